@@ -7,4 +7,6 @@
 
 pub mod math;
 pub mod model;
+pub mod pipeline;
 pub mod problem;
+pub mod sim;

@@ -3,6 +3,7 @@
 
 pub mod closure;
 pub mod constraints;
+pub mod contact;
 pub mod dynamics;
 pub mod geometry;
 pub mod kinematics;

@@ -1,0 +1,119 @@
+//! Argument parsing and dispatch.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use gripopt::problem::{Design, Problem};
+use std::path::PathBuf;
+
+mod bench;
+mod report;
+
+/// Design optimisation of underactuated two-finger grippers for high-speed grasping.
+#[derive(Parser)]
+#[command(name = "gripopt", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Staged evaluation (stages 0–3) of one design, with a report of every computed value.
+    Evaluate {
+        /// Problem file (TOML).
+        problem: PathBuf,
+        /// Design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
+        #[arg(long)]
+        design: Option<String>,
+        /// Print the MODEL.md §10 record as one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Stages 0–2 only (no grasp simulation).
+        #[arg(long)]
+        static_only: bool,
+    },
+    /// Diagnostic grasp simulation: runs to t_stab (or t_max) and reports every criterion.
+    Simulate {
+        /// Problem file (TOML).
+        problem: PathBuf,
+        /// Design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
+        #[arg(long)]
+        design: Option<String>,
+        /// Relative tolerance (default: the problem's solver.rtol).
+        #[arg(long)]
+        rtol: Option<f64>,
+        /// Integration method.
+        #[arg(long, value_enum, default_value = "tr-bdf2")]
+        method: MethodArg,
+        /// Print the stage-3 keys as one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Write the trajectory (accepted steps and events) to this CSV file.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+    },
+    /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
+    Bench {
+        #[command(subcommand)]
+        which: bench::BenchCmd,
+    },
+}
+
+/// Integration method choice.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    /// TR-BDF2 (stiff, default).
+    TrBdf2,
+    /// Dormand–Prince 5(4) (explicit; comparison only).
+    Dopri5,
+}
+
+impl MethodArg {
+    fn to_method(self) -> gripopt::sim::grasp::Method {
+        match self {
+            MethodArg::TrBdf2 => gripopt::sim::grasp::Method::TrBdf2,
+            MethodArg::Dopri5 => gripopt::sim::grasp::Method::Dopri5,
+        }
+    }
+}
+
+/// Load a problem, with the path in the error.
+pub fn load_problem(p: &PathBuf) -> Result<Problem> {
+    Ok(Problem::load(p)?)
+}
+
+fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
+    match d {
+        None => Ok(p.nominal),
+        Some(s) => Design::parse_assignments(s).map_err(anyhow::Error::msg),
+    }
+}
+
+fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
+    if let Some(v) = r {
+        if !(v > 0.0 && v < 1.0) {
+            anyhow::bail!("--rtol {v}: must lie in (0, 1)");
+        }
+    }
+    Ok(r)
+}
+
+/// Entry point.
+pub fn run() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.cmd {
+        Cmd::Evaluate { problem, design, json, static_only } => {
+            let p = load_problem(&problem)?;
+            let x = design_of(&p, &design)?;
+            report::evaluate(&p, &x, json, static_only)
+        }
+        Cmd::Simulate { problem, design, rtol, method, json, csv } => {
+            let p = load_problem(&problem)?;
+            let x = design_of(&p, &design)?;
+            let rtol = check_rtol(rtol)?;
+            report::simulate(&p, &x, rtol, method.to_method(), json, csv.as_deref())
+                .with_context(|| format!("simulating {}", problem.display()))
+        }
+        Cmd::Bench { which } => bench::run(which),
+    }
+}

@@ -1,0 +1,91 @@
+//! Dynamic criteria of MODEL.md §9: impact energy, force margin, stability threshold.
+
+use crate::math::V2;
+use crate::problem::Scene;
+
+/// Impact energies at a contact onset (§9.1).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Impact {
+    /// Effective finger mass m_finger = 1/(a M⁻¹ aᵀ).
+    pub m_finger: f64,
+    /// Onset velocity V = δ̇⁻ (uncapped).
+    pub v_impact: f64,
+    /// E_cyl = P²/(2 m_cyl).
+    pub e_cyl: f64,
+    /// E_trans = P²/(2 m_c).
+    pub e_trans: f64,
+    /// E_rot = P²/(2 m_rot).
+    pub e_rot: f64,
+    /// min(E_lim,trans, E_lim,rot).
+    pub e_lim: f64,
+}
+
+/// Energy limits (E_lim,trans, E_lim,rot) of eqs. 3.27, 3.29.
+pub fn impact_limits(s: &Scene) -> (f64, f64) {
+    let mc = s.object_mass();
+    let trans = s.mu_g * mc * s.g * s.dx_max;
+    let rot = mc * s.g * ((s.length / 2.0) * (s.theta_max.cos() - 1.0) + s.radius * s.theta_max.sin());
+    (trans, rot)
+}
+
+/// Impact energies for a finger of effective mass `m_finger` hitting at `v`.
+pub fn impact(s: &Scene, m_finger: f64, v: f64) -> Impact {
+    let m_c = s.object_mass();
+    let kc = s.impulse_lever();
+    let m_rot = if kc > 0.0 { s.object_inertia() / (kc * kc) } else { f64::INFINITY };
+    let m_cyl = if m_rot.is_finite() { m_c * m_rot / (m_c + m_rot) } else { m_c };
+    let m_tot = m_finger * m_cyl / (m_finger + m_cyl);
+    let p = (1.0 + s.restitution) * m_tot * v;
+    let (lt, lr) = impact_limits(s);
+    Impact {
+        m_finger,
+        v_impact: v,
+        e_cyl: p * p / (2.0 * m_cyl),
+        e_trans: p * p / (2.0 * m_c),
+        e_rot: if m_rot.is_finite() { p * p / (2.0 * m_rot) } else { 0.0 },
+        e_lim: lt.min(lr),
+    }
+}
+
+/// R_area = min(μ_g m_c g, R m_c g / h_c) (§9.3).
+pub fn r_area(s: &Scene) -> f64 {
+    let mg = s.object_mass() * s.g;
+    (s.mu_g * mg).min(s.radius * mg / s.grasp_height)
+}
+
+/// Force margin m(F) of §9.3 (≥ 0 = stable).
+#[inline]
+pub fn force_margin(s: &Scene, r_area: f64, f: V2) -> f64 {
+    if f.y >= 0.0 {
+        r_area - f.norm()
+    } else {
+        r_area - s.mu_p * f.y - f.x.abs()
+    }
+}
+
+/// U_min = min_i (2/5) K^{−2/3} (f⁰_i)^{5/3} (§9.4).
+pub fn u_min(s: &Scene, f0: [f64; 2]) -> f64 {
+    f0.iter().map(|&f| 0.4 * s.k_contact.powf(-2.0 / 3.0) * f.max(0.0).powf(5.0 / 3.0)).fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn margin_continuous_at_fy_zero() {
+        let s = crate::problem::Problem::from_toml_str(
+            &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap(),
+            std::path::Path::new("bottle-1l.toml"),
+        )
+        .unwrap()
+        .scene;
+        let ra = r_area(&s);
+        let a = force_margin(&s, ra, V2::new(0.7, 1e-12));
+        let b = force_margin(&s, ra, V2::new(0.7, -1e-12));
+        assert!((a - b).abs() < 1e-9);
+        let (lt, lr) = impact_limits(&s);
+        assert!((lt - 3.9448e-3).abs() < 1e-7, "{lt}");
+        assert!((lr - 6.7345e-3).abs() < 1e-7, "{lr}");
+    }
+}

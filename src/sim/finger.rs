@@ -1,0 +1,260 @@
+//! The finger ODE of the fixed-object grasp scene (MODEL.md §8): state
+//! y = (q11, q21, q̇11, q̇21, F̄_y) — one finger's four mechanical states plus the low-pass
+//! filtered hand force of the force criterion (§9.3). With the object fixed and centred,
+//! finger 2 is the mirror image of finger 1, so one finger is integrated. The object centre
+//! is a field (`centre`), so an offset scene reuses this code.
+
+use crate::math::{e, V2};
+use crate::model::contact::{capsule, flores_normal, CapsuleGeom, CapsulePart, FrictionLaw};
+use crate::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
+use crate::model::geometry::{Finger, Pose};
+use crate::model::kinematics::Kin;
+use crate::problem::Scene;
+use crate::sim::integrator::Rhs;
+use nalgebra::{Matrix2, SVector, Vector2};
+
+/// State dimension.
+pub const NS: usize = 5;
+/// State vector.
+pub type State = SVector<f64, NS>;
+
+/// Contact memory of one phalanx (§8.5): active between onset and separation.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Memory {
+    /// Between onset and separation.
+    pub active: bool,
+    /// Captured onset velocity δ̇⁻ (floored at v_min).
+    pub vminus: f64,
+}
+
+/// Everything about one phalanx contact at a state.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactState {
+    /// Capsule geometry.
+    pub geom: CapsuleGeom,
+    /// Contact row a (δ̇ = a q̇_a).
+    pub row: Vector2<f64>,
+    /// Point Jacobian.
+    pub jp: Matrix2<f64>,
+    /// Penetration rate δ̇.
+    pub delta_dot: f64,
+    /// Slip velocity u of the finger point along t_c.
+    pub slip: f64,
+    /// Normal force magnitude F_n.
+    pub normal_force: f64,
+    /// Friction force F_t (along t_c, on the finger).
+    pub friction_force: f64,
+}
+
+/// Full evaluation of the finger at a state.
+#[derive(Debug, Clone, Copy)]
+pub struct FingerEval {
+    /// Linkage pose.
+    pub pose: Pose,
+    /// Kinematics.
+    pub kin: Kin,
+    /// Mass matrix.
+    pub m: Matrix2<f64>,
+    /// Total generalised force minus bias: M q̈ = q_total.
+    pub q_total: Vector2<f64>,
+    /// Accelerations q̈_a.
+    pub qdd: Vector2<f64>,
+    /// Proximal (0) and distal (1) contacts.
+    pub contacts: [ContactState; 2],
+    /// Force of this finger on the object (local frame).
+    pub object_force: V2,
+    /// θ2.
+    pub theta2: f64,
+    /// θ̇2.
+    pub theta2_dot: f64,
+    /// Total energy E = T + V.
+    pub energy: f64,
+}
+
+/// Constants of the finger ODE.
+#[derive(Debug, Clone, Copy)]
+pub struct FingerOde<'a> {
+    /// The finger.
+    pub finger: &'a Finger,
+    /// Actuator torque τ.
+    pub tau: f64,
+    /// Spring preload τ_s0.
+    pub tau_s0: f64,
+    /// Spring rate k_s.
+    pub k_s: f64,
+    /// Stop stiffness and damping.
+    pub k_stop: f64,
+    /// Stop damping factor.
+    pub c_stop: f64,
+    /// Hertz stiffness.
+    pub k_contact: f64,
+    /// Flores χ.
+    pub chi: f64,
+    /// Friction law.
+    pub friction: FrictionLaw,
+    /// Object centre in the finger's local frame.
+    pub centre: V2,
+    /// R + w.
+    pub rw: f64,
+    /// Filter time constant T_f.
+    pub t_filter: f64,
+    /// Scene (gravity).
+    pub scene: &'a Scene,
+    /// Contact memories.
+    pub mem: [Memory; 2],
+    /// Contacts enabled (false: free finger, for energy tests).
+    pub contacts_enabled: bool,
+    /// RHS evaluations (counted here so that event location is counted too).
+    pub evals: u64,
+}
+
+impl<'a> FingerOde<'a> {
+    /// The finger of the grasp scene closing on the object centred at local (x_c, R).
+    pub fn new(finger: &'a Finger, scene: &'a Scene, tau_s0: f64, x_c: f64) -> Self {
+        FingerOde {
+            finger,
+            tau: scene.tau,
+            tau_s0,
+            k_s: scene.k_s,
+            k_stop: scene.k_stop,
+            c_stop: scene.c_stop,
+            k_contact: scene.k_contact,
+            chi: scene.chi(),
+            friction: FrictionLaw { mu_s: scene.mu_s, mu_d: scene.mu_d, v_s: scene.v_s, v_d: scene.v_d },
+            centre: V2::new(x_c, scene.radius),
+            rw: scene.radius + scene.w,
+            t_filter: scene.t_filter,
+            scene,
+            mem: [Memory::default(); 2],
+            contacts_enabled: true,
+            evals: 0,
+        }
+    }
+
+    /// Capsule geometry of both phalanges at a pose.
+    #[inline]
+    pub fn geometry(&self, p: &Pose) -> [CapsuleGeom; 2] {
+        let f = self.finger;
+        let xd = e(p.q21 + p.q22 + f.psi);
+        [
+            capsule(f.o21, e(p.q21), f.l21, self.centre, self.rw, f.w),
+            capsule(p.o22, xd, f.t22, self.centre, self.rw, f.w),
+        ]
+    }
+
+    /// Evaluate the full model at state `y`; `None` where the DGM or kinematics fail.
+    #[inline]
+    pub fn evaluate(&self, y: &State) -> Option<FingerEval> {
+        let f = self.finger;
+        let pose = f.dgm(y[0], y[1]).ok()?;
+        let kin = Kin::new(f, &pose)?;
+        let qd = Vector2::new(y[2], y[3]);
+        let red = reduced(f, &pose, &kin, qd);
+        let j = kin.j_row();
+        let theta2 = pose.q22 + f.psi;
+        let theta2_dot = j.dot(&qd);
+        // actuator, spring, stop, gravity
+        let mut q = Vector2::new(self.tau, 0.0) - (self.tau_s0 + self.k_s * theta2) * j;
+        let phi = -theta2;
+        let mut v = -self.tau * y[0] + self.tau_s0 * theta2 + 0.5 * self.k_s * theta2 * theta2;
+        if phi > 0.0 {
+            let ts = (self.k_stop * phi * (1.0 + self.c_stop * (-theta2_dot))).max(0.0);
+            q += ts * j;
+            v += 0.5 * self.k_stop * phi * phi;
+        }
+        if self.scene.g_eq != 0.0 {
+            q += reduce_tree_force(&kin, gravity_tree(f, &pose, self.scene));
+            v += gravity_potential(f, &pose, self.scene);
+        }
+        let geo = self.geometry(&pose);
+        let mut object_force = V2::zeros();
+        let mut contacts = [ContactState {
+            geom: geo[0],
+            row: Vector2::zeros(),
+            jp: Matrix2::zeros(),
+            delta_dot: 0.0,
+            slip: 0.0,
+            normal_force: 0.0,
+            friction_force: 0.0,
+        }; 2];
+        for i in 0..2 {
+            let g = geo[i];
+            let jp = kin.point_jacobian(f, &pose, g.point, i == 1);
+            let vp = jp * qd;
+            let c = &mut contacts[i];
+            c.geom = g;
+            c.jp = jp;
+            c.row = jp.transpose() * g.normal;
+            c.delta_dot = g.normal.dot(&vp);
+            c.slip = g.tangent.dot(&vp);
+            if self.contacts_enabled && self.mem[i].active && g.delta > 0.0 {
+                let fnm = flores_normal(self.k_contact, self.chi, g.delta, c.delta_dot, self.mem[i].vminus);
+                let ft = -self.friction.mu(c.slip) * fnm;
+                let force = -fnm * g.normal + ft * g.tangent;
+                q += jp.transpose() * force;
+                object_force -= force;
+                c.normal_force = fnm;
+                c.friction_force = ft;
+                v += 0.4 * self.k_contact * g.delta * g.delta * g.delta.sqrt();
+            }
+        }
+        let q_total = q - red.c;
+        let minv = red.m.try_inverse()?;
+        let qdd = minv * q_total;
+        let energy = 0.5 * qd.dot(&(red.m * qd)) + v;
+        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy })
+    }
+
+    /// Time derivative from a full evaluation (hand force F_hand,y = 2 × finger-1 force).
+    #[inline]
+    pub fn derivative(&self, y: &State, ev: &FingerEval) -> State {
+        let hand_y = 2.0 * ev.object_force.y;
+        State::from([y[2], y[3], ev.qdd[0], ev.qdd[1], (hand_y - y[4]) / self.t_filter])
+    }
+
+    /// True when a knuckle cap (O22, shared by both capsules) carries a contact.
+    pub fn knuckle_contact(ev: &FingerEval) -> bool {
+        (ev.contacts[0].geom.part == CapsulePart::End && ev.contacts[0].normal_force > 0.0)
+            || (ev.contacts[1].geom.part == CapsulePart::Start && ev.contacts[1].normal_force > 0.0)
+    }
+}
+
+impl Rhs<NS> for FingerOde<'_> {
+    #[inline]
+    fn eval(&mut self, _t: f64, y: &State) -> Option<State> {
+        self.evals += 1;
+        let ev = self.evaluate(y)?;
+        Some(self.derivative(y, &ev))
+    }
+
+    /// Smooth piece: bit 0 stop engaged, bit 1 stop force clipped, bits 2+2i contact i
+    /// loaded, bits 3+2i its force clipped by the damping term.
+    fn piece(&self, y: &State) -> u64 {
+        let f = self.finger;
+        let Ok(pose) = f.dgm(y[0], y[1]) else { return u64::MAX };
+        let Some(kin) = Kin::new(f, &pose) else { return u64::MAX };
+        let qd = Vector2::new(y[2], y[3]);
+        let theta2 = pose.q22 + f.psi;
+        let mut bits = 0u64;
+        if theta2 < 0.0 {
+            bits |= 1;
+            if 1.0 - self.c_stop * kin.j_row().dot(&qd) <= 0.0 {
+                bits |= 2;
+            }
+        }
+        if self.contacts_enabled {
+            let geo = self.geometry(&pose);
+            for i in 0..2 {
+                if self.mem[i].active && geo[i].delta > 0.0 {
+                    bits |= 4 << (2 * i);
+                    let jp = kin.point_jacobian(f, &pose, geo[i].point, i == 1);
+                    let dd = geo[i].normal.dot(&(jp * qd));
+                    if 1.0 + self.chi * dd / self.mem[i].vminus <= 0.0 {
+                        bits |= 8 << (2 * i);
+                    }
+                }
+            }
+        }
+        bits
+    }
+}

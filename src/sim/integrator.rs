@@ -1,0 +1,577 @@
+//! Adaptive one-step integrators on fixed-size states: TR-BDF2 (L-stable, stiff; Hosea &
+//! Shampine 1996 with its third-order embedded estimate, filtered by (I − dhJ)⁻¹) and
+//! Dormand–Prince 5(4) (explicit, for comparison and non-stiff references). Both expose
+//! accepted steps with (y, f) at both ends so a driver can do cubic Hermite dense output
+//! and event location. No heap allocation.
+
+use nalgebra::{SMatrix, SVector};
+
+/// A right-hand side y' = f(t, y). `None` marks a state where f is undefined (the driver
+/// turns it into an abort or a smaller step).
+pub trait Rhs<const N: usize> {
+    /// Evaluate f(t, y).
+    fn eval(&mut self, t: f64, y: &SVector<f64, N>) -> Option<SVector<f64, N>>;
+    /// Identifier of the smooth piece of a piecewise-smooth f that `y` lies on (stop
+    /// engaged, force clipped, …). Finite differences never straddle two pieces, so the
+    /// Jacobian is that of one smooth branch. Default: f is smooth.
+    fn piece(&self, _y: &SVector<f64, N>) -> u64 {
+        0
+    }
+}
+
+/// Work counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps (error test or Newton failure).
+    pub rejected: u64,
+    /// Right-hand-side evaluations.
+    pub rhs: u64,
+    /// Jacobian evaluations.
+    pub jac: u64,
+    /// LU factorisations.
+    pub lu: u64,
+}
+
+/// Tolerances: relative and per-component absolute.
+#[derive(Debug, Clone, Copy)]
+pub struct Tol<const N: usize> {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per component.
+    pub atol: SVector<f64, N>,
+}
+
+impl<const N: usize> Tol<N> {
+    /// Scaled RMS norm of `e` with weights from `y0`, `y1`.
+    #[inline]
+    pub fn norm(&self, e: &SVector<f64, N>, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> f64 {
+        let mut s = 0.0;
+        for i in 0..N {
+            let sc = self.atol[i] + self.rtol * y0[i].abs().max(y1[i].abs());
+            let r = e[i] / sc;
+            s += r * r;
+        }
+        (s / N as f64).sqrt()
+    }
+}
+
+/// Why a step could not be taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepError {
+    /// The step size fell below the minimum.
+    StepTooSmall,
+    /// f was undefined at the current state itself.
+    RhsFailed,
+}
+
+/// An accepted step.
+#[derive(Debug, Clone, Copy)]
+pub struct Accepted<const N: usize> {
+    /// New time.
+    pub t: f64,
+    /// New state.
+    pub y: SVector<f64, N>,
+    /// f at the new state.
+    pub f: SVector<f64, N>,
+}
+
+/// An adaptive one-step method.
+pub trait Stepper<const N: usize> {
+    /// Take one accepted step from (t, y, f) with h ≤ h_max, adapting the step size.
+    fn advance<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        h_max: f64,
+    ) -> Result<Accepted<N>, StepError>;
+    /// Forget step-size history and Jacobians (after a discontinuity of f).
+    fn restart(&mut self, h: f64);
+    /// Counters.
+    fn stats(&self) -> Stats;
+    /// Current step size proposal.
+    fn h(&self) -> f64;
+    /// Method name.
+    fn name(&self) -> &'static str;
+}
+
+/// Cubic Hermite interpolation on an accepted step.
+#[inline]
+pub fn hermite<const N: usize>(
+    t0: f64,
+    y0: &SVector<f64, N>,
+    f0: &SVector<f64, N>,
+    t1: f64,
+    y1: &SVector<f64, N>,
+    f1: &SVector<f64, N>,
+    t: f64,
+) -> SVector<f64, N> {
+    let h = t1 - t0;
+    if h == 0.0 {
+        return *y1;
+    }
+    let s = (t - t0) / h;
+    let s2 = s * s;
+    let s3 = s2 * s;
+    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+    let h10 = s3 - 2.0 * s2 + s;
+    let h01 = -2.0 * s3 + 3.0 * s2;
+    let h11 = s3 - s2;
+    y0 * h00 + f0 * (h10 * h) + y1 * h01 + f1 * (h11 * h)
+}
+
+const HMIN: f64 = 1e-14;
+
+/// LU factorisation with partial pivoting of a fixed-size square matrix (no allocation).
+#[derive(Debug, Clone, Copy)]
+pub struct Lu<const N: usize> {
+    lu: SMatrix<f64, N, N>,
+    piv: [usize; N],
+}
+
+impl<const N: usize> Lu<N> {
+    /// Factor `a`; `None` if singular.
+    pub fn factor(mut a: SMatrix<f64, N, N>) -> Option<Self> {
+        let mut piv = [0usize; N];
+        for k in 0..N {
+            let mut p = k;
+            let mut m = a[(k, k)].abs();
+            for i in k + 1..N {
+                if a[(i, k)].abs() > m {
+                    m = a[(i, k)].abs();
+                    p = i;
+                }
+            }
+            if !(m > 0.0) || !m.is_finite() {
+                return None;
+            }
+            piv[k] = p;
+            if p != k {
+                a.swap_rows(p, k);
+            }
+            let d = a[(k, k)];
+            for i in k + 1..N {
+                let l = a[(i, k)] / d;
+                a[(i, k)] = l;
+                for j in k + 1..N {
+                    a[(i, j)] -= l * a[(k, j)];
+                }
+            }
+        }
+        Some(Lu { lu: a, piv })
+    }
+
+    /// Solve A x = b.
+    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut x = *b;
+        for k in 0..N {
+            x.swap_rows(k, self.piv[k]);
+        }
+        for i in 0..N {
+            let mut s = x[i];
+            for j in 0..i {
+                s -= self.lu[(i, j)] * x[j];
+            }
+            x[i] = s;
+        }
+        for i in (0..N).rev() {
+            let mut s = x[i];
+            for j in i + 1..N {
+                s -= self.lu[(i, j)] * x[j];
+            }
+            x[i] = s / self.lu[(i, i)];
+        }
+        x
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// TR-BDF2
+// ---------------------------------------------------------------------------------------
+
+/// TR-BDF2 (γ = 2 − √2) as an ESDIRK with a simplified Newton iteration, finite-difference
+/// Jacobian reused across steps, and a filtered third-order error estimate.
+#[derive(Debug, Clone)]
+pub struct TrBdf2<const N: usize> {
+    tol: Tol<N>,
+    h: f64,
+    jac: SMatrix<f64, N, N>,
+    jac_valid: bool,
+    jac_fresh: bool,
+    lu: Option<Lu<N>>,
+    lu_h: f64,
+    stats: Stats,
+    /// Newton convergence threshold relative to the tolerance.
+    pub kappa: f64,
+    /// Maximum Newton iterations per stage.
+    pub max_newton: usize,
+    /// Recompute the Jacobian after every accepted step.
+    pub refresh_every_step: bool,
+}
+
+const SQRT2: f64 = std::f64::consts::SQRT_2;
+const GAMMA: f64 = 2.0 - SQRT2;
+const D: f64 = GAMMA / 2.0;
+const W: f64 = SQRT2 / 4.0;
+// Embedded third-order weights (Hosea & Shampine): ((1 − w)/3, (3w + 1)/3, d/3).
+const E1: f64 = W - (1.0 - W) / 3.0;
+const E2: f64 = W - (3.0 * W + 1.0) / 3.0;
+const E3: f64 = D - D / 3.0;
+
+impl<const N: usize> TrBdf2<N> {
+    /// New stepper with tolerances and an initial step size.
+    pub fn new(tol: Tol<N>, h0: f64) -> Self {
+        TrBdf2 {
+            tol,
+            h: h0,
+            jac: SMatrix::zeros(),
+            jac_valid: false,
+            jac_fresh: false,
+            lu: None,
+            lu_h: 0.0,
+            stats: Stats::default(),
+            kappa: 0.05,
+            max_newton: 8,
+            refresh_every_step: true,
+        }
+    }
+
+    fn jacobian<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>) -> bool {
+        let sq = f64::EPSILON.sqrt();
+        let mut yp = *y;
+        let piece = sys.piece(y);
+        for j in 0..N {
+            let mut dy = sq * y[j].abs().max(1e-3);
+            yp[j] = y[j] + dy;
+            if sys.piece(&yp) != piece {
+                dy = -dy;
+                yp[j] = y[j] + dy;
+            }
+            self.stats.rhs += 1;
+            let Some(fp) = sys.eval(t, &yp) else { return false };
+            self.jac.set_column(j, &((fp - f) / dy));
+            yp[j] = y[j];
+        }
+        self.stats.jac += 1;
+        self.jac_valid = true;
+        self.jac_fresh = true;
+        self.lu = None;
+        true
+    }
+
+    fn factor(&mut self, h: f64) -> bool {
+        if self.lu.is_some() && self.lu_h == h {
+            return true;
+        }
+        let a = SMatrix::<f64, N, N>::identity() - self.jac * (D * h);
+        self.stats.lu += 1;
+        let Some(lu) = Lu::factor(a) else {
+            self.lu = None;
+            return false;
+        };
+        self.lu = Some(lu);
+        self.lu_h = h;
+        true
+    }
+
+    /// Solve Y − d h f(Y) = rhs by simplified Newton from `z`; returns (Y, k = f(Y)).
+    fn newton<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        rhs: &SVector<f64, N>,
+        mut z: SVector<f64, N>,
+        yref: &SVector<f64, N>,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        let lu = self.lu.as_ref()?;
+        let mut prev = f64::INFINITY;
+        let mut theta = 0.5f64;
+        for it in 0..self.max_newton {
+            self.stats.rhs += 1;
+            let fz = sys.eval(t, &z)?;
+            let g = rhs + fz * (D * h) - z;
+            let dz = lu.solve(&g);
+            z += dz;
+            let n = self.tol.norm(&dz, yref, &z);
+            if !n.is_finite() {
+                return None;
+            }
+            if it > 0 {
+                theta = n / prev;
+                if theta >= 0.99 {
+                    return None;
+                }
+            }
+            let eta = if it == 0 { 1.0 } else { theta / (1.0 - theta) };
+            if eta * n <= self.kappa || n <= 1e-12 {
+                self.stats.rhs += 1;
+                let k = sys.eval(t, &z)?;
+                return Some((z, k));
+            }
+            prev = n;
+        }
+        None
+    }
+}
+
+impl<const N: usize> Stepper<N> for TrBdf2<N> {
+    fn advance<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        h_max: f64,
+    ) -> Result<Accepted<N>, StepError> {
+        loop {
+            let h = self.h.min(h_max);
+            if h < HMIN {
+                return Err(StepError::StepTooSmall);
+            }
+            if !self.jac_valid && !self.jacobian(sys, t, y, f) {
+                return Err(StepError::RhsFailed);
+            }
+            if !self.factor(h) {
+                if !self.jac_fresh {
+                    self.jac_valid = false;
+                } else {
+                    self.h = h * 0.5;
+                    self.stats.rejected += 1;
+                }
+                continue;
+            }
+            // Stage 2 (trapezoidal rule to t + γh).
+            let rhs2 = y + f * (D * h);
+            let z0 = y + f * (GAMMA * h);
+            let Some((y2, k2)) = self.newton(sys, t + GAMMA * h, h, &rhs2, z0, y) else {
+                self.newton_failed(h);
+                continue;
+            };
+            // Stage 3 (BDF2 to t + h).
+            let rhs3 = y + (f + k2) * (W * h);
+            let z0 = y + (y2 - y) / GAMMA;
+            let Some((y3, k3)) = self.newton(sys, t + h, h, &rhs3, z0, y) else {
+                self.newton_failed(h);
+                continue;
+            };
+            let est = (f * E1 + k2 * E2 + k3 * E3) * h;
+            let est = self.lu.as_ref().map(|lu| lu.solve(&est)).unwrap_or(est);
+            let err = self.tol.norm(&est, y, &y3);
+            if err.is_finite() && err <= 1.0 {
+                self.stats.steps += 1;
+                let fac = if err == 0.0 { 4.0 } else { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.2, 4.0) };
+                // keep h (and the LU) when the change would be small
+                if !(0.95..=1.2).contains(&fac) {
+                    self.h = h * fac;
+                } else {
+                    self.h = h;
+                }
+                self.jac_fresh = false;
+                if self.refresh_every_step {
+                    self.jac_valid = false;
+                }
+                return Ok(Accepted { t: t + h, y: y3, f: k3 });
+            }
+            self.stats.rejected += 1;
+            let fac = if err.is_finite() { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9) } else { 0.25 };
+            self.h = h * fac;
+        }
+    }
+
+    fn restart(&mut self, h: f64) {
+        self.h = h;
+        self.jac_valid = false;
+        self.lu = None;
+    }
+
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    fn h(&self) -> f64 {
+        self.h
+    }
+
+    fn name(&self) -> &'static str {
+        "tr-bdf2"
+    }
+}
+
+impl<const N: usize> TrBdf2<N> {
+    fn newton_failed(&mut self, h: f64) {
+        self.stats.rejected += 1;
+        if self.jac_fresh {
+            self.h = h * 0.25;
+        } else {
+            self.jac_valid = false;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Dormand–Prince 5(4)
+// ---------------------------------------------------------------------------------------
+
+/// Explicit Dormand–Prince 5(4) with FSAL and a standard step-size controller.
+#[derive(Debug, Clone)]
+pub struct Dopri5<const N: usize> {
+    tol: Tol<N>,
+    h: f64,
+    stats: Stats,
+}
+
+impl<const N: usize> Dopri5<N> {
+    /// New stepper.
+    pub fn new(tol: Tol<N>, h0: f64) -> Self {
+        Dopri5 { tol, h: h0, stats: Stats::default() }
+    }
+}
+
+impl<const N: usize> Stepper<N> for Dopri5<N> {
+    fn advance<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        h_max: f64,
+    ) -> Result<Accepted<N>, StepError> {
+        loop {
+            let h = self.h.min(h_max);
+            if h < HMIN {
+                return Err(StepError::StepTooSmall);
+            }
+            let k1 = *f;
+            let r = (|| {
+                let k2 = sys.eval(t + h / 5.0, &(y + k1 * (h / 5.0)))?;
+                let k3 = sys.eval(t + 0.3 * h, &(y + (k1 * (3.0 / 40.0) + k2 * (9.0 / 40.0)) * h))?;
+                let k4 = sys.eval(t + 0.8 * h, &(y + (k1 * (44.0 / 45.0) - k2 * (56.0 / 15.0) + k3 * (32.0 / 9.0)) * h))?;
+                let k5 = sys.eval(
+                    t + 8.0 / 9.0 * h,
+                    &(y + (k1 * (19372.0 / 6561.0) - k2 * (25360.0 / 2187.0) + k3 * (64448.0 / 6561.0)
+                        - k4 * (212.0 / 729.0))
+                        * h),
+                )?;
+                let k6 = sys.eval(
+                    t + h,
+                    &(y + (k1 * (9017.0 / 3168.0) - k2 * (355.0 / 33.0)
+                        + k3 * (46732.0 / 5247.0)
+                        + k4 * (49.0 / 176.0)
+                        - k5 * (5103.0 / 18656.0))
+                        * h),
+                )?;
+                let y1 = y + (k1 * (35.0 / 384.0) + k3 * (500.0 / 1113.0) + k4 * (125.0 / 192.0)
+                    - k5 * (2187.0 / 6784.0)
+                    + k6 * (11.0 / 84.0))
+                    * h;
+                let k7 = sys.eval(t + h, &y1)?;
+                let e = (k1 * (71.0 / 57600.0) - k3 * (71.0 / 16695.0) + k4 * (71.0 / 1920.0)
+                    - k5 * (17253.0 / 339200.0)
+                    + k6 * (22.0 / 525.0)
+                    - k7 * (1.0 / 40.0))
+                    * h;
+                Some((y1, k7, e))
+            })();
+            self.stats.rhs += 6;
+            let Some((y1, k7, e)) = r else {
+                self.stats.rejected += 1;
+                self.h = h * 0.25;
+                continue;
+            };
+            let err = self.tol.norm(&e, y, &y1);
+            if err <= 1.0 {
+                self.stats.steps += 1;
+                let fac = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
+                self.h = h * fac;
+                return Ok(Accepted { t: t + h, y: y1, f: k7 });
+            }
+            self.stats.rejected += 1;
+            self.h = h * (0.9 * err.powf(-0.2)).clamp(0.1, 0.9);
+        }
+    }
+
+    fn restart(&mut self, h: f64) {
+        self.h = h;
+    }
+
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    fn h(&self) -> f64 {
+        self.h
+    }
+
+    fn name(&self) -> &'static str {
+        "dopri5"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector2;
+
+    struct Osc(f64);
+    impl Rhs<2> for Osc {
+        fn eval(&mut self, _t: f64, y: &SVector<f64, 2>) -> Option<SVector<f64, 2>> {
+            Some(Vector2::new(y[1], -self.0 * self.0 * y[0]))
+        }
+    }
+
+    fn run<St: Stepper<2>>(mut st: St, omega: f64, t_end: f64) -> (SVector<f64, 2>, Stats) {
+        let mut sys = Osc(omega);
+        let mut t = 0.0;
+        let mut y = Vector2::new(1.0, 0.0);
+        let mut f = sys.eval(0.0, &y).unwrap();
+        while t < t_end {
+            let a = st.advance(&mut sys, t, &y, &f, t_end - t).unwrap();
+            t = a.t;
+            y = a.y;
+            f = a.f;
+        }
+        (y, st.stats())
+    }
+
+    #[test]
+    fn trbdf2_converges_second_order() {
+        let tol = |r: f64| Tol { rtol: r, atol: Vector2::new(r, r) };
+        let exact = 1.0f64.cos();
+        let (y1, _) = run(TrBdf2::new(tol(1e-6), 1e-3), 1.0, 1.0);
+        let (y2, _) = run(TrBdf2::new(tol(1e-9), 1e-3), 1.0, 1.0);
+        assert!((y1[0] - exact).abs() < 1e-4, "{}", (y1[0] - exact).abs());
+        assert!((y2[0] - exact).abs() < 1e-7, "{}", (y2[0] - exact).abs());
+        assert!((y2[0] - exact).abs() < (y1[0] - exact).abs());
+    }
+
+    #[test]
+    fn dopri5_accuracy() {
+        let tol = Tol { rtol: 1e-11, atol: Vector2::new(1e-13, 1e-13) };
+        let (y, _) = run(Dopri5::new(tol, 1e-3), 2.0, 3.0);
+        assert!((y[0] - 6.0f64.cos()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn trbdf2_l_stable_on_stiff_decay() {
+        struct Stiff;
+        impl Rhs<2> for Stiff {
+            fn eval(&mut self, t: f64, y: &SVector<f64, 2>) -> Option<SVector<f64, 2>> {
+                Some(Vector2::new(-1e6 * (y[0] - t.cos()), -y[1]))
+            }
+        }
+        let mut st = TrBdf2::new(Tol { rtol: 1e-6, atol: Vector2::new(1e-9, 1e-9) }, 1e-6);
+        let mut sys = Stiff;
+        let (mut t, mut y) = (0.0, Vector2::new(0.0, 1.0));
+        let mut f = sys.eval(0.0, &y).unwrap();
+        while t < 1.0 {
+            let a = st.advance(&mut sys, t, &y, &f, 1.0 - t).unwrap();
+            (t, y, f) = (a.t, a.y, a.f);
+        }
+        assert!((y[0] - 1.0f64.cos()).abs() < 1e-5);
+        assert!(st.stats().steps < 2000, "{:?}", st.stats());
+    }
+}
