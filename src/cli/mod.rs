@@ -43,7 +43,7 @@ enum Cmd {
         #[arg(long)]
         rtol: Option<f64>,
         /// Integration method.
-        #[arg(long, value_enum, default_value = "tr-bdf2")]
+        #[arg(long, value_enum, default_value = "radau5")]
         method: MethodArg,
         /// Print the stage-3 keys as one JSON object.
         #[arg(long)]
@@ -62,7 +62,9 @@ enum Cmd {
 /// Integration method choice.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum MethodArg {
-    /// TR-BDF2 (stiff, default).
+    /// Radau IIA order 5 (stiff, default).
+    Radau5,
+    /// TR-BDF2 (stiff, order 2).
     TrBdf2,
     /// Dormand–Prince 5(4) (explicit; comparison only).
     Dopri5,
@@ -71,6 +73,7 @@ pub enum MethodArg {
 impl MethodArg {
     fn to_method(self) -> gripopt::sim::grasp::Method {
         match self {
+            MethodArg::Radau5 => gripopt::sim::grasp::Method::Radau5,
             MethodArg::TrBdf2 => gripopt::sim::grasp::Method::TrBdf2,
             MethodArg::Dopri5 => gripopt::sim::grasp::Method::Dopri5,
         }

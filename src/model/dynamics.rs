@@ -9,8 +9,8 @@ use nalgebra::{Matrix2, Vector2, Vector4};
 /// Mass matrix and bias of one open chain (eq. 2.49, 2.53–2.54).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn chain(i1: f64, l1: f64, m2: f64, i2: f64, s: V2, beta: f64, adot: f64, bdot: f64) -> (Matrix2<f64>, Vector2<f64>) {
-    let (sb, cb) = beta.sin_cos();
+fn chain(i1: f64, l1: f64, m2: f64, i2: f64, s: V2, cs_beta: (f64, f64), adot: f64, bdot: f64) -> (Matrix2<f64>, Vector2<f64>) {
+    let (cb, sb) = cs_beta;
     let h = m2 * l1 * (s.x * cb - s.y * sb);
     let g = m2 * l1 * (s.x * sb + s.y * cb);
     let m = Matrix2::new(i1 + i2 + m2 * l1 * l1 + 2.0 * h, i2 + h, i2 + h, i2);
@@ -40,8 +40,10 @@ pub fn reduced(f: &Finger, p: &Pose, k: &Kin, qa_dot: Vector2<f64>) -> Reduced {
     let ms = &f.mass;
     let qd_dot = k.jd * qa_dot;
     let bd = k.bd(f, qa_dot);
-    let (m1, c1) = chain(ms.i[0], f.l11, ms.m[1], ms.i[1], V2::new(f.l12 / 2.0, 0.0), p.q12, qa_dot[0], qd_dot[0]);
-    let (m2, c2) = chain(ms.i[2], f.l21, ms.m[3], ms.i[3], ms.s22, p.q22, qa_dot[1], qd_dot[1]);
+    let cs12 = (p.x11.dot(&p.x12), crate::math::cross(p.x11, p.x12));
+    let cs22 = (p.x21.dot(&p.x22), crate::math::cross(p.x21, p.x22));
+    let (m1, c1) = chain(ms.i[0], f.l11, ms.m[1], ms.i[1], V2::new(f.l12 / 2.0, 0.0), cs12, qa_dot[0], qd_dot[0]);
+    let (m2, c2) = chain(ms.i[2], f.l21, ms.m[3], ms.i[3], ms.s22, cs22, qa_dot[1], qd_dot[1]);
     // Block rows for chain 1: (q11, q12), chain 2: (q21, q22).
     // W restricted: chain 1 rates = [[1,0],[J11,J12]] q̇_a, chain 2 = [[0,1],[J21,J22]] q̇_a.
     let w1 = Matrix2::new(1.0, 0.0, k.jd[(0, 0)], k.jd[(0, 1)]);

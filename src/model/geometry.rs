@@ -71,6 +71,8 @@ pub struct Finger {
     pub open: Pose,
     /// Mass properties.
     pub mass: MassProps,
+    /// (cos ψ, sin ψ).
+    pub psi_cs: V2,
 }
 
 /// A full linkage pose with its joint points.
@@ -92,6 +94,14 @@ pub struct Pose {
     pub o22: V2,
     /// Joint O13.
     pub o13: V2,
+    /// Unit vectors of links 11, 12, 21, 22 (x_i = e(absolute angle)).
+    pub x11: V2,
+    /// Unit vector of link 12.
+    pub x12: V2,
+    /// Unit vector of link 21 (proximal phalanx).
+    pub x21: V2,
+    /// Unit vector of link 22.
+    pub x22: V2,
 }
 
 impl Pose {
@@ -158,6 +168,10 @@ impl Finger {
             o12,
             o22,
             o13,
+            x11: e(q11_0),
+            x12: (o13 - o12) / l12,
+            x21: e(q21_0),
+            x22: e(q21_0 + q22_0),
         };
         let lam = s.rho_f * PI * w * w;
         let rod_i = |m: f64, l: f64| m * (w * w / 4.0 + l * l / 3.0);
@@ -173,14 +187,16 @@ impl Finger {
             i: [rod_i(m11, l11), rod_i(m12, l12), rod_i(m21, x.l21), rod_i(lam * l22, l22) + rod_i(lam * x.t22, x.t22)],
             s22,
         };
-        Ok(Finger { l11, l12, l21: x.l21, l22, t22: x.t22, psi: x.psi, w, o21, gamma, sigma, k10, open, mass })
+        Ok(Finger { l11, l12, l21: x.l21, l22, t22: x.t22, psi: x.psi, w, o21, gamma, sigma, k10, open, mass, psi_cs: V2::new(cp, sp) })
     }
 
     /// Direct geometric model (MODEL.md §5.1): pose from the active angles.
     #[inline]
     pub fn dgm(&self, q11: f64, q21: f64) -> Result<Pose, GeomError> {
-        let o12 = self.o21 + self.l11 * e(q11);
-        let o22 = self.o21 + self.l21 * e(q21);
+        let x11 = e(q11);
+        let x21 = e(q21);
+        let o12 = self.o21 + self.l11 * x11;
+        let o22 = self.o21 + self.l21 * x21;
         let v = o12 - o22;
         let d2 = v.norm_squared();
         if !(d2 > 0.0) {
@@ -194,9 +210,11 @@ impl Finger {
             return Err(GeomError::NotMountable);
         }
         let o13 = o22 + ak * v + self.gamma * bk2.sqrt() * perp(v);
-        let q12 = wrap(angle(o13 - o12) - q11);
-        let q22 = wrap(angle(o13 - o22) - q21);
-        Ok(Pose { q11, q12, q21, q22, q13: wrap(q21 + q22 - q11 - q12), o12, o22, o13 })
+        let x12 = (o13 - o12) / self.l12;
+        let x22 = (o13 - o22) / self.l22;
+        let q12 = cross(x11, x12).atan2(x11.dot(&x12));
+        let q22 = cross(x21, x22).atan2(x21.dot(&x22));
+        Ok(Pose { q11, q12, q21, q22, q13: wrap(q21 + q22 - q11 - q12), o12, o22, o13, x11, x12, x21, x22 })
     }
 
     /// Inverse model of leg 1 (MODEL.md §5.2): pose from the phalanx angles (θ1, θ2),
@@ -223,7 +241,14 @@ impl Finger {
 
     /// Distal phalanx tip in local coordinates at pose `p`.
     pub fn tip(&self, p: &Pose) -> V2 {
-        p.o22 + self.t22 * e(p.q21 + p.q22 + self.psi)
+        p.o22 + self.t22 * self.distal_dir(p)
+    }
+
+    /// Direction x_d of the distal phalanx at pose `p` (x22 rotated by ψ).
+    #[inline]
+    pub fn distal_dir(&self, p: &Pose) -> V2 {
+        let (c, s) = (self.psi_cs.x, self.psi_cs.y);
+        V2::new(c * p.x22.x - s * p.x22.y, s * p.x22.x + c * p.x22.y)
     }
 }
 

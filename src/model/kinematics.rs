@@ -1,7 +1,7 @@
 //! First- and second-order kinematics of the five-bar finger (MODEL.md §5.3–5.5, §6.3).
 
 use super::geometry::{Finger, Pose};
-use crate::math::{e, perp, V2};
+use crate::math::{perp, V2};
 use nalgebra::{Matrix2, Vector2};
 
 /// First-order kinematics at one pose.
@@ -23,10 +23,7 @@ impl Kin {
     /// Kinematics at pose `p`; `None` at a singular pose (det of the closure matrix ≈ 0).
     #[inline]
     pub fn new(f: &Finger, p: &Pose) -> Option<Self> {
-        let x11 = e(p.q11);
-        let x21 = e(p.q21);
-        let x12 = e(p.q11 + p.q12);
-        let x22 = e(p.q21 + p.q22);
+        let (x11, x21, x12, x22) = (p.x11, p.x21, p.x12, p.x22);
         let u1 = f.l12 * x12;
         let u2 = f.l22 * x22;
         let c = Matrix2::from_columns(&[perp(u1), -perp(u2)]);

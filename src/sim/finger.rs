@@ -4,7 +4,7 @@
 //! finger 2 is the mirror image of finger 1, so one finger is integrated. The object centre
 //! is a field (`centre`), so an offset scene reuses this code.
 
-use crate::math::{e, V2};
+use crate::math::V2;
 use crate::model::contact::{capsule, flores_normal, CapsuleGeom, CapsulePart, FrictionLaw};
 use crate::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
 use crate::model::geometry::{Finger, Pose};
@@ -135,15 +135,15 @@ impl<'a> FingerOde<'a> {
     #[inline]
     pub fn geometry(&self, p: &Pose) -> [CapsuleGeom; 2] {
         let f = self.finger;
-        let xd = e(p.q21 + p.q22 + f.psi);
+        let xd = f.distal_dir(p);
         [
-            capsule(f.o21, e(p.q21), f.l21, self.centre, self.rw, f.w),
+            capsule(f.o21, p.x21, f.l21, self.centre, self.rw, f.w),
             capsule(p.o22, xd, f.t22, self.centre, self.rw, f.w),
         ]
     }
 
     /// Evaluate the full model at state `y`; `None` where the DGM or kinematics fail.
-    #[inline]
+    #[inline(always)]
     pub fn evaluate(&self, y: &State) -> Option<FingerEval> {
         let f = self.finger;
         let pose = f.dgm(y[0], y[1]).ok()?;

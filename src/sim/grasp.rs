@@ -5,7 +5,7 @@
 
 use super::criteria::{force_margin, impact, r_area, u_min, Impact};
 use super::finger::{FingerEval, FingerOde, Memory, State, NS};
-use super::integrator::{hermite, Dopri5, Stats, Stepper, Tol, TrBdf2};
+use super::integrator::{hermite, Dopri5, Radau5, Stats, Stepper, Tol, TrBdf2};
 use crate::math::V2;
 use crate::model::geometry::Finger;
 use crate::model::statics::closed_pose;
@@ -19,7 +19,9 @@ use std::time::Instant;
 /// Integration method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum Method {
-    /// TR-BDF2 (default; stiff, L-stable).
+    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
+    Radau5,
+    /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
     TrBdf2,
     /// Dormand–Prince 5(4) (explicit; for comparison only).
     Dopri5,
@@ -54,11 +56,11 @@ pub struct SimOptions {
 }
 
 impl SimOptions {
-    /// Pipeline-mode options with TR-BDF2.
+    /// Pipeline-mode options with Radau IIA.
     pub fn pipeline(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions { rtol, atol, max_steps, mode: Mode::Pipeline, method: Method::TrBdf2, record: false, grid_dt: None }
+        SimOptions { rtol, atol, max_steps, mode: Mode::Pipeline, method: Method::Radau5, record: false, grid_dt: None }
     }
-    /// Diagnostic-mode options with TR-BDF2.
+    /// Diagnostic-mode options with Radau IIA.
     pub fn diagnostic(rtol: f64, atol: f64, max_steps: u64) -> Self {
         SimOptions { mode: Mode::Diagnostic, ..Self::pipeline(rtol, atol, max_steps) }
     }
@@ -293,6 +295,35 @@ struct Gs {
     force: f64,
     sing: f64,
     stop: f64,
+    /// Time derivatives of the contact and stop functions (δ̇ and θ̇2).
+    rate: [f64; 3],
+}
+
+/// Can the cubic Hermite through (0, a, da) and (h, b, db) take a value `> 0` (`up`) or
+/// `≤ 0` (`!up`) strictly inside the step while both ends are on the other side? Used to
+/// decide whether an event function must be sampled inside a step.
+fn hermite_may_cross(a: f64, da: f64, b: f64, db: f64, h: f64) -> bool {
+    // p(s) = h00 a + h10 h da + h01 b + h11 h db on s ∈ [0, 1]; find the extrema of the cubic.
+    let (m0, m1) = (h * da, h * db);
+    // p'(s) = 6(a − b)(s² − s) + m0(3s² − 4s + 1) + m1(3s² − 2s) = A s² + B s + C
+    let qa = 6.0 * (a - b) + 3.0 * m0 + 3.0 * m1;
+    let qb = -6.0 * (a - b) - 4.0 * m0 - 2.0 * m1;
+    let qc = m0;
+    let p = |s: f64| {
+        let (s2, s3) = (s * s, s * s * s);
+        (2.0 * s3 - 3.0 * s2 + 1.0) * a + (s3 - 2.0 * s2 + s) * m0 + (-2.0 * s3 + 3.0 * s2) * b + (s3 - s2) * m1
+    };
+    let side = a > 0.0;
+    let check = |s: f64| s > 0.0 && s < 1.0 && (p(s) > 0.0) != side;
+    if qa.abs() < 1e-300 {
+        return qb != 0.0 && check(-qc / qb);
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc < 0.0 {
+        return false;
+    }
+    let r = disc.sqrt();
+    check((-qb + r) / (2.0 * qa)) || check((-qb - r) / (2.0 * qa))
 }
 
 struct Ctx<'a> {
@@ -314,6 +345,7 @@ fn gvals(ode: &FingerOde, ctx: &Ctx, y: &State, ev: &FingerEval, after_first: bo
         force: force_margin(ctx.s, ctx.r_area, V2::new(0.0, y[4])),
         sing: ev.pose.q13.sin().abs() - 1e-3,
         stop: ev.theta2,
+        rate: [ev.contacts[0].delta_dot, ev.contacts[1].delta_dot, ev.theta2_dot],
     }
 }
 
@@ -385,6 +417,7 @@ fn tolerances(opts: &SimOptions) -> Tol<NS> {
 fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     let tol = tolerances(opts);
     match opts.method {
+        Method::Radau5 => run(Radau5::<NS, { 3 * NS }>::new(tol, 1e-5), f, s, st, opts, traj),
         Method::TrBdf2 => run(TrBdf2::new(tol, 1e-5), f, s, st, opts, traj),
         Method::Dopri5 => run(Dopri5::new(tol, 1e-6), f, s, st, opts, traj),
     }
@@ -510,6 +543,7 @@ fn run<St: Stepper<NS>>(
         // ---- find the earliest event in (t0, t1] --------------------------------------
         let active = [ode.mem[0].active, ode.mem[1].active];
         let mut best: Option<(f64, usize)> = None;
+        let mut sampled = false;
         let bracket = |k: usize, ta: f64, ga: f64, tb: f64, gb: f64, ode: &mut FingerOde| {
             // Illinois on the Hermite interpolant; returns the "after" end of the bracket.
             let (mut a, mut fa, mut b, mut fb) = (ta, ga, tb, gb);
@@ -554,24 +588,38 @@ fn run<St: Stepper<NS>>(
                 if best.is_none_or(|(tb, _)| te < tb) {
                     best = Some((te, k));
                 }
-            } else if k < 2 || k == 5 {
-                // a contact or the stop may open and close inside one step
-                let mut ta = t0;
-                let mut gaa = ga;
-                for j in 1..4 {
-                    let tj = t0 + (acc.t - t0) * j as f64 / 4.0;
-                    let yj = interp(tj);
-                    let Some(evj) = ode.evaluate(&yj) else { break };
-                    let gj = pick(&gvals(&ode, &ctx, &yj, &evj, after_first), k);
-                    if crossed(k, active, gaa, gj) {
-                        let te = bracket(k, ta, gaa, tj, gj, &mut ode);
-                        if best.is_none_or(|(tb, _)| te < tb) {
-                            best = Some((te, k));
+            } else if (k < 2 || k == 5) && !sampled {
+                // a contact or the stop may open and close inside one step: sample inside
+                // only where the cubic through the end values and rates can change sign
+                let ri = if k == 5 { 2 } else { k };
+                if hermite_may_cross(ga, g.rate[ri], gb, g1.rate[ri], acc.t - t0) {
+                    sampled = true;
+                    let mut ta = t0;
+                    let mut gprev = g;
+                    for j in 1..=4 {
+                        let tj = t0 + (acc.t - t0) * j as f64 / 4.0;
+                        let gj = if j == 4 {
+                            g1
+                        } else {
+                            let yj = interp(tj);
+                            let Some(evj) = ode.evaluate(&yj) else { break };
+                            gvals(&ode, &ctx, &yj, &evj, after_first)
+                        };
+                        for kk in [0usize, 1, 5] {
+                            let (a, b) = (pick(&gprev, kk), pick(&gj, kk));
+                            if crossed(kk, active, a, b) && j < 4 {
+                                let te = bracket(kk, ta, a, tj, b, &mut ode);
+                                if best.is_none_or(|(tb, _)| te < tb) {
+                                    best = Some((te, kk));
+                                }
+                            }
                         }
-                        break;
+                        if best.is_some_and(|(tb, _)| tb <= tj) {
+                            break;
+                        }
+                        ta = tj;
+                        gprev = gj;
                     }
-                    ta = tj;
-                    gaa = gj;
                 }
             }
         }
@@ -752,6 +800,10 @@ pub struct DynamicsRecord {
     pub rejected_steps: Option<u64>,
     /// RHS evaluations.
     pub rhs_evals: Option<u64>,
+    /// Jacobian evaluations.
+    pub jac_evals: Option<u64>,
+    /// LU factorisations.
+    pub lu_count: Option<u64>,
     /// Events.
     pub events: Option<u32>,
     /// CPU seconds of stage 3.
@@ -787,6 +839,8 @@ impl DynamicsRecord {
             steps: Some(d.stats.steps),
             rejected_steps: Some(d.stats.rejected),
             rhs_evals: Some(d.rhs_evals),
+            jac_evals: Some(d.stats.jac),
+            lu_count: Some(d.stats.lu),
             events: Some(d.events),
             cpu_s: Some(d.cpu_s),
             knuckle_contact: Some(d.knuckle_flag),
