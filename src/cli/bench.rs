@@ -19,12 +19,33 @@ pub enum BenchCmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// CPU time against error (t of first contact, impact energy, t_stab, final forces) for
+    /// rtol 1e-3 … 1e-10 and each integrator; writes work_precision.csv and .svg.
+    WorkPrecision {
+        /// Problem file.
+        #[arg(default_value = "problems/bottle-1l.toml")]
+        problem: PathBuf,
+        /// Design (default: the problem's nominal).
+        #[arg(long)]
+        design: Option<String>,
+        /// Output folder.
+        #[arg(long, default_value = "results/bench")]
+        out: PathBuf,
+        /// Maximum repetitions per point (each point also stops after ~1 s).
+        #[arg(long, default_value_t = 200)]
+        reps: usize,
+    },
 }
 
 /// Run a benchmark.
 pub fn run(b: BenchCmd) -> Result<()> {
     match b {
         BenchCmd::Static { problem, n, seed } => bench_static(&problem, n, seed),
+        BenchCmd::WorkPrecision { problem, design, out, reps } => {
+            let p = super::load_problem(&problem)?;
+            let x = super::design_of(&p, &design)?;
+            super::workprec::run(&problem, x, &out, reps)
+        }
     }
 }
 

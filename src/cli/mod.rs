@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 mod bench;
 mod report;
+mod workprec;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]

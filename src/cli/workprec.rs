@@ -1,0 +1,157 @@
+//! `gripopt bench work-precision`: CPU time against error for each integrator.
+
+use anyhow::{Context, Result};
+use gripopt::pipeline::{evaluate, stage_kinematics, stage_statics, EvalOptions};
+use gripopt::problem::{Design, Problem};
+use gripopt::sim::grasp::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+/// One row of the work-precision table.
+struct Row {
+    method: Method,
+    rtol: f64,
+    cpu_min: f64,
+    cpu_med: f64,
+    steps: u64,
+    rhs: u64,
+    err_t_first: f64,
+    err_e_cyl: f64,
+    err_t_stab: f64,
+    err_force: f64,
+    verdict_same: bool,
+}
+
+fn rel(a: Option<f64>, b: Option<f64>) -> f64 {
+    match (a, b) {
+        (Some(a), Some(b)) if b != 0.0 => ((a - b) / b).abs(),
+        _ => f64::NAN,
+    }
+}
+
+fn time_it<F: FnMut() -> DynamicsResult>(mut f: F, budget_s: f64, max_reps: usize) -> (DynamicsResult, f64, f64) {
+    let mut ts = vec![];
+    let start = Instant::now();
+    let mut last = None;
+    while ts.len() < 3 || (start.elapsed().as_secs_f64() < budget_s && ts.len() < max_reps) {
+        let t0 = Instant::now();
+        let r = f();
+        ts.push(t0.elapsed().as_secs_f64());
+        last = Some(r);
+    }
+    ts.sort_by(f64::total_cmp);
+    (last.expect("ran"), ts[0], ts[ts.len() / 2])
+}
+
+/// Run the benchmark and write CSV + SVG into `out_dir`.
+pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Result<()> {
+    let p = Problem::load(problem)?;
+    let s = &p.scene;
+    let k = stage_kinematics(&design, s).map_err(|d| anyhow::anyhow!("design discarded at stage {}: {}", d.stage, d.reason))?;
+    let st = stage_statics(&k.finger, s).map_err(|d| anyhow::anyhow!("design discarded at stage {}: {}", d.stage, d.reason))?;
+    let f = k.finger;
+    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, rtol * 1e-3, 5_000_000) };
+    let reference = simulate_grasp(&f, s, &st, &diag(Method::Radau5, 1e-12));
+    let check = simulate_grasp(&f, s, &st, &diag(Method::Dopri5, 1e-12));
+    let t_ref = reference.t_stab.context("the reference run did not reach stability")?;
+    println!("reference: Radau IIA rtol 1e-12: t_first {:.12e} s, E_cyl {:.12e} J, t_stab {:.12e} s, f_stab ({:.9}, {:.9}) N", reference.first.map(|x| x.t).unwrap_or(f64::NAN), reference.first.map(|x| x.impact.e_cyl).unwrap_or(f64::NAN), t_ref, reference.f_end[0], reference.f_end[1]);
+    println!("           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab", rel(check.t_stab, reference.t_stab));
+    let methods = [Method::Radau5, Method::TrBdf2, Method::Dopri5];
+    let rtols = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10];
+    let pb = indicatif::ProgressBar::new((methods.len() * rtols.len()) as u64);
+    pb.set_style(indicatif::ProgressStyle::with_template("work-precision [{bar:30}] {pos}/{len} {msg}").expect("template"));
+    let mut rows = vec![];
+    for m in methods {
+        for &rtol in &rtols {
+            pb.set_message(format!("{m:?} rtol {rtol:e}"));
+            let o = diag(m, rtol);
+            let (r, tmin, tmed) = time_it(|| simulate_grasp(&f, s, &st, &o), 1.0, reps);
+            let ef = r.f_end.iter().zip(reference.f_end.iter()).map(|(a, b)| ((a - b) / b).abs()).fold(0.0, f64::max);
+            rows.push(Row {
+                method: m,
+                rtol,
+                cpu_min: tmin,
+                cpu_med: tmed,
+                steps: r.stats.steps,
+                rhs: r.rhs_evals,
+                err_t_first: rel(r.first.map(|x| x.t), reference.first.map(|x| x.t)),
+                err_e_cyl: rel(r.first.map(|x| x.impact.e_cyl), reference.first.map(|x| x.impact.e_cyl)),
+                err_t_stab: rel(r.t_stab, reference.t_stab),
+                err_force: if r.t_stab.is_some() { ef } else { f64::NAN },
+                verdict_same: r.outcome == reference.outcome,
+            });
+            pb.inc(1);
+        }
+    }
+    pb.finish_and_clear();
+    std::fs::create_dir_all(out_dir).with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let csv = out_dir.join("work_precision.csv");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?);
+    writeln!(w, "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict")?;
+    println!("{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} {}", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)", "verdict");
+    for r in &rows {
+        writeln!(w, "{:?},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}", r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, r.verdict_same)?;
+        println!("{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", format!("{:?}", r.method), r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
+    }
+    w.flush()?;
+    // cheapest run meeting 1e-5 on t_stab, per method
+    for m in methods {
+        let best = rows.iter().filter(|r| r.method == m && r.err_t_stab <= 1e-5).min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
+        match best {
+            Some(r) => println!("{m:?}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
+            None => println!("{m:?}: no tolerance reached 1e-5 on t_stab"),
+        }
+    }
+    // whole staged evaluation (stages 0–3, pipeline mode, max_offset scan included)
+    let opts = EvalOptions::full(&p);
+    let mut ts = vec![];
+    for _ in 0..reps.max(20) {
+        let t0 = Instant::now();
+        std::hint::black_box(evaluate(&design, s, &opts));
+        ts.push(t0.elapsed().as_secs_f64());
+    }
+    ts.sort_by(f64::total_cmp);
+    let ev = evaluate(&design, s, &opts);
+    println!("whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}", p.solver.rtol, ts[0] * 1e3, ts[ts.len() / 2] * 1e3, ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into()));
+    plot(&rows, &out_dir.join("work_precision.svg"))?;
+    println!("wrote {} and {}", csv.display(), out_dir.join("work_precision.svg").display());
+    let _ = t_ref;
+    Ok(())
+}
+
+fn plot(rows: &[Row], path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let pts: Vec<_> = rows.iter().filter(|r| r.err_t_stab.is_finite() && r.err_t_stab > 0.0).collect();
+    let (xmin, xmax) = pts.iter().fold((1e-14f64, 1.0f64), |(a, b), r| (a.min(r.err_t_stab), b.max(r.err_t_stab)));
+    let (ymin, ymax) = pts.iter().fold((1e-4f64, 1e-3f64), |(a, b), r| (a.min(r.cpu_med), b.max(r.cpu_med)));
+    let mut chart = ChartBuilder::on(&root)
+        .caption("work-precision: nominal grasp to t_stab", ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((xmin * 0.5..xmax * 2.0).log_scale(), (ymin * 0.8..ymax * 1.25).log_scale())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    chart
+        .configure_mesh()
+        .x_desc("relative error in t_stab")
+        .y_desc("CPU time, median (s)")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    for (m, color) in [(Method::Radau5, RED), (Method::TrBdf2, BLUE), (Method::Dopri5, GREEN)] {
+        let series: Vec<(f64, f64)> = pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect();
+        chart
+            .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
+            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .label(format!("{m:?}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart.draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
+    chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw().map_err(|e| anyhow::anyhow!("{e}"))?;
+    root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(())
+}
