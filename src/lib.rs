@@ -7,6 +7,7 @@
 
 pub mod math;
 pub mod model;
+pub mod optim;
 pub mod pipeline;
 pub mod problem;
 pub mod sim;

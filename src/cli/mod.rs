@@ -6,6 +6,7 @@ use gripopt::problem::{Design, Problem};
 use std::path::PathBuf;
 
 mod bench;
+mod optcmd;
 mod report;
 mod workprec;
 
@@ -52,6 +53,27 @@ enum Cmd {
         /// Write the trajectory (accepted steps and events) to this CSV file.
         #[arg(long)]
         csv: Option<PathBuf>,
+    },
+    /// Validate the optimiser on standard problems (ZDT1-3, DTLZ2, BNH, TNK, OSY, C2DTLZ2):
+    /// hypervolume and IGD of the final feasible non-dominated set.
+    MooTest {
+        /// Problem name, or `all`.
+        name: String,
+        /// Seed of one run.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// A range of seeds, e.g. 1-11 (prints the median against the reference band).
+        #[arg(long)]
+        seeds: Option<String>,
+        /// One JSON object per run: problem, seed, hv, igd, evaluations, wall_s.
+        #[arg(long)]
+        json: bool,
+        /// Population size.
+        #[arg(long, default_value_t = 100)]
+        pop: usize,
+        /// Generations (default: 250 for ZDT and DTLZ2, 200 otherwise; 1 = initial population).
+        #[arg(long)]
+        generations: Option<u64>,
     },
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
@@ -117,6 +139,15 @@ pub fn run() -> Result<()> {
             let rtol = check_rtol(rtol)?;
             report::simulate(&p, &x, rtol, method.to_method(), json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
+        }
+        Cmd::MooTest { name, seed, seeds, json, pop, generations } => {
+            if pop < 2 {
+                anyhow::bail!("--pop {pop}: must be at least 2");
+            }
+            if generations == Some(0) {
+                anyhow::bail!("--generations 0: must be at least 1");
+            }
+            optcmd::moo_test(&name, seed, seeds, json, pop, generations)
         }
         Cmd::Bench { which } => bench::run(which),
     }

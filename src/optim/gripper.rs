@@ -1,0 +1,111 @@
+//! The gripper design problem: the staged pipeline as a [`MooProblem`] over
+//! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10).
+
+use super::{Evaluated, Infeasibility, MooProblem};
+use crate::pipeline::{evaluate, EvalOptions, Evaluation};
+use crate::problem::{Design, Problem};
+use serde::{Deserialize, Serialize};
+
+/// What is kept of each evaluated design (deterministic fields, plus wall-clock timings).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GripperInfo {
+    /// Derived lengths l11, l12, l22 (m), when stage 1 built the finger.
+    pub lengths: Option<[f64; 3]>,
+    /// l_hand (m).
+    pub l_hand: f64,
+    /// Objectives in natural sense: max_offset (m), α, F̃ (N), t_stab (s); null if not computed.
+    pub objectives: [Option<f64>; 4],
+    /// Failing stage, if discarded.
+    pub failed_stage: Option<u8>,
+    /// Why.
+    pub reason: Option<String>,
+    /// Violation.
+    pub violation: Option<f64>,
+    /// Stage-3 work: accepted steps and RHS evaluations (deterministic).
+    pub sim_work: Option<[u64; 2]>,
+    /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
+    pub stage_seconds: [f64; 4],
+}
+
+impl GripperInfo {
+    /// From a pipeline evaluation.
+    pub fn from_eval(ev: &Evaluation) -> Self {
+        let st = ev.statics;
+        let t_stab = match (&ev.dynamics, &ev.discard) {
+            (Some(d), _) => d.t_stab,
+            _ => None,
+        };
+        GripperInfo {
+            lengths: ev.kin.map(|k| [k.finger.l11, k.finger.l12, k.finger.l22]),
+            l_hand: ev.design.l_hand(),
+            objectives: [st.map(|s| s.max_offset), st.map(|s| s.alpha).filter(|a| a.is_finite()), st.map(|s| s.mean_force), t_stab],
+            failed_stage: ev.discard.map(|d| d.stage),
+            reason: ev.discard.map(|d| d.reason.to_string()),
+            violation: ev.discard.map(|d| d.violation),
+            sim_work: ev.dynamics.map(|d| [d.stats.steps, d.rhs_evals]),
+            stage_seconds: ev.stage_seconds,
+        }
+    }
+}
+
+/// The gripper problem for the optimiser.
+#[derive(Debug, Clone)]
+pub struct GripperProblem {
+    /// The loaded problem file.
+    pub problem: Problem,
+    /// Pipeline options (stage 3 in pipeline mode).
+    pub options: EvalOptions,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl GripperProblem {
+    /// Wrap a problem file.
+    pub fn new(problem: Problem) -> Self {
+        let options = EvalOptions::full(&problem);
+        let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
+        GripperProblem { problem, options, lo, hi }
+    }
+
+    /// Objectives used for ranking: feasible designs have all four; missing values are the
+    /// finite placeholders of MODEL.md §10 (they are never compared: only feasible designs
+    /// are ranked by objectives).
+    pub fn minimisation_objectives(&self, ev: &Evaluation) -> Vec<f64> {
+        let o = ev.objectives();
+        let ph = [self.problem.scene.offset_step, 1e6, 0.0, self.problem.scene.t_max];
+        (0..4).map(|k| if o[k].is_finite() { o[k] } else { ph[k] }).collect()
+    }
+
+    /// Ideal and reference points for the progress hypervolume (minimisation form):
+    /// max_offset ∈ [0, off_max], α ∈ [0, 1], F̃ ∈ [0, 2τ/l21_min], t_stab ∈ [0, t_max].
+    pub fn hv_points(&self) -> (Vec<f64>, Vec<f64>) {
+        let s = &self.problem.scene;
+        let fmax = 2.0 * s.tau / self.problem.bounds.lo[0];
+        (vec![-s.offset_max, 0.0, -fmax, 0.0], vec![0.0, 1.0, 0.0, s.t_max])
+    }
+}
+
+impl MooProblem for GripperProblem {
+    type Info = GripperInfo;
+    fn name(&self) -> String {
+        self.problem.name.clone()
+    }
+    fn lower(&self) -> &[f64] {
+        &self.lo
+    }
+    fn upper(&self) -> &[f64] {
+        &self.hi
+    }
+    fn n_obj(&self) -> usize {
+        4
+    }
+    fn evaluate(&self, x: &[f64]) -> Evaluated<GripperInfo> {
+        let arr: [f64; 6] = x.try_into().expect("six design variables");
+        let ev = evaluate(&Design::from_array(&arr), &self.problem.scene, &self.options);
+        let cv = match ev.discard {
+            None => Infeasibility::FEASIBLE,
+            Some(d) => Infeasibility { stages_short: 4 - d.stage, violation: d.violation },
+        };
+        Evaluated { f: self.minimisation_objectives(&ev), cv, info: GripperInfo::from_eval(&ev) }
+    }
+}

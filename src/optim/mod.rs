@@ -1,0 +1,125 @@
+//! Multi-objective optimisation: NSGA-II with constrained domination, in the
+//! Problem / Algorithm / Termination vocabulary of pymoo and run by argmin's `Executor`.
+//!
+//! - [`MooProblem`]: what is optimised (bounds, objectives in minimisation form, staged
+//!   infeasibility, per-design info kept for reports);
+//! - [`nsga2`]: the algorithm (argmin `Solver`) and its state (argmin `State`);
+//! - [`sort`]: non-dominated sorting and crowding; [`operators`]: SBX, polynomial mutation;
+//! - [`hv`]: exact hypervolume and IGD; [`testproblems`]: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
+//! - [`gripper`]: the gripper design problem over the staged pipeline;
+//! - [`checkpoint`]: atomic, portable checkpoints and exact resume.
+
+pub mod checkpoint;
+pub mod gripper;
+pub mod hv;
+pub mod nsga2;
+pub mod operators;
+pub mod run;
+pub mod sort;
+pub mod testproblems;
+
+use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use std::cmp::Ordering;
+
+/// How infeasible a solution is: the number of pipeline stages it fell short of, then the
+/// violation at the failing stage. `(0, 0)` is feasible. Lexicographic order: smaller is better.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Infeasibility {
+    /// Stages not reached (0 = all passed).
+    pub stages_short: u8,
+    /// Non-negative violation at the failing stage (sum of violations for plain problems).
+    pub violation: f64,
+}
+
+impl Infeasibility {
+    /// The feasible value.
+    pub const FEASIBLE: Infeasibility = Infeasibility { stages_short: 0, violation: 0.0 };
+
+    /// From a sum of constraint violations (test problems).
+    pub fn from_violation(v: f64) -> Self {
+        if v > 0.0 {
+            Infeasibility { stages_short: 1, violation: v }
+        } else {
+            Self::FEASIBLE
+        }
+    }
+    /// True when feasible.
+    pub fn is_feasible(&self) -> bool {
+        self.stages_short == 0
+    }
+    /// Lexicographic comparison (smaller = better).
+    pub fn cmp_key(&self, o: &Self) -> Ordering {
+        self.stages_short.cmp(&o.stages_short).then(self.violation.total_cmp(&o.violation))
+    }
+}
+
+/// The result of evaluating one decision vector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Evaluated<I> {
+    /// Objectives in minimisation form (only used when feasible).
+    pub f: Vec<f64>,
+    /// Infeasibility.
+    pub cv: Infeasibility,
+    /// Problem-specific information kept for reports.
+    pub info: I,
+}
+
+/// A multi-objective problem with box bounds.
+pub trait MooProblem: Sync {
+    /// Per-design information kept with each individual (reports, CSV rows).
+    type Info: Clone + Send + Sync + Serialize + DeserializeOwned + std::fmt::Debug;
+    /// Name.
+    fn name(&self) -> String;
+    /// Lower bounds.
+    fn lower(&self) -> &[f64];
+    /// Upper bounds.
+    fn upper(&self) -> &[f64];
+    /// Number of objectives.
+    fn n_obj(&self) -> usize;
+    /// Evaluate one decision vector (must be deterministic: results may not depend on the
+    /// thread that runs it).
+    fn evaluate(&self, x: &[f64]) -> Evaluated<Self::Info>;
+    /// Number of variables.
+    fn n_var(&self) -> usize {
+        self.lower().len()
+    }
+}
+
+/// One member of a population.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(bound = "I: Serialize + DeserializeOwned")]
+pub struct Individual<I> {
+    /// Unique id within a run (0, 1, 2, … in order of creation).
+    pub id: u64,
+    /// Generation in which it was created (1 = initial population).
+    pub generation: u64,
+    /// Decision vector.
+    pub x: Vec<f64>,
+    /// Evaluation.
+    pub eval: Evaluated<I>,
+}
+
+/// Constrained domination (Deb): does `a` dominate `b`?
+pub fn constrained_dominates(af: &[f64], acv: &Infeasibility, bf: &[f64], bcv: &Infeasibility) -> bool {
+    match (acv.is_feasible(), bcv.is_feasible()) {
+        (true, false) => true,
+        (false, true) => false,
+        (false, false) => acv.cmp_key(bcv) == Ordering::Less,
+        (true, true) => dominates(af, bf),
+    }
+}
+
+/// Pareto domination for minimisation.
+#[inline]
+pub fn dominates(a: &[f64], b: &[f64]) -> bool {
+    let mut strictly = false;
+    for (x, y) in a.iter().zip(b) {
+        if x > y {
+            return false;
+        }
+        if x < y {
+            strictly = true;
+        }
+    }
+    strictly
+}

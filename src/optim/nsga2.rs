@@ -1,0 +1,366 @@
+//! NSGA-II (Deb et al. 2002) with constrained domination, as an argmin `Solver` whose
+//! `State` holds everything a run needs to continue: population, ranks, counters and
+//! history. Variation draws from per-mating ChaCha streams derived from the seed, the
+//! generation and the mating index, so a run is fixed by its seed, independent of the
+//! thread count, and resumes exactly from a saved state without any RNG state.
+
+use super::operators::{polynomial_mutation, sbx, Operators};
+use super::sort::{rank_and_crowding, survivors_with_attributes};
+use super::{hv::hypervolume, Individual, MooProblem};
+use argmin::core::{Error, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use std::collections::{HashMap, HashSet};
+use std::time::Duration;
+
+/// Algorithm settings (everything that changes the result, except the generation count).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Nsga2Settings {
+    /// Population size.
+    pub pop_size: usize,
+    /// Seed of all random streams.
+    pub seed: u64,
+    /// Variation operators.
+    pub operators: Operators,
+    /// Eliminate duplicate offspring (re-mutate up to 20 times).
+    pub eliminate_duplicates: bool,
+    /// Hypervolume normalisation for progress: ideal point (raw objectives).
+    pub hv_ideal: Vec<f64>,
+    /// Hypervolume normalisation: reference point (raw objectives); HV is reported for the
+    /// normalised objectives (f − ideal)/(ref − ideal) with reference (1, …, 1).
+    pub hv_ref: Vec<f64>,
+}
+
+/// The optimiser state: what a checkpoint stores.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(bound = "I: Serialize + DeserializeOwned")]
+pub struct Nsga2State<I> {
+    /// Current population (survivors of the last generation).
+    pub population: Vec<Individual<I>>,
+    /// Front index of each member.
+    pub rank: Vec<usize>,
+    /// Crowding distance of each member.
+    pub crowding: Vec<f64>,
+    /// Completed generations (1 after the initial population).
+    pub generation: u64,
+    /// Total generations to run.
+    pub max_generations: u64,
+    /// Next design id.
+    pub next_id: u64,
+    /// Evaluations so far.
+    pub evaluations: u64,
+    /// Normalised hypervolume of the feasible non-dominated set, per generation.
+    pub hv_history: Vec<f64>,
+    /// Number of feasible members, per generation.
+    pub feasible_history: Vec<usize>,
+    /// Individuals evaluated in the last generation (for recorders; not checkpointed).
+    #[serde(skip)]
+    pub last_evaluated: Vec<Individual<I>>,
+    #[serde(skip)]
+    status: TerminationStatus,
+    #[serde(skip)]
+    counts: HashMap<String, u64>,
+    #[serde(skip)]
+    time: Option<Duration>,
+}
+
+impl<I> Nsga2State<I> {
+    /// Members of the first front that are feasible.
+    pub fn feasible_front(&self) -> Vec<&Individual<I>> {
+        self.population.iter().zip(&self.rank).filter(|(p, r)| **r == 0 && p.eval.cv.is_feasible()).map(|(p, _)| p).collect()
+    }
+    /// Set the total number of generations (resume with a new total).
+    pub fn with_max_generations(mut self, g: u64) -> Self {
+        self.max_generations = g;
+        self
+    }
+}
+
+impl<I> State for Nsga2State<I> {
+    type Param = Vec<f64>;
+    type Float = f64;
+
+    fn new() -> Self {
+        Nsga2State {
+            population: vec![],
+            rank: vec![],
+            crowding: vec![],
+            generation: 0,
+            max_generations: 1,
+            next_id: 0,
+            evaluations: 0,
+            hv_history: vec![],
+            feasible_history: vec![],
+            last_evaluated: vec![],
+            status: TerminationStatus::NotTerminated,
+            counts: HashMap::new(),
+            time: None,
+        }
+    }
+    fn update(&mut self) {}
+    fn get_param(&self) -> Option<&Vec<f64>> {
+        self.population.first().map(|p| &p.x)
+    }
+    fn get_best_param(&self) -> Option<&Vec<f64>> {
+        self.feasible_front().first().map(|p| &p.x)
+    }
+    /// Generations are counted from 1 (the initial population); argmin's iteration count
+    /// is the number of generations after the first.
+    fn get_max_iters(&self) -> u64 {
+        self.max_generations.saturating_sub(1)
+    }
+    fn increment_iter(&mut self) {}
+    fn get_iter(&self) -> u64 {
+        self.generation.saturating_sub(1)
+    }
+    fn get_cost(&self) -> f64 {
+        -self.hv_history.last().copied().unwrap_or(0.0)
+    }
+    fn get_best_cost(&self) -> f64 {
+        self.get_cost()
+    }
+    fn get_target_cost(&self) -> f64 {
+        f64::NEG_INFINITY
+    }
+    fn func_counts<O>(&mut self, problem: &Problem<O>) {
+        for (k, v) in problem.counts.iter() {
+            self.counts.insert(k.to_string(), *v);
+        }
+    }
+    fn get_func_counts(&self) -> &HashMap<String, u64> {
+        &self.counts
+    }
+    fn time(&mut self, time: Option<Duration>) -> &mut Self {
+        self.time = time;
+        self
+    }
+    fn get_time(&self) -> Option<Duration> {
+        self.time
+    }
+    fn get_last_best_iter(&self) -> u64 {
+        self.get_iter()
+    }
+    fn is_best(&self) -> bool {
+        true
+    }
+    fn terminate_with(mut self, reason: TerminationReason) -> Self {
+        self.status = TerminationStatus::Terminated(reason);
+        self
+    }
+    fn get_termination_status(&self) -> &TerminationStatus {
+        &self.status
+    }
+    fn get_termination_reason(&self) -> Option<&TerminationReason> {
+        match &self.status {
+            TerminationStatus::Terminated(r) => Some(r),
+            TerminationStatus::NotTerminated => None,
+        }
+    }
+}
+
+/// The NSGA-II solver.
+#[derive(Debug, Clone)]
+pub struct Nsga2 {
+    /// Settings.
+    pub settings: Nsga2Settings,
+}
+
+fn stream(seed: u64, generation: u64, k: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream((generation << 32) ^ k);
+    r
+}
+
+fn bits(x: &[f64]) -> Vec<u64> {
+    x.iter().map(|v| v.to_bits()).collect()
+}
+
+impl Nsga2 {
+    /// New solver.
+    pub fn new(settings: Nsga2Settings) -> Self {
+        Nsga2 { settings }
+    }
+
+    fn evaluate_all<P: MooProblem>(&self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> Vec<Individual<P::Info>> {
+        let evals: Vec<_> = xs.par_iter().map(|x| p.evaluate(x)).collect();
+        xs.into_iter()
+            .zip(evals)
+            .enumerate()
+            .map(|(k, (x, eval))| Individual { id: first_id + k as u64, generation, x, eval })
+            .collect()
+    }
+
+    fn normalised_hv<I>(&self, pop: &[Individual<I>], rank: &[usize]) -> f64 {
+        let s = &self.settings;
+        if s.hv_ref.is_empty() {
+            return f64::NAN;
+        }
+        let pts: Vec<Vec<f64>> = pop
+            .iter()
+            .zip(rank)
+            .filter(|(p, r)| **r == 0 && p.eval.cv.is_feasible())
+            .map(|(p, _)| p.eval.f.iter().enumerate().map(|(k, v)| (v - s.hv_ideal[k]) / (s.hv_ref[k] - s.hv_ideal[k])).collect())
+            .collect();
+        hypervolume(&pts, &vec![1.0; s.hv_ref.len()])
+    }
+
+    fn finish_generation<I: Clone>(&self, mut state: Nsga2State<I>, pop: Vec<Individual<I>>, rank: Vec<usize>, crowd: Vec<f64>, evaluated: Vec<Individual<I>>) -> Nsga2State<I> {
+        state.hv_history.push(self.normalised_hv(&pop, &rank));
+        state.feasible_history.push(pop.iter().filter(|p| p.eval.cv.is_feasible()).count());
+        state.population = pop;
+        state.rank = rank;
+        state.crowding = crowd;
+        state.last_evaluated = evaluated;
+        state
+    }
+
+    /// Binary tournament between members `a` and `b`: smaller infeasibility key if either is
+    /// infeasible; for two feasible members domination, then larger crowding, then a coin.
+    fn tournament<I>(state: &Nsga2State<I>, a: usize, b: usize, rng: &mut ChaCha8Rng) -> usize {
+        let (pa, pb) = (&state.population[a].eval, &state.population[b].eval);
+        if !(pa.cv.is_feasible() && pb.cv.is_feasible()) {
+            return match pa.cv.cmp_key(&pb.cv) {
+                std::cmp::Ordering::Less => a,
+                std::cmp::Ordering::Greater => b,
+                _ => {
+                    if rng.random::<bool>() {
+                        a
+                    } else {
+                        b
+                    }
+                }
+            };
+        }
+        if super::dominates(&pa.f, &pb.f) {
+            return a;
+        }
+        if super::dominates(&pb.f, &pa.f) {
+            return b;
+        }
+        if state.crowding[a] != state.crowding[b] {
+            return if state.crowding[a] > state.crowding[b] { a } else { b };
+        }
+        if rng.random::<bool>() {
+            a
+        } else {
+            b
+        }
+    }
+}
+
+/// Tournament candidates: concatenated random permutations of 0..n (each member takes part
+/// in about the same number of tournaments), `count` entries.
+fn permutation_candidates(rng: &mut ChaCha8Rng, n: usize, count: usize) -> Vec<usize> {
+    let mut out = Vec::with_capacity(count + n);
+    while out.len() < count {
+        let mut p: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = rng.random_range(0..=i);
+            p.swap(i, j);
+        }
+        out.extend(p);
+    }
+    out.truncate(count);
+    out
+}
+
+impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
+    fn name(&self) -> &str {
+        "NSGA-II"
+    }
+
+    /// Generation 1: a random population (idempotent: a state that already has a
+    /// population, e.g. from a checkpoint, is returned unchanged).
+    fn init(&mut self, problem: &mut Problem<P>, state: Nsga2State<P::Info>) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
+        if !state.population.is_empty() {
+            return Ok((state, None));
+        }
+        let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
+        let (lo, hi) = (p.lower().to_vec(), p.upper().to_vec());
+        let n = self.settings.pop_size;
+        let xs: Vec<Vec<f64>> = (0..n)
+            .map(|k| {
+                let mut rng = stream(self.settings.seed, 1, k as u64);
+                (0..lo.len()).map(|i| lo[i] + rng.random::<f64>() * (hi[i] - lo[i])).collect()
+            })
+            .collect();
+        let pop = self.evaluate_all(p, xs, 0, 1);
+        *problem.counts.entry("evaluations").or_insert(0) += n as u64;
+        let mut state = state;
+        state.next_id = n as u64;
+        state.evaluations = n as u64;
+        state.generation = 1;
+        let evaluated = pop.clone();
+        let (rank, crowd) = {
+            let f: Vec<&[f64]> = pop.iter().map(|p| p.eval.f.as_slice()).collect();
+            let cv: Vec<_> = pop.iter().map(|p| p.eval.cv).collect();
+            rank_and_crowding(&f, &cv)
+        };
+        let state = self.finish_generation(state, pop, rank, crowd, evaluated);
+        Ok((state, None))
+    }
+
+    fn next_iter(&mut self, problem: &mut Problem<P>, state: Nsga2State<P::Info>) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
+        let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
+        let (lo, hi) = (p.lower(), p.upper());
+        let s = &self.settings;
+        let n = s.pop_size;
+        let g = state.generation + 1;
+        let mut seen: HashSet<Vec<u64>> = if s.eliminate_duplicates { state.population.iter().map(|p| bits(&p.x)).collect() } else { HashSet::new() };
+        let mut xs: Vec<Vec<f64>> = Vec::with_capacity(n + 1);
+        let matings = n.div_ceil(2);
+        // candidates for 2 tournaments (of 2) per mating; extra rounds if duplicates force more
+        let mut cand_rng = stream(s.seed, g, u32::MAX as u64);
+        let mut cand = permutation_candidates(&mut cand_rng, n, 4 * matings);
+        let mut k = 0u64;
+        while xs.len() < n {
+            let mut rng = stream(s.seed, g, k);
+            let base = 4 * k as usize;
+            if base + 4 > cand.len() {
+                cand.extend(permutation_candidates(&mut cand_rng, n, 4 * matings));
+            }
+            k += 1;
+            let a = Self::tournament(&state, cand[base], cand[base + 1], &mut rng);
+            let b = Self::tournament(&state, cand[base + 2], cand[base + 3], &mut rng);
+            let (c1, c2) = sbx(&mut rng, &state.population[a].x, &state.population[b].x, lo, hi, &s.operators);
+            for mut c in [c1, c2] {
+                polynomial_mutation(&mut rng, &mut c, lo, hi, &s.operators);
+                // duplicates of a member or of an earlier child are dropped and replaced by
+                // further matings (after 100 rounds of matings they are accepted)
+                if s.eliminate_duplicates && (k as usize) < 100 * matings && !seen.insert(bits(&c)) {
+                    continue;
+                }
+                if xs.len() < n {
+                    xs.push(c);
+                }
+            }
+        }
+        let offspring = self.evaluate_all(p, xs, state.next_id, g);
+        *problem.counts.entry("evaluations").or_insert(0) += n as u64;
+        let mut state = state;
+        state.next_id += n as u64;
+        state.evaluations += n as u64;
+        state.generation = g;
+        let mut merged = std::mem::take(&mut state.population);
+        merged.extend(offspring.iter().cloned());
+        let (keep, rank, crowd) = {
+            let f: Vec<&[f64]> = merged.iter().map(|p| p.eval.f.as_slice()).collect();
+            let cv: Vec<_> = merged.iter().map(|p| p.eval.cv).collect();
+            survivors_with_attributes(&f, &cv, n)
+        };
+        let mut slots: Vec<Option<Individual<P::Info>>> = merged.into_iter().map(Some).collect();
+        let pop: Vec<_> = keep.iter().map(|&i| slots[i].take().expect("each survivor once")).collect();
+        let state = self.finish_generation(state, pop, rank, crowd, offspring);
+        Ok((state, None))
+    }
+
+    fn terminate(&mut self, state: &Nsga2State<P::Info>) -> TerminationStatus {
+        if state.generation >= state.max_generations {
+            TerminationStatus::Terminated(TerminationReason::MaxItersReached)
+        } else {
+            TerminationStatus::NotTerminated
+        }
+    }
+}
