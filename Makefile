@@ -16,17 +16,24 @@ build:
 test:
 	$(CARGO) test --locked
 
-# The main job on the default problem: evaluation of the nominal design and its grasp.
+# The main job on the default problem: a short NSGA-II optimisation (pop 100, 40
+# generations, ~4 000 designs through all four stages) writing results/bottle-1l/.
+POP ?= 100
+GENERATIONS ?= 40
+SEED ?= 1
 run: build
 	@mkdir -p results
-	$(BIN) evaluate $(PROBLEM)
-	$(BIN) evaluate $(PROBLEM) --json > results/nominal.json
-	$(BIN) simulate $(PROBLEM) --csv results/nominal_grasp.csv
-	@echo "results written to results/nominal.json and results/nominal_grasp.csv"
+	@if [ -e $(OUT)/checkpoint.json ]; then echo "$(OUT) holds an earlier run: moving it to $(OUT).previous"; rm -rf $(OUT).previous; mv $(OUT) $(OUT).previous; fi
+	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
+	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
+	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
 
 # Speed figures (see docs/benchmarks.md). Not tests.
 bench: build
 	$(BIN) bench static $(PROBLEM)
+	$(BIN) bench work-precision $(PROBLEM)
+	$(BIN) bench nsga
+	$(BIN) moo-test all --seeds 1-11
 
 clean:
 	$(CARGO) clean

@@ -54,6 +54,40 @@ enum Cmd {
         #[arg(long)]
         csv: Option<PathBuf>,
     },
+    /// NSGA-II over the staged pipeline; checkpoints every generation into RUN_DIR.
+    Optimise {
+        /// Problem file (TOML).
+        problem: PathBuf,
+        /// Run folder (created; must not hold a run already).
+        #[arg(long)]
+        out: PathBuf,
+        /// Population size.
+        #[arg(long, default_value_t = 100)]
+        pop: usize,
+        /// Generations (1 = the random initial population).
+        #[arg(long, default_value_t = 50)]
+        generations: u64,
+        /// Seed (fixes the run).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads (default: all cores; results do not depend on it).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Continue a stopped, killed or finished run.
+    Resume {
+        /// Run folder.
+        run_dir: PathBuf,
+        /// New total number of generations (default: the run's).
+        #[arg(long)]
+        generations: Option<u64>,
+        /// Resume even if the problem file changed (recorded in run.json).
+        #[arg(long)]
+        force: bool,
+        /// Worker threads.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Validate the optimiser on standard problems (ZDT1-3, DTLZ2, BNH, TNK, OSY, C2DTLZ2):
     /// hypervolume and IGD of the final feasible non-dominated set.
     MooTest {
@@ -124,6 +158,13 @@ fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
     Ok(r)
 }
 
+fn check_threads(t: Option<usize>) -> Result<()> {
+    if t == Some(0) {
+        anyhow::bail!("--threads 0: must be at least 1");
+    }
+    Ok(())
+}
+
 /// Entry point.
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
@@ -139,6 +180,19 @@ pub fn run() -> Result<()> {
             let rtol = check_rtol(rtol)?;
             report::simulate(&p, &x, rtol, method.to_method(), json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
+        }
+        Cmd::Optimise { problem, out, pop, generations, seed, threads } => {
+            check_threads(threads)?;
+            let spec = gripopt::optim::rundir::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None };
+            let s = gripopt::optim::rundir::optimise(&spec)?;
+            optcmd::summary(&s);
+            Ok(())
+        }
+        Cmd::Resume { run_dir, generations, force, threads } => {
+            check_threads(threads)?;
+            let s = gripopt::optim::rundir::resume(&run_dir, generations, force, threads, true)?;
+            optcmd::summary(&s);
+            Ok(())
         }
         Cmd::MooTest { name, seed, seeds, json, pop, generations } => {
             if pop < 2 {

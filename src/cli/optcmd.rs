@@ -61,3 +61,14 @@ pub fn moo_test(name: &str, seed: Option<u64>, seeds: Option<String>, json: bool
     }
     Ok(())
 }
+
+/// Print where the results are.
+pub fn summary(s: &gripopt::optim::rundir::RunSummary) {
+    let d = s.out.display();
+    if s.interrupted {
+        println!("interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`", s.generations, s.evaluations);
+    } else {
+        println!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
+    }
+    println!("results in {d}/: pareto.csv (front), population.csv, history.csv, pareto_matrix.svg, hypervolume.svg, run.json, checkpoint.json");
+}

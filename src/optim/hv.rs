@@ -6,16 +6,12 @@
 
 /// Points strictly better than `r` in every objective, non-dominated among themselves.
 pub fn nondominated_below(points: &[Vec<f64>], r: &[f64]) -> Vec<Vec<f64>> {
-    let inside: Vec<&Vec<f64>> = points.iter().filter(|p| p.iter().zip(r).all(|(a, b)| a < b)).collect();
-    let mut out: Vec<Vec<f64>> = vec![];
-    for (i, p) in inside.iter().enumerate() {
-        let dominated = inside.iter().enumerate().any(|(j, q)| {
-            j != i && (super::dominates(q, p) || (q.as_slice() == p.as_slice() && j < i))
-        });
-        if !dominated {
-            out.push((*p).clone());
-        }
-    }
+    let inside: Vec<&[f64]> = points.iter().filter(|p| p.iter().zip(r).all(|(a, b)| a < b)).map(|p| p.as_slice()).collect();
+    // first front by the fast non-dominated sort, then drop repeated points
+    let rank = super::sort::pareto_ranks(&inside);
+    let mut out: Vec<Vec<f64>> = inside.iter().zip(&rank).filter(|(_, r)| **r == 0).map(|(p, _)| p.to_vec()).collect();
+    out.sort_by(|a, b| a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal));
+    out.dedup();
     out
 }
 

@@ -14,7 +14,10 @@ pub mod gripper;
 pub mod hv;
 pub mod nsga2;
 pub mod operators;
+pub mod plots;
 pub mod run;
+pub mod rundir;
+pub mod serde_f64;
 pub mod sort;
 pub mod testproblems;
 
@@ -57,6 +60,7 @@ impl Infeasibility {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Evaluated<I> {
     /// Objectives in minimisation form (only used when feasible).
+    #[serde(with = "serde_f64")]
     pub f: Vec<f64>,
     /// Infeasibility.
     pub cv: Infeasibility,
@@ -94,6 +98,7 @@ pub struct Individual<I> {
     /// Generation in which it was created (1 = initial population).
     pub generation: u64,
     /// Decision vector.
+    #[serde(with = "serde_f64")]
     pub x: Vec<f64>,
     /// Evaluation.
     pub eval: Evaluated<I>,

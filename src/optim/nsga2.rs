@@ -27,9 +27,11 @@ pub struct Nsga2Settings {
     /// Eliminate duplicate offspring (re-mutate up to 20 times).
     pub eliminate_duplicates: bool,
     /// Hypervolume normalisation for progress: ideal point (raw objectives).
+    #[serde(with = "super::serde_f64")]
     pub hv_ideal: Vec<f64>,
     /// Hypervolume normalisation: reference point (raw objectives); HV is reported for the
     /// normalised objectives (f − ideal)/(ref − ideal) with reference (1, …, 1).
+    #[serde(with = "super::serde_f64")]
     pub hv_ref: Vec<f64>,
 }
 
@@ -42,6 +44,7 @@ pub struct Nsga2State<I> {
     /// Front index of each member.
     pub rank: Vec<usize>,
     /// Crowding distance of each member.
+    #[serde(with = "super::serde_f64")]
     pub crowding: Vec<f64>,
     /// Completed generations (1 after the initial population).
     pub generation: u64,
@@ -52,6 +55,7 @@ pub struct Nsga2State<I> {
     /// Evaluations so far.
     pub evaluations: u64,
     /// Normalised hypervolume of the feasible non-dominated set, per generation.
+    #[serde(with = "super::serde_f64")]
     pub hv_history: Vec<f64>,
     /// Number of feasible members, per generation.
     pub feasible_history: Vec<usize>,
@@ -176,6 +180,30 @@ fn stream(seed: u64, generation: u64, k: u64) -> ChaCha8Rng {
 fn bits(x: &[f64]) -> Vec<u64> {
     x.iter().map(|v| v.to_bits()).collect()
 }
+
+/// A small multiply–rotate hasher (FxHash) for the duplicate set: the keys are not
+/// adversarial, and SipHash cost more than the rest of a generation's bookkeeping.
+#[derive(Default, Clone, Copy)]
+struct Fx(u64);
+impl std::hash::Hasher for Fx {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut b = [0u8; 8];
+            b[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(b));
+        }
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+type FxSet<T> = HashSet<T, std::hash::BuildHasherDefault<Fx>>;
 
 impl Nsga2 {
     /// New solver.
@@ -308,7 +336,7 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
         let s = &self.settings;
         let n = s.pop_size;
         let g = state.generation + 1;
-        let mut seen: HashSet<Vec<u64>> = if s.eliminate_duplicates { state.population.iter().map(|p| bits(&p.x)).collect() } else { HashSet::new() };
+        let mut seen: FxSet<Vec<u64>> = if s.eliminate_duplicates { state.population.iter().map(|p| bits(&p.x)).collect() } else { FxSet::default() };
         let mut xs: Vec<Vec<f64>> = Vec::with_capacity(n + 1);
         let matings = n.div_ceil(2);
         // candidates for 2 tournaments (of 2) per mating; extra rounds if duplicates force more

@@ -27,6 +27,25 @@ impl Default for Operators {
     }
 }
 
+/// x^e with fast paths: integer e (repeated multiplication) and e = ±1/2^k (square roots).
+#[inline]
+fn pow_fast(x: f64, e: f64) -> f64 {
+    if e == e.trunc() && e.abs() <= 64.0 {
+        return x.powi(e as i32);
+    }
+    let inv = 1.0 / e;
+    if inv == inv.trunc() && inv > 0.0 && (inv as u64).is_power_of_two() && inv <= 64.0 {
+        let mut y = x;
+        let mut k = inv as u64;
+        while k > 1 {
+            y = y.sqrt();
+            k /= 2;
+        }
+        return y;
+    }
+    x.powf(e)
+}
+
 /// SBX on two parents within [lo, hi]; returns two children.
 pub fn sbx<R: Rng>(rng: &mut R, a: &[f64], b: &[f64], lo: &[f64], hi: &[f64], op: &Operators) -> (Vec<f64>, Vec<f64>) {
     let mut c1 = a.to_vec();
@@ -43,11 +62,11 @@ pub fn sbx<R: Rng>(rng: &mut R, a: &[f64], b: &[f64], lo: &[f64], hi: &[f64], op
         let (yl, yu) = (lo[i], hi[i]);
         let u: f64 = rng.random();
         let betaq = |beta: f64| {
-            let alpha = 2.0 - beta.powf(-(eta + 1.0));
+            let alpha = 2.0 - pow_fast(beta, -(eta + 1.0));
             if u <= 1.0 / alpha {
-                (u * alpha).powf(1.0 / (eta + 1.0))
+                pow_fast(u * alpha, 1.0 / (eta + 1.0))
             } else {
-                (1.0 / (2.0 - u * alpha)).powf(1.0 / (eta + 1.0))
+                pow_fast(1.0 / (2.0 - u * alpha), 1.0 / (eta + 1.0))
             }
         };
         let d = y2 - y1;
@@ -86,11 +105,11 @@ pub fn polynomial_mutation<R: Rng>(rng: &mut R, x: &mut [f64], lo: &[f64], hi: &
         let u: f64 = rng.random();
         let mp = 1.0 / (eta + 1.0);
         let dq = if u < 0.5 {
-            let v = 2.0 * u + (1.0 - 2.0 * u) * (1.0 - d1).powf(eta + 1.0);
-            v.powf(mp) - 1.0
+            let v = 2.0 * u + (1.0 - 2.0 * u) * pow_fast(1.0 - d1, eta + 1.0);
+            pow_fast(v, mp) - 1.0
         } else {
-            let v = 2.0 * (1.0 - u) + 2.0 * (u - 0.5) * (1.0 - d2).powf(eta + 1.0);
-            1.0 - v.powf(mp)
+            let v = 2.0 * (1.0 - u) + 2.0 * (u - 0.5) * pow_fast(1.0 - d2, eta + 1.0);
+            1.0 - pow_fast(v, mp)
         };
         x[i] = (y + dq * (yu - yl)).clamp(yl, yu);
     }
@@ -100,6 +119,16 @@ pub fn polynomial_mutation<R: Rng>(rng: &mut R, x: &mut [f64], lo: &[f64], hi: &
 mod tests {
     use super::*;
     use rand::SeedableRng;
+
+    #[test]
+    fn fast_powers_match_powf() {
+        for &x in &[1e-3, 0.37, 1.0, 2.5, 17.0] {
+            for &e in &[-16.0, 16.0, 21.0, 1.0 / 16.0, 1.0 / 2.0, 1.0 / 21.0, 0.3] {
+                let (a, b) = (pow_fast(x, e), f64::powf(x, e));
+                assert!((a - b).abs() <= 1e-13 * b.abs(), "{x}^{e}: {a} vs {b}");
+            }
+        }
+    }
 
     #[test]
     fn operators_stay_in_bounds_and_sbx_preserves_the_mean() {

@@ -1,0 +1,89 @@
+//! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
+
+use super::gripper::{GripperInfo, GripperProblem};
+use super::nsga2::Nsga2State;
+use plotters::prelude::*;
+use std::path::Path;
+
+fn e<E: std::fmt::Display>(x: E) -> anyhow::Error {
+    anyhow::anyhow!("plot: {x}")
+}
+
+/// Scatter matrix of the four objectives (natural sense) of the feasible final population;
+/// the non-dominated front in red.
+pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> anyhow::Result<()> {
+    let names = ["max_offset (mm)", "alpha", "mean force (N)", "t_stab (ms)"];
+    let scale = [1e3, 1.0, 1.0, 1e3];
+    let pts: Vec<([f64; 4], bool)> = st
+        .population
+        .iter()
+        .zip(&st.rank)
+        .filter(|(p, _)| p.eval.cv.is_feasible())
+        .map(|(p, r)| {
+            let o = &p.eval.info.objectives;
+            ([0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k]), *r == 0)
+        })
+        .collect();
+    let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let root = root.titled(&format!("final population: {} feasible, generation {}", pts.len(), st.generation), ("sans-serif", 20)).map_err(e)?;
+    let cells = root.split_evenly((4, 4));
+    for (idx, cell) in cells.iter().enumerate() {
+        let (row, col) = (idx / 4, idx % 4);
+        let range = |k: usize| {
+            let (lo, hi) = pts.iter().map(|p| p.0[k]).filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+            if lo.is_finite() && hi > lo {
+                let m = 0.05 * (hi - lo);
+                (lo - m)..(hi + m)
+            } else if lo.is_finite() {
+                (lo - 1.0)..(hi + 1.0)
+            } else {
+                0.0..1.0
+            }
+        };
+        let mut chart = ChartBuilder::on(cell)
+            .margin(4)
+            .x_label_area_size(if row == 3 { 30 } else { 12 })
+            .y_label_area_size(if col == 0 { 45 } else { 12 })
+            .build_cartesian_2d(range(col), range(row))
+            .map_err(e)?;
+        let mut mesh = chart.configure_mesh();
+        mesh.x_labels(3).y_labels(3);
+        if row == 3 {
+            mesh.x_desc(names[col]);
+        }
+        if col == 0 {
+            mesh.y_desc(names[row]);
+        }
+        mesh.draw().map_err(e)?;
+        if row == col {
+            continue;
+        }
+        chart
+            .draw_series(pts.iter().filter(|p| !p.1).map(|p| Circle::new((p.0[col], p.0[row]), 2, RGBColor(150, 150, 150).filled())))
+            .map_err(e)?;
+        chart.draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled()))).map_err(e)?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// Normalised hypervolume of the feasible front per generation.
+pub fn hypervolume(path: &Path, hv: &[f64]) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let ymax = hv.iter().cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("hypervolume of the feasible front (normalised objectives)", ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(35)
+        .y_label_area_size(60)
+        .build_cartesian_2d(1f64..(hv.len().max(2) as f64), 0f64..ymax)
+        .map_err(e)?;
+    chart.configure_mesh().x_desc("generation").y_desc("hypervolume").draw().map_err(e)?;
+    chart
+        .draw_series(LineSeries::new(hv.iter().enumerate().map(|(g, v)| (g as f64 + 1.0, if v.is_finite() { *v } else { 0.0 })), BLUE.stroke_width(2)))
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}

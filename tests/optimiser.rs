@@ -1,0 +1,171 @@
+//! Optimiser runs: determinism, exact resume (crash, kill -9, extension), refusal of
+//! changed inputs, corrupt checkpoints, and the reference hypervolume bands.
+use gripopt::optim::rundir::{optimise, resume, RunSpec};
+use gripopt::optim::testproblems::{run_test, TestProblem};
+use std::path::{Path, PathBuf};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gripopt-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
+    RunSpec {
+        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
+        out: out.to_path_buf(),
+        pop: 12,
+        generations,
+        seed: 7,
+        threads: Some(threads),
+        progress: false,
+        crash_after: None,
+    }
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The population without the wall-clock timings (the only non-deterministic field).
+fn population_json(dir: &Path) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_str(&read(&dir.join("checkpoint.json"))).unwrap();
+    let mut pop = v["state"]["population"].take();
+    for ind in pop.as_array_mut().unwrap() {
+        ind["eval"]["info"]["stage_seconds"] = serde_json::Value::Null;
+    }
+    pop
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let (a, b) = (tmp("t1"), tmp("t2"));
+    optimise(&spec(&a, 4, 1)).unwrap();
+    optimise(&spec(&b, 4, 2)).unwrap();
+    assert_eq!(read(&a.join("pareto.csv")), read(&b.join("pareto.csv")));
+    assert_eq!(population_json(&a), population_json(&b));
+    assert!(read(&a.join("pareto.csv")).len() > 200, "the front is not empty");
+}
+
+#[test]
+fn crash_and_resume_is_bit_identical() {
+    let (full, cut) = (tmp("full"), tmp("cut"));
+    optimise(&spec(&full, 6, 2)).unwrap();
+    let mut s = spec(&cut, 6, 2);
+    s.crash_after = Some(3);
+    let e = optimise(&s).unwrap_err().to_string();
+    assert!(e.contains("resume"), "{e}");
+    let run: serde_json::Value = serde_json::from_str(&read(&cut.join("run.json"))).unwrap();
+    assert_eq!(run["status"], "interrupted");
+    let r = resume(&cut, None, false, Some(1), false).unwrap();
+    assert_eq!(r.generations, 6);
+    assert_eq!(read(&full.join("pareto.csv")), read(&cut.join("pareto.csv")));
+    assert_eq!(read(&full.join("population.csv")), read(&cut.join("population.csv")));
+    assert_eq!(population_json(&full), population_json(&cut));
+    let run: serde_json::Value = serde_json::from_str(&read(&cut.join("run.json"))).unwrap();
+    assert_eq!(run["status"], "finished");
+    assert_eq!(run["resumes"][0]["at_generation"], 3);
+}
+
+#[test]
+fn a_finished_run_can_be_extended() {
+    let (long, short) = (tmp("long"), tmp("short"));
+    optimise(&spec(&long, 7, 2)).unwrap();
+    optimise(&spec(&short, 4, 2)).unwrap();
+    let r = resume(&short, Some(7), false, Some(2), false).unwrap();
+    assert_eq!(r.generations, 7);
+    assert_eq!(read(&long.join("pareto.csv")), read(&short.join("pareto.csv")));
+    // shrinking below the completed generations is refused
+    let e = resume(&short, Some(3), false, None, false).unwrap_err().to_string();
+    assert!(e.contains("already has 7 generations"), "{e}");
+}
+
+#[test]
+fn kill_minus_9_and_resume_via_the_cli() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let (full, cut) = (tmp("cli-full"), tmp("cli-cut"));
+    let args = |out: &Path| vec!["optimise".to_string(), problem.into(), "--out".into(), out.display().to_string(), "--pop".into(), "16".into(), "--generations".into(), "12".into(), "--seed".into(), "3".into()];
+    let st = std::process::Command::new(bin).args(args(&full)).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    // start again and kill it once a few generations are checkpointed
+    let mut child = std::process::Command::new(bin).args(args(&cut)).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
+    let t0 = std::time::Instant::now();
+    loop {
+        let g = std::fs::read(cut.join("checkpoint.json"))
+            .ok()
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+            .and_then(|v| v["state"]["generation"].as_u64())
+            .unwrap_or(0);
+        if g >= 3 || t0.elapsed().as_secs() > 60 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let _ = child.kill(); // SIGKILL
+    let _ = child.wait();
+    let out = std::process::Command::new(bin).args(["resume", &cut.display().to_string()]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(read(&full.join("pareto.csv")), read(&cut.join("pareto.csv")));
+}
+
+#[test]
+fn changed_problem_file_is_refused_unless_forced() {
+    let dir = tmp("changed");
+    let prob = dir.with_extension("toml");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap();
+    std::fs::write(&prob, &text).unwrap();
+    let mut s = spec(&dir, 3, 2);
+    s.problem_path = prob.clone();
+    optimise(&s).unwrap();
+    std::fs::write(&prob, text.replace("tau = 0.5 ", "tau = 0.45 ")).unwrap();
+    let e = resume(&dir, Some(4), false, None, false).unwrap_err().to_string();
+    assert!(e.contains("changed") && e.contains("--force") && e.contains(&prob.display().to_string()), "{e}");
+    resume(&dir, Some(4), true, None, false).unwrap();
+    let run: serde_json::Value = serde_json::from_str(&read(&dir.join("run.json"))).unwrap();
+    assert_eq!(run["resumes"][0]["forced"], true);
+    // a second start into the same folder is refused
+    let e = optimise(&s).unwrap_err().to_string();
+    assert!(e.contains("already holds a run"), "{e}");
+}
+
+#[test]
+fn corrupt_checkpoints_give_clear_errors() {
+    let dir = tmp("corrupt");
+    optimise(&spec(&dir, 2, 2)).unwrap();
+    let cp = dir.join("checkpoint.json");
+    let good = std::fs::read(&cp).unwrap();
+    // truncated
+    std::fs::write(&cp, &good[..good.len() / 2]).unwrap();
+    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    assert!(e.contains("checkpoint.json") && e.contains("truncated"), "{e}");
+    // wrong format tag
+    let mut v: serde_json::Value = serde_json::from_slice(&good).unwrap();
+    v["format"] = "something-else".into();
+    std::fs::write(&cp, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    assert!(e.contains("checkpoint.json") && e.contains("format"), "{e}");
+    // inconsistent state
+    let mut v: serde_json::Value = serde_json::from_slice(&good).unwrap();
+    v["state"]["generation"] = 9.into();
+    std::fs::write(&cp, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    assert!(e.contains("checkpoint.json") && e.contains("inconsistent"), "{e}");
+    // missing
+    std::fs::remove_file(&cp).unwrap();
+    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    assert!(e.contains("checkpoint.json"), "{e}");
+    // the results written before stay readable
+    assert!(read(&dir.join("pareto.csv")).starts_with("id,"));
+}
+
+#[test]
+fn reference_hypervolume_bands() {
+    // median over seeds 1..11 inside the band of the reference NSGA-II (the table)
+    for p in TestProblem::ALL {
+        let mut hv: Vec<f64> = (1..=11).map(|s| run_test(p, s, 100, None).hv).collect();
+        hv.sort_by(f64::total_cmp);
+        let (_, lo, hi) = p.hv_band();
+        assert!(hv[5] >= lo && hv[5] <= hi, "{}: median {} outside [{lo}, {hi}]", p.name(), hv[5]);
+    }
+}
