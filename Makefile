@@ -5,16 +5,30 @@ PROBLEM ?= problems/bottle-1l.toml
 OUT     ?= results/bottle-1l
 BIN     := target/release/gripopt
 
-.PHONY: all build test run bench clean
+.PHONY: all build test run bench clean venv
 
 all: build
 
 build:
 	$(CARGO) build --release --locked
 
-# Correctness tests (unit, integration, property). The test profile is optimised (opt-level 2).
-test:
+VENV    := .venv
+PYTHON  ?= python3
+
+# The independent MCAP reader (PyPI packages mcap and jsonschema) in a local venv.
+$(VENV)/.installed:
+	$(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap jsonschema
+	touch $@
+
+venv: $(VENV)/.installed
+
+# Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
+# then the independent reader over every MCAP file the tests wrote.
+test: $(VENV)/.installed
+	rm -rf target/mcap-check
 	$(CARGO) test --locked
+	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 100, 40
 # generations, ~4 000 designs through all four stages) writing results/bottle-1l/.

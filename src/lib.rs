@@ -10,4 +10,5 @@ pub mod model;
 pub mod optim;
 pub mod pipeline;
 pub mod problem;
+pub mod record;
 pub mod sim;

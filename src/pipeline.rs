@@ -8,7 +8,7 @@ use crate::model::geometry::{Finger, GeomError};
 use crate::model::statics::spring_preload;
 use crate::model::statics::isotropy;
 use crate::problem::{Design, Problem, Scene};
-use crate::sim::grasp::{simulate_grasp, DynOutcome, DynamicsResult, SimOptions};
+use crate::sim::grasp::{DynOutcome, DynamicsResult, SimOptions};
 use serde::Serialize;
 use std::fmt;
 use std::time::Instant;
@@ -203,6 +203,19 @@ pub fn stage_statics(f: &Finger, s: &Scene) -> Result<StaticsResult, Discard> {
 
 /// Evaluate a design through the staged pipeline.
 pub fn evaluate(x: &Design, s: &Scene, opts: &EvalOptions) -> Evaluation {
+    evaluate_inner(x, s, opts, None)
+}
+
+/// Evaluate and return the stage-3 trajectory (if stage 3 ran), recorded by the same
+/// simulation that decided the verdict.
+pub fn evaluate_with_trajectory(x: &Design, s: &Scene, opts: &EvalOptions) -> (Evaluation, Option<crate::sim::grasp::Trajectory>) {
+    let mut tr = crate::sim::grasp::Trajectory::default();
+    let ev = evaluate_inner(x, s, opts, Some(&mut tr));
+    let has = ev.dynamics.is_some();
+    (ev, has.then_some(tr))
+}
+
+fn evaluate_inner(x: &Design, s: &Scene, opts: &EvalOptions, traj: Option<&mut crate::sim::grasp::Trajectory>) -> Evaluation {
     let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
     let t0 = Instant::now();
     let kin = match stage_kinematics(x, s) {
@@ -230,7 +243,7 @@ pub fn evaluate(x: &Design, s: &Scene, opts: &EvalOptions) -> Evaluation {
     if !opts.dynamics {
         return ev;
     }
-    let dynr = simulate_grasp(&kin.finger, s, &st, &opts.sim);
+    let dynr = crate::sim::grasp::simulate_grasp_into(&kin.finger, s, &st, &opts.sim, traj);
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
         ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });

@@ -20,6 +20,7 @@ fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
         threads: Some(threads),
         progress: false,
         crash_after: None,
+        record: gripopt::record::RecordOptions::default(),
     }
 }
 

@@ -73,6 +73,34 @@ enum Cmd {
         /// Worker threads (default: all cores; results do not depend on it).
         #[arg(long)]
         threads: Option<usize>,
+        /// What to record to MCAP in RUN_DIR/recording: every design with its grasp
+        /// (all), trajectories of feasible designs only (feasible), design records only
+        /// (designs), or nothing (none).
+        #[arg(long, value_enum, default_value = "all")]
+        record: RecordArg,
+        /// Keep every n-th trajectory sample (1 = every accepted step).
+        #[arg(long, default_value_t = 1)]
+        record_every: u32,
+        /// Interval of the 3D scene updates in milliseconds of simulated time (0 = none).
+        #[arg(long, default_value_t = 0.5)]
+        scene_ms: f64,
+    },
+    /// Print a recorded design, re-simulate it and verify its trajectory.
+    Replay {
+        /// Run folder.
+        run_dir: PathBuf,
+        /// Design id (see pareto.csv / population.csv).
+        #[arg(long)]
+        design: u64,
+        /// Print the record plus `verified` and `max_difference` as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Write the recorded trajectory to this CSV file.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Plot the recorded trajectory to this SVG file.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// Continue a stopped, killed or finished run.
     Resume {
@@ -114,6 +142,19 @@ enum Cmd {
         #[command(subcommand)]
         which: bench::BenchCmd,
     },
+}
+
+/// Recording choice.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum RecordArg {
+    /// Every design and the trajectory of every grasp simulated.
+    All,
+    /// Every design; trajectories of feasible designs only.
+    Feasible,
+    /// Design records only.
+    Designs,
+    /// Nothing.
+    None,
 }
 
 /// Integration method choice.
@@ -181,13 +222,28 @@ pub fn run() -> Result<()> {
             report::simulate(&p, &x, rtol, method.to_method(), json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
-        Cmd::Optimise { problem, out, pop, generations, seed, threads } => {
+        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms } => {
             check_threads(threads)?;
-            let spec = gripopt::optim::rundir::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None };
+            if record_every == 0 {
+                anyhow::bail!("--record-every 0: must be at least 1");
+            }
+            if !(scene_ms.is_finite() && scene_ms >= 0.0) {
+                anyhow::bail!("--scene-ms {scene_ms}: must be a number >= 0");
+            }
+            use gripopt::optim::gripper::TrajectoryKeep;
+            let (enabled, trajectories) = match record {
+                RecordArg::All => (true, TrajectoryKeep::All),
+                RecordArg::Feasible => (true, TrajectoryKeep::Feasible),
+                RecordArg::Designs => (true, TrajectoryKeep::None),
+                RecordArg::None => (false, TrajectoryKeep::None),
+            };
+            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3 };
+            let spec = gripopt::optim::rundir::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
             let s = gripopt::optim::rundir::optimise(&spec)?;
             optcmd::summary(&s);
             Ok(())
         }
+        Cmd::Replay { run_dir, design, json, csv, plot } => optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref()),
         Cmd::Resume { run_dir, generations, force, threads } => {
             check_threads(threads)?;
             let s = gripopt::optim::rundir::resume(&run_dir, generations, force, threads, true)?;

@@ -2,7 +2,7 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10).
 
 use super::{Evaluated, Infeasibility, MooProblem};
-use crate::pipeline::{evaluate, EvalOptions, Evaluation};
+use crate::pipeline::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
 use crate::problem::{Design, Problem};
 use serde::{Deserialize, Serialize};
 
@@ -25,6 +25,10 @@ pub struct GripperInfo {
     pub sim_work: Option<[u64; 2]>,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
     pub stage_seconds: [f64; 4],
+    /// The stage-3 trajectory, kept only until the recorder has written it (never
+    /// checkpointed).
+    #[serde(skip)]
+    pub trajectory: Option<std::sync::Arc<crate::sim::grasp::Trajectory>>,
 }
 
 impl GripperInfo {
@@ -44,8 +48,21 @@ impl GripperInfo {
             violation: ev.discard.map(|d| d.violation),
             sim_work: ev.dynamics.map(|d| [d.stats.steps, d.rhs_evals]),
             stage_seconds: ev.stage_seconds,
+            trajectory: None,
         }
     }
+}
+
+/// Which stage-3 trajectories the problem keeps for a recorder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TrajectoryKeep {
+    /// None (no recorder, or designs only).
+    None,
+    /// Only of feasible designs.
+    Feasible,
+    /// Of every design that reached stage 3.
+    All,
 }
 
 /// The gripper problem for the optimiser.
@@ -55,6 +72,8 @@ pub struct GripperProblem {
     pub problem: Problem,
     /// Pipeline options (stage 3 in pipeline mode).
     pub options: EvalOptions,
+    /// Which trajectories to keep for the recorder.
+    pub keep_trajectories: TrajectoryKeep,
     lo: Vec<f64>,
     hi: Vec<f64>,
 }
@@ -64,7 +83,7 @@ impl GripperProblem {
     pub fn new(problem: Problem) -> Self {
         let options = EvalOptions::full(&problem);
         let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
-        GripperProblem { problem, options, lo, hi }
+        GripperProblem { problem, options, keep_trajectories: TrajectoryKeep::None, lo, hi }
     }
 
     /// Objectives used for ranking: feasible designs have all four; missing values are the
@@ -101,11 +120,21 @@ impl MooProblem for GripperProblem {
     }
     fn evaluate(&self, x: &[f64]) -> Evaluated<GripperInfo> {
         let arr: [f64; 6] = x.try_into().expect("six design variables");
-        let ev = evaluate(&Design::from_array(&arr), &self.problem.scene, &self.options);
+        let design = Design::from_array(&arr);
+        let (ev, traj) = match self.keep_trajectories {
+            TrajectoryKeep::None => (evaluate(&design, &self.problem.scene, &self.options), None),
+            keep => {
+                let (ev, tr) = evaluate_with_trajectory(&design, &self.problem.scene, &self.options);
+                let tr = if keep == TrajectoryKeep::Feasible && ev.discard.is_some() { None } else { tr };
+                (ev, tr)
+            }
+        };
         let cv = match ev.discard {
             None => Infeasibility::FEASIBLE,
             Some(d) => Infeasibility { stages_short: 4 - d.stage, violation: d.violation },
         };
-        Evaluated { f: self.minimisation_objectives(&ev), cv, info: GripperInfo::from_eval(&ev) }
+        let mut info = GripperInfo::from_eval(&ev);
+        info.trajectory = traj.map(std::sync::Arc::new);
+        Evaluated { f: self.minimisation_objectives(&ev), cv, info }
     }
 }

@@ -42,6 +42,8 @@ pub struct RunSpec {
     pub progress: bool,
     /// Test hook: fail after this generation's checkpoint, as a crash would.
     pub crash_after: Option<u64>,
+    /// What to record to MCAP.
+    pub record: crate::record::RecordOptions,
 }
 
 /// `run.json`.
@@ -71,6 +73,12 @@ pub struct RunInfo {
     pub status: String,
     /// Resumes: generation at which each happened, new total, and whether forced.
     pub resumes: Vec<Resume>,
+    /// Recording options.
+    pub recording: crate::record::RecordOptions,
+    /// Bytes recorded by the last process.
+    pub recording_bytes: u64,
+    /// Seconds spent recording by the last process.
+    pub recording_s: f64,
 }
 
 /// One resume.
@@ -167,6 +175,9 @@ pub fn optimise(spec: &RunSpec) -> anyhow::Result<RunSummary> {
         wall_s: 0.0,
         status: "running".into(),
         resumes: vec![],
+        recording: spec.record,
+        recording_bytes: 0,
+        recording_s: 0.0,
     };
     let state = Nsga2State::new().with_max_generations(spec.generations);
     drive(gp, settings, state, info, &spec.out, spec.threads, spec.progress, spec.crash_after, 0.0)
@@ -195,6 +206,9 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
             );
         }
         note = format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]);
+    }
+    if cp.options.get("recording") != Some(&serde_json::to_value(info.recording)?) {
+        anyhow::bail!("{}: recording options differ from {} (the run folder was modified); refusing to resume", cp_path.display(), run_json.display());
     }
     let total = generations.unwrap_or(info.generations);
     if total < cp.state.generation {
@@ -225,13 +239,36 @@ fn drive(
     info.threads = pool.current_num_threads();
     write_json(&out.join("run.json"), &info)?;
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
-    let options = serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": gp.problem.solver.rtol, "atol": gp.problem.solver.atol, "max_steps": gp.problem.solver.max_steps });
+    let options = run_options(&gp, &info.recording);
+    let mut gp = gp;
+    if info.recording.enabled {
+        gp.keep_trajectories = info.recording.trajectories;
+    }
+    let recorder = if info.recording.enabled {
+        let mut meta = std::collections::BTreeMap::new();
+        meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
+        meta.insert("problem".to_string(), gp.problem.name.clone());
+        meta.insert("problem_sha256".to_string(), info.problem_sha256.clone());
+        meta.insert("settings".to_string(), serde_json::to_string(&settings)?);
+        meta.insert("recording".to_string(), serde_json::to_string(&info.recording)?);
+        meta.insert("time_convention".to_string(), "design k: log_time in [k s, k s + 1 s); field t = simulated time".to_string());
+        let r = crate::record::Recorder::open(out, gp.problem.clone(), meta, info.recording, state.generation)?;
+        Some(crate::record::writer::SharedRecorder(Arc::new(Mutex::new(r))))
+    } else {
+        None
+    };
     let first = state.generation.max(1);
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let ckpt = CheckpointObserver { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
     let prog2 = prog.clone();
+    let rec2 = recorder.clone();
     let result = pool.install(|| {
         execute(gp, settings, state, move |e| {
+            // recorder first: a generation is checkpointed only after its shard is complete
+            let e = match rec2 {
+                Some(r) => observe(e, r),
+                None => e,
+            };
             let e = observe(observe(e, ckpt), prog2);
             match crash_after {
                 Some(k) => observe(e, CrashAfter(k)),
@@ -240,6 +277,11 @@ fn drive(
         }, crash_after.is_none())
     });
     prog.0.lock().expect("progress").finish();
+    if let Some(r) = &recorder {
+        let r = r.0.lock().expect("recorder");
+        info.recording_bytes = r.bytes;
+        info.recording_s = r.seconds;
+    }
     let (gp, st) = match result {
         Ok(r) => r,
         Err(e) => {
@@ -266,6 +308,11 @@ fn drive(
         interrupted,
         wall_s: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Run options hashed into checkpoints: pipeline settings and recording.
+fn run_options(gp: &GripperProblem, rec: &crate::record::RecordOptions) -> serde_json::Value {
+    serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": gp.problem.solver.rtol, "atol": gp.problem.solver.atol, "max_steps": gp.problem.solver.max_steps, "recording": rec })
 }
 
 fn write_json<T: Serialize>(path: &Path, v: &T) -> anyhow::Result<()> {

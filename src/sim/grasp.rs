@@ -402,6 +402,13 @@ pub fn simulate_grasp(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptio
     simulate(f, s, st, opts, None)
 }
 
+/// Simulate, recording the trajectory into `traj` when given (the result does not depend
+/// on recording).
+pub fn simulate_grasp_into(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+    let o = SimOptions { record: traj.is_some(), ..*opts };
+    simulate(f, s, st, &o, traj)
+}
+
 /// Simulate and also return the recorded trajectory (forces `record`).
 pub fn simulate_grasp_traj(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions) -> (DynamicsResult, Trajectory) {
     let mut tr = Trajectory::default();

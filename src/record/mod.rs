@@ -1,0 +1,16 @@
+//! Recording every evaluated design and its grasp to MCAP, and replaying designs.
+//!
+//! Layout of `RUN_DIR/recording/`: one MCAP shard per generation (`gen-00001.mcap`, …),
+//! written to a temporary file and renamed when complete, so a run killed mid-generation
+//! leaves every earlier shard valid, and a resumed run rewrites the unfinished generation
+//! (no duplicates); `index.jsonl` maps id ranges to shards. Inside a shard, design k's
+//! messages live in the time window [k s, k s + 1 s) (simulated time t is added to the
+//! window start, and carried as the field `t`), one zstd chunk per design, with summary,
+//! chunk and message indexes, so a replay reads one chunk. See docs/recording.md.
+
+pub mod messages;
+pub mod replay;
+pub mod schema;
+pub mod writer;
+
+pub use writer::{RecordOptions, Recorder};

@@ -1,0 +1,139 @@
+//! Replay: find one design in a run's recording through the index and the MCAP summary
+//! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
+//! verify that the new trajectory equals the recorded one.
+
+use super::messages::{sample_from, window_start_ns};
+use super::writer::{read_index, RecordOptions};
+use crate::pipeline::{evaluate_with_trajectory, EvalOptions};
+use crate::problem::{Design, Problem};
+use crate::sim::grasp::Sample;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// A design read back from a recording.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    /// The shard it was found in.
+    pub file: PathBuf,
+    /// The `/designs` message.
+    pub record: Value,
+    /// The recorded trajectory (possibly decimated, see the run's recording options).
+    pub samples: Vec<Sample>,
+}
+
+/// Result of a replay.
+#[derive(Debug, Clone)]
+pub struct Replay {
+    /// What was recorded.
+    pub recorded: Recorded,
+    /// Recomputed trajectory equals the recorded one (bitwise for the same build, else
+    /// within 1e-12 relative).
+    pub verified: bool,
+    /// Largest relative difference found.
+    pub max_difference: f64,
+    /// Samples compared.
+    pub compared: usize,
+    /// Verdict recomputed.
+    pub recomputed_feasible: bool,
+}
+
+fn mmap(path: &Path) -> anyhow::Result<memmap2::Mmap> {
+    let f = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    // SAFETY: shards are written to a temporary name and renamed when complete; nothing
+    // writes to a shard after that, so the mapping does not change under us.
+    unsafe { memmap2::Mmap::map(&f) }.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// Find design `id` in the recording of `run_dir`.
+pub fn read_design(run_dir: &Path, id: u64) -> anyhow::Result<Recorded> {
+    let dir = run_dir.join("recording");
+    let index = read_index(&dir)?;
+    let entry = index
+        .iter()
+        .find(|e| e.first_id <= id && id <= e.last_id)
+        .ok_or_else(|| {
+            let max = index.iter().map(|e| e.last_id).max();
+            anyhow::anyhow!("design {id} is not in {} (recorded ids: 0..={})", dir.join("index.jsonl").display(), max.map_or("none".into(), |m| m.to_string()))
+        })?;
+    let path = dir.join(&entry.file);
+    let buf = mmap(&path)?;
+    let bad = |what: String| anyhow::anyhow!("{}: {what}", path.display());
+    let summary = mcap::Summary::read(&buf)
+        .map_err(|e| bad(format!("cannot read the MCAP summary ({e}); the file is truncated or corrupt")))?
+        .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
+    let (lo, hi) = (window_start_ns(id), window_start_ns(id + 1));
+    let mut design = None;
+    let (mut joints, mut contacts, mut energy) = (vec![], vec![], vec![]);
+    for ci in summary.chunk_indexes.iter().filter(|c| c.message_start_time < hi && c.message_end_time >= lo) {
+        for m in summary.stream_chunk(&buf, ci).map_err(|e| bad(format!("chunk at offset {}: {e}", ci.chunk_start_offset)))? {
+            let m = m.map_err(|e| bad(format!("message: {e}")))?;
+            if m.log_time < lo || m.log_time >= hi {
+                continue;
+            }
+            let v: Value = serde_json::from_slice(&m.data).map_err(|e| bad(format!("{} message at {} ns is not JSON: {e}", m.channel.topic, m.log_time)))?;
+            match m.channel.topic.as_str() {
+                "/designs" => design = Some(v),
+                "/grasp/joints" => joints.push(v),
+                "/grasp/contacts" => contacts.push(v),
+                "/grasp/energy" => energy.push(v),
+                _ => {}
+            }
+        }
+    }
+    let record = design.ok_or_else(|| bad(format!("no /designs message for design {id}")))?;
+    if joints.len() != contacts.len() || joints.len() != energy.len() {
+        return Err(bad(format!("design {id}: trajectory channels disagree ({} / {} / {} messages)", joints.len(), contacts.len(), energy.len())));
+    }
+    let samples = joints
+        .iter()
+        .zip(&contacts)
+        .zip(&energy)
+        .map(|((j, c), e)| sample_from(j, c, e).ok_or_else(|| bad(format!("design {id}: a trajectory message lacks a field"))))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(Recorded { file: path, record, samples })
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    if a.to_bits() == b.to_bits() {
+        0.0
+    } else {
+        (a - b).abs() / a.abs().max(b.abs()).max(1e-300)
+    }
+}
+
+/// Replay design `id`: read it, re-simulate it with the run's problem (`problem.toml` in
+/// the run folder) and recording options, and compare.
+pub fn replay(run_dir: &Path, id: u64) -> anyhow::Result<Replay> {
+    let recorded = read_design(run_dir, id)?;
+    let problem = Problem::load(run_dir.join("problem.toml"))?;
+    let run_json = run_dir.join("run.json");
+    let run: Value = serde_json::from_str(&std::fs::read_to_string(&run_json).map_err(|e| anyhow::anyhow!("{}: {e}", run_json.display()))?)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", run_json.display()))?;
+    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|e| anyhow::anyhow!("{}: field `recording`: {e}", run_json.display()))?;
+    let p = &recorded.record["parameters"];
+    let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"].iter().map(|k| p[k].as_f64()).collect::<Option<_>>().ok_or_else(|| anyhow::anyhow!("{}: design {id}: field `parameters` incomplete", recorded.file.display()))?;
+    let design = Design::from_array(&x.try_into().expect("six"));
+    let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
+    let fresh: Vec<Sample> = match tr {
+        Some(t) => opts.kept(t.samples.len()).map(|k| t.samples[k]).collect(),
+        None => vec![],
+    };
+    let recorded_has_traj = !recorded.samples.is_empty();
+    let fresh = if recorded_has_traj { fresh } else { vec![] };
+    let mut maxd = 0.0f64;
+    let same_len = fresh.len() == recorded.samples.len();
+    for (a, b) in fresh.iter().zip(&recorded.samples) {
+        let pairs = [
+            (a.t, b.t), (a.q[0], b.q[0]), (a.q[1], b.q[1]), (a.qd[0], b.qd[0]), (a.qd[1], b.qd[1]), (a.theta2, b.theta2),
+            (a.delta[0], b.delta[0]), (a.delta[1], b.delta[1]), (a.normal[0], b.normal[0]), (a.normal[1], b.normal[1]),
+            (a.friction[0], b.friction[0]), (a.friction[1], b.friction[1]), (a.hand_fy, b.hand_fy), (a.filtered_fy, b.filtered_fy),
+            (a.energy, b.energy), (a.energy_excess, b.energy_excess),
+        ];
+        for (u, v) in pairs {
+            maxd = maxd.max(rel(u, v));
+        }
+    }
+    let feasible_rec = recorded.record["feasible"].as_bool().unwrap_or(false);
+    let verified = same_len && maxd <= 1e-12 && feasible_rec == ev.feasible();
+    Ok(Replay { compared: fresh.len().min(recorded.samples.len()), recorded, verified, max_difference: if same_len { maxd } else { f64::INFINITY }, recomputed_feasible: ev.feasible() })
+}
