@@ -30,10 +30,11 @@ test: $(VENV)/.installed
 	$(CARGO) test --locked
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 
-# The main job on the default problem: a short NSGA-II optimisation (pop 100, 40
-# generations, ~4 000 designs through all four stages) writing results/bottle-1l/.
-POP ?= 100
-GENERATIONS ?= 40
+# The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
+# generations, 1 500 designs through all four stages, every design and grasp recorded to
+# MCAP) writing results/bottle-1l/.
+POP ?= 60
+GENERATIONS ?= 25
 SEED ?= 1
 run: build
 	@mkdir -p results
@@ -41,6 +42,8 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
+	@echo "Recording (open in Foxglove): $(OUT)/recording/gen-*.mcap"
+	@id=$$(sed -n 2p $(OUT)/pareto.csv | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.
 bench: build

@@ -4,9 +4,13 @@ use gripopt::optim::rundir::{optimise, resume, RunSpec};
 use gripopt::optim::testproblems::{run_test, TestProblem};
 use std::path::{Path, PathBuf};
 
+/// Run folders go under target/mcap-check/ so that `make test` checks their recordings
+/// with the independent reader.
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gripopt-test-{}-{name}", std::process::id()));
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let d = base.join(format!("optimiser-{name}"));
     let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&base).unwrap();
     d
 }
 

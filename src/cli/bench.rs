@@ -1,6 +1,6 @@
 //! `gripopt bench …`: speed figures (not tests).
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Subcommand;
 use std::path::PathBuf;
 
@@ -26,6 +26,24 @@ pub enum BenchCmd {
         #[arg(long, default_value_t = 30)]
         reps: usize,
     },
+    /// Replay speed in a synthetic run of many recorded designs.
+    Replay {
+        /// Problem file.
+        #[arg(default_value = "problems/bottle-1l.toml")]
+        problem: PathBuf,
+        /// Recorded designs.
+        #[arg(long, default_value_t = 100_000)]
+        designs: u64,
+        /// Designs per shard.
+        #[arg(long, default_value_t = 1000)]
+        per_shard: u64,
+        /// Folder of the synthetic run (deleted afterwards unless --keep).
+        #[arg(long, default_value = "results/bench/replay-run")]
+        out: PathBuf,
+        /// Keep the synthetic run.
+        #[arg(long)]
+        keep: bool,
+    },
     /// CPU time against error (t of first contact, impact energy, t_stab, final forces) for
     /// rtol 1e-3 … 1e-10 and each integrator; writes work_precision.csv and .svg.
     WorkPrecision {
@@ -49,6 +67,7 @@ pub fn run(b: BenchCmd) -> Result<()> {
     match b {
         BenchCmd::Static { problem, n, seed } => bench_static(&problem, n, seed),
         BenchCmd::Nsga { reps } => bench_nsga(reps.max(3)),
+        BenchCmd::Replay { problem, designs, per_shard, out, keep } => bench_replay(&problem, designs, per_shard.max(1), &out, keep),
         BenchCmd::WorkPrecision { problem, design, out, reps } => {
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;
@@ -162,5 +181,70 @@ fn bench_nsga(reps: usize) -> Result<()> {
     }
     let (a, b) = min_med(per_gen);
     println!("NSGA-II overhead per generation on ZDT1 (pop 100, 250 generations, 1 thread, evaluation time {:.2} us/eval subtracted): {:.3} / {:.3} ms", eval_s * 1e6, a * 1e3, b * 1e3);
+    Ok(())
+}
+
+fn bench_replay(problem: &PathBuf, n: u64, per_shard: u64, out: &std::path::Path, keep: bool) -> Result<()> {
+    use gripopt::optim::gripper::{GripperProblem, TrajectoryKeep};
+    use gripopt::optim::{Individual, MooProblem};
+    use gripopt::record::writer::{write_shard, ShardEntry};
+    use rand::{Rng, SeedableRng};
+    let p = super::load_problem(problem)?;
+    if out.exists() {
+        std::fs::remove_dir_all(out).with_context(|| format!("cannot clear {}", out.display()))?;
+    }
+    let rec_dir = out.join("recording");
+    std::fs::create_dir_all(&rec_dir).with_context(|| format!("cannot create {}", rec_dir.display()))?;
+    std::fs::write(out.join("problem.toml"), &p.source_text)?;
+    let opts = gripopt::record::RecordOptions { scene_dt: 0.0, ..Default::default() };
+    std::fs::write(out.join("run.json"), serde_json::to_string_pretty(&serde_json::json!({ "synthetic": true, "recording": opts }))?)?;
+    // the nominal design's real evaluation and recorded grasp, under every id
+    let mut gp = GripperProblem::new(p.clone());
+    gp.keep_trajectories = TrajectoryKeep::All;
+    let x = p.nominal.to_array().to_vec();
+    let eval = gp.evaluate(&x);
+    let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.samples.len());
+    let meta = std::collections::BTreeMap::from([("synthetic".to_string(), "gripopt bench replay".to_string())]);
+    let t0 = std::time::Instant::now();
+    let shards = n.div_ceil(per_shard);
+    let pb = indicatif::ProgressBar::new(shards);
+    pb.set_style(indicatif::ProgressStyle::with_template("writing synthetic run [{bar:30}] {pos}/{len} shards").expect("template"));
+    let mut index = String::new();
+    let mut bytes = 0u64;
+    for k in 0..shards {
+        let ids = (k * per_shard)..((k + 1) * per_shard).min(n);
+        let inds: Vec<Individual<_>> = ids.clone().map(|id| Individual { id, generation: k + 1, x: x.clone(), eval: eval.clone() }).collect();
+        let refs: Vec<&Individual<_>> = inds.iter().collect();
+        let file = format!("gen-{:05}.mcap", k + 1);
+        let b = write_shard(&rec_dir.join(&file), &p, &meta, &refs, &opts)?;
+        bytes += b;
+        index.push_str(&serde_json::to_string(&ShardEntry { generation: k + 1, file, first_id: ids.start, last_id: ids.end - 1, designs: ids.end - ids.start, bytes: b })?);
+        index.push('\n');
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    std::fs::write(rec_dir.join("index.jsonl"), index)?;
+    let write_s = t0.elapsed().as_secs_f64();
+    println!("synthetic run: {n} designs ({samples} trajectory samples each) in {shards} shards, {:.1} MB, written in {:.1} s", bytes as f64 / 1e6, write_s);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut t_read, mut t_full) = (vec![], vec![]);
+    for _ in 0..50 {
+        let id = rng.random_range(0..n);
+        let a = std::time::Instant::now();
+        let r = gripopt::record::replay::read_design(out, id)?;
+        t_read.push(a.elapsed().as_secs_f64());
+        anyhow::ensure!(r.record["id"].as_u64() == Some(id), "wrong design returned");
+        let a = std::time::Instant::now();
+        let rp = gripopt::record::replay::replay(out, id)?;
+        t_full.push(a.elapsed().as_secs_f64());
+        anyhow::ensure!(rp.verified, "design {id} did not verify");
+    }
+    let (r0, r1) = min_med(t_read);
+    let (f0, f1) = min_med(t_full);
+    println!("find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)", r0 * 1e3, r1 * 1e3);
+    println!("replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
+    if !keep {
+        std::fs::remove_dir_all(out).with_context(|| format!("cannot remove {}", out.display()))?;
+    }
     Ok(())
 }
