@@ -189,6 +189,61 @@ impl<const N: usize> Lu<N> {
 }
 
 // ---------------------------------------------------------------------------------------
+// Finite-difference Jacobian shared by the implicit methods
+// ---------------------------------------------------------------------------------------
+
+/// A finite-difference Jacobian that never straddles a kink of a piecewise-smooth f (see
+/// [`Rhs::piece`]) and is reused across steps until the state leaves its smooth piece,
+/// Newton converges slowly, or a step is rejected.
+#[derive(Debug, Clone)]
+struct JacobianCache<const N: usize> {
+    jac: SMatrix<f64, N, N>,
+    valid: bool,
+    /// Computed at the current step's start (a failure cannot be blamed on staleness).
+    fresh: bool,
+    piece: u64,
+    /// Newton contracted slowly in the last step.
+    slow: bool,
+}
+
+impl<const N: usize> JacobianCache<N> {
+    fn new() -> Self {
+        JacobianCache { jac: SMatrix::zeros(), valid: false, fresh: false, piece: 0, slow: false }
+    }
+
+    /// At the start of a step: drop a stale Jacobian.
+    fn start_step<S: Rhs<N>>(&mut self, sys: &S, y: &SVector<f64, N>) {
+        if self.valid && !self.fresh && (self.slow || sys.piece(y) != self.piece) {
+            self.valid = false;
+        }
+        self.slow = false;
+    }
+
+    /// Compute J at (t, y); false if f is undefined at a perturbed state.
+    fn compute<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, stats: &mut Stats) -> bool {
+        let sq = f64::EPSILON.sqrt();
+        let mut yp = *y;
+        self.piece = sys.piece(y);
+        for j in 0..N {
+            let mut dy = sq * y[j].abs().max(1e-3);
+            yp[j] = y[j] + dy;
+            if sys.piece(&yp) != self.piece {
+                dy = -dy;
+                yp[j] = y[j] + dy;
+            }
+            stats.rhs += 1;
+            let Some(fp) = sys.eval(t, &yp) else { return false };
+            self.jac.set_column(j, &((fp - f) / dy));
+            yp[j] = y[j];
+        }
+        stats.jac += 1;
+        self.valid = true;
+        self.fresh = true;
+        true
+    }
+}
+
+// ---------------------------------------------------------------------------------------
 // TR-BDF2
 // ---------------------------------------------------------------------------------------
 
@@ -198,9 +253,7 @@ impl<const N: usize> Lu<N> {
 pub struct TrBdf2<const N: usize> {
     tol: Tol<N>,
     h: f64,
-    jac: SMatrix<f64, N, N>,
-    jac_valid: bool,
-    jac_fresh: bool,
+    jc: JacobianCache<N>,
     lu: Option<Lu<N>>,
     lu_h: f64,
     stats: Stats,
@@ -211,8 +264,6 @@ pub struct TrBdf2<const N: usize> {
     /// Recompute the Jacobian after every accepted step (else: on a change of smooth piece,
     /// slow Newton convergence, or a rejected step).
     pub refresh_every_step: bool,
-    jac_piece: u64,
-    slow: bool,
 }
 
 const SQRT2: f64 = std::f64::consts::SQRT_2;
@@ -230,49 +281,21 @@ impl<const N: usize> TrBdf2<N> {
         TrBdf2 {
             tol,
             h: h0,
-            jac: SMatrix::zeros(),
-            jac_valid: false,
-            jac_fresh: false,
+            jc: JacobianCache::new(),
             lu: None,
             lu_h: 0.0,
             stats: Stats::default(),
             kappa: 0.05,
             max_newton: 8,
             refresh_every_step: false,
-            jac_piece: 0,
-            slow: false,
         }
-    }
-
-    fn jacobian<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>) -> bool {
-        let sq = f64::EPSILON.sqrt();
-        let mut yp = *y;
-        let piece = sys.piece(y);
-        self.jac_piece = piece;
-        for j in 0..N {
-            let mut dy = sq * y[j].abs().max(1e-3);
-            yp[j] = y[j] + dy;
-            if sys.piece(&yp) != piece {
-                dy = -dy;
-                yp[j] = y[j] + dy;
-            }
-            self.stats.rhs += 1;
-            let Some(fp) = sys.eval(t, &yp) else { return false };
-            self.jac.set_column(j, &((fp - f) / dy));
-            yp[j] = y[j];
-        }
-        self.stats.jac += 1;
-        self.jac_valid = true;
-        self.jac_fresh = true;
-        self.lu = None;
-        true
     }
 
     fn factor(&mut self, h: f64) -> bool {
         if self.lu.is_some() && self.lu_h == h {
             return true;
         }
-        let a = SMatrix::<f64, N, N>::identity() - self.jac * (D * h);
+        let a = SMatrix::<f64, N, N>::identity() - self.jc.jac * (D * h);
         self.stats.lu += 1;
         let Some(lu) = Lu::factor(a) else {
             self.lu = None;
@@ -312,7 +335,7 @@ impl<const N: usize> TrBdf2<N> {
                     return None;
                 }
                 if theta > 0.2 {
-                    self.slow = true;
+                    self.jc.slow = true;
                 }
             }
             let eta = if it == 0 { 1.0 } else { theta / (1.0 - theta) };
@@ -336,21 +359,21 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
         f: &SVector<f64, N>,
         h_max: f64,
     ) -> Result<Accepted<N>, StepError> {
-        if self.jac_valid && !self.jac_fresh && (self.slow || sys.piece(y) != self.jac_piece) {
-            self.jac_valid = false;
-        }
-        self.slow = false;
+        self.jc.start_step(sys, y);
         loop {
             let h = self.h.min(h_max);
             if h < HMIN {
                 return Err(StepError::StepTooSmall);
             }
-            if !self.jac_valid && !self.jacobian(sys, t, y, f) {
-                return Err(StepError::RhsFailed);
+            if !self.jc.valid {
+                if !self.jc.compute(sys, t, y, f, &mut self.stats) {
+                    return Err(StepError::RhsFailed);
+                }
+                self.lu = None;
             }
             if !self.factor(h) {
-                if !self.jac_fresh {
-                    self.jac_valid = false;
+                if !self.jc.fresh {
+                    self.jc.valid = false;
                 } else {
                     self.h = h * 0.5;
                     self.stats.rejected += 1;
@@ -383,24 +406,24 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
                 } else {
                     self.h = h;
                 }
-                self.jac_fresh = false;
+                self.jc.fresh = false;
                 if self.refresh_every_step {
-                    self.jac_valid = false;
+                    self.jc.valid = false;
                 }
                 return Ok(Accepted { t: t + h, y: y3, f: k3 });
             }
             self.stats.rejected += 1;
             let fac = if err.is_finite() { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9) } else { 0.25 };
             self.h = h * fac;
-            if !self.jac_fresh {
-                self.jac_valid = false;
+            if !self.jc.fresh {
+                self.jc.valid = false;
             }
         }
     }
 
     fn restart(&mut self, h: f64) {
         self.h = h;
-        self.jac_valid = false;
+        self.jc.valid = false;
         self.lu = None;
     }
 
@@ -420,10 +443,10 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
 impl<const N: usize> TrBdf2<N> {
     fn newton_failed(&mut self, h: f64) {
         self.stats.rejected += 1;
-        if self.jac_fresh {
+        if self.jc.fresh {
             self.h = h * 0.25;
         } else {
-            self.jac_valid = false;
+            self.jc.valid = false;
         }
     }
 }
@@ -606,11 +629,7 @@ mod tests {
 pub struct Radau5<const N: usize, const M: usize> {
     tol: Tol<N>,
     h: f64,
-    jac: SMatrix<f64, N, N>,
-    jac_valid: bool,
-    jac_fresh: bool,
-    jac_piece: u64,
-    slow: bool,
+    jc: JacobianCache<N>,
     lu: Option<Lu<M>>,
     lu_e: Option<Lu<N>>,
     lu_h: f64,
@@ -645,11 +664,7 @@ impl<const N: usize, const M: usize> Radau5<N, M> {
         Radau5 {
             tol,
             h: h0,
-            jac: SMatrix::zeros(),
-            jac_valid: false,
-            jac_fresh: false,
-            jac_piece: 0,
-            slow: false,
+            jc: JacobianCache::new(),
             lu: None,
             lu_e: None,
             lu_h: 0.0,
@@ -662,30 +677,6 @@ impl<const N: usize, const M: usize> Radau5<N, M> {
         }
     }
 
-    fn jacobian<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>) -> bool {
-        let sq = f64::EPSILON.sqrt();
-        let mut yp = *y;
-        let piece = sys.piece(y);
-        self.jac_piece = piece;
-        for j in 0..N {
-            let mut dy = sq * y[j].abs().max(1e-3);
-            yp[j] = y[j] + dy;
-            if sys.piece(&yp) != piece {
-                dy = -dy;
-                yp[j] = y[j] + dy;
-            }
-            self.stats.rhs += 1;
-            let Some(fp) = sys.eval(t, &yp) else { return false };
-            self.jac.set_column(j, &((fp - f) / dy));
-            yp[j] = y[j];
-        }
-        self.stats.jac += 1;
-        self.jac_valid = true;
-        self.jac_fresh = true;
-        self.lu = None;
-        true
-    }
-
     fn factor(&mut self, h: f64) -> bool {
         if self.lu.is_some() && self.lu_h == h {
             return true;
@@ -696,12 +687,12 @@ impl<const N: usize, const M: usize> Radau5<N, M> {
                 let c = h * RA[i][j];
                 for r in 0..N {
                     for s in 0..N {
-                        a[(i * N + r, j * N + s)] -= c * self.jac[(r, s)];
+                        a[(i * N + r, j * N + s)] -= c * self.jc.jac[(r, s)];
                     }
                 }
             }
         }
-        let e = SMatrix::<f64, N, N>::identity() * (radau_gamma0() / h) - self.jac;
+        let e = SMatrix::<f64, N, N>::identity() * (radau_gamma0() / h) - self.jc.jac;
         self.stats.lu += 1;
         match (Lu::factor(a), Lu::factor(e)) {
             (Some(l), Some(le)) => {
@@ -727,21 +718,21 @@ impl<const N: usize, const M: usize> Stepper<N> for Radau5<N, M> {
         f: &SVector<f64, N>,
         h_max: f64,
     ) -> Result<Accepted<N>, StepError> {
-        if self.jac_valid && !self.jac_fresh && (self.slow || sys.piece(y) != self.jac_piece) {
-            self.jac_valid = false;
-        }
-        self.slow = false;
+        self.jc.start_step(sys, y);
         'outer: loop {
             let h = self.h.min(h_max);
             if h < HMIN {
                 return Err(StepError::StepTooSmall);
             }
-            if !self.jac_valid && !self.jacobian(sys, t, y, f) {
-                return Err(StepError::RhsFailed);
+            if !self.jc.valid {
+                if !self.jc.compute(sys, t, y, f, &mut self.stats) {
+                    return Err(StepError::RhsFailed);
+                }
+                self.lu = None;
             }
             if !self.factor(h) {
-                if !self.jac_fresh {
-                    self.jac_valid = false;
+                if !self.jc.fresh {
+                    self.jc.valid = false;
                 } else {
                     self.h = h * 0.5;
                     self.stats.rejected += 1;
@@ -813,7 +804,7 @@ impl<const N: usize, const M: usize> Stepper<N> for Radau5<N, M> {
                     continue 'outer;
                 }
                 if it > 0 && theta > 0.2 {
-                    self.slow = true;
+                    self.jc.slow = true;
                 }
                 let eta = if it == 0 { 1.0 } else { theta / (1.0 - theta) };
                 if eta * n <= self.kappa || n <= 1e-12 {
@@ -851,22 +842,22 @@ impl<const N: usize, const M: usize> Stepper<N> for Radau5<N, M> {
                 self.prev_z = Some((h, z));
                 let fac = if err == 0.0 { 4.0 } else { (0.9 * err.powf(-0.25)).clamp(0.2, 4.0) };
                 self.h = if (0.95..=1.2).contains(&fac) { h } else { h * fac };
-                self.jac_fresh = false;
+                self.jc.fresh = false;
                 return Ok(Accepted { t: t + h, y: y1, f: fy1 });
             }
             self.stats.rejected += 1;
             self.last_rejected = true;
             let fac = if err.is_finite() { (0.9 * err.powf(-0.25)).clamp(0.1, 0.9) } else { 0.25 };
             self.h = h * fac;
-            if !self.jac_fresh {
-                self.jac_valid = false;
+            if !self.jc.fresh {
+                self.jc.valid = false;
             }
         }
     }
 
     fn restart(&mut self, h: f64) {
         self.h = h;
-        self.jac_valid = false;
+        self.jc.valid = false;
         self.lu = None;
         self.first = true;
         self.prev_z = None;
@@ -889,10 +880,10 @@ impl<const N: usize, const M: usize> Radau5<N, M> {
     fn reject_newton(&mut self, h: f64) {
         self.stats.rejected += 1;
         self.last_rejected = true;
-        if self.jac_fresh {
+        if self.jc.fresh {
             self.h = h * 0.5;
         } else {
-            self.jac_valid = false;
+            self.jc.valid = false;
         }
     }
 }
