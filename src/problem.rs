@@ -13,12 +13,12 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ProblemError {
     /// The file could not be read.
-    #[error("{file}: cannot read problem file: {source}")]
+    #[error("{file}: cannot read problem file: {err}")]
     Io {
         /// The file.
         file: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        err: std::io::Error,
     },
     /// TOML syntax error, unknown key, missing key or wrong type.
     #[error("{file}: {message}")]
@@ -375,7 +375,7 @@ impl Problem {
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ProblemError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
-            .map_err(|source| ProblemError::Io { file: path.to_path_buf(), source })?;
+            .map_err(|err| ProblemError::Io { file: path.to_path_buf(), err })?;
         Self::from_toml_str(&text, path)
     }
 

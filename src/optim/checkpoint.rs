@@ -17,12 +17,12 @@ pub const VERSION: u32 = 1;
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
     /// I/O error.
-    #[error("{file}: {source}")]
+    #[error("{file}: {err}")]
     Io {
         /// File.
         file: PathBuf,
         /// Error.
-        source: std::io::Error,
+        err: std::io::Error,
     },
     /// Not a valid checkpoint.
     #[error("{file}: not a valid gripopt checkpoint: {message}")]
@@ -70,7 +70,7 @@ pub fn settings_hash(settings: &Nsga2Settings, options: &serde_json::Value) -> S
 
 /// Write `bytes` to `path` atomically: temp file in the same folder, fsync, rename, fsync folder.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError> {
-    let io = |source| CheckpointError::Io { file: path.to_path_buf(), source };
+    let io = |err| CheckpointError::Io { file: path.to_path_buf(), err };
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|s| s.to_str()).unwrap_or("checkpoint")));
     {
@@ -94,7 +94,7 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
 
     /// Load and check the format.
     pub fn load(path: &Path) -> Result<Self, CheckpointError> {
-        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io { file: path.to_path_buf(), source })?;
+        let bytes = std::fs::read(path).map_err(|err| CheckpointError::Io { file: path.to_path_buf(), err })?;
         let head: serde_json::Value = serde_json::from_slice(&bytes)
             .map_err(|e| CheckpointError::Invalid { file: path.to_path_buf(), message: format!("not JSON ({e}); the file may be truncated") })?;
         let fmt = head.get("format").and_then(|v| v.as_str());

@@ -47,6 +47,9 @@ fn mmap(path: &Path) -> anyhow::Result<memmap2::Mmap> {
 /// Find design `id` in the recording of `run_dir`.
 pub fn read_design(run_dir: &Path, id: u64) -> anyhow::Result<Recorded> {
     let dir = run_dir.join("recording");
+    if !dir.exists() {
+        anyhow::bail!("{} has no recording ({} is missing; was the run started with --record none?)", run_dir.display(), dir.display());
+    }
     let index = read_index(&dir)?;
     let entry = index
         .iter()
