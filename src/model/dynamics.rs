@@ -69,9 +69,7 @@ pub fn gravity_tree(f: &Finger, p: &Pose, s: &Scene) -> Vector4<f64> {
     }
     let gv = s.g_eq * e(s.theta_g);
     let ms = &f.mass;
-    let x11 = e(p.q11);
-    let x12 = e(p.q11 + p.q12);
-    let x21 = e(p.q21);
+    let (x11, x12, x21) = (p.x11, p.x12, p.x21);
     let rs22 = nalgebra::Rotation2::new(p.q21 + p.q22) * ms.s22;
     let g11 = ms.m[0] * gv.dot(&perp(0.5 * f.l11 * x11));
     let g12a = ms.m[1] * gv.dot(&perp(f.l11 * x11 + 0.5 * f.l12 * x12));
@@ -90,7 +88,7 @@ pub fn gravity_potential(f: &Finger, p: &Pose, s: &Scene) -> f64 {
     let gv = s.g_eq * e(s.theta_g);
     let ms = &f.mass;
     let r11 = f.o21 + 0.5 * f.l11 * e(p.q11);
-    let r12 = p.o12 + 0.5 * f.l12 * e(p.q11 + p.q12);
+    let r12 = p.o12 + 0.5 * f.l12 * p.x12;
     let r21 = f.o21 + 0.5 * f.l21 * e(p.q21);
     let r22 = p.o22 + nalgebra::Rotation2::new(p.q21 + p.q22) * ms.s22;
     -(ms.m[0] * gv.dot(&r11) + ms.m[1] * gv.dot(&r12) + ms.m[2] * gv.dot(&r21) + ms.m[3] * gv.dot(&r22))
@@ -111,7 +109,7 @@ pub fn kinetic_energy_bodies(f: &Finger, p: &Pose, k: &Kin, qa_dot: Vector2<f64>
     let (w11, w12, w21, w22) = (qa_dot[0], qa_dot[0] + qd[0], qa_dot[1], qa_dot[1] + qd[1]);
     let x11 = e(p.q11);
     let x21 = e(p.q21);
-    let x12 = e(p.q11 + p.q12);
+    let x12 = p.x12;
     // COM velocities: v = ω × r relative to moving joints
     let v_o12 = w11 * perp(f.l11 * x11);
     let v_o22 = w21 * perp(f.l21 * x21);

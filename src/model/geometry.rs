@@ -80,13 +80,13 @@ pub struct Finger {
 pub struct Pose {
     /// Actuated angle q11 (absolute).
     pub q11: f64,
-    /// Bar angle q12 (relative to link 11).
+    /// Bar angle q12 (relative to link 11); NaN from [`Finger::dgm_fast`].
     pub q12: f64,
     /// Proximal angle q21 (absolute) = θ1.
     pub q21: f64,
     /// Link-22 angle q22 (relative to link 21).
     pub q22: f64,
-    /// Angle from x12 to x22.
+    /// Angle from x12 to x22; NaN from [`Finger::dgm_fast`].
     pub q13: f64,
     /// Joint O12.
     pub o12: V2,
@@ -193,6 +193,18 @@ impl Finger {
     /// Direct geometric model (MODEL.md §5.1): pose from the active angles.
     #[inline]
     pub fn dgm(&self, q11: f64, q21: f64) -> Result<Pose, GeomError> {
+        self.dgm_with(q11, q21, true)
+    }
+
+    /// DGM for the simulator's right-hand side: as [`Finger::dgm`] but q12 and q13 are left
+    /// NaN (one `atan2` less); sin q13 is `cross(x12, x22)`.
+    #[inline]
+    pub fn dgm_fast(&self, q11: f64, q21: f64) -> Result<Pose, GeomError> {
+        self.dgm_with(q11, q21, false)
+    }
+
+    #[inline(always)]
+    fn dgm_with(&self, q11: f64, q21: f64, all_angles: bool) -> Result<Pose, GeomError> {
         let x11 = e(q11);
         let x21 = e(q21);
         let o12 = self.o21 + self.l11 * x11;
@@ -212,9 +224,14 @@ impl Finger {
         let o13 = o22 + ak * v + self.gamma * bk2.sqrt() * perp(v);
         let x12 = (o13 - o12) / self.l12;
         let x22 = (o13 - o22) / self.l22;
-        let q12 = cross(x11, x12).atan2(x11.dot(&x12));
         let q22 = cross(x21, x22).atan2(x21.dot(&x22));
-        Ok(Pose { q11, q12, q21, q22, q13: wrap(q21 + q22 - q11 - q12), o12, o22, o13, x11, x12, x21, x22 })
+        let (q12, q13) = if all_angles {
+            let q12 = cross(x11, x12).atan2(x11.dot(&x12));
+            (q12, wrap(q21 + q22 - q11 - q12))
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        Ok(Pose { q11, q12, q21, q22, q13, o12, o22, o13, x11, x12, x21, x22 })
     }
 
     /// Inverse model of leg 1 (MODEL.md §5.2): pose from the phalanx angles (θ1, θ2),

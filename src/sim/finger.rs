@@ -49,8 +49,10 @@ pub struct ContactState {
 /// Full evaluation of the finger at a state.
 #[derive(Debug, Clone, Copy)]
 pub struct FingerEval {
-    /// Linkage pose.
+    /// Linkage pose (q12, q13 not computed: NaN; use `sin_q13`).
     pub pose: Pose,
+    /// sin q13 = cross(x12, x22) (parallel singularity at 0).
+    pub sin_q13: f64,
     /// Kinematics.
     pub kin: Kin,
     /// Mass matrix.
@@ -146,7 +148,7 @@ impl<'a> FingerOde<'a> {
     #[inline(always)]
     pub fn evaluate(&self, y: &State) -> Option<FingerEval> {
         let f = self.finger;
-        let pose = f.dgm(y[0], y[1]).ok()?;
+        let pose = f.dgm_fast(y[0], y[1]).ok()?;
         let kin = Kin::new(f, &pose)?;
         let qd = Vector2::new(y[2], y[3]);
         let red = reduced(f, &pose, &kin, qd);
@@ -202,7 +204,8 @@ impl<'a> FingerOde<'a> {
         let minv = red.m.try_inverse()?;
         let qdd = minv * q_total;
         let energy = 0.5 * qd.dot(&(red.m * qd)) + v;
-        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy })
+        let sin_q13 = crate::math::cross(pose.x12, pose.x22);
+        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13 })
     }
 
     /// Time derivative from a full evaluation (hand force F_hand,y = 2 × finger-1 force).
@@ -231,7 +234,7 @@ impl Rhs<NS> for FingerOde<'_> {
     /// loaded, bits 3+2i its force clipped by the damping term.
     fn piece(&self, y: &State) -> u64 {
         let f = self.finger;
-        let Ok(pose) = f.dgm(y[0], y[1]) else { return u64::MAX };
+        let Ok(pose) = f.dgm_fast(y[0], y[1]) else { return u64::MAX };
         let Some(kin) = Kin::new(f, &pose) else { return u64::MAX };
         let qd = Vector2::new(y[2], y[3]);
         let theta2 = pose.q22 + f.psi;

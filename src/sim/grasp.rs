@@ -343,7 +343,7 @@ fn gvals(ode: &FingerOde, ctx: &Ctx, y: &State, ev: &FingerEval, after_first: bo
         contact,
         stab: if after_first { ev.energy - ctx.v_star - ctx.threshold } else { f64::INFINITY },
         force: force_margin(ctx.s, ctx.r_area, V2::new(0.0, y[4])),
-        sing: ev.pose.q13.sin().abs() - 1e-3,
+        sing: ev.sin_q13.abs() - 1e-3,
         stop: ev.theta2,
         rate: [ev.contacts[0].delta_dot, ev.contacts[1].delta_dot, ev.theta2_dot],
     }
