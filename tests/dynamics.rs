@@ -343,3 +343,19 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
         n += 1;
     }
 }
+
+#[test]
+fn distal_touches_first_when_the_spring_is_too_weak() {
+    // §13 item 8: with no spring preload the distal folds during closing and strikes first;
+    // the run still ends with a verdict (the fold criterion fails) and no NaN.
+    let s = scene();
+    let (f, mut st) = prepare(&nominal(), &s);
+    st.tau_s0 = 0.0;
+    let r = simulate_grasp(&f, &s, &st, &diag(1e-7));
+    assert_clean(&r, "weak spring");
+    let fc = r.first.expect("a contact happens");
+    assert_eq!(fc.phalanx, 2, "the distal should touch first");
+    assert!(fc.theta2.to_degrees() > 45.0, "the distal has folded: θ2 = {}°", fc.theta2.to_degrees());
+    assert_eq!(r.outcome, DynOutcome::Fold);
+    assert_eq!(r.fold_ok, Some(false));
+}
