@@ -4,6 +4,10 @@
 //! Layers: [`problem`] (scene, design, bounds) → [`model`] (finger physics) →
 //! [`pipeline`] (staged evaluation).
 #![warn(missing_docs)]
+// `!(x > 0.0)` is deliberate throughout: a NaN must fail every physical check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Index loops mirror the formulas of MODEL.md (rows, contacts, objectives).
+#![allow(clippy::needless_range_loop)]
 
 pub mod math;
 pub mod model;

@@ -5,7 +5,6 @@ use common::*;
 use gripopt::math::{perp, V2};
 use gripopt::model::dynamics::{kinetic_energy_bodies, mass_matrix, reduced};
 use gripopt::model::{Finger, Kin, Pose};
-use gripopt::problem::Design;
 use nalgebra::Vector2;
 use rand::{Rng, SeedableRng};
 
@@ -13,15 +12,10 @@ use rand::{Rng, SeedableRng};
 /// open pose and ~80° of closure that the DGM can assemble away from singularities.
 fn samples(n: usize, seed: u64) -> Vec<(Finger, Pose)> {
     let s = scene();
-    let p = bottle();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut out = vec![];
     while out.len() < n {
-        let mut x = [0.0; 6];
-        for i in 0..6 {
-            x[i] = rng.random_range(p.bounds.lo[i]..p.bounds.hi[i]);
-        }
-        let Ok(f) = Finger::new(&Design::from_array(&x), &s) else { continue };
+        let Ok(f) = Finger::new(&random_design(&mut rng), &s) else { continue };
         let q11 = f.open.q11 + rng.random_range(-0.3..1.4);
         let q21 = f.open.q21 + rng.random_range(-0.3..1.0);
         let Ok(pose) = f.dgm(q11, q21) else { continue };

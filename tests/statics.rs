@@ -6,7 +6,6 @@ use gripopt::model::dynamics::mass_matrix;
 use gripopt::model::statics::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
 use gripopt::model::{Finger, Kin};
 use gripopt::pipeline::{stage_kinematics, stage_statics};
-use gripopt::problem::Design;
 use gripopt::sim::finger::{FingerOde, State};
 use nalgebra::{SMatrix, SVector};
 use rand::{Rng, SeedableRng};
@@ -14,15 +13,10 @@ use rand::{Rng, SeedableRng};
 /// Random designs of the default box that pass stage 1 and have a centred closed pose.
 fn designs(n: usize, seed: u64) -> Vec<Finger> {
     let s = scene();
-    let p = bottle();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut out = vec![];
     while out.len() < n {
-        let mut x = [0.0; 6];
-        for i in 0..6 {
-            x[i] = rng.random_range(p.bounds.lo[i]..p.bounds.hi[i]);
-        }
-        let Ok(k) = stage_kinematics(&Design::from_array(&x), &s) else { continue };
+        let Ok(k) = stage_kinematics(&random_design(&mut rng), &s) else { continue };
         if closed_pose(&k.finger, s.radius, 0.0).is_ok() {
             out.push(k.finger);
         }

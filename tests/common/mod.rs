@@ -29,3 +29,13 @@ pub fn close_rel(a: f64, b: f64, rel: f64, what: &str) {
 pub fn close_abs(a: f64, b: f64, abs: f64, what: &str) {
     assert!((a - b).abs() <= abs, "{what}: got {a:.15e}, expected {b:.15e} (diff {:.2e})", (a - b).abs());
 }
+
+/// A design drawn uniformly in the default box of bottle-1l.toml.
+pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
+    let p = bottle();
+    let mut x = [0.0; 6];
+    for i in 0..6 {
+        x[i] = rng.random_range(p.bounds.lo[i]..p.bounds.hi[i]);
+    }
+    Design::from_array(&x)
+}
