@@ -359,3 +359,38 @@ fn distal_touches_first_when_the_spring_is_too_weak() {
     assert_eq!(r.outcome, DynOutcome::Fold);
     assert_eq!(r.fold_ok, Some(false));
 }
+
+#[test]
+fn knuckle_contact_is_flagged_and_finite() {
+    // §13 item 12: with the distal pressed 0.1 rad onto its stop (θ2 < 0) the knuckle O22
+    // is convex on the object side; an object centred on the bisector normal there touches
+    // the end cap of the proximal capsule and the start cap of the distal capsule at once.
+    // The accepted double count must be flagged, with finite forces.
+    use gripopt::math::perp;
+    use gripopt::model::contact::CapsulePart;
+    use gripopt::sim::finger::Memory;
+    let s = scene();
+    let f = Finger::new(&nominal(), &s).unwrap();
+    let pose = f.ik(f.open.q21, -0.1).unwrap();
+    let xd = f.distal_dir(&pose);
+    let nb = (perp(pose.x21) + perp(xd)).normalize();
+    let mut ode = FingerOde::new(&f, &s, 0.0, 0.0);
+    let pen = 1e-6;
+    ode.centre = pose.o22 + (s.radius + s.w - pen) * nb;
+    ode.mem = [Memory { active: true, vminus: 0.1 }; 2];
+    let y = State::from([pose.q11, pose.q21, 0.0, 0.0, 0.0]);
+    let ev = ode.evaluate(&y).unwrap();
+    assert_eq!(ev.contacts[0].geom.part, CapsulePart::End);
+    assert_eq!(ev.contacts[1].geom.part, CapsulePart::Start);
+    assert!(FingerOde::knuckle_contact(&ev));
+    for c in &ev.contacts {
+        assert!((c.geom.delta - pen).abs() < 1e-12, "δ = {}", c.geom.delta);
+        let expect = s.k_contact * pen.powf(1.5);
+        assert!((c.normal_force - expect).abs() < 1e-9 * expect, "{} vs {expect}", c.normal_force);
+    }
+    assert!(ev.qdd.iter().all(|v| v.is_finite()));
+    // an object touching mid-phalanx is not a knuckle contact
+    ode.centre = f.o21 + 0.5 * f.l21 * pose.x21 + (s.radius + s.w - pen) * perp(pose.x21);
+    let ev = ode.evaluate(&y).unwrap();
+    assert!(!FingerOde::knuckle_contact(&ev));
+}
