@@ -50,6 +50,7 @@ bench: build
 	$(BIN) bench static $(PROBLEM)
 	$(BIN) bench work-precision $(PROBLEM)
 	$(BIN) bench nsga
+	$(BIN) bench replay $(PROBLEM)
 	$(BIN) moo-test all --seeds 1-11
 
 clean:
