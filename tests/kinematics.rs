@@ -28,6 +28,14 @@ fn samples(n: usize, seed: u64) -> Vec<(Finger, Pose)> {
     out
 }
 
+/// Central difference of `g` with respect to the active angle `j` at `q` (step 1e-6).
+fn d_dq(q: Vector2<f64>, j: usize, g: impl Fn(Vector2<f64>) -> Vector2<f64>) -> Vector2<f64> {
+    let h = 1e-6;
+    let mut e = Vector2::zeros();
+    e[j] = h;
+    (g(q + e) - g(q - e)) / (2.0 * h)
+}
+
 fn qd(f: &Finger, q: Vector2<f64>) -> Vector2<f64> {
     let p = f.dgm(q[0], q[1]).expect("pose near a valid pose assembles");
     Vector2::new(p.q12, p.q22)
@@ -38,15 +46,10 @@ fn jd_and_jx_match_central_differences() {
     for (f, p) in samples(200, 1) {
         let k = Kin::new(&f, &p).unwrap();
         let h = 1e-6;
+        let q0 = Vector2::new(p.q11, p.q21);
         for j in 0..2 {
-            let mut qp = Vector2::new(p.q11, p.q21);
-            let mut qm = qp;
-            qp[j] += h;
-            qm[j] -= h;
-            let dq = (qd(&f, qp) - qd(&f, qm)) / (2.0 * h);
-            let pp = f.dgm(qp[0], qp[1]).unwrap();
-            let pm = f.dgm(qm[0], qm[1]).unwrap();
-            let dx = (pp.o13 - pm.o13) / (2.0 * h);
+            let dq = d_dq(q0, j, |q| qd(&f, q));
+            let dx = d_dq(q0, j, |q| f.dgm(q[0], q[1]).unwrap().o13);
             for i in 0..2 {
                 let scale = k.jd.column(j).amax().max(1.0);
                 assert!((k.jd[(i, j)] - dq[i]).abs() < 1e-7 * scale, "J_d[{i}{j}] {} vs fd {}", k.jd[(i, j)], dq[i]);
@@ -104,13 +107,8 @@ fn point_jacobians_match_differences() {
                 }
             };
             let jp = k.point_jacobian(&f, &p, point(&p), distal);
-            let h = 1e-6;
             for j in 0..2 {
-                let mut qp = Vector2::new(p.q11, p.q21);
-                let mut qm = qp;
-                qp[j] += h;
-                qm[j] -= h;
-                let d = (point(&f.dgm(qp[0], qp[1]).unwrap()) - point(&f.dgm(qm[0], qm[1]).unwrap())) / (2.0 * h);
+                let d = d_dq(Vector2::new(p.q11, p.q21), j, |q| point(&f.dgm(q[0], q[1]).unwrap()));
                 let sc = jp.column(j).amax().max(1e-3);
                 assert!((jp.column(j) - d).amax() < 1e-7 * sc, "J_P col {j} distal {distal}: {:?} vs {d:?}", jp.column(j));
             }
