@@ -59,6 +59,13 @@ pub enum BenchCmd {
         /// Maximum repetitions per point (each point also stops after ~1 s).
         #[arg(long, default_value_t = 200)]
         reps: usize,
+        /// Instead of one design: an ensemble of this many random designs of the box that
+        /// pass stage 2 (seeded), reporting median and 90th-percentile errors per rtol.
+        #[arg(long)]
+        sample: Option<usize>,
+        /// Seed of the ensemble.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
     },
 }
 
@@ -68,7 +75,8 @@ pub fn run(b: BenchCmd) -> Result<()> {
         BenchCmd::Static { problem, n, seed } => bench_static(&problem, n, seed),
         BenchCmd::Nsga { reps } => bench_nsga(reps.max(3)),
         BenchCmd::Replay { problem, designs, per_shard, out, keep } => bench_replay(&problem, designs, per_shard.max(1), &out, keep),
-        BenchCmd::WorkPrecision { problem, design, out, reps } => {
+        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, .. } => super::workprec::run_ensemble(&problem, n.max(1), seed, &out),
+        BenchCmd::WorkPrecision { problem, design, out, reps, .. } => {
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;
             super::workprec::run(&problem, x, &out, reps)

@@ -53,6 +53,10 @@ enum Cmd {
         /// Write the trajectory (accepted steps and events) to this CSV file.
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Close the finger on nothing (contacts off): shows where the linkage itself goes,
+        /// e.g. into a parallel singularity.
+        #[arg(long)]
+        no_contact: bool,
     },
     /// NSGA-II over the staged pipeline; checkpoints every generation into RUN_DIR.
     Optimise {
@@ -215,11 +219,11 @@ pub fn run() -> Result<()> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only)
         }
-        Cmd::Simulate { problem, design, rtol, method, json, csv } => {
+        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact } => {
             let p = load_problem(&problem)?;
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
-            report::simulate(&p, &x, rtol, method.to_method(), json, csv.as_deref())
+            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
         Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms } => {

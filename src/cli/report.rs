@@ -63,7 +63,7 @@ fn print_dyn(r: &DynamicsRecord) {
 }
 
 /// `gripopt simulate`.
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, json: bool, csv: Option<&Path>) -> Result<()> {
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, json: bool, csv: Option<&Path>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -71,6 +71,7 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, json
     };
     let mut o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
     o.method = method;
+    o.contacts = contacts;
     let (res, traj) = simulate_grasp_traj(&k.finger, &p.scene, &st, &o);
     let rec = DynamicsRecord::from_result(Some(&res));
     let fstar = res.fstar;

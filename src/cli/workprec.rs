@@ -155,3 +155,75 @@ fn plot(rows: &[Row], path: &Path) -> Result<()> {
     root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
 }
+
+/// Work-precision over an ensemble of `n` random designs of the box that pass stage 2
+/// (seed `seed`): for each method and rtol, the median CPU time per simulation and the
+/// median / 90th-percentile relative errors in t_stab and E_cyl against Radau IIA at rtol
+/// 1e-11, and how many verdicts differ. Writes work_precision_ensemble.csv.
+pub fn run_ensemble(problem: &Path, n: usize, seed: u64, out_dir: &Path) -> Result<()> {
+    use rand::{Rng, SeedableRng};
+    let p = Problem::load(problem)?;
+    let s = &p.scene;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, rtol * 1e-3, 5_000_000) };
+    let mut cases = vec![];
+    let mut drawn = 0usize;
+    let pb = indicatif::ProgressBar::new(n as u64);
+    pb.set_style(indicatif::ProgressStyle::with_template("designs + references [{bar:30}] {pos}/{len}").expect("template"));
+    while cases.len() < n && drawn < 1000 * n {
+        drawn += 1;
+        let mut x = [0.0; 6];
+        for i in 0..6 {
+            x[i] = rng.random_range(p.bounds.lo[i]..=p.bounds.hi[i]);
+        }
+        let d = Design::from_array(&x);
+        let Ok(k) = stage_kinematics(&d, s) else { continue };
+        let Ok(st) = stage_statics(&k.finger, s) else { continue };
+        let reference = simulate_grasp(&k.finger, s, &st, &diag(Method::Radau5, 1e-11));
+        if reference.t_stab.is_none() {
+            continue;
+        }
+        cases.push((k.finger, st, reference));
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    println!("ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
+    let q = |mut v: Vec<f64>, f: f64| -> f64 {
+        v.retain(|x| !x.is_nan());
+        if v.is_empty() {
+            return f64::NAN;
+        }
+        v.sort_by(f64::total_cmp);
+        v[((v.len() - 1) as f64 * f).round() as usize]
+    };
+    std::fs::create_dir_all(out_dir).with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let csv = out_dir.join("work_precision_ensemble.csv");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?);
+    writeln!(w, "method,rtol,designs,cpu_median_s,steps_median,rhs_median,err_t_stab_median,err_t_stab_p90,err_e_cyl_median,err_e_cyl_p90,verdicts_differing")?;
+    println!("{:<8} {:>7} {:>10} {:>7} {:>7} {:>11} {:>11} {:>11} {:>11} {}", "method", "rtol", "cpu med", "steps", "rhs", "t_stab med", "t_stab p90", "E_cyl med", "E_cyl p90", "verdicts differ");
+    for m in [Method::Radau5, Method::Dopri5, Method::TrBdf2] {
+        for rtol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+            if m == Method::TrBdf2 && rtol < 1e-7 {
+                continue;
+            }
+            let o = diag(m, rtol);
+            let (mut cpu, mut steps, mut rhs, mut ets, mut ee) = (vec![], vec![], vec![], vec![], vec![]);
+            let mut differ = 0;
+            for (f, st, reference) in &cases {
+                let (r, _, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 0.05, 7);
+                cpu.push(tmed);
+                steps.push(r.stats.steps as f64);
+                rhs.push(r.rhs_evals as f64);
+                ets.push(rel(r.t_stab, reference.t_stab));
+                ee.push(rel(r.first.map(|x| x.impact.e_cyl), reference.first.map(|x| x.impact.e_cyl)));
+                differ += usize::from(r.outcome != reference.outcome);
+            }
+            let row = (q(cpu, 0.5), q(steps, 0.5), q(rhs, 0.5), q(ets.clone(), 0.5), q(ets, 0.9), q(ee.clone(), 0.5), q(ee, 0.9));
+            writeln!(w, "{m:?},{rtol:e},{},{:e},{},{},{:e},{:e},{:e},{:e},{differ}", cases.len(), row.0, row.1, row.2, row.3, row.4, row.5, row.6)?;
+            println!("{:<8} {:>7.0e} {:>8.3}ms {:>7} {:>7} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {differ}", format!("{m:?}"), rtol, row.0 * 1e3, row.1, row.2, row.3, row.4, row.5, row.6);
+        }
+    }
+    w.flush()?;
+    println!("wrote {}", csv.display());
+    Ok(())
+}

@@ -1,7 +1,7 @@
 //! Derived geometry, open configuration, direct geometric model and the leg-1 inverse
 //! model (MODEL.md §3, §5.1, §5.2), plus the mass properties of §4.
 
-use crate::math::{angle, cross, e, perp, wrap, V2};
+use crate::math::{angle, cross, e, e_fast, perp, wrap, V2};
 use crate::problem::{Design, Scene};
 use std::f64::consts::PI;
 
@@ -84,7 +84,8 @@ pub struct Pose {
     pub q12: f64,
     /// Proximal angle q21 (absolute) = θ1.
     pub q21: f64,
-    /// Link-22 angle q22 (relative to link 21).
+    /// Link-22 angle q22 (relative to link 21); NaN from [`Finger::dgm_fast`] (see
+    /// [`Pose::q22_from_vectors`]).
     pub q22: f64,
     /// Angle from x12 to x22; NaN from [`Finger::dgm_fast`].
     pub q13: f64,
@@ -105,6 +106,12 @@ pub struct Pose {
 }
 
 impl Pose {
+    /// q22 from the unit vectors, `atan2(x21 × x22, x21 · x22)` (what [`Finger::dgm`] stores).
+    #[inline]
+    pub fn q22_from_vectors(&self) -> f64 {
+        cross(self.x21, self.x22).atan2(self.x21.dot(&self.x22))
+    }
+
     /// Phalanx angles (θ1, θ2) = (q21, q22 + ψ).
     pub fn theta(&self, psi: f64) -> (f64, f64) {
         (self.q21, self.q22 + psi)
@@ -196,8 +203,10 @@ impl Finger {
         self.dgm_with(q11, q21, true)
     }
 
-    /// DGM for the simulator's right-hand side: as [`Finger::dgm`] but q12 and q13 are left
-    /// NaN (one `atan2` less); sin q13 is `cross(x12, x22)`.
+    /// DGM for the simulator's right-hand side: as [`Finger::dgm`] but the angles q12, q22
+    /// and q13 are left NaN (no `atan2`) and sin/cos come from
+    /// [`crate::math::sin_cos_fast`]; sin q13 is `cross(x12, x22)`, q22 is
+    /// [`Pose::q22_from_vectors`].
     #[inline]
     pub fn dgm_fast(&self, q11: f64, q21: f64) -> Result<Pose, GeomError> {
         self.dgm_with(q11, q21, false)
@@ -205,8 +214,7 @@ impl Finger {
 
     #[inline(always)]
     fn dgm_with(&self, q11: f64, q21: f64, all_angles: bool) -> Result<Pose, GeomError> {
-        let x11 = e(q11);
-        let x21 = e(q21);
+        let (x11, x21) = if all_angles { (e(q11), e(q21)) } else { (e_fast(q11), e_fast(q21)) };
         let o12 = self.o21 + self.l11 * x11;
         let o22 = self.o21 + self.l21 * x21;
         let v = o12 - o22;
@@ -224,12 +232,12 @@ impl Finger {
         let o13 = o22 + ak * v + self.gamma * bk2.sqrt() * perp(v);
         let x12 = (o13 - o12) / self.l12;
         let x22 = (o13 - o22) / self.l22;
-        let q22 = cross(x21, x22).atan2(x21.dot(&x22));
-        let (q12, q13) = if all_angles {
+        let (q12, q22, q13) = if all_angles {
+            let q22 = cross(x21, x22).atan2(x21.dot(&x22));
             let q12 = cross(x11, x12).atan2(x11.dot(&x12));
-            (q12, wrap(q21 + q22 - q11 - q12))
+            (q12, q22, wrap(q21 + q22 - q11 - q12))
         } else {
-            (f64::NAN, f64::NAN)
+            (f64::NAN, f64::NAN, f64::NAN)
         };
         Ok(Pose { q11, q12, q21, q22, q13, o12, o22, o13, x11, x12, x21, x22 })
     }

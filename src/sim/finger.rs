@@ -71,6 +71,8 @@ pub struct FingerEval {
     pub theta2_dot: f64,
     /// Total energy E = T + V.
     pub energy: f64,
+    /// The smooth piece of the right-hand side (see [`Rhs::piece`]).
+    pub piece: u64,
 }
 
 /// Constants of the finger ODE.
@@ -108,6 +110,8 @@ pub struct FingerOde<'a> {
     pub contacts_enabled: bool,
     /// RHS evaluations (counted here so that event location is counted too).
     pub evals: u64,
+    /// The full evaluation at the end of the last accepted step (see [`FingerOde::take_accepted`]).
+    accepted: Option<(State, FingerEval)>,
 }
 
 impl<'a> FingerOde<'a> {
@@ -130,6 +134,7 @@ impl<'a> FingerOde<'a> {
             mem: [Memory::default(); 2],
             contacts_enabled: true,
             evals: 0,
+            accepted: None,
         }
     }
 
@@ -145,30 +150,54 @@ impl<'a> FingerOde<'a> {
     }
 
     /// Evaluate the full model at state `y`; `None` where the DGM or kinematics fail.
-    #[inline(always)]
+    #[inline]
     pub fn evaluate(&self, y: &State) -> Option<FingerEval> {
+        self.evaluate_with(y, true)
+    }
+
+    /// The model at `y`. `full = false` is the right-hand side's lean path: the energy is
+    /// NaN and θ2 (one `atan2`) is computed only where a force needs it — a spring rate
+    /// k_s ≠ 0, in-plane gravity, or the stop engaged (sin θ2 < 0, equivalent to θ2 < 0 for
+    /// θ2 = q22 + ψ with q22 ∈ (−π, π] and ψ > 0); otherwise θ2 is NaN.
+    #[inline(always)]
+    fn evaluate_with(&self, y: &State, full: bool) -> Option<FingerEval> {
         let f = self.finger;
-        let pose = f.dgm_fast(y[0], y[1]).ok()?;
+        let mut pose = f.dgm_fast(y[0], y[1]).ok()?;
         let kin = Kin::new(f, &pose)?;
         let qd = Vector2::new(y[2], y[3]);
         let red = reduced(f, &pose, &kin, qd);
         let j = kin.j_row();
-        let theta2 = pose.q22 + f.psi;
+        let xd = f.distal_dir(&pose);
+        let gravity = self.scene.g_eq != 0.0;
+        let theta2 = if full || gravity || self.k_s != 0.0 || crate::math::cross(pose.x21, xd) < 0.0 {
+            pose.q22 = pose.q22_from_vectors();
+            pose.q22 + f.psi
+        } else {
+            f64::NAN
+        };
         let theta2_dot = j.dot(&qd);
+        let mut piece = 0u64;
         // actuator, spring, stop, gravity
-        let mut q = Vector2::new(self.tau, 0.0) - (self.tau_s0 + self.k_s * theta2) * j;
+        let spring = if self.k_s != 0.0 { self.tau_s0 + self.k_s * theta2 } else { self.tau_s0 };
+        let mut q = Vector2::new(self.tau, 0.0) - spring * j;
+        let mut v = if full { -self.tau * y[0] + self.tau_s0 * theta2 + 0.5 * self.k_s * theta2 * theta2 } else { f64::NAN };
         let phi = -theta2;
-        let mut v = -self.tau * y[0] + self.tau_s0 * theta2 + 0.5 * self.k_s * theta2 * theta2;
         if phi > 0.0 {
-            let ts = (self.k_stop * phi * (1.0 + self.c_stop * (-theta2_dot))).max(0.0);
-            q += ts * j;
+            piece |= 1;
+            let damp = 1.0 + self.c_stop * (-theta2_dot);
+            if damp <= 0.0 {
+                piece |= 2;
+            }
+            q += (self.k_stop * phi * damp).max(0.0) * j;
             v += 0.5 * self.k_stop * phi * phi;
         }
-        if self.scene.g_eq != 0.0 {
+        if gravity {
             q += reduce_tree_force(&kin, gravity_tree(f, &pose, self.scene));
-            v += gravity_potential(f, &pose, self.scene);
+            if full {
+                v += gravity_potential(f, &pose, self.scene);
+            }
         }
-        let geo = self.geometry(&pose);
+        let geo = [capsule(f.o21, pose.x21, f.l21, self.centre, self.rw, f.w), capsule(pose.o22, xd, f.t22, self.centre, self.rw, f.w)];
         let mut object_force = V2::zeros();
         let mut contacts = [ContactState {
             geom: geo[0],
@@ -190,6 +219,10 @@ impl<'a> FingerOde<'a> {
             c.delta_dot = g.normal.dot(&vp);
             c.slip = g.tangent.dot(&vp);
             if self.contacts_enabled && self.mem[i].active && g.delta > 0.0 {
+                piece |= 4 << (2 * i);
+                if 1.0 + self.chi * c.delta_dot / self.mem[i].vminus <= 0.0 {
+                    piece |= 8 << (2 * i);
+                }
                 let fnm = flores_normal(self.k_contact, self.chi, g.delta, c.delta_dot, self.mem[i].vminus);
                 let ft = -self.friction.mu(c.slip) * fnm;
                 let force = -fnm * g.normal + ft * g.tangent;
@@ -197,15 +230,27 @@ impl<'a> FingerOde<'a> {
                 object_force -= force;
                 c.normal_force = fnm;
                 c.friction_force = ft;
-                v += 0.4 * self.k_contact * g.delta * g.delta * g.delta.sqrt();
+                if full {
+                    v += 0.4 * self.k_contact * g.delta * g.delta * g.delta.sqrt();
+                }
             }
         }
         let q_total = q - red.c;
         let minv = red.m.try_inverse()?;
         let qdd = minv * q_total;
-        let energy = 0.5 * qd.dot(&(red.m * qd)) + v;
+        let energy = if full { 0.5 * qd.dot(&(red.m * qd)) + v } else { f64::NAN };
         let sin_q13 = crate::math::cross(pose.x12, pose.x22);
-        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13 })
+        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13, piece })
+    }
+
+    /// The full evaluation the integrator made at the end of its last accepted step, if
+    /// that step ended at `y` (saves the driver a second evaluation per step).
+    #[inline]
+    pub fn take_accepted(&mut self, y: &State) -> Option<FingerEval> {
+        match self.accepted.take() {
+            Some((ya, ev)) if ya == *y => Some(ev),
+            _ => None,
+        }
     }
 
     /// Time derivative from a full evaluation (hand force F_hand,y = 2 × finger-1 force).
@@ -226,38 +271,29 @@ impl Rhs<NS> for FingerOde<'_> {
     #[inline]
     fn eval(&mut self, _t: f64, y: &State) -> Option<State> {
         self.evals += 1;
-        let ev = self.evaluate(y)?;
+        let ev = self.evaluate_with(y, false)?;
         Some(self.derivative(y, &ev))
     }
 
     /// Smooth piece: bit 0 stop engaged, bit 1 stop force clipped, bits 2+2i contact i
     /// loaded, bits 3+2i its force clipped by the damping term.
     fn piece(&self, y: &State) -> u64 {
-        let f = self.finger;
-        let Ok(pose) = f.dgm_fast(y[0], y[1]) else { return u64::MAX };
-        let Some(kin) = Kin::new(f, &pose) else { return u64::MAX };
-        let qd = Vector2::new(y[2], y[3]);
-        let theta2 = pose.q22 + f.psi;
-        let mut bits = 0u64;
-        if theta2 < 0.0 {
-            bits |= 1;
-            if 1.0 - self.c_stop * kin.j_row().dot(&qd) <= 0.0 {
-                bits |= 2;
-            }
-        }
-        if self.contacts_enabled {
-            let geo = self.geometry(&pose);
-            for i in 0..2 {
-                if self.mem[i].active && geo[i].delta > 0.0 {
-                    bits |= 4 << (2 * i);
-                    let jp = kin.point_jacobian(f, &pose, geo[i].point, i == 1);
-                    let dd = geo[i].normal.dot(&(jp * qd));
-                    if 1.0 + self.chi * dd / self.mem[i].vminus <= 0.0 {
-                        bits |= 8 << (2 * i);
-                    }
-                }
-            }
-        }
-        bits
+        self.evaluate_with(y, false).map_or(u64::MAX, |ev| ev.piece)
+    }
+
+    #[inline]
+    fn eval_piece(&mut self, _t: f64, y: &State) -> Option<(State, u64)> {
+        self.evals += 1;
+        let ev = self.evaluate_with(y, false)?;
+        Some((self.derivative(y, &ev), ev.piece))
+    }
+
+    /// The full evaluation (its forces equal the lean one's), kept for the driver.
+    fn eval_accepted(&mut self, _t: f64, y: &State) -> Option<(State, u64)> {
+        self.evals += 1;
+        let ev = self.evaluate_with(y, true)?;
+        let out = (self.derivative(y, &ev), ev.piece);
+        self.accepted = Some((*y, ev));
+        Some(out)
     }
 }

@@ -53,12 +53,15 @@ pub struct SimOptions {
     pub record: bool,
     /// Also sample a uniform grid with this step (s) when recording.
     pub grid_dt: Option<f64>,
+    /// Contacts with the object (false: the fingers close on nothing — a diagnostic scene
+    /// for the linkage alone; no compliant equilibrium, no stability).
+    pub contacts: bool,
 }
 
 impl SimOptions {
     /// Pipeline-mode options with Radau IIA.
     pub fn pipeline(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions { rtol, atol, max_steps, mode: Mode::Pipeline, method: Method::Radau5, record: false, grid_dt: None }
+        SimOptions { rtol, atol, max_steps, mode: Mode::Pipeline, method: Method::Radau5, record: false, grid_dt: None, contacts: true }
     }
     /// Diagnostic-mode options with Radau IIA.
     pub fn diagnostic(rtol: f64, atol: f64, max_steps: u64) -> Self {
@@ -337,7 +340,8 @@ fn gvals(ode: &FingerOde, ctx: &Ctx, y: &State, ev: &FingerEval, after_first: bo
     let mut contact = [0.0; 2];
     for i in 0..2 {
         let d = ev.contacts[i].geom.delta;
-        contact[i] = if ode.mem[i].active { d + ctx.s.eps_sep } else { d };
+        // without contacts (a diagnostic scene) the phalanges pass through the object
+        contact[i] = if !ode.contacts_enabled { -1.0 } else if ode.mem[i].active { d + ctx.s.eps_sep } else { d };
     }
     Gs {
         contact,
@@ -424,7 +428,7 @@ fn tolerances(opts: &SimOptions) -> Tol<NS> {
 fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     let tol = tolerances(opts);
     match opts.method {
-        Method::Radau5 => run(Radau5::<NS, { 3 * NS }>::new(tol, 1e-5), f, s, st, opts, traj),
+        Method::Radau5 => run(Radau5::<NS>::new(tol, 1e-5), f, s, st, opts, traj),
         Method::TrBdf2 => run(TrBdf2::new(tol, 1e-5), f, s, st, opts, traj),
         Method::Dopri5 => run(Dopri5::new(tol, 1e-6), f, s, st, opts, traj),
     }
@@ -485,9 +489,15 @@ fn run<St: Stepper<NS>>(
             return finish(res, &stepper, &ode);
         }
     }
-    let Some(eq) = compliant_equilibrium(&ode, s, st.f0) else {
-        res.outcome = DynOutcome::NoEquilibrium;
-        return finish(res, &stepper, &ode);
+    let eq = if opts.contacts {
+        let Some(eq) = compliant_equilibrium(&ode, s, st.f0) else {
+            res.outcome = DynOutcome::NoEquilibrium;
+            return finish(res, &stepper, &ode);
+        };
+        eq
+    } else {
+        ode.contacts_enabled = false;
+        Equilibrium { q: Vector2::repeat(f64::NAN), v_star: f64::NAN, fstar: [f64::NAN; 2] }
     };
     res.v_star = eq.v_star;
     res.fstar = eq.fstar;
@@ -539,7 +549,7 @@ fn run<St: Stepper<NS>>(
                 break;
             }
         };
-        let Some(ev1) = ode.evaluate(&acc.y) else {
+        let Some(ev1) = ode.take_accepted(&acc.y).or_else(|| ode.evaluate(&acc.y)) else {
             res.outcome = DynOutcome::DgmFailure;
             break;
         };
@@ -811,6 +821,10 @@ pub struct DynamicsRecord {
     pub jac_evals: Option<u64>,
     /// LU factorisations.
     pub lu_count: Option<u64>,
+    /// Newton iterations.
+    pub newton_iters: Option<u64>,
+    /// Step attempts rejected for Newton failure (part of `rejected_steps`).
+    pub newton_failures: Option<u64>,
     /// Events.
     pub events: Option<u32>,
     /// CPU seconds of stage 3.
@@ -848,9 +862,48 @@ impl DynamicsRecord {
             rhs_evals: Some(d.rhs_evals),
             jac_evals: Some(d.stats.jac),
             lu_count: Some(d.stats.lu),
+            newton_iters: Some(d.stats.newton),
+            newton_failures: Some(d.stats.newton_fail),
             events: Some(d.events),
             cpu_s: Some(d.cpu_s),
             knuckle_contact: Some(d.knuckle_flag),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hermite_may_cross;
+    use rand::{Rng, SeedableRng};
+
+    /// §13 item 3 (a contact that opens and closes inside one step): the test that decides
+    /// whether to sample inside a step agrees with brute-force sampling of the same cubic
+    /// wherever the excursion is not within rounding of zero.
+    #[test]
+    fn inner_crossing_test_matches_brute_force() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let (mut crossing, mut checked) = (0, 0);
+        for _ in 0..20_000 {
+            let h = 10f64.powf(rng.random_range(-8.0..-3.0));
+            let a: f64 = rng.random_range(-1e-5..1e-5);
+            let b = a.signum() * rng.random_range(1e-9..1e-5);
+            let (da, db) = (rng.random_range(-1.0..1.0) * 1e-5 / h, rng.random_range(-1.0..1.0) * 1e-5 / h);
+            let p = |s: f64| {
+                let (s2, s3) = (s * s, s * s * s);
+                (2.0 * s3 - 3.0 * s2 + 1.0) * a + (s3 - 2.0 * s2 + s) * h * da + (-2.0 * s3 + 3.0 * s2) * b + (s3 - s2) * h * db
+            };
+            // the extreme excursion to the other side, by dense sampling
+            let n = 4000;
+            let worst = (1..n).map(|i| p(i as f64 / n as f64)).map(|v| if a > 0.0 { -v } else { v }).fold(f64::NEG_INFINITY, f64::max);
+            let scale = a.abs().max(b.abs()) + h * (da.abs() + db.abs());
+            if worst.abs() < 1e-6 * scale {
+                continue; // tangency: either answer is right
+            }
+            checked += 1;
+            let expect = if a > 0.0 { worst >= 0.0 } else { worst > 0.0 };
+            crossing += usize::from(expect);
+            assert_eq!(hermite_may_cross(a, da, b, db, h), expect, "a {a:e} da {da:e} b {b:e} db {db:e} h {h:e}");
+        }
+        assert!(checked > 15_000 && crossing > 300, "{checked} checked, {crossing} crossing");
     }
 }
