@@ -424,3 +424,20 @@ fn knuckle_contact_is_flagged_and_finite() {
     let ev = ode.evaluate(&y).unwrap();
     assert!(!FingerOde::knuckle_contact(&ev));
 }
+
+/// The CLI's contact-free view reports the singular abort, and the ensemble bench refuses
+/// an empty sample instead of defaulting.
+#[test]
+fn cli_no_contact_and_bad_bench_flags() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let design = "l21=0.04549204603835802,b=0.05890255558786177,t22=0.0307206768455294,r=0.6474382809963541,p=0.6134575256373511,psi_deg=126.19868905695499";
+    let out = std::process::Command::new(bin).args(["simulate", problem, "--design", design, "--no-contact", "--json"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(j["reason"].as_str().unwrap().starts_with("singular"), "{j}");
+    assert!(j["t_first_contact"].is_null());
+    let out = std::process::Command::new(bin).args(["bench", "work-precision", problem, "--sample", "0"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--sample 0"));
+}

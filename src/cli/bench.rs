@@ -61,7 +61,7 @@ pub enum BenchCmd {
         reps: usize,
         /// Instead of one design: an ensemble of this many random designs of the box that
         /// pass stage 2 (seeded), reporting median and 90th-percentile errors per rtol.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "design")]
         sample: Option<usize>,
         /// Seed of the ensemble.
         #[arg(long, default_value_t = 1)]
@@ -75,7 +75,8 @@ pub fn run(b: BenchCmd) -> Result<()> {
         BenchCmd::Static { problem, n, seed } => bench_static(&problem, n, seed),
         BenchCmd::Nsga { reps } => bench_nsga(reps.max(3)),
         BenchCmd::Replay { problem, designs, per_shard, out, keep } => bench_replay(&problem, designs, per_shard.max(1), &out, keep),
-        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, .. } => super::workprec::run_ensemble(&problem, n.max(1), seed, &out),
+        BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
+        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, .. } => super::workprec::run_ensemble(&problem, n, seed, &out),
         BenchCmd::WorkPrecision { problem, design, out, reps, .. } => {
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;

@@ -187,6 +187,9 @@ pub fn run_ensemble(problem: &Path, n: usize, seed: u64, out_dir: &Path) -> Resu
         pb.inc(1);
     }
     pb.finish_and_clear();
+    if cases.is_empty() {
+        anyhow::bail!("{}: no random design of the box passed stage 2 and reached stability in {drawn} draws", problem.display());
+    }
     println!("ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     let q = |mut v: Vec<f64>, f: f64| -> f64 {
         v.retain(|x| !x.is_nan());
