@@ -282,6 +282,51 @@ impl<const N: usize> JacobianCache<N> {
     }
 }
 
+/// An implicit stepper's Jacobian and factored Newton matrix, for the shared start of a
+/// step attempt ([`prepare_attempt`]).
+trait NewtonMatrix<const N: usize> {
+    /// The Jacobian cache, the counters and the step-size proposal.
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64);
+    /// Forget the factorisation (the Jacobian changed).
+    fn drop_factor(&mut self);
+    /// Factor the Newton matrix for step `h` (no-op if already factored for `h`).
+    fn factor(&mut self, h: f64) -> bool;
+}
+
+/// Start a step attempt: bound h, refresh the Jacobian if needed and factor. `Ok(None)`:
+/// retry (a stale Jacobian was dropped, or h halved after a singular matrix).
+fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
+    m: &mut M,
+    sys: &mut S,
+    t: f64,
+    y: &SVector<f64, N>,
+    f: &SVector<f64, N>,
+    h_max: f64,
+) -> Result<Option<f64>, StepError> {
+    let (jc, stats, h_prop) = m.parts();
+    let h = h_prop.min(h_max);
+    if h < HMIN {
+        return Err(StepError::StepTooSmall);
+    }
+    if !jc.valid {
+        if !jc.compute(sys, t, y, f, stats) {
+            return Err(StepError::RhsFailed);
+        }
+        m.drop_factor();
+    }
+    if m.factor(h) {
+        return Ok(Some(h));
+    }
+    let (jc, stats, h_prop) = m.parts();
+    if !jc.fresh {
+        jc.valid = false;
+    } else {
+        *h_prop = h * 0.5;
+        stats.rejected += 1;
+    }
+    Ok(None)
+}
+
 // ---------------------------------------------------------------------------------------
 // TR-BDF2
 // ---------------------------------------------------------------------------------------
@@ -330,7 +375,7 @@ impl<const N: usize> TrBdf2<N> {
         }
     }
 
-    fn factor(&mut self, h: f64) -> bool {
+    fn factor_matrix(&mut self, h: f64) -> bool {
         if self.lu.is_some() && self.lu_h == h {
             return true;
         }
@@ -389,6 +434,18 @@ impl<const N: usize> TrBdf2<N> {
     }
 }
 
+impl<const N: usize> NewtonMatrix<N> for TrBdf2<N> {
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64) {
+        (&mut self.jc, &mut self.stats, &mut self.h)
+    }
+    fn drop_factor(&mut self) {
+        self.lu = None;
+    }
+    fn factor(&mut self, h: f64) -> bool {
+        self.factor_matrix(h)
+    }
+}
+
 impl<const N: usize> Stepper<N> for TrBdf2<N> {
     fn advance<S: Rhs<N>>(
         &mut self,
@@ -400,25 +457,7 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
     ) -> Result<Accepted<N>, StepError> {
         self.jc.start_step(sys, y);
         loop {
-            let h = self.h.min(h_max);
-            if h < HMIN {
-                return Err(StepError::StepTooSmall);
-            }
-            if !self.jc.valid {
-                if !self.jc.compute(sys, t, y, f, &mut self.stats) {
-                    return Err(StepError::RhsFailed);
-                }
-                self.lu = None;
-            }
-            if !self.factor(h) {
-                if !self.jc.fresh {
-                    self.jc.valid = false;
-                } else {
-                    self.h = h * 0.5;
-                    self.stats.rejected += 1;
-                }
-                continue;
-            }
+            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
             // Stage 2 (trapezoidal rule to t + γh).
             let rhs2 = y + f * (D * h);
             let z0 = y + f * (GAMMA * h);
@@ -766,7 +805,7 @@ impl<const N: usize> Radau5<N> {
         }
     }
 
-    fn factor(&mut self, h: f64) -> bool {
+    fn factor_matrix(&mut self, h: f64) -> bool {
         if self.lu_r.is_some() && self.lu_h == h {
             return true;
         }
@@ -898,6 +937,18 @@ impl<const N: usize> Radau5<N> {
     }
 }
 
+impl<const N: usize> NewtonMatrix<N> for Radau5<N> {
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64) {
+        (&mut self.jc, &mut self.stats, &mut self.h)
+    }
+    fn drop_factor(&mut self) {
+        self.lu_r = None;
+    }
+    fn factor(&mut self, h: f64) -> bool {
+        self.factor_matrix(h)
+    }
+}
+
 impl<const N: usize> Stepper<N> for Radau5<N> {
     fn advance<S: Rhs<N>>(
         &mut self,
@@ -909,25 +960,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
     ) -> Result<Accepted<N>, StepError> {
         self.jc.start_step(sys, y);
         loop {
-            let h = self.h.min(h_max);
-            if h < HMIN {
-                return Err(StepError::StepTooSmall);
-            }
-            if !self.jc.valid {
-                if !self.jc.compute(sys, t, y, f, &mut self.stats) {
-                    return Err(StepError::RhsFailed);
-                }
-                self.lu_r = None;
-            }
-            if !self.factor(h) {
-                if !self.jc.fresh {
-                    self.jc.valid = false;
-                } else {
-                    self.h = h * 0.5;
-                    self.stats.rejected += 1;
-                }
-                continue;
-            }
+            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
             let (z, theta, iters) = match self.newton(sys, t, y, h) {
                 Ok(v) => v,
                 Err(NewtonFail::Diverged) => {
