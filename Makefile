@@ -46,7 +46,9 @@ run: build
 	@id=$$(sed -n 2p $(OUT)/pareto.csv | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.
-bench: build
+# The work-precision table includes diffsol's solvers (optional feature "diffsol").
+bench:
+	$(CARGO) build --release --locked --features diffsol
 	$(BIN) bench static $(PROBLEM)
 	$(BIN) bench work-precision $(PROBLEM)
 	$(BIN) bench nsga

@@ -441,3 +441,103 @@ fn cli_no_contact_and_bad_bench_flags() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--sample 0"));
 }
+
+/// First onsets of both phalanges at spring preload `tau_s0`, simulated at `rtol` up to
+/// `t_max` (diagnostic mode: the run goes on past a failed criterion).
+fn onsets_at(f: &Finger, s: &Scene, st: &StaticsResult, tau_s0: f64, rtol: f64) -> DynamicsResult {
+    let mut st = *st;
+    st.tau_s0 = tau_s0;
+    simulate_grasp(f, s, &st, &diag(rtol))
+}
+
+#[test]
+fn simultaneous_proximal_and_distal_onsets() {
+    // §13 item 8: the preload decides which phalanx touches first (nominal: proximal;
+    // no preload: the folded distal). Bisection on τ_s0 finds the preload at which the
+    // simulator sees both onsets within 1e-12 s; there both are processed, the first
+    // contact is the earlier onset, and the run ends with a verdict, no NaN and a
+    // non-increasing energy.
+    let mut s = scene();
+    let (f, st) = prepare(&nominal(), &s);
+    s.t_max = 0.012;
+    let rtol = 1e-9;
+    let gap = |tau: f64| {
+        let r = onsets_at(&f, &s, &st, tau, rtol);
+        match r.onsets {
+            [Some(a), Some(b)] => b - a,
+            o => panic!("both phalanges should touch by t_max at τ_s0 = {tau}: {o:?}"),
+        }
+    };
+    let (mut lo, mut hi) = (0.0, st.tau_s0);
+    let (glo, ghi) = (gap(lo), gap(hi));
+    assert!(glo < 0.0 && ghi > 0.0, "distal first without preload ({glo:e}), proximal first at the nominal ({ghi:e})");
+    let mut best = (f64::INFINITY, hi);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        let g = gap(mid);
+        if g.abs() < best.0 {
+            best = (g.abs(), mid);
+        }
+        if g.abs() <= 1e-12 || hi - lo <= 1e-15 * hi {
+            break;
+        }
+        if g < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    eprintln!("simultaneous onsets at τ_s0 = {:.17e}: gap {:e} s", best.1, best.0);
+    assert!(best.0 <= 1e-12, "no preload puts the onsets within 1e-12 s (best {:e} s)", best.0);
+    let mut st2 = st;
+    st2.tau_s0 = best.1;
+    let (r, tr) = simulate_grasp_traj(&f, &s, &st2, &diag(rtol));
+    assert_clean(&r, "simultaneous onsets");
+    let [Some(a), Some(b)] = r.onsets else { panic!("both onsets: {:?}", r.onsets) };
+    let fc = r.first.expect("first contact");
+    assert_eq!(fc.t, a.min(b), "the first contact is the earlier onset");
+    assert!(fc.impact.e_cyl.is_finite() && fc.impact.e_cyl > 0.0);
+    let scale = (tr.samples[0].energy - r.v_star).abs();
+    let rise = tr.samples.windows(2).map(|w| w[1].energy - w[0].energy).fold(f64::NEG_INFINITY, f64::max);
+    assert!(rise <= 1e-6 * scale, "energy rose by {rise:e} J (scale {scale:e})");
+    // both onsets were processed as contacts: right after them both phalanges carry load
+    let t_both = a.max(b);
+    assert!(
+        tr.samples.iter().any(|x| x.t > t_both && x.t < t_both + 1e-4 && x.normal.iter().all(|&v| v > 0.0)),
+        "both phalanges loaded within 0.1 ms of the double onset"
+    );
+}
+
+#[test]
+fn knuckle_contact_in_a_full_simulation() {
+    // §13 item 12 inside a grasp: a short proximal on a wide base puts the projection of
+    // the object centre past the knuckle (k1 > l21), so the proximal touches with its O22
+    // end cap. Stage 2 discards such a design (k1 outside the phalanx); the diagnostic
+    // simulation, run with the design's own spring preload, must flag the double-counted
+    // cap and still end with a verdict, finite forces and a non-increasing energy, at
+    // two tolerances.
+    use gripopt::model::statics::spring_preload;
+    let s = scene();
+    let x = Design::from_array(&[0.03392756151429064, 0.07619270279217326, 0.01884084531015458, 0.23214368246908246, 0.33786516909439185, 99.28639227950096]);
+    let f = stage_kinematics(&x, &s).expect("stage 1").finger;
+    assert!(stage_statics(&f, &s).is_err(), "stage 2 discards a knuckle grasp");
+    let (_, mut st) = prepare(&nominal(), &s);
+    st.tau_s0 = spring_preload(&f, &s).expect("preload").1;
+    let mut verdicts = vec![];
+    for rtol in [1e-6, 1e-8] {
+        let (r, tr) = simulate_grasp_traj(&f, &s, &st, &diag(rtol));
+        assert_clean(&r, "knuckle");
+        assert!(r.knuckle_flag, "rtol {rtol}: the knuckle contact is flagged");
+        assert!(tr.samples.iter().all(|x| x.normal.iter().chain(x.friction.iter()).all(|v| v.is_finite())));
+        let scale = (tr.samples[0].energy - r.v_star).abs();
+        let rise = tr.samples.windows(2).map(|w| w[1].energy - w[0].energy).fold(f64::NEG_INFINITY, f64::max);
+        assert!(rise <= 1e-6 * scale, "rtol {rtol}: energy rose by {rise:e} J (scale {scale:e})");
+        assert!(
+            !matches!(r.outcome, DynOutcome::Aborted | DynOutcome::StepBudget | DynOutcome::StepTooSmall | DynOutcome::DgmFailure),
+            "rtol {rtol}: {:?}",
+            r.outcome
+        );
+        verdicts.push(r.outcome);
+    }
+    assert_eq!(verdicts[0], verdicts[1], "the verdict does not depend on the tolerance");
+}

@@ -9,6 +9,8 @@ mod bench;
 mod optcmd;
 mod report;
 mod workprec;
+#[cfg(feature = "diffsol")]
+mod diffsol_cmp;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]

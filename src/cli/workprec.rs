@@ -10,7 +10,7 @@ use std::time::Instant;
 
 /// One row of the work-precision table.
 struct Row {
-    method: Method,
+    method: &'static str,
     rtol: f64,
     cpu_min: f64,
     cpu_med: f64,
@@ -69,7 +69,7 @@ pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Resul
             let (r, tmin, tmed) = time_it(|| simulate_grasp(&f, s, &st, &o), 1.0, reps);
             let ef = r.f_end.iter().zip(reference.f_end.iter()).map(|(a, b)| ((a - b) / b).abs()).fold(0.0, f64::max);
             rows.push(Row {
-                method: m,
+                method: label(m),
                 rtol,
                 cpu_min: tmin,
                 cpu_med: tmed,
@@ -85,22 +85,25 @@ pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Resul
         }
     }
     pb.finish_and_clear();
+    rows.extend(diffsol_rows(&f, s, &st, &reference, reps)?);
     std::fs::create_dir_all(out_dir).with_context(|| format!("cannot create {}", out_dir.display()))?;
     let csv = out_dir.join("work_precision.csv");
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?);
     writeln!(w, "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict")?;
     println!("{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} {}", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)", "verdict");
     for r in &rows {
-        writeln!(w, "{:?},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}", r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, r.verdict_same)?;
-        println!("{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", format!("{:?}", r.method), r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
+        writeln!(w, "{},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}", r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, r.verdict_same)?;
+        println!("{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", r.method, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
     }
     w.flush()?;
     // cheapest run meeting 1e-5 on t_stab, per method
-    for m in methods {
+    let mut labels: Vec<&str> = rows.iter().map(|r| r.method).collect();
+    labels.dedup();
+    for m in labels {
         let best = rows.iter().filter(|r| r.method == m && r.err_t_stab <= 1e-5).min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
         match best {
-            Some(r) => println!("{m:?}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
-            None => println!("{m:?}: no tolerance reached 1e-5 on t_stab"),
+            Some(r) => println!("{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
+            None => println!("{m}: no tolerance reached 1e-5 on t_stab"),
         }
     }
     // whole staged evaluation (stages 0–3, pipeline mode, max_offset scan included)
@@ -118,6 +121,70 @@ pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Resul
     println!("wrote {} and {}", csv.display(), out_dir.join("work_precision.svg").display());
     let _ = t_ref;
     Ok(())
+}
+
+/// Label of one of gripopt's own methods in the table.
+fn label(m: Method) -> &'static str {
+    match m {
+        Method::Radau5 => "Radau5",
+        Method::TrBdf2 => "TrBdf2",
+        Method::Dopri5 => "Dopri5",
+    }
+}
+
+/// The same grasp through diffsol's solvers, against the same reference (feature `diffsol`).
+#[cfg(feature = "diffsol")]
+fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::problem::Scene, st: &gripopt::pipeline::StaticsResult, reference: &DynamicsResult, reps: usize) -> Result<Vec<Row>> {
+    use super::diffsol_cmp::{simulate, DsMethod};
+    let mut rows = vec![];
+    let pb = indicatif::ProgressBar::new((DsMethod::ALL.len() * 6) as u64);
+    pb.set_style(indicatif::ProgressStyle::with_template("diffsol [{bar:30}] {pos}/{len} {msg}").expect("template"));
+    for m in DsMethod::ALL {
+        for rtol in [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+            pb.set_message(format!("{} rtol {rtol:e}", m.label()));
+            pb.inc(1);
+            let mut ts = vec![];
+            let start = Instant::now();
+            let mut last = None;
+            while ts.len() < 3 || (start.elapsed().as_secs_f64() < 1.0 && ts.len() < reps) {
+                let t0 = Instant::now();
+                let r = simulate(f, s, st, m, rtol, rtol * 1e-3);
+                ts.push(t0.elapsed().as_secs_f64());
+                last = Some(r);
+            }
+            ts.sort_by(f64::total_cmp);
+            let r = match last.expect("ran") {
+                Ok(r) => r,
+                Err(e) => {
+                    pb.suspend(|| eprintln!("{} rtol {rtol:e}: failed ({e})", m.label()));
+                    continue;
+                }
+            };
+            let ef = r.f_end.iter().zip(reference.f_end.iter()).map(|(a, b)| ((a - b) / b).abs()).fold(0.0, f64::max);
+            rows.push(Row {
+                method: m.label(),
+                rtol,
+                cpu_min: ts[0],
+                cpu_med: ts[ts.len() / 2],
+                steps: r.steps,
+                rhs: r.rhs,
+                err_t_first: rel(r.t_first, reference.first.map(|x| x.t)),
+                err_e_cyl: rel(r.e_cyl, reference.first.map(|x| x.impact.e_cyl)),
+                err_t_stab: rel(r.t_stab, reference.t_stab),
+                err_force: if r.t_stab.is_some() { ef } else { f64::NAN },
+                verdict_same: r.t_stab.is_some() == reference.t_stab.is_some(),
+            });
+        }
+    }
+    pb.finish_and_clear();
+    Ok(rows)
+}
+
+/// Without the `diffsol` feature there is nothing to compare against.
+#[cfg(not(feature = "diffsol"))]
+fn diffsol_rows(_: &gripopt::model::geometry::Finger, _: &gripopt::problem::Scene, _: &gripopt::pipeline::StaticsResult, _: &DynamicsResult, _: usize) -> Result<Vec<Row>> {
+    println!("(diffsol rows: build with `--features diffsol`, as `make bench` does)");
+    Ok(vec![])
 }
 
 fn plot(rows: &[Row], path: &Path) -> Result<()> {
@@ -142,12 +209,16 @@ fn plot(rows: &[Row], path: &Path) -> Result<()> {
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    for (m, color) in [(Method::Radau5, RED), (Method::TrBdf2, BLUE), (Method::Dopri5, GREEN)] {
+    let mut labels: Vec<&str> = rows.iter().map(|r| r.method).collect();
+    labels.dedup();
+    let palette = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK, RGBColor(255, 140, 0)];
+    for (j, m) in labels.into_iter().enumerate() {
+        let color = palette[j % palette.len()];
         let series: Vec<(f64, f64)> = pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect();
         chart
             .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
             .map_err(|e| anyhow::anyhow!("{e}"))?
-            .label(format!("{m:?}"))
+            .label(m.to_string())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
         chart.draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(|e| anyhow::anyhow!("{e}"))?;
     }

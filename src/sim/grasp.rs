@@ -182,6 +182,8 @@ pub struct DynamicsResult {
     pub cpu_s: f64,
     /// A knuckle (O22 cap) contact was seen (double-counted force, §8.5).
     pub knuckle_flag: bool,
+    /// Time of the first onset of each phalanx (proximal, distal), if it touched.
+    pub onsets: [Option<f64>; 2],
 }
 
 impl DynamicsResult {
@@ -469,6 +471,7 @@ fn run<St: Stepper<NS>>(
         rhs_evals: 0,
         cpu_s: 0.0,
         knuckle_flag: false,
+        onsets: [None; 2],
     };
     let pipeline = opts.mode == Mode::Pipeline;
     let trace = std::env::var_os("GRIPOPT_TRACE").is_some();
@@ -693,6 +696,7 @@ fn run<St: Stepper<NS>>(
                     let located = i == kind;
                     if !ode.mem[i].active && c.geom.delta > 0.0 && (located || c.delta_dot > 0.0) {
                         ode.mem[i] = Memory { active: true, vminus: c.delta_dot.max(s.v_min) };
+                        res.onsets[i].get_or_insert(t);
                         if res.first.is_none() {
                             let minv = ev.m.try_inverse().unwrap_or(Matrix2::zeros());
                             let mf = 1.0 / c.row.dot(&(minv * c.row));
