@@ -440,6 +440,11 @@ fn cli_no_contact_and_bad_bench_flags() {
     let out = std::process::Command::new(bin).args(["bench", "work-precision", problem, "--sample", "0"]).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--sample 0"));
+    for bad in ["0", "-1e-9", "nan"] {
+        let out = std::process::Command::new(bin).args(["bench", "work-precision", problem, &format!("--atol={bad}")]).output().unwrap();
+        assert!(!out.status.success(), "--atol {bad} accepted");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--atol"), "{}", String::from_utf8_lossy(&out.stderr));
+    }
 }
 
 /// First onsets of both phalanges at spring preload `tau_s0`, simulated at `rtol` up to

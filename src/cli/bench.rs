@@ -66,6 +66,9 @@ pub enum BenchCmd {
         /// Seed of the ensemble.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Absolute tolerance on angles and rates, fixed for every rtol (default: 1e-3·rtol).
+        #[arg(long)]
+        atol: Option<f64>,
     },
 }
 
@@ -76,11 +79,12 @@ pub fn run(b: BenchCmd) -> Result<()> {
         BenchCmd::Nsga { reps } => bench_nsga(reps.max(3)),
         BenchCmd::Replay { problem, designs, per_shard, out, keep } => bench_replay(&problem, designs, per_shard.max(1), &out, keep),
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
-        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, .. } => super::workprec::run_ensemble(&problem, n, seed, &out),
-        BenchCmd::WorkPrecision { problem, design, out, reps, .. } => {
+        BenchCmd::WorkPrecision { atol: Some(a), .. } if !(a > 0.0 && a.is_finite()) => anyhow::bail!("--atol {a}: must be a positive number"),
+        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, atol, .. } => super::workprec::run_ensemble(&problem, n, seed, &out, atol),
+        BenchCmd::WorkPrecision { problem, design, out, reps, atol, .. } => {
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;
-            super::workprec::run(&problem, x, &out, reps)
+            super::workprec::run(&problem, x, &out, reps, atol)
         }
     }
 }

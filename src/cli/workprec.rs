@@ -45,15 +45,19 @@ fn time_it<F: FnMut() -> DynamicsResult>(mut f: F, budget_s: f64, max_reps: usiz
 }
 
 /// Run the benchmark and write CSV + SVG into `out_dir`.
-pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Result<()> {
+pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize, atol: Option<f64>) -> Result<()> {
     let p = Problem::load(problem)?;
     let s = &p.scene;
     let k = stage_kinematics(&design, s).map_err(|d| anyhow::anyhow!("design discarded at stage {}: {}", d.stage, d.reason))?;
     let st = stage_statics(&k.finger, s).map_err(|d| anyhow::anyhow!("design discarded at stage {}: {}", d.stage, d.reason))?;
     let f = k.finger;
-    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, rtol * 1e-3, 5_000_000) };
-    let reference = simulate_grasp(&f, s, &st, &diag(Method::Radau5, 1e-12));
-    let check = simulate_grasp(&f, s, &st, &diag(Method::Dopri5, 1e-12));
+    let atol_of = |rtol: f64| atol.unwrap_or(rtol * 1e-3);
+    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, atol_of(rtol), 5_000_000) };
+    // the reference is tight whatever --atol says
+    let tight = |m: Method| SimOptions { method: m, ..SimOptions::diagnostic(1e-12, 1e-15, 5_000_000) };
+    let reference = simulate_grasp(&f, s, &st, &tight(Method::Radau5));
+    let check = simulate_grasp(&f, s, &st, &tight(Method::Dopri5));
+    println!("atol: {}", atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol")));
     let t_ref = reference.t_stab.context("the reference run did not reach stability")?;
     println!("reference: Radau IIA rtol 1e-12: t_first {:.12e} s, E_cyl {:.12e} J, t_stab {:.12e} s, f_stab ({:.9}, {:.9}) N", reference.first.map(|x| x.t).unwrap_or(f64::NAN), reference.first.map(|x| x.impact.e_cyl).unwrap_or(f64::NAN), t_ref, reference.f_end[0], reference.f_end[1]);
     println!("           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab", rel(check.t_stab, reference.t_stab));
@@ -85,7 +89,7 @@ pub fn run(problem: &Path, design: Design, out_dir: &Path, reps: usize) -> Resul
         }
     }
     pb.finish_and_clear();
-    rows.extend(diffsol_rows(&f, s, &st, &reference, reps)?);
+    rows.extend(diffsol_rows(&f, s, &st, &reference, reps, atol)?);
     std::fs::create_dir_all(out_dir).with_context(|| format!("cannot create {}", out_dir.display()))?;
     let csv = out_dir.join("work_precision.csv");
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?);
@@ -134,7 +138,7 @@ fn label(m: Method) -> &'static str {
 
 /// The same grasp through diffsol's solvers, against the same reference (feature `diffsol`).
 #[cfg(feature = "diffsol")]
-fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::problem::Scene, st: &gripopt::pipeline::StaticsResult, reference: &DynamicsResult, reps: usize) -> Result<Vec<Row>> {
+fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::problem::Scene, st: &gripopt::pipeline::StaticsResult, reference: &DynamicsResult, reps: usize, atol: Option<f64>) -> Result<Vec<Row>> {
     use super::diffsol_cmp::{simulate, DsMethod};
     let mut rows = vec![];
     let pb = indicatif::ProgressBar::new((DsMethod::ALL.len() * 6) as u64);
@@ -148,7 +152,7 @@ fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::problem::Scen
             let mut last = None;
             while ts.len() < 3 || (start.elapsed().as_secs_f64() < 1.0 && ts.len() < reps) {
                 let t0 = Instant::now();
-                let r = simulate(f, s, st, m, rtol, rtol * 1e-3);
+                let r = simulate(f, s, st, m, rtol, atol.unwrap_or(rtol * 1e-3));
                 ts.push(t0.elapsed().as_secs_f64());
                 last = Some(r);
             }
@@ -182,7 +186,7 @@ fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::problem::Scen
 
 /// Without the `diffsol` feature there is nothing to compare against.
 #[cfg(not(feature = "diffsol"))]
-fn diffsol_rows(_: &gripopt::model::geometry::Finger, _: &gripopt::problem::Scene, _: &gripopt::pipeline::StaticsResult, _: &DynamicsResult, _: usize) -> Result<Vec<Row>> {
+fn diffsol_rows(_: &gripopt::model::geometry::Finger, _: &gripopt::problem::Scene, _: &gripopt::pipeline::StaticsResult, _: &DynamicsResult, _: usize, _: Option<f64>) -> Result<Vec<Row>> {
     println!("(diffsol rows: build with `--features diffsol`, as `make bench` does)");
     Ok(vec![])
 }
@@ -231,12 +235,13 @@ fn plot(rows: &[Row], path: &Path) -> Result<()> {
 /// (seed `seed`): for each method and rtol, the median CPU time per simulation and the
 /// median / 90th-percentile relative errors in t_stab and E_cyl against Radau IIA at rtol
 /// 1e-11, and how many verdicts differ. Writes work_precision_ensemble.csv.
-pub fn run_ensemble(problem: &Path, n: usize, seed: u64, out_dir: &Path) -> Result<()> {
+pub fn run_ensemble(problem: &Path, n: usize, seed: u64, out_dir: &Path, atol: Option<f64>) -> Result<()> {
     use rand::{Rng, SeedableRng};
     let p = Problem::load(problem)?;
     let s = &p.scene;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, rtol * 1e-3, 5_000_000) };
+    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000) };
+    let tight = SimOptions::diagnostic(1e-11, 1e-14, 5_000_000);
     let mut cases = vec![];
     let mut drawn = 0usize;
     let pb = indicatif::ProgressBar::new(n as u64);
@@ -250,7 +255,7 @@ pub fn run_ensemble(problem: &Path, n: usize, seed: u64, out_dir: &Path) -> Resu
         let d = Design::from_array(&x);
         let Ok(k) = stage_kinematics(&d, s) else { continue };
         let Ok(st) = stage_statics(&k.finger, s) else { continue };
-        let reference = simulate_grasp(&k.finger, s, &st, &diag(Method::Radau5, 1e-11));
+        let reference = simulate_grasp(&k.finger, s, &st, &tight);
         if reference.t_stab.is_none() {
             continue;
         }
