@@ -168,22 +168,11 @@ where
                     out.f_end = [ev.contacts[0].normal_force, ev.contacts[1].normal_force];
                     break;
                 }
-                if k == 3 {
-                    // restart at the stop kink with the same right-hand side
-                    drop(o);
-                    let d = ode.borrow_mut().eval(tr, &y).ok_or_else(|| anyhow::anyhow!("RHS failed at an event"))?;
-                    let st = solver.state_mut();
-                    for i in 0..NS {
-                        st.y.set_index(i, y[i]);
-                        st.dy.set_index(i, d[i]);
-                    }
-                    *st.t = tr;
-                    continue;
-                }
-                // the same memory rules as sim::grasp: the located contact changes, any
+                // k == 3: the stop kink, restarted below with the same right-hand side;
+                // otherwise the same memory rules as sim::grasp: the located contact changes, any
                 // other one that is penetrating and approaching gets its onset too
                 let mut m = mem.get();
-                for i in 0..2 {
+                for i in (0..2).filter(|_| k < 2) {
                     let c = &ev.contacts[i];
                     let located = i == k;
                     if !m[i].active && c.geom.delta >= 0.0 && (located || c.delta_dot > 0.0) {
@@ -201,7 +190,7 @@ where
                 mem.set(m);
                 o.mem = m;
                 drop(o);
-                // restart at the event with the new right-hand side
+                // restart at the event (with the new right-hand side after a contact change)
                 let d = ode.borrow_mut().eval(tr, &y).ok_or_else(|| anyhow::anyhow!("RHS failed at an event"))?;
                 let st = solver.state_mut();
                 for i in 0..NS {
