@@ -9,6 +9,7 @@
 // Index loops mirror the formulas of MODEL.md (rows, contacts, objectives).
 #![allow(clippy::needless_range_loop)]
 
+pub mod error;
 pub mod math;
 pub mod model;
 pub mod optim;

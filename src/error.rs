@@ -1,0 +1,105 @@
+//! The library's one error type. Every variant names the file (or flag) it is about and
+//! keeps its source error; the CLI adds context with anyhow and maps errors to exit codes.
+
+use std::path::PathBuf;
+
+/// Every error the library returns.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file or folder could not be read, written, renamed or created.
+    #[error("{}: {action}: {source}", path.display())]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// What was attempted ("cannot read problem file", "cannot write", …).
+        action: &'static str,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A problem file is not valid TOML of the expected shape (syntax, unknown or missing
+    /// key, wrong type); the message holds toml's line, column and key.
+    #[error("{}: {message}", file.display())]
+    ProblemParse {
+        /// The file.
+        file: PathBuf,
+        /// toml's message.
+        message: String,
+        /// toml's error.
+        #[source]
+        source: toml::de::Error,
+    },
+    /// A field (of a problem file, or a command-line flag) has a value outside its range.
+    #[error("{}: field `{field}` = {value}: {rule}", file.display())]
+    InvalidField {
+        /// The file (or `command line`).
+        file: PathBuf,
+        /// Dotted field name, e.g. `object.radius`.
+        field: String,
+        /// The offending value.
+        value: String,
+        /// What the value must satisfy.
+        rule: String,
+    },
+    /// A JSON file (checkpoint, run.json, index) could not be parsed or written.
+    #[error("{}: {what}: {source}", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What the file was expected to be.
+        what: &'static str,
+        /// serde_json's error.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// An MCAP file could not be read or written.
+    #[error("{}: MCAP: {source}", path.display())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The mcap crate's error.
+        #[source]
+        source: mcap::McapError,
+    },
+    /// A checkpoint is not valid, or does not match the run's inputs.
+    #[error("{}: not a valid gripopt checkpoint: {message}", file.display())]
+    Checkpoint {
+        /// The file.
+        file: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A run folder cannot be used as asked (already holds a run, holds no run, inputs changed…).
+    #[error("{}: {message}", path.display())]
+    RunDir {
+        /// The run folder.
+        path: PathBuf,
+        /// What is wrong and what to do.
+        message: String,
+    },
+    /// A recording is missing, incomplete or does not hold what was asked for.
+    #[error("{}: {message}", path.display())]
+    Recording {
+        /// The recording file or folder.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A command-line value that is not a file field (e.g. `--design`), with the flag named.
+    #[error("{0}")]
+    Input(String),
+    /// The optimiser's executor (argmin) failed.
+    #[error("optimiser: {0}")]
+    Optimiser(String),
+}
+
+/// Result with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// An I/O error on `path` while doing `action`.
+    pub fn io(path: impl Into<PathBuf>, action: &'static str, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), action, source }
+    }
+}
