@@ -1,6 +1,5 @@
 //! Stage-1/2 boundary cases (MODEL.md §7, §10, §13 items 1, 2).
-mod common;
-use common::*;
+use crate::common::*;
 use gripopt::math::dist_to_singular;
 use gripopt::model::constraints::{singularity_sweep, SweepFailure};
 use gripopt::model::Finger;

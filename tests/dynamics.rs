@@ -1,7 +1,6 @@
 //! Grasp dynamics: MODEL.md §11 items 3, 4, 6, 7; free closing vs an independent RK4;
 //! tolerance stability; the hard cases of §13.
-mod common;
-use common::*;
+use crate::common::*;
 use gripopt::model::contact::flores_normal;
 use gripopt::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};

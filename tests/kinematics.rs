@@ -1,7 +1,6 @@
 //! Jacobians against central finite differences of the direct geometric model (MODEL.md
 //! §5.3–5.5, §6.3) at random valid configurations of random designs.
-mod common;
-use common::*;
+use crate::common::*;
 use gripopt::math::{perp, V2};
 use gripopt::model::dynamics::{kinetic_energy_bodies, mass_matrix, reduced};
 use gripopt::model::{Finger, Kin, Pose};

@@ -1,6 +1,5 @@
 //! MODEL.md §3.4 nominal values (1e-9 relative) and §4 object properties.
-mod common;
-use common::*;
+use crate::common::*;
 use gripopt::model::constraints::singularity_sweep;
 use gripopt::model::statics::closed_pose;
 use gripopt::model::Finger;

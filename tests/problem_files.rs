@@ -1,5 +1,4 @@
 //! Problem-file validation: every malformed file gives an error naming the file and field.
-mod common;
 use gripopt::problem::{Design, Problem};
 use std::path::Path;
 
@@ -17,7 +16,7 @@ fn all_shipped_problems_load() {
         let p = Problem::load(format!("{}/problems/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
         assert_eq!(p.name, name);
     }
-    let p = common::bottle();
+    let p = crate::common::bottle();
     assert_eq!(p.nominal, Design::nominal());
     assert!((p.scene.radius - 0.040).abs() < 1e-15);
 }

@@ -1,5 +1,4 @@
 //! Property tests over random designs inside and around the bounds (full pipeline).
-mod common;
 use gripopt::pipeline::{evaluate, EvalOptions, Evaluation, Record};
 use gripopt::problem::Design;
 use gripopt::sim::grasp::DynOutcome;
@@ -50,7 +49,7 @@ proptest! {
     fn pipeline_never_panics_nor_produces_nan(
         u in proptest::array::uniform6(-0.3f64..1.3),
     ) {
-        let p = common::bottle();
+        let p = crate::common::bottle();
         // inside and ±30 % around the box
         let mut x = [0.0; 6];
         for i in 0..6 {
@@ -76,7 +75,7 @@ proptest! {
 
     #[test]
     fn degenerate_values_are_stage_0(bad in prop_oneof![Just(0.0), Just(-1e-3), Just(f64::NAN), Just(f64::INFINITY)], which in 0usize..5) {
-        let p = common::bottle();
+        let p = crate::common::bottle();
         let mut x = p.nominal.to_array();
         x[which] = bad;
         let ev = evaluate(&Design::from_array(&x), &p.scene, &EvalOptions::full(&p));

@@ -1,0 +1,14 @@
+//! The one integration-test binary (one link step in CI instead of nine): one module per
+//! area, sharing the test models and helpers of `common`.
+
+mod common;
+
+mod constraints;
+mod dynamics;
+mod kinematics;
+mod nominal;
+mod optimiser;
+mod problem_files;
+mod properties;
+mod recording;
+mod statics;
