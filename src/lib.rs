@@ -14,6 +14,6 @@ pub mod math;
 pub mod model;
 pub mod optim;
 pub mod pipeline;
-pub mod problem;
+pub mod params;
 pub mod record;
 pub mod sim;

@@ -7,7 +7,7 @@ use crate::model::constraints::{singularity_sweep, Sweep, SweepFailure};
 use crate::model::geometry::{Finger, GeomError};
 use crate::model::statics::spring_preload;
 use crate::model::statics::isotropy;
-use crate::problem::{Design, Problem, Scene};
+use crate::params::{Design, Problem, SceneParams};
 use crate::sim::grasp::{DynOutcome, DynamicsResult, SimOptions};
 use serde::Serialize;
 use std::fmt;
@@ -155,7 +155,7 @@ impl EvalOptions {
 }
 
 /// Stages 0 and 1: validity, open pose, mass, singularity sweep.
-pub fn stage_kinematics(x: &Design, s: &Scene) -> Result<KinematicsResult, Discard> {
+pub fn stage_kinematics(x: &Design, s: &SceneParams) -> Result<KinematicsResult, Discard> {
     let finger = Finger::new(x, s).map_err(|g| match g {
         GeomError::InvalidLength => Discard { stage: 0, reason: Reason::InvalidDesign, violation: 1.0 },
         other => Discard { stage: 1, reason: Reason::Geometry(other), violation: 90.0 },
@@ -163,20 +163,20 @@ pub fn stage_kinematics(x: &Design, s: &Scene) -> Result<KinematicsResult, Disca
     let sweep = singularity_sweep(&finger, s).map_err(|e| Discard {
         stage: 1,
         reason: Reason::Sweep(e),
-        violation: e.violation_deg(s.margin_sing),
+        violation: e.violation_deg(s.criteria.margin_sing),
     })?;
     Ok(KinematicsResult { finger, sweep })
 }
 
 /// Stage 2: spring, centred grasp, force constraints, α, F̃, form closure, max_offset.
-pub fn stage_statics(f: &Finger, s: &Scene) -> Result<StaticsResult, Discard> {
+pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Discard> {
     let d2 = |reason, violation| Discard { stage: 2, reason, violation };
     let (tau_s_min, tau_s0) = spring_preload(f, s).ok_or(d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION))?;
     let g = grasp_at(f, s, tau_s0, 0.0).map_err(|e| d2(Reason::Grasp(e), MISSING_POSE_VIOLATION))?;
     let fmin = g.min_force();
     if !(fmin > 0.0) || !(g.hand_mu.y < 0.0) {
         let why = if !(fmin > 0.0) { OffsetFailure::ForceNotPositive(fmin) } else { OffsetFailure::PalmForceNotPositive(g.hand_mu.y) };
-        let v = ((-fmin).max(g.hand_mu.y) / s.tau).max(0.0);
+        let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
         return Err(d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }));
     }
     let form_closed_0 = form_closure_test(&closure_matrix(f, &g.cp)).closed;
@@ -202,20 +202,20 @@ pub fn stage_statics(f: &Finger, s: &Scene) -> Result<StaticsResult, Discard> {
 }
 
 /// Evaluate a design through the staged pipeline.
-pub fn evaluate(x: &Design, s: &Scene, opts: &EvalOptions) -> Evaluation {
+pub fn evaluate(x: &Design, s: &SceneParams, opts: &EvalOptions) -> Evaluation {
     evaluate_inner(x, s, opts, None)
 }
 
 /// Evaluate and return the stage-3 trajectory (if stage 3 ran), recorded by the same
 /// simulation that decided the verdict.
-pub fn evaluate_with_trajectory(x: &Design, s: &Scene, opts: &EvalOptions) -> (Evaluation, Option<crate::sim::grasp::Trajectory>) {
+pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions) -> (Evaluation, Option<crate::sim::grasp::Trajectory>) {
     let mut tr = crate::sim::grasp::Trajectory::default();
     let ev = evaluate_inner(x, s, opts, Some(&mut tr));
     let has = ev.dynamics.is_some();
     (ev, has.then_some(tr))
 }
 
-fn evaluate_inner(x: &Design, s: &Scene, opts: &EvalOptions, traj: Option<&mut crate::sim::grasp::Trajectory>) -> Evaluation {
+fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut crate::sim::grasp::Trajectory>) -> Evaluation {
     let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
     let t0 = Instant::now();
     let kin = match stage_kinematics(x, s) {

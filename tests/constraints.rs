@@ -4,7 +4,7 @@ use gripopt::math::dist_to_singular;
 use gripopt::model::constraints::{singularity_sweep, SweepFailure};
 use gripopt::model::Finger;
 use gripopt::pipeline::{evaluate, EvalOptions, Reason};
-use gripopt::problem::Design;
+use gripopt::params::Design;
 
 fn margin_deg(x: &Design) -> Option<f64> {
     let s = scene();

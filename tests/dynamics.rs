@@ -5,13 +5,13 @@ use gripopt::model::contact::flores_normal;
 use gripopt::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};
 use gripopt::pipeline::{stage_kinematics, stage_statics, StaticsResult};
-use gripopt::problem::{Design, Scene};
+use gripopt::params::{Design, SceneParams};
 use gripopt::sim::finger::{FingerOde, State};
 use gripopt::sim::grasp::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};
 use gripopt::sim::integrator::{Radau5, Rhs, Stepper, Tol};
 use nalgebra::Vector2;
 
-fn prepare(x: &Design, s: &Scene) -> (Finger, StaticsResult) {
+fn prepare(x: &Design, s: &SceneParams) -> (Finger, StaticsResult) {
     let k = stage_kinematics(x, s).expect("stage 1");
     let st = stage_statics(&k.finger, s).expect("stage 2");
     (k.finger, st)
@@ -21,7 +21,7 @@ fn diag(rtol: f64) -> SimOptions {
     SimOptions::diagnostic(rtol, rtol * 1e-3, 2_000_000)
 }
 
-fn sim(x: &Design, s: &Scene, rtol: f64) -> DynamicsResult {
+fn sim(x: &Design, s: &SceneParams, rtol: f64) -> DynamicsResult {
     let (f, st) = prepare(x, s);
     simulate_grasp(&f, s, &st, &diag(rtol))
 }
@@ -44,10 +44,10 @@ fn rk4(ode: &mut FingerOde, mut y: State, t_end: f64, n: usize) -> State {
 fn energy_is_conserved_without_contact_and_actuation() {
     // τ = 0, τ_s0 = 0, no contact, conservative stop (c_stop = 0): E = T + V constant.
     let mut s = scene();
-    s.tau = 0.0;
-    s.c_stop = 0.0;
+    s.hand.tau = 0.0;
+    s.hand.c_stop = 0.0;
     for g_eq in [0.0, 9.81] {
-        s.g_eq = g_eq;
+        s.env.g_eq = g_eq;
         let f = Finger::new(&nominal(), &s).unwrap();
         let mut ode = FingerOde::new(&f, &s, 0.0, 0.0);
         ode.contacts_enabled = false;
@@ -71,8 +71,8 @@ fn energy_is_conserved_without_contact_and_actuation() {
 #[test]
 fn gravity_force_is_minus_gradient_of_potential() {
     let mut s = scene();
-    s.g_eq = 9.81;
-    s.theta_g = (-60f64).to_radians();
+    s.env.g_eq = 9.81;
+    s.env.theta_g = (-60f64).to_radians();
     let f = Finger::new(&nominal(), &s).unwrap();
     for dq in [0.0, 0.1, 0.3] {
         let q = Vector2::new(f.open.q11 + dq, f.open.q21 + 0.5 * dq);
@@ -90,7 +90,7 @@ fn gravity_force_is_minus_gradient_of_potential() {
     }
 }
 
-fn energy_non_increasing(x: &Design, s: &Scene, rtol: f64) -> DynamicsResult {
+fn energy_non_increasing(x: &Design, s: &SceneParams, rtol: f64) -> DynamicsResult {
     let (f, st) = prepare(x, s);
     let (r, tr) = simulate_grasp_traj(&f, s, &st, &diag(rtol));
     let e0 = tr.samples[0].energy;
@@ -111,7 +111,7 @@ fn energy_never_increases_with_contacts() {
     // e → 0 and e → 1 (§13 item 4): χ spans 0.016 … 79
     for e in [0.01, 0.99] {
         let mut s = scene();
-        s.restitution = e;
+        s.contact.restitution = e;
         let r = energy_non_increasing(&nominal(), &s, 1e-8);
         assert!(r.first.is_some(), "e = {e}: {:?}", r.outcome);
     }
@@ -123,12 +123,12 @@ fn dynamics_settles_to_the_compliant_equilibrium() {
     // E_ex cannot resolve this (1e-6 of f* is ~1e-17 J on E ≈ 0.39 J), so the stability
     // event is disabled (η < 0, test only) and the grasp runs to t_max; the final forces are compared.
     let mut s = scene();
-    s.eta_stab = -1.0;
-    s.t_max = 0.3;
+    s.criteria.eta_stab = -1.0;
+    s.criteria.t_max = 0.3;
     let (f, st) = prepare(&nominal(), &s);
     let r = simulate_grasp(&f, &s, &st, &diag(1e-10));
     assert_eq!(r.outcome, DynOutcome::ImpactEnergy, "{:?}", r.outcome);
-    assert!((r.t_end - s.t_max).abs() < 1e-12, "t_end {}", r.t_end);
+    assert!((r.t_end - s.criteria.t_max).abs() < 1e-12, "t_end {}", r.t_end);
     let fmax = st.f0[0].max(st.f0[1]);
     for i in 0..2 {
         assert!((r.f_end[i] - r.fstar[i]).abs() < 1e-6 * r.fstar[i], "f_end {:?} f* {:?}", r.f_end, r.fstar);
@@ -232,7 +232,7 @@ fn assert_clean(r: &DynamicsResult, what: &str) {
 fn zero_velocity_impact_at_r_open() {
     // §13 item 7: R = R_open, proximal tangent at t = 0 ⇒ onset at 0⁺ with δ̇⁻ = v_min
     let mut s = scene();
-    s.radius = s.r_open;
+    s.object.radius = s.hand.r_open;
     let (f, st) = prepare(&Design { t22: 0.05, ..nominal() }, &s);
     let r = simulate_grasp(&f, &s, &st, &diag(1e-8));
     assert_clean(&r, "R = R_open");
@@ -246,7 +246,7 @@ fn zero_velocity_impact_at_r_open() {
 fn very_stiff_contact() {
     // §13 item 5: K = 5.3e10 (100×); Radau must finish in bounded work
     let mut s = scene();
-    s.k_contact = 5.3e10;
+    s.contact.k_contact = 5.3e10;
     let r = sim(&nominal(), &s, 1e-6);
     assert_clean(&r, "stiff");
     assert!(r.t_stab.is_some(), "{:?}", r.outcome);
@@ -257,10 +257,10 @@ fn very_stiff_contact() {
 fn light_and_heavy_objects() {
     // §13 item 9: limits scale with m_c
     let mut s = scene();
-    s.density = 100.0;
+    s.object.density = 100.0;
     let r = sim(&nominal(), &s, 1e-6);
     assert_eq!(r.impact_ok, Some(false));
-    s.density = 5000.0;
+    s.object.density = 5000.0;
     let r = sim(&nominal(), &s, 1e-6);
     assert_clean(&r, "heavy");
     assert_eq!(r.impact_ok, Some(true), "{:?}", r.first);
@@ -279,7 +279,7 @@ fn clipped_spring_and_spring_rate() {
     // the open distal is pushed onto its stop: it has not folded at first contact
     assert!(r.first.unwrap().theta2 <= 1e-6, "θ2 at contact {}", r.first.unwrap().theta2);
     let mut s2 = scene();
-    s2.k_s = 0.05;
+    s2.hand.k_s = 0.05;
     let r = sim(&nominal(), &s2, 1e-7);
     assert_clean(&r, "k_s > 0");
     assert!(r.t_stab.is_some());
@@ -292,7 +292,7 @@ fn creep_ends_cleanly_at_t_max() {
     let x = Design::from_array(&[0.03453158864311287, 0.06309810698376056, 0.05035836915663862, 0.2583106669397255, 0.5490595743201696, 116.93600537588802]);
     let r = sim(&x, &s, 1e-6);
     assert_eq!(r.outcome, DynOutcome::NoStability);
-    assert!((r.t_end - s.t_max).abs() < 1e-12);
+    assert!((r.t_end - s.criteria.t_max).abs() < 1e-12);
     assert!(r.e_ex_end > r.threshold);
     assert_clean(&r, "creep");
     let v = r.discard_violation().unwrap();
@@ -304,8 +304,8 @@ fn in_plane_gravity_is_consistent() {
     // §13 item 14: with g_eq ≠ 0, statics, equilibrium and energy include V_g: the grasp
     // still settles (the stability rule fires) and energy never increases
     let mut s = scene();
-    s.g_eq = 9.81;
-    s.theta_g = (-90f64).to_radians();
+    s.env.g_eq = 9.81;
+    s.env.theta_g = (-90f64).to_radians();
     let r = energy_non_increasing(&nominal(), &s, 1e-8);
     assert!(r.t_stab.is_some(), "{:?}", r.outcome);
     let (f, st) = prepare(&nominal(), &s);
@@ -324,15 +324,11 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
     assert!(r.discard_violation().unwrap() > 0.0);
     // designs near the singular boundary end with a verdict
     let p = bottle();
-    use rand::{Rng, SeedableRng};
+    use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let mut n = 0;
     while n < 40 {
-        let mut x = [0.0; 6];
-        for i in 0..6 {
-            x[i] = rng.random_range(p.bounds.lo[i]..p.bounds.hi[i]);
-        }
-        let Ok(k) = stage_kinematics(&Design::from_array(&x), &s) else { continue };
+        let Ok(k) = stage_kinematics(&p.bounds.sample(&mut rng), &s) else { continue };
         if k.sweep.min_margin.to_degrees() > 30.5 {
             continue;
         }
@@ -350,14 +346,14 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
 #[test]
 fn free_closing_into_the_parallel_singularity_aborts_cleanly() {
     let mut s = scene();
-    s.t_max = 0.05;
+    s.criteria.t_max = 0.05;
     let x = Design::from_array(&[0.04549204603835802, 0.05890255558786177, 0.0307206768455294, 0.6474382809963541, 0.6134575256373511, 126.19868905695499]);
     let (f, st) = prepare(&x, &s);
     for rtol in [1e-6, 1e-9] {
         let o = SimOptions { contacts: false, ..diag(rtol) };
         let (r, tr) = simulate_grasp_traj(&f, &s, &st, &o);
         assert_eq!(r.outcome, DynOutcome::Singular, "rtol {rtol}");
-        assert!(r.first.is_none() && r.t_end > 0.0 && r.t_end < s.t_max);
+        assert!(r.first.is_none() && r.t_end > 0.0 && r.t_end < s.criteria.t_max);
         assert!(r.stats.steps < 5_000, "bounded work: {} steps", r.stats.steps);
         let last = tr.samples.last().expect("samples");
         assert!(last.q.iter().chain(last.qd.iter()).all(|v| v.is_finite()));
@@ -405,7 +401,7 @@ fn knuckle_contact_is_flagged_and_finite() {
     let nb = (perp(pose.x21) + perp(xd)).normalize();
     let mut ode = FingerOde::new(&f, &s, 0.0, 0.0);
     let pen = 1e-6;
-    ode.centre = pose.o22 + (s.radius + s.w - pen) * nb;
+    ode.centre = pose.o22 + (s.object.radius + s.hand.w - pen) * nb;
     ode.mem = [Memory { active: true, vminus: 0.1 }; 2];
     let y = State::from([pose.q11, pose.q21, 0.0, 0.0, 0.0]);
     let ev = ode.evaluate(&y).unwrap();
@@ -414,12 +410,12 @@ fn knuckle_contact_is_flagged_and_finite() {
     assert!(FingerOde::knuckle_contact(&ev));
     for c in &ev.contacts {
         assert!((c.geom.delta - pen).abs() < 1e-12, "δ = {}", c.geom.delta);
-        let expect = s.k_contact * pen.powf(1.5);
+        let expect = s.contact.k_contact * pen.powf(1.5);
         assert!((c.normal_force - expect).abs() < 1e-9 * expect, "{} vs {expect}", c.normal_force);
     }
     assert!(ev.qdd.iter().all(|v| v.is_finite()));
     // an object touching mid-phalanx is not a knuckle contact
-    ode.centre = f.o21 + 0.5 * f.l21 * pose.x21 + (s.radius + s.w - pen) * perp(pose.x21);
+    ode.centre = f.o21 + 0.5 * f.l21 * pose.x21 + (s.object.radius + s.hand.w - pen) * perp(pose.x21);
     let ev = ode.evaluate(&y).unwrap();
     assert!(!FingerOde::knuckle_contact(&ev));
 }
@@ -448,7 +444,7 @@ fn cli_no_contact_and_bad_bench_flags() {
 
 /// First onsets of both phalanges at spring preload `tau_s0`, simulated at `rtol` up to
 /// `t_max` (diagnostic mode: the run goes on past a failed criterion).
-fn onsets_at(f: &Finger, s: &Scene, st: &StaticsResult, tau_s0: f64, rtol: f64) -> DynamicsResult {
+fn onsets_at(f: &Finger, s: &SceneParams, st: &StaticsResult, tau_s0: f64, rtol: f64) -> DynamicsResult {
     let mut st = *st;
     st.tau_s0 = tau_s0;
     simulate_grasp(f, s, &st, &diag(rtol))
@@ -463,7 +459,7 @@ fn simultaneous_proximal_and_distal_onsets() {
     // non-increasing energy.
     let mut s = scene();
     let (f, st) = prepare(&nominal(), &s);
-    s.t_max = 0.012;
+    s.criteria.t_max = 0.012;
     let rtol = 1e-9;
     let gap = |tau: f64| {
         let r = onsets_at(&f, &s, &st, tau, rtol);

@@ -43,9 +43,9 @@ fn mass_properties() {
 #[test]
 fn object_properties() {
     let s = scene();
-    close_rel(s.object_mass(), 1.005310, 1e-6, "m_c");
-    close_rel(s.object_inertia(), 3.75316e-3, 1e-5, "J_c");
-    close_rel(s.impulse_lever(), 0.05, 1e-12, "k_c");
+    close_rel(s.object.mass(), 1.005310, 1e-6, "m_c");
+    close_rel(s.object.inertia(), 3.75316e-3, 1e-5, "J_c");
+    close_rel(s.object.impulse_lever(), 0.05, 1e-12, "k_c");
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Property tests over random designs inside and around the bounds (full pipeline).
 use gripopt::pipeline::{evaluate, EvalOptions, Evaluation, Record};
-use gripopt::problem::Design;
+use gripopt::params::Design;
 use gripopt::sim::grasp::DynOutcome;
 use proptest::prelude::*;
 

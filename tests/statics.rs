@@ -16,7 +16,7 @@ fn designs(n: usize, seed: u64) -> Vec<Finger> {
     let mut out = vec![];
     while out.len() < n {
         let Ok(k) = stage_kinematics(&random_design(&mut rng), &s) else { continue };
-        if closed_pose(&k.finger, s.radius, 0.0).is_ok() {
+        if closed_pose(&k.finger, s.object.radius, 0.0).is_ok() {
             out.push(k.finger);
         }
     }
@@ -28,13 +28,13 @@ fn birglen_form_equals_row_formulation() {
     let s = scene();
     for f in designs(200, 1) {
         let (_, ts0) = spring_preload(&f, &s).unwrap();
-        let cp = closed_pose(&f, s.radius, 0.0).unwrap();
+        let cp = closed_pose(&f, s.object.radius, 0.0).unwrap();
         let ff = finger_forces(&f, &s, &cp, ts0).unwrap();
         let r = birglen_residual(&f, &cp, &ff);
         let j21 = cp.kin.j21();
-        let expect = [s.tau, s.tau / j21 - ts0];
+        let expect = [s.hand.tau, s.hand.tau / j21 - ts0];
         for i in 0..2 {
-            assert!((r[i] - expect[i]).abs() < 1e-9 * expect[i].abs().max(s.tau), "{r:?} vs {expect:?}");
+            assert!((r[i] - expect[i]).abs() < 1e-9 * expect[i].abs().max(s.hand.tau), "{r:?} vs {expect:?}");
         }
     }
 }
@@ -47,7 +47,7 @@ fn spring_rule_matches_eq_4_12_and_balances_the_distal() {
         let k = Kin::new(&f, &f.open).unwrap();
         let m = mass_matrix(&f, &f.open, &k);
         // eq. 4.12 (O11 = O21): τ (M22 + M12) / (J21 (M11 + 2 M12 + M22))
-        let eq412 = s.tau * (m[(1, 1)] + m[(0, 1)]) / (k.j21() * (m[(0, 0)] + 2.0 * m[(0, 1)] + m[(1, 1)]));
+        let eq412 = s.hand.tau * (m[(1, 1)] + m[(0, 1)]) / (k.j21() * (m[(0, 0)] + 2.0 * m[(0, 1)] + m[(1, 1)]));
         assert!((tmin - eq412).abs() < 1e-10 * eq412.abs().max(1e-6), "{tmin} vs {eq412}");
         assert_eq!(ts0, tmin.max(0.0));
         if tmin > 0.0 {
@@ -261,7 +261,7 @@ fn offset_scan_endings() {
         }
         // the last offset is admissible, the next is not
         assert!(admissible(&f, &s, st.tau_s0, scan.max_offset).is_ok());
-        let next = scan.max_offset + s.offset_step;
+        let next = scan.max_offset + s.criteria.offset_step;
         match end {
             OffsetFailure::NotFormClosed => {
                 let g = grasp_at(&f, &s, st.tau_s0, next).unwrap();
@@ -270,7 +270,7 @@ fn offset_scan_endings() {
             }
             OffsetFailure::NoClosedPose(j, ClosedPoseError::DistalBeyondTip) => {
                 let xc = if j == 0 { next } else { -next };
-                let (_, _, k2, _) = tangent_angles(&f, s.radius, xc).unwrap();
+                let (_, _, k2, _) = tangent_angles(&f, s.object.radius, xc).unwrap();
                 assert!(k2 > f.t22);
                 kinds[1] += 1;
             }

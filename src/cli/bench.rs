@@ -91,7 +91,7 @@ pub fn run(b: BenchCmd) -> Result<()> {
 
 fn bench_static(problem: &PathBuf, n: usize, seed: u64) -> Result<()> {
     use gripopt::pipeline::{evaluate, EvalOptions};
-    use gripopt::problem::Design;
+    use gripopt::params::Design;
     use rand::{Rng, SeedableRng};
     let p = super::load_problem(problem)?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

@@ -8,7 +8,7 @@
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use gripopt::model::geometry::Finger;
 use gripopt::pipeline::StaticsResult;
-use gripopt::problem::Scene;
+use gripopt::params::SceneParams;
 use gripopt::sim::criteria::{impact, u_min};
 use gripopt::sim::finger::{FingerOde, Memory, State, NS};
 use gripopt::sim::grasp::compliant_equilibrium;
@@ -62,7 +62,7 @@ pub struct DsResult {
 
 /// Simulate the nominal-scene grasp of finger `f` with a diffsol method at `rtol` (atol as
 /// in `sim::grasp`: `atol` on angles and rates, 1e4·atol on the filtered force).
-pub fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, method: DsMethod, rtol: f64, atol: f64) -> anyhow::Result<DsResult> {
+pub fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, method: DsMethod, rtol: f64, atol: f64) -> anyhow::Result<DsResult> {
     let base = FingerOde::new(f, s, st.tau_s0, 0.0);
     let eq = compliant_equilibrium(&base, s, st.f0).ok_or_else(|| anyhow::anyhow!("no compliant equilibrium"))?;
     let threshold = s.eta_stab * u_min(s, st.f0);
@@ -132,7 +132,7 @@ pub fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, method: DsMethod, rto
 
 fn run<'a, Eqn, S>(
     mut solver: S,
-    s: &Scene,
+    s: &SceneParams,
     ode: &RefCell<FingerOde>,
     mem: &Cell<[Memory; 2]>,
     after_first: &Cell<bool>,

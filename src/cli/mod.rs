@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use gripopt::problem::{Design, Problem};
+use gripopt::params::{Design, Problem};
 use std::path::PathBuf;
 
 mod bench;
@@ -192,7 +192,7 @@ pub fn load_problem(p: &PathBuf) -> Result<Problem> {
 fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
     match d {
         None => Ok(p.nominal),
-        Some(s) => Design::parse_assignments(s).map_err(anyhow::Error::msg),
+        Some(s) => Design::parse_assignments(s).map_err(anyhow::Error::from),
     }
 }
 

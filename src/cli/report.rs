@@ -2,7 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use gripopt::pipeline::{evaluate as eval_design, EvalOptions, Record};
-use gripopt::problem::{Design, Problem};
+use gripopt::params::{Design, Problem};
 use gripopt::sim::grasp::{simulate_grasp_traj, DynamicsRecord, Method, SimOptions};
 use std::io::Write;
 use std::path::Path;
@@ -29,8 +29,8 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     println!("stage 0/1  kinematics");
     println!("  l11 {} mm  l22 {} mm  l12 {} mm", mm(r.l11), mm(r.l22), mm(r.l12));
     println!("  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {:?}  sigma {:?}", d(r.q11_0), d(r.q21_0), d(r.q12_0), d(r.q22_0), d(r.q13_0), r.gamma, r.sigma);
-    println!("  singularity margin {} deg (limit {:.1})", opt(r.min_margin_deg, 1.0, 3), p.scene.margin_sing.to_degrees());
-    println!("stage 2    statics (centred object, R = {} mm)", p.scene.radius * 1e3);
+    println!("  singularity margin {} deg (limit {:.1})", opt(r.min_margin_deg, 1.0, 3), p.scene.criteria.margin_sing.to_degrees());
+    println!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
     println!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
     println!("  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm", d(r.theta1), d(r.theta2), mm(r.k1), mm(r.k2));
     println!("  f0  {} / {} N   f_mu {} / {} N", opt(r.f0_1, 1.0, 4), opt(r.f0_2, 1.0, 4), opt(r.fmu_1, 1.0, 4), opt(r.fmu_2, 1.0, 4));

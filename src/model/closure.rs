@@ -4,7 +4,7 @@
 use super::geometry::Finger;
 use super::statics::{closed_pose, finger_forces, to_world, ClosedPose, ClosedPoseError, FingerForces};
 use crate::math::V2;
-use crate::problem::Scene;
+use crate::params::SceneParams;
 use nalgebra::{SMatrix, SVector};
 
 /// Number of unilateral rows of M_c (4 contacts + palm); rows 5 and 6 are bilateral.
@@ -132,9 +132,9 @@ impl Grasp {
 }
 
 /// Closed poses and static forces of both fingers at world offset `x_off`.
-pub fn grasp_at(f: &Finger, s: &Scene, tau_s0: f64, x_off: f64) -> Result<Grasp, OffsetFailure> {
-    let cp0 = closed_pose(f, s.radius, x_off).map_err(|e| OffsetFailure::NoClosedPose(0, e))?;
-    let cp1 = if x_off == 0.0 { cp0 } else { closed_pose(f, s.radius, -x_off).map_err(|e| OffsetFailure::NoClosedPose(1, e))? };
+pub fn grasp_at(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64) -> Result<Grasp, OffsetFailure> {
+    let cp0 = closed_pose(f, s.object.radius, x_off).map_err(|e| OffsetFailure::NoClosedPose(0, e))?;
+    let cp1 = if x_off == 0.0 { cp0 } else { closed_pose(f, s.object.radius, -x_off).map_err(|e| OffsetFailure::NoClosedPose(1, e))? };
     let f0 = finger_forces(f, s, &cp0, tau_s0).ok_or(OffsetFailure::SingularForces)?;
     let f1 = if x_off == 0.0 { f0 } else { finger_forces(f, s, &cp1, tau_s0).ok_or(OffsetFailure::SingularForces)? };
     let hand0 = to_world(f0.force0, 0) + to_world(f1.force0, 1);
@@ -155,7 +155,7 @@ pub fn check_forces(g: &Grasp) -> Result<(), OffsetFailure> {
 }
 
 /// Full admissibility test at one offset (§6.7).
-pub fn admissible(f: &Finger, s: &Scene, tau_s0: f64, x_off: f64) -> Result<Grasp, OffsetFailure> {
+pub fn admissible(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64) -> Result<Grasp, OffsetFailure> {
     let g = grasp_at(f, s, tau_s0, x_off)?;
     check_forces(&g)?;
     if !form_closure_test(&closure_matrix(f, &g.cp)).closed {
@@ -174,18 +174,18 @@ pub struct OffsetScan {
 }
 
 /// Objective 1 (§6.7): scan x_off = kΔ_off for k = 0..=off_max/Δ_off.
-pub fn max_offset(f: &Finger, s: &Scene, tau_s0: f64) -> OffsetScan {
-    let n = (s.offset_max / s.offset_step + 1e-9).floor() as usize;
+pub fn max_offset(f: &Finger, s: &SceneParams, tau_s0: f64) -> OffsetScan {
+    let n = (s.criteria.offset_max / s.criteria.offset_step + 1e-9).floor() as usize;
     let mut last = None;
     for k in 0..=n {
-        let x = k as f64 * s.offset_step;
+        let x = k as f64 * s.criteria.offset_step;
         match admissible(f, s, tau_s0, x) {
             Ok(_) => last = Some(x),
             Err(e) => {
-                let max_offset = last.unwrap_or(-s.offset_step);
+                let max_offset = last.unwrap_or(-s.criteria.offset_step);
                 return OffsetScan { max_offset, ended_by: Some(e) };
             }
         }
     }
-    OffsetScan { max_offset: last.unwrap_or(-s.offset_step), ended_by: None }
+    OffsetScan { max_offset: last.unwrap_or(-s.criteria.offset_step), ended_by: None }
 }

@@ -3,7 +3,7 @@
 use super::geometry::{Finger, GeomError};
 use super::statics::{tangent_angles, ClosedPoseError};
 use crate::math::{angle, dist_to_singular, wrap, V2};
-use crate::problem::Scene;
+use crate::params::SceneParams;
 
 /// Which linkage angle sets the margin.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,11 +79,11 @@ pub fn closing_angle(f: &Finger, r: f64) -> Result<f64, ClosedPoseError> {
 }
 
 /// Run the singularity sweep of §7 on all radii of `s.r_sing`.
-pub fn singularity_sweep(f: &Finger, s: &Scene) -> Result<Sweep, SweepFailure> {
+pub fn singularity_sweep(f: &Finger, s: &SceneParams) -> Result<Sweep, SweepFailure> {
     let mut th_max = 0.0f64;
     let mut closing = [0.0f64; 16];
-    let nr = s.r_sing.len().min(16);
-    for (i, &r) in s.r_sing.iter().take(16).enumerate() {
+    let nr = s.criteria.r_sing.len().min(16);
+    for (i, &r) in s.criteria.r_sing.iter().take(16).enumerate() {
         closing[i] = closing_angle(f, r).map_err(|e| SweepFailure::ClosedPose(r, e))?;
         th_max = th_max.max(closing[i]);
     }
@@ -105,11 +105,11 @@ pub fn singularity_sweep(f: &Finger, s: &Scene) -> Result<Sweep, SweepFailure> {
         visit(c)?;
     }
     let mut k = 1;
-    while (k as f64) * s.sweep_step < th_max {
-        visit(k as f64 * s.sweep_step)?;
+    while (k as f64) * s.criteria.sweep_step < th_max {
+        visit(k as f64 * s.criteria.sweep_step)?;
         k += 1;
     }
-    if best.min_margin < s.margin_sing {
+    if best.min_margin < s.criteria.margin_sing {
         return Err(SweepFailure::Margin(best));
     }
     Ok(best)

@@ -3,7 +3,7 @@
 use super::geometry::{Finger, Pose};
 use super::kinematics::Kin;
 use crate::math::{e, perp, V2};
-use crate::problem::Scene;
+use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2, Vector4};
 
 /// Mass matrix and bias of one open chain (eq. 2.49, 2.53–2.54).
@@ -63,11 +63,11 @@ pub fn mass_matrix(f: &Finger, p: &Pose, k: &Kin) -> Matrix2<f64> {
 
 /// Tree generalised gravity force Q_t = −∂V_g/∂q_t (MODEL.md §8.3), indexed (q11, q12, q21, q22).
 #[inline]
-pub fn gravity_tree(f: &Finger, p: &Pose, s: &Scene) -> Vector4<f64> {
-    if s.g_eq == 0.0 {
+pub fn gravity_tree(f: &Finger, p: &Pose, s: &SceneParams) -> Vector4<f64> {
+    if s.env.g_eq == 0.0 {
         return Vector4::zeros();
     }
-    let gv = s.g_eq * e(s.theta_g);
+    let gv = s.env.g_eq * e(s.env.theta_g);
     let ms = &f.mass;
     let (x11, x12, x21) = (p.x11, p.x12, p.x21);
     let rs22 = nalgebra::Rotation2::new(p.q21 + p.q22) * ms.s22;
@@ -81,11 +81,11 @@ pub fn gravity_tree(f: &Finger, p: &Pose, s: &Scene) -> Vector4<f64> {
 }
 
 /// Gravity potential V_g = −Σ m_k g·r_Sk (MODEL.md §8.3).
-pub fn gravity_potential(f: &Finger, p: &Pose, s: &Scene) -> f64 {
-    if s.g_eq == 0.0 {
+pub fn gravity_potential(f: &Finger, p: &Pose, s: &SceneParams) -> f64 {
+    if s.env.g_eq == 0.0 {
         return 0.0;
     }
-    let gv = s.g_eq * e(s.theta_g);
+    let gv = s.env.g_eq * e(s.env.theta_g);
     let ms = &f.mass;
     let r11 = f.o21 + 0.5 * f.l11 * e(p.q11);
     let r12 = p.o12 + 0.5 * f.l12 * p.x12;

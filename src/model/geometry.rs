@@ -2,7 +2,7 @@
 //! model (MODEL.md §3, §5.1, §5.2), plus the mass properties of §4.
 
 use crate::math::{angle, cross, e, e_fast, perp, wrap, V2};
-use crate::problem::{Design, Scene};
+use crate::params::{Design, SceneParams};
 use std::f64::consts::PI;
 
 /// Why a finger cannot be built or posed.
@@ -137,15 +137,15 @@ fn circle_intersections(c0: V2, r0: f64, c1: V2, r1: f64) -> Option<(V2, V2)> {
 
 impl Finger {
     /// Build the finger of design `x` in scene `s` (stage 0 and the open pose of stage 1).
-    pub fn new(x: &Design, s: &Scene) -> Result<Self, GeomError> {
+    pub fn new(x: &Design, s: &SceneParams) -> Result<Self, GeomError> {
         let l11 = x.p * x.l21;
         let l22 = x.r * l11;
         let lengths = [x.l21, x.b, x.t22, l11, l22];
         if lengths.iter().any(|v| !(v.is_finite() && *v > 0.0)) || !x.psi.is_finite() {
             return Err(GeomError::InvalidLength);
         }
-        let w = s.w;
-        let ro = s.r_open;
+        let w = s.hand.w;
+        let ro = s.hand.r_open;
         let k10sq = (x.b / 2.0).powi(2) + ro * ro - (ro + w).powi(2);
         if !(k10sq > 0.0) {
             return Err(GeomError::NoOpenPose);
@@ -180,7 +180,7 @@ impl Finger {
             x21: e(q21_0),
             x22: e(q21_0 + q22_0),
         };
-        let lam = s.rho_f * PI * w * w;
+        let lam = s.hand.rho_f * PI * w * w;
         let rod_i = |m: f64, l: f64| m * (w * w / 4.0 + l * l / 3.0);
         let (m11, m12, m21) = (lam * l11, lam * l12, lam * x.l21);
         let m22 = lam * (l22 + x.t22);

@@ -5,7 +5,7 @@ use super::dynamics::{gravity_tree, mass_matrix, reduce_tree_force};
 use super::geometry::{Finger, GeomError, Pose};
 use super::kinematics::Kin;
 use crate::math::{angle, e, perp, V2};
-use crate::problem::Scene;
+use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 use std::f64::consts::PI;
 
@@ -109,27 +109,27 @@ pub fn closed_pose(f: &Finger, r: f64, x_c: f64) -> Result<ClosedPose, ClosedPos
 }
 
 /// Minimal spring preload (§6.2): returns (τ_s^min, τ_s0 = max(0, τ_s^min)).
-pub fn spring_preload(f: &Finger, s: &Scene) -> Option<(f64, f64)> {
+pub fn spring_preload(f: &Finger, s: &SceneParams) -> Option<(f64, f64)> {
     let kin = Kin::new(f, &f.open)?;
     let m = mass_matrix(f, &f.open, &kin);
     let minv = m.try_inverse()?;
     let j = kin.j_row();
     let num = j.dot(&(minv * Vector2::new(1.0, 0.0)));
     let den = j.dot(&(minv * j));
-    let tmin = s.tau * num / den;
+    let tmin = s.hand.tau * num / den;
     tmin.is_finite().then_some((tmin, tmin.max(0.0)))
 }
 
 /// Spring torque τ_s(θ2) = τ_s0 + k_s θ2.
 #[inline]
-pub fn spring_torque(tau_s0: f64, s: &Scene, theta2: f64) -> f64 {
-    tau_s0 + s.k_s * theta2
+pub fn spring_torque(tau_s0: f64, s: &SceneParams, theta2: f64) -> f64 {
+    tau_s0 + s.hand.k_s * theta2
 }
 
 /// External generalised force at a static pose: Q_ext = (τ, 0) − τ_s(θ2)(J21, J22) + Wᵀ Q_t^grav.
-pub fn external_force(f: &Finger, s: &Scene, pose: &Pose, kin: &Kin, tau_s0: f64) -> Vector2<f64> {
+pub fn external_force(f: &Finger, s: &SceneParams, pose: &Pose, kin: &Kin, tau_s0: f64) -> Vector2<f64> {
     let th2 = pose.q22 + f.psi;
-    Vector2::new(s.tau, 0.0) - spring_torque(tau_s0, s, th2) * kin.j_row()
+    Vector2::new(s.hand.tau, 0.0) - spring_torque(tau_s0, s, th2) * kin.j_row()
         + reduce_tree_force(kin, gravity_tree(f, pose, s))
 }
 
@@ -147,14 +147,14 @@ pub struct FingerForces {
 }
 
 /// Solve the two static force sets at a closed pose.
-pub fn finger_forces(f: &Finger, s: &Scene, cp: &ClosedPose, tau_s0: f64) -> Option<FingerForces> {
+pub fn finger_forces(f: &Finger, s: &SceneParams, cp: &ClosedPose, tau_s0: f64) -> Option<FingerForces> {
     let q = external_force(f, s, &cp.pose, &cp.kin, tau_s0);
     let a0 = Matrix2::from_columns(&[cp.a[0], cp.a[1]]);
     let f0 = a0.try_inverse()? * q;
-    let amu = Matrix2::from_columns(&[cp.a[0] - s.mu_s * cp.b[0], cp.a[1] - s.mu_s * cp.b[1]]);
+    let amu = Matrix2::from_columns(&[cp.a[0] - s.contact.mu_s * cp.b[0], cp.a[1] - s.contact.mu_s * cp.b[1]]);
     let fmu = amu.try_inverse()? * q;
     let force0 = f0[0] * cp.n[0] + f0[1] * cp.n[1];
-    let force_mu = fmu[0] * (cp.n[0] - s.mu_s * cp.x[0]) + fmu[1] * (cp.n[1] - s.mu_s * cp.x[1]);
+    let force_mu = fmu[0] * (cp.n[0] - s.contact.mu_s * cp.x[0]) + fmu[1] * (cp.n[1] - s.contact.mu_s * cp.x[1]);
     let ok = f0.iter().chain(fmu.iter()).all(|v| v.is_finite());
     ok.then_some(FingerForces { f0: [f0[0], f0[1]], fmu: [fmu[0], fmu[1]], force0, force_mu })
 }

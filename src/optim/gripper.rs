@@ -3,7 +3,7 @@
 
 use super::{Evaluated, Infeasibility, MooProblem};
 use crate::pipeline::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
-use crate::problem::{Design, Problem};
+use crate::params::{Design, Problem};
 use serde::{Deserialize, Serialize};
 
 /// What is kept of each evaluated design (deterministic fields, plus wall-clock timings).
@@ -91,7 +91,7 @@ impl GripperProblem {
     /// are ranked by objectives).
     pub fn minimisation_objectives(&self, ev: &Evaluation) -> Vec<f64> {
         let o = ev.objectives();
-        let ph = [self.problem.scene.offset_step, 1e6, 0.0, self.problem.scene.t_max];
+        let ph = [self.problem.scene.criteria.offset_step, 1e6, 0.0, self.problem.scene.criteria.t_max];
         (0..4).map(|k| if o[k].is_finite() { o[k] } else { ph[k] }).collect()
     }
 
@@ -99,8 +99,8 @@ impl GripperProblem {
     /// max_offset ∈ [0, off_max], α ∈ [0, 1], F̃ ∈ [0, 2τ/l21_min], t_stab ∈ [0, t_max].
     pub fn hv_points(&self) -> (Vec<f64>, Vec<f64>) {
         let s = &self.problem.scene;
-        let fmax = 2.0 * s.tau / self.problem.bounds.lo[0];
-        (vec![-s.offset_max, 0.0, -fmax, 0.0], vec![0.0, 1.0, 0.0, s.t_max])
+        let fmax = 2.0 * s.hand.tau / self.problem.bounds.lo[0];
+        (vec![-s.criteria.offset_max, 0.0, -fmax, 0.0], vec![0.0, 1.0, 0.0, s.criteria.t_max])
     }
 }
 

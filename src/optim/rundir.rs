@@ -14,7 +14,7 @@ use super::nsga2::{Nsga2Settings, Nsga2State};
 use super::operators::Operators;
 use super::run::{execute, observe, CheckpointObserver, ProgressObserver, SharedProgress};
 use super::Individual;
-use crate::problem::Problem;
+use crate::params::Problem;
 use argmin::core::observers::Observe;
 use argmin::core::{Error as ArgminError, State, KV};
 use serde::{Deserialize, Serialize};

@@ -4,7 +4,7 @@ use crate::math::V2;
 use crate::model::Finger;
 use crate::optim::gripper::GripperInfo;
 use crate::optim::Individual;
-use crate::problem::{Design, Scene};
+use crate::params::{Design, SceneParams};
 use crate::sim::grasp::Sample;
 use serde_json::{json, Value};
 
@@ -221,7 +221,7 @@ fn pose(x: f64, y: f64, z: f64) -> Pose {
 
 /// `/scene` message drawing both fingers at a sample (and, with `with_static`, the palm and
 /// the object, which persist); `None` if the pose cannot be assembled.
-pub fn scene(id: u64, t_ns: u64, design: &Design, finger: &Finger, sc: &Scene, s: &Sample, with_static: bool) -> Option<SceneUpdate> {
+pub fn scene(id: u64, t_ns: u64, design: &Design, finger: &Finger, sc: &SceneParams, s: &Sample, with_static: bool) -> Option<SceneUpdate> {
     let p = finger.dgm(s.q[0], s.q[1]).ok()?;
     let tip = finger.tip(&p);
     let base = finger.o21;
@@ -261,7 +261,7 @@ pub fn scene(id: u64, t_ns: u64, design: &Design, finger: &Finger, sc: &Scene, s
     )];
     if with_static {
         let palm = Cube { pose: pose(0.0, -0.005, 0.0), size: P3 { x: design.b + 0.02, y: 0.01, z: 0.04 }, color: Rgba { r: 0.5, g: 0.5, b: 0.5, a: 1.0 } };
-        let object = Cylinder { pose: pose(0.0, sc.radius, 0.0), size: P3 { x: 2.0 * sc.radius, y: 2.0 * sc.radius, z: sc.length }, bottom_scale: 1.0, top_scale: 1.0, color: Rgba { r: 0.2, g: 0.5, b: 0.9, a: 0.5 } };
+        let object = Cylinder { pose: pose(0.0, sc.object.radius, 0.0), size: P3 { x: 2.0 * sc.object.radius, y: 2.0 * sc.object.radius, z: sc.object.length }, bottom_scale: 1.0, top_scale: 1.0, color: Rgba { r: 0.2, g: 0.5, b: 0.9, a: 0.5 } };
         entities.push(entity("palm", vec![palm], vec![], vec![]));
         entities.push(entity("object", vec![], vec![object], vec![]));
     }

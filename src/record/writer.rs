@@ -6,7 +6,7 @@ use crate::optim::checkpoint::write_atomic;
 use crate::optim::gripper::{GripperInfo, TrajectoryKeep};
 use crate::optim::nsga2::Nsga2State;
 use crate::optim::Individual;
-use crate::problem::{Design, Problem};
+use crate::params::{Design, Problem};
 use argmin::core::observers::Observe;
 use argmin::core::{Error as ArgminError, KV};
 use mcap::records::{MessageHeader, Metadata};
@@ -145,7 +145,7 @@ pub fn write_shard(path: &Path, problem: &Problem, meta: &BTreeMap<String, Strin
 }
 
 /// All messages of one design as (channel index, log time, JSON bytes).
-fn encode_design(ind: &Individual<GripperInfo>, problem: &Problem, s: &crate::problem::Scene, opts: &RecordOptions) -> anyhow::Result<Vec<(usize, u64, Vec<u8>)>> {
+fn encode_design(ind: &Individual<GripperInfo>, problem: &Problem, s: &crate::params::SceneParams, opts: &RecordOptions) -> anyhow::Result<Vec<(usize, u64, Vec<u8>)>> {
     let t0 = messages::window_start_ns(ind.id);
     let mut out = vec![(0usize, t0, serde_json::to_vec(&messages::design(ind, &problem.name))?)];
     if let Some(tr) = &ind.eval.info.trajectory {

@@ -1,7 +1,7 @@
 //! Dynamic criteria of MODEL.md §9: impact energy, force margin, stability threshold.
 
 use crate::math::V2;
-use crate::problem::Scene;
+use crate::params::SceneParams;
 
 /// Impact energies at a contact onset (§9.1).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -21,21 +21,21 @@ pub struct Impact {
 }
 
 /// Energy limits (E_lim,trans, E_lim,rot) of eqs. 3.27, 3.29.
-pub fn impact_limits(s: &Scene) -> (f64, f64) {
-    let mc = s.object_mass();
-    let trans = s.mu_g * mc * s.g * s.dx_max;
-    let rot = mc * s.g * ((s.length / 2.0) * (s.theta_max.cos() - 1.0) + s.radius * s.theta_max.sin());
+pub fn impact_limits(s: &SceneParams) -> (f64, f64) {
+    let mc = s.object.mass();
+    let trans = s.env.mu_g * mc * s.env.g * s.criteria.dx_max;
+    let rot = mc * s.env.g * ((s.object.length / 2.0) * (s.criteria.theta_max.cos() - 1.0) + s.object.radius * s.criteria.theta_max.sin());
     (trans, rot)
 }
 
 /// Impact energies for a finger of effective mass `m_finger` hitting at `v`.
-pub fn impact(s: &Scene, m_finger: f64, v: f64) -> Impact {
-    let m_c = s.object_mass();
-    let kc = s.impulse_lever();
-    let m_rot = if kc > 0.0 { s.object_inertia() / (kc * kc) } else { f64::INFINITY };
+pub fn impact(s: &SceneParams, m_finger: f64, v: f64) -> Impact {
+    let m_c = s.object.mass();
+    let kc = s.object.impulse_lever();
+    let m_rot = if kc > 0.0 { s.object.inertia() / (kc * kc) } else { f64::INFINITY };
     let m_cyl = if m_rot.is_finite() { m_c * m_rot / (m_c + m_rot) } else { m_c };
     let m_tot = m_finger * m_cyl / (m_finger + m_cyl);
-    let p = (1.0 + s.restitution) * m_tot * v;
+    let p = (1.0 + s.contact.restitution) * m_tot * v;
     let (lt, lr) = impact_limits(s);
     Impact {
         m_finger,
@@ -48,24 +48,24 @@ pub fn impact(s: &Scene, m_finger: f64, v: f64) -> Impact {
 }
 
 /// R_area = min(μ_g m_c g, R m_c g / h_c) (§9.3).
-pub fn r_area(s: &Scene) -> f64 {
-    let mg = s.object_mass() * s.g;
-    (s.mu_g * mg).min(s.radius * mg / s.grasp_height)
+pub fn r_area(s: &SceneParams) -> f64 {
+    let mg = s.object.mass() * s.env.g;
+    (s.env.mu_g * mg).min(s.object.radius * mg / s.object.grasp_height)
 }
 
 /// Force margin m(F) of §9.3 (≥ 0 = stable).
 #[inline]
-pub fn force_margin(s: &Scene, r_area: f64, f: V2) -> f64 {
+pub fn force_margin(s: &SceneParams, r_area: f64, f: V2) -> f64 {
     if f.y >= 0.0 {
         r_area - f.norm()
     } else {
-        r_area - s.mu_p * f.y - f.x.abs()
+        r_area - s.env.mu_p * f.y - f.x.abs()
     }
 }
 
 /// U_min = min_i (2/5) K^{−2/3} (f⁰_i)^{5/3} (§9.4).
-pub fn u_min(s: &Scene, f0: [f64; 2]) -> f64 {
-    f0.iter().map(|&f| 0.4 * s.k_contact.powf(-2.0 / 3.0) * f.max(0.0).powf(5.0 / 3.0)).fold(f64::INFINITY, f64::min)
+pub fn u_min(s: &SceneParams, f0: [f64; 2]) -> f64 {
+    f0.iter().map(|&f| 0.4 * s.contact.k_contact.powf(-2.0 / 3.0) * f.max(0.0).powf(5.0 / 3.0)).fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]
@@ -74,7 +74,7 @@ mod tests {
 
     #[test]
     fn margin_continuous_at_fy_zero() {
-        let s = crate::problem::Problem::from_toml_str(
+        let s = crate::params::Problem::from_toml_str(
             &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap(),
             std::path::Path::new("bottle-1l.toml"),
         )

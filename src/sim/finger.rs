@@ -9,7 +9,7 @@ use crate::model::contact::{capsule, flores_normal, CapsuleGeom, CapsulePart, Fr
 use crate::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
 use crate::model::geometry::{Finger, Pose};
 use crate::model::kinematics::Kin;
-use crate::problem::Scene;
+use crate::params::SceneParams;
 use crate::sim::integrator::Rhs;
 use nalgebra::{Matrix2, SVector, Vector2};
 
@@ -102,8 +102,8 @@ pub struct FingerOde<'a> {
     pub rw: f64,
     /// Filter time constant T_f.
     pub t_filter: f64,
-    /// Scene (gravity).
-    pub scene: &'a Scene,
+    /// Scene constants (gravity, contact law).
+    pub scene: &'a SceneParams,
     /// Contact memories.
     pub mem: [Memory; 2],
     /// Contacts enabled (false: free finger, for energy tests).
@@ -116,20 +116,20 @@ pub struct FingerOde<'a> {
 
 impl<'a> FingerOde<'a> {
     /// The finger of the grasp scene closing on the object centred at local (x_c, R).
-    pub fn new(finger: &'a Finger, scene: &'a Scene, tau_s0: f64, x_c: f64) -> Self {
+    pub fn new(finger: &'a Finger, scene: &'a SceneParams, tau_s0: f64, x_c: f64) -> Self {
         FingerOde {
             finger,
-            tau: scene.tau,
+            tau: scene.hand.tau,
             tau_s0,
-            k_s: scene.k_s,
-            k_stop: scene.k_stop,
-            c_stop: scene.c_stop,
-            k_contact: scene.k_contact,
-            chi: scene.chi(),
-            friction: FrictionLaw { mu_s: scene.mu_s, mu_d: scene.mu_d, v_s: scene.v_s, v_d: scene.v_d },
-            centre: V2::new(x_c, scene.radius),
-            rw: scene.radius + scene.w,
-            t_filter: scene.t_filter,
+            k_s: scene.hand.k_s,
+            k_stop: scene.hand.k_stop,
+            c_stop: scene.hand.c_stop,
+            k_contact: scene.contact.k_contact,
+            chi: scene.contact.chi(),
+            friction: FrictionLaw { mu_s: scene.contact.mu_s, mu_d: scene.contact.mu_d, v_s: scene.contact.v_s, v_d: scene.contact.v_d },
+            centre: V2::new(x_c, scene.object.radius),
+            rw: scene.object.radius + scene.hand.w,
+            t_filter: scene.criteria.t_filter,
             scene,
             mem: [Memory::default(); 2],
             contacts_enabled: true,
@@ -168,7 +168,7 @@ impl<'a> FingerOde<'a> {
         let red = reduced(f, &pose, &kin, qd);
         let j = kin.j_row();
         let xd = f.distal_dir(&pose);
-        let gravity = self.scene.g_eq != 0.0;
+        let gravity = self.scene.env.g_eq != 0.0;
         let theta2 = if full || gravity || self.k_s != 0.0 || crate::math::cross(pose.x21, xd) < 0.0 {
             pose.q22 = pose.q22_from_vectors();
             pose.q22 + f.psi

@@ -10,7 +10,7 @@ use crate::math::V2;
 use crate::model::geometry::Finger;
 use crate::model::statics::closed_pose;
 use crate::pipeline::StaticsResult;
-use crate::problem::Scene;
+use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 use serde::Serialize;
 use std::fmt;
@@ -251,18 +251,18 @@ pub struct Equilibrium {
 }
 
 /// Damped Newton iteration of §8.9 from the pre-penetrated rigid closed pose.
-pub fn compliant_equilibrium(ode: &FingerOde, s: &Scene, f0: [f64; 2]) -> Option<Equilibrium> {
+pub fn compliant_equilibrium(ode: &FingerOde, s: &SceneParams, f0: [f64; 2]) -> Option<Equilibrium> {
     let mut o = *ode;
     o.mem = [Memory { active: true, vminus: 1.0 }; 2];
     let f = o.finger;
-    let cp = closed_pose(f, s.radius, o.centre.x).ok()?;
+    let cp = closed_pose(f, s.object.radius, o.centre.x).ok()?;
     let at = |q: Vector2<f64>| -> Option<FingerEval> { o.evaluate(&State::from([q[0], q[1], 0.0, 0.0, 0.0])) };
     let q_rigid = Vector2::new(cp.pose.q11, cp.pose.q21);
     let e0 = at(q_rigid)?;
     let a = Matrix2::from_rows(&[e0.contacts[0].row.transpose(), e0.contacts[1].row.transpose()]);
-    let dl = Vector2::new((f0[0].max(0.0) / s.k_contact).powf(2.0 / 3.0), (f0[1].max(0.0) / s.k_contact).powf(2.0 / 3.0));
+    let dl = Vector2::new((f0[0].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0), (f0[1].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0));
     let mut q = q_rigid + a.try_inverse()? * dl;
-    let tol = 1e-9 * s.tau;
+    let tol = 1e-9 * s.hand.tau;
     for _ in 0..2000 {
         let r = at(q)?.q_total;
         if r.amax() < tol {
@@ -332,7 +332,7 @@ fn hermite_may_cross(a: f64, da: f64, b: f64, db: f64, h: f64) -> bool {
 }
 
 struct Ctx<'a> {
-    s: &'a Scene,
+    s: &'a SceneParams,
     v_star: f64,
     threshold: f64,
     r_area: f64,
@@ -343,7 +343,7 @@ fn gvals(ode: &FingerOde, ctx: &Ctx, y: &State, ev: &FingerEval, after_first: bo
     for i in 0..2 {
         let d = ev.contacts[i].geom.delta;
         // without contacts (a diagnostic scene) the phalanges pass through the object
-        contact[i] = if !ode.contacts_enabled { -1.0 } else if ode.mem[i].active { d + ctx.s.eps_sep } else { d };
+        contact[i] = if !ode.contacts_enabled { -1.0 } else if ode.mem[i].active { d + ctx.s.contact.eps_sep } else { d };
     }
     Gs {
         contact,
@@ -404,19 +404,19 @@ fn sample(_ode: &FingerOde, t: f64, y: &State, ev: &FingerEval, v_star: f64) -> 
 }
 
 /// Simulate the grasp of the design's finger on the centred object (pipeline entry point).
-pub fn simulate_grasp(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions) -> DynamicsResult {
+pub fn simulate_grasp(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> DynamicsResult {
     simulate(f, s, st, opts, None)
 }
 
 /// Simulate, recording the trajectory into `traj` when given (the result does not depend
 /// on recording).
-pub fn simulate_grasp_into(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+pub fn simulate_grasp_into(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     let o = SimOptions { record: traj.is_some(), ..*opts };
     simulate(f, s, st, &o, traj)
 }
 
 /// Simulate and also return the recorded trajectory (forces `record`).
-pub fn simulate_grasp_traj(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions) -> (DynamicsResult, Trajectory) {
+pub fn simulate_grasp_traj(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> (DynamicsResult, Trajectory) {
     let mut tr = Trajectory::default();
     let r = simulate(f, s, st, &SimOptions { record: true, ..*opts }, Some(&mut tr));
     (r, tr)
@@ -427,7 +427,7 @@ fn tolerances(opts: &SimOptions) -> Tol<NS> {
     Tol { rtol: opts.rtol, atol: State::from([opts.atol, opts.atol, opts.atol, opts.atol, opts.atol * 1e4]) }
 }
 
-fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     let tol = tolerances(opts);
     match opts.method {
         Method::Radau5 => run(Radau5::<NS>::new(tol, 1e-5), f, s, st, opts, traj),
@@ -439,7 +439,7 @@ fn simulate(f: &Finger, s: &Scene, st: &StaticsResult, opts: &SimOptions, traj: 
 fn run<St: Stepper<NS>>(
     mut stepper: St,
     f: &Finger,
-    s: &Scene,
+    s: &SceneParams,
     st: &StaticsResult,
     opts: &SimOptions,
     mut traj: Option<&mut Trajectory>,
@@ -448,7 +448,7 @@ fn run<St: Stepper<NS>>(
     let mut ode = FingerOde::new(f, s, st.tau_s0, 0.0);
     let ra = r_area(s);
     let static_margin = force_margin(s, ra, V2::new(st.hand0[0], st.hand0[1]));
-    let threshold = s.eta_stab * u_min(s, st.f0);
+    let threshold = s.criteria.eta_stab * u_min(s, st.f0);
     let mut res = DynamicsResult {
         outcome: DynOutcome::Stable,
         first: None,
@@ -537,11 +537,11 @@ fn run<St: Stepper<NS>>(
             res.outcome = DynOutcome::StepBudget;
             break;
         }
-        if t >= s.t_max * (1.0 - 1e-15) {
+        if t >= s.criteria.t_max * (1.0 - 1e-15) {
             fail_first(&mut res, DynOutcome::NoStability);
             break;
         }
-        let acc = match stepper.advance(&mut ode, t, &y, &fy, s.t_max - t) {
+        let acc = match stepper.advance(&mut ode, t, &y, &fy, s.criteria.t_max - t) {
             Ok(a) => a,
             Err(super::integrator::StepError::StepTooSmall) => {
                 res.outcome = DynOutcome::StepTooSmall;
@@ -695,7 +695,7 @@ fn run<St: Stepper<NS>>(
                     let c = &ev.contacts[i];
                     let located = i == kind;
                     if !ode.mem[i].active && c.geom.delta > 0.0 && (located || c.delta_dot > 0.0) {
-                        ode.mem[i] = Memory { active: true, vminus: c.delta_dot.max(s.v_min) };
+                        ode.mem[i] = Memory { active: true, vminus: c.delta_dot.max(s.contact.v_min) };
                         res.onsets[i].get_or_insert(t);
                         if res.first.is_none() {
                             let minv = ev.m.try_inverse().unwrap_or(Matrix2::zeros());
@@ -703,7 +703,7 @@ fn run<St: Stepper<NS>>(
                             first_onsets[i] = Some(impact(s, mf, c.delta_dot));
                         }
                     } else if ode.mem[i].active
-                        && c.geom.delta < -s.eps_sep
+                        && c.geom.delta < -s.contact.eps_sep
                         && (located || c.delta_dot < 0.0)
                     {
                         ode.mem[i] = Memory::default();
@@ -719,7 +719,7 @@ fn run<St: Stepper<NS>>(
                     if let Some((i, imp)) = pickf {
                         res.first = Some(FirstContact { t, phalanx: i as u8 + 1, impact: imp, theta2: ev.theta2 });
                         let iok = imp.e_cyl <= imp.e_lim;
-                        let fok = ev.theta2 <= s.fold_max;
+                        let fok = ev.theta2 <= s.criteria.fold_max;
                         res.impact_ok = Some(iok);
                         res.fold_ok = Some(fok);
                         if !iok {

@@ -1,7 +1,7 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
-use gripopt::problem::{Design, Problem, Scene};
+use gripopt::params::{Design, Problem, SceneParams};
 
 /// The default problem, loaded from the repository file.
 pub fn bottle() -> Problem {
@@ -9,7 +9,7 @@ pub fn bottle() -> Problem {
 }
 
 /// The nominal scene.
-pub fn scene() -> Scene {
+pub fn scene() -> SceneParams {
     bottle().scene
 }
 
@@ -32,10 +32,5 @@ pub fn close_abs(a: f64, b: f64, abs: f64, what: &str) {
 
 /// A design drawn uniformly in the default box of bottle-1l.toml.
 pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
-    let p = bottle();
-    let mut x = [0.0; 6];
-    for i in 0..6 {
-        x[i] = rng.random_range(p.bounds.lo[i]..p.bounds.hi[i]);
-    }
-    Design::from_array(&x)
+    bottle().bounds.sample(rng)
 }

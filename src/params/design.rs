@@ -1,0 +1,97 @@
+//! The design vector, its names and the design bounds (MODEL.md §1.2).
+
+use crate::error::{Error, Result};
+use crate::math::deg;
+use serde::{Deserialize, Serialize};
+
+/// Design vector `x = (l21, b, t22, r, p, ψ)` (MODEL.md §1.2). ψ in radians.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Design {
+    /// Proximal phalanx length l21 (m).
+    pub l21: f64,
+    /// Palm length b (m).
+    pub b: f64,
+    /// Distal phalanx length t22 (m).
+    pub t22: f64,
+    /// Transmission ratio r = l22/l11.
+    pub r: f64,
+    /// Ratio p = l11/l21.
+    pub p: f64,
+    /// Distal angle ψ (rad).
+    pub psi: f64,
+}
+
+/// Names of the six design variables, in order (ψ given in degrees in files and on the CLI).
+pub const DESIGN_NAMES: [&str; 6] = ["l21", "b", "t22", "r", "p", "psi_deg"];
+
+impl Design {
+    /// The thesis' nominal design (MODEL.md §1.2).
+    pub fn nominal() -> Self {
+        Design { l21: 0.0494, b: 0.056, t22: 0.0376, r: 0.46, p: 0.4, psi: deg(129.76) }
+    }
+    /// As an array in optimiser units (ψ in degrees).
+    pub fn to_array(&self) -> [f64; 6] {
+        [self.l21, self.b, self.t22, self.r, self.p, self.psi.to_degrees()]
+    }
+    /// From an array in optimiser units (ψ in degrees).
+    pub fn from_array(x: &[f64; 6]) -> Self {
+        Design { l21: x[0], b: x[1], t22: x[2], r: x[3], p: x[4], psi: deg(x[5]) }
+    }
+    /// Total hand length l_hand = b + 2 t22 + 2 l21.
+    pub fn l_hand(&self) -> f64 {
+        self.b + 2.0 * self.t22 + 2.0 * self.l21
+    }
+    /// Parse `l21=..,b=..,t22=..,r=..,p=..,psi_deg=..` (all six required, each once).
+    pub fn parse_assignments(s: &str) -> Result<Self> {
+        let mut vals: [Option<f64>; 6] = [None; 6];
+        for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (k, v) = part
+                .split_once('=')
+                .ok_or_else(|| Error::Input(format!("--design: `{part}` is not of the form name=value")))?;
+            let k = k.trim();
+            let idx = DESIGN_NAMES.iter().position(|n| *n == k).ok_or_else(|| {
+                Error::Input(format!("--design: unknown variable `{k}` (expected one of {})", DESIGN_NAMES.join(", ")))
+            })?;
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| Error::Input(format!("--design: `{k}` = `{}` is not a number", v.trim())))?;
+            if !x.is_finite() {
+                return Err(Error::Input(format!("--design: `{k}` = {x} is not finite")));
+            }
+            if vals[idx].replace(x).is_some() {
+                return Err(Error::Input(format!("--design: `{k}` given twice")));
+            }
+        }
+        let mut arr = [0.0; 6];
+        for (i, v) in vals.iter().enumerate() {
+            arr[i] = v.ok_or_else(|| Error::Input(format!("--design: missing `{}`", DESIGN_NAMES[i])))?;
+        }
+        Ok(Design::from_array(&arr))
+    }
+}
+
+/// Inclusive design bounds, in optimiser units (ψ in degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Bounds {
+    /// Lower bounds.
+    pub lo: [f64; 6],
+    /// Upper bounds.
+    pub hi: [f64; 6],
+}
+
+impl Bounds {
+    /// A design drawn uniformly in the box (each variable from `[lo, hi)`, in order).
+    pub fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> Design {
+        let mut x = [0.0; 6];
+        for i in 0..6 {
+            x[i] = rng.random_range(self.lo[i]..self.hi[i]);
+        }
+        Design::from_array(&x)
+    }
+    /// Is the design (in optimiser units) inside the box?
+    pub fn contains(&self, d: &Design) -> bool {
+        let x = d.to_array();
+        (0..6).all(|i| x[i] >= self.lo[i] && x[i] <= self.hi[i])
+    }
+}

@@ -1,0 +1,289 @@
+//! Problem files: TOML with the sections `[hand]`, `[object]`, `[contact]`,
+//! `[environment]`, `[criteria]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
+//! required and unknown keys are rejected: there are no silent defaults. Errors name the
+//! file and the field.
+
+use super::design::{Bounds, Design, DESIGN_NAMES};
+use super::scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
+use crate::error::{Error, Result};
+use crate::math::deg;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Integrator settings of the grasp simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSettings {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance (rad and rad/s).
+    pub atol: f64,
+    /// Maximum number of accepted + rejected steps before a discard.
+    pub max_steps: u64,
+}
+
+/// A loaded and validated problem.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Problem {
+    /// Problem name (from the file).
+    pub name: String,
+    /// Scene constants, section by section.
+    pub scene: SceneParams,
+    /// Integrator settings.
+    pub solver: SolverSettings,
+    /// Nominal design.
+    pub nominal: Design,
+    /// Design bounds.
+    pub bounds: Bounds,
+    /// Raw text of the file (hashed into checkpoints).
+    #[serde(skip)]
+    pub source_text: String,
+}
+
+// ---- raw TOML shape -------------------------------------------------------------------
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    name: String,
+    hand: RawHand,
+    object: RawObject,
+    contact: RawContact,
+    environment: RawEnv,
+    criteria: RawCriteria,
+    solver: SolverSettings,
+    nominal: RawDesign,
+    bounds: RawBounds,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHand {
+    tau: f64,
+    w: f64,
+    rho_f: f64,
+    r_open: f64,
+    k_s: f64,
+    k_stop: f64,
+    c_stop: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawObject {
+    radius: f64,
+    length: f64,
+    density: f64,
+    grasp_height: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContact {
+    mu_s: f64,
+    mu_d: f64,
+    v_s: f64,
+    v_d: f64,
+    restitution: f64,
+    k_contact: f64,
+    v_min: f64,
+    eps_sep: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnv {
+    g: f64,
+    g_eq: f64,
+    theta_g_deg: f64,
+    mu_g: f64,
+    mu_p: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCriteria {
+    r_sing: Vec<f64>,
+    margin_sing_deg: f64,
+    sweep_step_deg: f64,
+    dx_max: f64,
+    theta_max_deg: f64,
+    fold_max_deg: f64,
+    offset_step: f64,
+    offset_max: f64,
+    t_filter: f64,
+    eta_stab: f64,
+    t_max: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDesign {
+    l21: f64,
+    b: f64,
+    t22: f64,
+    r: f64,
+    p: f64,
+    psi_deg: f64,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBounds {
+    l21: [f64; 2],
+    b: [f64; 2],
+    t22: [f64; 2],
+    r: [f64; 2],
+    p: [f64; 2],
+    psi_deg: [f64; 2],
+}
+
+/// Physical range a field must lie in.
+#[derive(Clone, Copy)]
+enum Rule {
+    Positive,
+    NonNegative,
+    Finite,
+    /// Open-closed interval (lo, hi].
+    In(f64, f64),
+}
+
+struct Checker<'a> {
+    file: &'a Path,
+}
+
+impl Checker<'_> {
+    fn check(&self, field: &str, v: f64, rule: Rule) -> Result<f64> {
+        let bad = |rule: String| Error::InvalidField {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            value: format!("{v}"),
+            rule,
+        };
+        if !v.is_finite() {
+            return Err(bad("must be a finite number".into()));
+        }
+        match rule {
+            Rule::Positive if v <= 0.0 => Err(bad("must be > 0".into())),
+            Rule::NonNegative if v < 0.0 => Err(bad("must be >= 0".into())),
+            Rule::In(lo, hi) if !(v > lo && v <= hi) => Err(bad(format!("must lie in ({lo}, {hi}]"))),
+            _ => Ok(v),
+        }
+    }
+    fn fail(&self, field: &str, value: String, rule: &str) -> Error {
+        Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
+    }
+}
+
+impl Problem {
+    /// Load and validate a problem file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path)
+            .map_err(|err| Error::io(path, "cannot read problem file", err))?;
+        Self::from_toml_str(&text, path)
+    }
+
+    /// Parse and validate problem text; `path` is used in error messages only.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Self> {
+        let raw: RawFile = toml::from_str(text)
+            .map_err(|e| Error::ProblemParse { file: path.to_path_buf(), message: e.to_string().trim_end().to_string(), source: e })?;
+        let c = Checker { file: path };
+        use Rule::*;
+        let h = &raw.hand;
+        let o = &raw.object;
+        let k = &raw.contact;
+        let en = &raw.environment;
+        let cr = &raw.criteria;
+        let scene = SceneParams {
+            hand: Hand {
+                tau: c.check("hand.tau", h.tau, Positive)?,
+                w: c.check("hand.w", h.w, Positive)?,
+                rho_f: c.check("hand.rho_f", h.rho_f, Positive)?,
+                r_open: c.check("hand.r_open", h.r_open, Positive)?,
+                k_s: c.check("hand.k_s", h.k_s, NonNegative)?,
+                k_stop: c.check("hand.k_stop", h.k_stop, Positive)?,
+                c_stop: c.check("hand.c_stop", h.c_stop, NonNegative)?,
+            },
+            object: Object {
+                radius: c.check("object.radius", o.radius, Positive)?,
+                length: c.check("object.length", o.length, Positive)?,
+                density: c.check("object.density", o.density, Positive)?,
+                grasp_height: c.check("object.grasp_height", o.grasp_height, Positive)?,
+            },
+            contact: ContactLaw {
+                mu_s: c.check("contact.mu_s", k.mu_s, Positive)?,
+                mu_d: c.check("contact.mu_d", k.mu_d, Positive)?,
+                v_s: c.check("contact.v_s", k.v_s, Positive)?,
+                v_d: c.check("contact.v_d", k.v_d, Positive)?,
+                restitution: c.check("contact.restitution", k.restitution, In(0.0, 1.0))?,
+                k_contact: c.check("contact.k_contact", k.k_contact, Positive)?,
+                v_min: c.check("contact.v_min", k.v_min, Positive)?,
+                eps_sep: c.check("contact.eps_sep", k.eps_sep, Positive)?,
+            },
+            env: Environment {
+                g: c.check("environment.g", en.g, NonNegative)?,
+                g_eq: c.check("environment.g_eq", en.g_eq, NonNegative)?,
+                theta_g: deg(c.check("environment.theta_g_deg", en.theta_g_deg, Finite)?),
+                mu_g: c.check("environment.mu_g", en.mu_g, Positive)?,
+                mu_p: c.check("environment.mu_p", en.mu_p, NonNegative)?,
+            },
+            criteria: Criteria {
+                r_sing: cr
+                    .r_sing
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &r)| c.check(&format!("criteria.r_sing[{i}]"), r, Positive))
+                    .collect::<Result<_, _>>()?,
+                margin_sing: deg(c.check("criteria.margin_sing_deg", cr.margin_sing_deg, In(0.0, 90.0))?),
+                sweep_step: deg(c.check("criteria.sweep_step_deg", cr.sweep_step_deg, In(0.0, 45.0))?),
+                dx_max: c.check("criteria.dx_max", cr.dx_max, Positive)?,
+                theta_max: deg(c.check("criteria.theta_max_deg", cr.theta_max_deg, In(0.0, 90.0))?),
+                fold_max: deg(c.check("criteria.fold_max_deg", cr.fold_max_deg, In(0.0, 180.0))?),
+                offset_step: c.check("criteria.offset_step", cr.offset_step, Positive)?,
+                offset_max: c.check("criteria.offset_max", cr.offset_max, NonNegative)?,
+                t_filter: c.check("criteria.t_filter", cr.t_filter, Positive)?,
+                eta_stab: c.check("criteria.eta_stab", cr.eta_stab, In(0.0, 1.0))?,
+                t_max: c.check("criteria.t_max", cr.t_max, Positive)?,
+            },
+        };
+        if cr.r_sing.is_empty() {
+            return Err(c.fail("criteria.r_sing", "[]".into(), "must list at least one radius"));
+        }
+        if scene.contact.v_d <= scene.contact.v_s {
+            return Err(c.fail("contact.v_d", format!("{}", scene.contact.v_d), "must be > contact.v_s"));
+        }
+        if scene.criteria.offset_max / scene.criteria.offset_step > 1e5 {
+            return Err(c.fail("criteria.offset_step", format!("{}", scene.criteria.offset_step), "gives more than 1e5 offsets"));
+        }
+        let s = &raw.solver;
+        c.check("solver.rtol", s.rtol, In(0.0, 1.0))?;
+        c.check("solver.atol", s.atol, Positive)?;
+        if s.max_steps == 0 {
+            return Err(c.fail("solver.max_steps", "0".into(), "must be >= 1"));
+        }
+        let n = &raw.nominal;
+        let nominal = Design {
+            l21: c.check("nominal.l21", n.l21, Positive)?,
+            b: c.check("nominal.b", n.b, Positive)?,
+            t22: c.check("nominal.t22", n.t22, Positive)?,
+            r: c.check("nominal.r", n.r, Positive)?,
+            p: c.check("nominal.p", n.p, Positive)?,
+            psi: deg(c.check("nominal.psi_deg", n.psi_deg, Finite)?),
+        };
+        let b = &raw.bounds;
+        let pairs = [b.l21, b.b, b.t22, b.r, b.p, b.psi_deg];
+        let mut lo = [0.0; 6];
+        let mut hi = [0.0; 6];
+        for (i, pr) in pairs.iter().enumerate() {
+            let name = format!("bounds.{}", DESIGN_NAMES[i]);
+            let rule = if i == 5 { Finite } else { Positive };
+            lo[i] = c.check(&name, pr[0], rule)?;
+            hi[i] = c.check(&name, pr[1], rule)?;
+            if lo[i] >= hi[i] {
+                return Err(c.fail(&name, format!("[{}, {}]", pr[0], pr[1]), "lower bound must be < upper bound"));
+            }
+        }
+        Ok(Problem {
+            name: raw.name,
+            scene,
+            solver: raw.solver,
+            nominal,
+            bounds: Bounds { lo, hi },
+            source_text: text.to_string(),
+        })
+    }
+}

@@ -1,0 +1,12 @@
+//! Parameters: the problem file turned into typed values — the scene constants by section
+//! ([`Hand`], [`Object`], [`ContactLaw`], [`Environment`], [`Criteria`]), the solver
+//! settings, the nominal [`Design`] and the [`Bounds`]. The lowest layer: it depends on
+//! nothing of gripopt but `math` and `error`.
+
+mod design;
+mod load;
+mod scene;
+
+pub use design::{Bounds, Design, DESIGN_NAMES};
+pub use load::{Problem, SolverSettings};
+pub use scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
