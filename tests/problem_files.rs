@@ -75,3 +75,64 @@ fn design_assignments() {
     assert!(Design::parse_assignments("l21=abc").unwrap_err().to_string().contains("not a number"));
     assert!(Design::parse_assignments("l21=nan,b=1,t22=1,r=1,p=1,psi_deg=1").unwrap_err().to_string().contains("finite"));
 }
+
+/// Sets `section.key` of the default file to `value` (a TOML value) and returns the error text.
+fn err_with(section: &str, key: &str, value: toml::Value) -> String {
+    let mut t: toml::Table = base().parse().unwrap();
+    t.get_mut(section).and_then(|s| s.as_table_mut()).unwrap().insert(key.into(), value);
+    err_of(&toml::to_string(&t).unwrap())
+}
+
+/// Every numeric field of the file refuses an absurd value with an error naming it
+/// (before the limits, 1e300 was accepted in 34 fields, and `g = 1e300` made the nominal
+/// design feasible).
+#[test]
+fn absurd_values_are_refused_in_every_field() {
+    let mut checked = 0;
+    for l in gripopt::params::LIMITS {
+        let Some((section, key)) = l.field.split_once('.') else { continue };
+        let big = if key == "max_steps" { toml::Value::Integer(i64::MAX) } else { toml::Value::Float(1e300) };
+        let value = if key == "r_sing" { toml::Value::Array(vec![toml::Value::Float(1e300)]) } else { big };
+        let e = err_with(section, key, value);
+        assert!(e.contains("bad.toml") && e.contains(l.field), "{}: {e}", l.field);
+        checked += 1;
+    }
+    assert!(checked >= 38, "{checked}");
+    for name in ["l21", "b", "t22", "r", "p", "psi_deg"] {
+        let e = err_with("nominal", name, toml::Value::Float(1e300));
+        assert!(e.contains(&format!("nominal.{name}")), "{e}");
+        let e = err_with("bounds", name, toml::Value::Array(vec![toml::Value::Float(0.01), toml::Value::Float(1e300)]));
+        assert!(e.contains(&format!("bounds.{name}")), "{e}");
+    }
+}
+
+#[test]
+fn bounds_need_exactly_two_numbers_and_sweep_step_a_floor() {
+    let three = toml::Value::Array(vec![0.03.into(), 0.05.into(), 0.07.into()]);
+    let e = err_with("bounds", "l21", three);
+    assert!(e.contains("bounds.l21") && e.contains("exactly two"), "{e}");
+    let e = err_with("criteria", "sweep_step_deg", toml::Value::Float(1e-300));
+    assert!(e.contains("criteria.sweep_step_deg") && e.contains(">= 0.01"), "{e}");
+    let e = err_with("criteria", "r_sing", toml::Value::Array(vec![0.04.into(); 101]));
+    assert!(e.contains("criteria.r_sing") && e.contains("at most 100"), "{e}");
+}
+
+/// A problem file is read with a size cap: `/dev/zero` is refused instead of read forever.
+#[test]
+fn endless_or_huge_files_are_refused() {
+    if std::path::Path::new("/dev/zero").exists() {
+        let e = Problem::load("/dev/zero").unwrap_err().to_string();
+        assert!(e.contains("/dev/zero") && e.contains("bytes"), "{e}");
+    }
+}
+
+/// docs/problem-files.md lists every limit exactly as the code checks it.
+#[test]
+fn the_documented_limits_are_the_checked_ones() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/problem-files.md")).unwrap();
+    for l in gripopt::params::LIMITS {
+        let name = if l.field.contains('.') { l.field.to_string() } else { format!("nominal.{0}, bounds.{0}", l.field) };
+        let row = format!("| `{name}` | {} | {} |", l.range(), l.unit);
+        assert!(doc.contains(&row), "docs/problem-files.md lacks the row {row}");
+    }
+}

@@ -198,9 +198,8 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
 
 fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
     if let Some(v) = r {
-        if !(v > 0.0 && v < 1.0) {
-            anyhow::bail!("--rtol {v}: must lie in (0, 1)");
-        }
+        // the same range as the problem file's solver.rtol
+        gripopt::params::limit("solver.rtol").check(v).map_err(|rule| anyhow::anyhow!("--rtol {v}: {rule}"))?;
     }
     Ok(r)
 }

@@ -4,10 +4,12 @@
 //! file and the field.
 
 use super::design::{Bounds, Design, DESIGN_NAMES};
+use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
 use super::scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
 use crate::error::{Error, Result};
 use crate::math::deg;
 use serde::{Deserialize, Serialize};
+use std::io::Read;
 use std::path::Path;
 
 /// Integrator settings of the grasp simulation.
@@ -123,22 +125,12 @@ struct RawDesign {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawBounds {
-    l21: [f64; 2],
-    b: [f64; 2],
-    t22: [f64; 2],
-    r: [f64; 2],
-    p: [f64; 2],
-    psi_deg: [f64; 2],
-}
-
-/// Physical range a field must lie in.
-#[derive(Clone, Copy)]
-enum Rule {
-    Positive,
-    NonNegative,
-    Finite,
-    /// Open-closed interval (lo, hi].
-    In(f64, f64),
+    l21: Vec<f64>,
+    b: Vec<f64>,
+    t22: Vec<f64>,
+    r: Vec<f64>,
+    p: Vec<f64>,
+    psi_deg: Vec<f64>,
 }
 
 struct Checker<'a> {
@@ -146,22 +138,13 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    fn check(&self, field: &str, v: f64, rule: Rule) -> Result<f64> {
-        let bad = |rule: String| Error::InvalidField {
+    fn check(&self, field: &str, v: f64) -> Result<f64> {
+        limit(field).check(v).map_err(|rule| Error::InvalidField {
             file: self.file.to_path_buf(),
             field: field.to_string(),
             value: format!("{v}"),
             rule,
-        };
-        if !v.is_finite() {
-            return Err(bad("must be a finite number".into()));
-        }
-        match rule {
-            Rule::Positive if v <= 0.0 => Err(bad("must be > 0".into())),
-            Rule::NonNegative if v < 0.0 => Err(bad("must be >= 0".into())),
-            Rule::In(lo, hi) if !(v > lo && v <= hi) => Err(bad(format!("must lie in ({lo}, {hi}]"))),
-            _ => Ok(v),
-        }
+        })
     }
     fn fail(&self, field: &str, value: String, rule: &str) -> Error {
         Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
@@ -172,8 +155,20 @@ impl Problem {
     /// Load and validate a problem file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|err| Error::io(path, "cannot read problem file", err))?;
+        let io = |err| Error::io(path, "cannot read problem file", err);
+        let file = std::fs::File::open(path).map_err(io)?;
+        let mut bytes = Vec::new();
+        file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
+        if bytes.len() as u64 > MAX_FILE_BYTES {
+            return Err(Error::InvalidField {
+                file: path.to_path_buf(),
+                field: "(the whole file)".into(),
+                value: format!("more than {MAX_FILE_BYTES} bytes"),
+                rule: "a problem file is a few kB of TOML".into(),
+            });
+        }
+        let text = String::from_utf8(bytes)
+            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text ({e})"))))?;
         Self::from_toml_str(&text, path)
     }
 
@@ -182,7 +177,6 @@ impl Problem {
         let raw: RawFile = toml::from_str(text)
             .map_err(|e| Error::ProblemParse { file: path.to_path_buf(), message: e.to_string().trim_end().to_string(), source: e })?;
         let c = Checker { file: path };
-        use Rule::*;
         let h = &raw.hand;
         let o = &raw.object;
         let k = &raw.contact;
@@ -190,56 +184,59 @@ impl Problem {
         let cr = &raw.criteria;
         let scene = SceneParams {
             hand: Hand {
-                tau: c.check("hand.tau", h.tau, Positive)?,
-                w: c.check("hand.w", h.w, Positive)?,
-                rho_f: c.check("hand.rho_f", h.rho_f, Positive)?,
-                r_open: c.check("hand.r_open", h.r_open, Positive)?,
-                k_s: c.check("hand.k_s", h.k_s, NonNegative)?,
-                k_stop: c.check("hand.k_stop", h.k_stop, Positive)?,
-                c_stop: c.check("hand.c_stop", h.c_stop, NonNegative)?,
+                tau: c.check("hand.tau", h.tau)?,
+                w: c.check("hand.w", h.w)?,
+                rho_f: c.check("hand.rho_f", h.rho_f)?,
+                r_open: c.check("hand.r_open", h.r_open)?,
+                k_s: c.check("hand.k_s", h.k_s)?,
+                k_stop: c.check("hand.k_stop", h.k_stop)?,
+                c_stop: c.check("hand.c_stop", h.c_stop)?,
             },
             object: Object {
-                radius: c.check("object.radius", o.radius, Positive)?,
-                length: c.check("object.length", o.length, Positive)?,
-                density: c.check("object.density", o.density, Positive)?,
-                grasp_height: c.check("object.grasp_height", o.grasp_height, Positive)?,
+                radius: c.check("object.radius", o.radius)?,
+                length: c.check("object.length", o.length)?,
+                density: c.check("object.density", o.density)?,
+                grasp_height: c.check("object.grasp_height", o.grasp_height)?,
             },
             contact: ContactLaw {
-                mu_s: c.check("contact.mu_s", k.mu_s, Positive)?,
-                mu_d: c.check("contact.mu_d", k.mu_d, Positive)?,
-                v_s: c.check("contact.v_s", k.v_s, Positive)?,
-                v_d: c.check("contact.v_d", k.v_d, Positive)?,
-                restitution: c.check("contact.restitution", k.restitution, In(0.0, 1.0))?,
-                k_contact: c.check("contact.k_contact", k.k_contact, Positive)?,
-                v_min: c.check("contact.v_min", k.v_min, Positive)?,
-                eps_sep: c.check("contact.eps_sep", k.eps_sep, Positive)?,
+                mu_s: c.check("contact.mu_s", k.mu_s)?,
+                mu_d: c.check("contact.mu_d", k.mu_d)?,
+                v_s: c.check("contact.v_s", k.v_s)?,
+                v_d: c.check("contact.v_d", k.v_d)?,
+                restitution: c.check("contact.restitution", k.restitution)?,
+                k_contact: c.check("contact.k_contact", k.k_contact)?,
+                v_min: c.check("contact.v_min", k.v_min)?,
+                eps_sep: c.check("contact.eps_sep", k.eps_sep)?,
             },
             env: Environment {
-                g: c.check("environment.g", en.g, NonNegative)?,
-                g_eq: c.check("environment.g_eq", en.g_eq, NonNegative)?,
-                theta_g: deg(c.check("environment.theta_g_deg", en.theta_g_deg, Finite)?),
-                mu_g: c.check("environment.mu_g", en.mu_g, Positive)?,
-                mu_p: c.check("environment.mu_p", en.mu_p, NonNegative)?,
+                g: c.check("environment.g", en.g)?,
+                g_eq: c.check("environment.g_eq", en.g_eq)?,
+                theta_g: deg(c.check("environment.theta_g_deg", en.theta_g_deg)?),
+                mu_g: c.check("environment.mu_g", en.mu_g)?,
+                mu_p: c.check("environment.mu_p", en.mu_p)?,
             },
             criteria: Criteria {
                 r_sing: cr
                     .r_sing
                     .iter()
                     .enumerate()
-                    .map(|(i, &r)| c.check(&format!("criteria.r_sing[{i}]"), r, Positive))
+                    .map(|(i, &r)| c.check(&format!("criteria.r_sing[{i}]"), r))
                     .collect::<Result<_, _>>()?,
-                margin_sing: deg(c.check("criteria.margin_sing_deg", cr.margin_sing_deg, In(0.0, 90.0))?),
-                sweep_step: deg(c.check("criteria.sweep_step_deg", cr.sweep_step_deg, In(0.0, 45.0))?),
-                dx_max: c.check("criteria.dx_max", cr.dx_max, Positive)?,
-                theta_max: deg(c.check("criteria.theta_max_deg", cr.theta_max_deg, In(0.0, 90.0))?),
-                fold_max: deg(c.check("criteria.fold_max_deg", cr.fold_max_deg, In(0.0, 180.0))?),
-                offset_step: c.check("criteria.offset_step", cr.offset_step, Positive)?,
-                offset_max: c.check("criteria.offset_max", cr.offset_max, NonNegative)?,
-                t_filter: c.check("criteria.t_filter", cr.t_filter, Positive)?,
-                eta_stab: c.check("criteria.eta_stab", cr.eta_stab, In(0.0, 1.0))?,
-                t_max: c.check("criteria.t_max", cr.t_max, Positive)?,
+                margin_sing: deg(c.check("criteria.margin_sing_deg", cr.margin_sing_deg)?),
+                sweep_step: deg(c.check("criteria.sweep_step_deg", cr.sweep_step_deg)?),
+                dx_max: c.check("criteria.dx_max", cr.dx_max)?,
+                theta_max: deg(c.check("criteria.theta_max_deg", cr.theta_max_deg)?),
+                fold_max: deg(c.check("criteria.fold_max_deg", cr.fold_max_deg)?),
+                offset_step: c.check("criteria.offset_step", cr.offset_step)?,
+                offset_max: c.check("criteria.offset_max", cr.offset_max)?,
+                t_filter: c.check("criteria.t_filter", cr.t_filter)?,
+                eta_stab: c.check("criteria.eta_stab", cr.eta_stab)?,
+                t_max: c.check("criteria.t_max", cr.t_max)?,
             },
         };
+        if cr.r_sing.len() > MAX_R_SING {
+            return Err(c.fail("criteria.r_sing", format!("{} radii", cr.r_sing.len()), &format!("must list at most {MAX_R_SING} radii")));
+        }
         if cr.r_sing.is_empty() {
             return Err(c.fail("criteria.r_sing", "[]".into(), "must list at least one radius"));
         }
@@ -250,29 +247,29 @@ impl Problem {
             return Err(c.fail("criteria.offset_step", format!("{}", scene.criteria.offset_step), "gives more than 1e5 offsets"));
         }
         let s = &raw.solver;
-        c.check("solver.rtol", s.rtol, In(0.0, 1.0))?;
-        c.check("solver.atol", s.atol, Positive)?;
-        if s.max_steps == 0 {
-            return Err(c.fail("solver.max_steps", "0".into(), "must be >= 1"));
-        }
+        c.check("solver.rtol", s.rtol)?;
+        c.check("solver.atol", s.atol)?;
+        c.check("solver.max_steps", s.max_steps as f64)?;
         let n = &raw.nominal;
         let nominal = Design {
-            l21: c.check("nominal.l21", n.l21, Positive)?,
-            b: c.check("nominal.b", n.b, Positive)?,
-            t22: c.check("nominal.t22", n.t22, Positive)?,
-            r: c.check("nominal.r", n.r, Positive)?,
-            p: c.check("nominal.p", n.p, Positive)?,
-            psi: deg(c.check("nominal.psi_deg", n.psi_deg, Finite)?),
+            l21: c.check("nominal.l21", n.l21)?,
+            b: c.check("nominal.b", n.b)?,
+            t22: c.check("nominal.t22", n.t22)?,
+            r: c.check("nominal.r", n.r)?,
+            p: c.check("nominal.p", n.p)?,
+            psi: deg(c.check("nominal.psi_deg", n.psi_deg)?),
         };
         let b = &raw.bounds;
-        let pairs = [b.l21, b.b, b.t22, b.r, b.p, b.psi_deg];
+        let pairs = [&b.l21, &b.b, &b.t22, &b.r, &b.p, &b.psi_deg];
         let mut lo = [0.0; 6];
         let mut hi = [0.0; 6];
         for (i, pr) in pairs.iter().enumerate() {
             let name = format!("bounds.{}", DESIGN_NAMES[i]);
-            let rule = if i == 5 { Finite } else { Positive };
-            lo[i] = c.check(&name, pr[0], rule)?;
-            hi[i] = c.check(&name, pr[1], rule)?;
+            if pr.len() != 2 {
+                return Err(c.fail(&name, format!("{pr:?}"), "must be [lower, upper]: exactly two numbers"));
+            }
+            lo[i] = c.check(&name, pr[0])?;
+            hi[i] = c.check(&name, pr[1])?;
             if lo[i] >= hi[i] {
                 return Err(c.fail(&name, format!("[{}, {}]", pr[0], pr[1]), "lower bound must be < upper bound"));
             }

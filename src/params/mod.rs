@@ -4,9 +4,11 @@
 //! nothing of gripopt but `math` and `error`.
 
 mod design;
+mod limits;
 mod load;
 mod scene;
 
 pub use design::{Bounds, Design, DESIGN_NAMES};
+pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
 pub use scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
