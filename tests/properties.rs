@@ -2,7 +2,7 @@
 mod common;
 use gripopt::pipeline::{evaluate, EvalOptions, Evaluation, Record};
 use gripopt::problem::Design;
-use gripopt::sim::grasp::DynOutcome;
+use gripopt::sim::DynOutcome;
 use proptest::prelude::*;
 
 fn check_finite(ev: &Evaluation) -> Result<(), String> {
