@@ -155,37 +155,41 @@ pub struct CentredScene<'a, 't> {
 }
 
 impl<'a, 't> CentredScene<'a, 't> {
-    /// Set up the scene of finger `f` with its statics `st`: static force criterion and
-    /// compliant equilibrium. `Err`: the result of a simulation that ends before its first
-    /// step (pipeline mode and a violated static force criterion, or no equilibrium).
-    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&'t mut Trajectory>) -> Result<Self, DynamicsResult> {
+    /// The scene of finger `f` with its statics `st` (before [`CentredScene::prepare`]).
+    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&'t mut Trajectory>) -> Self {
         let ode = FingerOde::new(f, s, st.tau_s0, 0.0);
         let ra = r_area(s);
         let static_margin = force_margin(s, ra, V2::new(st.hand0[0], st.hand0[1]));
         let threshold = s.eta_stab * u_min(s, st.f0);
-        let pipeline = opts.mode == Mode::Pipeline;
         let none = Equilibrium { q: Vector2::repeat(f64::NAN), v_star: f64::NAN, fstar: [f64::NAN; 2] };
-        let mut sc = CentredScene { ode, s, eq: none, threshold, r_area: ra, static_force_margin: static_margin, tracker: Tracker::new(pipeline), traj };
-        if static_margin < 0.0 {
-            sc.tracker.fail(DynOutcome::StaticForceLimit);
-            if pipeline {
-                return Err(sc.result());
+        let tracker = Tracker::new(opts.mode == Mode::Pipeline);
+        CentredScene { ode, s, eq: none, threshold, r_area: ra, static_force_margin: static_margin, tracker, traj }
+    }
+
+    /// The static force criterion and the compliant equilibrium (from the static forces
+    /// `f0`) before the run. False: the simulation ends here (pipeline mode and a violated
+    /// static force criterion, or no equilibrium); [`CentredScene::result`] says why.
+    pub fn prepare(&mut self, f0: [f64; 2], opts: &SimOptions) -> bool {
+        if self.static_force_margin < 0.0 {
+            self.tracker.fail(DynOutcome::StaticForceLimit);
+            if self.tracker.pipeline {
+                return false;
             }
         }
         if opts.contacts {
-            let Some(eq) = compliant_equilibrium(&sc.ode, s, st.f0) else {
-                sc.tracker.outcome = DynOutcome::NoEquilibrium;
-                return Err(sc.result());
+            let Some(eq) = compliant_equilibrium(&self.ode, self.s, f0) else {
+                self.tracker.outcome = DynOutcome::NoEquilibrium;
+                return false;
             };
-            sc.eq = eq;
+            self.eq = eq;
         } else {
-            sc.ode.contacts_enabled = false;
+            self.ode.contacts_enabled = false;
         }
-        Ok(sc)
+        true
     }
 
-    /// The result as far as known (no run, or before the run's end values).
-    fn result(&self) -> DynamicsResult {
+    /// The result as far as known (without a run, or before the run's end values).
+    pub fn result(&self) -> DynamicsResult {
         let k = &self.tracker;
         DynamicsResult {
             outcome: k.outcome,
@@ -413,10 +417,8 @@ fn tolerances(opts: &SimOptions) -> Tol<NS> {
 
 fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     let clock = Instant::now();
-    let mut res = match CentredScene::new(f, s, st, opts, traj) {
-        Ok(scene) => driver::simulate(scene, opts, tolerances(opts), s.t_max),
-        Err(res) => res,
-    };
+    let mut scene = CentredScene::new(f, s, st, opts, traj);
+    let mut res = if scene.prepare(st.f0, opts) { driver::simulate(scene, opts, tolerances(opts), s.t_max) } else { scene.result() };
     res.cpu_s = clock.elapsed().as_secs_f64();
     res
 }
