@@ -7,8 +7,9 @@ use crate::model::constraints::{singularity_sweep, Sweep, SweepFailure};
 use crate::model::geometry::{Finger, GeomError};
 use crate::model::statics::spring_preload;
 use crate::model::statics::isotropy;
+pub use crate::model::statics::StaticsResult;
 use crate::params::{Design, Problem, SceneParams};
-use crate::sim::grasp::{DynOutcome, DynamicsResult, SimOptions};
+use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
 use serde::Serialize;
 use std::fmt;
 use std::time::Instant;
@@ -65,37 +66,6 @@ pub struct KinematicsResult {
     pub finger: Finger,
     /// Singularity sweep.
     pub sweep: Sweep,
-}
-
-/// Stage 2 values (centred object).
-#[derive(Debug, Clone, Copy)]
-pub struct StaticsResult {
-    /// τ_s^min before clipping.
-    pub tau_s_min: f64,
-    /// Spring preload τ_s0.
-    pub tau_s0: f64,
-    /// θ1, θ2 of the closed pose.
-    pub theta: [f64; 2],
-    /// k1, k2.
-    pub k: [f64; 2],
-    /// f⁰ (finger 1).
-    pub f0: [f64; 2],
-    /// f^μ (finger 1).
-    pub fmu: [f64; 2],
-    /// F⁰_hand (world).
-    pub hand0: [f64; 2],
-    /// F^μ_hand (world).
-    pub hand_mu: [f64; 2],
-    /// Form closed at x_off = 0.
-    pub form_closed_0: bool,
-    /// Objective 1 (m).
-    pub max_offset: f64,
-    /// What ended the offset scan.
-    pub offset_ended_by: Option<OffsetFailure>,
-    /// Objective 2.
-    pub alpha: f64,
-    /// Objective 3 (N).
-    pub mean_force: f64,
 }
 
 /// Everything known about one evaluated design.
@@ -208,14 +178,14 @@ pub fn evaluate(x: &Design, s: &SceneParams, opts: &EvalOptions) -> Evaluation {
 
 /// Evaluate and return the stage-3 trajectory (if stage 3 ran), recorded by the same
 /// simulation that decided the verdict.
-pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions) -> (Evaluation, Option<crate::sim::grasp::Trajectory>) {
-    let mut tr = crate::sim::grasp::Trajectory::default();
+pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions) -> (Evaluation, Option<Trajectory>) {
+    let mut tr = Trajectory::default();
     let ev = evaluate_inner(x, s, opts, Some(&mut tr));
     let has = ev.dynamics.is_some();
     (ev, has.then_some(tr))
 }
 
-fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut crate::sim::grasp::Trajectory>) -> Evaluation {
+fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
     let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
     let t0 = Instant::now();
     let kin = match stage_kinematics(x, s) {
@@ -243,7 +213,7 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     if !opts.dynamics {
         return ev;
     }
-    let dynr = crate::sim::grasp::simulate_grasp_into(&kin.finger, s, &st, &opts.sim, traj);
+    let dynr = crate::sim::simulate_grasp_into(&kin.finger, s, &st, &opts.sim, traj);
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
         ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });
@@ -338,7 +308,7 @@ pub struct Record {
     pub mean_force: Option<f64>,
     /// Stage-3 keys (flattened; all null when stage 3 did not run).
     #[serde(flatten)]
-    pub dynamics: crate::sim::grasp::DynamicsRecord,
+    pub dynamics: DynamicsRecord,
     /// No stage discarded the design.
     pub feasible: bool,
     /// Stage that discarded it.
@@ -395,11 +365,108 @@ impl Record {
             max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
             alpha: st.and_then(|s| fin(s.alpha)),
             mean_force: st.map(|s| s.mean_force),
-            dynamics: crate::sim::grasp::DynamicsRecord::from_result(ev.dynamics.as_ref()),
+            dynamics: DynamicsRecord::from_result(ev.dynamics.as_ref()),
             feasible: ev.feasible(),
             failed_stage: ev.discard.map(|d| d.stage),
             reason: ev.discard.map(|d| d.reason.to_string()),
             violation: ev.discard.map(|d| d.violation),
+        }
+    }
+}
+
+/// Stage-3 keys of the JSON record (MODEL.md §10); all `null` when stage 3 did not run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct DynamicsRecord {
+    /// Time of first contact (s).
+    pub t_first_contact: Option<f64>,
+    /// "proximal" or "distal".
+    pub first_contact_phalanx: Option<&'static str>,
+    /// Onset velocity (m/s).
+    pub v_impact: Option<f64>,
+    /// Effective finger mass (kg).
+    pub m_finger: Option<f64>,
+    /// E_cyl (J).
+    pub e_cyl: Option<f64>,
+    /// E_trans (J).
+    pub e_trans: Option<f64>,
+    /// E_rot (J).
+    pub e_rot: Option<f64>,
+    /// min(E_lim,trans, E_lim,rot) (J).
+    pub e_lim: Option<f64>,
+    /// θ2 at first contact (rad).
+    pub theta2_first_contact: Option<f64>,
+    /// Min filtered-force margin (N).
+    pub min_force_margin: Option<f64>,
+    /// Static hand-force margin (N).
+    pub static_force_margin: Option<f64>,
+    /// Time to stability (s).
+    pub t_stab: Option<f64>,
+    /// Proximal normal force at t_stab (N).
+    pub f_stab_1: Option<f64>,
+    /// Distal normal force at t_stab (N).
+    pub f_stab_2: Option<f64>,
+    /// f*_1 (N).
+    pub fstar_1: Option<f64>,
+    /// f*_2 (N).
+    pub fstar_2: Option<f64>,
+    /// max |q̈| at the end (rad/s²).
+    pub max_qdd_end: Option<f64>,
+    /// Accepted steps.
+    pub steps: Option<u64>,
+    /// Rejected steps.
+    pub rejected_steps: Option<u64>,
+    /// RHS evaluations.
+    pub rhs_evals: Option<u64>,
+    /// Jacobian evaluations.
+    pub jac_evals: Option<u64>,
+    /// LU factorisations.
+    pub lu_count: Option<u64>,
+    /// Newton iterations.
+    pub newton_iters: Option<u64>,
+    /// Step attempts rejected for Newton failure (part of `rejected_steps`).
+    pub newton_failures: Option<u64>,
+    /// Events.
+    pub events: Option<u32>,
+    /// CPU seconds of stage 3.
+    pub cpu_s: Option<f64>,
+    /// A knuckle contact was seen.
+    pub knuckle_contact: Option<bool>,
+}
+
+impl DynamicsRecord {
+    /// Flatten a result (None → all null).
+    pub fn from_result(d: Option<&DynamicsResult>) -> Self {
+        let Some(d) = d else { return Self::default() };
+        let fin = |v: f64| v.is_finite().then_some(v);
+        let fc = d.first;
+        DynamicsRecord {
+            t_first_contact: fc.map(|f| f.t),
+            first_contact_phalanx: fc.map(|f| if f.phalanx == 1 { "proximal" } else { "distal" }),
+            v_impact: fc.map(|f| f.impact.v_impact),
+            m_finger: fc.map(|f| f.impact.m_finger),
+            e_cyl: fc.map(|f| f.impact.e_cyl),
+            e_trans: fc.map(|f| f.impact.e_trans),
+            e_rot: fc.map(|f| f.impact.e_rot),
+            e_lim: fc.map(|f| f.impact.e_lim),
+            theta2_first_contact: fc.map(|f| f.theta2),
+            min_force_margin: fin(d.min_force_margin),
+            static_force_margin: fin(d.static_force_margin),
+            t_stab: d.t_stab,
+            f_stab_1: d.t_stab.map(|_| d.f_end[0]),
+            f_stab_2: d.t_stab.map(|_| d.f_end[1]),
+            fstar_1: fin(d.fstar[0]),
+            fstar_2: fin(d.fstar[1]),
+            max_qdd_end: fin(d.max_qdd_end),
+            steps: Some(d.stats.steps),
+            rejected_steps: Some(d.stats.rejected),
+            rhs_evals: Some(d.rhs_evals),
+            jac_evals: Some(d.stats.jac),
+            lu_count: Some(d.stats.lu),
+            newton_iters: Some(d.stats.newton),
+            newton_failures: Some(d.stats.newton_fail),
+            events: Some(d.events),
+            cpu_s: Some(d.cpu_s),
+            knuckle_contact: Some(d.knuckle_flag),
         }
     }
 }

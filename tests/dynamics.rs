@@ -6,9 +6,9 @@ use gripopt::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_forc
 use gripopt::model::{Finger, Kin};
 use gripopt::pipeline::{stage_kinematics, stage_statics, StaticsResult};
 use gripopt::params::{Design, SceneParams};
-use gripopt::sim::finger::{FingerOde, State};
-use gripopt::sim::grasp::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};
-use gripopt::sim::integrator::{Radau5, Rhs, Stepper, Tol};
+use gripopt::sim::{FingerOde, State};
+use gripopt::sim::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};
+use gripopt::sim::{Radau5, Rhs, Stepper, Tol};
 use nalgebra::Vector2;
 
 fn prepare(x: &Design, s: &SceneParams) -> (Finger, StaticsResult) {
@@ -393,7 +393,7 @@ fn knuckle_contact_is_flagged_and_finite() {
     // The accepted double count must be flagged, with finite forces.
     use gripopt::math::perp;
     use gripopt::model::contact::CapsulePart;
-    use gripopt::sim::finger::Memory;
+    use gripopt::sim::Memory;
     let s = scene();
     let f = Finger::new(&nominal(), &s).unwrap();
     let pose = f.ik(f.open.q21, -0.1).unwrap();

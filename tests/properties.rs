@@ -1,7 +1,7 @@
 //! Property tests over random designs inside and around the bounds (full pipeline).
 use gripopt::pipeline::{evaluate, EvalOptions, Evaluation, Record};
 use gripopt::params::Design;
-use gripopt::sim::grasp::DynOutcome;
+use gripopt::sim::DynOutcome;
 use proptest::prelude::*;
 
 fn check_finite(ev: &Evaluation) -> Result<(), String> {

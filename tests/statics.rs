@@ -5,7 +5,7 @@ use gripopt::model::dynamics::mass_matrix;
 use gripopt::model::statics::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
 use gripopt::model::{Finger, Kin};
 use gripopt::pipeline::{stage_kinematics, stage_statics};
-use gripopt::sim::finger::{FingerOde, State};
+use gripopt::sim::{FingerOde, State};
 use nalgebra::{SMatrix, SVector};
 use rand::{Rng, SeedableRng};
 

@@ -9,10 +9,10 @@ use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverSto
 use gripopt::model::geometry::Finger;
 use gripopt::pipeline::StaticsResult;
 use gripopt::params::SceneParams;
-use gripopt::sim::criteria::{impact, u_min};
-use gripopt::sim::finger::{FingerOde, Memory, State, NS};
-use gripopt::sim::grasp::compliant_equilibrium;
-use gripopt::sim::integrator::Rhs;
+use gripopt::sim::{impact, u_min};
+use gripopt::sim::{FingerOde, Memory, State, NS};
+use gripopt::sim::compliant_equilibrium;
+use gripopt::sim::Rhs;
 use std::cell::{Cell, RefCell};
 
 type M = NalgebraMat<f64>;

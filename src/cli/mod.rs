@@ -59,6 +59,9 @@ enum Cmd {
         /// e.g. into a parallel singularity.
         #[arg(long)]
         no_contact: bool,
+        /// Print every located event to stderr.
+        #[arg(long)]
+        trace: bool,
     },
     /// NSGA-II over the staged pipeline; checkpoints every generation into RUN_DIR.
     Optimise {
@@ -175,11 +178,11 @@ pub enum MethodArg {
 }
 
 impl MethodArg {
-    fn to_method(self) -> gripopt::sim::grasp::Method {
+    fn to_method(self) -> gripopt::sim::Method {
         match self {
-            MethodArg::Radau5 => gripopt::sim::grasp::Method::Radau5,
-            MethodArg::TrBdf2 => gripopt::sim::grasp::Method::TrBdf2,
-            MethodArg::Dopri5 => gripopt::sim::grasp::Method::Dopri5,
+            MethodArg::Radau5 => gripopt::sim::Method::Radau5,
+            MethodArg::TrBdf2 => gripopt::sim::Method::TrBdf2,
+            MethodArg::Dopri5 => gripopt::sim::Method::Dopri5,
         }
     }
 }
@@ -220,11 +223,11 @@ pub fn run() -> Result<()> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only)
         }
-        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact } => {
+        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact, trace } => {
             let p = load_problem(&problem)?;
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
-            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, json, csv.as_deref())
+            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
         Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms } => {

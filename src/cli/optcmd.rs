@@ -119,7 +119,7 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     Ok(())
 }
 
-fn plot_trajectory(path: &std::path::Path, id: u64, s: &[gripopt::sim::grasp::Sample]) -> Result<()> {
+fn plot_trajectory(path: &std::path::Path, id: u64, s: &[gripopt::sim::Sample]) -> Result<()> {
     use plotters::prelude::*;
     let e = |x: Box<dyn std::fmt::Display>| anyhow::anyhow!("plot {}: {x}", path.display());
     let root = SVGBackend::new(path, (900, 700)).into_drawing_area();

@@ -3,7 +3,8 @@
 use anyhow::{bail, Context, Result};
 use gripopt::pipeline::{evaluate as eval_design, EvalOptions, Record};
 use gripopt::params::{Design, Problem};
-use gripopt::sim::grasp::{simulate_grasp_traj, DynamicsRecord, Method, SimOptions};
+use gripopt::pipeline::DynamicsRecord;
+use gripopt::sim::{simulate_grasp_traj, Method, SimOptions};
 use std::io::Write;
 use std::path::Path;
 
@@ -63,7 +64,8 @@ fn print_dyn(r: &DynamicsRecord) {
 }
 
 /// `gripopt simulate`.
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, json: bool, csv: Option<&Path>) -> Result<()> {
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -72,6 +74,7 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
     let mut o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
     o.method = method;
     o.contacts = contacts;
+    o.trace = trace;
     let (res, traj) = simulate_grasp_traj(&k.finger, &p.scene, &st, &o);
     let rec = DynamicsRecord::from_result(Some(&res));
     let fstar = res.fstar;

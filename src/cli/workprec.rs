@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use gripopt::pipeline::{evaluate, stage_kinematics, stage_statics, EvalOptions};
 use gripopt::params::{Design, Problem};
-use gripopt::sim::grasp::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use gripopt::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;

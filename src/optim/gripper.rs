@@ -28,7 +28,7 @@ pub struct GripperInfo {
     /// The stage-3 trajectory, kept only until the recorder has written it (never
     /// checkpointed).
     #[serde(skip)]
-    pub trajectory: Option<std::sync::Arc<crate::sim::grasp::Trajectory>>,
+    pub trajectory: Option<std::sync::Arc<crate::sim::Trajectory>>,
 }
 
 impl GripperInfo {

@@ -5,7 +5,7 @@ use crate::model::Finger;
 use crate::optim::gripper::GripperInfo;
 use crate::optim::Individual;
 use crate::params::{Design, SceneParams};
-use crate::sim::grasp::Sample;
+use crate::sim::Sample;
 use serde_json::{json, Value};
 
 /// Nanoseconds of the time window of design `id`: design k lives in [k s, k s + 1 s).

@@ -6,7 +6,7 @@ use super::messages::{sample_from, window_start_ns};
 use super::writer::{read_index, RecordOptions};
 use crate::pipeline::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
-use crate::sim::grasp::Sample;
+use crate::sim::Sample;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 

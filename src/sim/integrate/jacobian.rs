@@ -1,0 +1,73 @@
+//! The finite-difference Jacobian shared by the implicit methods and its refresh policy.
+
+use super::{Piece, Rhs, Stats};
+use nalgebra::{SMatrix, SVector};
+
+/// A finite-difference Jacobian that never straddles a kink of a piecewise-smooth f (see
+/// [`Rhs::piece`]) and is reused across steps until the state leaves its smooth piece,
+/// Newton converges slowly, or a step is rejected.
+#[derive(Debug, Clone)]
+pub(super) struct JacobianCache<const N: usize> {
+    /// The Jacobian.
+    pub(super) jac: SMatrix<f64, N, N>,
+    /// Usable (else recomputed at the next attempt).
+    pub(super) valid: bool,
+    /// Computed at the current step's start (a failure cannot be blamed on staleness).
+    pub(super) fresh: bool,
+    /// The smooth piece it was computed on.
+    pub(super) piece: Piece,
+    /// Newton contracted slowly in the last step.
+    pub(super) slow: bool,
+    /// The piece of the last accepted state, known from its evaluation.
+    pub(super) known: Option<(SVector<f64, N>, Piece)>,
+}
+
+impl<const N: usize> JacobianCache<N> {
+    /// No Jacobian yet.
+    pub(super) fn new() -> Self {
+        JacobianCache { jac: SMatrix::zeros(), valid: false, fresh: false, piece: Piece::SMOOTH, slow: false, known: None }
+    }
+
+    /// The piece of `y` (from the last accepted evaluation when `y` is that state).
+    fn piece_of<S: Rhs<N>>(&self, sys: &S, y: &SVector<f64, N>) -> Piece {
+        match self.known {
+            Some((yk, p)) if yk == *y => p,
+            _ => sys.piece(y),
+        }
+    }
+
+    /// At the start of a step: drop a stale Jacobian.
+    pub(super) fn start_step<S: Rhs<N>>(&mut self, sys: &S, y: &SVector<f64, N>) {
+        if self.valid && !self.fresh && (self.slow || self.piece_of(sys, y) != self.piece) {
+            self.valid = false;
+        }
+        self.slow = false;
+    }
+
+    /// Compute J at (t, y); false if f is undefined at a perturbed state.
+    pub(super) fn compute<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, stats: &mut Stats) -> bool {
+        let sq = f64::EPSILON.sqrt();
+        let mut yp = *y;
+        self.piece = self.piece_of(sys, y);
+        for j in 0..N {
+            let mut dy = sq * y[j].abs().max(1e-3);
+            yp[j] = y[j] + dy;
+            stats.rhs += 1;
+            let Some((mut fp, p)) = sys.eval_piece(t, &yp) else { return false };
+            if p != self.piece {
+                // one-sided difference on the other side, inside the piece of y
+                dy = -dy;
+                yp[j] = y[j] + dy;
+                stats.rhs += 1;
+                let Some((fm, _)) = sys.eval_piece(t, &yp) else { return false };
+                fp = fm;
+            }
+            self.jac.set_column(j, &((fp - f) / dy));
+            yp[j] = y[j];
+        }
+        stats.jac += 1;
+        self.valid = true;
+        self.fresh = true;
+        true
+    }
+}

@@ -1,0 +1,91 @@
+//! LU factorisation with partial pivoting of fixed-size square matrices (real or complex;
+//! no allocation), used by the implicit methods' simplified Newton iterations.
+
+use nalgebra::{Complex, SMatrix, SVector};
+
+/// LU factorisation with partial pivoting of a fixed-size square matrix (no allocation),
+/// real (`f64`) or complex (`Complex<f64>`, for the transformed Radau IIA system).
+#[derive(Debug, Clone, Copy)]
+pub struct Lu<T: Scalar, const N: usize> {
+    lu: SMatrix<T, N, N>,
+    piv: [usize; N],
+}
+
+/// The field of an [`Lu`]: `f64` or `Complex<f64>`.
+pub trait Scalar: nalgebra::ComplexField<RealField = f64> + Copy {}
+impl Scalar for f64 {}
+impl Scalar for Complex<f64> {}
+
+impl<T: Scalar, const N: usize> Lu<T, N> {
+    /// Factor `a`; `None` if singular.
+    #[inline]
+    pub fn factor(mut a: SMatrix<T, N, N>) -> Option<Self> {
+        let mut piv = [0usize; N];
+        for k in 0..N {
+            let mut p = k;
+            let mut m = a[(k, k)].norm1();
+            for i in k + 1..N {
+                let v = a[(i, k)].norm1();
+                if v > m {
+                    m = v;
+                    p = i;
+                }
+            }
+            if !(m > 0.0) || !m.is_finite() {
+                return None;
+            }
+            piv[k] = p;
+            if p != k {
+                a.swap_rows(p, k);
+            }
+            let d = T::one() / a[(k, k)];
+            for i in k + 1..N {
+                let l = a[(i, k)] * d;
+                a[(i, k)] = l;
+                for j in k + 1..N {
+                    let akj = a[(k, j)];
+                    a[(i, j)] -= l * akj;
+                }
+            }
+        }
+        Some(Lu { lu: a, piv })
+    }
+
+    /// Solve A x = b.
+    #[inline]
+    pub fn solve(&self, b: &SVector<T, N>) -> SVector<T, N> {
+        let mut x = *b;
+        for k in 0..N {
+            x.swap_rows(k, self.piv[k]);
+        }
+        for i in 0..N {
+            let mut s = x[i];
+            for j in 0..i {
+                s -= self.lu[(i, j)] * x[j];
+            }
+            x[i] = s;
+        }
+        for i in (0..N).rev() {
+            let mut s = x[i];
+            for j in i + 1..N {
+                s -= self.lu[(i, j)] * x[j];
+            }
+            x[i] = s / self.lu[(i, i)];
+        }
+        x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The complex LU solves a complex system (checked by multiplying back).
+    #[test]
+    fn complex_lu_solves() {
+        let a = SMatrix::<Complex<f64>, 3, 3>::from_fn(|i, j| Complex::new((i * 3 + j) as f64 + if i == j { 5.0 } else { 0.0 }, (i as f64) - (j as f64) * 0.5));
+        let b = SVector::<Complex<f64>, 3>::from_fn(|i, _| Complex::new(1.0 + i as f64, -(i as f64)));
+        let x = Lu::factor(a).unwrap().solve(&b);
+        assert!((a * x - b).norm() < 1e-13);
+    }
+}

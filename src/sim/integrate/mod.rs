@@ -1,0 +1,234 @@
+//! Adaptive one-step integrators on fixed-size states, one method per file: Radau IIA
+//! order 5 ([`Radau5`], stiff, the default), TR-BDF2 ([`TrBdf2`], stiff) and Dormand–Prince
+//! 5(4) ([`Dopri5`], explicit, for comparison). Each exposes accepted steps with (y, f) at
+//! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
+//! location. The implicit methods share the finite-difference Jacobian and its refresh
+//! policy (`jacobian`), the start of a step attempt (`prepare_attempt`) and the LU
+//! ([`Lu`]). No heap allocation.
+
+mod dense;
+mod dopri5;
+mod jacobian;
+mod lu;
+mod radau5;
+mod trbdf2;
+
+pub use dense::hermite;
+pub use dopri5::Dopri5;
+pub use lu::{Lu, Scalar};
+pub use radau5::Radau5;
+pub use trbdf2::TrBdf2;
+
+use jacobian::JacobianCache;
+use nalgebra::SVector;
+
+/// Identifier of the smooth piece of a piecewise-smooth right-hand side: a set of on/off
+/// flags (stop engaged, a force clipped, …; the system names its flags, see
+/// [`Piece::with`]). Two states on the same piece have equal values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct Piece(u64);
+
+impl Piece {
+    /// The piece of a smooth f (no flag set).
+    pub const SMOOTH: Piece = Piece(0);
+    /// The "piece" of a state where f is undefined.
+    pub const UNDEFINED: Piece = Piece(u64::MAX);
+
+    /// This piece with flag `bit` (0..64) set.
+    #[inline(always)]
+    #[must_use]
+    pub const fn with(self, bit: u32) -> Piece {
+        Piece(self.0 | 1 << bit)
+    }
+
+    /// Is flag `bit` set?
+    #[inline]
+    pub const fn has(self, bit: u32) -> bool {
+        self.0 & (1 << bit) != 0
+    }
+}
+
+/// A right-hand side y' = f(t, y). `None` marks a state where f is undefined (the driver
+/// turns it into an abort or a smaller step).
+pub trait Rhs<const N: usize> {
+    /// Evaluate f(t, y).
+    fn eval(&mut self, t: f64, y: &SVector<f64, N>) -> Option<SVector<f64, N>>;
+    /// Identifier of the smooth piece of a piecewise-smooth f that `y` lies on (stop
+    /// engaged, force clipped, …). Finite differences never straddle two pieces, so the
+    /// Jacobian is that of one smooth branch. Default: f is smooth.
+    fn piece(&self, _y: &SVector<f64, N>) -> Piece {
+        Piece::SMOOTH
+    }
+    /// f(t, y) together with `piece(y)`; override when the evaluation knows its piece
+    /// for free.
+    fn eval_piece(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
+        let f = self.eval(t, y)?;
+        Some((f, self.piece(y)))
+    }
+    /// As [`Rhs::eval_piece`], at the end of an accepted step (a system may keep a fuller
+    /// evaluation there for its driver).
+    fn eval_accepted(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
+        self.eval_piece(t, y)
+    }
+}
+
+/// Work counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps (error test or Newton failure).
+    pub rejected: u64,
+    /// Right-hand-side evaluations.
+    pub rhs: u64,
+    /// Jacobian evaluations.
+    pub jac: u64,
+    /// LU factorisations.
+    pub lu: u64,
+    /// Newton iterations (implicit methods).
+    pub newton: u64,
+    /// Step attempts rejected because Newton failed (part of `rejected`).
+    pub newton_fail: u64,
+}
+
+/// Tolerances: relative and per-component absolute.
+#[derive(Debug, Clone, Copy)]
+pub struct Tol<const N: usize> {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per component.
+    pub atol: SVector<f64, N>,
+}
+
+impl<const N: usize> Tol<N> {
+    /// Scaled RMS norm of `e` with weights from `y0`, `y1`.
+    #[inline]
+    pub fn norm(&self, e: &SVector<f64, N>, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> f64 {
+        let mut s = 0.0;
+        for i in 0..N {
+            let sc = self.atol[i] + self.rtol * y0[i].abs().max(y1[i].abs());
+            let r = e[i] / sc;
+            s += r * r;
+        }
+        (s / N as f64).sqrt()
+    }
+}
+
+/// Why a step could not be taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepError {
+    /// The step size fell below the minimum.
+    StepTooSmall,
+    /// f was undefined at the current state itself.
+    RhsFailed,
+}
+
+/// An accepted step.
+#[derive(Debug, Clone, Copy)]
+pub struct Accepted<const N: usize> {
+    /// New time.
+    pub t: f64,
+    /// New state.
+    pub y: SVector<f64, N>,
+    /// f at the new state.
+    pub f: SVector<f64, N>,
+}
+
+/// An adaptive one-step method.
+pub trait Stepper<const N: usize> {
+    /// Take one accepted step from (t, y, f) with h ≤ h_max, adapting the step size.
+    fn advance<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        h_max: f64,
+    ) -> Result<Accepted<N>, StepError>;
+    /// Forget step-size history and Jacobians (after a discontinuity of f).
+    fn restart(&mut self, h: f64);
+    /// Counters.
+    fn stats(&self) -> Stats;
+    /// Current step size proposal.
+    fn h(&self) -> f64;
+    /// Method name.
+    fn name(&self) -> &'static str;
+}
+
+/// The smallest step size.
+const HMIN: f64 = 1e-14;
+
+/// An implicit stepper's Jacobian and factored Newton matrix, for the shared start of a
+/// step attempt ([`prepare_attempt`]).
+trait NewtonMatrix<const N: usize> {
+    /// The Jacobian cache, the counters and the step-size proposal.
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64);
+    /// Forget the factorisation (the Jacobian changed).
+    fn drop_factor(&mut self);
+    /// Factor the Newton matrix for step `h` (no-op if already factored for `h`).
+    fn factor(&mut self, h: f64) -> bool;
+}
+
+/// Start a step attempt: bound h, refresh the Jacobian if needed and factor. `Ok(None)`:
+/// retry (a stale Jacobian was dropped, or h halved after a singular matrix).
+fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
+    m: &mut M,
+    sys: &mut S,
+    t: f64,
+    y: &SVector<f64, N>,
+    f: &SVector<f64, N>,
+    h_max: f64,
+) -> Result<Option<f64>, StepError> {
+    let (jc, stats, h_prop) = m.parts();
+    let h = h_prop.min(h_max);
+    if h < HMIN {
+        return Err(StepError::StepTooSmall);
+    }
+    if !jc.valid {
+        if !jc.compute(sys, t, y, f, stats) {
+            return Err(StepError::RhsFailed);
+        }
+        m.drop_factor();
+    }
+    if m.factor(h) {
+        return Ok(Some(h));
+    }
+    let (jc, stats, h_prop) = m.parts();
+    if !jc.fresh {
+        jc.valid = false;
+    } else {
+        *h_prop = h * 0.5;
+        stats.rejected += 1;
+    }
+    Ok(None)
+}
+
+#[cfg(test)]
+pub(crate) mod testsys {
+    //! Test systems shared by the methods' tests.
+    use super::{Rhs, Stats, Stepper};
+    use nalgebra::{SVector, Vector2};
+
+    /// The harmonic oscillator y'' = −ω² y.
+    pub struct Osc(pub f64);
+    impl Rhs<2> for Osc {
+        fn eval(&mut self, _t: f64, y: &SVector<f64, 2>) -> Option<SVector<f64, 2>> {
+            Some(Vector2::new(y[1], -self.0 * self.0 * y[0]))
+        }
+    }
+
+    /// Integrate the oscillator from (1, 0) to `t_end`.
+    pub fn run_osc<St: Stepper<2>>(mut st: St, omega: f64, t_end: f64) -> (SVector<f64, 2>, Stats) {
+        let mut sys = Osc(omega);
+        let mut t = 0.0;
+        let mut y = Vector2::new(1.0, 0.0);
+        let mut f = sys.eval(0.0, &y).unwrap();
+        while t < t_end {
+            let a = st.advance(&mut sys, t, &y, &f, t_end - t).unwrap();
+            t = a.t;
+            y = a.y;
+            f = a.f;
+        }
+        (y, st.stats())
+    }
+}

@@ -1,0 +1,434 @@
+//! Radau IIA of order 5 (3 stages) after Hairer & Wanner's RADAU5.
+
+use super::jacobian::JacobianCache;
+use super::lu::Lu;
+use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, StepError, Stats, Stepper, Tol};
+use nalgebra::{Complex, SMatrix, SVector};
+
+/// Radau IIA of order 5 after Hairer & Wanner's RADAU5: stiffly accurate, L-stable. The
+/// simplified Newton iteration uses their transformation A⁻¹ = T Λ T⁻¹, so each Jacobian
+/// costs one real N×N LU of γ/h − J and one complex N×N LU of (α + iβ)/h − J instead of a
+/// 3N×3N one. Newton's contraction is carried across steps and a predicted non-convergence
+/// shrinks h early; the step size follows Gustafsson's predictive controller; the error
+/// estimate is RADAU5's, filtered by (γ/h − J)⁻¹.
+#[derive(Debug, Clone)]
+pub struct Radau5<const N: usize> {
+    tol: Tol<N>,
+    h: f64,
+    jc: JacobianCache<N>,
+    /// γ/h − J.
+    lu_r: Option<Lu<f64, N>>,
+    /// (α + iβ)/h − J.
+    lu_c: Option<Lu<Complex<f64>, N>>,
+    lu_h: f64,
+    stats: Stats,
+    first: bool,
+    last_rejected: bool,
+    prev_z: Option<(f64, [SVector<f64, N>; 3])>,
+    /// Newton's η = θ/(1 − θ) of the last step (the first iteration's estimate).
+    eta: f64,
+    /// (h, err) of the last accepted step, for the predictive controller.
+    acc: Option<(f64, f64)>,
+    eig: RadauEig,
+    /// Newton convergence threshold in tolerance units.
+    pub kappa: f64,
+    /// Maximum Newton iterations.
+    pub max_newton: usize,
+    /// Recompute the Jacobian after an accepted step whose Newton contraction θ exceeded
+    /// this (RADAU5's `THET`).
+    pub theta_jac: f64,
+}
+
+const SQ6: f64 = 2.449_489_742_783_178;
+const RC: [f64; 3] = [(4.0 - SQ6) / 10.0, (4.0 + SQ6) / 10.0, 1.0];
+/// Radau IIA coefficient matrix A (used by the tests of the transformation).
+#[cfg(test)]
+const RA: [[f64; 3]; 3] = [
+    [(88.0 - 7.0 * SQ6) / 360.0, (296.0 - 169.0 * SQ6) / 1800.0, (-2.0 + 3.0 * SQ6) / 225.0],
+    [(296.0 + 169.0 * SQ6) / 1800.0, (88.0 + 7.0 * SQ6) / 360.0, (-2.0 - 3.0 * SQ6) / 225.0],
+    [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
+];
+const DD: [f64; 3] = [-(13.0 + 7.0 * SQ6) / 3.0, (-13.0 + 7.0 * SQ6) / 3.0, -1.0 / 3.0];
+/// Hairer & Wanner's T with A⁻¹ = T Λ T⁻¹, Λ = [[γ, 0, 0], [0, α, −β], [0, β, α]].
+#[allow(clippy::excessive_precision)]
+const RT: [[f64; 3]; 3] = [
+    [9.123_239_487_089_294_279_2e-2, -0.141_255_295_020_954_208_43, -3.002_919_410_514_742_449_2e-2],
+    [0.241_717_932_707_107_018_96, 0.204_129_352_293_799_931_99, 0.382_942_112_757_261_937_79],
+    [0.966_048_182_615_092_936_19, 1.0, 0.0],
+];
+/// T⁻¹.
+#[allow(clippy::excessive_precision)]
+const RTI: [[f64; 3]; 3] = [
+    [4.325_579_890_063_155_351_0, 0.339_199_251_815_809_869_54, 0.541_770_539_935_874_871_19],
+    [-4.178_718_591_551_904_727_3, -0.327_682_820_761_062_387_08, 0.476_623_554_500_550_451_96],
+    [-0.502_872_634_945_786_875_95, 2.571_926_949_855_605_429_2, -0.596_039_204_828_224_924_97],
+];
+
+/// The eigenvalues of A⁻¹: γ (real) and α ± iβ.
+#[derive(Debug, Clone, Copy)]
+struct RadauEig {
+    gamma: f64,
+    alpha: f64,
+    beta: f64,
+}
+
+impl RadauEig {
+    fn new() -> Self {
+        let c9 = 9f64.cbrt();
+        let c81 = c9 * c9;
+        let (a, b) = ((12.0 - c81 + c9) / 60.0, (c81 + c9) * 3f64.sqrt() / 60.0);
+        let cno = a * a + b * b;
+        RadauEig { gamma: 30.0 / (6.0 + c81 - c9), alpha: a / cno, beta: b / cno }
+    }
+}
+
+#[inline(always)]
+fn mix3<const N: usize>(m: &[[f64; 3]; 3], v: &[SVector<f64, N>; 3]) -> [SVector<f64, N>; 3] {
+    let row = |i: usize| v[0] * m[i][0] + v[1] * m[i][1] + v[2] * m[i][2];
+    [row(0), row(1), row(2)]
+}
+
+impl<const N: usize> Radau5<N> {
+    /// New stepper.
+    pub fn new(tol: Tol<N>, h0: f64) -> Self {
+        Radau5 {
+            tol,
+            h: h0,
+            jc: JacobianCache::new(),
+            lu_r: None,
+            lu_c: None,
+            lu_h: 0.0,
+            stats: Stats::default(),
+            first: true,
+            last_rejected: false,
+            prev_z: None,
+            eta: 1.0,
+            acc: None,
+            eig: RadauEig::new(),
+            kappa: 0.1,
+            max_newton: 7,
+            theta_jac: 0.01,
+        }
+    }
+
+    fn factor_matrix(&mut self, h: f64) -> bool {
+        if self.lu_r.is_some() && self.lu_h == h {
+            return true;
+        }
+        let j = &self.jc.jac;
+        let e = SMatrix::<f64, N, N>::from_diagonal_element(self.eig.gamma / h) - j;
+        let ac = Complex::new(self.eig.alpha / h, self.eig.beta / h);
+        let ec = SMatrix::<Complex<f64>, N, N>::from_fn(|r, c| {
+            let d = if r == c { ac } else { Complex::new(0.0, 0.0) };
+            d - Complex::new(j[(r, c)], 0.0)
+        });
+        self.stats.lu += 1;
+        match (Lu::factor(e), Lu::factor(ec)) {
+            (Some(l), Some(lc)) => {
+                self.lu_r = Some(l);
+                self.lu_c = Some(lc);
+                self.lu_h = h;
+                true
+            }
+            _ => {
+                self.lu_r = None;
+                self.lu_c = None;
+                false
+            }
+        }
+    }
+
+    /// Start of Newton: the previous step's collocation polynomial extrapolated to the new
+    /// stages (zero after a restart or a rejection).
+    fn predict(&self, h: f64) -> [SVector<f64, N>; 3] {
+        let mut z = [SVector::<f64, N>::zeros(); 3];
+        if let Some((hp, zp)) = self.prev_z.filter(|_| !self.first && !self.last_rejected) {
+            // The polynomial through (0, 0), (c_i, zp_i) in s = (t − t_{n−1}) / hp; the new
+            // stages sit at s = 1 + c_i h / hp, and the origin moves to y_n = y_{n−1} + zp_3.
+            let nodes = [0.0, RC[0], RC[1], RC[2]];
+            for i in 0..3 {
+                let sv = 1.0 + RC[i] * h / hp;
+                let mut val = SVector::<f64, N>::zeros();
+                for k in 1..4 {
+                    let mut l = 1.0;
+                    for m in 0..4 {
+                        if m != k {
+                            l *= (sv - nodes[m]) / (nodes[k] - nodes[m]);
+                        }
+                    }
+                    val += zp[k - 1] * l;
+                }
+                z[i] = val - zp[2];
+            }
+        }
+        z
+    }
+}
+
+/// Why a Newton iteration stopped without converging.
+enum NewtonFail {
+    /// f undefined, divergence or too many iterations: halve h (or refresh J).
+    Diverged,
+    /// Predicted not to converge in time: retry with h scaled by this factor.
+    Slow(f64),
+}
+
+impl<const N: usize> Radau5<N> {
+    /// Simplified Newton on the transformed stages; returns Z and the last contraction θ.
+    fn newton<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        h: f64,
+    ) -> Result<([SVector<f64, N>; 3], f64, usize), NewtonFail> {
+        let (gh, ah, bh) = (self.eig.gamma / h, self.eig.alpha / h, self.eig.beta / h);
+        let mut z = self.predict(h);
+        let mut w = mix3(&RTI, &z);
+        let mut eta = self.eta.max(f64::EPSILON).powf(0.8);
+        let mut theta = self.theta_jac;
+        let (mut prev, mut thq_old) = (0.0, 0.0);
+        let lu_r = self.lu_r.as_ref().expect("factored");
+        let lu_c = self.lu_c.as_ref().expect("factored");
+        for it in 0..self.max_newton {
+            self.stats.newton += 1;
+            let mut fz = [SVector::<f64, N>::zeros(); 3];
+            for i in 0..3 {
+                self.stats.rhs += 1;
+                fz[i] = sys.eval(t + RC[i] * h, &(y + z[i])).ok_or(NewtonFail::Diverged)?;
+            }
+            let r = mix3(&RTI, &fz);
+            let r1 = r[0] - w[0] * gh;
+            let r2 = r[1] - (w[1] * ah - w[2] * bh);
+            let r3 = r[2] - (w[1] * bh + w[2] * ah);
+            let d1 = lu_r.solve(&r1);
+            let dc = lu_c.solve(&SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(r2[k], r3[k])));
+            let d2 = dc.map(|c| c.re);
+            let d3 = dc.map(|c| c.im);
+            let n1 = self.tol.norm(&d1, y, y);
+            let n2 = self.tol.norm(&d2, y, y);
+            let n3 = self.tol.norm(&d3, y, y);
+            let n = ((n1 * n1 + n2 * n2 + n3 * n3) / 3.0).sqrt();
+            if !n.is_finite() {
+                return Err(NewtonFail::Diverged);
+            }
+            if it > 0 {
+                let thq = n / prev;
+                theta = if it == 1 { thq } else { (thq * thq_old).sqrt() };
+                thq_old = thq;
+                if theta >= 0.99 {
+                    return Err(NewtonFail::Diverged);
+                }
+                eta = theta / (1.0 - theta);
+                let left = self.max_newton as i32 - 2 - it as i32;
+                if left >= 0 {
+                    let dyth = eta * n * theta.powi(left) / self.kappa;
+                    if dyth >= 1.0 {
+                        let q = dyth.clamp(1e-4, 20.0);
+                        return Err(NewtonFail::Slow(0.8 * q.powf(-1.0 / (4.0 + left as f64))));
+                    }
+                }
+            }
+            prev = n.max(f64::EPSILON);
+            w[0] += d1;
+            w[1] += d2;
+            w[2] += d3;
+            z = mix3(&RT, &w);
+            if eta * n <= self.kappa || n <= 1e-12 {
+                self.eta = eta;
+                return Ok((z, theta, it + 1));
+            }
+        }
+        Err(NewtonFail::Diverged)
+    }
+}
+
+impl<const N: usize> NewtonMatrix<N> for Radau5<N> {
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64) {
+        (&mut self.jc, &mut self.stats, &mut self.h)
+    }
+    fn drop_factor(&mut self) {
+        self.lu_r = None;
+    }
+    fn factor(&mut self, h: f64) -> bool {
+        self.factor_matrix(h)
+    }
+}
+
+impl<const N: usize> Stepper<N> for Radau5<N> {
+    fn advance<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        h_max: f64,
+    ) -> Result<Accepted<N>, StepError> {
+        self.jc.start_step(sys, y);
+        loop {
+            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
+            let (z, theta, iters) = match self.newton(sys, t, y, h) {
+                Ok(v) => v,
+                Err(NewtonFail::Diverged) => {
+                    self.reject_newton(h);
+                    continue;
+                }
+                Err(NewtonFail::Slow(fac)) => {
+                    // RADAU5: shrink h and refactor; the Jacobian stays.
+                    self.stats.rejected += 1;
+                    self.stats.newton_fail += 1;
+                    self.last_rejected = true;
+                    self.h = h * fac;
+                    continue;
+                }
+            };
+            let y1 = y + z[2];
+            // error estimate (RADAU5): (γ/h − J)⁻¹ (f0 + Σ dd_i Z_i / h)
+            let f2 = (z[0] * DD[0] + z[1] * DD[1] + z[2] * DD[2]) / h;
+            let le = self.lu_r.as_ref().expect("factored");
+            let mut err_v = le.solve(&(f + f2));
+            let mut err = self.tol.norm(&err_v, y, &y1);
+            if err >= 1.0 && (self.first || self.last_rejected) {
+                self.stats.rhs += 1;
+                if let Some(f1) = sys.eval(t, &(y + err_v)) {
+                    err_v = le.solve(&(f1 + f2));
+                    err = self.tol.norm(&err_v, y, &y1);
+                }
+            }
+            // RADAU5's step-size rule: safety factor lowered by Newton iterations.
+            let safe = (0.9 * (1 + 2 * self.max_newton) as f64 / (iters + 2 * self.max_newton) as f64).min(0.9);
+            let err_q = if err.is_finite() { err.max(1e-10) } else { 1e10 };
+            let mut quot = (err_q.sqrt().sqrt() / safe).clamp(1.0 / 8.0, 5.0);
+            if err.is_finite() && err <= 1.0 {
+                self.stats.rhs += 1;
+                let Some((fy1, piece)) = sys.eval_accepted(t + h, &y1) else {
+                    self.reject_newton(h);
+                    continue;
+                };
+                self.stats.steps += 1;
+                // Gustafsson's predictive controller.
+                if let Some((h_acc, err_acc)) = self.acc {
+                    let fg = ((h_acc / h) * (err_q * err_q / err_acc).sqrt().sqrt() / 0.9).clamp(1.0 / 8.0, 5.0);
+                    quot = quot.max(fg);
+                }
+                self.acc = Some((h, err_q.max(1e-2)));
+                let mut h_new = h / quot;
+                if self.last_rejected {
+                    h_new = h_new.min(h);
+                }
+                self.first = false;
+                self.last_rejected = false;
+                self.prev_z = Some((h, z));
+                self.jc.fresh = false;
+                self.jc.known = Some((y1, piece));
+                if theta > self.theta_jac {
+                    self.jc.slow = true;
+                }
+                let q = h_new / h;
+                self.h = if !self.jc.slow && (1.0..=1.2).contains(&q) { h } else { h_new };
+                return Ok(Accepted { t: t + h, y: y1, f: fy1 });
+            }
+            self.stats.rejected += 1;
+            self.h = if self.stats.steps == 0 { h * 0.1 } else { h / quot };
+            self.last_rejected = true;
+            if !self.jc.fresh {
+                self.jc.valid = false;
+            }
+        }
+    }
+
+    fn restart(&mut self, h: f64) {
+        self.h = h;
+        self.jc.valid = false;
+        self.lu_r = None;
+        self.first = true;
+        self.prev_z = None;
+        self.acc = None;
+        self.eta = 1.0;
+    }
+
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    fn h(&self) -> f64 {
+        self.h
+    }
+
+    fn name(&self) -> &'static str {
+        "radau5"
+    }
+}
+
+impl<const N: usize> Radau5<N> {
+    fn reject_newton(&mut self, h: f64) {
+        self.stats.rejected += 1;
+        self.stats.newton_fail += 1;
+        self.last_rejected = true;
+        if self.jc.fresh {
+            self.h = h * 0.5;
+        } else {
+            self.jc.valid = false;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::integrate::testsys::Osc;
+    use nalgebra::Vector2;
+
+    /// Hairer's transformation: T T⁻¹ = I and T Λ T⁻¹ = A⁻¹ (independent of the stepper).
+    #[test]
+    fn radau_transformation_diagonalises_a_inverse() {
+        let m = |a: &[[f64; 3]; 3]| nalgebra::Matrix3::from_fn(|i, j| a[i][j]);
+        let (t, ti, a) = (m(&RT), m(&RTI), m(&RA));
+        let e = RadauEig::new();
+        let lam = nalgebra::Matrix3::new(e.gamma, 0.0, 0.0, 0.0, e.alpha, -e.beta, 0.0, e.beta, e.alpha);
+        assert!((t * ti - nalgebra::Matrix3::identity()).abs().max() < 1e-15 * 10.0);
+        let ainv = a.try_inverse().unwrap();
+        assert!((t * lam * ti - ainv).abs().max() < 1e-12 * ainv.abs().max(), "{}", t * lam * ti - ainv);
+    }
+
+    #[test]
+    fn radau5_accuracy_and_order() {
+        let mut errs = vec![];
+        for rtol in [1e-6, 1e-9] {
+            let mut st: Radau5<2> = Radau5::new(Tol { rtol, atol: Vector2::new(rtol, rtol) }, 1e-3);
+            let mut sys = Osc(1.0);
+            let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
+            let mut f = sys.eval(0.0, &y).unwrap();
+            while t < 3.0 {
+                let a = st.advance(&mut sys, t, &y, &f, 3.0 - t).unwrap();
+                (t, y, f) = (a.t, a.y, a.f);
+            }
+            errs.push(((y[0] - 3f64.cos()).abs(), st.stats().steps));
+        }
+        assert!(errs[0].0 < 1e-5, "{errs:?}");
+        assert!(errs[1].0 < 1e-8, "{errs:?}");
+        assert!(errs[1].1 < 400, "{errs:?}");
+    }
+
+    #[test]
+    fn radau5_stiff_van_der_pol_like() {
+        struct Stiff;
+        impl Rhs<2> for Stiff {
+            fn eval(&mut self, t: f64, y: &SVector<f64, 2>) -> Option<SVector<f64, 2>> {
+                Some(Vector2::new(-1e7 * (y[0] - t.sin()) + t.cos(), -y[1]))
+            }
+        }
+        let mut st: Radau5<2> = Radau5::new(Tol { rtol: 1e-8, atol: Vector2::new(1e-10, 1e-10) }, 1e-6);
+        let mut sys = Stiff;
+        let (mut t, mut y) = (0.0, Vector2::new(0.0, 1.0));
+        let mut f = sys.eval(0.0, &y).unwrap();
+        while t < 2.0 {
+            let a = st.advance(&mut sys, t, &y, &f, 2.0 - t).unwrap();
+            (t, y, f) = (a.t, a.y, a.f);
+        }
+        assert!((y[0] - 2f64.sin()).abs() < 1e-8);
+        assert!((y[1] - (-2f64).exp()).abs() < 1e-8);
+        assert!(st.stats().steps < 500, "{:?}", st.stats());
+    }
+}
+

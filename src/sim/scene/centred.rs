@@ -1,0 +1,424 @@
+//! The centred scene (MODEL.md §8–9, the thesis's stage 3): both fingers close under a
+//! constant torque on a fixed cylinder centred between them. Finger 2 is the mirror image
+//! of finger 1 (D18), so one finger is integrated — state y = (q11, q21, q̇11, q̇21, F̄_y),
+//! its four mechanical states plus the low-pass filtered hand force of the force criterion
+//! (§9.3) — and the hand force is twice finger 1's.
+
+use super::{Point, Response, Scene};
+use crate::math::V2;
+use crate::model::geometry::Finger;
+use crate::model::statics::StaticsResult;
+use crate::params::SceneParams;
+use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
+use crate::sim::driver::{self, End, Run};
+use crate::sim::equilibrium::{finger_equilibrium, Equilibrium};
+use crate::sim::events::{Crossing, EventKind, EventValues};
+use crate::sim::finger::{FingerEval, FingerModel};
+use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::memory::{Memory, MemoryChange};
+use crate::sim::result::{DynOutcome, DynamicsResult, Mode, Sample, SimOptions, Trajectory};
+use crate::sim::tracking::Tracker;
+use nalgebra::{Matrix2, SVector, Vector2};
+use std::time::Instant;
+
+/// State dimension of the centred scene.
+pub const NS: usize = 5;
+/// State vector of the centred scene.
+pub type State = SVector<f64, NS>;
+
+/// The ODE of the centred scene: finger 1 against the object centred at `centre` (local
+/// frame) plus the filtered hand force, finger 2 being its mirror image.
+#[derive(Debug, Clone, Copy)]
+pub struct FingerOde<'a> {
+    /// The finger model.
+    pub model: FingerModel<'a>,
+    /// Object centre in the finger's local frame ((0, R) in the centred scene).
+    pub centre: V2,
+    /// Filter time constant T_f.
+    pub t_filter: f64,
+    /// Contact memories (proximal, distal).
+    pub mem: [Memory; 2],
+    /// Contacts enabled (false: free finger, for energy tests).
+    pub contacts_enabled: bool,
+    /// Right-hand-side evaluations.
+    pub evals: u64,
+    /// The full evaluation at the end of the last accepted step (see [`FingerOde::take_accepted`]).
+    accepted: Option<(State, FingerEval)>,
+}
+
+impl<'a> FingerOde<'a> {
+    /// The finger of the grasp scene closing on the object centred at local (x_c, R).
+    pub fn new(finger: &'a Finger, scene: &'a SceneParams, tau_s0: f64, x_c: f64) -> Self {
+        FingerOde {
+            model: FingerModel::new(finger, scene, tau_s0),
+            centre: V2::new(x_c, scene.object.radius),
+            t_filter: scene.criteria.t_filter,
+            mem: [Memory::default(); 2],
+            contacts_enabled: true,
+            evals: 0,
+            accepted: None,
+        }
+    }
+
+    /// Evaluate the full model at state `y`; `None` where the DGM or kinematics fail.
+    #[inline]
+    pub fn evaluate(&self, y: &State) -> Option<FingerEval> {
+        self.evaluate_with(y, true)
+    }
+
+    /// The model at `y` (`full = false`: the lean path of [`FingerModel::evaluate`]).
+    #[inline(always)]
+    fn evaluate_with(&self, y: &State, full: bool) -> Option<FingerEval> {
+        self.model.evaluate(Vector2::new(y[0], y[1]), Vector2::new(y[2], y[3]), self.centre, &self.mem, self.contacts_enabled, full)
+    }
+
+    /// The full evaluation the integrator made at the end of its last accepted step, if
+    /// that step ended at `y` (saves the driver a second evaluation per step).
+    #[inline]
+    pub fn take_accepted(&mut self, y: &State) -> Option<FingerEval> {
+        match self.accepted.take() {
+            Some((ya, ev)) if ya == *y => Some(ev),
+            _ => None,
+        }
+    }
+
+    /// The hand force F_hand,y: twice finger 1's force on the object (the mirror image).
+    #[inline(always)]
+    pub fn hand_fy(ev: &FingerEval) -> f64 {
+        2.0 * ev.object_force.y
+    }
+
+    /// Time derivative from a full evaluation.
+    #[inline]
+    pub fn derivative(&self, y: &State, ev: &FingerEval) -> State {
+        let hand_y = Self::hand_fy(ev);
+        State::from([y[2], y[3], ev.qdd[0], ev.qdd[1], (hand_y - y[4]) / self.t_filter])
+    }
+
+    /// True when a knuckle cap (O22, shared by both capsules) carries a contact.
+    pub fn knuckle_contact(ev: &FingerEval) -> bool {
+        ev.knuckle_contact()
+    }
+}
+
+impl Rhs<NS> for FingerOde<'_> {
+    #[inline]
+    fn eval(&mut self, _t: f64, y: &State) -> Option<State> {
+        self.evals += 1;
+        let ev = self.evaluate_with(y, false)?;
+        Some(self.derivative(y, &ev))
+    }
+
+    /// Smooth piece: the finger's [`Kink`](crate::sim::finger::Kink)s.
+    fn piece(&self, y: &State) -> Piece {
+        self.evaluate_with(y, false).map_or(Piece::UNDEFINED, |ev| ev.piece)
+    }
+
+    #[inline]
+    fn eval_piece(&mut self, _t: f64, y: &State) -> Option<(State, Piece)> {
+        self.evals += 1;
+        let ev = self.evaluate_with(y, false)?;
+        Some((self.derivative(y, &ev), ev.piece))
+    }
+
+    /// The full evaluation (its forces equal the lean one's), kept for the driver.
+    fn eval_accepted(&mut self, _t: f64, y: &State) -> Option<(State, Piece)> {
+        self.evals += 1;
+        let ev = self.evaluate_with(y, true)?;
+        let out = (self.derivative(y, &ev), ev.piece);
+        self.accepted = Some((*y, ev));
+        Some(out)
+    }
+}
+
+/// Compliant static equilibrium (§8.9) of the scene's finger on its object.
+pub fn compliant_equilibrium(ode: &FingerOde, s: &SceneParams, f0: [f64; 2]) -> Option<Equilibrium> {
+    finger_equilibrium(&ode.model, ode.centre, s, f0)
+}
+
+/// The event functions of the centred scene, in the order of their values.
+pub const EVENTS: [EventKind; 6] =
+    [EventKind::Contact(0), EventKind::Contact(1), EventKind::Stability, EventKind::Force, EventKind::Singular(0), EventKind::Stop(0)];
+/// Index of the force event in [`EVENTS`].
+const FORCE: usize = 3;
+
+/// The centred scene during a run: the ODE, the criteria and the outputs.
+pub struct CentredScene<'a, 't> {
+    ode: FingerOde<'a>,
+    s: &'a SceneParams,
+    eq: Equilibrium,
+    threshold: f64,
+    r_area: f64,
+    static_force_margin: f64,
+    tracker: Tracker<2>,
+    traj: Option<&'t mut Trajectory>,
+}
+
+impl<'a, 't> CentredScene<'a, 't> {
+    /// The scene of finger `f` with its statics `st` (before [`CentredScene::prepare`]).
+    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&'t mut Trajectory>) -> Self {
+        let ode = FingerOde::new(f, s, st.tau_s0, 0.0);
+        let ra = r_area(s);
+        let static_margin = force_margin(s, ra, V2::new(st.hand0[0], st.hand0[1]));
+        let threshold = s.criteria.eta_stab * u_min(s, st.f0);
+        let none = Equilibrium { q: Vector2::repeat(f64::NAN), v_star: f64::NAN, fstar: [f64::NAN; 2] };
+        let tracker = Tracker::new(opts.mode == Mode::Pipeline);
+        CentredScene { ode, s, eq: none, threshold, r_area: ra, static_force_margin: static_margin, tracker, traj }
+    }
+
+    /// The static force criterion and the compliant equilibrium (from the static forces
+    /// `f0`) before the run. False: the simulation ends here (pipeline mode and a violated
+    /// static force criterion, or no equilibrium); [`CentredScene::result`] says why.
+    pub fn prepare(&mut self, f0: [f64; 2], opts: &SimOptions) -> bool {
+        if self.static_force_margin < 0.0 {
+            self.tracker.fail(DynOutcome::StaticForceLimit);
+            if self.tracker.pipeline {
+                return false;
+            }
+        }
+        if opts.contacts {
+            let Some(eq) = compliant_equilibrium(&self.ode, self.s, f0) else {
+                self.tracker.outcome = DynOutcome::NoEquilibrium;
+                return false;
+            };
+            self.eq = eq;
+        } else {
+            self.ode.contacts_enabled = false;
+        }
+        true
+    }
+
+    /// The result as far as known (without a run, or before the run's end values).
+    pub fn result(&self) -> DynamicsResult {
+        let k = &self.tracker;
+        DynamicsResult {
+            outcome: k.outcome,
+            first: k.first,
+            impact_ok: k.impact_ok,
+            fold_ok: k.fold_ok,
+            min_force_margin: k.min_force_margin,
+            t_force_violation: k.t_force_violation,
+            static_force_margin: self.static_force_margin,
+            r_area: self.r_area,
+            t_stab: k.t_stab,
+            f_end: [0.0; 2],
+            fstar: self.eq.fstar,
+            v_star: self.eq.v_star,
+            threshold: self.threshold,
+            e_ex_end: f64::NAN,
+            max_qdd_end: f64::NAN,
+            t_end: 0.0,
+            events: 0,
+            stats: Stats::default(),
+            rhs_evals: self.ode.evals,
+            cpu_s: 0.0,
+            knuckle_flag: k.knuckle,
+            onsets: k.onsets,
+        }
+    }
+}
+
+impl Rhs<NS> for CentredScene<'_, '_> {
+    #[inline]
+    fn eval(&mut self, t: f64, y: &State) -> Option<State> {
+        self.ode.eval(t, y)
+    }
+    #[inline]
+    fn piece(&self, y: &State) -> Piece {
+        self.ode.piece(y)
+    }
+    #[inline]
+    fn eval_piece(&mut self, t: f64, y: &State) -> Option<(State, Piece)> {
+        self.ode.eval_piece(t, y)
+    }
+    #[inline]
+    fn eval_accepted(&mut self, t: f64, y: &State) -> Option<(State, Piece)> {
+        self.ode.eval_accepted(t, y)
+    }
+}
+
+impl Scene<NS, 6> for CentredScene<'_, '_> {
+    type Eval = FingerEval;
+    type Output = DynamicsResult;
+
+    fn events(&self) -> [EventKind; 6] {
+        EVENTS
+    }
+
+    fn initial_state(&self) -> State {
+        let f = self.ode.model.finger;
+        State::from([f.open.q11, f.open.q21, 0.0, 0.0, 0.0])
+    }
+
+    #[inline]
+    fn evaluate(&self, y: &State) -> Option<FingerEval> {
+        self.ode.evaluate(y)
+    }
+
+    #[inline]
+    fn take_accepted(&mut self, y: &State) -> Option<FingerEval> {
+        self.ode.take_accepted(y)
+    }
+
+    #[inline]
+    fn derivative(&self, y: &State, ev: &FingerEval) -> State {
+        self.ode.derivative(y, ev)
+    }
+
+    fn event_values(&self, y: &State, ev: &FingerEval) -> EventValues<6> {
+        let s = self.s;
+        let mut contact = [0.0; 2];
+        for i in 0..2 {
+            // without contacts (a diagnostic scene) the phalanges pass through the object
+            contact[i] = if !self.ode.contacts_enabled { -1.0 } else { self.ode.mem[i].event_value(ev.contacts[i].geom.delta, s.contact.eps_sep) };
+        }
+        let stab = if self.tracker.first.is_some() { ev.energy - self.eq.v_star - self.threshold } else { f64::INFINITY };
+        let force = force_margin(s, self.r_area, V2::new(0.0, y[4]));
+        let sing = ev.sin_q13.abs() - 1e-3;
+        EventValues {
+            g: [contact[0], contact[1], stab, force, sing, ev.theta2],
+            rate: [ev.contacts[0].delta_dot, ev.contacts[1].delta_dot, 0.0, 0.0, 0.0, ev.theta2_dot],
+        }
+    }
+
+    fn crossing(&self, i: usize) -> Option<Crossing> {
+        match EVENTS[i] {
+            EventKind::Force if !self.tracker.force_armed => None,
+            EventKind::Contact(c) => Some(EVENTS[i].crossing(self.ode.mem[c as usize].active)),
+            kind => Some(kind.crossing(false)),
+        }
+    }
+
+    fn begin(&mut self, _y: &State, ev: &FingerEval, g: &EventValues<6>) -> bool {
+        if ev.contacts.iter().any(|c| c.geom.delta > 1e-12) {
+            self.tracker.outcome = DynOutcome::InitialPenetration;
+            return false;
+        }
+        self.tracker.min_force_margin = g.g[FORCE];
+        true
+    }
+
+    fn handle(&mut self, i: usize, t: f64, ev: &FingerEval, end: &EventValues<6>) -> Response {
+        let s = self.s;
+        match EVENTS[i] {
+            EventKind::Contact(_) => {
+                let mut impacts: [Option<Impact>; 2] = [None, None];
+                for c in 0..2 {
+                    let cs = &ev.contacts[c];
+                    let located = EVENTS[i] == EventKind::Contact(c as u8);
+                    if self.ode.mem[c].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min) == MemoryChange::Onset {
+                        self.tracker.onset(c, t);
+                        if self.tracker.first.is_none() {
+                            let minv = ev.m.try_inverse().unwrap_or(Matrix2::zeros());
+                            let mf = 1.0 / cs.row.dot(&(minv * cs.row));
+                            impacts[c] = Some(impact(s, mf, cs.delta_dot));
+                        }
+                    }
+                }
+                let stop = self.tracker.first.is_none() && self.tracker.first_contact(s, t, &impacts, ev.theta2);
+                // memory changed: f is discontinuous
+                Response { restart: true, stop }
+            }
+            EventKind::Stability => {
+                self.tracker.t_stab = Some(t);
+                Response { restart: false, stop: true }
+            }
+            EventKind::Force => Response { restart: false, stop: self.tracker.force_violated(t, end.g[FORCE]) },
+            EventKind::Singular(_) => {
+                self.tracker.outcome = DynOutcome::Singular;
+                Response { restart: false, stop: true }
+            }
+            // the stop engages or releases: the right-hand side has a kink here
+            EventKind::Stop(_) => Response { restart: true, stop: false },
+        }
+    }
+
+    fn track(&mut self, at: Point, ev: &FingerEval, g: &EventValues<6>) {
+        self.tracker.force_margin(g.g[FORCE]);
+        if at == Point::Step {
+            self.tracker.knuckle |= ev.knuckle_contact();
+        }
+    }
+
+    fn sample(&mut self, at: Point, t: f64, y: &State, ev: &FingerEval) {
+        let Some(tr) = self.traj.as_deref_mut() else { return };
+        let c = &ev.contacts;
+        let smp = Sample {
+            t,
+            q: [y[0], y[1]],
+            qd: [y[2], y[3]],
+            theta2: ev.theta2,
+            delta: [c[0].geom.delta, c[1].geom.delta],
+            normal: [c[0].normal_force, c[1].normal_force],
+            friction: [c[0].friction_force, c[1].friction_force],
+            hand_fy: FingerOde::hand_fy(ev),
+            filtered_fy: y[4],
+            energy: ev.energy,
+            energy_excess: ev.energy - self.eq.v_star,
+        };
+        if at == Point::Grid {
+            tr.grid.push(smp);
+        } else {
+            tr.samples.push(smp);
+        }
+    }
+
+    fn trace_state(&self) -> String {
+        format!("mem {:?}", self.ode.mem)
+    }
+
+    fn finish(mut self, run: &Run<FingerEval>) -> DynamicsResult {
+        match run.end {
+            End::Stopped | End::Declined => {}
+            End::TimeUp => self.tracker.fail(DynOutcome::NoStability),
+            End::StepBudget => self.tracker.outcome = DynOutcome::StepBudget,
+            End::StepTooSmall => self.tracker.outcome = DynOutcome::StepTooSmall,
+            End::Undefined => self.tracker.outcome = DynOutcome::DgmFailure,
+            End::Aborted => self.tracker.outcome = DynOutcome::Aborted,
+        }
+        let mut res = self.result();
+        if let Some(ev) = &run.last {
+            res.t_end = run.t;
+            res.f_end = [ev.contacts[0].normal_force, ev.contacts[1].normal_force];
+            res.e_ex_end = ev.energy - self.eq.v_star;
+            res.max_qdd_end = ev.qdd.amax();
+        }
+        res.events = run.events;
+        res.stats = run.stats;
+        res.rhs_evals = self.ode.evals + run.locate_evals;
+        res
+    }
+}
+
+/// Simulate the grasp of the design's finger on the centred object (pipeline entry point).
+pub fn simulate_grasp(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> DynamicsResult {
+    simulate(f, s, st, opts, None)
+}
+
+/// Simulate, recording the trajectory into `traj` when given (the result does not depend
+/// on recording).
+pub fn simulate_grasp_into(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+    let o = SimOptions { record: traj.is_some(), ..*opts };
+    simulate(f, s, st, &o, traj)
+}
+
+/// Simulate and also return the recorded trajectory (forces `record`).
+pub fn simulate_grasp_traj(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> (DynamicsResult, Trajectory) {
+    let mut tr = Trajectory::default();
+    let r = simulate(f, s, st, &SimOptions { record: true, ..*opts }, Some(&mut tr));
+    (r, tr)
+}
+
+/// Tolerances of the centred scene's state.
+fn tolerances(opts: &SimOptions) -> Tol<NS> {
+    // The filter state is in N: an absolute tolerance of 1e4·atol (1e-5 N at atol 1e-9).
+    Tol { rtol: opts.rtol, atol: State::from([opts.atol, opts.atol, opts.atol, opts.atol, opts.atol * 1e4]) }
+}
+
+fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+    let clock = Instant::now();
+    let mut scene = CentredScene::new(f, s, st, opts, traj);
+    let mut res = if scene.prepare(st.f0, opts) { driver::simulate(scene, opts, tolerances(opts), s.criteria.t_max) } else { scene.result() };
+    res.cpu_s = clock.elapsed().as_secs_f64();
+    res
+}
