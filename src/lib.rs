@@ -13,7 +13,7 @@ pub mod error;
 pub mod math;
 pub mod model;
 pub mod optim;
-pub mod pipeline;
+pub mod eval;
 pub mod params;
 pub mod record;
 pub mod sim;

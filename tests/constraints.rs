@@ -3,7 +3,7 @@ use crate::common::*;
 use gripopt::math::dist_to_singular;
 use gripopt::model::constraints::{singularity_sweep, SweepFailure};
 use gripopt::model::Finger;
-use gripopt::pipeline::{evaluate, EvalOptions, Reason};
+use gripopt::eval::{evaluate, EvalOptions, Reason};
 use gripopt::params::Design;
 
 fn margin_deg(x: &Design) -> Option<f64> {

@@ -4,7 +4,7 @@ use crate::common::*;
 use gripopt::model::contact::flores_normal;
 use gripopt::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};
-use gripopt::pipeline::{stage_kinematics, stage_statics, StaticsResult};
+use gripopt::eval::{stage_kinematics, stage_statics, StaticsResult};
 use gripopt::params::{Design, SceneParams};
 use gripopt::sim::{FingerOde, State};
 use gripopt::sim::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};

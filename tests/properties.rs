@@ -1,5 +1,5 @@
 //! Property tests over random designs inside and around the bounds (full pipeline).
-use gripopt::pipeline::{evaluate, EvalOptions, Evaluation, Record};
+use gripopt::eval::{evaluate, EvalOptions, Evaluation, Record};
 use gripopt::params::Design;
 use gripopt::sim::DynOutcome;
 use proptest::prelude::*;

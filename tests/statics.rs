@@ -4,7 +4,7 @@ use gripopt::model::closure::{admissible, closure_matrix, form_closure_test, gra
 use gripopt::model::dynamics::mass_matrix;
 use gripopt::model::statics::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
 use gripopt::model::{Finger, Kin};
-use gripopt::pipeline::{stage_kinematics, stage_statics};
+use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::sim::{FingerOde, State};
 use nalgebra::{SMatrix, SVector};
 use rand::{Rng, SeedableRng};

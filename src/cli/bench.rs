@@ -90,7 +90,7 @@ pub fn run(b: BenchCmd) -> Result<()> {
 }
 
 fn bench_static(problem: &PathBuf, n: usize, seed: u64) -> Result<()> {
-    use gripopt::pipeline::{evaluate, EvalOptions};
+    use gripopt::eval::{evaluate, EvalOptions};
     use gripopt::params::Design;
     use rand::{Rng, SeedableRng};
     let p = super::load_problem(problem)?;

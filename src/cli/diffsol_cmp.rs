@@ -7,7 +7,7 @@
 
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use gripopt::model::geometry::Finger;
-use gripopt::pipeline::StaticsResult;
+use gripopt::eval::StaticsResult;
 use gripopt::params::SceneParams;
 use gripopt::sim::{impact, u_min};
 use gripopt::sim::{FingerOde, Memory, State, NS};

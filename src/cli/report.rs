@@ -1,9 +1,9 @@
 //! Human and JSON reports of `evaluate` and `simulate`.
 
 use anyhow::{bail, Context, Result};
-use gripopt::pipeline::{evaluate as eval_design, EvalOptions, Record};
+use gripopt::eval::{evaluate as eval_design, EvalOptions, Record};
 use gripopt::params::{Design, Problem};
-use gripopt::pipeline::DynamicsRecord;
+use gripopt::eval::DynamicsRecord;
 use gripopt::sim::{simulate_grasp_traj, Method, SimOptions};
 use std::io::Write;
 use std::path::Path;

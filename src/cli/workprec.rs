@@ -1,7 +1,7 @@
 //! `gripopt bench work-precision`: CPU time against error for each integrator.
 
 use anyhow::{Context, Result};
-use gripopt::pipeline::{evaluate, stage_kinematics, stage_statics, EvalOptions};
+use gripopt::eval::{evaluate, stage_kinematics, stage_statics, EvalOptions};
 use gripopt::params::{Design, Problem};
 use gripopt::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
 use std::io::Write;
@@ -138,7 +138,7 @@ fn label(m: Method) -> &'static str {
 
 /// The same grasp through diffsol's solvers, against the same reference (feature `diffsol`).
 #[cfg(feature = "diffsol")]
-fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::params::SceneParams, st: &gripopt::pipeline::StaticsResult, reference: &DynamicsResult, reps: usize, atol: Option<f64>) -> Result<Vec<Row>> {
+fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::params::SceneParams, st: &gripopt::eval::StaticsResult, reference: &DynamicsResult, reps: usize, atol: Option<f64>) -> Result<Vec<Row>> {
     use super::diffsol_cmp::{simulate, DsMethod};
     let mut rows = vec![];
     let pb = indicatif::ProgressBar::new((DsMethod::ALL.len() * 6) as u64);
@@ -186,7 +186,7 @@ fn diffsol_rows(f: &gripopt::model::geometry::Finger, s: &gripopt::params::Scene
 
 /// Without the `diffsol` feature there is nothing to compare against.
 #[cfg(not(feature = "diffsol"))]
-fn diffsol_rows(_: &gripopt::model::geometry::Finger, _: &gripopt::params::SceneParams, _: &gripopt::pipeline::StaticsResult, _: &DynamicsResult, _: usize, _: Option<f64>) -> Result<Vec<Row>> {
+fn diffsol_rows(_: &gripopt::model::geometry::Finger, _: &gripopt::params::SceneParams, _: &gripopt::eval::StaticsResult, _: &DynamicsResult, _: usize, _: Option<f64>) -> Result<Vec<Row>> {
     println!("(diffsol rows: build with `--features diffsol`, as `make bench` does)");
     Ok(vec![])
 }

@@ -2,7 +2,7 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10).
 
 use super::{Evaluated, Infeasibility, MooProblem};
-use crate::pipeline::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
+use crate::eval::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
 use crate::params::{Design, Problem};
 use serde::{Deserialize, Serialize};
 

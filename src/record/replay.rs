@@ -4,7 +4,7 @@
 
 use super::messages::{sample_from, window_start_ns};
 use super::writer::{read_index, RecordOptions};
-use crate::pipeline::{evaluate_with_trajectory, EvalOptions};
+use crate::eval::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
 use crate::sim::Sample;
 use serde_json::Value;

@@ -1,0 +1,13 @@
+//! Evaluation (MODEL.md §10): a design through the staged pipeline — stage 0/1 kinematics
+//! and singularities, stage 2 statics and form closure, stage 3 the grasp simulation —
+//! with discards and violations, and the one flattening of an evaluation into its record.
+//! Above `sim`, below `optim`/`record`/`run`.
+
+mod record;
+mod stages;
+
+pub use record::{DynamicsRecord, Record};
+pub use stages::{
+    evaluate, evaluate_full, evaluate_with_trajectory, stage_kinematics, stage_statics, Discard, EvalOptions, Evaluation,
+    KinematicsResult, Reason, StaticsResult, MISSING_POSE_VIOLATION,
+};

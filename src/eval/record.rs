@@ -1,0 +1,250 @@
+//! The ONE place that flattens an evaluation into its record: the per-design JSON record
+//! of MODEL.md §10 (`gripopt evaluate --json`, CSV rows, recordings, sweeps).
+
+use super::stages::Evaluation;
+use crate::sim::DynamicsResult;
+use serde::Serialize;
+
+/// The per-design JSON record of MODEL.md §10 (snake_case keys; `null` = not computed).
+#[derive(Debug, Clone, Serialize)]
+pub struct Record {
+    /// Design: l21 (m).
+    pub l21: f64,
+    /// Design: b (m).
+    pub b: f64,
+    /// Design: t22 (m).
+    pub t22: f64,
+    /// Design: r.
+    pub r: f64,
+    /// Design: p.
+    pub p: f64,
+    /// Design: ψ (deg).
+    pub psi_deg: f64,
+    /// l_hand (m).
+    pub l_hand: f64,
+    /// l11 (m).
+    pub l11: Option<f64>,
+    /// l12 (m).
+    pub l12: Option<f64>,
+    /// l22 (m).
+    pub l22: Option<f64>,
+    /// Open q11 (rad).
+    pub q11_0: Option<f64>,
+    /// Open q21 (rad).
+    pub q21_0: Option<f64>,
+    /// Open q12 (rad).
+    pub q12_0: Option<f64>,
+    /// Open q22 (rad).
+    pub q22_0: Option<f64>,
+    /// Open q13 (rad).
+    pub q13_0: Option<f64>,
+    /// Assembly mode Γ.
+    pub gamma: Option<f64>,
+    /// Working mode σ.
+    pub sigma: Option<f64>,
+    /// Body masses m11, m12, m21, m22 (kg).
+    pub masses: Option<[f64; 4]>,
+    /// Minimum singularity margin (deg).
+    pub min_margin_deg: Option<f64>,
+    /// τ_s^min before clipping (N·m).
+    pub tau_s_min: Option<f64>,
+    /// Spring preload τ_s0 (N·m).
+    pub tau_s0: Option<f64>,
+    /// Closed pose θ1 (rad).
+    pub theta1: Option<f64>,
+    /// Closed pose θ2 (rad).
+    pub theta2: Option<f64>,
+    /// k1 (m).
+    pub k1: Option<f64>,
+    /// k2 (m).
+    pub k2: Option<f64>,
+    /// f⁰_1 (N).
+    pub f0_1: Option<f64>,
+    /// f⁰_2 (N).
+    pub f0_2: Option<f64>,
+    /// f^μ_1 (N).
+    pub fmu_1: Option<f64>,
+    /// f^μ_2 (N).
+    pub fmu_2: Option<f64>,
+    /// F⁰_hand,x (N).
+    pub fhand0_x: Option<f64>,
+    /// F⁰_hand,y (N).
+    pub fhand0_y: Option<f64>,
+    /// F^μ_hand,x (N).
+    pub fhandmu_x: Option<f64>,
+    /// F^μ_hand,y (N).
+    pub fhandmu_y: Option<f64>,
+    /// Form closed at x_off = 0.
+    pub form_closed_0: Option<bool>,
+    /// Objective 1 (m).
+    pub max_offset: Option<f64>,
+    /// What ended the offset scan (null if off_max was reached).
+    pub max_offset_ended_by: Option<String>,
+    /// Objective 2.
+    pub alpha: Option<f64>,
+    /// Objective 3 (N).
+    pub mean_force: Option<f64>,
+    /// Stage-3 keys (flattened; all null when stage 3 did not run).
+    #[serde(flatten)]
+    pub dynamics: DynamicsRecord,
+    /// No stage discarded the design.
+    pub feasible: bool,
+    /// Stage that discarded it.
+    pub failed_stage: Option<u8>,
+    /// Why.
+    pub reason: Option<String>,
+    /// Violation magnitude (§10 units).
+    pub violation: Option<f64>,
+}
+
+impl Record {
+    /// Build the record of an evaluation.
+    pub fn from_eval(ev: &Evaluation) -> Self {
+        let x = &ev.design;
+        let f = ev.kin.map(|k| k.finger);
+        let st = ev.statics;
+        let fin = |v: f64| v.is_finite().then_some(v);
+        Record {
+            l21: x.l21,
+            b: x.b,
+            t22: x.t22,
+            r: x.r,
+            p: x.p,
+            psi_deg: x.psi.to_degrees(),
+            l_hand: x.l_hand(),
+            l11: f.map(|f| f.l11),
+            l12: f.map(|f| f.l12),
+            l22: f.map(|f| f.l22),
+            q11_0: f.map(|f| f.open.q11),
+            q21_0: f.map(|f| f.open.q21),
+            q12_0: f.map(|f| f.open.q12),
+            q22_0: f.map(|f| f.open.q22),
+            q13_0: f.map(|f| f.open.q13),
+            gamma: f.map(|f| f.gamma),
+            sigma: f.map(|f| f.sigma),
+            masses: f.map(|f| f.mass.m),
+            min_margin_deg: ev.kin.map(|k| k.sweep.min_margin.to_degrees()),
+            tau_s_min: st.map(|s| s.tau_s_min),
+            tau_s0: st.map(|s| s.tau_s0),
+            theta1: st.map(|s| s.theta[0]),
+            theta2: st.map(|s| s.theta[1]),
+            k1: st.map(|s| s.k[0]),
+            k2: st.map(|s| s.k[1]),
+            f0_1: st.map(|s| s.f0[0]),
+            f0_2: st.map(|s| s.f0[1]),
+            fmu_1: st.map(|s| s.fmu[0]),
+            fmu_2: st.map(|s| s.fmu[1]),
+            fhand0_x: st.map(|s| s.hand0[0]),
+            fhand0_y: st.map(|s| s.hand0[1]),
+            fhandmu_x: st.map(|s| s.hand_mu[0]),
+            fhandmu_y: st.map(|s| s.hand_mu[1]),
+            form_closed_0: st.map(|s| s.form_closed_0),
+            max_offset: st.map(|s| s.max_offset),
+            max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
+            alpha: st.and_then(|s| fin(s.alpha)),
+            mean_force: st.map(|s| s.mean_force),
+            dynamics: DynamicsRecord::from_result(ev.dynamics.as_ref()),
+            feasible: ev.feasible(),
+            failed_stage: ev.discard.map(|d| d.stage),
+            reason: ev.discard.map(|d| d.reason.to_string()),
+            violation: ev.discard.map(|d| d.violation),
+        }
+    }
+}
+
+/// Stage-3 keys of the JSON record (MODEL.md §10); all `null` when stage 3 did not run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct DynamicsRecord {
+    /// Time of first contact (s).
+    pub t_first_contact: Option<f64>,
+    /// "proximal" or "distal".
+    pub first_contact_phalanx: Option<&'static str>,
+    /// Onset velocity (m/s).
+    pub v_impact: Option<f64>,
+    /// Effective finger mass (kg).
+    pub m_finger: Option<f64>,
+    /// E_cyl (J).
+    pub e_cyl: Option<f64>,
+    /// E_trans (J).
+    pub e_trans: Option<f64>,
+    /// E_rot (J).
+    pub e_rot: Option<f64>,
+    /// min(E_lim,trans, E_lim,rot) (J).
+    pub e_lim: Option<f64>,
+    /// θ2 at first contact (rad).
+    pub theta2_first_contact: Option<f64>,
+    /// Min filtered-force margin (N).
+    pub min_force_margin: Option<f64>,
+    /// Static hand-force margin (N).
+    pub static_force_margin: Option<f64>,
+    /// Time to stability (s).
+    pub t_stab: Option<f64>,
+    /// Proximal normal force at t_stab (N).
+    pub f_stab_1: Option<f64>,
+    /// Distal normal force at t_stab (N).
+    pub f_stab_2: Option<f64>,
+    /// f*_1 (N).
+    pub fstar_1: Option<f64>,
+    /// f*_2 (N).
+    pub fstar_2: Option<f64>,
+    /// max |q̈| at the end (rad/s²).
+    pub max_qdd_end: Option<f64>,
+    /// Accepted steps.
+    pub steps: Option<u64>,
+    /// Rejected steps.
+    pub rejected_steps: Option<u64>,
+    /// RHS evaluations.
+    pub rhs_evals: Option<u64>,
+    /// Jacobian evaluations.
+    pub jac_evals: Option<u64>,
+    /// LU factorisations.
+    pub lu_count: Option<u64>,
+    /// Newton iterations.
+    pub newton_iters: Option<u64>,
+    /// Step attempts rejected for Newton failure (part of `rejected_steps`).
+    pub newton_failures: Option<u64>,
+    /// Events.
+    pub events: Option<u32>,
+    /// CPU seconds of stage 3.
+    pub cpu_s: Option<f64>,
+    /// A knuckle contact was seen.
+    pub knuckle_contact: Option<bool>,
+}
+
+impl DynamicsRecord {
+    /// Flatten a result (None → all null).
+    pub fn from_result(d: Option<&DynamicsResult>) -> Self {
+        let Some(d) = d else { return Self::default() };
+        let fin = |v: f64| v.is_finite().then_some(v);
+        let fc = d.first;
+        DynamicsRecord {
+            t_first_contact: fc.map(|f| f.t),
+            first_contact_phalanx: fc.map(|f| if f.phalanx == 1 { "proximal" } else { "distal" }),
+            v_impact: fc.map(|f| f.impact.v_impact),
+            m_finger: fc.map(|f| f.impact.m_finger),
+            e_cyl: fc.map(|f| f.impact.e_cyl),
+            e_trans: fc.map(|f| f.impact.e_trans),
+            e_rot: fc.map(|f| f.impact.e_rot),
+            e_lim: fc.map(|f| f.impact.e_lim),
+            theta2_first_contact: fc.map(|f| f.theta2),
+            min_force_margin: fin(d.min_force_margin),
+            static_force_margin: fin(d.static_force_margin),
+            t_stab: d.t_stab,
+            f_stab_1: d.t_stab.map(|_| d.f_end[0]),
+            f_stab_2: d.t_stab.map(|_| d.f_end[1]),
+            fstar_1: fin(d.fstar[0]),
+            fstar_2: fin(d.fstar[1]),
+            max_qdd_end: fin(d.max_qdd_end),
+            steps: Some(d.stats.steps),
+            rejected_steps: Some(d.stats.rejected),
+            rhs_evals: Some(d.rhs_evals),
+            jac_evals: Some(d.stats.jac),
+            lu_count: Some(d.stats.lu),
+            newton_iters: Some(d.stats.newton),
+            newton_failures: Some(d.stats.newton_fail),
+            events: Some(d.events),
+            cpu_s: Some(d.cpu_s),
+            knuckle_contact: Some(d.knuckle_flag),
+        }
+    }
+}
