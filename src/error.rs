@@ -26,9 +26,9 @@ pub enum Error {
         file: PathBuf,
         /// toml's message.
         message: String,
-        /// toml's error.
+        /// toml's error (boxed: it is large, and every `Result` carries the enum's size).
         #[source]
-        source: toml::de::Error,
+        source: Box<toml::de::Error>,
     },
     /// A field (of a problem file, or a command-line flag) has a value outside its range.
     #[error("{}: field `{field}` = {value}: {rule}", file.display())]
@@ -54,10 +54,12 @@ pub enum Error {
         source: serde_json::Error,
     },
     /// An MCAP file could not be read or written.
-    #[error("{}: MCAP: {source}", path.display())]
+    #[error("{}: {what}: {source}", path.display())]
     Mcap {
         /// The file.
         path: PathBuf,
+        /// What failed (e.g. "cannot read the MCAP summary; the file is truncated or corrupt").
+        what: String,
         /// The mcap crate's error.
         #[source]
         source: mcap::McapError,
@@ -73,7 +75,7 @@ pub enum Error {
     /// A run folder cannot be used as asked (already holds a run, holds no run, inputs changed…).
     #[error("{}: {message}", path.display())]
     RunDir {
-        /// The run folder.
+        /// The run folder, or the file in it (or the problem file) at fault.
         path: PathBuf,
         /// What is wrong and what to do.
         message: String,
@@ -92,6 +94,28 @@ pub enum Error {
     /// The optimiser's executor (argmin) failed.
     #[error("optimiser: {0}")]
     Optimiser(String),
+    /// A plot could not be drawn or written.
+    #[error("{}: plot: {source}", path.display())]
+    Plot {
+        /// The SVG file.
+        path: PathBuf,
+        /// The plotting library's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// The worker thread pool could not be started.
+    #[error("cannot start the worker threads: {0}")]
+    ThreadPool(#[from] rayon::ThreadPoolBuildError),
+    /// An optimisation run stopped before its last generation (crash hook, failed observer);
+    /// its checkpoint allows a resume.
+    #[error("run in {} stopped: {source}; resume with `gripopt resume {}`", path.display(), path.display())]
+    Stopped {
+        /// The run folder.
+        path: PathBuf,
+        /// Why it stopped.
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 /// Result with the library's [`Error`].

@@ -2,7 +2,8 @@
 //! grasping, after the model contract `shared/spec/MODEL.md`.
 //!
 //! Layers: [`problem`] (scene, design, bounds) → [`model`] (finger physics) →
-//! [`pipeline`] (staged evaluation).
+//! [`pipeline`] (staged evaluation) → [`optim`] (pure NSGA-II) → [`record`] (MCAP) →
+//! [`run`] (run folders, checkpoints, observers, the gripper problem).
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: a NaN must fail every physical check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -10,10 +11,12 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod error;
+pub mod fsutil;
 pub mod math;
 pub mod model;
 pub mod optim;
 pub mod eval;
 pub mod params;
 pub mod record;
+pub mod run;
 pub mod sim;

@@ -1,6 +1,6 @@
 //! Optimiser runs: determinism, exact resume (crash, kill -9, extension), refusal of
 //! changed inputs, corrupt checkpoints, and the reference hypervolume bands.
-use gripopt::optim::rundir::{optimise, resume, RunSpec};
+use gripopt::run::{optimise, resume, RunSpec};
 use gripopt::optim::testproblems::{run_test, TestProblem};
 use std::path::{Path, PathBuf};
 

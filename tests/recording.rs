@@ -1,7 +1,7 @@
 //! MCAP recording: round trip, replay verification, corrupt files, crash/resume without
 //! duplicates. Runs are written under target/mcap-check/ so that `make test` also checks
 //! every file with the independent Python reader (tools/check_mcap.py).
-use gripopt::optim::rundir::{optimise, resume, RunSpec};
+use gripopt::run::{optimise, resume, RunSpec};
 use gripopt::record::replay::{read_design, replay};
 use gripopt::record::writer::read_index;
 use gripopt::record::RecordOptions;

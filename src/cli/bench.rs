@@ -186,7 +186,7 @@ fn bench_nsga(reps: usize) -> Result<()> {
             let st = gripopt::optim::nsga2::Nsga2State::new().with_max_generations(gens);
             let mut s = reference_settings(which, rep as u64 + 1, 100);
             s.hv_ref.clear();
-            gripopt::optim::run::execute(which.instance(), s, st, |e| e, false)
+            gripopt::optim::nsga2::execute(which.instance(), s, st, |e| e, false)
         })
         .map_err(|e| anyhow::anyhow!("{e}"))?;
         let total = t0.elapsed().as_secs_f64();
@@ -198,7 +198,7 @@ fn bench_nsga(reps: usize) -> Result<()> {
 }
 
 fn bench_replay(problem: &PathBuf, n: u64, per_shard: u64, out: &std::path::Path, keep: bool) -> Result<()> {
-    use gripopt::optim::gripper::{GripperProblem, TrajectoryKeep};
+    use gripopt::run::gripper::{GripperProblem, TrajectoryKeep};
     use gripopt::optim::{Individual, MooProblem};
     use gripopt::record::writer::{write_shard, ShardEntry};
     use rand::{Rng, SeedableRng};

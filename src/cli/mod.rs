@@ -93,6 +93,12 @@ enum Cmd {
         /// Interval of the 3D scene updates in milliseconds of simulated time (0 = none).
         #[arg(long, default_value_t = 0.5)]
         scene_ms: f64,
+        /// zstd compression level of the recording (changes file sizes, never content).
+        #[arg(long, default_value_t = gripopt::record::options::DEFAULT_ZSTD_LEVEL)]
+        zstd_level: u32,
+        /// zstd worker threads per recording shard (0 = compress on the writing thread).
+        #[arg(long, default_value_t = gripopt::record::options::DEFAULT_ZSTD_THREADS)]
+        zstd_threads: u32,
     },
     /// Print a recorded design, re-simulate it and verify its trajectory.
     Replay {
@@ -230,7 +236,7 @@ pub fn run() -> Result<()> {
             report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
-        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms } => {
+        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads } => {
             check_threads(threads)?;
             if record_every == 0 {
                 anyhow::bail!("--record-every 0: must be at least 1");
@@ -238,23 +244,23 @@ pub fn run() -> Result<()> {
             if !(scene_ms.is_finite() && scene_ms >= 0.0) {
                 anyhow::bail!("--scene-ms {scene_ms}: must be a number >= 0");
             }
-            use gripopt::optim::gripper::TrajectoryKeep;
+            use gripopt::record::TrajectoryKeep;
             let (enabled, trajectories) = match record {
                 RecordArg::All => (true, TrajectoryKeep::All),
                 RecordArg::Feasible => (true, TrajectoryKeep::Feasible),
                 RecordArg::Designs => (true, TrajectoryKeep::None),
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
-            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3 };
-            let spec = gripopt::optim::rundir::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
-            let s = gripopt::optim::rundir::optimise(&spec)?;
+            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads };
+            let spec = gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
+            let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s);
             Ok(())
         }
         Cmd::Replay { run_dir, design, json, csv, plot } => optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref()),
         Cmd::Resume { run_dir, generations, force, threads } => {
             check_threads(threads)?;
-            let s = gripopt::optim::rundir::resume(&run_dir, generations, force, threads, true)?;
+            let s = gripopt::run::resume(&run_dir, generations, force, threads, true)?;
             optcmd::summary(&s);
             Ok(())
         }

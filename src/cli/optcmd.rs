@@ -63,7 +63,7 @@ pub fn moo_test(name: &str, seed: Option<u64>, seeds: Option<String>, json: bool
 }
 
 /// Print where the results are.
-pub fn summary(s: &gripopt::optim::rundir::RunSummary) {
+pub fn summary(s: &gripopt::run::RunSummary) {
     let d = s.out.display();
     if s.interrupted {
         println!("interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`", s.generations, s.evaluations);

@@ -6,17 +6,15 @@
 //! - [`nsga2`]: the algorithm (argmin `Solver`) and its state (argmin `State`);
 //! - [`sort`]: non-dominated sorting and crowding; [`operators`]: SBX, polynomial mutation;
 //! - [`hv`]: exact hypervolume and IGD; [`testproblems`]: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
-//! - [`gripper`]: the gripper design problem over the staged pipeline;
-//! - [`checkpoint`]: atomic, portable checkpoints and exact resume.
+//! - [`serde_f64`]: exact (bit-preserving) serialisation of floats, so a state can be saved
+//!   and restored.
+//!
+//! This layer is pure: no files, no recording, no gripper. Runs with run folders,
+//! checkpoints, observers and the gripper problem live in the run layer above it.
 
-pub mod checkpoint;
-pub mod gripper;
 pub mod hv;
 pub mod nsga2;
 pub mod operators;
-pub mod plots;
-pub mod run;
-pub mod rundir;
 pub mod serde_f64;
 pub mod sort;
 pub mod testproblems;

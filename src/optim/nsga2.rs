@@ -7,7 +7,8 @@
 use super::operators::{polynomial_mutation, sbx, Operators};
 use super::sort::{rank_and_crowding, survivors_with_attributes};
 use super::{hv::hypervolume, Individual, MooProblem};
-use argmin::core::{Error, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
+use argmin::core::observers::{Observe, ObserverMode};
+use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -391,4 +392,32 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
             TerminationStatus::NotTerminated
         }
     }
+}
+
+/// Run NSGA-II from `state` (a fresh `Nsga2State::new()` or a restored state) until
+/// `state.max_generations` in argmin's `Executor`, after `observers` added its observers.
+/// Returns the problem and the final state; with `ctrlc`, a ctrl-c stops after the current
+/// generation (observers see it). An observer's [`crate::error::Error`] comes back as it
+/// was; any other executor error becomes [`crate::error::Error::Optimiser`].
+pub fn execute<P, O>(problem: P, settings: Nsga2Settings, state: Nsga2State<P::Info>, observers: O, ctrlc: bool) -> crate::error::Result<(P, Nsga2State<P::Info>)>
+where
+    P: MooProblem + 'static,
+    P::Info: 'static,
+    O: FnOnce(Executor<P, Nsga2, Nsga2State<P::Info>>) -> Executor<P, Nsga2, Nsga2State<P::Info>>,
+{
+    use crate::error::Error as LibError;
+    let exec = Executor::new(problem, Nsga2::new(settings)).configure(|_| state).ctrlc(ctrlc).timer(false);
+    let exec = observers(exec);
+    let mut res = exec.run().map_err(|e| e.downcast::<LibError>().unwrap_or_else(|e| LibError::Optimiser(e.to_string())))?;
+    let p = res.problem.take_problem().ok_or_else(|| LibError::Optimiser("problem lost".into()))?;
+    Ok((p, res.state))
+}
+
+/// Add an observer to an executor, called after the initial population and every generation.
+pub fn observe<P, OBS>(exec: Executor<P, Nsga2, Nsga2State<P::Info>>, obs: OBS) -> Executor<P, Nsga2, Nsga2State<P::Info>>
+where
+    P: MooProblem,
+    OBS: Observe<Nsga2State<P::Info>> + 'static,
+{
+    exec.add_observer(obs, ObserverMode::Always)
 }

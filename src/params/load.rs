@@ -175,7 +175,7 @@ impl Problem {
     /// Parse and validate problem text; `path` is used in error messages only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self> {
         let raw: RawFile = toml::from_str(text)
-            .map_err(|e| Error::ProblemParse { file: path.to_path_buf(), message: e.to_string().trim_end().to_string(), source: e })?;
+            .map_err(|e| Error::ProblemParse { file: path.to_path_buf(), message: e.to_string().trim_end().to_string(), source: Box::new(e) })?;
         let c = Checker { file: path };
         let h = &raw.hand;
         let o = &raw.object;

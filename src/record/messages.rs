@@ -2,8 +2,7 @@
 
 use crate::math::V2;
 use crate::model::Finger;
-use crate::optim::gripper::GripperInfo;
-use crate::optim::Individual;
+use super::entry::DesignEntry;
 use crate::params::{Design, SceneParams};
 use crate::sim::Sample;
 use serde_json::{json, Value};
@@ -14,19 +13,15 @@ pub fn window_start_ns(id: u64) -> u64 {
 }
 
 /// `/designs` message.
-pub fn design(ind: &Individual<GripperInfo>, problem: &str) -> Value {
-    let i = &ind.eval.info;
-    let x = &ind.x;
+pub fn design(i: &DesignEntry<'_>, problem: &str) -> Value {
+    let x = &i.parameters;
     let l = i.lengths;
-    let stages_passed = match i.failed_stage {
-        None => 4,
-        Some(s) => s,
-    };
+    let stages_passed = i.failed_stage.unwrap_or(4);
     json!({
-        "id": ind.id,
-        "generation": ind.generation,
+        "id": i.id,
+        "generation": i.generation,
         "problem": problem,
-        "window_start_s": ind.id as f64,
+        "window_start_s": i.id as f64,
         "parameters": {"l21": x[0], "b": x[1], "t22": x[2], "r": x[3], "p": x[4], "psi_deg": x[5]},
         "derived": {"l11": l.map(|v| v[0]), "l12": l.map(|v| v[1]), "l22": l.map(|v| v[2]), "l_hand": i.l_hand},
         "stages_passed": stages_passed,
@@ -38,7 +33,7 @@ pub fn design(ind: &Individual<GripperInfo>, problem: &str) -> Value {
         "stage_seconds": {"stages_0_1": i.stage_seconds[1], "stage_2": i.stage_seconds[2], "stage_3": i.stage_seconds[3]},
         "sim_steps": i.sim_work.map(|w| w[0]),
         "sim_rhs_evals": i.sim_work.map(|w| w[1]),
-        "trajectory_samples": i.trajectory.as_ref().map_or(0, |t| t.samples.len()),
+        "trajectory_samples": i.trajectory.map_or(0, |t| t.samples.len()),
     })
 }
 

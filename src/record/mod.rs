@@ -7,10 +7,18 @@
 //! messages live in the time window [k s, k s + 1 s) (simulated time t is added to the
 //! window start, and carried as the field `t`), one zstd chunk per design, with summary,
 //! chunk and message indexes, so a replay reads one chunk. See docs/recording.md.
+//!
+//! This layer sits above the pipeline and the simulator and below the run layer: it never
+//! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
+//! [`Recordable`] for their own types and call [`Recorder::record_generation`].
 
+pub mod entry;
 pub mod messages;
+pub mod options;
 pub mod replay;
 pub mod schema;
 pub mod writer;
 
-pub use writer::{RecordOptions, Recorder};
+pub use entry::{DesignEntry, Recordable};
+pub use options::{RecordOptions, TrajectoryKeep};
+pub use writer::Recorder;

@@ -3,7 +3,9 @@
 //! verify that the new trajectory equals the recorded one.
 
 use super::messages::{sample_from, window_start_ns};
-use super::writer::{read_index, RecordOptions};
+use super::writer::read_index;
+use super::RecordOptions;
+use crate::error::{Error, Result};
 use crate::eval::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
 use crate::sim::Sample;
@@ -37,18 +39,18 @@ pub struct Replay {
     pub recomputed_feasible: bool,
 }
 
-fn mmap(path: &Path) -> anyhow::Result<memmap2::Mmap> {
-    let f = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+fn mmap(path: &Path) -> Result<memmap2::Mmap> {
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "cannot open", e))?;
     // SAFETY: shards are written to a temporary name and renamed when complete; nothing
     // writes to a shard after that, so the mapping does not change under us.
-    unsafe { memmap2::Mmap::map(&f) }.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    unsafe { memmap2::Mmap::map(&f) }.map_err(|e| Error::io(path, "cannot map", e))
 }
 
 /// Find design `id` in the recording of `run_dir`.
-pub fn read_design(run_dir: &Path, id: u64) -> anyhow::Result<Recorded> {
+pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
     if !dir.exists() {
-        anyhow::bail!("{} has no recording ({} is missing; was the run started with --record none?)", run_dir.display(), dir.display());
+        return Err(Error::Recording { path: run_dir.to_path_buf(), message: format!("no recording ({} is missing; was the run started with --record none?)", dir.display()) });
     }
     let index = read_index(&dir)?;
     let entry = index
@@ -56,20 +58,21 @@ pub fn read_design(run_dir: &Path, id: u64) -> anyhow::Result<Recorded> {
         .find(|e| e.first_id <= id && id <= e.last_id)
         .ok_or_else(|| {
             let max = index.iter().map(|e| e.last_id).max();
-            anyhow::anyhow!("design {id} is not in {} (recorded ids: 0..={})", dir.join("index.jsonl").display(), max.map_or("none".into(), |m| m.to_string()))
+            Error::Recording { path: dir.join("index.jsonl"), message: format!("design {id} is not in this index (recorded ids: 0..={})", max.map_or("none".into(), |m| m.to_string())) }
         })?;
     let path = dir.join(&entry.file);
     let buf = mmap(&path)?;
-    let bad = |what: String| anyhow::anyhow!("{}: {what}", path.display());
+    let bad = |message: String| Error::Recording { path: path.clone(), message };
+    let mc = |what: String| |source| Error::Mcap { path: path.clone(), what, source };
     let summary = mcap::Summary::read(&buf)
-        .map_err(|e| bad(format!("cannot read the MCAP summary ({e}); the file is truncated or corrupt")))?
+        .map_err(mc("cannot read the MCAP summary; the file is truncated or corrupt".into()))?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
     let (lo, hi) = (window_start_ns(id), window_start_ns(id + 1));
     let mut design = None;
     let (mut joints, mut contacts, mut energy) = (vec![], vec![], vec![]);
     for ci in summary.chunk_indexes.iter().filter(|c| c.message_start_time < hi && c.message_end_time >= lo) {
-        for m in summary.stream_chunk(&buf, ci).map_err(|e| bad(format!("chunk at offset {}: {e}", ci.chunk_start_offset)))? {
-            let m = m.map_err(|e| bad(format!("message: {e}")))?;
+        for m in summary.stream_chunk(&buf, ci).map_err(mc(format!("chunk at offset {}", ci.chunk_start_offset)))? {
+            let m = m.map_err(mc("message".into()))?;
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }
@@ -92,7 +95,7 @@ pub fn read_design(run_dir: &Path, id: u64) -> anyhow::Result<Recorded> {
         .zip(&contacts)
         .zip(&energy)
         .map(|((j, c), e)| sample_from(j, c, e).ok_or_else(|| bad(format!("design {id}: a trajectory message lacks a field"))))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>>>()?;
     Ok(Recorded { file: path, record, samples })
 }
 
@@ -106,15 +109,19 @@ fn rel(a: f64, b: f64) -> f64 {
 
 /// Replay design `id`: read it, re-simulate it with the run's problem (`problem.toml` in
 /// the run folder) and recording options, and compare.
-pub fn replay(run_dir: &Path, id: u64) -> anyhow::Result<Replay> {
+pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let recorded = read_design(run_dir, id)?;
     let problem = Problem::load(run_dir.join("problem.toml"))?;
     let run_json = run_dir.join("run.json");
-    let run: Value = serde_json::from_str(&std::fs::read_to_string(&run_json).map_err(|e| anyhow::anyhow!("{}: {e}", run_json.display()))?)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", run_json.display()))?;
-    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|e| anyhow::anyhow!("{}: field `recording`: {e}", run_json.display()))?;
+    let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
+    let run: Value = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
+    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|source| Error::Json { path: run_json.clone(), what: "field `recording`", source })?;
     let p = &recorded.record["parameters"];
-    let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"].iter().map(|k| p[k].as_f64()).collect::<Option<_>>().ok_or_else(|| anyhow::anyhow!("{}: design {id}: field `parameters` incomplete", recorded.file.display()))?;
+    let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"]
+        .iter()
+        .map(|k| p[k].as_f64())
+        .collect::<Option<_>>()
+        .ok_or_else(|| Error::Recording { path: recorded.file.clone(), message: format!("design {id}: field `parameters` incomplete") })?;
     let design = Design::from_array(&x.try_into().expect("six"));
     let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
     let fresh: Vec<Sample> = match tr {

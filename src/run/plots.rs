@@ -1,17 +1,19 @@
 //! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
 
 use super::gripper::{GripperInfo, GripperProblem};
-use super::nsga2::Nsga2State;
+use crate::error::{Error, Result};
+use crate::optim::nsga2::Nsga2State;
 use plotters::prelude::*;
 use std::path::Path;
 
-fn e<E: std::fmt::Display>(x: E) -> anyhow::Error {
-    anyhow::anyhow!("plot: {x}")
+/// The error of drawing into `path`.
+fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |x| Error::Plot { path: path.to_path_buf(), source: Box::new(x) }
 }
 
 /// Scatter matrix of the four objectives (natural sense) of the feasible final population;
 /// the non-dominated front in red.
-pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> anyhow::Result<()> {
+pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
     let names = ["max_offset (mm)", "alpha", "mean force (N)", "t_stab (ms)"];
     let scale = [1e3, 1.0, 1.0, 1e3];
     let pts: Vec<([f64; 4], bool)> = st
@@ -25,8 +27,8 @@ pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperI
         })
         .collect();
     let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
-    root.fill(&WHITE).map_err(e)?;
-    let root = root.titled(&format!("final population: {} feasible, generation {}", pts.len(), st.generation), ("sans-serif", 20)).map_err(e)?;
+    root.fill(&WHITE).map_err(plot_error(path))?;
+    let root = root.titled(&format!("final population: {} feasible, generation {}", pts.len(), st.generation), ("sans-serif", 20)).map_err(plot_error(path))?;
     let cells = root.split_evenly((4, 4));
     for (idx, cell) in cells.iter().enumerate() {
         let (row, col) = (idx / 4, idx % 4);
@@ -46,7 +48,7 @@ pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperI
             .x_label_area_size(if row == 3 { 30 } else { 12 })
             .y_label_area_size(if col == 0 { 45 } else { 12 })
             .build_cartesian_2d(range(col), range(row))
-            .map_err(e)?;
+            .map_err(plot_error(path))?;
         let mut mesh = chart.configure_mesh();
         mesh.x_labels(3).y_labels(3);
         if row == 3 {
@@ -55,23 +57,23 @@ pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperI
         if col == 0 {
             mesh.y_desc(names[row]);
         }
-        mesh.draw().map_err(e)?;
+        mesh.draw().map_err(plot_error(path))?;
         if row == col {
             continue;
         }
         chart
             .draw_series(pts.iter().filter(|p| !p.1).map(|p| Circle::new((p.0[col], p.0[row]), 2, RGBColor(150, 150, 150).filled())))
-            .map_err(e)?;
-        chart.draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled()))).map_err(e)?;
+            .map_err(plot_error(path))?;
+        chart.draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled()))).map_err(plot_error(path))?;
     }
-    root.present().map_err(e)?;
+    root.present().map_err(plot_error(path))?;
     Ok(())
 }
 
 /// Normalised hypervolume of the feasible front per generation.
-pub fn hypervolume(path: &Path, hv: &[f64]) -> anyhow::Result<()> {
+pub fn hypervolume(path: &Path, hv: &[f64]) -> Result<()> {
     let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
-    root.fill(&WHITE).map_err(e)?;
+    root.fill(&WHITE).map_err(plot_error(path))?;
     let ymax = hv.iter().cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
     let mut chart = ChartBuilder::on(&root)
         .caption("hypervolume of the feasible front (normalised objectives)", ("sans-serif", 18))
@@ -79,11 +81,11 @@ pub fn hypervolume(path: &Path, hv: &[f64]) -> anyhow::Result<()> {
         .x_label_area_size(35)
         .y_label_area_size(60)
         .build_cartesian_2d(1f64..(hv.len().max(2) as f64), 0f64..ymax)
-        .map_err(e)?;
-    chart.configure_mesh().x_desc("generation").y_desc("hypervolume").draw().map_err(e)?;
+        .map_err(plot_error(path))?;
+    chart.configure_mesh().x_desc("generation").y_desc("hypervolume").draw().map_err(plot_error(path))?;
     chart
         .draw_series(LineSeries::new(hv.iter().enumerate().map(|(g, v)| (g as f64 + 1.0, if v.is_finite() { *v } else { 0.0 })), BLUE.stroke_width(2)))
-        .map_err(e)?;
-    root.present().map_err(e)?;
+        .map_err(plot_error(path))?;
+    root.present().map_err(plot_error(path))?;
     Ok(())
 }

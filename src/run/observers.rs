@@ -1,11 +1,15 @@
-//! Running NSGA-II in argmin's `Executor`, with observers for progress (indicatif) and
-//! checkpoints (after the initial population and after every generation).
+//! argmin observers of an NSGA-II run: progress (indicatif), checkpoints and recording
+//! (after the initial population and after every generation), and a crash hook for tests.
+//! Library errors pass through argmin's error unchanged and come back from
+//! [`crate::optim::nsga2::execute`] as they were.
 
-use super::checkpoint::{settings_hash, Checkpoint};
-use super::nsga2::{Nsga2, Nsga2Settings, Nsga2State};
-use super::MooProblem;
-use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{Error, Executor, KV};
+use super::checkpoint::Checkpoint;
+use super::gripper::GripperInfo;
+use crate::optim::nsga2::{Nsga2Settings, Nsga2State};
+use crate::optim::Individual;
+use crate::record::Recorder;
+use argmin::core::observers::Observe;
+use argmin::core::{Error, KV};
 use serde::{de::DeserializeOwned, Serialize};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -79,17 +83,9 @@ pub struct CheckpointObserver {
 
 impl CheckpointObserver {
     fn save<I: Serialize + DeserializeOwned + Clone>(&self, state: &Nsga2State<I>) -> Result<(), Error> {
-        let cp = Checkpoint {
-            format: super::checkpoint::FORMAT.into(),
-            version: super::checkpoint::VERSION,
-            problem_hash: self.problem_hash.clone(),
-            settings_hash: settings_hash(&self.settings, &self.options),
-            settings: self.settings.clone(),
-            options: self.options.clone(),
-            state: state.clone(),
-            wall_s: self.wall_before + self.start.elapsed().as_secs_f64(),
-        };
-        cp.save(&self.path).map_err(|e| Error::msg(e.to_string()))
+        let wall_s = self.wall_before + self.start.elapsed().as_secs_f64();
+        let cp = Checkpoint::new(self.problem_hash.clone(), self.settings.clone(), self.options.clone(), state.clone(), wall_s);
+        Ok(cp.save(&self.path)?)
     }
 }
 
@@ -102,27 +98,39 @@ impl<I: Serialize + DeserializeOwned + Clone> Observe<Nsga2State<I>> for Checkpo
     }
 }
 
-/// Run NSGA-II from `state` (a fresh `Nsga2State::new()` or a loaded checkpoint state)
-/// until `state.max_generations`, with the given observers. Returns the problem and the
-/// final state; a ctrl-c stops after the current generation (its checkpoint is written).
-pub fn execute<P, O>(problem: P, settings: Nsga2Settings, state: Nsga2State<P::Info>, observers: O, ctrlc: bool) -> Result<(P, Nsga2State<P::Info>), Error>
-where
-    P: MooProblem + 'static,
-    P::Info: 'static,
-    O: FnOnce(Executor<P, Nsga2, Nsga2State<P::Info>>) -> Executor<P, Nsga2, Nsga2State<P::Info>>,
-{
-    let exec = Executor::new(problem, Nsga2::new(settings)).configure(|_| state).ctrlc(ctrlc).timer(false);
-    let exec = observers(exec);
-    let mut res = exec.run()?;
-    let p = res.problem.take_problem().ok_or_else(|| Error::msg("problem lost"))?;
-    Ok((p, res.state))
+/// Records each generation's evaluated designs into one shard (shared, so that the caller
+/// can read the recorder's counters after the run).
+#[derive(Clone)]
+pub struct RecordingObserver(pub Arc<Mutex<Recorder>>);
+
+impl RecordingObserver {
+    fn record(&self, st: &Nsga2State<GripperInfo>) -> Result<(), Error> {
+        let designs: Vec<&Individual<GripperInfo>> = st.last_evaluated.iter().collect();
+        Ok(self.0.lock().expect("recorder lock").record_generation(st.generation, &designs)?)
+    }
 }
 
-/// Add an observer to an executor that is called every generation.
-pub fn observe<P, OBS>(exec: Executor<P, Nsga2, Nsga2State<P::Info>>, obs: OBS) -> Executor<P, Nsga2, Nsga2State<P::Info>>
-where
-    P: MooProblem,
-    OBS: Observe<Nsga2State<P::Info>> + 'static,
-{
-    exec.add_observer(obs, ObserverMode::Always)
+impl Observe<Nsga2State<GripperInfo>> for RecordingObserver {
+    fn observe_init(&mut self, _name: &str, st: &Nsga2State<GripperInfo>, _kv: &KV) -> Result<(), Error> {
+        self.record(st)
+    }
+    fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> Result<(), Error> {
+        self.record(st)
+    }
+}
+
+/// Test hook: fails once generation `.0` is complete (after the observers added before it
+/// ran, so its checkpoint is written), as a crash would.
+pub struct CrashAfter(pub u64);
+
+impl<I> Observe<Nsga2State<I>> for CrashAfter {
+    fn observe_iter(&mut self, s: &Nsga2State<I>, _kv: &KV) -> Result<(), Error> {
+        if s.generation >= self.0 {
+            return Err(Error::msg(format!("simulated crash after generation {}", s.generation)));
+        }
+        Ok(())
+    }
+    fn observe_init(&mut self, _n: &str, s: &Nsga2State<I>, kv: &KV) -> Result<(), Error> {
+        self.observe_iter(s, kv)
+    }
 }

@@ -1,10 +1,14 @@
 //! The gripper design problem: the staged pipeline as a [`MooProblem`] over
-//! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10).
+//! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
+//! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use super::{Evaluated, Infeasibility, MooProblem};
+use crate::optim::{Evaluated, Individual, Infeasibility, MooProblem};
 use crate::eval::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
 use crate::params::{Design, Problem};
+use crate::record::{DesignEntry, Recordable};
 use serde::{Deserialize, Serialize};
+
+pub use crate::record::TrajectoryKeep;
 
 /// What is kept of each evaluated design (deterministic fields, plus wall-clock timings).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -53,16 +57,24 @@ impl GripperInfo {
     }
 }
 
-/// Which stage-3 trajectories the problem keeps for a recorder.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum TrajectoryKeep {
-    /// None (no recorder, or designs only).
-    None,
-    /// Only of feasible designs.
-    Feasible,
-    /// Of every design that reached stage 3.
-    All,
+impl Recordable for Individual<GripperInfo> {
+    fn entry(&self) -> DesignEntry<'_> {
+        let i = &self.eval.info;
+        DesignEntry {
+            id: self.id,
+            generation: self.generation,
+            parameters: self.x.as_slice().try_into().expect("six design variables"),
+            lengths: i.lengths,
+            l_hand: i.l_hand,
+            objectives: i.objectives,
+            failed_stage: i.failed_stage,
+            reason: i.reason.as_deref(),
+            violation: i.violation,
+            sim_work: i.sim_work,
+            stage_seconds: i.stage_seconds,
+            trajectory: i.trajectory.as_deref(),
+        }
+    }
 }
 
 /// The gripper problem for the optimiser.
