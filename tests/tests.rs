@@ -3,6 +3,7 @@
 
 mod common;
 
+mod architecture;
 mod constraints;
 mod dynamics;
 mod kinematics;
