@@ -46,14 +46,16 @@ run: build
 	@id=$$(sed -n 2p $(OUT)/pareto.csv | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.
-# The work-precision table includes diffsol's solvers (optional feature "diffsol").
-bench:
-	$(CARGO) build --release --locked --features diffsol
+# diffsol's solvers are compared by a cargo bench of the package crates/diffsol-bench (so the
+# gripopt binary never depends on diffsol), which writes its own
+# results/bench/work_precision_diffsol.csv and .svg next to work_precision.csv.
+bench: build
 	$(BIN) bench static $(PROBLEM)
 	$(BIN) bench work-precision $(PROBLEM)
 	$(BIN) bench nsga
 	$(BIN) bench replay $(PROBLEM)
 	$(BIN) moo-test all --seeds 1-11
+	$(CARGO) bench --locked -p gripopt-diffsol-bench --bench diffsol -- $(PROBLEM)
 
 clean:
 	$(CARGO) clean

@@ -116,6 +116,16 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// A benchmark could not run as set up (a design discarded, a reference run that does
+    /// not reach stability, a failed plot or step of the benchmark).
+    #[error("{message}")]
+    Bench {
+        /// What failed.
+        message: String,
+        /// The error behind it, if any.
+        #[source]
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
+    },
 }
 
 /// Result with the library's [`Error`].
@@ -125,5 +135,15 @@ impl Error {
     /// An I/O error on `path` while doing `action`.
     pub fn io(path: impl Into<PathBuf>, action: &'static str, source: std::io::Error) -> Self {
         Error::Io { path: path.into(), action, source }
+    }
+
+    /// A benchmark error with `message` and no source.
+    pub fn bench(message: impl Into<String>) -> Self {
+        Error::Bench { message: message.into(), source: None }
+    }
+
+    /// A benchmark error with `message`, caused by `source`.
+    pub fn bench_from(message: impl Into<String>, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        Error::Bench { message: message.into(), source: Some(source.into()) }
     }
 }

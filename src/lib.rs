@@ -10,6 +10,7 @@
 // Index loops mirror the formulas of MODEL.md (rows, contacts, objectives).
 #![allow(clippy::needless_range_loop)]
 
+pub mod bench;
 pub mod error;
 pub mod fsutil;
 pub mod math;

@@ -8,9 +8,6 @@ use std::path::PathBuf;
 mod bench;
 mod optcmd;
 mod report;
-mod workprec;
-#[cfg(feature = "diffsol")]
-mod diffsol_cmp;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]

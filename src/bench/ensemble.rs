@@ -1,0 +1,90 @@
+//! `gripopt bench work-precision --sample N`: work against precision over random designs.
+
+use super::work_precision::{check_atol, rel};
+use super::{progress, random_design, time_it};
+use crate::error::{Error, Result};
+use crate::eval::{stage_kinematics, stage_statics};
+use crate::params::Problem;
+use crate::sim::{simulate_grasp, Method, SimOptions};
+use rand::SeedableRng;
+use std::io::Write;
+use std::path::Path;
+
+/// The `f`-quantile (nearest rank) of the non-NaN values of `v`; NaN if none.
+fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
+    v.retain(|x| !x.is_nan());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * f).round() as usize]
+}
+
+/// Work-precision over an ensemble of `n` random designs of the box that pass stage 2
+/// (seed `seed`): for each method and rtol, the median CPU time per simulation and the
+/// median / 90th-percentile relative errors in t_stab and E_cyl against Radau IIA at rtol
+/// 1e-11, and how many verdicts differ. `atol` as in [`super::WorkPrecision`]; `path` is
+/// the problem file, for messages. Writes work_precision_ensemble.csv into `out_dir`.
+pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u64, out_dir: &Path, atol: Option<f64>) -> Result<()> {
+    if n == 0 {
+        return Err(Error::Input("--sample 0: must be at least 1".into()));
+    }
+    check_atol(atol)?;
+    let p = problem;
+    let s = &p.scene;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000) };
+    let tight = SimOptions::diagnostic(1e-11, 1e-14, 5_000_000);
+    let mut cases = vec![];
+    let mut drawn = 0usize;
+    let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
+    while cases.len() < n && drawn < 1000 * n {
+        drawn += 1;
+        let d = random_design(p, &mut rng);
+        let Ok(k) = stage_kinematics(&d, s) else { continue };
+        let Ok(st) = stage_statics(&k.finger, s) else { continue };
+        let reference = simulate_grasp(&k.finger, s, &st, &tight);
+        if reference.t_stab.is_none() {
+            continue;
+        }
+        cases.push((k.finger, st, reference));
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    if cases.is_empty() {
+        return Err(Error::bench(format!("{}: no random design of the box passed stage 2 and reached stability in {drawn} draws", path.display())));
+    }
+    println!("ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
+    let csv = out_dir.join("work_precision_ensemble.csv");
+    let io = |e| Error::io(&csv, "cannot write", e);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
+    writeln!(w, "method,rtol,designs,cpu_median_s,steps_median,rhs_median,err_t_stab_median,err_t_stab_p90,err_e_cyl_median,err_e_cyl_p90,verdicts_differing").map_err(io)?;
+    println!("{:<8} {:>7} {:>10} {:>7} {:>7} {:>11} {:>11} {:>11} {:>11} verdicts differ", "method", "rtol", "cpu med", "steps", "rhs", "t_stab med", "t_stab p90", "E_cyl med", "E_cyl p90");
+    for m in [Method::Radau5, Method::Dopri5, Method::TrBdf2] {
+        for rtol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+            if m == Method::TrBdf2 && rtol < 1e-7 {
+                continue;
+            }
+            let o = diag(m, rtol);
+            let (mut cpu, mut steps, mut rhs, mut ets, mut ee) = (vec![], vec![], vec![], vec![], vec![]);
+            let mut differ = 0;
+            for (f, st, reference) in &cases {
+                let (r, _, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 0.05, 7);
+                cpu.push(tmed);
+                steps.push(r.stats.steps as f64);
+                rhs.push(r.rhs_evals as f64);
+                ets.push(rel(r.t_stab, reference.t_stab));
+                ee.push(rel(r.first.map(|x| x.impact.e_cyl), reference.first.map(|x| x.impact.e_cyl)));
+                differ += usize::from(r.outcome != reference.outcome);
+            }
+            let q = quantile;
+            let row = (q(cpu, 0.5), q(steps, 0.5), q(rhs, 0.5), q(ets.clone(), 0.5), q(ets, 0.9), q(ee.clone(), 0.5), q(ee, 0.9));
+            writeln!(w, "{m:?},{rtol:e},{},{:e},{},{},{:e},{:e},{:e},{:e},{differ}", cases.len(), row.0, row.1, row.2, row.3, row.4, row.5, row.6).map_err(io)?;
+            println!("{:<8} {:>7.0e} {:>8.3}ms {:>7} {:>7} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {differ}", format!("{m:?}"), rtol, row.0 * 1e3, row.1, row.2, row.3, row.4, row.5, row.6);
+        }
+    }
+    w.flush().map_err(io)?;
+    println!("wrote {}", csv.display());
+    Ok(())
+}

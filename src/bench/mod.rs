@@ -1,0 +1,60 @@
+//! Benchmarks: the speed figures of docs/benchmarks.md (not tests). `gripopt bench …` calls
+//! them; the diffsol comparison (`benches/diffsol.rs`, a cargo bench) reuses the
+//! work-precision reference, error measures and table writers from here. Each benchmark
+//! prints its figures to stdout and writes its tables into the folder it is given.
+//!
+//! The top layer of the library: it may use everything below it.
+
+mod ensemble;
+mod nsga;
+mod replay;
+mod static_eval;
+mod table;
+mod work_precision;
+
+pub use ensemble::work_precision_ensemble;
+pub use nsga::nsga;
+pub use replay::{replay, ReplayBench};
+pub use static_eval::static_pipeline;
+pub use table::{plot, print_table, print_targets, write_csv};
+pub use work_precision::{check_atol, work_precision, Measured, Reference, Row, WorkPrecision, RTOLS};
+
+use std::time::Instant;
+
+/// Run `f` at least three times, and on while under `budget_s` seconds in all and fewer
+/// than `max_reps` runs: the last result and the minimum and median times in seconds.
+pub fn time_it<T, F: FnMut() -> T>(mut f: F, budget_s: f64, max_reps: usize) -> (T, f64, f64) {
+    let mut ts = vec![];
+    let start = Instant::now();
+    let mut last = None;
+    while ts.len() < 3 || (start.elapsed().as_secs_f64() < budget_s && ts.len() < max_reps) {
+        let t0 = Instant::now();
+        let r = f();
+        ts.push(t0.elapsed().as_secs_f64());
+        last = Some(r);
+    }
+    ts.sort_by(f64::total_cmp);
+    (last.expect("ran"), ts[0], ts[ts.len() / 2])
+}
+
+/// Minimum and median of a non-empty list.
+fn min_med(mut v: Vec<f64>) -> (f64, f64) {
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2])
+}
+
+/// A progress bar with `template` (a constant, known to be valid).
+fn progress(len: u64, template: &'static str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(len);
+    pb.set_style(indicatif::ProgressStyle::with_template(template).expect("template"));
+    pb
+}
+
+/// A uniform random design in the bounds of `p` (six draws in field order).
+fn random_design(p: &crate::params::Problem, rng: &mut impl rand::Rng) -> crate::params::Design {
+    let mut x = [0.0; 6];
+    for i in 0..6 {
+        x[i] = rng.random_range(p.bounds.lo[i]..=p.bounds.hi[i]);
+    }
+    crate::params::Design::from_array(&x)
+}

@@ -1,0 +1,61 @@
+//! `gripopt bench nsga`: non-dominated sorting and the optimiser's own overhead.
+
+use super::min_med;
+use crate::error::{Error, Result};
+use crate::optim::sort::rank_and_crowding;
+use crate::optim::testproblems::{reference_settings, TestProblem};
+use crate::optim::{Infeasibility, MooProblem};
+use rand::{Rng, SeedableRng};
+
+/// Non-dominated sort + crowding distance on uniform random sets (2 and 4 objectives, 200 to
+/// 10 000 points), and NSGA-II's overhead per generation on ZDT1 (everything but
+/// evaluation), `reps` repetitions each (at least 3); prints min / median times.
+pub fn nsga(reps: usize) -> Result<()> {
+    let reps = reps.max(3);
+    println!("non-dominated sort + crowding distance, uniform random points, 1 thread, {reps} repetitions (min / median)");
+    for m in [2usize, 4] {
+        for n in [200usize, 1000, 10000] {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64 + m as u64);
+            let pts: Vec<Vec<f64>> = (0..n).map(|_| (0..m).map(|_| rng.random::<f64>()).collect()).collect();
+            let f: Vec<&[f64]> = pts.iter().map(|p| p.as_slice()).collect();
+            let cv = vec![Infeasibility::FEASIBLE; n];
+            let mut ts = vec![];
+            for _ in 0..reps {
+                let t0 = std::time::Instant::now();
+                std::hint::black_box(rank_and_crowding(&f, &cv));
+                ts.push(t0.elapsed().as_secs_f64());
+            }
+            let (a, b) = min_med(ts);
+            println!("  {m} objectives, {n:>5} points: {:.3} / {:.3} ms", a * 1e3, b * 1e3);
+        }
+    }
+    // optimiser overhead on ZDT1: whole run minus evaluation time, per generation
+    let which = TestProblem::Zdt1;
+    let gens = 250u64;
+    let mut per_gen = vec![];
+    let inst = which.instance();
+    let x: Vec<f64> = vec![0.5; 30];
+    let t0 = std::time::Instant::now();
+    let k = 100_000;
+    for _ in 0..k {
+        std::hint::black_box(inst.evaluate(std::hint::black_box(&x)));
+    }
+    let eval_s = t0.elapsed().as_secs_f64() / k as f64;
+    for rep in 0..reps.min(10) {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| Error::bench_from("bench nsga: thread pool", e))?;
+        let t0 = std::time::Instant::now();
+        pool.install(|| {
+            use argmin::core::State;
+            let st = crate::optim::nsga2::Nsga2State::new().with_max_generations(gens);
+            let mut s = reference_settings(which, rep as u64 + 1, 100);
+            s.hv_ref.clear();
+            crate::optim::nsga2::execute(which.instance(), s, st, |e| e, false)
+        })
+        .map_err(|e| Error::Optimiser(e.to_string()))?;
+        let total = t0.elapsed().as_secs_f64();
+        per_gen.push((total - eval_s * 100.0 * gens as f64) / gens as f64);
+    }
+    let (a, b) = min_med(per_gen);
+    println!("NSGA-II overhead per generation on ZDT1 (pop 100, 250 generations, 1 thread, evaluation time {:.2} us/eval subtracted): {:.3} / {:.3} ms", eval_s * 1e6, a * 1e3, b * 1e3);
+    Ok(())
+}

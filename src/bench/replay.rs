@@ -1,0 +1,101 @@
+//! `gripopt bench replay`: finding, reading and replaying designs in a large recorded run.
+
+use super::min_med;
+use crate::error::{Error, Result};
+use crate::run::gripper::{GripperProblem, TrajectoryKeep};
+use crate::optim::{Individual, MooProblem};
+use crate::params::Problem;
+use crate::record::writer::{write_shard, ShardEntry};
+use rand::{Rng, SeedableRng};
+use std::path::{Path, PathBuf};
+
+/// Settings of the replay benchmark.
+#[derive(Debug, Clone)]
+pub struct ReplayBench {
+    /// Recorded designs in the synthetic run.
+    pub designs: u64,
+    /// Designs per shard (at least 1).
+    pub per_shard: u64,
+    /// Folder of the synthetic run (cleared first).
+    pub out: PathBuf,
+    /// Keep the synthetic run afterwards.
+    pub keep: bool,
+}
+
+fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
+    move |source| Error::Json { path: path.to_path_buf(), what: "synthetic run file", source }
+}
+
+/// Replay speed: writes a synthetic run of `b.designs` copies of the nominal design's real
+/// evaluation and recorded grasp (the problem's nominal), then finds, reads and replays 50
+/// random ids; prints min / median times.
+pub fn replay(problem: &Problem, b: &ReplayBench) -> Result<()> {
+    let (p, n, out) = (problem, b.designs, b.out.as_path());
+    let per_shard = b.per_shard.max(1);
+    if out.exists() {
+        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot clear", e))?;
+    }
+    let rec_dir = out.join("recording");
+    std::fs::create_dir_all(&rec_dir).map_err(|e| Error::io(&rec_dir, "cannot create", e))?;
+    let problem_toml = out.join("problem.toml");
+    std::fs::write(&problem_toml, &p.source_text).map_err(|e| Error::io(&problem_toml, "cannot write", e))?;
+    let opts = crate::record::RecordOptions { scene_dt: 0.0, ..Default::default() };
+    let run_json = out.join("run.json");
+    let text = serde_json::to_string_pretty(&serde_json::json!({ "synthetic": true, "recording": opts })).map_err(json_err(&run_json))?;
+    std::fs::write(&run_json, text).map_err(|e| Error::io(&run_json, "cannot write", e))?;
+    // the nominal design's real evaluation and recorded grasp, under every id
+    let mut gp = GripperProblem::new(p.clone());
+    gp.keep_trajectories = TrajectoryKeep::All;
+    let x = p.nominal.to_array().to_vec();
+    let eval = gp.evaluate(&x);
+    let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.samples.len());
+    let meta = std::collections::BTreeMap::from([("synthetic".to_string(), "gripopt bench replay".to_string())]);
+    let t0 = std::time::Instant::now();
+    let shards = n.div_ceil(per_shard);
+    let pb = super::progress(shards, "writing synthetic run [{bar:30}] {pos}/{len} shards");
+    let mut index = String::new();
+    let mut bytes = 0u64;
+    let index_path = rec_dir.join("index.jsonl");
+    for k in 0..shards {
+        let ids = (k * per_shard)..((k + 1) * per_shard).min(n);
+        let inds: Vec<Individual<_>> = ids.clone().map(|id| Individual { id, generation: k + 1, x: x.clone(), eval: eval.clone() }).collect();
+        let refs: Vec<&Individual<_>> = inds.iter().collect();
+        let file = format!("gen-{:05}.mcap", k + 1);
+        let shard = rec_dir.join(&file);
+        let b = write_shard(&shard, p, &meta, &refs, &opts).map_err(|e| Error::bench_from(format!("bench replay: writing {}", shard.display()), e))?;
+        bytes += b;
+        let entry = ShardEntry { generation: k + 1, file, first_id: ids.start, last_id: ids.end - 1, designs: ids.end - ids.start, bytes: b };
+        index.push_str(&serde_json::to_string(&entry).map_err(json_err(&index_path))?);
+        index.push('\n');
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    std::fs::write(&index_path, index).map_err(|e| Error::io(&index_path, "cannot write", e))?;
+    let write_s = t0.elapsed().as_secs_f64();
+    println!("synthetic run: {n} designs ({samples} trajectory samples each) in {shards} shards, {:.1} MB, written in {:.1} s", bytes as f64 / 1e6, write_s);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut t_read, mut t_full) = (vec![], vec![]);
+    for _ in 0..50 {
+        let id = rng.random_range(0..n);
+        let a = std::time::Instant::now();
+        let r = crate::record::replay::read_design(out, id).map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
+        t_read.push(a.elapsed().as_secs_f64());
+        if r.record["id"].as_u64() != Some(id) {
+            return Err(Error::Recording { path: r.file, message: format!("asked for design {id}, wrong design returned") });
+        }
+        let a = std::time::Instant::now();
+        let rp = crate::record::replay::replay(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
+        t_full.push(a.elapsed().as_secs_f64());
+        if !rp.verified {
+            return Err(Error::Recording { path: rp.recorded.file, message: format!("design {id} did not verify") });
+        }
+    }
+    let (r0, r1) = min_med(t_read);
+    let (f0, f1) = min_med(t_full);
+    println!("find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)", r0 * 1e3, r1 * 1e3);
+    println!("replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
+    if !b.keep {
+        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e))?;
+    }
+    Ok(())
+}

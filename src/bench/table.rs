@@ -1,0 +1,87 @@
+//! The work-precision table as CSV, as a printed table, and as an SVG plot.
+
+use super::work_precision::Row;
+use crate::error::{Error, Result};
+use std::io::Write;
+use std::path::Path;
+
+/// Writes `rows` as CSV to `path` (its folder created if need be).
+pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create", e))?;
+    }
+    let io = |e| Error::io(path, "cannot write", e);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
+    writeln!(w, "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict").map_err(io)?;
+    for r in rows {
+        writeln!(w, "{},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}", r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, r.verdict_same).map_err(io)?;
+    }
+    w.flush().map_err(io)
+}
+
+/// Prints `rows` as a table.
+pub fn print_table(rows: &[Row]) {
+    println!("{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} verdict", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)");
+    for r in rows {
+        println!("{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", r.method, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
+    }
+}
+
+/// Labels of `rows` in order, each once per run of equal labels.
+fn labels(rows: &[Row]) -> Vec<&'static str> {
+    let mut labels: Vec<&'static str> = rows.iter().map(|r| r.method).collect();
+    labels.dedup();
+    labels
+}
+
+/// Prints, per method, the cheapest run (median CPU) with t_stab within 1e-5.
+pub fn print_targets(rows: &[Row]) {
+    for m in labels(rows) {
+        let best = rows.iter().filter(|r| r.method == m && r.err_t_stab <= 1e-5).min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
+        match best {
+            Some(r) => println!("{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
+            None => println!("{m}: no tolerance reached 1e-5 on t_stab"),
+        }
+    }
+}
+
+/// Plots median CPU time against the relative error in t_stab, one line per method, to the
+/// SVG file `path`.
+pub fn plot(rows: &[Row], path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let e = |e| Error::bench_from(format!("plot {}", path.display()), e);
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let pts: Vec<_> = rows.iter().filter(|r| r.err_t_stab.is_finite() && r.err_t_stab > 0.0).collect();
+    let (xmin, xmax) = pts.iter().fold((1e-14f64, 1.0f64), |(a, b), r| (a.min(r.err_t_stab), b.max(r.err_t_stab)));
+    let (ymin, ymax) = pts.iter().fold((1e-4f64, 1e-3f64), |(a, b), r| (a.min(r.cpu_med), b.max(r.cpu_med)));
+    let mut chart = ChartBuilder::on(&root)
+        .caption("work-precision: nominal grasp to t_stab", ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((xmin * 0.5..xmax * 2.0).log_scale(), (ymin * 0.8..ymax * 1.25).log_scale())
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("relative error in t_stab")
+        .y_desc("CPU time, median (s)")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(e)?;
+    let palette = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK, RGBColor(255, 140, 0)];
+    for (j, m) in labels(rows).into_iter().enumerate() {
+        let color = palette[j % palette.len()];
+        let series: Vec<(f64, f64)> = pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect();
+        chart
+            .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
+            .map_err(e)?
+            .label(m.to_string())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart.draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(e)?;
+    }
+    chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw().map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
