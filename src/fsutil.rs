@@ -1,7 +1,7 @@
 //! File-system helpers shared by the layers that write files (record, run). No layer
 //! dependencies besides the error type.
 
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use std::io::Write;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Stage-1/2 boundary cases (MODEL.md §7, §10, §13 items 1, 2).
 use crate::common::*;
 use gripopt::math::dist_to_singular;
-use gripopt::model::constraints::{singularity_sweep, SweepFailure};
+use gripopt::model::{singularity_sweep, SweepFailure};
 use gripopt::model::Finger;
 use gripopt::eval::{evaluate, EvalOptions, Reason};
 use gripopt::params::Design;

@@ -1,8 +1,8 @@
 //! Grasp dynamics: MODEL.md §11 items 3, 4, 6, 7; free closing vs an independent RK4;
 //! tolerance stability; the hard cases of §13.
 use crate::common::*;
-use gripopt::model::contact::flores_normal;
-use gripopt::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force};
+use gripopt::model::flores_normal;
+use gripopt::model::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};
 use gripopt::eval::{stage_kinematics, stage_statics, StaticsResult};
 use gripopt::params::{Design, SceneParams};
@@ -392,7 +392,7 @@ fn knuckle_contact_is_flagged_and_finite() {
     // the end cap of the proximal capsule and the start cap of the distal capsule at once.
     // The accepted double count must be flagged, with finite forces.
     use gripopt::math::perp;
-    use gripopt::model::contact::CapsulePart;
+    use gripopt::model::CapsulePart;
     use gripopt::sim::Memory;
     let s = scene();
     let f = Finger::new(&nominal(), &s).unwrap();
@@ -516,7 +516,7 @@ fn knuckle_contact_in_a_full_simulation() {
     // simulation, run with the design's own spring preload, must flag the double-counted
     // cap and still end with a verdict, finite forces and a non-increasing energy, at
     // two tolerances.
-    use gripopt::model::statics::spring_preload;
+    use gripopt::model::spring_preload;
     let s = scene();
     let x = Design::from_array(&[0.03392756151429064, 0.07619270279217326, 0.01884084531015458, 0.23214368246908246, 0.33786516909439185, 99.28639227950096]);
     let f = stage_kinematics(&x, &s).expect("stage 1").finger;

@@ -2,7 +2,7 @@
 //! §5.3–5.5, §6.3) at random valid configurations of random designs.
 use crate::common::*;
 use gripopt::math::{perp, V2};
-use gripopt::model::dynamics::{kinetic_energy_bodies, mass_matrix, reduced};
+use gripopt::model::{kinetic_energy_bodies, mass_matrix, reduced};
 use gripopt::model::{Finger, Kin, Pose};
 use nalgebra::Vector2;
 use rand::{Rng, SeedableRng};

@@ -1,7 +1,7 @@
 //! Optimiser runs: determinism, exact resume (crash, kill -9, extension), refusal of
 //! changed inputs, corrupt checkpoints, and the reference hypervolume bands.
 use gripopt::run::{optimise, resume, RunSpec};
-use gripopt::optim::testproblems::{run_test, TestProblem};
+use gripopt::optim::{run_test, TestProblem};
 use std::path::{Path, PathBuf};
 
 /// Run folders go under target/mcap-check/ so that `make test` checks their recordings

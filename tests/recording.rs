@@ -2,8 +2,8 @@
 //! duplicates. Runs are written under target/mcap-check/ so that `make test` also checks
 //! every file with the independent Python reader (tools/check_mcap.py).
 use gripopt::run::{optimise, resume, RunSpec};
-use gripopt::record::replay::{read_design, replay};
-use gripopt::record::writer::read_index;
+use gripopt::record::{read_design, replay};
+use gripopt::record::read_index;
 use gripopt::record::RecordOptions;
 use std::path::{Path, PathBuf};
 

@@ -1,8 +1,8 @@
 //! Statics, spring sizing, symmetry and form closure (MODEL.md §6, §11 items 5, 8, 9, §13.11).
 use crate::common::*;
-use gripopt::model::closure::{admissible, closure_matrix, form_closure_test, grasp_at, max_offset, ClosureMatrix, OffsetFailure};
-use gripopt::model::dynamics::mass_matrix;
-use gripopt::model::statics::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
+use gripopt::model::{admissible, closure_matrix, form_closure_test, grasp_at, max_offset, ClosureMatrix, OffsetFailure};
+use gripopt::model::mass_matrix;
+use gripopt::model::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
 use gripopt::model::{Finger, Kin};
 use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::sim::{FingerOde, State};

@@ -2,7 +2,7 @@
 
 use super::work_precision::{check_atol, rel};
 use super::{progress, random_design, time_it};
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::params::Problem;
 use crate::sim::{simulate_grasp, Method, SimOptions};

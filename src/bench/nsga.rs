@@ -1,9 +1,9 @@
 //! `gripopt bench nsga`: non-dominated sorting and the optimiser's own overhead.
 
 use super::min_med;
-use crate::error::{Error, Result};
-use crate::optim::sort::rank_and_crowding;
-use crate::optim::testproblems::{reference_settings, TestProblem};
+use crate::{Error, Result};
+use crate::optim::rank_and_crowding;
+use crate::optim::{reference_settings, TestProblem};
 use crate::optim::{Infeasibility, MooProblem};
 use rand::{Rng, SeedableRng};
 
@@ -46,10 +46,10 @@ pub fn nsga(reps: usize) -> Result<()> {
         let t0 = std::time::Instant::now();
         pool.install(|| {
             use argmin::core::State;
-            let st = crate::optim::nsga2::Nsga2State::new().with_max_generations(gens);
+            let st = crate::optim::Nsga2State::new().with_max_generations(gens);
             let mut s = reference_settings(which, rep as u64 + 1, 100);
             s.hv_ref.clear();
-            crate::optim::nsga2::execute(which.instance(), s, st, |e| e, false)
+            crate::optim::execute(which.instance(), s, st, |e| e, false)
         })
         .map_err(|e| Error::Optimiser(e.to_string()))?;
         let total = t0.elapsed().as_secs_f64();

@@ -1,11 +1,11 @@
 //! `gripopt bench replay`: finding, reading and replaying designs in a large recorded run.
 
 use super::min_med;
-use crate::error::{Error, Result};
-use crate::run::gripper::{GripperProblem, TrajectoryKeep};
+use crate::{Error, Result};
+use crate::run::{GripperProblem, TrajectoryKeep};
 use crate::optim::{Individual, MooProblem};
 use crate::params::Problem;
-use crate::record::writer::{write_shard, ShardEntry};
+use crate::record::{write_shard, ShardEntry};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 
@@ -78,13 +78,13 @@ pub fn replay(problem: &Problem, b: &ReplayBench) -> Result<()> {
     for _ in 0..50 {
         let id = rng.random_range(0..n);
         let a = std::time::Instant::now();
-        let r = crate::record::replay::read_design(out, id).map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
+        let r = crate::record::read_design(out, id).map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
         t_read.push(a.elapsed().as_secs_f64());
         if r.record["id"].as_u64() != Some(id) {
             return Err(Error::Recording { path: r.file, message: format!("asked for design {id}, wrong design returned") });
         }
         let a = std::time::Instant::now();
-        let rp = crate::record::replay::replay(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
+        let rp = crate::record::replay(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
         t_full.push(a.elapsed().as_secs_f64());
         if !rp.verified {
             return Err(Error::Recording { path: rp.recorded.file, message: format!("design {id} did not verify") });

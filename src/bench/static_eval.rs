@@ -1,6 +1,6 @@
 //! `gripopt bench static`: throughput of the static pipeline (stages 0–2).
 
-use crate::error::Result;
+use crate::Result;
 use crate::eval::{evaluate, EvalOptions};
 use crate::params::{Design, Problem};
 use rand::SeedableRng;

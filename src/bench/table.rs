@@ -1,7 +1,7 @@
 //! The work-precision table as CSV, as a printed table, and as an SVG plot.
 
 use super::work_precision::Row;
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use std::io::Write;
 use std::path::Path;
 

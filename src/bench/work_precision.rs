@@ -4,8 +4,8 @@
 
 use super::table::{plot, print_table, print_targets, write_csv};
 use super::{progress, time_it};
-use crate::error::{Error, Result};
-use crate::model::geometry::Finger;
+use crate::{Error, Result};
+use crate::model::Finger;
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::params::{Design, Problem, SceneParams};
 use crate::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};

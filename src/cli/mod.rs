@@ -91,10 +91,10 @@ enum Cmd {
         #[arg(long, default_value_t = 0.5)]
         scene_ms: f64,
         /// zstd compression level of the recording (changes file sizes, never content).
-        #[arg(long, default_value_t = gripopt::record::options::DEFAULT_ZSTD_LEVEL)]
+        #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_LEVEL)]
         zstd_level: u32,
         /// zstd worker threads per recording shard (0 = compress on the writing thread).
-        #[arg(long, default_value_t = gripopt::record::options::DEFAULT_ZSTD_THREADS)]
+        #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_THREADS)]
         zstd_threads: u32,
     },
     /// Print a recorded design, re-simulate it and verify its trajectory.

@@ -1,7 +1,7 @@
 //! `gripopt moo-test`, `optimise`, `resume`.
 
 use anyhow::{bail, Context, Result};
-use gripopt::optim::testproblems::{run_test, TestProblem};
+use gripopt::optim::{run_test, TestProblem};
 
 /// `gripopt moo-test NAME --seed S | --seeds A-B [--json]`.
 pub fn moo_test(name: &str, seed: Option<u64>, seeds: Option<String>, json: bool, pop: usize, generations: Option<u64>) -> Result<()> {
@@ -77,7 +77,7 @@ pub fn summary(s: &gripopt::run::RunSummary) {
 pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path::Path>, plot: Option<&std::path::Path>) -> Result<()> {
     use std::io::Write;
     let t0 = std::time::Instant::now();
-    let r = gripopt::record::replay::replay(dir, id)?;
+    let r = gripopt::record::replay(dir, id)?;
     let secs = t0.elapsed().as_secs_f64();
     let samples = &r.recorded.samples;
     if let Some(path) = csv {

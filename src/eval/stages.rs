@@ -2,12 +2,12 @@
 //! reason and a non-negative violation (0 = satisfied), so an optimiser can rank infeasible
 //! designs. No heap allocation per evaluation.
 
-use crate::model::closure::{closure_matrix, form_closure_test, grasp_at, max_offset, OffsetFailure};
-use crate::model::constraints::{singularity_sweep, Sweep, SweepFailure};
-use crate::model::geometry::{Finger, GeomError};
-use crate::model::statics::spring_preload;
-use crate::model::statics::isotropy;
-pub use crate::model::statics::StaticsResult;
+use crate::model::{closure_matrix, form_closure_test, grasp_at, max_offset, OffsetFailure};
+use crate::model::{singularity_sweep, Sweep, SweepFailure};
+use crate::model::{Finger, GeomError};
+use crate::model::spring_preload;
+use crate::model::isotropy;
+pub use crate::model::StaticsResult;
 use crate::params::{Design, Problem, SceneParams};
 use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
 use std::fmt;

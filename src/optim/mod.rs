@@ -12,12 +12,12 @@
 //! This layer is pure: no files, no recording, no gripper. Runs with run folders,
 //! checkpoints, observers and the gripper problem live in the run layer above it.
 
-pub mod hv;
-pub mod nsga2;
-pub mod operators;
-pub mod serde_f64;
-pub mod sort;
-pub mod testproblems;
+mod hv;
+mod nsga2;
+mod operators;
+mod serde_f64;
+mod sort;
+mod testproblems;
 
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::cmp::Ordering;
@@ -126,3 +126,10 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
     }
     strictly
 }
+
+pub use hv::{hypervolume, igd, nondominated_below};
+pub use nsga2::{Nsga2, Nsga2Settings, Nsga2State, execute, observe};
+pub use operators::{Operators, polynomial_mutation, sbx};
+pub use serde_f64::{deserialize, serialize};
+pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};
+pub use testproblems::{Test, TestProblem, TestRun, c2_constraint, reference_settings, run_test};

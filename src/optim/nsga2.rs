@@ -397,15 +397,15 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
 /// Run NSGA-II from `state` (a fresh `Nsga2State::new()` or a restored state) until
 /// `state.max_generations` in argmin's `Executor`, after `observers` added its observers.
 /// Returns the problem and the final state; with `ctrlc`, a ctrl-c stops after the current
-/// generation (observers see it). An observer's [`crate::error::Error`] comes back as it
-/// was; any other executor error becomes [`crate::error::Error::Optimiser`].
-pub fn execute<P, O>(problem: P, settings: Nsga2Settings, state: Nsga2State<P::Info>, observers: O, ctrlc: bool) -> crate::error::Result<(P, Nsga2State<P::Info>)>
+/// generation (observers see it). An observer's [`crate::Error`] comes back as it
+/// was; any other executor error becomes [`crate::Error::Optimiser`].
+pub fn execute<P, O>(problem: P, settings: Nsga2Settings, state: Nsga2State<P::Info>, observers: O, ctrlc: bool) -> crate::Result<(P, Nsga2State<P::Info>)>
 where
     P: MooProblem + 'static,
     P::Info: 'static,
     O: FnOnce(Executor<P, Nsga2, Nsga2State<P::Info>>) -> Executor<P, Nsga2, Nsga2State<P::Info>>,
 {
-    use crate::error::Error as LibError;
+    use crate::Error as LibError;
     let exec = Executor::new(problem, Nsga2::new(settings)).configure(|_| state).ctrlc(ctrlc).timer(false);
     let exec = observers(exec);
     let mut res = exec.run().map_err(|e| e.downcast::<LibError>().unwrap_or_else(|e| LibError::Optimiser(e.to_string())))?;

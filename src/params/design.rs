@@ -1,6 +1,6 @@
 //! The design vector, its names and the design bounds (MODEL.md §1.2).
 
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::math::deg;
 use serde::{Deserialize, Serialize};
 

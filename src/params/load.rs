@@ -6,7 +6,7 @@
 use super::design::{Bounds, Design, DESIGN_NAMES};
 use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
 use super::scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::math::deg;
 use serde::{Deserialize, Serialize};
 use std::io::Read;

@@ -12,13 +12,15 @@
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
 //! [`Recordable`] for their own types and call [`Recorder::record_generation`].
 
-pub mod entry;
-pub mod messages;
-pub mod options;
-pub mod replay;
-pub mod schema;
-pub mod writer;
+mod entry;
+mod messages;
+mod options;
+mod replay;
+mod schema;
+mod writer;
 
 pub use entry::{DesignEntry, Recordable};
-pub use options::{RecordOptions, TrajectoryKeep};
-pub use writer::Recorder;
+pub use messages::{sample_from, window_start_ns, Contacts, Energy, Joints, SceneUpdate};
+pub use options::{DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, RecordOptions, TrajectoryKeep};
+pub use replay::{Recorded, Replay, read_design, replay};
+pub use writer::{Recorder, ShardEntry, read_index, write_shard};

@@ -5,7 +5,7 @@
 use super::messages::{sample_from, window_start_ns};
 use super::writer::read_index;
 use super::RecordOptions;
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::eval::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
 use crate::sim::Sample;

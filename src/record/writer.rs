@@ -2,7 +2,7 @@
 
 use super::entry::{DesignEntry, Recordable};
 use super::{messages, schema, RecordOptions};
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::model::Finger;
 use crate::params::{Design, Problem};

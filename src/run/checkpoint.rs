@@ -2,9 +2,9 @@
 //! fsync, rename, fsync of the folder) after every generation, with hashes of the problem
 //! file and of the settings so that a resume with changed inputs is refused.
 
-use crate::error::{Error, Result};
+use crate::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::optim::nsga2::{Nsga2Settings, Nsga2State};
+use crate::optim::{Nsga2Settings, Nsga2State};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::path::Path;

@@ -6,11 +6,16 @@
 //! This layer sits on top: it uses the pure optimiser ([`crate::optim`]) and the recorder
 //! ([`crate::record`]); neither of them names it.
 
-pub mod checkpoint;
-pub mod gripper;
-pub mod observers;
-pub mod outputs;
-pub mod plots;
-pub mod rundir;
+mod checkpoint;
+mod gripper;
+mod observers;
+mod outputs;
+mod plots;
+mod rundir;
 
-pub use rundir::{optimise, resume, RunInfo, RunSpec, RunStatus, RunSummary};
+pub use checkpoint::{Checkpoint, FORMAT, VERSION, settings_hash, sha256_hex};
+pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
+pub use observers::{CheckpointObserver, CrashAfter, ProgressObserver, RecordingObserver, SharedProgress};
+pub use outputs::{final_front, write_outputs};
+pub use plots::{hypervolume, pareto_matrix};
+pub use rundir::{Resume, RunInfo, RunSpec, RunStatus, RunSummary, optimise, resume};

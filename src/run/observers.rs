@@ -1,11 +1,11 @@
 //! argmin observers of an NSGA-II run: progress (indicatif), checkpoints and recording
 //! (after the initial population and after every generation), and a crash hook for tests.
 //! Library errors pass through argmin's error unchanged and come back from
-//! [`crate::optim::nsga2::execute`] as they were.
+//! [`crate::optim::execute`] as they were.
 
 use super::checkpoint::Checkpoint;
 use super::gripper::GripperInfo;
-use crate::optim::nsga2::{Nsga2Settings, Nsga2State};
+use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::optim::Individual;
 use crate::record::Recorder;
 use argmin::core::observers::Observe;

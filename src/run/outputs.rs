@@ -4,9 +4,9 @@
 //! `history.csv`, and the plots `pareto_matrix.svg` and `hypervolume.svg`.
 
 use super::gripper::{GripperInfo, GripperProblem};
-use crate::error::Result;
+use crate::Result;
 use crate::fsutil::write_atomic;
-use crate::optim::nsga2::Nsga2State;
+use crate::optim::Nsga2State;
 use crate::optim::Individual;
 use std::fmt::Write as _;
 use std::path::Path;

@@ -1,8 +1,8 @@
 //! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
 
 use super::gripper::{GripperInfo, GripperProblem};
-use crate::error::{Error, Result};
-use crate::optim::nsga2::Nsga2State;
+use crate::{Error, Result};
+use crate::optim::Nsga2State;
 use plotters::prelude::*;
 use std::path::Path;
 

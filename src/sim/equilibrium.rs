@@ -3,7 +3,7 @@
 use super::finger::{FingerEval, FingerModel};
 use super::memory::Memory;
 use crate::math::V2;
-use crate::model::statics::closed_pose;
+use crate::model::closed_pose;
 use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 

@@ -6,10 +6,10 @@
 use super::integrate::Piece;
 use super::memory::Memory;
 use crate::math::V2;
-use crate::model::contact::{capsule, flores_normal, CapsuleGeom, CapsulePart, FrictionLaw};
-use crate::model::dynamics::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
-use crate::model::geometry::{Finger, Pose};
-use crate::model::kinematics::Kin;
+use crate::model::{capsule, flores_normal, CapsuleGeom, CapsulePart, FrictionLaw};
+use crate::model::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
+use crate::model::{Finger, Pose};
+use crate::model::Kin;
 use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 

@@ -16,7 +16,7 @@ use anyhow::Result;
 use clap::Parser;
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use gripopt::bench::{print_table, print_targets, time_it, Measured, Reference, Row, WorkPrecision};
-use gripopt::model::geometry::Finger;
+use gripopt::model::Finger;
 use gripopt::eval::StaticsResult;
 use gripopt::params::{Design, Problem, SceneParams};
 use gripopt::sim::{impact, u_min};

@@ -6,8 +6,8 @@
 
 use super::{Point, Response, Scene};
 use crate::math::V2;
-use crate::model::geometry::Finger;
-use crate::model::statics::StaticsResult;
+use crate::model::Finger;
+use crate::model::StaticsResult;
 use crate::params::SceneParams;
 use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
 use crate::sim::driver::{self, End, Run};
