@@ -92,10 +92,20 @@ pub struct StaticsResult {
     pub max_offset: f64,
     /// What ended the offset scan.
     pub offset_ended_by: Option<OffsetFailure>,
-    /// Objective 2.
+    /// Objective 2: α of the problem's force model (D22).
     pub alpha: f64,
-    /// Objective 3 (N).
+    /// Objective 3 (N): F̃ of the problem's force model (D22).
     pub mean_force: f64,
+    /// α from f^μ (always computed, §6.5).
+    pub alpha_mu: f64,
+    /// F̃ from f^μ (N).
+    pub mean_force_mu: f64,
+    /// α from f⁰.
+    pub alpha_0: f64,
+    /// F̃ from f⁰ (N).
+    pub mean_force_0: f64,
+    /// The force model that chose `alpha` and `mean_force`.
+    pub force_model: crate::params::ForceModel,
 }
 
 /// Everything known about one evaluated design.
@@ -182,7 +192,13 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
     let form_closed_0 = form_closure_test(&closure_matrix(f, &g.cp)).closed;
     let scan = max_offset(f, s, tau_s0);
     let ff = &g.forces[0];
-    let (alpha, mean_force) = isotropy(ff.f0);
+    let (alpha_0, mean_force_0) = isotropy(ff.f0);
+    let (alpha_mu, mean_force_mu) = isotropy(ff.fmu);
+    let force_model = s.criteria.force_model;
+    let (alpha, mean_force) = match force_model {
+        crate::params::ForceModel::Mobilised => (alpha_mu, mean_force_mu),
+        crate::params::ForceModel::Frictionless => (alpha_0, mean_force_0),
+    };
     let cp = &g.cp[0];
     Ok(StaticsResult {
         tau_s_min,
@@ -198,6 +214,11 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
         offset_ended_by: scan.ended_by,
         alpha,
         mean_force,
+        alpha_mu,
+        mean_force_mu,
+        alpha_0,
+        mean_force_0,
+        force_model,
     })
 }
 
@@ -332,10 +353,20 @@ pub struct Record {
     pub max_offset: Option<f64>,
     /// What ended the offset scan (null if off_max was reached).
     pub max_offset_ended_by: Option<String>,
-    /// Objective 2.
+    /// Objective 2: α of the problem's force model (D22).
     pub alpha: Option<f64>,
-    /// Objective 3 (N).
+    /// Objective 3 (N): F̃ of the problem's force model (D22).
     pub mean_force: Option<f64>,
+    /// α from f^μ.
+    pub alpha_mu: Option<f64>,
+    /// F̃ from f^μ (N).
+    pub mean_force_mu: Option<f64>,
+    /// α from f⁰.
+    pub alpha_0: Option<f64>,
+    /// F̃ from f⁰ (N).
+    pub mean_force_0: Option<f64>,
+    /// Force model of alpha and mean_force ("mobilised" or "frictionless").
+    pub force_model: Option<&'static str>,
     /// Stage-3 keys (flattened; all null when stage 3 did not run).
     #[serde(flatten)]
     pub dynamics: crate::sim::grasp::DynamicsRecord,
@@ -395,6 +426,11 @@ impl Record {
             max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
             alpha: st.and_then(|s| fin(s.alpha)),
             mean_force: st.map(|s| s.mean_force),
+            alpha_mu: st.and_then(|s| fin(s.alpha_mu)),
+            mean_force_mu: st.map(|s| s.mean_force_mu),
+            alpha_0: st.and_then(|s| fin(s.alpha_0)),
+            mean_force_0: st.map(|s| s.mean_force_0),
+            force_model: st.map(|s| s.force_model.as_str()),
             dynamics: crate::sim::grasp::DynamicsRecord::from_result(ev.dynamics.as_ref()),
             feasible: ev.feasible(),
             failed_stage: ev.discard.map(|d| d.stage),

@@ -5,6 +5,7 @@ mod common;
 
 mod constraints;
 mod dynamics;
+mod force_model;
 mod kinematics;
 mod nominal;
 mod optimiser;

@@ -176,7 +176,7 @@ pub fn birglen_residual(f: &Finger, cp: &ClosedPose, forces: &FingerForces) -> V
     jn.transpose() * Vector2::new(forces.f0[0], forces.f0[1])
 }
 
-/// Force isotropy α and mean force F̃ of eq. 3.12 from f⁰.
+/// Force isotropy α and mean force F̃ of eq. 3.12 from a force pair (f⁰ or f^μ, §6.5, D22).
 pub fn isotropy(f0: [f64; 2]) -> (f64, f64) {
     let mean = 0.5 * (f0[0] + f0[1]);
     let alpha = ((mean - f0[0]).powi(2) + (mean - f0[1]).powi(2)) / (f0[0] * f0[1]);
