@@ -17,3 +17,4 @@ pub mod pipeline;
 pub mod params;
 pub mod record;
 pub mod sim;
+pub mod sweep;

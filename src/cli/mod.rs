@@ -8,6 +8,7 @@ use std::path::PathBuf;
 mod bench;
 mod optcmd;
 mod report;
+mod sweep;
 mod workprec;
 #[cfg(feature = "diffsol")]
 mod diffsol_cmp;
@@ -143,6 +144,8 @@ enum Cmd {
         #[arg(long)]
         generations: Option<u64>,
     },
+    /// Parameter study: evaluate a grid of 1-3 varied names, write DIR/sweep.csv and plots.
+    Sweep(sweep::SweepArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
         #[command(subcommand)]
@@ -265,5 +268,6 @@ pub fn run() -> Result<()> {
             optcmd::moo_test(&name, seed, seeds, json, pop, generations)
         }
         Cmd::Bench { which } => bench::run(which),
+        Cmd::Sweep(a) => sweep::run(a),
     }
 }
