@@ -13,3 +13,4 @@ mod problem_files;
 mod properties;
 mod recording;
 mod statics;
+mod sweep;

@@ -28,9 +28,9 @@ pub struct SweepArgs {
     /// Apply psi = 140 - 25.6 p (thesis eq. 4.15) at every point (implied by --vary l11).
     #[arg(long)]
     pub psi_rule: bool,
-    /// Maps: also colour by this record key (e.g. max_offset, alpha, t_stab, e_cyl).
+    /// Maps: also colour by this record key (e.g. max_offset, alpha, t_stab, e_cyl); repeatable.
     #[arg(long)]
-    pub color: Option<String>,
+    pub color: Vec<String>,
     /// Line plots (one varied name): record keys to plot, `+` joins keys in one plot
     /// (default: e_cyl+e_lim and t_stab for dynamic, alpha, mean_force and max_offset for static,
     /// min_margin_deg for kinematics).
@@ -124,7 +124,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
             Stage::Kinematics => vec!["min_margin_deg".into()],
         }
     };
-    let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, a.color.as_deref(), &bounds)?;
+    let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, &a.color, &bounds)?;
     summary(&a.out, &rows, &bounds, &files);
     Ok(())
 }

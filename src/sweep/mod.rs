@@ -441,6 +441,9 @@ impl<'de> serde::Deserialize<'de> for Ordered {
     }
 }
 
+/// Keys of the record that hold fixed-length arrays, with their lengths.
+const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4)];
+
 /// The evaluation record (the JSON of `gripopt evaluate --json`) as CSV cells, in record
 /// order; arrays become `key_0`, `key_1`, …
 pub fn record_cells(ev: &Evaluation) -> Vec<(String, String)> {
@@ -461,6 +464,13 @@ pub fn record_cells(ev: &Evaluation) -> Vec<(String, String)> {
         }
     }
     for (k, v) in kv {
+        if let (serde_json::Value::Null, Some(n)) = (&v, ARRAY_KEYS.iter().find(|a| a.0 == k).map(|a| a.1)) {
+            // a null array keeps its columns, so every row has the header's width
+            for i in 0..n {
+                out.push((format!("{k}_{i}"), String::new()));
+            }
+            continue;
+        }
         match &v {
             serde_json::Value::Array(a) => {
                 for (i, x) in a.iter().enumerate() {

@@ -66,9 +66,10 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Draw every plot for the sweep; returns the files written.
-pub fn plot_all(dir: &Path, spec: &SweepSpec, rows: &[Row], ys: &[String], colour: Option<&str>, bounds: &[Boundary]) -> Result<Vec<PathBuf>> {
+pub fn plot_all(dir: &Path, spec: &SweepSpec, rows: &[Row], ys: &[String], colours: &[String], bounds: &[Boundary]) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
-    match spec.vary.len() {
+    let one_d = spec.vary[0].n > 1 && spec.vary[1..].iter().all(|v| v.n == 1);
+    match if one_d { 1 } else { spec.vary.len() } {
         1 => {
             for y in ys {
                 let f = dir.join(format!("line_{}.svg", y.replace('+', "_")));
@@ -81,9 +82,9 @@ pub fn plot_all(dir: &Path, spec: &SweepSpec, rows: &[Row], ys: &[String], colou
             let f = dir.join(format!("{kind}_verdict.svg"));
             maps(&f, spec, rows, None)?;
             out.push(f);
-            if let Some(c) = colour {
+            for c in colours {
                 let f = dir.join(format!("{kind}_{c}.svg"));
-                maps(&f, spec, rows, Some(c))?;
+                maps(&f, spec, rows, Some(c.as_str()))?;
                 out.push(f);
             }
         }
