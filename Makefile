@@ -59,3 +59,13 @@ bench: build
 
 clean:
 	$(CARGO) clean
+
+# The thesis's chapter-4 parameter studies (figs 4.1-4.18) with `gripopt sweep`, into
+# results/studies/ (see scripts/studies.sh and docs/thesis-comparison.md). One study:
+# `scripts/studies.sh fig4_16`. `make figures` also copies the cited plots to docs/figures/.
+.PHONY: studies figures
+studies: build
+	scripts/studies.sh
+
+figures: studies
+	scripts/figures.sh

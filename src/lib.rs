@@ -23,6 +23,7 @@ pub mod eval;
 pub mod optim;
 pub mod record;
 pub mod run;
+pub mod sweep;
 pub mod bench;
 
 // Shared below every layer.

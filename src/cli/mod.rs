@@ -8,6 +8,7 @@ use std::path::PathBuf;
 mod bench;
 mod optcmd;
 mod report;
+mod sweep;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]
@@ -149,6 +150,8 @@ enum Cmd {
         #[arg(long)]
         generations: Option<u64>,
     },
+    /// Parameter study: evaluate a grid of 1-3 varied names, write DIR/sweep.csv and plots.
+    Sweep(sweep::SweepArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
         #[command(subcommand)]
@@ -271,5 +274,6 @@ pub fn run() -> Result<()> {
             optcmd::moo_test(&name, seed, seeds, json, pop, generations)
         }
         Cmd::Bench { which } => bench::run(which),
+        Cmd::Sweep(a) => sweep::run(a),
     }
 }

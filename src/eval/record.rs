@@ -80,10 +80,20 @@ pub struct Record {
     pub max_offset: Option<f64>,
     /// What ended the offset scan (null if off_max was reached).
     pub max_offset_ended_by: Option<String>,
-    /// Objective 2.
+    /// Objective 2: α of the problem's force model (D22).
     pub alpha: Option<f64>,
-    /// Objective 3 (N).
+    /// Objective 3 (N): F̃ of the problem's force model (D22).
     pub mean_force: Option<f64>,
+    /// α from f^μ.
+    pub alpha_mu: Option<f64>,
+    /// F̃ from f^μ (N).
+    pub mean_force_mu: Option<f64>,
+    /// α from f⁰.
+    pub alpha_0: Option<f64>,
+    /// F̃ from f⁰ (N).
+    pub mean_force_0: Option<f64>,
+    /// Force model of alpha and mean_force ("mobilised" or "frictionless").
+    pub force_model: Option<&'static str>,
     /// Stage-3 keys (flattened; all null when stage 3 did not run).
     #[serde(flatten)]
     pub dynamics: DynamicsRecord,
@@ -143,6 +153,11 @@ impl Record {
             max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
             alpha: st.and_then(|s| fin(s.alpha)),
             mean_force: st.map(|s| s.mean_force),
+            alpha_mu: st.and_then(|s| fin(s.alpha_mu)),
+            mean_force_mu: st.map(|s| s.mean_force_mu),
+            alpha_0: st.and_then(|s| fin(s.alpha_0)),
+            mean_force_0: st.map(|s| s.mean_force_0),
+            force_model: st.map(|s| s.force_model.as_str()),
             dynamics: DynamicsRecord::from_result(ev.dynamics.as_ref()),
             feasible: ev.feasible(),
             failed_stage: ev.discard.map(|d| d.stage),

@@ -151,7 +151,13 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
     let form_closed_0 = form_closure_test(&closure_matrix(f, &g.cp)).closed;
     let scan = max_offset(f, s, tau_s0);
     let ff = &g.forces[0];
-    let (alpha, mean_force) = isotropy(ff.f0);
+    let (alpha_0, mean_force_0) = isotropy(ff.f0);
+    let (alpha_mu, mean_force_mu) = isotropy(ff.fmu);
+    let force_model = s.criteria.force_model;
+    let (alpha, mean_force) = match force_model {
+        crate::params::ForceModel::Mobilised => (alpha_mu, mean_force_mu),
+        crate::params::ForceModel::Frictionless => (alpha_0, mean_force_0),
+    };
     let cp = &g.cp[0];
     Ok(StaticsResult {
         tau_s_min,
@@ -167,6 +173,11 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
         offset_ended_by: scan.ended_by,
         alpha,
         mean_force,
+        alpha_mu,
+        mean_force_mu,
+        alpha_0,
+        mean_force_0,
+        force_model,
     })
 }
 

@@ -35,10 +35,20 @@ pub struct StaticsResult {
     pub max_offset: f64,
     /// What ended the offset scan.
     pub offset_ended_by: Option<OffsetFailure>,
-    /// Objective 2.
+    /// Objective 2: α of the problem's force model (D22).
     pub alpha: f64,
-    /// Objective 3 (N).
+    /// Objective 3 (N): F̃ of the problem's force model (D22).
     pub mean_force: f64,
+    /// α from f^μ (always computed, §6.5).
+    pub alpha_mu: f64,
+    /// F̃ from f^μ (N).
+    pub mean_force_mu: f64,
+    /// α from f⁰.
+    pub alpha_0: f64,
+    /// F̃ from f⁰ (N).
+    pub mean_force_0: f64,
+    /// The force model that chose `alpha` and `mean_force`.
+    pub force_model: crate::params::ForceModel,
 }
 
 /// Why a closed pose on a cylinder does not exist.
@@ -208,7 +218,7 @@ pub fn birglen_residual(f: &Finger, cp: &ClosedPose, forces: &FingerForces) -> V
     jn.transpose() * Vector2::new(forces.f0[0], forces.f0[1])
 }
 
-/// Force isotropy α and mean force F̃ of eq. 3.12 from f⁰.
+/// Force isotropy α and mean force F̃ of eq. 3.12 from a force pair (f⁰ or f^μ, §6.5, D22).
 pub fn isotropy(f0: [f64; 2]) -> (f64, f64) {
     let mean = 0.5 * (f0[0] + f0[1]);
     let alpha = ((mean - f0[0]).powi(2) + (mean - f0[1]).powi(2)) / (f0[0] * f0[1]);

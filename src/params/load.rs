@@ -5,7 +5,7 @@
 
 use super::design::{Bounds, Design, DESIGN_NAMES};
 use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
-use super::scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
+use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
 use crate::{Error, Result};
 use crate::math::deg;
 use serde::{Deserialize, Serialize};
@@ -111,6 +111,7 @@ struct RawCriteria {
     t_filter: f64,
     eta_stab: f64,
     t_max: f64,
+    force_model: String,
 }
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -232,6 +233,11 @@ impl Problem {
                 t_filter: c.check("criteria.t_filter", cr.t_filter)?,
                 eta_stab: c.check("criteria.eta_stab", cr.eta_stab)?,
                 t_max: c.check("criteria.t_max", cr.t_max)?,
+                force_model: match cr.force_model.as_str() {
+                    "mobilised" => ForceModel::Mobilised,
+                    "frictionless" => ForceModel::Frictionless,
+                    other => return Err(c.fail("criteria.force_model", format!("{other:?}"), "must be \"mobilised\" or \"frictionless\" (MODEL.md D22)")),
+                },
             },
         };
         if cr.r_sing.len() > MAX_R_SING {

@@ -11,4 +11,4 @@ mod scene;
 pub use design::{Bounds, Design, DESIGN_NAMES};
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
-pub use scene::{ContactLaw, Criteria, Environment, Hand, Object, SceneParams};
+pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};

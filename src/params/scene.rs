@@ -118,6 +118,29 @@ pub struct Criteria {
     pub eta_stab: f64,
     /// Maximum simulated time (s).
     pub t_max: f64,
+    /// Which static force set defines α and F̃ (MODEL.md §6.5, D22).
+    pub force_model: ForceModel,
+}
+
+/// The force set that defines the objectives α and F̃ (MODEL.md §6.5, decision D22).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ForceModel {
+    /// Friction-mobilised forces f^μ (the thesis's §2.2.1 / §4.2.2 forces; the default).
+    #[default]
+    Mobilised,
+    /// Frictionless forces f⁰ (the v1 definition).
+    Frictionless,
+}
+
+impl ForceModel {
+    /// The problem-file spelling (`mobilised`, `frictionless`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ForceModel::Mobilised => "mobilised",
+            ForceModel::Frictionless => "frictionless",
+        }
+    }
 }
 
 /// All scene constants of MODEL.md §1.1, section by section.

@@ -25,7 +25,8 @@ pub fn final_front(st: &Nsga2State<GripperInfo>) -> Vec<&Individual<GripperInfo>
 /// Write every result file of the final state `st` into the run folder `out`.
 pub fn write_outputs(out: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
     let front = final_front(st);
-    let mut csv = String::from("id,generation,l21,b,t22,r,p,psi_deg,l11,l12,l22,l_hand,max_offset,alpha,mean_force,t_stab,sim_steps,sim_rhs_evals\n");
+    let mut csv = String::from("id,generation,l21,b,t22,r,p,psi_deg,l11,l12,l22,l_hand,max_offset,alpha,mean_force,t_stab,sim_steps,sim_rhs_evals,force_model\n");
+    let force_model = gp.problem.scene.criteria.force_model.as_str(); // D22: which forces define alpha, mean_force
     let mut tim = String::from("id,stage01_s,stage2_s,stage3_s\n");
     for ind in &front {
         let i = &ind.eval.info;
@@ -34,9 +35,9 @@ pub fn write_outputs(out: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInf
         let w = i.sim_work.map(|w| (w[0].to_string(), w[1].to_string())).unwrap_or_default();
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             ind.id, ind.generation, x[0], x[1], x[2], x[3], x[4], x[5], l[0], l[1], l[2], i.l_hand,
-            opt(i.objectives[0]), opt(i.objectives[1]), opt(i.objectives[2]), opt(i.objectives[3]), w.0, w.1
+            opt(i.objectives[0]), opt(i.objectives[1]), opt(i.objectives[2]), opt(i.objectives[3]), w.0, w.1, force_model
         );
         let _ = writeln!(tim, "{},{},{},{}", ind.id, i.stage_seconds[1], i.stage_seconds[2], i.stage_seconds[3]);
     }

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The thesis's chapter-4 parameter studies (figs 4.1-4.18) rerun with `gripopt sweep`.
+# Usage: scripts/studies.sh [STUDY...]   (no argument = all; e.g. scripts/studies.sh fig4_16)
+# Writes results/studies/<study>/ (git-ignored): sweep.csv, SVG plots, boundaries.csv.
+# `make studies` runs all; `make figures` also copies the plots cited in
+# docs/thesis-comparison.md to docs/figures/. Base: problems/bottle-1l.toml, the thesis's
+# nominal design (§4.1.2) and, where the thesis holds it fixed, l_hand = 0.230 m.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+B=${GRIPOPT:-target/release/gripopt}
+P=${PROBLEM:-problems/bottle-1l.toml}
+R=results/studies
+sw() { local name=$1; shift; echo "== $name"; "$B" sweep "$P" "$@" --out "$R/$name"; }
+
+fig4_1()  { sw fig4_1  --stage kinematics --vary l11=0.01:0.08:15 --vary r=0.2:1.2:11 --vary psi_deg=90:160:8 --color min_margin_deg; }
+fig4_2()  { sw fig4_2  --stage kinematics --vary p=0.2:1.6:15 --vary r=0.2:1.2:11 --vary l21=0.03:0.07:5 --psi-rule --hold-l-hand --color min_margin_deg; }
+fig4_4()  { sw fig4_4  --stage kinematics --vary b=0.04:0.08:9 --vary l21=0.03:0.07:9 --vary l_hand=0.20:0.40:5 --psi-rule; }
+fig4_5()  { sw fig4_5  --stage static --vary l11=0.01:0.04:7 --vary r=0.2:1.0:9 --vary psi_deg=100:160:7 --color max_offset; }
+fig4_6()  { sw fig4_6  --stage static --vary p=0.2:1.4:7 --vary r=0.2:1.0:9 --vary l21=0.03:0.07:5 --psi-rule --hold-l-hand --color max_offset; }
+fig4_7()  { sw fig4_7  --stage static --vary b=0.045:0.08:8 --vary l21=0.03:0.07:9 --vary l_hand=0.20:0.30:3 --psi-rule --color max_offset; }
+fig4_8()  { sw fig4_8  --stage static --vary l11=0.01:0.04:13 --vary psi_deg=100:160:13 --color alpha --color mean_force --color alpha_0 --color mean_force_0; }
+fig4_8r() { sw fig4_8r --stage static --vary r=0.30:0.66:10 --y mean_force_mu+mean_force_0 --y alpha_mu+alpha_0; }
+fig4_9()  { sw fig4_9  --stage static --vary p=0.2:1.4:7 --vary r=0.2:1.0:9 --vary l21=0.03:0.07:5 --psi-rule --hold-l-hand --color alpha --color mean_force; }
+fig4_9l() { sw fig4_9l --stage static --vary l21=0.030:0.060:31 --hold-l-hand --y alpha_mu+alpha_0 --y mean_force_mu+mean_force_0; }
+fig4_10() { sw fig4_10 --stage static --vary b=0.045:0.08:8 --vary l21=0.03:0.07:9 --vary l_hand=0.20:0.30:3 --psi-rule --color alpha --color mean_force; }
+fig4_11() { mkdir -p "$R/fig4_11"; echo "== fig4_11"; "$B" simulate "$P" --csv "$R/fig4_11/trajectory.csv" --json > "$R/fig4_11/simulate.json"; }
+fig4_13() { sw fig4_13 --stage dynamic --vary l11=0.010:0.080:15 --bisect l11; }
+# fig 4.13 at the torque that puts gripopt's nominal at the thesis's impact margin (0.5 N·m x 0.338/0.9)
+fig4_13s() { sw fig4_13s --stage dynamic --vary l11=0.010:0.080:29 --vary tau=0.188:0.188:1 --bisect l11; }
+fig4_14() { sw fig4_14 --stage dynamic --vary b=0.045:0.08:4 --vary l21=0.03:0.07:5 --vary l_hand=0.20:0.40:5 --psi-rule --color t_stab --color e_cyl; }
+fig4_16() { sw fig4_16 --stage dynamic --vary tau=0.05:1.5:30 --bisect tau; }
+fig4_17() { sw fig4_17 --stage dynamic --vary density=100:2000:20 --bisect density; }
+fig4_18() { sw fig4_18 --stage dynamic --vary grasp_height=0.005:0.195:20 --bisect grasp_height; }
+# the impact-energy differences (docs/thesis-comparison.md): onset velocity and effective finger mass against the torque
+fig4_16e() { sw fig4_16e --stage dynamic --vary tau=0.05:1.5:30 --y v_impact --y m_finger; }
+
+ALL="fig4_1 fig4_2 fig4_4 fig4_5 fig4_6 fig4_7 fig4_8 fig4_8r fig4_9 fig4_9l fig4_10 fig4_11 fig4_13 fig4_13s fig4_14 fig4_16 fig4_16e fig4_17 fig4_18"
+for s in ${@:-$ALL}; do "$s"; done

@@ -1,0 +1,149 @@
+//! `gripopt sweep`: a parameter study on a grid (see `gripopt::sweep`).
+
+use anyhow::{Context, Result};
+use gripopt::params::{Design, Problem};
+use gripopt::sweep::{self, Stage, SweepSpec, Vary};
+use std::path::{Path, PathBuf};
+
+/// The `sweep` subcommand's arguments.
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// Problem file (TOML).
+    pub problem: PathBuf,
+    /// A varied name and its grid, NAME=LO:HI:N (1 to 3 times; the first varies fastest).
+    /// NAME: a design variable (l21, b, t22, r, p, psi_deg), a derived one (l11: p = l11/l21
+    /// and psi = 140 - 25.6 p; l22: r = l22/l11; l_hand: t22 = (l_hand - b - 2 l21)/2), or a
+    /// numeric problem-file field (tau, density, grasp_height, radius, restitution, hand.w …).
+    #[arg(long = "vary", required = true)]
+    pub vary: Vec<String>,
+    /// Base design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
+    #[arg(long)]
+    pub design: Option<String>,
+    /// Stages to run: kinematics (0-1), static (0-2) or dynamic (0-3).
+    #[arg(long, value_enum, default_value = "dynamic")]
+    pub stage: StageArg,
+    /// Keep the base design's l_hand when l21 or b vary (t22 derived), as the thesis does.
+    #[arg(long)]
+    pub hold_l_hand: bool,
+    /// Apply psi = 140 - 25.6 p (thesis eq. 4.15) at every point (implied by --vary l11).
+    #[arg(long)]
+    pub psi_rule: bool,
+    /// Maps: also colour by this record key (e.g. max_offset, alpha, t_stab, e_cyl); repeatable.
+    #[arg(long)]
+    pub color: Vec<String>,
+    /// Line plots (one varied name): record keys to plot, `+` joins keys in one plot
+    /// (default: e_cyl+e_lim and t_stab for dynamic, alpha, mean_force and max_offset for static,
+    /// min_margin_deg for kinematics).
+    #[arg(long = "y")]
+    pub ys: Vec<String>,
+    /// Refine the boundaries where the verdict flips along this varied name by bisection
+    /// (written to DIR/boundaries.csv).
+    #[arg(long)]
+    pub bisect: Vec<String>,
+    /// Bisection steps per boundary.
+    #[arg(long, default_value_t = 20)]
+    pub bisect_steps: u32,
+    /// Worker threads (default: all cores; results do not depend on it).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output folder (created): sweep.csv, plots, boundaries.csv.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `--stage`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum StageArg {
+    /// Stages 0-1.
+    Kinematics,
+    /// Stages 0-2.
+    Static,
+    /// Stages 0-3.
+    Dynamic,
+}
+
+/// Build the spec from the arguments (all checks that need no evaluation).
+pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
+    if a.vary.len() > 3 {
+        anyhow::bail!("--vary: at most 3 names, {} given", a.vary.len());
+    }
+    let problem = Problem::load(&a.problem)?;
+    let design = match &a.design {
+        None => problem.nominal,
+        Some(s) => Design::parse_assignments(s)?,
+    };
+    let vary = a.vary.iter().map(|s| Vary::parse(s)).collect::<Result<Vec<_>, _>>()?;
+    let stage = match a.stage {
+        StageArg::Kinematics => Stage::Kinematics,
+        StageArg::Static => Stage::Static,
+        StageArg::Dynamic => Stage::Dynamic,
+    };
+    let spec = SweepSpec { problem, design, vary, stage, hold_l_hand: a.hold_l_hand, psi_rule: a.psi_rule };
+    spec.validate()?;
+    for b in &a.bisect {
+        if !spec.vary.iter().any(|v| &v.name == b) {
+            anyhow::bail!("--bisect {b}: not one of the varied names ({})", spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", "));
+        }
+    }
+    if a.threads == Some(0) {
+        anyhow::bail!("--threads 0: must be at least 1");
+    }
+    if a.bisect_steps > 60 {
+        anyhow::bail!("--bisect-steps {}: at most 60", a.bisect_steps);
+    }
+    Ok(spec)
+}
+
+/// Run the sweep.
+pub fn run(a: SweepArgs) -> Result<()> {
+    let spec = spec_of(&a)?;
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = a.threads {
+        b = b.num_threads(t);
+    }
+    let pool = b.build()?;
+    let pb = indicatif::ProgressBar::new(spec.len() as u64);
+    pb.set_style(indicatif::ProgressStyle::with_template("sweep [{bar:30}] {pos}/{len} points, ETA {eta}").expect("template"));
+    let rows = pool.install(|| sweep::run(&spec, &|| pb.inc(1)))?;
+    pb.finish_and_clear();
+    sweep::write_csv(&a.out, &spec, &rows)?;
+    let mut bounds = Vec::new();
+    for name in &a.bisect {
+        bounds.extend(pool.install(|| sweep::bisect(&spec, &rows, name, a.bisect_steps))?);
+    }
+    if !a.bisect.is_empty() {
+        let f = a.out.join("boundaries.csv");
+        std::fs::write(&f, sweep::boundaries_csv(&spec, &bounds)).with_context(|| format!("writing {}", f.display()))?;
+    }
+    let ys: Vec<String> = if !a.ys.is_empty() {
+        a.ys.clone()
+    } else {
+        match spec.stage {
+            Stage::Dynamic => vec!["e_cyl+e_lim".into(), "t_stab".into()],
+            Stage::Static => vec!["alpha".into(), "mean_force".into(), "max_offset".into()],
+            Stage::Kinematics => vec!["min_margin_deg".into()],
+        }
+    };
+    let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, &a.color, &bounds)?;
+    summary(&a.out, &rows, &bounds, &files);
+    Ok(())
+}
+
+fn summary(out: &Path, rows: &[sweep::Row], bounds: &[sweep::Boundary], files: &[PathBuf]) {
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for r in rows {
+        match counts.iter_mut().find(|c| c.0 == r.verdict) {
+            Some(c) => c.1 += 1,
+            None => counts.push((r.verdict, 1)),
+        }
+    }
+    println!("{} points: {}", rows.len(), counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", "));
+    for b in bounds {
+        let o = if b.others.is_empty() { String::new() } else { format!(" at {:?}", b.others) };
+        println!("boundary {}{}: {} at {} | {} at {}", b.name, o, b.verdict_lo, b.lo, b.verdict_hi, b.hi);
+    }
+    println!("wrote {}", out.join("sweep.csv").display());
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+}

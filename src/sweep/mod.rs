@@ -1,0 +1,607 @@
+//! Parameter studies (`gripopt sweep`): a grid of 1–3 varied names — design variables,
+//! the derived relations the thesis's chapter 4 uses, or any numeric problem-file field —
+//! evaluated in parallel through the staged pipeline, written as one CSV row per point (the
+//! varied values, a verdict class and every key of the evaluation [`Record`]), plotted
+//! ([`plot`]), and optionally refined by bisection to the boundaries where the verdict flips.
+//!
+//! Names (see [`Knob`]):
+//! * design variables `l21`, `b`, `t22`, `r`, `p`, `psi_deg` (ψ in degrees);
+//! * derived (thesis §4.1.2–4.2.2): `l11` sets p = l11/l21 and, unless `psi_deg` is varied
+//!   too, ψ = 140 − 25.6 p (eq. 4.15); `l22` sets r = l22/l11; `l_hand` sets
+//!   t22 = (l_hand − b − 2 l21)/2 (b and l21 as set at that point);
+//! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
+//!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
+//!
+//! Results do not depend on the number of threads: every point is evaluated on its own and
+//! rows are written in grid order.
+
+pub mod plot;
+
+use crate::{Error, Result};
+use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
+use crate::eval::{evaluate, stage_kinematics, EvalOptions, Evaluation, Reason, Record};
+use rayon::prelude::*;
+use serde::de::{Deserializer, MapAccess, Visitor};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Largest number of values along one varied name.
+pub const MAX_N: usize = 10_000;
+/// Largest number of grid points of one sweep.
+pub const MAX_POINTS: usize = 200_000;
+
+/// Which stages a sweep runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Stages 0–1 (validity, open pose, singularity sweep).
+    Kinematics,
+    /// Stages 0–2.
+    Static,
+    /// Stages 0–3 (pipeline mode: stage 3 stops at the first violated criterion).
+    Dynamic,
+}
+
+/// What a varied name sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Knob {
+    /// Design variable by index into [`DESIGN_NAMES`].
+    Design(usize),
+    /// l11 (m): p = l11/l21, and ψ = 140 − 25.6 p unless ψ is varied.
+    L11,
+    /// l22 (m): r = l22/l11.
+    L22,
+    /// l_hand (m): t22 = (l_hand − b − 2 l21)/2.
+    LHand,
+    /// A numeric problem-file field, by its index into [`LIMITS`].
+    Field(usize),
+}
+
+/// One `--vary NAME=LO:HI:N`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vary {
+    /// The name as given (the CSV column).
+    pub name: String,
+    /// What it sets.
+    pub knob: Knob,
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+    /// Number of values (1 = lo only).
+    pub n: usize,
+}
+
+fn bad(flag: &str, what: &str, msg: impl std::fmt::Display) -> Error {
+    Error::Input(format!("{flag} {what}: {msg}"))
+}
+
+/// Resolve a name to what it sets (`flag` is used in errors).
+pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
+    if let Some(i) = DESIGN_NAMES.iter().position(|n| *n == name) {
+        return Ok(Knob::Design(i));
+    }
+    match name {
+        "l11" => return Ok(Knob::L11),
+        "l22" => return Ok(Knob::L22),
+        "l_hand" => return Ok(Knob::LHand),
+        _ => {}
+    }
+    let is_field = |l: &&crate::params::Limit| !DESIGN_NAMES.contains(&l.field) && l.field != "criteria.r_sing";
+    if let Some(i) = LIMITS.iter().position(|l| l.field == name && is_field(&l)) {
+        return Ok(Knob::Field(i));
+    }
+    let short: Vec<usize> =
+        (0..LIMITS.len()).filter(|&i| is_field(&&LIMITS[i]) && LIMITS[i].field.rsplit('.').next() == Some(name)).collect();
+    match short.as_slice() {
+        [i] => Ok(Knob::Field(*i)),
+        [] => Err(bad(
+            flag,
+            name,
+            format!(
+                "unknown name (a design variable {}, a derived l11, l22, l_hand, or a numeric problem-file field such as tau, density, grasp_height, radius, restitution, hand.w)",
+                DESIGN_NAMES.join(", ")
+            ),
+        )),
+        many => Err(bad(flag, name, format!("ambiguous; use one of {}", many.iter().map(|&i| LIMITS[i].field).collect::<Vec<_>>().join(", ")))),
+    }
+}
+
+/// The admissible range of what a knob sets, for checking the varied values.
+fn knob_limit(k: Knob) -> (f64, bool, f64, &'static str) {
+    let l = match k {
+        Knob::Design(i) => limit(DESIGN_NAMES[i]),
+        Knob::Field(i) => &LIMITS[i],
+        // derived lengths: the same range as the design lengths
+        Knob::L11 | Knob::L22 => limit("l21"),
+        Knob::LHand => return (0.0, true, 2.0, "m"),
+    };
+    (l.lo, l.lo_open, l.hi, l.unit)
+}
+
+impl Vary {
+    /// Parse `NAME=LO:HI:N`, checking the name, N and the range against the field's limits.
+    pub fn parse(s: &str) -> Result<Vary> {
+        let flag = "--vary";
+        let (name, spec) = s.split_once('=').ok_or_else(|| bad(flag, s, "expected NAME=LO:HI:N, e.g. tau=0.30:0.40:11"))?;
+        let name = name.trim();
+        let knob = resolve(name, flag)?;
+        let parts: Vec<&str> = spec.split(':').map(str::trim).collect();
+        if parts.len() != 3 {
+            return Err(bad(flag, s, "expected NAME=LO:HI:N (three fields after `=`)"));
+        }
+        let num = |t: &str, what: &str| -> Result<f64> {
+            let v: f64 = t.parse().map_err(|_| bad(flag, s, format!("{what} `{t}` is not a number")))?;
+            if !v.is_finite() {
+                return Err(bad(flag, s, format!("{what} `{t}` is not finite")));
+            }
+            Ok(v)
+        };
+        let lo = num(parts[0], "LO")?;
+        let hi = num(parts[1], "HI")?;
+        let n: usize = parts[2].parse().map_err(|_| bad(flag, s, format!("N `{}` is not a whole number >= 1", parts[2])))?;
+        if n < 1 {
+            return Err(bad(flag, s, "N must be at least 1"));
+        }
+        if n > MAX_N {
+            return Err(bad(flag, s, format!("N = {n} is more than {MAX_N} values along one name")));
+        }
+        if lo > hi {
+            return Err(bad(flag, s, format!("LO = {lo} is greater than HI = {hi}")));
+        }
+        if n > 1 && lo == hi {
+            return Err(bad(flag, s, "LO = HI with N > 1 repeats one value; use N = 1"));
+        }
+        let (llo, lo_open, lhi, unit) = knob_limit(knob);
+        for (what, v) in [("LO", lo), ("HI", hi)] {
+            let below = if lo_open { v <= llo } else { v < llo };
+            if below || v > lhi {
+                return Err(bad(
+                    flag,
+                    s,
+                    format!("{what} = {v} is outside the admissible range {}{llo}, {lhi}] {unit} of `{name}` (src/params/limits.rs)", if lo_open { "(" } else { "[" }),
+                ));
+            }
+        }
+        Ok(Vary { name: name.to_string(), knob, lo, hi, n })
+    }
+
+    /// The n values, evenly spaced, lo and hi exact.
+    pub fn values(&self) -> Vec<f64> {
+        if self.n == 1 {
+            return vec![self.lo];
+        }
+        (0..self.n)
+            .map(|i| if i + 1 == self.n { self.hi } else { self.lo + (self.hi - self.lo) * i as f64 / (self.n - 1) as f64 })
+            .collect()
+    }
+}
+
+/// A whole sweep.
+#[derive(Debug, Clone)]
+pub struct SweepSpec {
+    /// The problem (its nominal design is the base design unless `design` is set).
+    pub problem: Problem,
+    /// Base design.
+    pub design: Design,
+    /// 1–3 varied names (the first varies fastest in the CSV).
+    pub vary: Vec<Vary>,
+    /// Stages to run.
+    pub stage: Stage,
+    /// Keep l_hand of the base design (t22 derived) when l21 or b vary (thesis §4.1.2 holds l_hand fixed).
+    pub hold_l_hand: bool,
+    /// Apply ψ = 140 − 25.6 p at every point (thesis eq. 4.15) unless ψ is varied.
+    pub psi_rule: bool,
+}
+
+impl SweepSpec {
+    /// Check the combination of names.
+    pub fn validate(&self) -> Result<()> {
+        if self.vary.is_empty() {
+            return Err(Error::Input("--vary: give 1 to 3 names (none given)".into()));
+        }
+        if self.vary.len() > 3 {
+            return Err(Error::Input(format!("--vary: at most 3 names, {} given", self.vary.len())));
+        }
+        for (i, a) in self.vary.iter().enumerate() {
+            for b in &self.vary[..i] {
+                if a.knob == b.knob {
+                    return Err(Error::Input(format!("--vary {}: the same quantity as --vary {}", a.name, b.name)));
+                }
+            }
+        }
+        let has = |k: Knob| self.vary.iter().any(|v| v.knob == k);
+        let design = |n: &str| Knob::Design(DESIGN_NAMES.iter().position(|d| *d == n).unwrap_or(0));
+        if has(Knob::L11) && has(design("p")) {
+            return Err(Error::Input("--vary l11 and --vary p set the same ratio p = l11/l21".into()));
+        }
+        if has(Knob::L22) && has(design("r")) {
+            return Err(Error::Input("--vary l22 and --vary r set the same ratio r = l22/l11".into()));
+        }
+        if has(Knob::LHand) && has(design("t22")) {
+            return Err(Error::Input("--vary l_hand and --vary t22: l_hand sets t22".into()));
+        }
+        let total: usize = self.vary.iter().map(|v| v.n).try_fold(1usize, |a, n| a.checked_mul(n)).unwrap_or(usize::MAX);
+        if total > MAX_POINTS {
+            return Err(Error::Input(format!("--vary: {total} grid points is more than {MAX_POINTS}")));
+        }
+        Ok(())
+    }
+
+    /// Number of grid points.
+    pub fn len(&self) -> usize {
+        self.vary.iter().map(|v| v.n).product()
+    }
+
+    /// True for an empty grid (never, once validated).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The grid point `k` as values of the varied names (first name fastest).
+    pub fn point(&self, mut k: usize) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.vary.len());
+        for v in &self.vary {
+            let vals = v.values();
+            out.push(vals[k % v.n]);
+            k /= v.n;
+        }
+        out
+    }
+
+    /// The problem and design at the given values of the varied names.
+    pub fn apply(&self, values: &[f64]) -> Result<(Problem, Design)> {
+        let mut p = self.problem.clone();
+        let mut x = self.design.to_array();
+        let base_l_hand = self.design.l_hand();
+        let mut derived = Vec::new();
+        for (v, &val) in self.vary.iter().zip(values) {
+            match v.knob {
+                Knob::Design(i) => x[i] = val,
+                Knob::Field(i) => set_field(&mut p, LIMITS[i].field, val)?,
+                k => derived.push((k, val)),
+            }
+        }
+        let psi_varied = self.vary.iter().any(|v| v.knob == Knob::Design(5));
+        let mut psi_rule = self.psi_rule && !psi_varied;
+        // derived relations, in dependency order: l11 (needs l21), l22 (needs l11), l_hand (needs b, l21)
+        for want in [Knob::L11, Knob::L22, Knob::LHand] {
+            for &(k, val) in derived.iter().filter(|(k, _)| *k == want) {
+                match k {
+                    Knob::L11 => {
+                        x[4] = val / x[0];
+                        psi_rule |= !psi_varied;
+                    }
+                    Knob::L22 => x[3] = val / (x[4] * x[0]),
+                    Knob::LHand => x[2] = (val - x[1] - 2.0 * x[0]) / 2.0,
+                    _ => {}
+                }
+            }
+        }
+        if self.hold_l_hand && !derived.iter().any(|(k, _)| *k == Knob::LHand) {
+            x[2] = (base_l_hand - x[1] - 2.0 * x[0]) / 2.0;
+        }
+        if psi_rule {
+            x[5] = psi_thesis(x[4]);
+        }
+        Ok((p, Design::from_array(&x)))
+    }
+}
+
+/// Thesis eq. 4.15: ψ = 140 − 25.6 p (degrees).
+pub fn psi_thesis(p: f64) -> f64 {
+    140.0 - 25.6 * p
+}
+
+/// Set a numeric problem-file field by its dotted name (`*_deg` fields in degrees).
+pub fn set_field(p: &mut Problem, field: &str, v: f64) -> Result<()> {
+    let s = &mut p.scene;
+    let d = v.to_radians();
+    match field {
+        "hand.tau" => s.hand.tau = v,
+        "hand.w" => s.hand.w = v,
+        "hand.rho_f" => s.hand.rho_f = v,
+        "hand.r_open" => s.hand.r_open = v,
+        "hand.k_s" => s.hand.k_s = v,
+        "hand.k_stop" => s.hand.k_stop = v,
+        "hand.c_stop" => s.hand.c_stop = v,
+        "object.radius" => s.object.radius = v,
+        "object.length" => s.object.length = v,
+        "object.density" => s.object.density = v,
+        "object.grasp_height" => s.object.grasp_height = v,
+        "contact.mu_s" => s.contact.mu_s = v,
+        "contact.mu_d" => s.contact.mu_d = v,
+        "contact.v_s" => s.contact.v_s = v,
+        "contact.v_d" => s.contact.v_d = v,
+        "contact.restitution" => s.contact.restitution = v,
+        "contact.k_contact" => s.contact.k_contact = v,
+        "contact.v_min" => s.contact.v_min = v,
+        "contact.eps_sep" => s.contact.eps_sep = v,
+        "environment.g" => s.env.g = v,
+        "environment.g_eq" => s.env.g_eq = v,
+        "environment.theta_g_deg" => s.env.theta_g = d,
+        "environment.mu_g" => s.env.mu_g = v,
+        "environment.mu_p" => s.env.mu_p = v,
+        "criteria.margin_sing_deg" => s.criteria.margin_sing = d,
+        "criteria.sweep_step_deg" => s.criteria.sweep_step = d,
+        "criteria.dx_max" => s.criteria.dx_max = v,
+        "criteria.theta_max_deg" => s.criteria.theta_max = d,
+        "criteria.fold_max_deg" => s.criteria.fold_max = d,
+        "criteria.offset_step" => s.criteria.offset_step = v,
+        "criteria.offset_max" => s.criteria.offset_max = v,
+        "criteria.t_filter" => s.criteria.t_filter = v,
+        "criteria.eta_stab" => s.criteria.eta_stab = v,
+        "criteria.t_max" => s.criteria.t_max = v,
+        "solver.rtol" => p.solver.rtol = v,
+        "solver.atol" => p.solver.atol = v,
+        "solver.max_steps" => p.solver.max_steps = v.round() as u64,
+        other => return Err(Error::Input(format!("--vary {other}: not a numeric field a sweep can set"))),
+    }
+    if p.scene.contact.v_d <= p.scene.contact.v_s {
+        return Err(Error::Input(format!("--vary {field} = {v}: contact.v_d must stay > contact.v_s")));
+    }
+    Ok(())
+}
+
+/// The verdict class of an evaluation: `pass` or what discarded it, as a short word
+/// (`singular_open`, `singular_closing`, `mode_change`, `impact`, `force`, …).
+pub fn verdict(ev: &Evaluation) -> &'static str {
+    use crate::model::OffsetFailure as O;
+    use crate::model::SweepFailure as S;
+    use crate::model::GeomError as G;
+    use crate::sim::DynOutcome as D;
+    let Some(d) = ev.discard else { return "pass" };
+    match d.reason {
+        Reason::InvalidDesign => "invalid",
+        Reason::Geometry(G::NoOpenPose) => "no_open_pose",
+        Reason::Geometry(G::AssemblyModeChange) | Reason::Sweep(S::Pose(_, G::AssemblyModeChange)) => "mode_change",
+        Reason::Geometry(_) | Reason::Sweep(S::Pose(..)) => "not_mountable",
+        Reason::Sweep(S::ClosedPose(..)) => "no_closed_pose",
+        Reason::Sweep(S::Margin(s)) => {
+            if s.at_theta2 == 0.0 {
+                "singular_open"
+            } else {
+                "singular_closing"
+            }
+        }
+        Reason::SpringUndefined => "spring",
+        Reason::Grasp(O::NoClosedPose(..)) => "no_grasp_pose",
+        Reason::Grasp(O::SingularForces) => "singular_forces",
+        Reason::Grasp(O::ForceNotPositive(_)) => "force_positiveness",
+        Reason::Grasp(O::PalmForceNotPositive(_)) => "palm_force",
+        Reason::Grasp(O::NotFormClosed) => "no_form_closure",
+        Reason::Dynamics(o) => match o {
+            D::Stable => "pass",
+            D::ImpactEnergy => "impact",
+            D::Fold => "fold",
+            D::ForceCriterion => "force",
+            D::StaticForceLimit => "static_force",
+            D::NoStability => "no_stability",
+            D::Singular | D::DgmFailure => "singular_dynamic",
+            D::Aborted | D::StepBudget | D::StepTooSmall => "aborted",
+            D::InitialPenetration => "initial_penetration",
+            D::NoEquilibrium => "no_equilibrium",
+        },
+    }
+}
+
+/// Evaluate one design of one problem through the chosen stages.
+pub fn evaluate_point(p: &Problem, x: &Design, stage: Stage) -> Evaluation {
+    match stage {
+        Stage::Kinematics => {
+            let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
+            match stage_kinematics(x, &p.scene) {
+                Ok(k) => ev.kin = Some(k),
+                Err(d) => ev.discard = Some(d),
+            }
+            ev
+        }
+        Stage::Static => evaluate(x, &p.scene, &EvalOptions::statics_only()),
+        Stage::Dynamic => evaluate(x, &p.scene, &EvalOptions::full(p)),
+    }
+}
+
+/// One evaluated grid point.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Values of the varied names.
+    pub values: Vec<f64>,
+    /// Verdict class ([`verdict`]).
+    pub verdict: &'static str,
+    /// The evaluation record, flattened: (key, CSV text); numbers are `None` when null.
+    pub cells: Vec<(String, String)>,
+}
+
+impl Row {
+    /// A numeric record value by key (None when null, absent or not a number).
+    pub fn num(&self, key: &str) -> Option<f64> {
+        self.cells.iter().find(|(k, _)| k == key).and_then(|(_, v)| v.parse().ok())
+    }
+}
+
+/// The record's keys in record order, as (key, JSON value).
+struct Ordered(Vec<(String, serde_json::Value)>);
+
+impl<'de> serde::Deserialize<'de> for Ordered {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Ordered;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> std::result::Result<Ordered, A::Error> {
+                let mut v = Vec::new();
+                while let Some((k, x)) = m.next_entry::<String, serde_json::Value>()? {
+                    v.push((k, x));
+                }
+                Ok(Ordered(v))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// Keys of the record that hold fixed-length arrays, with their lengths.
+const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4)];
+
+/// The evaluation record (the JSON of `gripopt evaluate --json`) as CSV cells, in record
+/// order; arrays become `key_0`, `key_1`, …
+pub fn record_cells(ev: &Evaluation) -> Vec<(String, String)> {
+    let json = serde_json::to_string(&Record::from_eval(ev)).unwrap_or_else(|_| "{}".into());
+    let Ordered(kv) = serde_json::from_str(&json).unwrap_or(Ordered(Vec::new()));
+    let mut out = Vec::with_capacity(kv.len() + 4);
+    fn cell(v: &serde_json::Value) -> String {
+        match v {
+            serde_json::Value::Null => String::new(),
+            serde_json::Value::String(s) => {
+                if s.contains([',', '"', '\n']) {
+                    format!("\"{}\"", s.replace('"', "\"\""))
+                } else {
+                    s.clone()
+                }
+            }
+            other => other.to_string(),
+        }
+    }
+    for (k, v) in kv {
+        if let (serde_json::Value::Null, Some(n)) = (&v, ARRAY_KEYS.iter().find(|a| a.0 == k).map(|a| a.1)) {
+            // a null array keeps its columns, so every row has the header's width
+            for i in 0..n {
+                out.push((format!("{k}_{i}"), String::new()));
+            }
+            continue;
+        }
+        match &v {
+            serde_json::Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    out.push((format!("{k}_{i}"), cell(x)));
+                }
+            }
+            _ => out.push((k, cell(&v))),
+        }
+    }
+    out
+}
+
+/// Evaluate one point of the sweep.
+pub fn eval_row(spec: &SweepSpec, values: &[f64]) -> Result<Row> {
+    let (p, x) = spec.apply(values)?;
+    let ev = evaluate_point(&p, &x, spec.stage);
+    Ok(Row { values: values.to_vec(), verdict: verdict(&ev), cells: record_cells(&ev) })
+}
+
+/// Evaluate the whole grid in parallel (rows in grid order); `tick` is called once per point.
+pub fn run(spec: &SweepSpec, tick: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
+    spec.validate()?;
+    // every point is set up before any is evaluated, so a bad value fails fast
+    let points: Vec<Vec<f64>> = (0..spec.len()).map(|k| spec.point(k)).collect();
+    for v in &points {
+        spec.apply(v)?;
+    }
+    points
+        .par_iter()
+        .map(|v| {
+            let r = eval_row(spec, v);
+            tick();
+            r
+        })
+        .collect()
+}
+
+/// The CSV text: varied names, `verdict`, then every record key (keys equal to a varied
+/// name are not repeated).
+pub fn to_csv(spec: &SweepSpec, rows: &[Row]) -> String {
+    let mut s = String::new();
+    let names: Vec<&str> = spec.vary.iter().map(|v| v.name.as_str()).collect();
+    let keys: Vec<&str> = rows.first().map(|r| r.cells.iter().map(|(k, _)| k.as_str()).filter(|k| !names.contains(k)).collect()).unwrap_or_default();
+    let _ = writeln!(s, "{},verdict,{}", names.join(","), keys.join(","));
+    for r in rows {
+        let vals: Vec<String> = r.values.iter().map(|v| format!("{v}")).collect();
+        let cells: Vec<&str> = r.cells.iter().filter(|(k, _)| !names.contains(&k.as_str())).map(|(_, v)| v.as_str()).collect();
+        let _ = writeln!(s, "{},{},{}", vals.join(","), r.verdict, cells.join(","));
+    }
+    s
+}
+
+/// A boundary found by bisection: along `name`, between two values whose verdicts differ.
+#[derive(Debug, Clone)]
+pub struct Boundary {
+    /// The bisected name.
+    pub name: String,
+    /// Values of the other varied names (in --vary order, the bisected one omitted).
+    pub others: Vec<f64>,
+    /// Last value with `verdict_lo`.
+    pub lo: f64,
+    /// First value with `verdict_hi`.
+    pub hi: f64,
+    /// Verdict at `lo`.
+    pub verdict_lo: &'static str,
+    /// Verdict at `hi`.
+    pub verdict_hi: &'static str,
+}
+
+/// For every line of the grid along the varied name `name`, every pair of neighbours with
+/// different verdicts is narrowed by `steps` bisections (in parallel).
+pub fn bisect(spec: &SweepSpec, rows: &[Row], name: &str, steps: u32) -> Result<Vec<Boundary>> {
+    let axis = spec
+        .vary
+        .iter()
+        .position(|v| v.name == name)
+        .ok_or_else(|| Error::Input(format!("--bisect {name}: not one of the varied names ({})", spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", "))))?;
+    if steps > 60 {
+        return Err(Error::Input(format!("--bisect-steps {steps}: at most 60")));
+    }
+    let stride: usize = spec.vary[..axis].iter().map(|v| v.n).product();
+    let mut pairs = Vec::new();
+    for k in 0..rows.len() {
+        let i = (k / stride) % spec.vary[axis].n;
+        if i + 1 < spec.vary[axis].n && rows[k].verdict != rows[k + stride].verdict {
+            pairs.push((k, k + stride));
+        }
+    }
+    pairs
+        .par_iter()
+        .map(|&(a, b)| {
+            let (mut lo, mut hi) = (rows[a].values[axis], rows[b].values[axis]);
+            let (vlo, vhi) = (rows[a].verdict, rows[b].verdict);
+            let mut point = rows[a].values.clone();
+            for _ in 0..steps {
+                let mid = 0.5 * (lo + hi);
+                point[axis] = mid;
+                let v = eval_row(spec, &point)?.verdict;
+                if v == vlo {
+                    lo = mid;
+                } else if v == vhi {
+                    hi = mid;
+                } else {
+                    // a third verdict in between: keep the side next to the lower verdict
+                    hi = mid;
+                }
+            }
+            let mut others = rows[a].values.clone();
+            others.remove(axis);
+            Ok(Boundary { name: name.to_string(), others, lo, hi, verdict_lo: vlo, verdict_hi: vhi })
+        })
+        .collect()
+}
+
+/// boundaries.csv text.
+pub fn boundaries_csv(spec: &SweepSpec, b: &[Boundary]) -> String {
+    let mut s = String::new();
+    for bd in b.iter().take(1) {
+        let others: Vec<&str> = spec.vary.iter().filter(|v| v.name != bd.name).map(|v| v.name.as_str()).collect();
+        let _ = writeln!(s, "bisected,{}{}lo,hi,verdict_lo,verdict_hi", others.join(","), if others.is_empty() { "" } else { "," });
+    }
+    for bd in b {
+        let o: Vec<String> = bd.others.iter().map(|v| format!("{v}")).collect();
+        let _ = writeln!(s, "{},{}{}{},{},{},{}", bd.name, o.join(","), if o.is_empty() { "" } else { "," }, bd.lo, bd.hi, bd.verdict_lo, bd.verdict_hi);
+    }
+    s
+}
+
+/// Write DIR/sweep.csv (and create DIR).
+pub fn write_csv(dir: &Path, spec: &SweepSpec, rows: &[Row]) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create the output folder", e))?;
+    let f = dir.join("sweep.csv");
+    std::fs::write(&f, to_csv(spec, rows)).map_err(|e| Error::io(&f, "cannot write", e))
+}

@@ -1,0 +1,210 @@
+//! `gripopt sweep` (issue 14): grid, CSV from the evaluation record, derived relations,
+//! bisection, bad input. Grids are tiny; expected values are computed independently.
+
+use crate::common::{bottle, close_rel};
+use gripopt::params::Design;
+use gripopt::sweep::{self, Stage, SweepSpec, Vary};
+use std::path::PathBuf;
+
+fn spec(vary: &[&str], stage: Stage) -> SweepSpec {
+    let p = bottle();
+    let design = p.nominal;
+    SweepSpec { problem: p, design, vary: vary.iter().map(|s| Vary::parse(s).unwrap()).collect(), stage, hold_l_hand: false, psi_rule: false }
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/sweep-tests").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Parse sweep.csv into (header, rows) — simple: no quoted commas in the numeric columns we read.
+fn read_csv(dir: &std::path::Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let t = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let mut lines = t.lines();
+    let h: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(String::from).collect()).collect();
+    (h, rows)
+}
+
+fn col(h: &[String], name: &str) -> usize {
+    h.iter().position(|c| c == name).unwrap_or_else(|| panic!("no column {name} in {h:?}"))
+}
+
+#[test]
+fn tau_sweep_writes_tau_e_cyl_e_lim_static_and_dynamic() {
+    // dynamic stage: the issue's "done when" command, 11 points
+    let s = spec(&["tau=0.30:0.40:11"], Stage::Dynamic);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let d = out_dir("tau-dyn");
+    sweep::write_csv(&d, &s, &rows).unwrap();
+    let (h, r) = read_csv(&d);
+    assert_eq!(r.len(), 11);
+    let (it, ie, il) = (col(&h, "tau"), col(&h, "e_cyl"), col(&h, "e_lim"));
+    assert!(h.contains(&"verdict".to_string()) && h.contains(&"t_stab".to_string()) && h.contains(&"alpha".to_string()));
+    // E_lim by hand (MODEL.md §9.1): min(mu_g m_c g dx, m_c g [(L/2)(cos th - 1) + R sin th])
+    let m_c = 1000.0 * std::f64::consts::PI * 0.04f64.powi(2) * 0.2;
+    let th = 1f64.to_radians();
+    let e_lim = (0.4 * m_c * 9.81 * 1e-3).min(m_c * 9.81 * (0.1 * (th.cos() - 1.0) + 0.04 * th.sin()));
+    let mut last = 0.0;
+    for (k, row) in r.iter().enumerate() {
+        close_rel(row[it].parse().unwrap(), 0.30 + 0.01 * k as f64, 1e-12, "tau grid");
+        close_rel(row[il].parse().unwrap(), e_lim, 1e-9, "e_lim");
+        let e: f64 = row[ie].parse().unwrap();
+        assert!(e > last, "E_cyl grows with the torque: {e} after {last}");
+        last = e;
+    }
+    // static stage: no stage-3 values; forces are linear in tau (tau_s0 ∝ tau, §6.2)
+    let s = spec(&["tau=0.30:0.40:11"], Stage::Static);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let d = out_dir("tau-static");
+    sweep::write_csv(&d, &s, &rows).unwrap();
+    let (h, r) = read_csv(&d);
+    let (it, ie, im) = (col(&h, "tau"), col(&h, "e_cyl"), col(&h, "mean_force"));
+    for row in &r {
+        assert_eq!(row[ie], "", "no impact energy without stage 3");
+        let tau: f64 = row[it].parse().unwrap();
+        close_rel(row[im].parse().unwrap(), 11.0872485551 * tau / 0.5, 1e-9, "mean force ∝ tau");
+    }
+}
+
+#[test]
+fn derived_l11_sets_p_and_psi_by_the_thesis_rule_and_l_hand_sets_t22() {
+    let s = spec(&["l11=0.015:0.030:4", "l_hand=0.20:0.26:3"], Stage::Kinematics);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    assert_eq!(rows.len(), 12);
+    let (l21, b) = (0.0494, 0.056);
+    for r in &rows {
+        let (l11, lh) = (r.values[0], r.values[1]);
+        let p = l11 / l21;
+        close_rel(r.num("p").unwrap(), p, 1e-12, "p = l11/l21");
+        close_rel(r.num("psi_deg").unwrap(), 140.0 - 25.6 * p, 1e-12, "psi = 140 - 25.6 p");
+        close_rel(r.num("t22").unwrap(), (lh - b - 2.0 * l21) / 2.0, 1e-12, "t22 from l_hand");
+        close_rel(r.num("l_hand").unwrap(), lh, 1e-12, "record l_hand");
+        if let Some(x) = r.num("l11") {
+            close_rel(x, l11, 1e-12, "record l11");
+        }
+    }
+    // every row has the header's width, also rows discarded before the masses exist (b too small: no open pose)
+    let s2 = spec(&["b=0.03:0.06:4"], Stage::Kinematics);
+    let rows2 = sweep::run(&s2, &|| ()).unwrap();
+    assert_eq!(rows2[0].verdict, "no_open_pose");
+    let csv = sweep::to_csv(&s2, &rows2);
+    let widths: Vec<usize> = csv.lines().map(|l| l.split(',').count()).collect();
+    assert!(widths.iter().all(|&w| w == widths[0]), "{widths:?}");
+    // with psi varied too, the rule does not override it
+    let s = spec(&["l11=0.015:0.030:2", "psi_deg=100:120:2"], Stage::Kinematics);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    for r in &rows {
+        close_rel(r.num("psi_deg").unwrap(), r.values[1], 1e-12, "psi as varied");
+    }
+    // --hold-l-hand: l21 varies, t22 follows so that l_hand stays 0.230
+    let mut s = spec(&["l21=0.04:0.05:3"], Stage::Kinematics);
+    s.hold_l_hand = true;
+    for r in sweep::run(&s, &|| ()).unwrap() {
+        close_rel(r.num("l_hand").unwrap(), 0.230, 1e-12, "l_hand held");
+    }
+}
+
+#[test]
+fn bisection_finds_a_boundary_the_verdict_flips_across() {
+    // psi across the singular / passing boundary of the nominal design (stages 0-1)
+    let s = spec(&["psi_deg=90:160:8"], Stage::Kinematics);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let b = sweep::bisect(&s, &rows, "psi_deg", 24).unwrap();
+    assert!(!b.is_empty(), "verdicts along psi: {:?}", rows.iter().map(|r| r.verdict).collect::<Vec<_>>());
+    let p = bottle();
+    for bd in &b {
+        assert!(bd.hi - bd.lo <= 10.0 / (1 << 24) as f64 * 1.0001, "narrowed: {} {}", bd.lo, bd.hi);
+        // independent re-evaluation on both sides
+        let at = |psi: f64| {
+            let mut x = p.nominal;
+            x.psi = psi.to_radians();
+            sweep::verdict(&sweep::evaluate_point(&p, &x, Stage::Kinematics))
+        };
+        assert_eq!(at(bd.lo), bd.verdict_lo);
+        assert_eq!(at(bd.hi), bd.verdict_hi);
+        assert_ne!(bd.verdict_lo, bd.verdict_hi);
+    }
+    let csv = sweep::boundaries_csv(&s, &b);
+    assert!(csv.starts_with("bisected,lo,hi,verdict_lo,verdict_hi\n"), "{csv}");
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let s = spec(&["r=0.3:0.7:3", "b=0.05:0.06:2"], Stage::Static);
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
+    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
+    assert_eq!(sweep::to_csv(&s, &one), sweep::to_csv(&s, &two));
+    // the first name varies fastest
+    assert_eq!(one[1].values, vec![0.5, 0.05]);
+    assert_eq!(one[3].values, vec![0.3, 0.06]);
+}
+
+#[test]
+fn bad_flags_are_errors_naming_the_flag() {
+    let err = |s: &str| Vary::parse(s).unwrap_err().to_string();
+    for (arg, want) in [
+        ("torque=0.3:0.4:3", "unknown name"),
+        ("tau=0.3:0.4:0", "at least 1"),
+        ("tau=0.3:0.4:1000000", "more than"),
+        ("tau=0.4:0.3:3", "greater than"),
+        ("tau=0:0.4:3", "admissible range"),
+        ("density=-5:1000:3", "admissible range"),
+        ("restitution=0.3:1.5:3", "admissible range"),
+        ("tau=0.3:0.4", "NAME=LO:HI:N"),
+        ("tau=a:0.4:3", "not a number"),
+        ("tau", "NAME=LO:HI:N"),
+        ("tau=0.3:0.4:-2", "whole number"),
+        ("mu=0.3:0.4:2", "unknown name"),
+    ] {
+        let e = err(arg);
+        assert!(e.starts_with("--vary") && e.contains(want), "{arg}: {e}");
+    }
+    let mut s = spec(&["tau=0.3:0.4:2", "b=0.05:0.06:2", "r=0.3:0.4:2"], Stage::Static);
+    s.vary.push(Vary::parse("p=0.3:0.4:2").unwrap());
+    assert!(s.validate().unwrap_err().to_string().contains("at most 3"));
+    let s = spec(&["l11=0.01:0.02:2", "p=0.3:0.4:2"], Stage::Static);
+    assert!(s.validate().is_err());
+    let s = spec(&["tau=0.3:0.4:2", "hand.tau=0.3:0.4:2"], Stage::Static);
+    assert!(s.validate().unwrap_err().to_string().contains("same quantity"));
+    let s = spec(&["tau=0.3:0.4:2"], Stage::Static);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    assert!(sweep::bisect(&s, &rows, "b", 5).unwrap_err().to_string().contains("--bisect b"));
+    // the command line: an error message and a failure status (not 101, a panic), never a panic
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let d = out_dir("cli-bad");
+    for args in [
+        vec!["--vary", "nope=1:2:3"],
+        vec!["--vary", "tau=0.3:0.4:2", "--vary", "b=0.05:0.06:2", "--vary", "r=0.3:0.4:2", "--vary", "p=0.3:0.4:2"],
+        vec!["--vary", "tau=0.3:0.4:2", "--bisect", "b"],
+        vec!["--vary", "tau=0.3:0.4:2", "--threads", "0"],
+    ] {
+        let o = std::process::Command::new(bin).arg("sweep").arg(problem).args(&args).arg("--out").arg(&d).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(matches!(o.status.code(), Some(1 | 2)), "{args:?}: exit {:?}: {err}", o.status.code());
+        assert!(err.contains("--") && !err.contains("panicked"), "{args:?}: {err}");
+    }
+    let _ = Design::nominal();
+}
+
+#[test]
+fn cli_sweep_writes_csv_and_plots() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let d = out_dir("cli-map");
+    let o = std::process::Command::new(bin)
+        .args(["sweep", problem, "--vary", "r=0.3:0.7:3", "--vary", "p=0.3:0.5:2", "--stage", "static", "--color", "max_offset", "--out"])
+        .arg(&d)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (h, r) = read_csv(&d);
+    assert_eq!(r.len(), 6);
+    assert_eq!(&h[..3], &["r".to_string(), "p".into(), "verdict".into()]);
+    for f in ["map_verdict.svg", "map_max_offset.svg"] {
+        let t = std::fs::read_to_string(d.join(f)).unwrap();
+        assert!(t.starts_with("<svg"), "{f}");
+    }
+}
