@@ -1,7 +1,7 @@
 //! `gripopt bench work-precision --sample N`: work against precision over random designs.
 
 use super::work_precision::{check_atol, rel};
-use super::{progress, random_design, time_it};
+use super::{progress, time_it};
 use crate::{Error, Result};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::params::Problem;
@@ -40,7 +40,7 @@ pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u
     let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
     while cases.len() < n && drawn < 1000 * n {
         drawn += 1;
-        let d = random_design(p, &mut rng);
+        let d = p.bounds.sample(&mut rng);
         let Ok(k) = stage_kinematics(&d, s) else { continue };
         let Ok(st) = stage_statics(&k.finger, s) else { continue };
         let reference = simulate_grasp(&k.finger, s, &st, &tight);

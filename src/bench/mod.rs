@@ -50,11 +50,3 @@ fn progress(len: u64, template: &'static str) -> indicatif::ProgressBar {
     pb
 }
 
-/// A uniform random design in the bounds of `p` (six draws in field order).
-fn random_design(p: &crate::params::Problem, rng: &mut impl rand::Rng) -> crate::params::Design {
-    let mut x = [0.0; 6];
-    for i in 0..6 {
-        x[i] = rng.random_range(p.bounds.lo[i]..=p.bounds.hi[i]);
-    }
-    crate::params::Design::from_array(&x)
-}

@@ -12,7 +12,7 @@ use std::path::Path;
 pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64) -> Result<()> {
     let p = problem;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let designs: Vec<Design> = (0..n).map(|_| super::random_design(p, &mut rng)).collect();
+    let designs: Vec<Design> = (0..n).map(|_| p.bounds.sample(&mut rng)).collect();
     let opts = EvalOptions::statics_only();
     let mut counts = [0usize; 4];
     let mut feasible = 0usize;
