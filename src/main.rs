@@ -8,11 +8,12 @@ fn message(e: &anyhow::Error) -> String {
     let mut msg = String::new();
     for cause in e.chain() {
         let s = cause.to_string();
-        if !msg.contains(&s) {
+        let s = s.trim();
+        if !msg.contains(s) {
             if !msg.is_empty() {
                 msg.push_str(": ");
             }
-            msg.push_str(&s);
+            msg.push_str(s);
         }
     }
     msg

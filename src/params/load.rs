@@ -176,7 +176,14 @@ impl Problem {
     /// Parse and validate problem text; `path` is used in error messages only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self> {
         let raw: RawFile = toml::from_str(text)
-            .map_err(|e| Error::ProblemParse { file: path.to_path_buf(), message: e.to_string().trim_end().to_string(), source: Box::new(e) })?;
+            .map_err(|e| {
+                let mut message = e.to_string().trim_end().to_string();
+                if message.contains("missing field `force_model`") {
+                    // files written before MODEL.md v2 (D22), e.g. the copy in an older run folder
+                    message.push_str("\n(problem files from before MODEL.md v2 lack `criteria.force_model`: add `force_model = \"frictionless\"` to reproduce a run as it was computed, or \"mobilised\" for the thesis's forces, D22)");
+                }
+                Error::ProblemParse { file: path.to_path_buf(), message, source: Box::new(e) }
+            })?;
         let c = Checker { file: path };
         let h = &raw.hand;
         let o = &raw.object;
