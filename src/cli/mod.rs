@@ -60,6 +60,9 @@ enum Cmd {
         /// Print every located event to stderr.
         #[arg(long)]
         trace: bool,
+        /// Plot the grasp (joint angles, contact forces, raw and filtered hand force) to this SVG file.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// NSGA-II over the staged pipeline; checkpoints every generation into RUN_DIR.
     Optimise {
@@ -229,11 +232,11 @@ pub fn run() -> Result<()> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only)
         }
-        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact, trace } => {
+        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact, trace, plot } => {
             let p = load_problem(&problem)?;
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
-            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref())
+            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref(), plot.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
         Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads } => {

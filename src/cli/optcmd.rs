@@ -89,7 +89,7 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         w.flush()?;
     }
     if let Some(path) = plot {
-        plot_trajectory(path, id, samples)?;
+        gripopt::run::grasp_plot(path, &format!("design {id}"), samples)?;
     }
     if json {
         let mut v = r.recorded.record.clone();
@@ -116,32 +116,5 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         println!("  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})", r.max_difference, r.compared, r.recomputed_feasible);
     }
     println!("  ({:.1} ms)", secs * 1e3);
-    Ok(())
-}
-
-fn plot_trajectory(path: &std::path::Path, id: u64, s: &[gripopt::sim::Sample]) -> Result<()> {
-    use plotters::prelude::*;
-    let e = |x: Box<dyn std::fmt::Display>| anyhow::anyhow!("plot {}: {x}", path.display());
-    let root = SVGBackend::new(path, (900, 700)).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| e(Box::new(x)))?;
-    let (top, bottom) = root.split_vertically(350);
-    let tmax = s.last().map_or(1e-3, |x| x.t).max(1e-6) * 1e3;
-    let ang: Vec<(f64, f64, f64, f64)> = s.iter().map(|x| (x.t * 1e3, x.q[0].to_degrees(), x.q[1].to_degrees(), x.theta2.to_degrees())).collect();
-    let (amin, amax) = ang.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v.1.min(v.2).min(v.3)), b.max(v.1.max(v.2).max(v.3))));
-    let (amin, amax) = if amin.is_finite() { (amin - 1.0, amax + 1.0) } else { (0.0, 1.0) };
-    let mut c = ChartBuilder::on(&top).caption(format!("design {id}: joint angles"), ("sans-serif", 18)).margin(10).x_label_area_size(30).y_label_area_size(50).build_cartesian_2d(0.0..tmax, amin..amax).map_err(|x| e(Box::new(x)))?;
-    c.configure_mesh().x_desc("t (ms)").y_desc("deg").draw().map_err(|x| e(Box::new(x)))?;
-    for (k, col, name) in [(1, RED, "q11"), (2, BLUE, "q21 = theta1"), (3, GREEN, "theta2")] {
-        c.draw_series(LineSeries::new(ang.iter().map(|v| (v.0, [v.1, v.2, v.3][k - 1])), col)).map_err(|x| e(Box::new(x)))?.label(name).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], col));
-    }
-    c.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|x| e(Box::new(x)))?;
-    let fmax = s.iter().map(|x| x.normal[0].max(x.normal[1])).fold(1.0, f64::max).min(200.0);
-    let mut c = ChartBuilder::on(&bottom).caption("contact normal forces (N, clipped at 200)", ("sans-serif", 18)).margin(10).x_label_area_size(30).y_label_area_size(50).build_cartesian_2d(0.0..tmax, 0.0..fmax * 1.05).map_err(|x| e(Box::new(x)))?;
-    c.configure_mesh().x_desc("t (ms)").y_desc("N").draw().map_err(|x| e(Box::new(x)))?;
-    for (k, col, name) in [(0usize, RED, "proximal"), (1, BLUE, "distal")] {
-        c.draw_series(LineSeries::new(s.iter().map(|x| (x.t * 1e3, x.normal[k].min(fmax * 1.05))), col)).map_err(|x| e(Box::new(x)))?.label(name).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], col));
-    }
-    c.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|x| e(Box::new(x)))?;
-    root.present().map_err(|x| e(Box::new(x)))?;
     Ok(())
 }

@@ -65,7 +65,8 @@ fn print_dyn(r: &DynamicsRecord) {
 
 /// `gripopt simulate`.
 #[allow(clippy::too_many_arguments)]
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>) -> Result<()> {
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>, plot: Option<&Path>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -85,6 +86,9 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
             writeln!(w, "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}", s.t, s.q[0], s.q[1], s.qd[0], s.qd[1], s.theta2, s.delta[0], s.delta[1], s.normal[0], s.normal[1], s.friction[0], s.friction[1], s.hand_fy, s.filtered_fy, s.energy, s.energy_excess)?;
         }
         w.flush()?;
+    }
+    if let Some(path) = plot {
+        gripopt::run::grasp_plot(path, &format!("{}: grasp", p.name), &traj.samples)?;
     }
     let verdict = match res.discard_violation() {
         None => (true, None, None),

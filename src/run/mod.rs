@@ -7,6 +7,7 @@
 //! ([`crate::record`]); neither of them names it.
 
 mod checkpoint;
+mod grasp_plot;
 mod gripper;
 mod observers;
 mod outputs;
@@ -14,6 +15,7 @@ mod plots;
 mod rundir;
 
 pub use checkpoint::{Checkpoint, FORMAT, VERSION, settings_hash, sha256_hex};
+pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use observers::{CheckpointObserver, CrashAfter, ProgressObserver, RecordingObserver, SharedProgress};
 pub use outputs::{final_front, write_outputs};

@@ -1,0 +1,85 @@
+//! SVG plot of one grasp (thesis figs 4.11–4.12): joint angles, contact normal forces, and
+//! the hand force with its low-pass filtered value of the force criterion, against time.
+
+use crate::sim::Sample;
+use crate::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Plot `samples` (one design's trajectory) into the SVG file `path` under `title`.
+pub fn grasp_plot(path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
+    let e = |x: &dyn std::fmt::Display| Error::Plot { path: path.to_path_buf(), source: x.to_string().into() };
+    let root = SVGBackend::new(path, (900, 1000)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let panels = root.split_evenly((3, 1));
+    let tmax = samples.last().map_or(1e-3, |x| x.t).max(1e-6) * 1e3;
+    let range = |vals: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = vals.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        if lo.is_finite() {
+            let pad = 0.05 * (hi - lo).max(1e-9);
+            (lo - pad, hi + pad)
+        } else {
+            (0.0, 1.0)
+        }
+    };
+    // joint angles (deg)
+    let ang = |x: &Sample| [x.q[0].to_degrees(), x.q[1].to_degrees(), x.theta2.to_degrees()];
+    let (lo, hi) = range(&mut samples.iter().flat_map(ang));
+    let mut c = ChartBuilder::on(&panels[0])
+        .caption(format!("{title}: joint angles"), ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..tmax, lo..hi)
+        .map_err(|x| e(&x))?;
+    c.configure_mesh().x_desc("t (ms)").y_desc("deg").draw().map_err(|x| e(&x))?;
+    for (k, col, name) in [(0usize, RED, "q11"), (1, BLUE, "q21 = theta1"), (2, GREEN, "theta2")] {
+        c.draw_series(LineSeries::new(samples.iter().map(|x| (x.t * 1e3, ang(x)[k])), col))
+            .map_err(|x| e(&x))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], col));
+    }
+    c.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|x| e(&x))?;
+    // contact normal forces (N), clipped at 200 N so the settled level stays readable
+    let fmax = samples.iter().map(|x| x.normal[0].max(x.normal[1])).fold(1.0, f64::max).min(200.0);
+    let mut c = ChartBuilder::on(&panels[1])
+        .caption("contact normal forces (N, clipped at 200)", ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..tmax, 0.0..fmax * 1.05)
+        .map_err(|x| e(&x))?;
+    c.configure_mesh().x_desc("t (ms)").y_desc("N").draw().map_err(|x| e(&x))?;
+    for (k, col, name) in [(0usize, RED, "proximal"), (1, BLUE, "distal")] {
+        c.draw_series(LineSeries::new(samples.iter().map(|x| (x.t * 1e3, x.normal[k].min(fmax * 1.05))), col))
+            .map_err(|x| e(&x))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], col));
+    }
+    c.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|x| e(&x))?;
+    // hand force on the object, filtered (§9.3) and raw, the raw clipped to a few times the
+    // filtered range so that the filtered curve the criterion reads stays visible
+    let fscale = samples.iter().map(|x| x.filtered_fy.abs()).filter(|v| v.is_finite()).fold(1.0, f64::max);
+    let clip = |v: f64| v.clamp(-3.0 * fscale, 3.0 * fscale);
+    let (lo, hi) = range(&mut samples.iter().flat_map(|x| [clip(x.hand_fy), x.filtered_fy]));
+    let mut c = ChartBuilder::on(&panels[2])
+        .caption("hand force F_hand,y on the object (N): low-pass filtered (force criterion) and raw, clipped", ("sans-serif", 16))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..tmax, lo..hi)
+        .map_err(|x| e(&x))?;
+    c.configure_mesh().x_desc("t (ms)").y_desc("N").draw().map_err(|x| e(&x))?;
+    let raw = RGBColor(170, 170, 170);
+    c.draw_series(LineSeries::new(samples.iter().map(|x| (x.t * 1e3, clip(x.hand_fy))), raw))
+        .map_err(|x| e(&x))?
+        .label("raw")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], raw));
+    c.draw_series(LineSeries::new(samples.iter().map(|x| (x.t * 1e3, x.filtered_fy)), BLACK))
+        .map_err(|x| e(&x))?
+        .label("filtered")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
+    c.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
