@@ -113,7 +113,7 @@ impl Limit {
 }
 
 /// A limit as people write it: `1e-12`, `0.05`, `25000`, `1e8`.
-fn num(v: f64) -> String {
+pub(crate) fn num(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
         format!("{v:e}")
     } else {

@@ -158,7 +158,13 @@ impl Vary {
                 return Err(bad(
                     flag,
                     s,
-                    format!("{what} = {v} is outside the admissible range {}{llo}, {lhi}] {unit} of `{name}` (src/params/limits.rs)", if lo_open { "(" } else { "[" }),
+                    format!(
+                        "{what} = {} is outside the admissible range {}{}, {}] {unit} of `{name}` (src/params/limits.rs)",
+                        crate::params::fmt_num(v),
+                        if lo_open { "(" } else { "[" },
+                        crate::params::fmt_num(llo),
+                        crate::params::fmt_num(lhi)
+                    ),
                 ));
             }
         }
