@@ -7,8 +7,10 @@ mod design;
 mod limits;
 mod load;
 mod scene;
+mod scene_kind;
 
 pub use design::{Bounds, Design, DESIGN_NAMES};
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
+pub use scene_kind::{SceneKind, SceneSetup};
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
