@@ -90,6 +90,10 @@ pub struct FreeEval {
     pub pos: V3,
     /// Orientation (w, x, y, z).
     pub quat: [f64; 4],
+    /// Angular velocity (world, rad/s).
+    pub omega: V3,
+    /// The axis a (world).
+    pub axis: V3,
 }
 
 /// A sample of the object's pose (for `--csv` and recordings).
@@ -120,6 +124,10 @@ pub struct FreeResult {
     pub object_max_dy: f64,
     /// Largest tilt (°).
     pub object_max_tilt_deg: f64,
+    /// Largest |a_x|: the axis leaning along the palm, i.e. tilt about y (rad, sine).
+    pub object_max_tilt_y: f64,
+    /// Largest spin about the vertical, 2|q_z| (rad; small-angle).
+    pub object_max_spin: f64,
     /// Horizontal displacement at the end (m).
     pub object_final_displacement: f64,
     /// Tilt at the end (°).
@@ -193,9 +201,16 @@ impl<'a> FreeScene<'a> {
     pub fn new(f: &'a Finger, s: &'a SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup, record: bool) -> Self {
         let ng = s.setup.ground_points.min(NG_MAX);
         let mut rim_body = [V3::zeros(); NG_MAX];
-        for (k, p) in rim_body.iter_mut().enumerate().take(ng) {
-            let phi = 2.0 * std::f64::consts::PI * k as f64 / ng as f64;
-            *p = V3::new(s.object.radius * phi.cos(), s.object.radius * phi.sin(), -s.object.length / 2.0);
+        for k in 0..ng {
+            // mirror images (x → −x) of each other exactly where the set is symmetric, so a
+            // symmetric grasp stays symmetric to rounding
+            let m = if ng % 2 == 0 { (ng / 2 + ng - k) % ng } else { k };
+            rim_body[k] = if m < k {
+                V3::new(-rim_body[m].x, rim_body[m].y, rim_body[m].z)
+            } else {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / ng as f64;
+                V3::new(s.object.radius * phi.cos(), s.object.radius * phi.sin(), -s.object.length / 2.0)
+            };
         }
         let m = s.object.mass();
         let k = &s.contact;
@@ -204,6 +219,8 @@ impl<'a> FreeScene<'a> {
             object_max_dx: 0.0,
             object_max_dy: 0.0,
             object_max_tilt_deg: 0.0,
+            object_max_tilt_y: 0.0,
+            object_max_spin: 0.0,
             object_final_displacement: 0.0,
             object_final_tilt_deg: 0.0,
             object_peak_e_trans: 0.0,
@@ -392,7 +409,7 @@ impl<'a> FreeScene<'a> {
         let e_t = 0.5 * self.m * v.norm_squared();
         let e_r = 0.5 * om.dot(&l);
         let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * g.z + v_el } else { f64::NAN };
-        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: g, quat: q })
+        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: g, quat: q, omega: om, axis: a })
     }
 
     fn deriv(&self, y: &St, ev: &FreeEval) -> St {
@@ -429,6 +446,8 @@ impl<'a> FreeScene<'a> {
         o.object_max_dy = o.object_max_dy.max(dy.abs());
         o.object_max_displacement = o.object_max_displacement.max(dx.hypot(dy));
         o.object_max_tilt_deg = o.object_max_tilt_deg.max(ev.tilt.to_degrees());
+        o.object_max_tilt_y = o.object_max_tilt_y.max(ev.axis.x.abs());
+        o.object_max_spin = o.object_max_spin.max(2.0 * ev.quat[3].abs());
         if self.first_open {
             o.object_peak_e_trans = o.object_peak_e_trans.max(ev.e_obj.0);
             o.object_peak_e_rot = o.object_peak_e_rot.max(ev.e_obj.1);
