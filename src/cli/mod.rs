@@ -8,6 +8,7 @@ use std::path::PathBuf;
 mod bench;
 mod optcmd;
 mod report;
+mod scenes;
 mod sweep;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
@@ -47,6 +48,9 @@ enum Cmd {
         /// Integration method.
         #[arg(long, value_enum, default_value = "radau5")]
         method: MethodArg,
+        /// Scene (MODEL.md §14): centred, offset:X (metres) or free (default: the problem's [scene]).
+        #[arg(long)]
+        scene: Option<String>,
         /// Print the stage-3 keys as one JSON object.
         #[arg(long)]
         json: bool,
@@ -229,10 +233,16 @@ pub fn run() -> Result<()> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only)
         }
-        Cmd::Simulate { problem, design, rtol, method, json, csv, no_contact, trace } => {
-            let p = load_problem(&problem)?;
+        Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace } => {
+            let mut p = load_problem(&problem)?;
+            if let Some(sc) = &scene {
+                scenes::apply_scene(&mut p, sc)?;
+            }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
+            if p.scene.setup.kind != gripopt::params::SceneKind::Centred {
+                return scenes::simulate(&p, &x, rtol, json, csv.as_deref()).with_context(|| format!("simulating {}", problem.display()));
+            }
             report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
