@@ -12,6 +12,7 @@ mod nominal;
 mod optimiser;
 mod problem_files;
 mod properties;
+mod scenes;
 mod recording;
 mod statics;
 mod sweep;

@@ -223,13 +223,23 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     if !opts.dynamics {
         return ev;
     }
-    let dynr = crate::sim::simulate_grasp_into(&kin.finger, s, &st, &opts.sim, traj);
+    let dynr = stage3_scene(&kin.finger, s, &st, &opts.sim, traj);
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
         ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });
     }
     ev.dynamics = Some(dynr);
     ev
+}
+
+/// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
+/// on the object at x_off. The free scene's criteria are the centred scene's (the thesis's
+/// prediction); its measured motion is `simulate --scene free` and `verify`.
+fn stage3_scene(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+    match s.setup.kind {
+        crate::params::SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
+        _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
+    }
 }
 
 /// Evaluate the problem's design `x` with all stages.
