@@ -15,3 +15,4 @@ mod properties;
 mod recording;
 mod statics;
 mod sweep;
+mod robustness;

@@ -41,10 +41,6 @@ pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result
     if generations < 1 {
         return Err(field("--generations", generations.to_string(), "must be at least 1".into()));
     }
-    let evals = (pop as u128) * (generations as u128);
-    if evals > MAX_EVALUATIONS as u128 {
-        return Err(field("--pop × --generations", format!("{pop} × {generations}"), format!("at most {MAX_EVALUATIONS} evaluations (design ids are the recording's time windows of 1 s on a u64 nanosecond clock)")));
-    }
     let per = BYTES_PER_DESIGN as f64 + if recording { 2.0 * BYTES_PER_TRAJECTORY as f64 } else { 0.0 };
     let need = pop as f64 * per;
     let (avail, known) = match available_memory() {
@@ -66,6 +62,10 @@ pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result
                 if known { "available" } else { "assumed (memory unknown)" }
             ),
         ));
+    }
+    let evals = (pop as u128) * (generations as u128);
+    if evals > MAX_EVALUATIONS as u128 {
+        return Err(field("--pop × --generations", format!("{pop} × {generations}"), format!("at most {MAX_EVALUATIONS} evaluations (design ids are the recording's time windows of 1 s on a u64 nanosecond clock)")));
     }
     Ok(())
 }
