@@ -152,13 +152,18 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     super::limits::check_population(spec.pop, spec.generations, spec.record.enabled)?;
     let problem = Problem::load(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
+    let cp_path = spec.out.join("checkpoint.json");
+    let holds_run = || -> Result<()> {
+        if cp_path.exists() {
+            let message = format!("already holds a run (checkpoint.json); use `gripopt resume {}` or another --out", spec.out.display());
+            return Err(Error::RunDir { path: spec.out.clone(), message });
+        }
+        Ok(())
+    };
+    holds_run()?;
     check_new_run_folder(&spec.out)?;
     let _lock = RunLock::acquire(&spec.out)?;
-    let cp_path = spec.out.join("checkpoint.json");
-    if cp_path.exists() {
-        let message = format!("already holds a run (checkpoint.json); use `gripopt resume {}` or another --out", spec.out.display());
-        return Err(Error::RunDir { path: spec.out.clone(), message });
-    }
+    holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
