@@ -56,7 +56,7 @@ fn every_design_is_recorded_and_replays_verified() {
     assert!(with_traj > 0 && feasible > 0 && discarded > 0, "{with_traj} {feasible} {discarded}");
     // replay: a feasible design, a stage-3 discard and an early discard all verify
     let pareto = std::fs::read_to_string(d.join("pareto.csv")).unwrap();
-    let front_id: u64 = pareto.lines().nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    let front_id: u64 = pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
     let r = replay(&d, front_id).unwrap();
     assert!(r.verified && r.max_difference == 0.0 && r.compared > 100, "{} {} {}", r.verified, r.max_difference, r.compared);
     for id in 0..s.evaluations {

@@ -16,3 +16,4 @@ mod scenes;
 mod recording;
 mod statics;
 mod sweep;
+mod robustness;

@@ -15,6 +15,7 @@
 mod entry;
 mod messages;
 mod options;
+mod recover;
 mod replay;
 mod schema;
 mod writer;
@@ -22,5 +23,6 @@ mod writer;
 pub use entry::{DesignEntry, Recordable};
 pub use messages::{sample_from, window_start_ns, Contacts, Energy, Joints, SceneUpdate};
 pub use options::{DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, RecordOptions, TrajectoryKeep};
+pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use replay::{Recorded, Replay, read_design, replay};
 pub use writer::{Recorder, ShardEntry, read_index, write_shard};

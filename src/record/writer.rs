@@ -161,20 +161,7 @@ impl Recorder {
     pub fn open(run_dir: &Path, problem: Problem, meta: BTreeMap<String, String>, opts: RecordOptions, completed: u64) -> Result<Self> {
         let dir = run_dir.join("recording");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
-        let mut index = if dir.join("index.jsonl").exists() { read_index(&dir)? } else { vec![] };
-        for e in index.iter().filter(|e| e.generation > completed) {
-            let _ = std::fs::remove_file(dir.join(&e.file));
-        }
-        index.retain(|e| e.generation <= completed);
-        if let Ok(rd) = std::fs::read_dir(&dir) {
-            for f in rd.flatten() {
-                let n = f.file_name().to_string_lossy().to_string();
-                let orphan = n.ends_with(".tmp") || (n.starts_with("gen-") && !index.iter().any(|e| e.file == n));
-                if orphan {
-                    let _ = std::fs::remove_file(f.path());
-                }
-            }
-        }
+        let index = super::recover::recover(&dir, completed)?.index; // never deletes what the checkpoint covers
         write_index(&dir, &index)?;
         Ok(Recorder { dir, problem, meta, opts, index, bytes: 0, seconds: 0.0 })
     }
