@@ -89,8 +89,11 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         record_every: u32,
         /// Interval of the 3D scene updates in milliseconds of simulated time (0 = none).
-        #[arg(long, default_value_t = 0.5)]
+        #[arg(long, default_value_t = gripopt::record::DEFAULT_SCENE_DT * 1e3)]
         scene_ms: f64,
+        /// Record every trajectory sample in full f64 (default: the compact subset).
+        #[arg(long)]
+        record_full: bool,
         /// zstd compression level of the recording (changes file sizes, never content).
         #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_LEVEL)]
         zstd_level: u32,
@@ -236,7 +239,7 @@ pub fn run() -> Result<()> {
             report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref())
                 .with_context(|| format!("simulating {}", problem.display()))
         }
-        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads } => {
+        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, record_full } => {
             check_threads(threads)?;
             if record_every == 0 {
                 anyhow::bail!("--record-every 0: must be at least 1");
@@ -251,7 +254,7 @@ pub fn run() -> Result<()> {
                 RecordArg::Designs => (true, TrajectoryKeep::None),
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
-            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads };
+            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads, resolution: if record_full { gripopt::record::Resolution::Full } else { gripopt::record::Resolution::Compact }, epoch_s: 0 };
             let spec = gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
             let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s);

@@ -157,6 +157,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
         return Err(Error::RunDir { path: spec.out.clone(), message });
     }
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
+    crate::record::write_layout(&spec.out)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
@@ -172,7 +173,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
         wall_s: 0.0,
         status: RunStatus::Running,
         resumes: vec![],
-        recording: spec.record,
+        recording: spec.record.starting_now(),
         recording_bytes: 0,
         recording_s: 0.0,
     };
