@@ -15,10 +15,12 @@ build:
 VENV    := .venv
 PYTHON  ?= python3
 
-# The independent MCAP reader (PyPI packages mcap and jsonschema) in a local venv.
+# The independent MCAP reader in a local venv: PyPI mcap (reference reader),
+# mcap-protobuf-support (protobuf decoding), foxglove-schemas-protobuf (the official
+# Foxglove descriptors to compare with) and jsonschema.
 $(VENV)/.installed:
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap jsonschema
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema
 	touch $@
 
 venv: $(VENV)/.installed
@@ -42,7 +44,7 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
-	@echo "Recording (open in Foxglove): $(OUT)/recording/gen-*.mcap"
+	@echo "Recording (open in Foxglove with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap"
 	@id=$$(sed -n 2p $(OUT)/pareto.csv | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.
