@@ -139,9 +139,18 @@ mod tests {
         let mut i = 0;
         let mut seen = vec![];
         while i < b.len() {
-            let (tag, wire) = ((b[i] >> 3) as i32, b[i] & 7);
+            // the key is a varint (two bytes from tag 16 on)
+            let (mut key, mut shift) = (0u32, 0);
+            loop {
+                key |= ((b[i] & 0x7f) as u32) << shift;
+                shift += 7;
+                i += 1;
+                if b[i - 1] < 0x80 {
+                    break;
+                }
+            }
+            let (tag, wire) = ((key >> 3) as i32, (key & 7) as u8);
             let (_, _, ty, rep) = SERIES_FIELDS.iter().find(|f| f.1 == tag).copied().expect("field in the table");
-            i += 1;
             match (ty, rep) {
                 (Type::Double, true) => {
                     assert_eq!((wire, b[i]), (2, 8), "packed double");
