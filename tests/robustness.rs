@@ -235,7 +235,8 @@ fn exit_codes_follow_the_documented_table() {
     let feasible_id = &front[1][0];
     let r = cli(&["replay", &d, "--design", feasible_id]);
     assert_eq!(code(&r), 0, "{}", stderr(&r));
-    assert!(String::from_utf8_lossy(&r.stdout).contains("verified: re-simulation reproduces"));
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert!(out.contains("  verified (") && out.contains("re-simulation reproduces"), "{out}");
     let fcol = pop[0].iter().position(|h| h == "failed_stage").unwrap();
     let discarded = pop.iter().skip(1).find(|r| !r[fcol].is_empty() && r[fcol] != "3").expect("a design discarded before stage 3");
     let r = cli(&["replay", &d, "--design", &discarded[0]]);

@@ -97,8 +97,11 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         record_every: u32,
         /// Interval of the 3D scene updates in milliseconds of simulated time (0 = none).
-        #[arg(long, default_value_t = 0.5)]
+        #[arg(long, default_value_t = gripopt::record::DEFAULT_SCENE_DT * 1e3)]
         scene_ms: f64,
+        /// Record every trajectory sample in full f64 (default: the compact subset).
+        #[arg(long)]
+        record_full: bool,
         /// zstd compression level of the recording (changes file sizes, never content).
         #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_LEVEL)]
         zstd_level: u32,
@@ -289,7 +292,7 @@ pub fn run() -> Result<i32> {
                 .with_context(|| format!("simulating {}", problem.display()))
                 .map(|_| 0)
         }
-        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, json } => {
+        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, record_full, json } => {
             check_threads(threads)?;
             if let Ok(p) = gripopt::params::Problem::load(&problem) {
                 warn_free_scene(&p);
@@ -313,7 +316,7 @@ pub fn run() -> Result<i32> {
                 RecordArg::Designs => (true, TrajectoryKeep::None),
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
-            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads };
+            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads, resolution: if record_full { gripopt::record::Resolution::Full } else { gripopt::record::Resolution::Compact }, epoch_s: 0 };
             let spec = gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
             let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s, json)

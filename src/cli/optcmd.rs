@@ -137,7 +137,8 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     if r.compared == 0 {
         println!("  NOT verified: no trajectory was recorded for this design, so nothing was compared (recomputed feasible: {})", r.recomputed_feasible);
     } else if verified {
-        println!("  verified: re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
+        let precision = if r.recorded.resolution == gripopt::record::Resolution::Full { "every sample, f64" } else { "compact subset, to the recorded f32 precision" };
+        println!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
     } else {
         println!("  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})", r.max_difference, r.compared, r.recomputed_feasible);
     }

@@ -4,10 +4,11 @@
 //! that was being recorded when the run stopped) and temporary files are removed.
 //!
 //! A shard's index line is rebuilt from the MCAP file alone, without decoding any message
-//! payload: the generation from its `gripopt.run` metadata record (or its file name), the
-//! design ids from the chunk indexes' log times (design k lives in [k s, k s + 1 s)), the
-//! number of designs from the message count of the `/designs` channel, the size from the
-//! file system.
+//! payload: the generation, the first and last design ids and the number of designs from
+//! its `gripopt.run` metadata record; where a key is missing, the generation from the file
+//! name, the ids from the chunk indexes' log times (design k lives in
+//! [epoch + k s, epoch + k s + 1 s), `epoch_s` from the same record, else 0) and the count
+//! from the `/designs` channel's statistics; the size from the file system.
 
 use super::writer::ShardEntry;
 use crate::{Error, Result};
@@ -39,23 +40,29 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
     let summary = mcap::Summary::read(&buf)
         .map_err(|source| Error::Mcap { path: path.to_path_buf(), what: "cannot read the MCAP summary; the file is truncated or corrupt".into(), source })?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
-    let mut generation = None;
+    let (mut generation, mut first, mut last, mut count, mut epoch_s) = (None, None, None, None, 0u64);
     for mi in summary.metadata_indexes.iter().filter(|m| m.name == "gripopt.run") {
         let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::Mcap { path: path.to_path_buf(), what: "cannot read the metadata record".into(), source })?;
-        generation = m.metadata.get("generation").and_then(|g| g.parse::<u64>().ok());
+        let num = |k: &str| m.metadata.get(k).and_then(|g| g.parse::<u64>().ok());
+        generation = num("generation");
+        first = num("first_id");
+        last = num("last_id");
+        count = num("designs");
+        epoch_s = num("epoch_s").unwrap_or(0);
     }
     let generation = generation.or_else(|| shard_generation(&file)).ok_or_else(|| bad("no generation in the metadata or the file name".into()))?;
     let start = summary.chunk_indexes.iter().map(|c| c.message_start_time).min();
     let end = summary.chunk_indexes.iter().map(|c| c.message_end_time).max();
     let (Some(start), Some(end)) = (start, end) else { return Err(bad("the shard holds no messages".into())) };
     let designs_channel = summary.channels.values().find(|c| c.topic == "/designs").map(|c| c.id);
-    let designs = match (&summary.stats, designs_channel) {
+    let designs = count.or(match (&summary.stats, designs_channel) {
         (Some(st), Some(ch)) => st.channel_message_counts.get(&ch).copied(),
         _ => None,
-    }
+    })
     .unwrap_or(summary.chunk_indexes.len() as u64);
     let bytes = buf.len() as u64;
-    Ok(ShardEntry { generation, file, first_id: start / 1_000_000_000, last_id: end / 1_000_000_000, designs, bytes })
+    let id_at = |t: u64| (t / 1_000_000_000).saturating_sub(epoch_s);
+    Ok(ShardEntry { generation, file, first_id: first.unwrap_or(id_at(start)), last_id: last.unwrap_or(id_at(end)), designs, bytes })
 }
 
 /// Recover the recording folder `dir` of a run whose checkpoint covers generations

@@ -165,6 +165,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     let _lock = RunLock::acquire(&spec.out)?;
     holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
+    crate::record::write_layout(&spec.out)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
@@ -180,7 +181,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
         wall_s: 0.0,
         status: RunStatus::Running,
         resumes: vec![],
-        recording: spec.record,
+        recording: spec.record.starting_now(),
         recording_bytes: 0,
         recording_s: 0.0,
     };
