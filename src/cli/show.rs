@@ -139,7 +139,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
         "l21" | "b" | "t22" => format!("{n} mm"),
         _ => n.to_string(),
     };
-    let line: Vec<String> = shown.iter().map(|n| format!("{:>13}", label(n))).collect();
+    let line: Vec<String> = shown.iter().map(|n| format!(" {:>13}", label(n))).collect();
     println!("{}  replay", line.join(""));
     for r in &rows {
         let cells: Vec<String> = shown
@@ -148,9 +148,11 @@ pub fn run(a: ShowArgs) -> Result<()> {
                 let v = col(n).and_then(|k| r.get(k)).map(String::as_str).unwrap_or("");
                 let scale = match *n { "max_offset" | "t_stab" | "l21" | "b" | "t22" => 1e3, _ => 1.0 };
                 match (v.parse::<f64>(), *n) {
-                    (_, "id") => format!("{v:>13}"),
-                    (Ok(x), _) => format!("{:>13.5}", x * scale),
-                    _ => format!("{:>13}", if v.is_empty() { "—" } else { v }),
+                    (_, "id") => format!(" {v:>13}"),
+                    // small values (alpha near isotropy) keep their significant digits
+                    (Ok(x), _) if x != 0.0 && (x * scale).abs() < 1e-3 => format!(" {:>13.4e}", x * scale),
+                    (Ok(x), _) => format!(" {:>13.5}", x * scale),
+                    _ => format!(" {:>13}", if v.is_empty() { "—" } else { v }),
                 }
             })
             .collect();
