@@ -30,11 +30,15 @@ fn message(e: &anyhow::Error) -> String {
 /// Exit code of an error: the library's classification where it is a library error, a
 /// closed pipe quietly, 1 for other I/O failures, 2 for the CLI's own checks of its flags.
 fn exit_code(e: &anyhow::Error) -> i32 {
+    let io = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>());
+    if io.is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) {
+        return EXIT_BROKEN_PIPE;
+    }
     if let Some(g) = e.chain().find_map(|c| c.downcast_ref::<gripopt::Error>()) {
         return g.exit_code();
     }
-    if let Some(io) = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
-        return if io.kind() == std::io::ErrorKind::BrokenPipe { EXIT_BROKEN_PIPE } else { 1 };
+    if io.is_some() {
+        return 1;
     }
     2
 }

@@ -386,3 +386,32 @@ fn outputs_are_written_every_generation_with_units_archive_and_totals() {
     assert_eq!(code(&o), 0);
     assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("--design {id}")));
 }
+
+/// `gripopt bench … --json`: the figures as one JSON object on stdout (the text report on
+/// stderr), with the discard counts adding up to the designs drawn.
+#[test]
+fn bench_json_summaries() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let out = std::process::Command::new(bin).args(["bench", "static", problem, "--n", "200", "--json"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    let discarded: u64 = v["discarded_by_stage"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap()).sum();
+    assert_eq!(discarded + v["passed_stage_2"].as_u64().unwrap(), 200, "{v}");
+    assert!(v["designs_per_s_min_time"].as_f64().unwrap() > 0.0);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("static pipeline"));
+}
+
+/// `gripopt bench replay --out DIR` never deletes a folder it did not write itself.
+#[test]
+fn bench_replay_refuses_to_clear_a_folder_it_did_not_write() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let dir = tmp("bench-replay-guard");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("precious.csv"), "keep me").unwrap();
+    let out = std::process::Command::new(bin).args(["bench", "replay", problem, "--designs", "10", "--out"]).arg(&dir).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a synthetic run"));
+    assert_eq!(std::fs::read_to_string(dir.join("precious.csv")).unwrap(), "keep me");
+}

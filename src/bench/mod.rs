@@ -1,7 +1,9 @@
 //! Benchmarks: the speed figures of docs/benchmarks.md (not tests). `gripopt bench …` calls
-//! them; the diffsol comparison (`benches/diffsol.rs`, a cargo bench) reuses the
+//! them; the diffsol comparison (`crates/diffsol-bench`, a cargo bench) reuses the
 //! work-precision reference, error measures and table writers from here. Each benchmark
-//! prints its figures to stdout and writes its tables into the folder it is given.
+//! writes its figures as text to the writer it is given (the CLI's stdout, or stderr with
+//! `--json`), returns them as a JSON summary, and writes its tables into the folder it is
+//! given.
 //!
 //! The top layer of the library: it may use everything below it.
 
@@ -19,7 +21,19 @@ pub use static_eval::static_pipeline;
 pub use table::{plot, print_table, print_targets, write_csv};
 pub use work_precision::{check_atol, work_precision, Measured, Reference, Row, WorkPrecision, RTOLS};
 
+/// Where a benchmark writes its text report.
+pub type Out<'a> = &'a mut dyn std::io::Write;
+
 use std::time::Instant;
+
+/// Write one line of a benchmark's text report to `out` (a library `Error` on failure, so a
+/// closed pipe ends the CLI quietly).
+macro_rules! say {
+    ($out:expr, $($arg:tt)*) => {
+        writeln!($out, $($arg)*).map_err(|e| crate::Error::io("<benchmark report>", "cannot write the report", e))?
+    };
+}
+pub(crate) use say;
 
 /// Run `f` at least three times, and on while under `budget_s` seconds in all and fewer
 /// than `max_reps` runs: the last result and the minimum and median times in seconds.

@@ -1,6 +1,6 @@
 //! `gripopt bench nsga`: non-dominated sorting and the optimiser's own overhead.
 
-use super::min_med;
+use super::{min_med, say, Out};
 use crate::{Error, Result};
 use crate::optim::rank_and_crowding;
 use crate::optim::{reference_settings, TestProblem};
@@ -9,10 +9,12 @@ use rand::{Rng, SeedableRng};
 
 /// Non-dominated sort + crowding distance on uniform random sets (2 and 4 objectives, 200 to
 /// 10 000 points), and NSGA-II's overhead per generation on ZDT1 (everything but
-/// evaluation), `reps` repetitions each (at least 3); prints min / median times.
-pub fn nsga(reps: usize) -> Result<()> {
+/// evaluation), `reps` repetitions each (at least 3); writes min / median times to `out`
+/// and returns them as JSON.
+pub fn nsga(reps: usize, out: Out) -> Result<serde_json::Value> {
     let reps = reps.max(3);
-    println!("non-dominated sort + crowding distance, uniform random points, 1 thread, {reps} repetitions (min / median)");
+    let mut sorts = vec![];
+    say!(out, "non-dominated sort + crowding distance, uniform random points, 1 thread, {reps} repetitions (min / median)");
     for m in [2usize, 4] {
         for n in [200usize, 1000, 10000] {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64 + m as u64);
@@ -26,7 +28,8 @@ pub fn nsga(reps: usize) -> Result<()> {
                 ts.push(t0.elapsed().as_secs_f64());
             }
             let (a, b) = min_med(ts);
-            println!("  {m} objectives, {n:>5} points: {:.3} / {:.3} ms", a * 1e3, b * 1e3);
+            sorts.push(serde_json::json!({ "objectives": m, "points": n, "min_ms": a * 1e3, "median_ms": b * 1e3 }));
+            say!(out, "  {m} objectives, {n:>5} points: {:.3} / {:.3} ms", a * 1e3, b * 1e3);
         }
     }
     // optimiser overhead on ZDT1: whole run minus evaluation time, per generation
@@ -56,6 +59,9 @@ pub fn nsga(reps: usize) -> Result<()> {
         per_gen.push((total - eval_s * 100.0 * gens as f64) / gens as f64);
     }
     let (a, b) = min_med(per_gen);
-    println!("NSGA-II overhead per generation on ZDT1 (pop 100, 250 generations, 1 thread, evaluation time {:.2} us/eval subtracted): {:.3} / {:.3} ms", eval_s * 1e6, a * 1e3, b * 1e3);
-    Ok(())
+    say!(out, "NSGA-II overhead per generation on ZDT1 (pop 100, 250 generations, 1 thread, evaluation time {:.2} us/eval subtracted): {:.3} / {:.3} ms", eval_s * 1e6, a * 1e3, b * 1e3);
+    Ok(serde_json::json!({
+        "bench": "nsga", "repetitions": reps, "sort_and_crowding": sorts,
+        "generation_overhead_zdt1_ms": { "min": a * 1e3, "median": b * 1e3, "eval_us_subtracted": eval_s * 1e6 },
+    }))
 }

@@ -1,5 +1,6 @@
 //! `gripopt bench replay`: finding, reading and replaying designs in a large recorded run.
 
+use super::say;
 use super::min_med;
 use crate::{Error, Result};
 use crate::run::{GripperProblem, TrajectoryKeep};
@@ -28,11 +29,18 @@ fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
 
 /// Replay speed: writes a synthetic run of `b.designs` copies of the nominal design's real
 /// evaluation and recorded grasp (the problem's nominal), then finds, reads and replays 50
-/// random ids; prints min / median times.
-pub fn replay(problem: &Problem, b: &ReplayBench) -> Result<()> {
+/// random ids; writes min / median times to `out_text` and returns them as JSON. An existing
+/// `b.out` is cleared only if it is an earlier synthetic run (its run.json says so).
+pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Result<serde_json::Value> {
     let (p, n, out) = (problem, b.designs, b.out.as_path());
     let per_shard = b.per_shard.max(1);
     if out.exists() {
+        // never delete a folder this benchmark did not write (a real run, say)
+        let synthetic = std::fs::read_to_string(out.join("run.json")).ok().and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok()).is_some_and(|v| v["synthetic"] == true);
+        let empty = std::fs::read_dir(out).map(|mut d| d.next().is_none()).unwrap_or(false);
+        if !synthetic && !empty {
+            return Err(Error::RunDir { path: out.to_path_buf(), message: "exists and is not a synthetic run of `gripopt bench replay`: choose another --out (nothing was deleted)".into() });
+        }
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot clear", e))?;
     }
     let rec_dir = out.join("recording");
@@ -72,7 +80,7 @@ pub fn replay(problem: &Problem, b: &ReplayBench) -> Result<()> {
     pb.finish_and_clear();
     std::fs::write(&index_path, index).map_err(|e| Error::io(&index_path, "cannot write", e))?;
     let write_s = t0.elapsed().as_secs_f64();
-    println!("synthetic run: {n} designs ({samples} trajectory samples each) in {shards} shards, {:.1} MB, written in {:.1} s", bytes as f64 / 1e6, write_s);
+    say!(out_text, "synthetic run: {n} designs ({samples} trajectory samples each) in {shards} shards, {:.1} MB, written in {:.1} s", bytes as f64 / 1e6, write_s);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let (mut t_read, mut t_full) = (vec![], vec![]);
     for _ in 0..50 {
@@ -92,10 +100,13 @@ pub fn replay(problem: &Problem, b: &ReplayBench) -> Result<()> {
     }
     let (r0, r1) = min_med(t_read);
     let (f0, f1) = min_med(t_full);
-    println!("find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)", r0 * 1e3, r1 * 1e3);
-    println!("replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
+    say!(out_text, "find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)", r0 * 1e3, r1 * 1e3);
+    say!(out_text, "replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
     if !b.keep {
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e))?;
     }
-    Ok(())
+    Ok(serde_json::json!({
+        "bench": "replay", "designs": n, "samples_per_design": samples, "shards": shards, "bytes": bytes, "write_s": write_s,
+        "find_read_ms": { "min": r0 * 1e3, "median": r1 * 1e3 }, "replay_ms": { "min": f0 * 1e3, "median": f1 * 1e3 },
+    }))
 }

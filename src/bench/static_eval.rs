@@ -1,5 +1,6 @@
 //! `gripopt bench static`: throughput of the static pipeline (stages 0–2).
 
+use super::{say, Out};
 use crate::Result;
 use crate::eval::{evaluate, EvalOptions};
 use crate::params::{Design, Problem};
@@ -8,8 +9,8 @@ use std::path::Path;
 
 /// Static pipeline (stages 0–2) throughput on one core: `n` random designs in the bounds of
 /// `problem` (seed `seed`), five repetitions; prints designs/s and the discard counts per
-/// stage. `path` is the problem file, for the printout.
-pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64) -> Result<()> {
+/// stage to `out` and returns them as JSON. `path` is the problem file, for the printout.
+pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64, out: Out) -> Result<serde_json::Value> {
     let p = problem;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let designs: Vec<Design> = (0..n).map(|_| p.bounds.sample(&mut rng)).collect();
@@ -37,11 +38,15 @@ pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64) -> R
     pb.finish_and_clear();
     times.sort_by(f64::total_cmp);
     let (tmin, tmed) = (times[0], times[times.len() / 2]);
-    println!("static pipeline (stages 0-2), {} random designs in the bounds of {}, seed {seed}, 1 thread, 5 repetitions", n, path.display());
-    println!("  designs/s: min-time {:.0}  median-time {:.0}   ({:.2} us/design at min)", n as f64 / tmin, n as f64 / tmed, tmin / n as f64 * 1e6);
+    say!(out, "static pipeline (stages 0-2), {} random designs in the bounds of {}, seed {seed}, 1 thread, 5 repetitions", n, path.display());
+    say!(out, "  designs/s: min-time {:.0}  median-time {:.0}   ({:.2} us/design at min)", n as f64 / tmin, n as f64 / tmed, tmin / n as f64 * 1e6);
     for (s, c) in counts.iter().enumerate() {
-        println!("  discarded at stage {s}: {c} ({:.1} %)", 100.0 * *c as f64 / n as f64);
+        say!(out, "  discarded at stage {s}: {c} ({:.1} %)", 100.0 * *c as f64 / n as f64);
     }
-    println!("  passed stage 2: {feasible} ({:.1} %)", 100.0 * feasible as f64 / n as f64);
-    Ok(())
+    say!(out, "  passed stage 2: {feasible} ({:.1} %)", 100.0 * feasible as f64 / n as f64);
+    Ok(serde_json::json!({
+        "bench": "static", "problem": path.display().to_string(), "designs": n, "seed": seed, "threads": 1, "repetitions": 5,
+        "designs_per_s_min_time": n as f64 / tmin, "designs_per_s_median_time": n as f64 / tmed, "us_per_design_min": tmin / n as f64 * 1e6,
+        "discarded_by_stage": counts, "passed_stage_2": feasible,
+    }))
 }

@@ -1,8 +1,9 @@
 //! The work-precision table as CSV, as a printed table, and as an SVG plot.
 
+use std::io::Write as _;
+use super::say;
 use super::work_precision::Row;
 use crate::{Error, Result};
-use std::io::Write;
 use std::path::Path;
 
 /// Writes `rows` as CSV to `path` (its folder created if need be).
@@ -19,12 +20,13 @@ pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {
     w.flush().map_err(io)
 }
 
-/// Prints `rows` as a table.
-pub fn print_table(rows: &[Row]) {
-    println!("{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} verdict", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)");
+/// Writes `rows` as a table to `out`.
+pub fn print_table(rows: &[Row], out: super::Out) -> Result<()> {
+    say!(out, "{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} verdict", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)");
     for r in rows {
-        println!("{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", r.method, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
+        say!(out, "{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", r.method, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
     }
+    Ok(())
 }
 
 /// Labels of `rows` in order, each once per run of equal labels.
@@ -34,15 +36,16 @@ fn labels(rows: &[Row]) -> Vec<&'static str> {
     labels
 }
 
-/// Prints, per method, the cheapest run (median CPU) with t_stab within 1e-5.
-pub fn print_targets(rows: &[Row]) {
+/// Writes to `out`, per method, the cheapest run (median CPU) with t_stab within 1e-5.
+pub fn print_targets(rows: &[Row], out: super::Out) -> Result<()> {
     for m in labels(rows) {
         let best = rows.iter().filter(|r| r.method == m && r.err_t_stab <= 1e-5).min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
         match best {
-            Some(r) => println!("{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
-            None => println!("{m}: no tolerance reached 1e-5 on t_stab"),
+            Some(r) => say!(out, "{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
+            None => say!(out, "{m}: no tolerance reached 1e-5 on t_stab"),
         }
     }
+    Ok(())
 }
 
 /// Plots median CPU time against the relative error in t_stab, one line per method, to the

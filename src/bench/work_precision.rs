@@ -2,6 +2,7 @@
 //! against a tight reference run. The reference, the error measures and the table are also
 //! what the diffsol comparison (`benches/diffsol.rs`) uses.
 
+use super::{say, Out};
 use super::table::{plot, print_table, print_targets, write_csv};
 use super::{progress, time_it};
 use crate::{Error, Result};
@@ -107,7 +108,7 @@ impl Measured {
 }
 
 /// One row of the work-precision table.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Row {
     /// Method label.
     pub method: &'static str,
@@ -167,11 +168,11 @@ impl Reference {
         SimOptions { method, ..SimOptions::diagnostic(1e-12, 1e-15, 5_000_000) }
     }
 
-    /// Prints the atol used and the reference's values.
-    pub fn print(&self, atol: Option<f64>) {
+    /// Writes the atol used and the reference's values to `out`.
+    pub fn print(&self, atol: Option<f64>, out: Out) -> Result<()> {
         let r = &self.run;
-        println!("atol: {}", atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol")));
-        println!(
+        say!(out, "atol: {}", atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol")));
+        say!(out, 
             "reference: Radau IIA rtol 1e-12: t_first {:.12e} s, E_cyl {:.12e} J, t_stab {:.12e} s, f_stab ({:.9}, {:.9}) N",
             r.first.map(|x| x.t).unwrap_or(f64::NAN),
             r.first.map(|x| x.impact.e_cyl).unwrap_or(f64::NAN),
@@ -179,6 +180,7 @@ impl Reference {
             r.f_end[0],
             r.f_end[1]
         );
+        Ok(())
     }
 
     /// The row of a run measured as `m`, at `rtol`, with CPU times `cpu_min`, `cpu_med`.
@@ -233,20 +235,21 @@ fn label(m: Method) -> &'static str {
 /// The work-precision table of `design`: the reference (checked against Dormand–Prince at
 /// the same tight tolerance), gripopt's integrators at each rtol, the cheapest run per
 /// method within 1e-5 on t_stab, and the whole staged evaluation's time. Writes
-/// work_precision.csv and work_precision.svg into `wp.out_dir`.
-pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision) -> Result<()> {
+/// work_precision.csv and work_precision.svg into `wp.out_dir`; the text goes to `out`, the
+/// figures come back as JSON.
+pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, out: Out) -> Result<serde_json::Value> {
     check_atol(wp.atol)?;
     check_rtols(&wp.rtols)?;
     let reference = Reference::new(problem, design)?;
     let check = simulate_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
-    reference.print(wp.atol);
-    println!("           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab", rel(check.t_stab, reference.run.t_stab));
+    reference.print(wp.atol, out)?;
+    say!(out, "           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab", rel(check.t_stab, reference.run.t_stab));
     let rows = reference.own_rows(wp);
-    println!("(diffsol rows: `cargo bench --features diffsol --bench diffsol`, as `make bench` does)");
+    say!(out, "(diffsol rows: `cargo bench -p gripopt-diffsol-bench --bench diffsol`, as `make bench` does)");
     let csv = wp.out_dir.join("work_precision.csv");
     write_csv(&rows, &csv)?;
-    print_table(&rows);
-    print_targets(&rows);
+    print_table(&rows, out)?;
+    print_targets(&rows, out)?;
     // whole staged evaluation (stages 0–3, pipeline mode, max_offset scan included)
     let s = &problem.scene;
     let opts = EvalOptions::full(problem);
@@ -258,9 +261,12 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision) ->
     }
     ts.sort_by(f64::total_cmp);
     let ev = evaluate(design, s, &opts);
-    println!("whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}", problem.solver.rtol, ts[0] * 1e3, ts[ts.len() / 2] * 1e3, ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into()));
+    say!(out, "whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}", problem.solver.rtol, ts[0] * 1e3, ts[ts.len() / 2] * 1e3, ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into()));
     let svg = wp.out_dir.join("work_precision.svg");
     plot(&rows, &svg)?;
-    println!("wrote {} and {}", csv.display(), svg.display());
-    Ok(())
+    say!(out, "wrote {} and {}", csv.display(), svg.display());
+    Ok(serde_json::json!({
+        "bench": "work-precision", "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
+        "whole_evaluation_ms": { "min": ts[0] * 1e3, "median": ts[ts.len() / 2] * 1e3, "rtol": problem.solver.rtol },
+    }))
 }

@@ -77,26 +77,34 @@ pub enum BenchCmd {
     },
 }
 
-/// Run a benchmark.
-pub fn run(b: BenchCmd) -> Result<()> {
-    match b {
-        BenchCmd::Static { problem, n, seed } => Ok(gripopt::bench::static_pipeline(&super::load_problem(&problem)?, &problem, n, seed)?),
-        BenchCmd::Nsga { reps } => Ok(gripopt::bench::nsga(reps)?),
-        BenchCmd::Replay { problem, designs, per_shard, out, keep } => {
+/// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
+/// the figures as one JSON object on stdout.
+pub fn run(b: BenchCmd, json: bool) -> Result<()> {
+    let (mut stdout, mut stderr) = (std::io::stdout().lock(), std::io::stderr().lock());
+    let out: gripopt::bench::Out = if json { &mut stderr } else { &mut stdout };
+    let summary = match b {
+        BenchCmd::Static { problem, n, seed } => gripopt::bench::static_pipeline(&super::load_problem(&problem)?, &problem, n, seed, out)?,
+        BenchCmd::Nsga { reps } => gripopt::bench::nsga(reps, out)?,
+        BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
-            Ok(gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out, keep })?)
+            gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
-        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out, atol, .. } => {
+        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out: dir, atol, .. } => {
             gripopt::bench::check_atol(atol)?;
             let p = super::load_problem(&problem)?;
-            Ok(gripopt::bench::work_precision_ensemble(&p, &problem, n, seed, &out, atol)?)
+            gripopt::bench::work_precision_ensemble(&p, &problem, n, seed, &dir, atol, out)?
         }
-        BenchCmd::WorkPrecision { problem, design, out, reps, atol, rtols, .. } => {
+        BenchCmd::WorkPrecision { problem, design, out: dir, reps, atol, rtols, .. } => {
             gripopt::bench::check_atol(atol)?;
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;
-            Ok(gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: out, reps, atol, rtols })?)
+            gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: dir, reps, atol, rtols }, out)?
         }
+    };
+    if json {
+        use std::io::Write as _;
+        writeln!(stdout, "{}", serde_json::to_string_pretty(&summary)?)?;
     }
+    Ok(())
 }

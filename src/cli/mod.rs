@@ -174,6 +174,9 @@ enum Cmd {
     Sweep(sweep::SweepArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
+        /// Print the figures as one JSON object on stdout (the text report goes to stderr).
+        #[arg(long, global = true)]
+        json: bool,
         #[command(subcommand)]
         which: bench::BenchCmd,
     },
@@ -338,7 +341,7 @@ pub fn run() -> Result<i32> {
             gripopt::run::check_population(pop.max(4), generations.unwrap_or(250), false)?;
             optcmd::moo_test(&name, seed, seeds, json, pop, generations).map(|_| 0)
         }
-        Cmd::Bench { which } => bench::run(which).map(|_| 0),
+        Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),
         Cmd::Sweep(a) => sweep::run(a).map(|_| 0),
     }
 }

@@ -77,15 +77,15 @@ fn main() -> Result<()> {
         Some(s) => Design::parse_assignments(s).map_err(anyhow::Error::msg)?,
     };
     let reference = Reference::new(&p, &design)?;
-    reference.print(a.atol);
+    reference.print(a.atol, &mut std::io::stdout())?;
     let wp = WorkPrecision { out_dir: a.out.clone(), reps: a.reps, atol: a.atol, rtols: a.rtols.clone() };
     let mut rows = if a.with_gripopt { reference.own_rows(&wp) } else { vec![] };
     rows.extend(diffsol_rows(&reference, &wp));
     let csv = a.out.join("work_precision_diffsol.csv");
     let svg = a.out.join("work_precision_diffsol.svg");
     gripopt::bench::write_csv(&rows, &csv)?;
-    print_table(&rows);
-    print_targets(&rows);
+    print_table(&rows, &mut std::io::stdout())?;
+    print_targets(&rows, &mut std::io::stdout())?;
     gripopt::bench::plot(&rows, &svg)?;
     println!("wrote {} and {}", csv.display(), svg.display());
     Ok(())
