@@ -11,6 +11,7 @@ mod grasp_plot;
 mod gripper;
 mod observers;
 mod outputs;
+mod persist;
 mod plots;
 mod rundir;
 
@@ -18,6 +19,7 @@ pub use checkpoint::{Checkpoint, FORMAT, VERSION, settings_hash, sha256_hex};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use observers::{CheckpointObserver, CrashAfter, ProgressObserver, RecordingObserver, SharedProgress};
+pub use persist::{CheckpointSpec, PersistStats, Persister};
 pub use outputs::{final_front, write_outputs};
 pub use plots::{hypervolume, pareto_matrix};
 pub use rundir::{Resume, RunInfo, RunSpec, RunStatus, RunSummary, optimise, resume};

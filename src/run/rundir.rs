@@ -10,7 +10,8 @@
 
 use super::checkpoint::{sha256_hex, settings_hash, Checkpoint};
 use super::gripper::{GripperInfo, GripperProblem};
-use super::observers::{CheckpointObserver, CrashAfter, ProgressObserver, RecordingObserver, SharedProgress};
+use super::observers::{ProgressObserver, RecordingObserver, SharedProgress};
+use super::persist::{CheckpointSpec, Persister};
 use super::outputs::write_outputs;
 use crate::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -254,23 +255,15 @@ fn drive(
     };
     let first = state.generation.max(1);
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
-    let ckpt = CheckpointObserver { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
-    let prog2 = prog.clone();
-    let rec2 = recorder.clone();
-    let result = pool.install(|| {
-        execute(gp, settings, state, move |e| {
-            // recorder first: a generation is checkpointed only after its shard is complete
-            let e = match rec2 {
-                Some(r) => observe(e, r),
-                None => e,
-            };
-            let e = observe(observe(e, ckpt), prog2);
-            match crash_after {
-                Some(k) => observe(e, CrashAfter(k)),
-                None => e,
-            }
-        }, crash_after.is_none())
-    });
+    // shard k, then checkpoint k, written by a background thread while k+1 evaluates
+    let ckpt = CheckpointSpec { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
+    let persister = Persister::start(recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
+    let (pers2, prog2) = (persister.clone(), prog.clone());
+    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
+    let result = match (result, persister.finish()) {
+        (Ok(_), Err(e)) => Err(e),
+        (r, _) => r,
+    };
     prog.0.lock().expect("progress").finish();
     if let Some(r) = &recorder {
         let r = r.0.lock().expect("recorder");
