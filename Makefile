@@ -15,20 +15,24 @@ build:
 VENV    := .venv
 PYTHON  ?= python3
 
-# The independent MCAP reader (PyPI packages mcap and jsonschema) in a local venv.
-$(VENV)/.installed:
+# The independent checks in a local venv: PyPI mcap (reference reader),
+# mcap-protobuf-support (protobuf decoding), foxglove-schemas-protobuf (the official
+# Foxglove descriptors to compare with), jsonschema, and pandas (docs/python.md).
+$(VENV)/.installed-3:
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap jsonschema
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas
 	touch $@
 
-venv: $(VENV)/.installed
+venv: $(VENV)/.installed-3
 
 # Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
-# then the independent reader over every MCAP file the tests wrote.
-test: $(VENV)/.installed
+# then the independent reader over every MCAP file the tests wrote, then the pandas example of
+# docs/python.md on a run the tests wrote.
+test: $(VENV)/.installed-3
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
+	$(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
 # generations, 1 500 designs through all four stages, every design and grasp recorded to
@@ -42,8 +46,8 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
-	@echo "Recording (open in Foxglove): $(OUT)/recording/gen-*.mcap"
-	@id=$$(sed -n 2p $(OUT)/pareto.csv | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
+	@echo "Recording (open in Foxglove with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap"
+	@id=$$(grep -v "^#" $(OUT)/pareto.csv | sed -n 2p | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.
 # diffsol's solvers are compared by a cargo bench of the package crates/diffsol-bench (so the

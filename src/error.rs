@@ -80,6 +80,14 @@ pub enum Error {
         /// What is wrong and what to do.
         message: String,
     },
+    /// Another process holds the run folder's lock (its pid, when it could be read).
+    #[error("{}: the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    Locked {
+        /// The run folder.
+        path: PathBuf,
+        /// The holder's process id.
+        pid: Option<u32>,
+    },
     /// A recording is missing, incomplete or does not hold what was asked for.
     #[error("{}: {message}", path.display())]
     Recording {
@@ -135,6 +143,24 @@ impl Error {
     /// An I/O error on `path` while doing `action`.
     pub fn io(path: impl Into<PathBuf>, action: &'static str, source: std::io::Error) -> Self {
         Error::Io { path: path.into(), action, source }
+    }
+
+    /// True when the error is the user's input (a file, field, flag or folder given that
+    /// cannot be used as asked): exit code 2. Other errors are failures of a run: exit 1.
+    pub fn is_input(&self) -> bool {
+        use std::io::ErrorKind as K;
+        match self {
+            Error::ProblemParse { .. } | Error::InvalidField { .. } | Error::Input(_) | Error::RunDir { .. } | Error::Checkpoint { .. } | Error::Locked { .. } | Error::Recording { .. } => true,
+            Error::Json { .. } => true,
+            Error::Io { source, .. } => matches!(source.kind(), K::NotFound | K::PermissionDenied | K::InvalidInput | K::InvalidData | K::IsADirectory | K::NotADirectory | K::AlreadyExists),
+            _ => false,
+        }
+    }
+
+    /// The process exit code this error ends the CLI with (see docs/exit-codes in the README):
+    /// 2 for bad input, 1 for a failed run.
+    pub fn exit_code(&self) -> i32 {
+        if self.is_input() { 2 } else { 1 }
     }
 
     /// A benchmark error with `message` and no source.

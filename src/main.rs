@@ -1,6 +1,14 @@
 //! `gripopt` command-line interface: a thin layer over the library.
+//!
+//! Exit codes (README, docs/cli.md): 0 done; 1 the run failed; 2 bad input (a file, field,
+//! flag or folder that cannot be used as asked); 3 `replay` did not verify the recording;
+//! 130 interrupted by ctrl-c after the checkpoint of the current generation (resumable);
+//! 141 the output pipe was closed by its reader (quietly, like a program ended by SIGPIPE).
 
 mod cli;
+
+/// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
+const EXIT_BROKEN_PIPE: i32 = 141;
 
 /// The error and its causes on one line, each cause once: the library's errors name their
 /// file and often repeat their source's text, which anyhow's `{:#}` would print twice.
@@ -19,9 +27,36 @@ fn message(e: &anyhow::Error) -> String {
     msg
 }
 
+/// Exit code of an error: the library's classification where it is a library error, a
+/// closed pipe quietly, 1 for other I/O failures, 2 for the CLI's own checks of its flags.
+fn exit_code(e: &anyhow::Error) -> i32 {
+    if let Some(g) = e.chain().find_map(|c| c.downcast_ref::<gripopt::Error>()) {
+        return g.exit_code();
+    }
+    if let Some(io) = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
+        return if io.kind() == std::io::ErrorKind::BrokenPipe { EXIT_BROKEN_PIPE } else { 1 };
+    }
+    2
+}
+
 fn main() {
-    if let Err(e) = cli::run() {
-        eprintln!("error: {}", message(&e));
-        std::process::exit(2);
+    // `println!` panics when stdout is a closed pipe (`gripopt … | head -1`): end quietly
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let text = info.payload().downcast_ref::<String>().map(String::as_str).or_else(|| info.payload().downcast_ref::<&str>().copied()).unwrap_or("");
+        if text.contains("Broken pipe") || text.contains("os error 32") {
+            std::process::exit(EXIT_BROKEN_PIPE);
+        }
+        default_hook(info);
+    }));
+    match cli::run() {
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            let code = exit_code(&e);
+            if code != EXIT_BROKEN_PIPE {
+                eprintln!("error: {}", message(&e));
+            }
+            std::process::exit(code);
+        }
     }
 }

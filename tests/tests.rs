@@ -12,6 +12,8 @@ mod nominal;
 mod optimiser;
 mod problem_files;
 mod properties;
+mod scenes;
 mod recording;
 mod statics;
 mod sweep;
+mod robustness;

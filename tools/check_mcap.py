@@ -1,22 +1,155 @@
 #!/usr/bin/env python3
-"""Independent check of gripopt's MCAP files with the reference `mcap` reader (PyPI).
+"""Independent check of gripopt's MCAP files, as a Foxglove viewer would read them.
 
-For every *.mcap under the given folders: the file opens, has a summary with statistics,
-chunk indexes and message indexes, every channel has a jsonschema schema, and every JSON
-message validates against its channel's schema. Prints one line per file and a closing
-'N passed, N failed' line; exits non-zero on any failure or when no file was found.
+Knows nothing of gripopt's code: it uses the reference `mcap` reader, `mcap-protobuf-support`
+(decodes protobuf messages with the descriptor embedded in the file) and the official
+Foxglove schemas from `foxglove-schemas-protobuf`. For every *.mcap under the given folders:
+
+1. the file opens, has a summary with statistics, chunk and message indexes, and a
+   `gripopt.run` metadata record with generation, first_id, last_id, designs, epoch_s;
+2. every channel is protobuf (schema encoding `protobuf`) or JSON (`jsonschema`);
+   a `foxglove.*` schema must be protobuf and its descriptor (every message it reaches:
+   field names, numbers, labels, types, type names; enum values) must equal the official
+   one; every JSON schema must parse the way Foxglove's JSON-schema parser does (one type
+   per field, no union types; every array with typed `items`; every object with properties);
+3. every message decodes (protobuf with the embedded descriptor; JSON, validated against
+   its schema), and the count equals the statistics;
+4. the time convention and scene: each design's `/designs` message sits at the start of its
+   time window, epoch_s + id s; in that window `/grasp/series` has equal-length columns with
+   time running forward inside the window; where there is a scene, `/tf` (world → hand),
+   `/scene/static` (deleting all, then ground, palm, object) and `/scene` (deleting all first)
+   are at the window start, and the last `/scene` message is at the last recorded sample.
+
+Prints one line per file and 'N passed, N failed'; exits non-zero on any failure or when
+no file was found.
 """
+import importlib
 import json
 import pathlib
 import sys
 
 import jsonschema
+from google.protobuf import descriptor_pb2
+from mcap.decoder import DecoderFactory as McapDecoderFactory
 from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+
+NS = 1_000_000_000
+
+
+# ---------------------------------------------------------------- JSON schema, viewer-style
+def parse_like_viewer(schema, path="$"):
+    """Walk a JSON schema the way Foxglove's parser does; raise on what it rejects."""
+    t = schema.get("type")
+    if isinstance(t, list):
+        raise ValueError(f"{path}: Unsupported type {json.dumps(t)} (union types are not parsed)")
+    if t is None:
+        if "oneOf" in schema and all("const" in s for s in schema["oneOf"]):
+            return
+        raise ValueError(f"{path}: no `type`")
+    if t == "object":
+        props = schema.get("properties")
+        if not isinstance(props, dict):
+            raise ValueError(f"{path}: object without properties")
+        for k, v in props.items():
+            parse_like_viewer(v, f"{path}.{k}")
+    elif t == "array":
+        items = schema.get("items")
+        if not isinstance(items, dict) or "type" not in items and "oneOf" not in items:
+            raise ValueError(f"{path}: array without typed `items` (reading 'type' of undefined)")
+        parse_like_viewer(items, f"{path}[]")
+    elif t not in ("string", "number", "integer", "boolean", "null"):
+        raise ValueError(f"{path}: unsupported type {t!r}")
+
+
+# ---------------------------------------------------------------- protobuf descriptors
+def messages_of(fds):
+    """full name -> normalised description of every message and enum in a FileDescriptorSet."""
+    out = {}
+
+    def walk_enum(prefix, e):
+        out[f"{prefix}{e.name}"] = ("enum", sorted((v.name, v.number) for v in e.value))
+
+    def walk_msg(prefix, m):
+        name = f"{prefix}{m.name}"
+        fields = sorted((f.name, f.number, f.label, f.type, f.type_name.lstrip(".")) for f in m.field)
+        out[name] = ("message", fields)
+        for n in m.nested_type:
+            walk_msg(f"{name}.", n)
+        for e in m.enum_type:
+            walk_enum(f"{name}.", e)
+
+    for f in fds.file:
+        prefix = f"{f.package}." if f.package else ""
+        for m in f.message_type:
+            walk_msg(prefix, m)
+        for e in f.enum_type:
+            walk_enum(prefix, e)
+    return out
+
+
+def official_descriptor(full_name):
+    """The FileDescriptorSet of an official Foxglove message (foxglove-schemas-protobuf)."""
+    short = full_name.split(".", 1)[1]
+    module = importlib.import_module(f"foxglove_schemas_protobuf.{short}_pb2")
+    desc = getattr(module, short).DESCRIPTOR
+    fds = descriptor_pb2.FileDescriptorSet()
+    seen = set()
+
+    def add(fd):
+        if fd.name in seen:
+            return
+        seen.add(fd.name)
+        for dep in fd.dependencies:
+            add(dep)
+        fd.CopyToProto(fds.file.add())
+
+    add(desc.file)
+    return fds
+
+
+def reachable(name, table, acc=None):
+    acc = set() if acc is None else acc
+    if name in acc or name not in table:
+        return acc
+    acc.add(name)
+    kind, body = table[name]
+    if kind == "message":
+        for field in body:
+            if field[4]:
+                reachable(field[4], table, acc)
+    return acc
+
+
+def check_foxglove_schema(schema):
+    if schema.encoding != "protobuf":
+        why = ""
+        if schema.encoding == "jsonschema":
+            try:
+                parse_like_viewer(json.loads(schema.data), schema.name)
+            except ValueError as e:
+                why = f" (and the viewer rejects it: {e})"
+        raise ValueError(f"schema {schema.name}: encoding {schema.encoding!r}, not the official protobuf schema{why}")
+    recorded = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+    mine, theirs = messages_of(recorded), messages_of(official_descriptor(schema.name))
+    for name in sorted(reachable(schema.name, theirs)):
+        if name not in mine:
+            raise ValueError(f"schema {schema.name}: {name} missing from the embedded descriptor")
+        if mine[name] != theirs[name]:
+            raise ValueError(f"schema {schema.name}: {name} differs from the official descriptor:\n  file:     {mine[name]}\n  official: {theirs[name]}")
+
+
+# ---------------------------------------------------------------- the file
+class JsonDecoderFactory(McapDecoderFactory):
+    """JSON messages: json.loads (validated against the channel's schema below)."""
+
+    def decoder_for(self, message_encoding, schema):
+        return json.loads if message_encoding == "json" else None
 
 
 def check(path):
     with open(path, "rb") as f:
-        reader = make_reader(f)
+        reader = make_reader(f, decoder_factories=[DecoderFactory(), JsonDecoderFactory()])
         summary = reader.get_summary()
         if summary is None:
             raise ValueError("no summary section")
@@ -28,27 +161,88 @@ def check(path):
             if not ci.message_index_offsets:
                 raise ValueError(f"chunk at {ci.chunk_start_offset} has no message index")
         validators = {}
-        for cid, ch in summary.channels.items():
+        problems = []  # every channel's problem, not only the first
+        for cid, ch in sorted(summary.channels.items()):
             schema = summary.schemas[ch.schema_id]
-            if schema.encoding != "jsonschema" or ch.message_encoding != "json":
-                raise ValueError(f"channel {ch.topic}: encodings {schema.encoding}/{ch.message_encoding}")
-            s = json.loads(schema.data)
-            jsonschema.Draft7Validator.check_schema(s)
-            validators[cid] = (ch.topic, jsonschema.Draft7Validator(s))
+            try:
+                if schema.name.startswith("foxglove."):
+                    check_foxglove_schema(schema)
+                if schema.encoding == "protobuf" and ch.message_encoding == "protobuf":
+                    descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+                elif schema.encoding == "jsonschema" and ch.message_encoding == "json":
+                    s = json.loads(schema.data)
+                    parse_like_viewer(s, f"{ch.topic} ({schema.name})")
+                    jsonschema.Draft7Validator.check_schema(s)
+                    validators[cid] = jsonschema.Draft7Validator(s)
+                else:
+                    raise ValueError(f"channel {ch.topic}: encodings {schema.encoding}/{ch.message_encoding}")
+            except Exception as e:  # noqa: BLE001 - collect them all
+                problems.append(f"channel {ch.topic}: {e}")
+        if problems:
+            raise ValueError("\n    " + "\n    ".join(problems))
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+        if "gripopt.run" not in meta:
+            raise ValueError("no gripopt.run metadata record")
+        run = meta["gripopt.run"]
+        for k in ("generation", "first_id", "last_id", "designs", "epoch_s"):
+            if k not in run:
+                raise ValueError(f"gripopt.run metadata lacks {k!r}")
+        epoch = int(run["epoch_s"]) * NS
         n = 0
-        for schema, channel, message in reader.iter_messages():
-            topic, v = validators[channel.id]
-            doc = json.loads(message.data)
-            errors = sorted(v.iter_errors(doc), key=lambda e: e.path)
-            if errors:
-                raise ValueError(f"{topic} message at {message.log_time}: {errors[0].message}")
+        by_design = {}
+        for schema, channel, message, decoded in reader.iter_decoded_messages():
             n += 1
+            if channel.message_encoding == "json":
+                errors = sorted(validators[channel.id].iter_errors(decoded), key=lambda e: e.path)
+                if errors:
+                    raise ValueError(f"{channel.topic} message at {message.log_time}: {errors[0].message}")
+            d = (message.log_time - epoch) // NS
+            by_design.setdefault(d, []).append((channel.topic, message.log_time, decoded))
         if n != summary.statistics.message_count:
             raise ValueError(f"read {n} messages, statistics say {summary.statistics.message_count}")
-        meta = list(reader.iter_metadata())
-        if not any(m.name == "gripopt.run" for m in meta):
-            raise ValueError("no gripopt.run metadata record")
+        ids = sorted(by_design)
+        if [ids[0], ids[-1], len(ids)] != [int(run["first_id"]), int(run["last_id"]), int(run["designs"])]:
+            raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run['first_id']}..{run['last_id']} ({run['designs']})")
+        scene = any(ch.topic == "/scene" for ch in summary.channels.values())
+        for d, msgs in by_design.items():
+            check_design(d, epoch + d * NS, msgs, scene)
         return n, len(summary.chunk_indexes)
+
+
+def check_design(d, t0, msgs, scene):
+    at = lambda topic: [(t, m) for tp, t, m in msgs if tp == topic]  # noqa: E731
+    designs, series = at("/designs"), at("/grasp/series")
+    if len(designs) != 1 or designs[0][0] != t0 or designs[0][1]["id"] != d:
+        raise ValueError(f"design {d}: /designs must hold one message, for id {d}, at the window start {t0}")
+    ws = designs[0][1]["window_start"]
+    if ws["sec"] * NS + ws["nsec"] != t0:
+        raise ValueError(f"design {d}: /designs.window_start {ws} is not the window start {t0}")
+    if len(series) != 1 or series[0][0] != t0 or series[0][1].design_id != d:
+        raise ValueError(f"design {d}: /grasp/series must hold one message for this design at the window start")
+    s = series[0][1]
+    cols = [s.t, s.q11, s.q21, s.theta2, s.proximal_normal_force, s.distal_normal_force, s.hand_force, s.energy]
+    if len({len(c) for c in cols}) != 1:
+        raise ValueError(f"design {d}: /grasp/series columns differ in length")
+    t = list(s.t)
+    if t and (t[0] != 0.0 or any(b < a for a, b in zip(t, t[1:])) or t[-1] >= 1.0):
+        raise ValueError(f"design {d}: /grasp/series.t must start at 0 and run forward inside the window")
+    if not scene:
+        return
+    tf, static, fingers = at("/tf"), at("/scene/static"), at("/scene")
+    if not tf or tf[0][0] != t0 or [(x.parent_frame_id, x.child_frame_id) for x in tf[0][1].transforms] != [("world", "hand")]:
+        raise ValueError(f"design {d}: no world → hand transform at the window start")
+    if not static or static[0][0] != t0:
+        raise ValueError(f"design {d}: no /scene/static message at the window start")
+    st = static[0][1]
+    if not st.deletions or st.deletions[0].type != 1 or {e.id for e in st.entities} != {"ground", "palm", "object"}:
+        raise ValueError(f"design {d}: /scene/static must delete all, then draw ground, palm and object")
+    if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
+        raise ValueError(f"design {d}: the first /scene message must be at the window start and delete the previous fingers")
+    drawn = [(tm, m) for tm, m in fingers if m.entities]
+    if t and drawn:
+        last = t0 + min(round(t[-1] * NS), NS - 1)
+        if drawn[-1][0] != last:
+            raise ValueError(f"design {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last sample at {last - t0} ns")
 
 
 def main(folders):
@@ -57,7 +251,7 @@ def main(folders):
     for p in files:
         try:
             n, chunks = check(p)
-            print(f"ok   {p}: {n} messages in {chunks} chunks, all valid")
+            print(f"ok   {p}: {n} messages in {chunks} chunks decoded; schemas official / viewer-parsable; scene and time windows consistent")
             ok += 1
         except Exception as e:  # noqa: BLE001 - report every failure
             print(f"FAIL {p}: {e}")

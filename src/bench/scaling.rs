@@ -46,8 +46,6 @@ struct Gen {
     costs: Vec<f64>,
     eval_s: f64,
     serial_s: f64,
-    /// Main-thread time between the end of the solver's step and the next step (observers).
-    observe_s: f64,
 }
 
 /// One measured run.
@@ -59,7 +57,7 @@ struct Measured {
 }
 
 #[derive(Clone)]
-struct Timer(Arc<Mutex<(Vec<Gen>, Instant)>>);
+struct Timer(Arc<Mutex<Vec<Gen>>>);
 
 impl Observe<Nsga2State<GripperInfo>> for Timer {
     fn observe_init(&mut self, _n: &str, st: &Nsga2State<GripperInfo>, kv: &KV) -> std::result::Result<(), argmin::core::Error> {
@@ -68,26 +66,7 @@ impl Observe<Nsga2State<GripperInfo>> for Timer {
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
         let mut g = self.0.lock().expect("timer");
         let t = &st.timing;
-        g.0.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s, observe_s: 0.0 });
-        g.1 = Instant::now();
-        Ok(())
-    }
-}
-
-/// Closes the previous generation's observer time (added after the persister).
-#[derive(Clone)]
-struct TimerEnd(Arc<Mutex<(Vec<Gen>, Instant)>>);
-
-impl Observe<Nsga2State<GripperInfo>> for TimerEnd {
-    fn observe_init(&mut self, _n: &str, st: &Nsga2State<GripperInfo>, kv: &KV) -> std::result::Result<(), argmin::core::Error> {
-        self.observe_iter(st, kv)
-    }
-    fn observe_iter(&mut self, _st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
-        let mut g = self.0.lock().expect("timer");
-        let dt = g.1.elapsed().as_secs_f64();
-        if let Some(last) = g.0.last_mut() {
-            last.observe_s = dt;
-        }
+        g.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s });
         Ok(())
     }
 }
@@ -106,14 +85,14 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
     let spec = CheckpointSpec { path: dir.join("checkpoint.json"), problem_hash: String::new(), settings: settings.clone(), options: serde_json::json!({}), wall_before: 0.0, start };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let persister = Persister::start(recorder, spec, threads, None)?;
-    let timer = Arc::new(Mutex::new((Vec::new(), Instant::now())));
-    let (p2, t1, t2) = (persister.clone(), Timer(timer.clone()), TimerEnd(timer.clone()));
+    let timer = Arc::new(Mutex::new(Vec::new()));
+    let (p2, t1) = (persister.clone(), Timer(timer.clone()));
     let state = Nsga2State::new().with_max_generations(b.generations);
-    let res = pool.install(|| execute(gp, settings, state, move |e| observe(observe(observe(e, t1), p2), t2), false));
+    let res = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, t1), p2), false));
     let persist = persister.finish()?;
     res?;
     let wall_s = start.elapsed().as_secs_f64();
-    let gens = std::mem::take(&mut timer.lock().expect("timer").0);
+    let gens = std::mem::take(&mut *timer.lock().expect("timer"));
     Ok(Measured { wall_s, gens, persist })
 }
 
@@ -133,9 +112,10 @@ const SIMULATED_S: f64 = 200e-6;
 /// Prediction at `p` threads: (time, total work, limiting step). The per-design costs and
 /// the serial steps are as measured; the persister's time per generation is taken as
 /// serial (its encoding is parallel, so this is conservative).
-fn predict(m: &Measured, p: usize) -> (f64, f64, &'static str) {
+fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
     let n = m.gens.len().max(1) as f64;
-    let persist_g = (m.persist.record_s + m.persist.checkpoint_s) / n;
+    let persist_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.checkpoint_s) / n;
+    let handover_g = m.persist.handover_s / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work) = (0.0, 0.0, 0.0);
     for g in &m.gens {
@@ -145,7 +125,7 @@ fn predict(m: &Measured, p: usize) -> (f64, f64, &'static str) {
         let sum: f64 = g.costs.iter().sum();
         let ms = makespan(&order, p);
         strag += ms - sum / p as f64;
-        let ser = g.serial_s + g.observe_s;
+        let ser = g.serial_s + handover_g;
         serial += ser;
         work += sum + ser + persist_g;
         main_t += ms + ser;
@@ -183,7 +163,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         b.reps,
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    println!("threads  wall min / med   eff(min)  eval    strag.  serial  observers  rec.(bg)  ckpt(bg)  waited");
+    println!("threads  wall min / med   eff(min)  eval    strag.  serial  hand-over  rec.(bg)  ckpt(bg)  waited");
     let mut t1 = None;
     let mut best: Option<Measured> = None;
     for n in 1..=b.max_threads {
@@ -198,11 +178,11 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         let eval: f64 = r.gens.iter().map(|g| g.eval_s).sum();
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
         let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
-        let obs: f64 = r.gens.iter().map(|g| g.observe_s).sum();
         let p = r.persist;
         println!(
-            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {obs:>9.3}  {:>8.3}  {:>8.3}  {:>6.3}",
+            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>6.3}",
             100.0 * t1v / (n as f64 * mn),
+            p.handover_s,
             p.record_s,
             p.checkpoint_s,
             p.wait_s
@@ -213,13 +193,18 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
     }
     let _ = std::fs::remove_dir_all(dir);
     println!("(eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
-    println!(" observers: main-thread hand-over to the persister and progress; rec./ckpt: the persister's background wall time; waited: backpressure + final flush)");
+    println!(" hand-over: cloning each generation for the persister; rec./ckpt: the persister's background wall time; waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
-    let (t_1, work, _) = predict(&m, 1);
-    println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it):");
+    let on = b.record.enabled;
+    println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
     for &p in &b.predict {
-        let (t, _, what) = predict(&m, p);
-        println!("  {p:>3} threads: {:.3} s, efficiency {:.1} %; limited by {what}", t, 100.0 * work.max(t_1) / (p as f64 * t));
+        let (t, work, what) = predict(&m, p, on);
+        print!("  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+        if on {
+            let (t, work, what) = predict(&m, p, false);
+            print!("; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+        }
+        println!();
     }
     Ok(())
 }

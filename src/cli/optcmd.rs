@@ -62,24 +62,47 @@ pub fn moo_test(name: &str, seed: Option<u64>, seeds: Option<String>, json: bool
     Ok(())
 }
 
-/// Print where the results are.
-pub fn summary(s: &gripopt::run::RunSummary) {
+/// Print where the results are (text, or one JSON object with `--json`); the exit code:
+/// 130 when the run was interrupted (after the checkpoint of the current generation), else 0.
+pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
     let d = s.out.display();
+    let code = if s.interrupted { 130 } else { 0 };
+    if json {
+        let v = serde_json::json!({
+            "status": if s.interrupted { "interrupted" } else { "finished" },
+            "run_dir": d.to_string(),
+            "generations": s.generations,
+            "evaluations": s.evaluations,
+            "feasible": s.feasible,
+            "front_size": s.front_size,
+            "hypervolume": if s.hv.is_finite() { Some(s.hv) } else { None },
+            "wall_s": s.wall_s,
+            "exit_code": code,
+        });
+        println!("{}", serde_json::to_string(&v)?);
+        return Ok(code);
+    }
     if s.interrupted {
         println!("interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`", s.generations, s.evaluations);
     } else {
         println!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
     }
-    println!("results in {d}/: pareto.csv (front), population.csv, history.csv, pareto_matrix.svg, hypervolume.svg, run.json, checkpoint.json");
+    println!("results in {d}/: pareto.csv (front), archive.csv, population.csv, history.csv, pareto_matrix.svg, hypervolume.svg, run.json, checkpoint.json; best designs: `gripopt show {d}`");
+    Ok(code)
 }
 
 /// `gripopt replay`.
-pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path::Path>, plot: Option<&std::path::Path>) -> Result<()> {
+/// Exit code 3 when the recording is not verified, which includes a design with no recorded
+/// trajectory (nothing was compared).
+pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path::Path>, plot: Option<&std::path::Path>) -> Result<i32> {
     use std::io::Write;
     let t0 = std::time::Instant::now();
     let r = gripopt::record::replay(dir, id)?;
     let secs = t0.elapsed().as_secs_f64();
     let samples = &r.recorded.samples;
+    // verified means a trajectory was re-simulated and compared: never for 0 samples
+    let verified = r.verified && r.compared > 0;
+    let code = if verified { 0 } else { 3 };
     if let Some(path) = csv {
         let mut w = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?);
         writeln!(w, "t,q11,q21,q11_dot,q21_dot,theta2,delta_1,delta_2,fn_1,fn_2,ft_1,ft_2,hand_fy,filtered_fy,energy,energy_excess")?;
@@ -93,13 +116,14 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     }
     if json {
         let mut v = r.recorded.record.clone();
-        v["verified"] = serde_json::json!(r.verified);
+        v["verified"] = serde_json::json!(verified);
+        v["verdict_agrees"] = serde_json::json!(r.recomputed_feasible == v["feasible"].as_bool().unwrap_or(false));
         v["max_difference"] = serde_json::json!(if r.max_difference.is_finite() { Some(r.max_difference) } else { None });
         v["compared_samples"] = serde_json::json!(r.compared);
         v["file"] = serde_json::json!(r.recorded.file.display().to_string());
         v["replay_s"] = serde_json::json!(secs);
         println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
+        return Ok(code);
     }
     let rec = &r.recorded.record;
     println!("design {id} (generation {}) from {}", rec["generation"], r.recorded.file.display());
@@ -110,11 +134,14 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         None => println!("  feasible; objectives {}", rec["objectives"]),
     }
     println!("  trajectory: {} samples{}", samples.len(), samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default());
-    if r.verified {
-        println!("  verified: re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
+    if r.compared == 0 {
+        println!("  NOT verified: no trajectory was recorded for this design, so nothing was compared (recomputed feasible: {})", r.recomputed_feasible);
+    } else if verified {
+        let precision = if r.recorded.resolution == gripopt::record::Resolution::Full { "every sample, f64" } else { "compact subset, to the recorded f32 precision" };
+        println!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
     } else {
         println!("  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})", r.max_difference, r.compared, r.recomputed_feasible);
     }
     println!("  ({:.1} ms)", secs * 1e3);
-    Ok(())
+    Ok(code)
 }

@@ -15,6 +15,14 @@ fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
     }
 }
 
+fn yes_no(v: Option<bool>) -> &'static str {
+    match v {
+        Some(true) => "yes",
+        Some(false) => "no",
+        None => "—",
+    }
+}
+
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
     let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
@@ -29,14 +37,14 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     println!("problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m)", p.name, x.l21, x.b, x.t22, x.r, x.p, x.psi.to_degrees(), x.l_hand());
     println!("stage 0/1  kinematics");
     println!("  l11 {} mm  l22 {} mm  l12 {} mm", mm(r.l11), mm(r.l22), mm(r.l12));
-    println!("  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {:?}  sigma {:?}", d(r.q11_0), d(r.q21_0), d(r.q12_0), d(r.q22_0), d(r.q13_0), r.gamma, r.sigma);
+    println!("  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {}  sigma {}", d(r.q11_0), d(r.q21_0), d(r.q12_0), d(r.q22_0), d(r.q13_0), opt(r.gamma, 1.0, 0), opt(r.sigma, 1.0, 0));
     println!("  singularity margin {} deg (limit {:.1})", opt(r.min_margin_deg, 1.0, 3), p.scene.criteria.margin_sing.to_degrees());
     println!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
     println!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
     println!("  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm", d(r.theta1), d(r.theta2), mm(r.k1), mm(r.k2));
     println!("  f0  {} / {} N   f_mu {} / {} N", opt(r.f0_1, 1.0, 4), opt(r.f0_2, 1.0, 4), opt(r.fmu_1, 1.0, 4), opt(r.fmu_2, 1.0, 4));
     println!("  F_hand0 ({}, {}) N   F_hand_mu ({}, {}) N", opt(r.fhand0_x, 1.0, 4), opt(r.fhand0_y, 1.0, 4), opt(r.fhandmu_x, 1.0, 4), opt(r.fhandmu_y, 1.0, 4));
-    println!("  alpha {}  mean force {} N  form closed at 0: {:?}  max_offset {} mm{}", opt(r.alpha, 1.0, 5), opt(r.mean_force, 1.0, 4), r.form_closed_0, mm(r.max_offset), r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default());
+    println!("  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}", opt(r.alpha, 1.0, 5), opt(r.mean_force, 1.0, 4), yes_no(r.form_closed_0), mm(r.max_offset.filter(|m| *m >= 0.0)), r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default());
     if !static_only {
         print_dyn(&r.dynamics);
     }
@@ -105,17 +113,17 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
         m.insert("fold_ok".into(), serde_json::json!(res.fold_ok));
         m.insert("force_ok".into(), serde_json::json!(res.t_force_violation.is_none() && res.static_force_margin >= 0.0));
         m.insert("t_end".into(), serde_json::json!(res.t_end));
-        m.insert("method".into(), serde_json::json!(format!("{method:?}")));
+        m.insert("method".into(), serde_json::json!(method_name(method)));
         m.insert("feasible".into(), serde_json::json!(verdict.0));
         m.insert("failed_stage".into(), serde_json::json!(verdict.1));
         m.insert("reason".into(), serde_json::json!(verdict.2));
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    println!("problem {}  method {:?}  rtol {:e}", p.name, method, o.rtol);
+    println!("problem {}  method {}  rtol {:e}", p.name, method_name(method), o.rtol);
     print_dyn(&rec);
     println!("  f0 (rigid statics) {:.4} / {:.4} N", st.f0[0], st.f0[1]);
-    println!("  criteria: impact {:?}  fold {:?}  force {}", res.impact_ok, res.fold_ok, if res.t_force_violation.is_none() && res.static_force_margin >= 0.0 { "ok" } else { "VIOLATED" });
+    println!("  criteria: impact {}  fold {}  force {}", ok(res.impact_ok), ok(res.fold_ok), if res.t_force_violation.is_none() && res.static_force_margin >= 0.0 { "ok" } else { "VIOLATED" });
     match verdict.2 {
         None => println!("verdict    stable"),
         Some(why) => println!("verdict    DISCARDED at stage 3: {why}"),
@@ -124,4 +132,20 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
         println!("trajectory: {} samples written to {}", traj.samples.len(), path.display());
     }
     Ok(())
+}
+
+fn ok(v: Option<bool>) -> &'static str {
+    match v {
+        Some(true) => "ok",
+        Some(false) => "VIOLATED",
+        None => "not reached",
+    }
+}
+
+fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Radau5 => "radau5",
+        Method::TrBdf2 => "trbdf2",
+        Method::Dopri5 => "dopri5",
+    }
 }

@@ -9,5 +9,5 @@ mod stages;
 pub use record::{DynamicsRecord, Record};
 pub use stages::{
     evaluate, evaluate_full, evaluate_with_trajectory, stage_kinematics, stage_statics, Discard, EvalOptions, Evaluation,
-    KinematicsResult, Reason, StaticsResult, MISSING_POSE_VIOLATION,
+    KinematicsResult, Partial, PartialGrasp, Reason, StaticsResult, MISSING_POSE_VIOLATION,
 };

@@ -111,8 +111,22 @@ impl Record {
     /// Build the record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
         let x = &ev.design;
-        let f = ev.kin.map(|k| k.finger);
+        let fin = |v: f64| v.is_finite().then_some(v);
+        // MODEL.md §10: every value computed before a discard is reported, the rest null
+        let f = ev.kin.map(|k| k.finger).or(ev.partial.finger);
         let st = ev.statics;
+        let spring = st.map(|s| [s.tau_s_min, s.tau_s0]).or(ev.partial.spring);
+        let pg = ev.partial.grasp;
+        let grasp = |a: fn(&super::stages::StaticsResult) -> [f64; 2], b: fn(&super::stages::PartialGrasp) -> [f64; 2]| st.as_ref().map(a).or(pg.as_ref().map(b));
+        let theta = grasp(|s| s.theta, |g| g.theta);
+        let k = grasp(|s| s.k, |g| g.k);
+        let f0 = grasp(|s| s.f0, |g| g.f0);
+        let fmu = grasp(|s| s.fmu, |g| g.fmu);
+        let hand0 = grasp(|s| s.hand0, |g| g.hand0);
+        let hand_mu = grasp(|s| s.hand_mu, |g| g.hand_mu);
+        // l11 and l22 follow from the design (stage 0 computes them before any check)
+        let l11 = f.map(|f| f.l11).or_else(|| fin(x.p * x.l21));
+        let l22 = f.map(|f| f.l22).or_else(|| fin(x.r * (x.p * x.l21)));
         let fin = |v: f64| v.is_finite().then_some(v);
         Record {
             l21: x.l21,
@@ -122,9 +136,9 @@ impl Record {
             p: x.p,
             psi_deg: x.psi.to_degrees(),
             l_hand: x.l_hand(),
-            l11: f.map(|f| f.l11),
+            l11,
             l12: f.map(|f| f.l12),
-            l22: f.map(|f| f.l22),
+            l22,
             q11_0: f.map(|f| f.open.q11),
             q21_0: f.map(|f| f.open.q21),
             q12_0: f.map(|f| f.open.q12),
@@ -134,20 +148,20 @@ impl Record {
             sigma: f.map(|f| f.sigma),
             masses: f.map(|f| f.mass.m),
             min_margin_deg: ev.kin.map(|k| k.sweep.min_margin.to_degrees()),
-            tau_s_min: st.map(|s| s.tau_s_min),
-            tau_s0: st.map(|s| s.tau_s0),
-            theta1: st.map(|s| s.theta[0]),
-            theta2: st.map(|s| s.theta[1]),
-            k1: st.map(|s| s.k[0]),
-            k2: st.map(|s| s.k[1]),
-            f0_1: st.map(|s| s.f0[0]),
-            f0_2: st.map(|s| s.f0[1]),
-            fmu_1: st.map(|s| s.fmu[0]),
-            fmu_2: st.map(|s| s.fmu[1]),
-            fhand0_x: st.map(|s| s.hand0[0]),
-            fhand0_y: st.map(|s| s.hand0[1]),
-            fhandmu_x: st.map(|s| s.hand_mu[0]),
-            fhandmu_y: st.map(|s| s.hand_mu[1]),
+            tau_s_min: spring.map(|s| s[0]),
+            tau_s0: spring.map(|s| s[1]),
+            theta1: theta.map(|v| v[0]),
+            theta2: theta.map(|v| v[1]),
+            k1: k.map(|v| v[0]),
+            k2: k.map(|v| v[1]),
+            f0_1: f0.map(|v| v[0]),
+            f0_2: f0.map(|v| v[1]),
+            fmu_1: fmu.map(|v| v[0]),
+            fmu_2: fmu.map(|v| v[1]),
+            fhand0_x: hand0.map(|v| v[0]),
+            fhand0_y: hand0.map(|v| v[1]),
+            fhandmu_x: hand_mu.map(|v| v[0]),
+            fhandmu_y: hand_mu.map(|v| v[1]),
             form_closed_0: st.map(|s| s.form_closed_0),
             max_offset: st.map(|s| s.max_offset),
             max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),

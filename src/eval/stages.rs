@@ -80,11 +80,47 @@ pub struct Evaluation {
     pub dynamics: Option<DynamicsResult>,
     /// `None` = feasible.
     pub discard: Option<Discard>,
+    /// Values a discarding stage computed before it discarded the design (MODEL.md §10:
+    /// every value computed before a discard is reported).
+    pub partial: Partial,
     /// Wall time per stage (s): 0–1 together in [1], 2, 3.
     pub stage_seconds: [f64; 4],
 }
 
+/// What a stage computed before it discarded the design.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Partial {
+    /// The finger (open pose, l12, Γ, σ, masses) when stage 1's singularity sweep discarded it.
+    pub finger: Option<Finger>,
+    /// τ_s^min and τ_s0, when stage 2 discarded the design after computing them.
+    pub spring: Option<[f64; 2]>,
+    /// The centred grasp (closed pose θ, k; f⁰, f^μ; F⁰_hand, F^μ_hand) when stage 2's force
+    /// positiveness discarded it.
+    pub grasp: Option<PartialGrasp>,
+}
+
+/// Stage-2 values of a grasp whose forces were not all positive.
+#[derive(Debug, Clone, Copy)]
+pub struct PartialGrasp {
+    /// θ1, θ2 of the closed pose.
+    pub theta: [f64; 2],
+    /// k1, k2.
+    pub k: [f64; 2],
+    /// f⁰ (finger 1).
+    pub f0: [f64; 2],
+    /// f^μ (finger 1).
+    pub fmu: [f64; 2],
+    /// F⁰_hand.
+    pub hand0: [f64; 2],
+    /// F^μ_hand.
+    pub hand_mu: [f64; 2],
+}
+
 impl Evaluation {
+    /// A design not evaluated yet.
+    pub fn new(design: Design) -> Self {
+        Evaluation { design, kin: None, statics: None, dynamics: None, discard: None, partial: Partial::default(), stage_seconds: [0.0; 4] }
+    }
     /// True when no stage discarded the design.
     pub fn feasible(&self) -> bool {
         self.discard.is_none()
@@ -125,28 +161,41 @@ impl EvalOptions {
 
 /// Stages 0 and 1: validity, open pose, mass, singularity sweep.
 pub fn stage_kinematics(x: &Design, s: &SceneParams) -> Result<KinematicsResult, Discard> {
-    let finger = Finger::new(x, s).map_err(|g| match g {
-        GeomError::InvalidLength => Discard { stage: 0, reason: Reason::InvalidDesign, violation: 1.0 },
-        other => Discard { stage: 1, reason: Reason::Geometry(other), violation: 90.0 },
-    })?;
-    let sweep = singularity_sweep(&finger, s).map_err(|e| Discard {
-        stage: 1,
-        reason: Reason::Sweep(e),
-        violation: e.violation_deg(s.criteria.margin_sing),
-    })?;
-    Ok(KinematicsResult { finger, sweep })
+    kinematics_partial(x, s).map_err(|(d, _)| d)
 }
 
 /// Stage 2: spring, centred grasp, force constraints, α, F̃, form closure, max_offset.
 pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Discard> {
+    statics_partial(f, s).map_err(|(d, _)| d)
+}
+
+/// Stages 0 and 1, with the finger when the sweep discarded it.
+fn kinematics_partial(x: &Design, s: &SceneParams) -> Result<KinematicsResult, (Discard, Partial)> {
+    let finger = Finger::new(x, s).map_err(|g| match g {
+        GeomError::InvalidLength => Discard { stage: 0, reason: Reason::InvalidDesign, violation: 1.0 },
+        other => Discard { stage: 1, reason: Reason::Geometry(other), violation: 90.0 },
+    });
+    let finger = finger.map_err(|d| (d, Partial::default()))?;
+    let sweep = singularity_sweep(&finger, s).map_err(|e| {
+        let d = Discard { stage: 1, reason: Reason::Sweep(e), violation: e.violation_deg(s.criteria.margin_sing) };
+        (d, Partial { finger: Some(finger), ..Partial::default() })
+    })?;
+    Ok(KinematicsResult { finger, sweep })
+}
+
+/// Stage 2, with what was computed before a discard.
+fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discard, Partial)> {
     let d2 = |reason, violation| Discard { stage: 2, reason, violation };
-    let (tau_s_min, tau_s0) = spring_preload(f, s).ok_or(d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION))?;
-    let g = grasp_at(f, s, tau_s0, 0.0).map_err(|e| d2(Reason::Grasp(e), MISSING_POSE_VIOLATION))?;
+    let (tau_s_min, tau_s0) = spring_preload(f, s).ok_or((d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION), Partial::default()))?;
+    let spring = Partial { spring: Some([tau_s_min, tau_s0]), ..Partial::default() };
+    let g = grasp_at(f, s, tau_s0, 0.0).map_err(|e| (d2(Reason::Grasp(e), MISSING_POSE_VIOLATION), spring))?;
     let fmin = g.min_force();
     if !(fmin > 0.0) || !(g.hand_mu.y < 0.0) {
         let why = if !(fmin > 0.0) { OffsetFailure::ForceNotPositive(fmin) } else { OffsetFailure::PalmForceNotPositive(g.hand_mu.y) };
         let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
-        return Err(d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }));
+        let (cp, ff) = (&g.cp[0], &g.forces[0]);
+        let grasp = PartialGrasp { theta: [cp.theta1, cp.theta2], k: [cp.k1, cp.k2], f0: ff.f0, fmu: ff.fmu, hand0: [g.hand0.x, g.hand0.y], hand_mu: [g.hand_mu.x, g.hand_mu.y] };
+        return Err((d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }), Partial { grasp: Some(grasp), ..spring }));
     }
     let form_closed_0 = form_closure_test(&closure_matrix(f, &g.cp)).closed;
     let scan = max_offset(f, s, tau_s0);
@@ -196,26 +245,28 @@ pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions)
 }
 
 fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
-    let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
+    let mut ev = Evaluation::new(*x);
     let t0 = Instant::now();
-    let kin = match stage_kinematics(x, s) {
+    let kin = match kinematics_partial(x, s) {
         Ok(k) => k,
-        Err(d) => {
+        Err((d, partial)) => {
             ev.stage_seconds[1] = t0.elapsed().as_secs_f64();
             ev.discard = Some(d);
+            ev.partial = partial;
             return ev;
         }
     };
     ev.kin = Some(kin);
     let t1 = Instant::now();
     ev.stage_seconds[1] = (t1 - t0).as_secs_f64();
-    let st = stage_statics(&kin.finger, s);
+    let st = statics_partial(&kin.finger, s);
     let t2 = Instant::now();
     ev.stage_seconds[2] = (t2 - t1).as_secs_f64();
     let st = match st {
         Ok(st) => st,
-        Err(d) => {
+        Err((d, partial)) => {
             ev.discard = Some(d);
+            ev.partial = partial;
             return ev;
         }
     };
@@ -223,13 +274,23 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     if !opts.dynamics {
         return ev;
     }
-    let dynr = crate::sim::simulate_grasp_into(&kin.finger, s, &st, &opts.sim, traj);
+    let dynr = stage3_scene(&kin.finger, s, &st, &opts.sim, traj);
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
         ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });
     }
     ev.dynamics = Some(dynr);
     ev
+}
+
+/// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
+/// on the object at x_off. The free scene's criteria are the centred scene's (the thesis's
+/// prediction); its measured motion is `simulate --scene free` and `verify`.
+fn stage3_scene(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+    match s.setup.kind {
+        crate::params::SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
+        _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
+    }
 }
 
 /// Evaluate the problem's design `x` with all stages.

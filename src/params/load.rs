@@ -1,10 +1,11 @@
 //! Problem files: TOML with the sections `[hand]`, `[object]`, `[contact]`,
-//! `[environment]`, `[criteria]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
+//! `[environment]`, `[criteria]`, `[scene]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
 //! required and unknown keys are rejected: there are no silent defaults. Errors name the
 //! file and the field.
 
 use super::design::{Bounds, Design, DESIGN_NAMES};
 use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
+use super::scene_kind::{SceneKind, SceneSetup};
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
 use crate::{Error, Result};
 use crate::math::deg;
@@ -53,6 +54,7 @@ struct RawFile {
     contact: RawContact,
     environment: RawEnv,
     criteria: RawCriteria,
+    scene: RawScene,
     solver: SolverSettings,
     nominal: RawDesign,
     bounds: RawBounds,
@@ -112,6 +114,17 @@ struct RawCriteria {
     eta_stab: f64,
     t_max: f64,
     force_model: String,
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    kind: String,
+    x_off: f64,
+    t_obs: f64,
+    ground_points: f64,
+    ground_k: f64,
+    ground_v_s: f64,
+    ground_v_d: f64,
 }
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -190,7 +203,27 @@ impl Problem {
         let k = &raw.contact;
         let en = &raw.environment;
         let cr = &raw.criteria;
+        let sc = &raw.scene;
+        let setup = SceneSetup {
+            kind: SceneKind::parse(&sc.kind).ok_or_else(|| c.fail("scene.kind", format!("{:?}", sc.kind), "must be \"centred\", \"offset\" or \"free\" (MODEL.md §14)"))?,
+            x_off: c.check("scene.x_off", sc.x_off)?,
+            t_obs: c.check("scene.t_obs", sc.t_obs)?,
+            ground_points: {
+                let n = c.check("scene.ground_points", sc.ground_points)?;
+                if n.fract() != 0.0 {
+                    return Err(c.fail("scene.ground_points", format!("{n}"), "must be a whole number"));
+                }
+                n as usize
+            },
+            ground_k: c.check("scene.ground_k", sc.ground_k)?,
+            ground_v_s: c.check("scene.ground_v_s", sc.ground_v_s)?,
+            ground_v_d: c.check("scene.ground_v_d", sc.ground_v_d)?,
+        };
+        if setup.ground_v_d <= setup.ground_v_s {
+            return Err(c.fail("scene.ground_v_d", format!("{}", setup.ground_v_d), "must be > scene.ground_v_s"));
+        }
         let scene = SceneParams {
+            setup,
             hand: Hand {
                 tau: c.check("hand.tau", h.tau)?,
                 w: c.check("hand.w", h.w)?,

@@ -156,4 +156,6 @@ pub struct SceneParams {
     pub env: Environment,
     /// `[criteria]`.
     pub criteria: Criteria,
+    /// `[scene]` (MODEL.md §14).
+    pub setup: super::scene_kind::SceneSetup,
 }

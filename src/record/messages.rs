@@ -1,264 +1,232 @@
-//! Building the JSON messages of one design.
+//! Building the messages of one design: the `/designs` JSON record, the
+//! `gripopt.GraspSeries` columns, and the Foxglove scene (official `foxglove` SDK types).
 
+use super::entry::DesignEntry;
+use super::proto::GraspSeries;
+use super::options::{RecordOptions, Resolution};
 use crate::math::V2;
 use crate::model::Finger;
-use super::entry::DesignEntry;
 use crate::params::{Design, SceneParams};
 use crate::sim::Sample;
+use foxglove::messages::{
+    line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform, FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose,
+    Quaternion, SceneEntity, SceneEntityDeletion, SceneUpdate, Timestamp, Vector3,
+};
 use serde_json::{json, Value};
 
-/// Nanoseconds of the time window of design `id`: design k lives in [k s, k s + 1 s).
-pub fn window_start_ns(id: u64) -> u64 {
-    id * 1_000_000_000
+/// Log time (ns since 1970) at which design `id`'s window starts: `epoch_ns + id` s.
+pub fn window_start_ns(epoch_ns: u64, id: u64) -> u64 {
+    epoch_ns + id * 1_000_000_000
 }
 
-/// `/designs` message.
-pub fn design(i: &DesignEntry<'_>, problem: &str) -> Value {
+/// Log time of simulated time `t` in the window starting at `t0_ns` (inside the window).
+pub fn log_time(t0_ns: u64, t: f64) -> u64 {
+    t0_ns + (t * 1e9).round().clamp(0.0, 999_999_999.0) as u64
+}
+
+fn stamp(ns: u64) -> Timestamp {
+    Timestamp::new((ns / 1_000_000_000).min(u32::MAX as u64) as u32, (ns % 1_000_000_000) as u32)
+}
+
+/// `/designs` message (JSON). Values that were not computed are left out (no nulls, so the
+/// schema needs no union types).
+pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> Value {
     let x = &i.parameters;
-    let l = i.lengths;
-    let stages_passed = i.failed_stage.unwrap_or(4);
-    json!({
+    let mut derived = json!({"l_hand": i.l_hand});
+    if let Some(l) = i.lengths {
+        derived = json!({"l11": l[0], "l12": l[1], "l22": l[2], "l_hand": i.l_hand});
+    }
+    let mut objectives = serde_json::Map::new();
+    for (k, v) in ["max_offset", "alpha", "mean_force", "t_stab"].iter().zip(i.objectives) {
+        if let Some(v) = v {
+            objectives.insert(k.to_string(), json!(v));
+        }
+    }
+    let mut v = json!({
         "id": i.id,
         "generation": i.generation,
         "problem": problem,
+        "window_start": {"sec": t0_ns / 1_000_000_000, "nsec": t0_ns % 1_000_000_000},
         "window_start_s": i.id as f64,
+        "epoch_s": epoch_s,
         "parameters": {"l21": x[0], "b": x[1], "t22": x[2], "r": x[3], "p": x[4], "psi_deg": x[5]},
-        "derived": {"l11": l.map(|v| v[0]), "l12": l.map(|v| v[1]), "l22": l.map(|v| v[2]), "l_hand": i.l_hand},
-        "stages_passed": stages_passed,
+        "derived": derived,
+        "stages_passed": i.failed_stage.unwrap_or(4),
         "feasible": i.failed_stage.is_none(),
-        "failed_stage": i.failed_stage,
-        "reason": i.reason,
-        "violation": i.violation,
-        "objectives": {"max_offset": i.objectives[0], "alpha": i.objectives[1], "mean_force": i.objectives[2], "t_stab": i.objectives[3]},
+        "objectives": objectives,
         "stage_seconds": {"stages_0_1": i.stage_seconds[1], "stage_2": i.stage_seconds[2], "stage_3": i.stage_seconds[3]},
-        "sim_steps": i.sim_work.map(|w| w[0]),
-        "sim_rhs_evals": i.sim_work.map(|w| w[1]),
         "trajectory_samples": i.trajectory.map_or(0, |t| t.samples.len()),
-    })
-}
-
-#[derive(serde::Serialize)]
-struct FingerState {
-    q11: f64,
-    q21: f64,
-    q11_dot: f64,
-    q21_dot: f64,
-    theta1: f64,
-    theta2: f64,
-}
-
-/// `/grasp/joints` message (typed: this is the hot path of recording).
-#[derive(serde::Serialize)]
-pub struct Joints {
-    design_id: u64,
-    t: f64,
-    finger1: FingerState,
-    finger2: FingerState,
-}
-
-/// Build a `/grasp/joints` message.
-pub fn joints(id: u64, s: &Sample) -> Joints {
-    let f = || FingerState { q11: s.q[0], q21: s.q[1], q11_dot: s.qd[0], q21_dot: s.qd[1], theta1: s.q[1], theta2: s.theta2 };
-    Joints { design_id: id, t: s.t, finger1: f(), finger2: f() }
-}
-
-#[derive(serde::Serialize)]
-struct ContactState {
-    penetration: f64,
-    normal_force: f64,
-    friction_force: f64,
-}
-
-#[derive(serde::Serialize)]
-struct Xy {
-    x: f64,
-    y: f64,
-}
-
-/// `/grasp/contacts` message.
-#[derive(serde::Serialize)]
-pub struct Contacts {
-    design_id: u64,
-    t: f64,
-    proximal: ContactState,
-    distal: ContactState,
-    hand_force: Xy,
-    filtered_hand_force: Xy,
-}
-
-/// Build a `/grasp/contacts` message.
-pub fn contacts(id: u64, s: &Sample) -> Contacts {
-    let c = |k: usize| ContactState { penetration: s.delta[k], normal_force: s.normal[k], friction_force: s.friction[k] };
-    Contacts { design_id: id, t: s.t, proximal: c(0), distal: c(1), hand_force: Xy { x: 0.0, y: s.hand_fy }, filtered_hand_force: Xy { x: 0.0, y: s.filtered_fy } }
-}
-
-/// `/grasp/energy` message.
-#[derive(serde::Serialize)]
-pub struct Energy {
-    design_id: u64,
-    t: f64,
-    energy: f64,
-    energy_excess: f64,
-}
-
-/// Build a `/grasp/energy` message.
-pub fn energy(id: u64, s: &Sample) -> Energy {
-    Energy { design_id: id, t: s.t, energy: s.energy, energy_excess: s.energy_excess }
-}
-
-/// Rebuild a trajectory sample from the three recorded messages (replay).
-pub fn sample_from(j: &Value, c: &Value, e: &Value) -> Option<Sample> {
-    let f = |v: &Value| v.as_f64();
-    let g = &j["finger1"];
-    Some(Sample {
-        t: f(&j["t"])?,
-        q: [f(&g["q11"])?, f(&g["q21"])?],
-        qd: [f(&g["q11_dot"])?, f(&g["q21_dot"])?],
-        theta2: f(&g["theta2"])?,
-        delta: [f(&c["proximal"]["penetration"])?, f(&c["distal"]["penetration"])?],
-        normal: [f(&c["proximal"]["normal_force"])?, f(&c["distal"]["normal_force"])?],
-        friction: [f(&c["proximal"]["friction_force"])?, f(&c["distal"]["friction_force"])?],
-        hand_fy: f(&c["hand_force"]["y"])?,
-        filtered_fy: f(&c["filtered_hand_force"]["y"])?,
-        energy: f(&e["energy"])?,
-        energy_excess: f(&e["energy_excess"])?,
-    })
-}
-
-#[derive(serde::Serialize, Clone, Copy)]
-struct P3 {
-    x: f64,
-    y: f64,
-    z: f64,
-}
-#[derive(serde::Serialize, Clone, Copy)]
-struct Quat {
-    x: f64,
-    y: f64,
-    z: f64,
-    w: f64,
-}
-#[derive(serde::Serialize, Clone, Copy)]
-struct Pose {
-    position: P3,
-    orientation: Quat,
-}
-#[derive(serde::Serialize, Clone, Copy)]
-struct Rgba {
-    r: f64,
-    g: f64,
-    b: f64,
-    a: f64,
-}
-#[derive(serde::Serialize, Clone, Copy)]
-struct Time {
-    sec: u64,
-    nsec: u64,
-}
-#[derive(serde::Serialize)]
-struct Line {
-    r#type: u8,
-    pose: Pose,
-    thickness: f64,
-    scale_invariant: bool,
-    points: Vec<P3>,
-    color: Rgba,
-    colors: [Rgba; 0],
-    indices: [u32; 0],
-}
-#[derive(serde::Serialize)]
-struct Cylinder {
-    pose: Pose,
-    size: P3,
-    bottom_scale: f64,
-    top_scale: f64,
-    color: Rgba,
-}
-#[derive(serde::Serialize)]
-struct Cube {
-    pose: Pose,
-    size: P3,
-    color: Rgba,
-}
-#[derive(serde::Serialize)]
-struct KeyValue {
-    key: &'static str,
-    value: String,
-}
-#[derive(serde::Serialize)]
-struct Entity {
-    timestamp: Time,
-    frame_id: &'static str,
-    id: &'static str,
-    lifetime: Time,
-    frame_locked: bool,
-    metadata: Vec<KeyValue>,
-    arrows: [u8; 0],
-    cubes: Vec<Cube>,
-    spheres: [u8; 0],
-    cylinders: Vec<Cylinder>,
-    lines: Vec<Line>,
-    triangles: [u8; 0],
-    texts: [u8; 0],
-    models: [u8; 0],
-}
-
-/// `/scene` message (foxglove.SceneUpdate).
-#[derive(serde::Serialize)]
-pub struct SceneUpdate {
-    deletions: [u8; 0],
-    entities: Vec<Entity>,
-}
-
-fn pose(x: f64, y: f64, z: f64) -> Pose {
-    Pose { position: P3 { x, y, z }, orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } }
-}
-
-/// `/scene` message drawing both fingers at a sample (and, with `with_static`, the palm and
-/// the object, which persist); `None` if the pose cannot be assembled.
-pub fn scene(id: u64, t_ns: u64, design: &Design, finger: &Finger, sc: &SceneParams, s: &Sample, with_static: bool) -> Option<SceneUpdate> {
-    let p = finger.dgm(s.q[0], s.q[1]).ok()?;
-    let tip = finger.tip(&p);
-    let base = finger.o21;
-    let segs = [(base, p.o12), (p.o12, p.o13), (base, p.o22), (p.o22, p.o13), (p.o22, tip)];
-    let mut pts = Vec::with_capacity(20);
-    for mirror in [1.0, -1.0] {
-        for (a, b) in segs {
-            for v in [a, b] {
-                let v: V2 = v;
-                pts.push(P3 { x: mirror * v.x, y: v.y, z: 0.0 });
-            }
-        }
+    });
+    let o = v.as_object_mut().expect("object");
+    if let Some(s) = i.failed_stage {
+        o.insert("failed_stage".into(), json!(s));
     }
-    let timestamp = Time { sec: t_ns / 1_000_000_000, nsec: t_ns % 1_000_000_000 };
-    let zero = Time { sec: 0, nsec: 0 };
-    let entity = |eid: &'static str, cubes: Vec<Cube>, cylinders: Vec<Cylinder>, lines: Vec<Line>| Entity {
-        timestamp,
-        frame_id: "hand",
-        id: eid,
-        lifetime: zero,
-        frame_locked: false,
-        metadata: vec![KeyValue { key: "design_id", value: id.to_string() }],
-        arrows: [],
-        cubes,
-        spheres: [],
-        cylinders,
-        lines,
-        triangles: [],
-        texts: [],
-        models: [],
+    if let Some(r) = i.reason {
+        o.insert("reason".into(), json!(r));
+    }
+    if let Some(x) = i.violation {
+        o.insert("violation".into(), json!(x));
+    }
+    if let Some(w) = i.sim_work {
+        o.insert("sim_steps".into(), json!(w[0]));
+        o.insert("sim_rhs_evals".into(), json!(w[1]));
+    }
+    v
+}
+
+/// A value as recorded at `res` (f32 precision when compact).
+pub fn at_precision(x: f64, res: Resolution) -> f64 {
+    match res {
+        Resolution::Full => x,
+        Resolution::Compact => x as f32 as f64,
+    }
+}
+
+/// The `/grasp/series` message of design `id` from the selected samples (empty when the
+/// design has no trajectory).
+pub fn series(id: u64, samples: &[Sample], kept: &[usize], opts: &RecordOptions) -> GraspSeries {
+    let r = opts.resolution;
+    let mut m = GraspSeries { design_id: id, full_resolution: r == Resolution::Full, simulated_samples: samples.len() as u32, ..Default::default() };
+    for &k in kept {
+        let s = &samples[k];
+        let p = |x: f64| at_precision(x, r);
+        m.t.push(s.t);
+        m.q11.push(p(s.q[0]));
+        m.q21.push(p(s.q[1]));
+        m.q11_dot.push(p(s.qd[0]));
+        m.q21_dot.push(p(s.qd[1]));
+        m.theta2.push(p(s.theta2));
+        m.proximal_penetration.push(p(s.delta[0]));
+        m.distal_penetration.push(p(s.delta[1]));
+        m.proximal_normal_force.push(p(s.normal[0]));
+        m.distal_normal_force.push(p(s.normal[1]));
+        m.proximal_friction_force.push(p(s.friction[0]));
+        m.distal_friction_force.push(p(s.friction[1]));
+        m.hand_force.push(p(s.hand_fy));
+        m.filtered_hand_force.push(p(s.filtered_fy));
+        m.energy.push(p(s.energy));
+        m.energy_excess.push(p(s.energy_excess));
+    }
+    m
+}
+
+/// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in length.
+pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
+    let n = m.t.len();
+    let cols = [
+        &m.q11, &m.q21, &m.q11_dot, &m.q21_dot, &m.theta2, &m.proximal_penetration, &m.distal_penetration, &m.proximal_normal_force, &m.distal_normal_force,
+        &m.proximal_friction_force, &m.distal_friction_force, &m.hand_force, &m.filtered_hand_force, &m.energy, &m.energy_excess,
+    ];
+    if cols.iter().any(|c| c.len() != n) {
+        return None;
+    }
+    Some(
+        (0..n)
+            .map(|k| Sample {
+                t: m.t[k],
+                q: [m.q11[k], m.q21[k]],
+                qd: [m.q11_dot[k], m.q21_dot[k]],
+                theta2: m.theta2[k],
+                delta: [m.proximal_penetration[k], m.distal_penetration[k]],
+                normal: [m.proximal_normal_force[k], m.distal_normal_force[k]],
+                friction: [m.proximal_friction_force[k], m.distal_friction_force[k]],
+                hand_fy: m.hand_force[k],
+                filtered_fy: m.filtered_hand_force[k],
+                energy: m.energy[k],
+                energy_excess: m.energy_excess[k],
+            })
+            .collect(),
+    )
+}
+
+fn rgba(r: f64, g: f64, b: f64, a: f64) -> Option<Color> {
+    Some(Color { r, g, b, a })
+}
+
+fn at(x: f64, y: f64, z: f64) -> Option<Pose> {
+    Some(Pose { position: Some(Vector3 { x, y, z }), orientation: Some(Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }) })
+}
+
+fn entity(t_ns: u64, frame: &str, id: &str, design_id: u64) -> SceneEntity {
+    SceneEntity {
+        timestamp: Some(stamp(t_ns)),
+        frame_id: frame.into(),
+        id: id.into(),
+        lifetime: Some(Duration::new(0, 0)),
+        metadata: vec![KeyValuePair { key: "design_id".into(), value: design_id.to_string() }],
+        ..Default::default()
+    }
+}
+
+fn delete_all(t_ns: u64) -> Vec<SceneEntityDeletion> {
+    vec![SceneEntityDeletion { timestamp: Some(stamp(t_ns)), r#type: scene_entity_deletion::Type::All as i32, id: String::new() }]
+}
+
+/// `/tf` message at a design's window start: `world` (z up, ground at z = 0) → `hand`
+/// (the model's plane: x across the palm, y from the palm towards the object, which lies
+/// on the ground; so the hand looks down, its palm 2 r above the ground).
+pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    FrameTransforms {
+        transforms: vec![FrameTransform {
+            timestamp: Some(stamp(t_ns)),
+            parent_frame_id: "world".into(),
+            child_frame_id: "hand".into(),
+            translation: Some(Vector3 { x: 0.0, y: 0.0, z: 2.0 * sc.object.radius }),
+            // −90° about x: hand y → world −z, hand z (the object's axis) → world y
+            rotation: Some(Quaternion { x: -h, y: 0.0, z: 0.0, w: h }),
+        }],
+    }
+}
+
+/// `/scene/static` message at a design's window start: it first deletes everything of the
+/// previous design on this topic, then draws the ground plane (frame `world`), the palm
+/// (width b + 2 cm) and the object (frame `hand`). Its latest message is always valid.
+pub fn static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
+    let mut ground = entity(t_ns, "world", "ground", id);
+    ground.cubes.push(CubePrimitive { pose: at(0.0, 0.0, -0.0005), size: Some(Vector3 { x: 0.6, y: 0.6, z: 0.001 }), color: rgba(0.55, 0.55, 0.5, 1.0) });
+    let mut palm = entity(t_ns, "hand", "palm", id);
+    palm.cubes.push(CubePrimitive { pose: at(0.0, -0.005, 0.0), size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }), color: rgba(0.5, 0.5, 0.5, 1.0) });
+    let r = sc.object.radius;
+    let mut object = entity(t_ns, "hand", "object", id);
+    object.cylinders.push(CylinderPrimitive {
+        pose: at(0.0, r, 0.0),
+        size: Some(Vector3 { x: 2.0 * r, y: 2.0 * r, z: sc.object.length }),
+        bottom_scale: 1.0,
+        top_scale: 1.0,
+        color: rgba(0.2, 0.5, 0.9, 0.5),
+    });
+    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground, palm, object] }
+}
+
+/// Round a coordinate to 2⁻²⁰ m (≈ 1 µm): invisible, and the zeroed low mantissa bits
+/// compress well.
+fn q(x: f64) -> f64 {
+    (x * 1_048_576.0).round() / 1_048_576.0
+}
+
+/// `/scene` message: both fingers at sample `s` (a line strip per finger through tip, O22,
+/// base, O12, O13, O22); with `first`, it first deletes the previous design's fingers.
+/// `None` when there is no finger or the pose cannot be assembled (then, with `first`, a
+/// message that only deletes).
+pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, first: bool) -> Option<SceneUpdate> {
+    let deletions = if first { delete_all(t_ns) } else { vec![] };
+    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p)));
+    let Some((finger, p)) = pose else {
+        return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
-    let mut entities = vec![entity(
-        "fingers",
-        vec![],
-        vec![],
-        vec![Line { r#type: 2, pose: pose(0.0, 0.0, 0.0), thickness: 2.0 * finger.w, scale_invariant: false, points: pts, color: Rgba { r: 0.9, g: 0.4, b: 0.1, a: 1.0 }, colors: [], indices: [] }],
-    )];
-    if with_static {
-        let palm = Cube { pose: pose(0.0, -0.005, 0.0), size: P3 { x: design.b + 0.02, y: 0.01, z: 0.04 }, color: Rgba { r: 0.5, g: 0.5, b: 0.5, a: 1.0 } };
-        let object = Cylinder { pose: pose(0.0, sc.object.radius, 0.0), size: P3 { x: 2.0 * sc.object.radius, y: 2.0 * sc.object.radius, z: sc.object.length }, bottom_scale: 1.0, top_scale: 1.0, color: Rgba { r: 0.2, g: 0.5, b: 0.9, a: 0.5 } };
-        entities.push(entity("palm", vec![palm], vec![], vec![]));
-        entities.push(entity("object", vec![], vec![object], vec![]));
+    let chain: [V2; 6] = [finger.tip(&p), p.o22, finger.o21, p.o12, p.o13, p.o22];
+    let mut e = entity(t_ns, "hand", "fingers", id);
+    for mirror in [1.0, -1.0] {
+        e.lines.push(LinePrimitive {
+            r#type: line_primitive::Type::LineStrip as i32,
+            pose: at(0.0, 0.0, 0.0),
+            thickness: 2.0 * finger.w,
+            scale_invariant: false,
+            points: chain.iter().map(|v| Point3 { x: q(mirror * v.x), y: q(v.y), z: 0.0 }).collect(),
+            color: rgba(0.9, 0.4, 0.1, 1.0),
+            ..Default::default()
+        });
     }
-    Some(SceneUpdate { deletions: [], entities })
+    Some(SceneUpdate { deletions, entities: vec![e] })
 }

@@ -4,9 +4,11 @@
 //! written to a temporary file and renamed when complete, so a run killed mid-generation
 //! leaves every earlier shard valid, and a resumed run rewrites the unfinished generation
 //! (no duplicates); `index.jsonl` maps id ranges to shards. Inside a shard, design k's
-//! messages live in the time window [k s, k s + 1 s) (simulated time t is added to the
-//! window start, and carried as the field `t`), one zstd chunk per design, with summary,
-//! chunk and message indexes, so a replay reads one chunk. See docs/recording.md.
+//! messages live in the time window [epoch + k s, epoch + k s + 1 s) (epoch = the run's
+//! start time; simulated time t is added to the window start), one zstd chunk per design,
+//! with summary, chunk and message indexes, so a replay reads one chunk. Foxglove channels
+//! use the official schemas of the `foxglove` SDK (protobuf); gripopt's own are
+//! `/designs` (JSON) and `/grasp/series` (protobuf). See docs/recording.md.
 //!
 //! This layer sits above the pipeline and the simulator and below the run layer: it never
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
@@ -14,13 +16,19 @@
 
 mod entry;
 mod messages;
+mod layout;
 mod options;
+mod recover;
+mod proto;
 mod replay;
 mod schema;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};
-pub use messages::{sample_from, window_start_ns, Contacts, Energy, Joints, SceneUpdate};
-pub use options::{DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, RecordOptions, TrajectoryKeep};
+pub use layout::{layout, write_layout, LAYOUT_FILE};
+pub use messages::{samples_from, window_start_ns};
+pub use options::{COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, RecordOptions, Resolution, TrajectoryKeep};
+pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
+pub use proto::{GraspSeries, SERIES_NAME};
 pub use replay::{Recorded, Replay, read_design, replay};
 pub use writer::{Recorder, ShardEntry, read_index, write_shard};

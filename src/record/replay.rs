@@ -2,9 +2,11 @@
 //! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
 //! verify that the new trajectory equals the recorded one.
 
-use super::messages::{sample_from, window_start_ns};
+use super::messages::{at_precision, samples_from, window_start_ns};
+use super::proto::GraspSeries;
 use super::writer::read_index;
-use super::RecordOptions;
+use super::{RecordOptions, Resolution};
+use prost::Message;
 use crate::{Error, Result};
 use crate::eval::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
@@ -19,8 +21,10 @@ pub struct Recorded {
     pub file: PathBuf,
     /// The `/designs` message.
     pub record: Value,
-    /// The recorded trajectory (possibly decimated, see the run's recording options).
+    /// The recorded trajectory (possibly a subset, see the run's recording options).
     pub samples: Vec<Sample>,
+    /// Resolution of the recorded trajectory (compact: values to f32 precision).
+    pub resolution: Resolution,
 }
 
 /// Result of a replay.
@@ -28,8 +32,9 @@ pub struct Recorded {
 pub struct Replay {
     /// What was recorded.
     pub recorded: Recorded,
-    /// Recomputed trajectory equals the recorded one (bitwise for the same build, else
-    /// within 1e-12 relative).
+    /// Recomputed trajectory, selected and rounded as recorded, equals the recorded one
+    /// (bitwise for the same build; else within 1e-12 relative for a full-resolution
+    /// recording, within one f32 unit, 1.2e-7 relative, for a compact one).
     pub verified: bool,
     /// Largest relative difference found.
     pub max_difference: f64,
@@ -67,36 +72,42 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let summary = mcap::Summary::read(&buf)
         .map_err(mc("cannot read the MCAP summary; the file is truncated or corrupt".into()))?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
-    let (lo, hi) = (window_start_ns(id), window_start_ns(id + 1));
-    let mut design = None;
-    let (mut joints, mut contacts, mut energy) = (vec![], vec![], vec![]);
+    // the epoch and the resolution from the shard's metadata record
+    let meta = summary
+        .metadata_indexes
+        .iter()
+        .find(|m| m.name == "gripopt.run")
+        .ok_or_else(|| bad("no gripopt.run metadata record".into()))
+        .and_then(|mi| mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into())))?;
+    let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into()))?;
+    let resolution = match meta.metadata.get("resolution").map(String::as_str) {
+        Some("full") => Resolution::Full,
+        Some("compact") => Resolution::Compact,
+        other => return Err(bad(format!("metadata `resolution` is {other:?}, expected \"full\" or \"compact\""))),
+    };
+    let epoch_ns = epoch_s.saturating_mul(1_000_000_000);
+    let (lo, hi) = (window_start_ns(epoch_ns, id), window_start_ns(epoch_ns, id + 1));
+    let (mut design, mut series) = (None, None);
     for ci in summary.chunk_indexes.iter().filter(|c| c.message_start_time < hi && c.message_end_time >= lo) {
         for m in summary.stream_chunk(&buf, ci).map_err(mc(format!("chunk at offset {}", ci.chunk_start_offset)))? {
             let m = m.map_err(mc("message".into()))?;
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }
-            let v: Value = serde_json::from_slice(&m.data).map_err(|e| bad(format!("{} message at {} ns is not JSON: {e}", m.channel.topic, m.log_time)))?;
             match m.channel.topic.as_str() {
-                "/designs" => design = Some(v),
-                "/grasp/joints" => joints.push(v),
-                "/grasp/contacts" => contacts.push(v),
-                "/grasp/energy" => energy.push(v),
+                "/designs" => design = Some(serde_json::from_slice::<Value>(&m.data).map_err(|e| bad(format!("/designs message at {} ns is not JSON: {e}", m.log_time)))?),
+                "/grasp/series" => series = Some(GraspSeries::decode(&m.data[..]).map_err(|e| bad(format!("/grasp/series message at {} ns: {e}", m.log_time)))?),
                 _ => {}
             }
         }
     }
     let record = design.ok_or_else(|| bad(format!("no /designs message for design {id}")))?;
-    if joints.len() != contacts.len() || joints.len() != energy.len() {
-        return Err(bad(format!("design {id}: trajectory channels disagree ({} / {} / {} messages)", joints.len(), contacts.len(), energy.len())));
+    let series = series.ok_or_else(|| bad(format!("no /grasp/series message for design {id}")))?;
+    if series.design_id != id {
+        return Err(bad(format!("the /grasp/series message in design {id}'s window is design {}'s", series.design_id)));
     }
-    let samples = joints
-        .iter()
-        .zip(&contacts)
-        .zip(&energy)
-        .map(|((j, c), e)| sample_from(j, c, e).ok_or_else(|| bad(format!("design {id}: a trajectory message lacks a field"))))
-        .collect::<Result<Vec<_>>>()?;
-    Ok(Recorded { file: path, record, samples })
+    let samples = samples_from(&series).ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
+    Ok(Recorded { file: path, record, samples, resolution })
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -125,7 +136,24 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let design = Design::from_array(&x.try_into().expect("six"));
     let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
     let fresh: Vec<Sample> = match tr {
-        Some(t) => opts.kept(t.samples.len()).map(|k| t.samples[k]).collect(),
+        Some(t) => {
+            let p = |x: f64| at_precision(x, recorded.resolution);
+            let round = |s: &Sample| Sample {
+                t: s.t,
+                q: s.q.map(p),
+                qd: s.qd.map(p),
+                theta2: p(s.theta2),
+                delta: s.delta.map(p),
+                normal: s.normal.map(p),
+                friction: s.friction.map(p),
+                hand_fy: p(s.hand_fy),
+                filtered_fy: p(s.filtered_fy),
+                energy: p(s.energy),
+                energy_excess: p(s.energy_excess),
+            };
+            let opts = RecordOptions { resolution: recorded.resolution, ..opts };
+            opts.kept_samples(&t.samples).into_iter().map(|k| round(&t.samples[k])).collect()
+        }
         None => vec![],
     };
     let recorded_has_traj = !recorded.samples.is_empty();
@@ -144,6 +172,12 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         }
     }
     let feasible_rec = recorded.record["feasible"].as_bool().unwrap_or(false);
-    let verified = same_len && maxd <= 1e-12 && feasible_rec == ev.feasible();
+    // same build: 0 (bitwise); another build may differ in the last bits, then by at most
+    // one unit of the recorded precision
+    let tol = match recorded.resolution {
+        Resolution::Full => 1e-12,
+        Resolution::Compact => f32::EPSILON as f64,
+    };
+    let verified = same_len && maxd <= tol && feasible_rec == ev.feasible();
     Ok(Replay { compared: fresh.len().min(recorded.samples.len()), recorded, verified, max_difference: if same_len { maxd } else { f64::INFINITY }, recomputed_feasible: ev.feasible() })
 }

@@ -1,7 +1,10 @@
 //! Shard writer and the per-generation [`Recorder`] (shard files and `index.jsonl`).
 
 use super::entry::{DesignEntry, Recordable};
-use super::{messages, schema, RecordOptions};
+use super::{messages, proto, schema, RecordOptions};
+use foxglove::messages::{FrameTransforms, SceneUpdate};
+use foxglove::Encode;
+use prost::Message;
 use crate::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::model::Finger;
@@ -51,16 +54,32 @@ fn write_index(dir: &Path, entries: &[ShardEntry]) -> Result<()> {
     write_atomic(&path, s.as_bytes())
 }
 
-struct Channels {
-    designs: u16,
-    joints: u16,
-    contacts: u16,
-    energy: u16,
-    scene: u16,
+/// Channels of a shard, in the order of [`Ch`].
+const TOPICS: [&str; 5] = ["/designs", "/grasp/series", "/tf", "/scene/static", "/scene"];
+
+/// Channel index into [`TOPICS`].
+#[derive(Clone, Copy)]
+enum Ch {
+    Designs = 0,
+    Series = 1,
+    Tf = 2,
+    Static = 3,
+    Scene = 4,
+}
+
+fn fx<T: Encode>(m: &T) -> Vec<u8> {
+    let mut b = Vec::with_capacity(m.encoded_len().unwrap_or(256));
+    // encoding into a growable Vec cannot run out of space
+    m.encode(&mut b).expect("protobuf encoding into a Vec");
+    b
 }
 
 /// Write one shard with the given designs (in the order given; one zstd chunk per design)
 /// to a temporary file renamed to `path` when complete. Returns the file size in bytes.
+///
+/// Besides `meta`, the shard's `gripopt.run` metadata record holds `generation` (unless
+/// given: the first design's), `first_id`, `last_id`, `designs`, `epoch_s`, `resolution`
+/// and `time_convention`, so a lost `index.jsonl` can be rebuilt from the shards.
 pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, designs: &[&R], opts: &RecordOptions) -> Result<u64> {
     let tmp = path.with_extension("mcap.tmp");
     let mc = |e: mcap::McapError| Error::Mcap { path: tmp.clone(), what: "cannot write".into(), source: e };
@@ -74,27 +93,41 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
         .library(format!("gripopt {}", env!("CARGO_PKG_VERSION")))
         .create(BufWriter::new(file))
         .map_err(mc)?;
+    let mut meta = meta.clone();
+    let ids: Vec<u64> = designs.iter().map(|d| d.entry().id).collect();
+    if let (Some(first), Some(last)) = (ids.iter().min(), ids.iter().max()) {
+        meta.entry("generation".into()).or_insert_with(|| designs[0].entry().generation.to_string());
+        meta.insert("first_id".into(), first.to_string());
+        meta.insert("last_id".into(), last.to_string());
+    }
+    meta.insert("designs".into(), designs.len().to_string());
+    meta.insert("epoch_s".into(), opts.epoch_s.to_string());
+    meta.insert("resolution".into(), serde_json::to_value(opts.resolution).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default());
+    meta.insert("time_convention".into(), "design k: log_time in [epoch_s + k s, epoch_s + k s + 1 s); simulated time t at epoch_s + k s + t".into());
     // metadata before any channel: no empty chunk
-    w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta.clone() }).map_err(mc)?;
+    w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
     let none = BTreeMap::new();
-    let mut add = |name: &str, s: serde_json::Value, topic: &str| -> Result<u16> {
-        let sid = w.add_schema(name, "jsonschema", &to_json(&s)).map_err(mc)?;
-        w.add_channel(sid, topic, "json", &none).map_err(mc)
+    let design_schema = w.add_schema("gripopt.Design", "jsonschema", &serde_json::to_vec(&schema::design()).expect("schema serialises")).map_err(mc)?;
+    let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
+    let mut fox = |s: Option<foxglove::Schema>| -> Result<u16> {
+        let s = s.expect("the SDK's message types have schemas");
+        w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
     };
-    let ch = Channels {
-        designs: add("gripopt.Design", schema::design(), "/designs")?,
-        joints: add("gripopt.Joints", schema::joints(), "/grasp/joints")?,
-        contacts: add("gripopt.Contacts", schema::contacts(), "/grasp/contacts")?,
-        energy: add("gripopt.Energy", schema::energy(), "/grasp/energy")?,
-        scene: add("foxglove.SceneUpdate", schema::scene_update(), "/scene")?,
-    };
-    // serialise every design's messages in parallel, then write them in order
-    let s = &problem.scene;
-    let encoded: Vec<Vec<(usize, u64, Vec<u8>)>> = designs.par_iter().map(|d| encode_design(&d.entry(), problem, s, opts)).collect();
-    let chans = [ch.designs, ch.joints, ch.contacts, ch.energy, ch.scene];
+    let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
+    let schema_of = [(design_schema, "json"), (series_schema, "protobuf"), (tf_schema, "protobuf"), (scene_schema, "protobuf"), (scene_schema, "protobuf")];
+    let mut chans = [0u16; 5];
+    for (k, topic) in TOPICS.iter().enumerate() {
+        if k >= Ch::Tf as usize && opts.scene_dt <= 0.0 {
+            continue;
+        }
+        chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
+    }
+    // encode every design's messages in parallel, then write them in order
+    let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> = designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
     let mut seq = [0u32; 5];
     for msgs in encoded {
         for (k, t_ns, data) in msgs {
+            let k = k as usize;
             seq[k] += 1;
             w.write_to_known_channel(&MessageHeader { channel_id: chans[k], sequence: seq[k], log_time: t_ns, publish_time: t_ns }, &data).map_err(mc)?;
         }
@@ -109,34 +142,42 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
     Ok(std::fs::metadata(path).map_err(|e| Error::io(path, "cannot read the size of", e))?.len())
 }
 
-fn to_json<T: Serialize>(v: &T) -> Vec<u8> {
-    // the messages are plain structs of numbers, strings and options: serialising cannot fail
-    serde_json::to_vec(v).expect("recorded messages serialise")
-}
-
-/// All messages of one design as (channel index, log time, JSON bytes).
-fn encode_design(d: &DesignEntry<'_>, problem: &Problem, s: &crate::params::SceneParams, opts: &RecordOptions) -> Vec<(usize, u64, Vec<u8>)> {
-    let t0 = messages::window_start_ns(d.id);
-    let mut out = vec![(0usize, t0, to_json(&messages::design(d, &problem.name)))];
-    if let Some(tr) = d.trajectory {
-        let design = Design::from_array(&d.parameters);
-        let finger = Finger::new(&design, s).ok();
-        let mut next_scene = 0.0;
-        let mut first_scene = true;
-        for k in opts.kept(tr.samples.len()) {
-            let smp = &tr.samples[k];
-            let tn = t0 + (smp.t * 1e9).round().min(999_999_999.0) as u64;
-            out.push((1, tn, to_json(&messages::joints(d.id, smp))));
-            out.push((2, tn, to_json(&messages::contacts(d.id, smp))));
-            out.push((3, tn, to_json(&messages::energy(d.id, smp))));
-            if opts.scene_dt > 0.0 && smp.t >= next_scene {
-                if let Some(v) = finger.as_ref().and_then(|f| messages::scene(d.id, tn, &design, f, s, smp, first_scene)) {
-                    out.push((4, tn, to_json(&v)));
-                    first_scene = false;
-                }
-                next_scene = smp.t + opts.scene_dt;
-            }
+/// All messages of one design as (channel, log time, bytes), in time order: at the window
+/// start the record, the series, the frames, the static scene and the first finger pose
+/// (or a deletion); then the fingers every `scene_dt` of simulated time and at the last
+/// sample (t_stab or the discard time).
+fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -> Vec<(Ch, u64, Vec<u8>)> {
+    let t0 = messages::window_start_ns(opts.epoch_ns(), d.id);
+    let sc = &problem.scene;
+    let samples = d.trajectory.map_or(&[][..], |t| &t.samples[..]);
+    let kept = opts.kept_samples(samples);
+    let record = serde_json::to_vec(&messages::design(d, &problem.name, t0, opts.epoch_s)).expect("records serialise");
+    let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
+    if opts.scene_dt <= 0.0 {
+        return out;
+    }
+    let design = Design::from_array(&d.parameters);
+    let finger = d.lengths.and_then(|_| Finger::new(&design, sc).ok());
+    out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
+    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d.id, &design, sc))));
+    let Some(last) = samples.len().checked_sub(1) else {
+        if let Some(m) = messages::scene(d.id, t0, None, None, true) {
+            out.push((Ch::Scene, t0, fx(&m)));
         }
+        return out;
+    };
+    let mut next = 0.0;
+    let mut first = true;
+    for (k, s) in samples.iter().enumerate() {
+        if s.t < next && k != last {
+            continue;
+        }
+        let tn = if first { t0 } else { messages::log_time(t0, s.t) };
+        if let Some(m) = messages::scene(d.id, tn, finger.as_ref(), Some(s), first) {
+            out.push((Ch::Scene, tn, fx(&m)));
+        }
+        first = false;
+        next = s.t + opts.scene_dt;
     }
     out
 }
@@ -161,20 +202,7 @@ impl Recorder {
     pub fn open(run_dir: &Path, problem: Problem, meta: BTreeMap<String, String>, opts: RecordOptions, completed: u64) -> Result<Self> {
         let dir = run_dir.join("recording");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
-        let mut index = if dir.join("index.jsonl").exists() { read_index(&dir)? } else { vec![] };
-        for e in index.iter().filter(|e| e.generation > completed) {
-            let _ = std::fs::remove_file(dir.join(&e.file));
-        }
-        index.retain(|e| e.generation <= completed);
-        if let Ok(rd) = std::fs::read_dir(&dir) {
-            for f in rd.flatten() {
-                let n = f.file_name().to_string_lossy().to_string();
-                let orphan = n.ends_with(".tmp") || (n.starts_with("gen-") && !index.iter().any(|e| e.file == n));
-                if orphan {
-                    let _ = std::fs::remove_file(f.path());
-                }
-            }
-        }
+        let index = super::recover::recover(&dir, completed)?.index; // never deletes what the checkpoint covers
         write_index(&dir, &index)?;
         Ok(Recorder { dir, problem, meta, opts, index, bytes: 0, seconds: 0.0 })
     }

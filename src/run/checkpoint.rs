@@ -1,6 +1,8 @@
 //! Checkpoints: the whole optimiser state as JSON, written atomically (temporary file,
 //! fsync, rename, fsync of the folder) after every generation, with hashes of the problem
-//! file and of the settings so that a resume with changed inputs is refused.
+//! file and of the settings so that a resume with changed inputs is refused, and a SHA-256
+//! of its own content (`sha256`: the canonical JSON of every other field, keys sorted), so
+//! that a hand-edited or damaged checkpoint is refused (unless forced).
 
 use crate::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -12,7 +14,16 @@ use std::path::Path;
 /// Format tag written into every checkpoint.
 pub const FORMAT: &str = "gripopt-checkpoint";
 /// Format version.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
+
+/// The checkpoint's content checksum did not match (or was missing, in a version-1 file).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChecksumMismatch {
+    /// The checksum in the file (None in a version-1 checkpoint).
+    pub stored: Option<String>,
+    /// The checksum of the content as read.
+    pub computed: String,
+}
 
 /// A checkpoint file.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -36,10 +47,31 @@ pub struct Checkpoint<I> {
     pub wall_s: f64,
 }
 
+impl ChecksumMismatch {
+    /// The error refusing the checkpoint at `path`.
+    pub fn error(&self, path: &Path) -> Error {
+        let message = match &self.stored {
+            Some(s) => format!("content checksum mismatch (field `sha256` {} but the content hashes to {}): the file was edited or damaged after it was written; resuming would put parameters next to objectives that were never evaluated for them. Use --force only if you know what was edited (recorded in run.json)", short(s), short(&self.computed)),
+            None => "no content checksum (a version-1 checkpoint); use --force to resume it (recorded in run.json)".into(),
+        };
+        Error::Checkpoint { file: path.to_path_buf(), message }
+    }
+}
+
 /// SHA-256 hex of bytes.
 pub fn sha256_hex(data: &[u8]) -> String {
     let d = Sha256::digest(data);
     d.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// SHA-256 of the canonical JSON (keys sorted, shortest round-trip numbers) of a checkpoint
+/// without its `sha256` field.
+fn content_sha256(v: &serde_json::Value) -> serde_json::Result<String> {
+    Ok(sha256_hex(&serde_json::to_vec(v)?))
+}
+
+fn short(s: &str) -> &str {
+    &s[..s.len().min(12)]
 }
 
 /// Hash of settings and options (canonical JSON).
@@ -55,14 +87,28 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         Checkpoint { format: FORMAT.into(), version: VERSION, problem_hash, settings_hash, settings, options, state, wall_s }
     }
 
-    /// Save atomically.
+    /// Save atomically, with the content checksum `sha256`.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let bytes = serde_json::to_vec(self).map_err(|source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source })?;
+        let ser = |source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source };
+        let mut v = serde_json::to_value(self).map_err(ser)?;
+        let sum = content_sha256(&v).map_err(ser)?;
+        v["sha256"] = serde_json::Value::String(sum);
+        let bytes = serde_json::to_vec(&v).map_err(ser)?;
         write_atomic(path, &bytes)
     }
 
-    /// Load and check the format.
+    /// Load, check the format and the content checksum (a mismatch is an error).
     pub fn load(path: &Path) -> Result<Self> {
+        let (cp, mismatch) = Self::load_unverified(path)?;
+        match mismatch {
+            None => Ok(cp),
+            Some(m) => Err(m.error(path)),
+        }
+    }
+
+    /// Load and check the format; a checksum mismatch is returned beside the checkpoint
+    /// instead of refused (for `resume --force`).
+    pub fn load_unverified(path: &Path) -> Result<(Self, Option<ChecksumMismatch>)> {
         let invalid = |message: String| Error::Checkpoint { file: path.to_path_buf(), message };
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the checkpoint", e))?;
         let head: serde_json::Value =
@@ -72,9 +118,13 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             return Err(invalid(format!("field `format` is {fmt:?}, expected \"{FORMAT}\"")));
         }
         let ver = head.get("version").and_then(|v| v.as_u64());
-        if ver != Some(VERSION as u64) {
-            return Err(invalid(format!("field `version` is {ver:?}, expected {VERSION}")));
+        if ver != Some(VERSION as u64) && ver != Some(1) {
+            return Err(invalid(format!("field `version` is {ver:?}, expected {VERSION} (or 1)")));
         }
+        let mut head = head;
+        let stored = head.as_object_mut().and_then(|m| m.remove("sha256")).and_then(|v| v.as_str().map(String::from));
+        let computed = content_sha256(&head).map_err(|source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source })?;
+        let mismatch = (stored.as_deref() != Some(computed.as_str())).then(|| ChecksumMismatch { stored: stored.clone(), computed });
         let cp: Self = serde_json::from_value(head).map_err(|source| Error::Json { path: path.to_path_buf(), what: "not a valid gripopt checkpoint", source })?;
         let st = &cp.state;
         let consistent = st.population.len() == cp.settings.pop_size
@@ -85,6 +135,6 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         if !consistent {
             return Err(invalid("field `state` is inconsistent (population, ranks, generation and history disagree)".into()));
         }
-        Ok(cp)
+        Ok((cp, mismatch))
     }
 }

@@ -6,20 +6,26 @@
 //! This layer sits on top: it uses the pure optimiser ([`crate::optim`]) and the recorder
 //! ([`crate::record`]); neither of them names it.
 
+mod archive;
 mod checkpoint;
 mod grasp_plot;
 mod gripper;
+mod limits;
+mod lock;
 mod observers;
 mod outputs;
 mod persist;
 mod plots;
 mod rundir;
 
-pub use checkpoint::{Checkpoint, FORMAT, VERSION, settings_hash, sha256_hex};
+pub use archive::{Archive, ARCHIVE_FILE};
 pub use grasp_plot::grasp_plot;
+pub use checkpoint::{Checkpoint, ChecksumMismatch, FORMAT, VERSION, settings_hash, sha256_hex};
+pub use limits::{check_population, BYTES_PER_DESIGN};
+pub use lock::{RunLock, LOCK_FILE};
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
-pub use observers::{CheckpointObserver, CrashAfter, ProgressObserver, RecordingObserver, SharedProgress};
+pub use observers::{CheckpointObserver, CrashAfter, OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
 pub use persist::{CheckpointSpec, PersistStats, Persister};
-pub use outputs::{final_front, write_outputs};
+pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
 pub use plots::{hypervolume, pareto_matrix};
 pub use rundir::{Resume, RunInfo, RunSpec, RunStatus, RunSummary, optimise, resume};

@@ -4,7 +4,9 @@
 //! [`crate::optim::execute`] as they were.
 
 use super::checkpoint::Checkpoint;
+use super::archive::Archive;
 use super::gripper::GripperInfo;
+use super::outputs::write_tables;
 use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::optim::Individual;
 use crate::record::Recorder;
@@ -15,17 +17,23 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// indicatif progress: generation, evaluations/s, feasible count, hypervolume, ETA.
+/// Progress: on a terminal an indicatif bar (generation, evaluations/s, feasible count,
+/// hypervolume, ETA); otherwise (a log file, a pipe) one line per generation on stderr.
 pub struct ProgressObserver {
     bar: indicatif::ProgressBar,
     start: Instant,
     evals_at_start: Option<u64>,
+    gen_at_start: Option<u64>,
+    log_lines: bool,
 }
 
 impl ProgressObserver {
-    /// A progress bar over `total` generations (hidden when `visible` is false).
+    /// Progress over `total` generations; nothing when `visible` is false, a bar when stderr
+    /// is a terminal, else one log line per generation.
     pub fn new(total: u64, first: u64, visible: bool) -> Self {
-        let bar = if visible { indicatif::ProgressBar::new(total) } else { indicatif::ProgressBar::hidden() };
+        use std::io::IsTerminal;
+        let terminal = std::io::stderr().is_terminal();
+        let bar = if visible && terminal { indicatif::ProgressBar::new(total) } else { indicatif::ProgressBar::hidden() };
         bar.set_style(
             indicatif::ProgressStyle::with_template("{prefix} [{bar:25}] gen {pos}/{len} {msg} ETA {eta}")
                 .expect("template")
@@ -33,7 +41,7 @@ impl ProgressObserver {
         );
         bar.set_prefix("NSGA-II");
         bar.set_position(first.saturating_sub(1));
-        ProgressObserver { bar, start: Instant::now(), evals_at_start: None }
+        ProgressObserver { bar, start: Instant::now(), evals_at_start: None, gen_at_start: None, log_lines: visible && !terminal }
     }
     fn show<I>(&mut self, s: &Nsga2State<I>) {
         let e0 = *self.evals_at_start.get_or_insert(s.evaluations.saturating_sub(s.population.len() as u64));
@@ -43,6 +51,16 @@ impl ProgressObserver {
         self.bar.set_length(s.max_generations);
         self.bar.set_position(s.generation);
         self.bar.set_message(format!("{rate:.0} evals/s, feasible {feas}/{}, HV {hv:.4}", s.population.len()));
+        if self.log_lines {
+            let g0 = *self.gen_at_start.get_or_insert(s.generation.saturating_sub(1));
+            let done = s.generation.saturating_sub(g0) as f64;
+            let left = s.max_generations.saturating_sub(s.generation) as f64;
+            let eta = self.start.elapsed().as_secs_f64() / done.max(1.0) * left;
+            eprintln!(
+                "generation {}/{}  evaluations {}  feasible {feas}/{}  hypervolume {hv:.4}  {rate:.0} evaluations/s  ETA {eta:.0} s",
+                s.generation, s.max_generations, s.evaluations, s.population.len()
+            );
+        }
     }
     /// Finish and clear the bar.
     pub fn finish(&self) {
@@ -95,6 +113,38 @@ impl<I: Serialize + DeserializeOwned + Clone> Observe<Nsga2State<I>> for Checkpo
     }
     fn observe_iter(&mut self, state: &Nsga2State<I>, _kv: &KV) -> Result<(), Error> {
         self.save(state)
+    }
+}
+
+/// Rewrites the archive and the result CSVs after every generation (before the checkpoint),
+/// so that a running run can be watched; shared, so that the caller can use the archive.
+#[derive(Clone)]
+pub struct OutputsObserver {
+    /// Run folder.
+    pub out: PathBuf,
+    /// Force model name (a column of the design CSVs).
+    pub force_model: &'static str,
+    /// Algorithm settings (hypervolume normalisation).
+    pub settings: Nsga2Settings,
+    /// The run's archive.
+    pub archive: Arc<Mutex<Archive>>,
+}
+
+impl OutputsObserver {
+    fn write(&self, st: &Nsga2State<GripperInfo>) -> Result<(), Error> {
+        let mut a = self.archive.lock().expect("archive lock");
+        a.update(st, &self.settings);
+        a.save(&self.out)?;
+        Ok(write_tables(&self.out, self.force_model, st, &a)?)
+    }
+}
+
+impl Observe<Nsga2State<GripperInfo>> for OutputsObserver {
+    fn observe_init(&mut self, _name: &str, st: &Nsga2State<GripperInfo>, _kv: &KV) -> Result<(), Error> {
+        self.write(st)
+    }
+    fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> Result<(), Error> {
+        self.write(st)
     }
 }
 

@@ -11,10 +11,17 @@ fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl
     move |x| Error::Plot { path: path.to_path_buf(), source: Box::new(x) }
 }
 
-/// Scatter matrix of the four objectives (natural sense) of the feasible final population;
-/// the non-dominated front in red.
-pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
-    let names = ["max_offset (mm)", "alpha", "mean force (N)", "t_stab (ms)"];
+/// Scatter matrix of the four objectives (natural sense) of the feasible final population:
+/// the non-dominated front in red, other feasible designs in grey, the problem's nominal
+/// design as a blue cross; axis names say which way is better.
+pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
+    let names = ["max_offset (mm), higher better", "alpha, lower better", "mean force (N), higher better", "t_stab (ms), lower better"];
+    let nominal = {
+        use crate::optim::MooProblem;
+        let ev = gp.evaluate(&gp.problem.nominal.to_array());
+        let o = ev.info.objectives;
+        [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * [1e3, 1.0, 1.0, 1e3][k])
+    };
     let scale = [1e3, 1.0, 1.0, 1e3];
     let pts: Vec<([f64; 4], bool)> = st
         .population
@@ -28,7 +35,8 @@ pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperI
         .collect();
     let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_error(path))?;
-    let root = root.titled(&format!("final population: {} feasible, generation {}", pts.len(), st.generation), ("sans-serif", 20)).map_err(plot_error(path))?;
+    let title = format!("generation {}: {} feasible; red = Pareto front ({}), grey = dominated, blue cross = nominal design", st.generation, pts.len(), pts.iter().filter(|p| p.1).count());
+    let root = root.titled(&title, ("sans-serif", 16)).map_err(plot_error(path))?;
     let cells = root.split_evenly((4, 4));
     for (idx, cell) in cells.iter().enumerate() {
         let (row, col) = (idx / 4, idx % 4);
@@ -65,18 +73,23 @@ pub fn pareto_matrix(path: &Path, _gp: &GripperProblem, st: &Nsga2State<GripperI
             .draw_series(pts.iter().filter(|p| !p.1).map(|p| Circle::new((p.0[col], p.0[row]), 2, RGBColor(150, 150, 150).filled())))
             .map_err(plot_error(path))?;
         chart.draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled()))).map_err(plot_error(path))?;
+        if nominal[col].is_finite() && nominal[row].is_finite() {
+            chart.draw_series(std::iter::once(Cross::new((nominal[col], nominal[row]), 5, BLUE.stroke_width(2)))).map_err(plot_error(path))?;
+        }
     }
     root.present().map_err(plot_error(path))?;
     Ok(())
 }
 
-/// Normalised hypervolume of the feasible front per generation.
-pub fn hypervolume(path: &Path, hv: &[f64]) -> Result<()> {
+/// Normalised hypervolume per generation: the population's feasible front (can dip when
+/// crowding drops a front member) and the archive of every feasible non-dominated design
+/// (never falls).
+pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
     let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_error(path))?;
-    let ymax = hv.iter().cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
+    let ymax = hv.iter().chain(archive_hv).cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
     let mut chart = ChartBuilder::on(&root)
-        .caption("hypervolume of the feasible front (normalised objectives)", ("sans-serif", 18))
+        .caption("hypervolume (normalised objectives; higher is better)", ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(35)
         .y_label_area_size(60)
@@ -85,7 +98,15 @@ pub fn hypervolume(path: &Path, hv: &[f64]) -> Result<()> {
     chart.configure_mesh().x_desc("generation").y_desc("hypervolume").draw().map_err(plot_error(path))?;
     chart
         .draw_series(LineSeries::new(hv.iter().enumerate().map(|(g, v)| (g as f64 + 1.0, if v.is_finite() { *v } else { 0.0 })), BLUE.stroke_width(2)))
-        .map_err(plot_error(path))?;
+        .map_err(plot_error(path))?
+        .label("population's front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLUE));
+    chart
+        .draw_series(LineSeries::new(archive_hv.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(g, v)| (g as f64 + 1.0, *v)), RED.stroke_width(2)))
+        .map_err(plot_error(path))?
+        .label("archive (every non-dominated design found)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RED));
+    chart.configure_series_labels().position(SeriesLabelPosition::LowerRight).background_style(WHITE).border_style(BLACK).draw().map_err(plot_error(path))?;
     root.present().map_err(plot_error(path))?;
     Ok(())
 }

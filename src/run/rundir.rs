@@ -10,7 +10,9 @@
 
 use super::checkpoint::{sha256_hex, settings_hash, Checkpoint};
 use super::gripper::{GripperInfo, GripperProblem};
-use super::observers::{ProgressObserver, RecordingObserver, SharedProgress};
+use super::lock::{RunLock, LOCK_FILE};
+use super::archive::Archive;
+use super::observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
 use super::persist::{CheckpointSpec, Persister};
 use super::outputs::write_outputs;
 use crate::{Error, Result};
@@ -89,9 +91,9 @@ pub struct RunInfo {
     pub resumes: Vec<Resume>,
     /// Recording options.
     pub recording: RecordOptions,
-    /// Bytes recorded by the last process.
+    /// Bytes recorded, over all processes (a process killed with -9 does not add its own).
     pub recording_bytes: u64,
-    /// Seconds spent recording by the last process.
+    /// Seconds spent recording, over all processes (as `recording_bytes`).
     pub recording_s: f64,
 }
 
@@ -121,8 +123,12 @@ pub struct RunSummary {
     pub front_size: usize,
     /// Feasible members of the final population.
     pub feasible: usize,
-    /// Final normalised hypervolume.
+    /// Final normalised hypervolume of the population's feasible front.
     pub hv: f64,
+    /// Designs in the archive (every feasible non-dominated design evaluated).
+    pub archive_size: usize,
+    /// Normalised hypervolume of the archive.
+    pub archive_hv: f64,
     /// Stopped by ctrl-c.
     pub interrupted: bool,
     /// Wall time of this process (s).
@@ -144,20 +150,23 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 
 /// Start a new run in `spec.out` (which must not hold a checkpoint already).
 pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
-    if spec.pop < 4 {
-        return Err(Error::Input(format!("--pop {}: must be at least 4", spec.pop)));
-    }
-    if spec.generations < 1 {
-        return Err(Error::Input(format!("--generations {}: must be at least 1", spec.generations)));
-    }
+    super::limits::check_population(spec.pop, spec.generations, spec.record.enabled)?;
     let problem = Problem::load(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     let cp_path = spec.out.join("checkpoint.json");
-    if cp_path.exists() {
-        let message = format!("already holds a run (checkpoint.json); use `gripopt resume {}` or another --out", spec.out.display());
-        return Err(Error::RunDir { path: spec.out.clone(), message });
-    }
+    let holds_run = || -> Result<()> {
+        if cp_path.exists() {
+            let message = format!("already holds a run (checkpoint.json); use `gripopt resume {}` or another --out", spec.out.display());
+            return Err(Error::RunDir { path: spec.out.clone(), message });
+        }
+        Ok(())
+    };
+    holds_run()?;
+    check_new_run_folder(&spec.out)?;
+    let _lock = RunLock::acquire(&spec.out)?;
+    holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
+    crate::record::write_layout(&spec.out)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
@@ -173,7 +182,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
         wall_s: 0.0,
         status: RunStatus::Running,
         resumes: vec![],
-        recording: spec.record,
+        recording: spec.record.starting_now(),
         recording_bytes: 0,
         recording_s: 0.0,
     };
@@ -186,8 +195,16 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
     let run_json = dir.join("run.json");
     let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read (is its folder a run folder?)", e))?;
     let mut info: RunInfo = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
+    let _lock = RunLock::acquire(dir)?;
     let cp_path = dir.join("checkpoint.json");
-    let cp: Checkpoint<GripperInfo> = Checkpoint::load(&cp_path)?;
+    let (cp, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
+    let mut forced_notes = vec![];
+    if let Some(m) = mismatch {
+        if !force {
+            return Err(m.error(&cp_path));
+        }
+        forced_notes.push(format!("forced: checkpoint content checksum mismatch (stored {}, content {})", m.stored.as_deref().map(|s| &s[..s.len().min(12)]).unwrap_or("none"), &m.computed[..12]));
+    }
     let modified = |what: &str| Error::RunDir { path: cp_path.clone(), message: format!("{what} differ from {} (the run folder was modified); refusing to resume", run_json.display()) };
     if cp.settings != info.settings || cp.settings_hash != settings_hash(&cp.settings, &cp.options) {
         return Err(modified("settings"));
@@ -208,15 +225,21 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
         }
         note = format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]);
     }
+    let checksum_forced = !forced_notes.is_empty();
+    if !note.is_empty() {
+        forced_notes.insert(0, note);
+    }
+    let note = forced_notes.join("; ");
     let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json { path: run_json.clone(), what: "field `recording`", source })?;
     if cp.options.get("recording") != Some(&recording) {
         return Err(modified("recording options"));
     }
     let total = generations.unwrap_or(info.generations);
+    super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
     if total < cp.state.generation {
         return Err(Error::Input(format!("--generations {total}: the run already has {} generations", cp.state.generation)));
     }
-    info.resumes.push(Resume { at_generation: cp.state.generation, generations: total, forced: force && now != cp.problem_hash, note });
+    info.resumes.push(Resume { at_generation: cp.state.generation, generations: total, forced: (force && now != cp.problem_hash) || checksum_forced, note });
     info.generations = total;
     info.status = RunStatus::Running;
     let gp = GripperProblem::new(problem);
@@ -255,11 +278,14 @@ fn drive(
     };
     let first = state.generation.max(1);
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
-    // shard k, then checkpoint k, written by a background thread while k+1 evaluates
+    let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
+    let outputs = OutputsObserver { out: out.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: archive.clone() };
+    // outputs and archive on this thread before the hand-over; then shard k and checkpoint k
+    // in that order on a background thread while k+1 evaluates (src/run/persist.rs)
     let ckpt = CheckpointSpec { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
     let persister = Persister::start(recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
     let (pers2, prog2) = (persister.clone(), prog.clone());
-    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
+    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(observe(e, outputs), pers2), prog2), crash_after.is_none()));
     let result = match (result, persister.finish()) {
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
@@ -267,8 +293,8 @@ fn drive(
     prog.0.lock().expect("progress").finish();
     if let Some(r) = &recorder {
         let r = r.0.lock().expect("recorder");
-        info.recording_bytes = r.bytes;
-        info.recording_s = r.seconds;
+        info.recording_bytes += r.bytes;
+        info.recording_s += r.seconds;
     }
     let (gp, st) = match result {
         Ok(r) => r,
@@ -284,7 +310,8 @@ fn drive(
     info.evaluations = st.evaluations;
     info.wall_s = wall_before + start.elapsed().as_secs_f64();
     info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
-    write_outputs(out, &gp, &st)?;
+    let archive = archive.lock().expect("archive").clone();
+    write_outputs(out, &gp, &st, &archive)?;
     write_json(&out.join("run.json"), &info)?;
     Ok(RunSummary {
         out: out.to_path_buf(),
@@ -293,9 +320,30 @@ fn drive(
         front_size: st.feasible_front().len(),
         feasible: st.population.iter().filter(|p| p.eval.cv.is_feasible()).count(),
         hv: st.hv_history.last().copied().unwrap_or(f64::NAN),
+        archive_size: archive.members.len(),
+        archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
         interrupted,
         wall_s: start.elapsed().as_secs_f64(),
     })
+}
+
+/// `optimise --out DIR` only into a new or empty folder, or one left by a run that never
+/// reached its first checkpoint: never into a folder of other files.
+fn check_new_run_folder(dir: &Path) -> Result<()> {
+    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the run folder", e))?;
+    let ours = ["run.json", "problem.toml", "recording", "checkpoint.json", LOCK_FILE];
+    let foreign: Vec<String> = rd
+        .flatten()
+        .map(|f| f.file_name().to_string_lossy().to_string())
+        .filter(|n| !ours.contains(&n.as_str()) && !(n.starts_with('.') && n.ends_with(".tmp")))
+        .collect();
+    if foreign.is_empty() {
+        return Ok(());
+    }
+    let mut shown: Vec<&str> = foreign.iter().map(String::as_str).take(3).collect();
+    shown.sort();
+    let message = format!("--out: the folder is not empty and is not a gripopt run (it holds {}{}); give a new or empty folder", shown.join(", "), if foreign.len() > 3 { ", …" } else { "" });
+    Err(Error::RunDir { path: dir.to_path_buf(), message })
 }
 
 /// Metadata written into every shard of the recording.

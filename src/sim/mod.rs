@@ -10,6 +10,7 @@
 //! takes and gives. Nothing here imports the evaluation pipeline, the optimiser, the
 //! recorder or the CLI.
 
+mod contact3d;
 mod criteria;
 mod driver;
 mod equilibrium;
@@ -32,3 +33,6 @@ pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample,
 pub use scene::centred::{compliant_equilibrium, simulate_grasp, simulate_grasp_into, simulate_grasp_traj, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS, NS};
 pub use scene::{Point, Response, Scene};
 pub use tracking::Tracker;
+pub use contact3d::{closest_segments, quat_matrix, V3};
+pub use scene::free::{simulate_free, FreeEval, FreeResult, FreeScene, FreeSetup, PoseSample, EF as FREE_EVENTS, NF as FREE_NS};
+pub use scene::offset::{simulate_offset, OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};

@@ -394,7 +394,7 @@ pub fn verdict(ev: &Evaluation) -> &'static str {
 pub fn evaluate_point(p: &Problem, x: &Design, stage: Stage) -> Evaluation {
     match stage {
         Stage::Kinematics => {
-            let mut ev = Evaluation { design: *x, kin: None, statics: None, dynamics: None, discard: None, stage_seconds: [0.0; 4] };
+            let mut ev = Evaluation::new(*x);
             match stage_kinematics(x, &p.scene) {
                 Ok(k) => ev.kin = Some(k),
                 Err(d) => ev.discard = Some(d),

@@ -6,6 +6,8 @@
 //! (two fingers and the object as a rigid body: N = 22) are further implementations.
 
 pub mod centred;
+pub mod free;
+pub mod offset;
 
 use super::driver::Run;
 use super::events::{Crossing, EventKind, EventValues};

@@ -1,0 +1,99 @@
+//! `--scene centred|offset:X|free` for `simulate` (MODEL.md §14): parsing, and the offset
+//! and free scenes' reports (the centred scene keeps `report::simulate`).
+
+use anyhow::{bail, Context, Result};
+use gripopt::eval::{evaluate as eval_design, EvalOptions};
+use gripopt::params::{limit, Design, Problem, SceneKind};
+use gripopt::sim::{simulate_free, simulate_grasp, simulate_offset, FreeSetup, SimOptions};
+use std::io::Write;
+use std::path::Path;
+
+/// Parse `centred`, `offset:X` (metres) or `free` into the problem's `[scene]`.
+pub fn apply_scene(p: &mut Problem, arg: &str) -> Result<()> {
+    let setup = &mut p.scene.setup;
+    match arg.split_once(':') {
+        None if arg == "centred" => setup.kind = SceneKind::Centred,
+        None if arg == "free" => setup.kind = SceneKind::Free,
+        Some(("offset", x)) => {
+            let v: f64 = x.parse().with_context(|| format!("--scene offset:{x}: not a number"))?;
+            limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene offset:{x}: {r}"))?;
+            setup.kind = SceneKind::Offset;
+            setup.x_off = v;
+        }
+        Some(("free", x)) => {
+            let v: f64 = x.parse().with_context(|| format!("--scene free:{x}: not a number"))?;
+            limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene free:{x}: {r}"))?;
+            setup.kind = SceneKind::Free;
+            setup.x_off = v;
+        }
+        _ => bail!("--scene {arg}: must be centred, offset:X (metres) or free"),
+    }
+    if setup.kind == SceneKind::Free && p.scene.env.g_eq != 0.0 {
+        bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1)");
+    }
+    Ok(())
+}
+
+/// `gripopt simulate` in the offset or free scene.
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<&Path>) -> Result<()> {
+    let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
+    let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
+        let d = ev.discard.expect("a design without statics was discarded");
+        bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
+    };
+    let s = &p.scene;
+    let o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
+    let x_off = s.setup.x_off;
+    if s.setup.kind == SceneKind::Offset {
+        let r = simulate_offset(&k.finger, s, &st, x_off, &o);
+        let d = &r.dynamics;
+        let v = serde_json::json!({
+            "scene": "offset", "x_off": x_off, "outcome": d.outcome.to_string(),
+            "t_first_contact": d.first.map(|f| f.t), "first_phalanx": d.first.map(|f| f.phalanx),
+            "e_cyl": d.first.map(|f| f.impact.e_cyl), "e_lim": d.first.map(|f| f.impact.e_lim),
+            "t_stab": d.t_stab, "min_force_margin": d.min_force_margin, "static_force_margin": d.static_force_margin,
+            "hand_x_end": r.hand_end[0], "hand_y_end": r.hand_end[1], "hand0_x": r.hand0[0], "hand0_y": r.hand0[1],
+            "recentres": r.hand_end[0] * x_off < 0.0, "t_end": d.t_end, "steps": d.stats.steps, "cpu_s": d.cpu_s,
+        });
+        println!("{}", if json { serde_json::to_string_pretty(&v)? } else { serde_json::to_string(&v)? });
+        return Ok(());
+    }
+    let centred = simulate_grasp(&k.finger, s, &st, &SimOptions { mode: gripopt::sim::Mode::Diagnostic, ..o });
+    let rec_o = SimOptions { record: csv.is_some(), ..o };
+    let r = simulate_free(&k.finger, s, st.tau_s0, x_off, FreeSetup::default(), &rec_o, None);
+    if let Some(path) = csv {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?);
+        writeln!(w, "t,gx,gy,gz,qw,qx,qy,qz,tilt_deg,q11_1,q21_1,q11_2,q21_2,energy")?;
+        for p in &r.poses {
+            writeln!(w, "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}", p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), p.fingers[0], p.fingers[1], p.fingers[2], p.fingers[3], p.energy)?;
+        }
+        w.flush()?;
+    }
+    let mut v = serde_json::to_value(&r)?;
+    let m = v.as_object_mut().expect("object");
+    let fc = centred.first;
+    m.insert("scene".into(), serde_json::json!("free"));
+    m.insert("x_off".into(), serde_json::json!(x_off));
+    m.insert("outcome".into(), serde_json::json!(centred.outcome.to_string()));
+    m.insert("impact_ok".into(), serde_json::json!(centred.impact_ok));
+    m.insert("e_cyl".into(), serde_json::json!(fc.map(|f| f.impact.e_cyl)));
+    m.insert("e_trans".into(), serde_json::json!(fc.map(|f| f.impact.e_trans)));
+    m.insert("e_rot".into(), serde_json::json!(fc.map(|f| f.impact.e_rot)));
+    m.insert("e_lim".into(), serde_json::json!(fc.map(|f| f.impact.e_lim)));
+    m.insert("t_first_contact".into(), serde_json::json!(fc.map(|f| f.t)));
+    m.insert("min_force_margin".into(), serde_json::json!(centred.min_force_margin));
+    m.insert("static_force_margin".into(), serde_json::json!(centred.static_force_margin));
+    m.insert("force_ok".into(), serde_json::json!(centred.t_force_violation.is_none() && centred.static_force_margin >= 0.0));
+    m.insert("t_stab".into(), serde_json::json!(centred.t_stab));
+    if json {
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("problem {}  scene free  x_off {x_off} m", p.name);
+        println!("  object: max displacement {:.3e} m (dx {:.3e}, dy {:.3e})  max tilt {:.4}°  final {:.3e} m / {:.4}°", r.object_max_displacement, r.object_max_dx, r.object_max_dy, r.object_max_tilt_deg, r.object_final_displacement, r.object_final_tilt_deg);
+        println!("  peak E_trans {:.4e} J  E_rot {:.4e} J during the first contact", r.object_peak_e_trans, r.object_peak_e_rot);
+        println!("  moved {}  toppled {}  escaped {}  rim_contact {}", r.moved, r.toppled, r.escaped, r.rim_contact);
+        println!("  centred criteria: impact {:?}  outcome {}", centred.impact_ok, centred.outcome);
+        println!("  steps {} rhs {} events {} cpu {:.2} ms", r.stats.steps, r.rhs_evals, r.events, r.cpu_s * 1e3);
+    }
+    Ok(())
+}

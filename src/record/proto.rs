@@ -1,0 +1,171 @@
+//! gripopt's own protobuf message, `gripopt.GraspSeries` (one per design on
+//! `/grasp/series`): prost encodes and decodes it; its schema (a serialized
+//! `FileDescriptorSet`, as MCAP's protobuf profile wants) is built from the same field
+//! table, [`SERIES_FIELDS`], so the two cannot drift apart silently (a unit test decodes a
+//! message field by field against the table).
+
+use prost::Message;
+use prost_types::field_descriptor_proto::{Label, Type};
+use prost_types::{DescriptorProto, FieldDescriptorProto, FileDescriptorProto, FileDescriptorSet};
+
+/// Full name of the message (the MCAP schema name).
+pub const SERIES_NAME: &str = "gripopt.GraspSeries";
+
+/// One design's recorded grasp trajectory as columns (finger 2 mirrors finger 1 in the
+/// symmetric scene, so one finger is stored). Plotted in Foxglove with the x-axis
+/// "Path (current)" `/grasp/series.t`.
+#[derive(Clone, PartialEq, Message)]
+pub struct GraspSeries {
+    /// Design id.
+    #[prost(uint64, tag = "1")]
+    pub design_id: u64,
+    /// True when every sample is stored in f64 (else: compact subset, values to f32 precision).
+    #[prost(bool, tag = "2")]
+    pub full_resolution: bool,
+    /// Samples of the simulation before selection.
+    #[prost(uint32, tag = "3")]
+    pub simulated_samples: u32,
+    /// Simulated time (s), exact.
+    #[prost(double, repeated, tag = "4")]
+    pub t: Vec<f64>,
+    /// q11 (rad).
+    #[prost(double, repeated, tag = "5")]
+    pub q11: Vec<f64>,
+    /// q21 = θ1 (rad).
+    #[prost(double, repeated, tag = "6")]
+    pub q21: Vec<f64>,
+    /// q̇11 (rad/s).
+    #[prost(double, repeated, tag = "7")]
+    pub q11_dot: Vec<f64>,
+    /// q̇21 (rad/s).
+    #[prost(double, repeated, tag = "8")]
+    pub q21_dot: Vec<f64>,
+    /// θ2 (rad).
+    #[prost(double, repeated, tag = "9")]
+    pub theta2: Vec<f64>,
+    /// Proximal penetration δ1 (m).
+    #[prost(double, repeated, tag = "10")]
+    pub proximal_penetration: Vec<f64>,
+    /// Distal penetration δ2 (m).
+    #[prost(double, repeated, tag = "11")]
+    pub distal_penetration: Vec<f64>,
+    /// Proximal normal force (N).
+    #[prost(double, repeated, tag = "12")]
+    pub proximal_normal_force: Vec<f64>,
+    /// Distal normal force (N).
+    #[prost(double, repeated, tag = "13")]
+    pub distal_normal_force: Vec<f64>,
+    /// Proximal friction force (N).
+    #[prost(double, repeated, tag = "14")]
+    pub proximal_friction_force: Vec<f64>,
+    /// Distal friction force (N).
+    #[prost(double, repeated, tag = "15")]
+    pub distal_friction_force: Vec<f64>,
+    /// Raw hand force F_hand,y (N).
+    #[prost(double, repeated, tag = "16")]
+    pub hand_force: Vec<f64>,
+    /// Filtered hand force (N).
+    #[prost(double, repeated, tag = "17")]
+    pub filtered_hand_force: Vec<f64>,
+    /// Energy E (J).
+    #[prost(double, repeated, tag = "18")]
+    pub energy: Vec<f64>,
+    /// E − V* (J).
+    #[prost(double, repeated, tag = "19")]
+    pub energy_excess: Vec<f64>,
+}
+
+/// (name, number, type, repeated) of every field of [`GraspSeries`], in tag order.
+pub const SERIES_FIELDS: [(&str, i32, Type, bool); 19] = [
+    ("design_id", 1, Type::Uint64, false),
+    ("full_resolution", 2, Type::Bool, false),
+    ("simulated_samples", 3, Type::Uint32, false),
+    ("t", 4, Type::Double, true),
+    ("q11", 5, Type::Double, true),
+    ("q21", 6, Type::Double, true),
+    ("q11_dot", 7, Type::Double, true),
+    ("q21_dot", 8, Type::Double, true),
+    ("theta2", 9, Type::Double, true),
+    ("proximal_penetration", 10, Type::Double, true),
+    ("distal_penetration", 11, Type::Double, true),
+    ("proximal_normal_force", 12, Type::Double, true),
+    ("distal_normal_force", 13, Type::Double, true),
+    ("proximal_friction_force", 14, Type::Double, true),
+    ("distal_friction_force", 15, Type::Double, true),
+    ("hand_force", 16, Type::Double, true),
+    ("filtered_hand_force", 17, Type::Double, true),
+    ("energy", 18, Type::Double, true),
+    ("energy_excess", 19, Type::Double, true),
+];
+
+/// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3).
+pub fn series_descriptor() -> Vec<u8> {
+    let field = |(name, number, ty, repeated): (&str, i32, Type, bool)| FieldDescriptorProto {
+        name: Some(name.into()),
+        number: Some(number),
+        label: Some(if repeated { Label::Repeated } else { Label::Optional } as i32),
+        r#type: Some(ty as i32),
+        json_name: Some(name.into()),
+        ..Default::default()
+    };
+    let msg = DescriptorProto { name: Some("GraspSeries".into()), field: SERIES_FIELDS.into_iter().map(field).collect(), ..Default::default() };
+    let file = FileDescriptorProto {
+        name: Some("gripopt/GraspSeries.proto".into()),
+        package: Some("gripopt".into()),
+        message_type: vec![msg],
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    FileDescriptorSet { file: vec![file] }.encode_to_vec()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn descriptor_matches_the_encoding() {
+        // every field gets a distinct value; decode the bytes by hand with the table
+        let mut m = GraspSeries { design_id: 7, full_resolution: true, simulated_samples: 3, ..Default::default() };
+        let cols: [&mut Vec<f64>; 16] = [
+            &mut m.t, &mut m.q11, &mut m.q21, &mut m.q11_dot, &mut m.q21_dot, &mut m.theta2, &mut m.proximal_penetration, &mut m.distal_penetration,
+            &mut m.proximal_normal_force, &mut m.distal_normal_force, &mut m.proximal_friction_force, &mut m.distal_friction_force, &mut m.hand_force,
+            &mut m.filtered_hand_force, &mut m.energy, &mut m.energy_excess,
+        ];
+        for (k, c) in cols.into_iter().enumerate() {
+            c.push(k as f64 + 0.5);
+        }
+        let b = m.encode_to_vec();
+        let mut i = 0;
+        let mut seen = vec![];
+        while i < b.len() {
+            // the key is a varint (two bytes from tag 16 on)
+            let (mut key, mut shift) = (0u32, 0);
+            loop {
+                key |= ((b[i] & 0x7f) as u32) << shift;
+                shift += 7;
+                i += 1;
+                if b[i - 1] < 0x80 {
+                    break;
+                }
+            }
+            let (tag, wire) = ((key >> 3) as i32, (key & 7) as u8);
+            let (_, _, ty, rep) = SERIES_FIELDS.iter().find(|f| f.1 == tag).copied().expect("field in the table");
+            match (ty, rep) {
+                (Type::Double, true) => {
+                    assert_eq!((wire, b[i]), (2, 8), "packed double");
+                    let v = f64::from_le_bytes(b[i + 1..i + 9].try_into().unwrap());
+                    assert_eq!(v, (tag - 4) as f64 + 0.5, "field {tag}");
+                    i += 9;
+                }
+                _ => {
+                    assert_eq!(wire, 0, "varint field {tag}");
+                    i += 1;
+                }
+            }
+            seen.push(tag);
+        }
+        assert_eq!(seen, (1..=19).collect::<Vec<_>>());
+        assert!(!series_descriptor().is_empty());
+    }
+}

@@ -1,0 +1,71 @@
+//! Limits of a run's size: a population (and run length) that fits in memory and in the
+//! recording's id space, checked before anything is allocated, with the estimate in the
+//! error (docs/limits.md).
+
+use crate::{Error, Result};
+
+/// Memory per design of the population, without trajectories (bytes): parents, offspring,
+/// the merged population while sorting, the last evaluated generation, the checkpoint's
+/// copy and its JSON tree (measured ≈ 6 KiB; rounded up).
+pub const BYTES_PER_DESIGN: u64 = 16 << 10;
+
+/// Memory per design while its stage-3 trajectory waits for the recorder (bytes; a grasp
+/// is a few hundred to a few thousand accepted steps of 136 bytes).
+pub const BYTES_PER_TRAJECTORY: u64 = 512 << 10;
+
+/// Largest design id a recording can hold: design k's messages live at [k s, k s + 1 s) of
+/// a u64 nanosecond clock.
+pub const MAX_EVALUATIONS: u64 = u64::MAX / 1_000_000_000 - 1;
+
+/// Memory the system can give (MemAvailable of /proc/meminfo), if known.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+fn gib(b: f64) -> String {
+    if b >= (1u64 << 30) as f64 { format!("{:.1} GiB", b / (1u64 << 30) as f64) } else { format!("{:.0} MiB", b / (1u64 << 20) as f64) }
+}
+
+/// Check `--pop` and `--generations` before a run allocates anything: pop ≥ 4, generations
+/// ≥ 1, pop × generations within the recording's id space, and the memory estimate
+/// (pop × [`BYTES_PER_DESIGN`], plus 2 × pop × [`BYTES_PER_TRAJECTORY`] when recording)
+/// within half of the available memory (64 GiB when unknown).
+pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result<()> {
+    let field = |f: &str, v: String, rule: String| Error::InvalidField { file: "command line".into(), field: f.into(), value: v, rule };
+    if pop < 4 {
+        return Err(field("--pop", pop.to_string(), "must be at least 4".into()));
+    }
+    if generations < 1 {
+        return Err(field("--generations", generations.to_string(), "must be at least 1".into()));
+    }
+    let per = BYTES_PER_DESIGN as f64 + if recording { 2.0 * BYTES_PER_TRAJECTORY as f64 } else { 0.0 };
+    let need = pop as f64 * per;
+    let (avail, known) = match available_memory() {
+        Some(a) => (a as f64, true),
+        None => (64.0 * (1u64 << 30) as f64, false),
+    };
+    let budget = avail / 2.0;
+    if need > budget {
+        let max = (budget / per).floor() as u64;
+        return Err(field(
+            "--pop",
+            pop.to_string(),
+            format!(
+                "needs about {} of memory ({} per design{}), more than half of the {} {}; at most {max} here",
+                gib(need),
+                gib(per).replace(".0 ", " "),
+                if recording { ", trajectories included while they wait for the recorder" } else { "" },
+                gib(avail),
+                if known { "available" } else { "assumed (memory unknown)" }
+            ),
+        ));
+    }
+    let evals = (pop as u128) * (generations as u128);
+    if evals > MAX_EVALUATIONS as u128 {
+        return Err(field("--pop × --generations", format!("{pop} × {generations}"), format!("at most {MAX_EVALUATIONS} evaluations (design ids are the recording's time windows of 1 s on a u64 nanosecond clock)")));
+    }
+    Ok(())
+}

@@ -1,0 +1,680 @@
+//! The free scene (MODEL.md §14.1–14.4): both fingers close on the object, a free rigid
+//! body standing on the ground (z = −h_c) against the palm. Contacts in 3-D: each phalanx
+//! capsule against the object's axis segment, the palm capsule, and n_g rim points on the
+//! ground, all Hertz–Flores with memory and the 2-D regularised friction of §14.2.
+//! State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2 | G (3) | quaternion (w, x, y, z) |
+//! v_G (3) | ω (3, world axes)). The run ends at min(t_max, t_obs).
+
+use super::{Point, Response, Scene};
+use crate::math::V2;
+use crate::model::{Finger, FrictionLaw};
+use crate::params::SceneParams;
+use crate::sim::contact3d::{closest_segments, point_force, quat_matrix, quat_mul, V3};
+use crate::sim::criteria::{impact, Impact};
+use crate::sim::driver::{self, End, Run};
+use crate::sim::events::{Crossing, EventKind, EventValues};
+use crate::sim::finger::{FingerEval, FingerModel, Kink};
+use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::memory::{Memory, MemoryChange};
+use crate::sim::result::SimOptions;
+use nalgebra::{Matrix2, Matrix3, SVector, Vector2};
+use serde::Serialize;
+use std::time::Instant;
+
+/// State dimension of the free scene.
+pub const NF: usize = 21;
+/// Most ground points (event slots are fixed at compile time).
+pub const NG_MAX: usize = 16;
+/// Contacts: 4 phalanges, the palm, the ground points.
+pub const NC: usize = 5 + NG_MAX;
+/// Number of event functions of the free scene.
+pub const EF: usize = NC + 4;
+type St = SVector<f64, NF>;
+const G0: usize = 8;
+const Q0: usize = 11;
+const V0: usize = 15;
+const W0: usize = 18;
+
+/// Test and study inputs of the free scene beyond the problem file (MODEL.md §14.5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FreeSetup {
+    /// Integrate the fingers (false: they stay open and never touch; the object alone).
+    pub fingers: bool,
+    /// Initial velocity of G (m/s).
+    pub v0: [f64; 3],
+    /// Initial tilt about the y axis (rad; the axis leans toward +x), resting on its lowest rim point.
+    pub tilt: f64,
+    /// A constant force along x through the axis at z = 0 (N).
+    pub push_x: f64,
+}
+
+impl Default for FreeSetup {
+    fn default() -> Self {
+        FreeSetup { fingers: true, v0: [0.0; 3], tilt: 0.0, push_x: 0.0 }
+    }
+}
+
+/// One contact at a state (world frame).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Contact3 {
+    /// Penetration δ (m).
+    pub delta: f64,
+    /// δ̇ (m/s).
+    pub delta_dot: f64,
+    /// Normal force (N).
+    pub normal: f64,
+    /// The closest point on the object's axis was clamped to an end (rim or face contact).
+    pub rim: bool,
+}
+
+/// The free scene's model at one state.
+#[derive(Debug, Clone, Copy)]
+pub struct FreeEval {
+    /// Finger 1 and 2 (local frames; their contact fields are unused).
+    pub f: [FingerEval; 2],
+    /// Every contact (0–3 phalanges, 4 palm, 5.. ground).
+    pub c: [Contact3; NC],
+    /// q̈ of both fingers.
+    pub qdd: [Vector2<f64>; 2],
+    /// dv_G/dt and dω/dt.
+    pub acc: (V3, V3),
+    /// Tilt acos(a·z) (rad).
+    pub tilt: f64,
+    /// Translational and rotational kinetic energy of the object (J).
+    pub e_obj: (f64, f64),
+    /// Total energy: fingers, object, gravity of the object, contact elastic energies (J).
+    pub energy: f64,
+    /// Smooth piece.
+    pub piece: Piece,
+    /// Position of G (m).
+    pub pos: V3,
+    /// Orientation (w, x, y, z).
+    pub quat: [f64; 4],
+    /// Angular velocity (world, rad/s).
+    pub omega: V3,
+    /// The axis a (world).
+    pub axis: V3,
+}
+
+/// A sample of the object's pose (for `--csv` and recordings).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseSample {
+    /// Time (s).
+    pub t: f64,
+    /// Position of G (m).
+    pub g: [f64; 3],
+    /// Orientation (w, x, y, z).
+    pub q: [f64; 4],
+    /// Tilt (rad).
+    pub tilt: f64,
+    /// Active angles (q11, q21) of finger 1 and finger 2.
+    pub fingers: [f64; 4],
+    /// Total energy (J).
+    pub energy: f64,
+}
+
+/// The outputs of MODEL.md §14.4.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FreeResult {
+    /// Largest horizontal displacement of G (m).
+    pub object_max_displacement: f64,
+    /// Largest |Δx| of G (m).
+    pub object_max_dx: f64,
+    /// Largest |Δy| of G (m).
+    pub object_max_dy: f64,
+    /// Largest tilt (°).
+    pub object_max_tilt_deg: f64,
+    /// Largest |a_x|: the axis leaning along the palm, i.e. tilt about y (rad, sine).
+    pub object_max_tilt_y: f64,
+    /// Largest spin about the vertical, 2|q_z| (rad; small-angle).
+    pub object_max_spin: f64,
+    /// Horizontal displacement at the end (m).
+    pub object_final_displacement: f64,
+    /// Tilt at the end (°).
+    pub object_final_tilt_deg: f64,
+    /// Peak translational kinetic energy during the first contact (J).
+    pub object_peak_e_trans: f64,
+    /// Peak rotational kinetic energy during the first contact (J).
+    pub object_peak_e_rot: f64,
+    /// First phalanx contact time (s).
+    pub first_contact_t: Option<f64>,
+    /// First phalanx: 1 proximal, 2 distal (finger 1 or 2).
+    pub first_contact_phalanx: Option<u8>,
+    /// The §9.1 energies at the first contact as this scene's fingers hit.
+    pub first_impact: Option<Impact>,
+    /// The verdict: max displacement > Δx_max or max tilt > θ_max.
+    pub moved: bool,
+    /// Tilt above 45° at some time.
+    pub toppled: bool,
+    /// No phalanx in contact at the end.
+    pub escaped: bool,
+    /// A loaded phalanx met the object's rim or a face.
+    pub rim_contact: bool,
+    /// How the run ended.
+    pub end: String,
+    /// Time reached (s).
+    pub t_end: f64,
+    /// Events located.
+    pub events: u32,
+    /// Integrator counters.
+    pub stats: Stats,
+    /// Right-hand-side evaluations (including event location).
+    pub rhs_evals: u64,
+    /// Wall seconds.
+    pub cpu_s: f64,
+    /// Energy at the start and at the end (J).
+    pub energy: [f64; 2],
+    /// Largest energy increase between two consecutive accepted states (J; ≈ 0).
+    pub max_energy_rise: f64,
+    /// Pose samples (when recording).
+    #[serde(skip)]
+    pub poses: Vec<PoseSample>,
+}
+
+/// The free scene during a run.
+pub struct FreeScene<'a> {
+    model: FingerModel<'a>,
+    s: &'a SceneParams,
+    setup: FreeSetup,
+    mem: [Memory; NC],
+    ng: usize,
+    rim_body: [V3; NG_MAX],
+    m: f64,
+    j_body: V3,
+    chi: f64,
+    law_palm: FrictionLaw,
+    law_ground: FrictionLaw,
+    x_off: f64,
+    evals: u64,
+    accepted: Option<(St, FreeEval)>,
+    // tracking
+    g_start: V3,
+    out: FreeResult,
+    first_k: Option<usize>,
+    first_open: bool,
+    last_energy: Option<f64>,
+    record: bool,
+}
+
+impl<'a> FreeScene<'a> {
+    /// The scene of finger `f` with spring preload `tau_s0` on the object at x_off.
+    pub fn new(f: &'a Finger, s: &'a SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup, record: bool) -> Self {
+        let ng = s.setup.ground_points.min(NG_MAX);
+        let mut rim_body = [V3::zeros(); NG_MAX];
+        for k in 0..ng {
+            // mirror images (x → −x) of each other exactly where the set is symmetric, so a
+            // symmetric grasp stays symmetric to rounding
+            let m = if ng % 2 == 0 { (ng / 2 + ng - k) % ng } else { k };
+            rim_body[k] = if m < k {
+                V3::new(-rim_body[m].x, rim_body[m].y, rim_body[m].z)
+            } else {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / ng as f64;
+                V3::new(s.object.radius * phi.cos(), s.object.radius * phi.sin(), -s.object.length / 2.0)
+            };
+        }
+        let m = s.object.mass();
+        let k = &s.contact;
+        let out = FreeResult {
+            object_max_displacement: 0.0,
+            object_max_dx: 0.0,
+            object_max_dy: 0.0,
+            object_max_tilt_deg: 0.0,
+            object_max_tilt_y: 0.0,
+            object_max_spin: 0.0,
+            object_final_displacement: 0.0,
+            object_final_tilt_deg: 0.0,
+            object_peak_e_trans: 0.0,
+            object_peak_e_rot: 0.0,
+            first_contact_t: None,
+            first_contact_phalanx: None,
+            first_impact: None,
+            moved: false,
+            toppled: false,
+            escaped: false,
+            rim_contact: false,
+            end: String::new(),
+            t_end: 0.0,
+            events: 0,
+            stats: Stats::default(),
+            rhs_evals: 0,
+            cpu_s: 0.0,
+            energy: [f64::NAN; 2],
+            max_energy_rise: 0.0,
+            poses: Vec::new(),
+        };
+        FreeScene {
+            model: FingerModel::new(f, s, tau_s0),
+            s,
+            setup,
+            mem: [Memory::default(); NC],
+            ng,
+            rim_body,
+            m,
+            j_body: V3::new(s.object.inertia(), s.object.inertia(), m * s.object.radius.powi(2) / 2.0),
+            chi: k.chi(),
+            law_palm: FrictionLaw { mu_s: s.env.mu_p, mu_d: s.env.mu_p, v_s: k.v_s, v_d: k.v_d },
+            law_ground: FrictionLaw { mu_s: s.env.mu_g, mu_d: s.env.mu_g, v_s: s.setup.ground_v_s, v_d: s.setup.ground_v_d },
+            x_off,
+            evals: 0,
+            accepted: None,
+            g_start: V3::zeros(),
+            out,
+            first_k: None,
+            first_open: false,
+            last_energy: None,
+            record,
+        }
+    }
+
+    /// Pre-sink δ_g0 = (m_c g / (n_g K_g))^{2/3} of §14.1.
+    pub fn presink(&self) -> f64 {
+        (self.m * self.s.env.g / (self.ng as f64 * self.s.setup.ground_k)).powf(2.0 / 3.0)
+    }
+
+    /// The model at `y`.
+    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
+        let s = self.s;
+        let (r, w, lc) = (s.object.radius, s.hand.w, s.object.length);
+        let fm = &self.model;
+        let f = fm.finger;
+        let no_mem = [Memory::default(); 2];
+        let mut fe = [None, None];
+        for (i, slot) in fe.iter_mut().enumerate() {
+            let o = 4 * i;
+            let qd = if self.setup.fingers { Vector2::new(y[o + 2], y[o + 3]) } else { Vector2::zeros() };
+            *slot = Some(fm.evaluate(Vector2::new(y[o], y[o + 1]), qd, V2::new(0.0, r), &no_mem, false, full)?);
+        }
+        let fe = [fe[0]?, fe[1]?];
+        let g = V3::new(y[G0], y[G0 + 1], y[G0 + 2]);
+        let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
+        let rot = quat_matrix(q);
+        let v = V3::new(y[V0], y[V0 + 1], y[V0 + 2]);
+        let om = V3::new(y[W0], y[W0 + 1], y[W0 + 2]);
+        let a = rot.column(2).into_owned();
+        let (p0, d2) = (g - a * (lc / 2.0), a * lc);
+        let mut c = [Contact3::default(); NC];
+        let mut force = V3::new(0.0, 0.0, -self.m * s.env.g);
+        let mut torque = V3::zeros();
+        let mut gen = [fe[0].q_total, fe[1].q_total];
+        let mut piece = Piece::SMOOTH;
+        for i in 0..2 {
+            for b in 0..Kink::BITS {
+                if fe[i].piece.has(b) {
+                    piece = piece.with(b + Kink::BITS * i as u32);
+                }
+            }
+        }
+        let mut v_el = 0.0;
+        let kc = s.contact.k_contact;
+        // phalanges and palm: capsule (radius w) against the axis segment (radius R)
+        for k in 0..5 {
+            if k < 4 && !self.setup.fingers {
+                c[k].delta = -1.0;
+                continue;
+            }
+            let (mx, a3, b3, jp) = if k < 4 {
+                let (i, j) = (k / 2, k % 2);
+                let p = &fe[i].pose;
+                let mx = if i == 0 { 1.0 } else { -1.0 };
+                let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, f.distal_dir(p), f.t22) };
+                let a3 = V3::new(mx * start.x, start.y, 0.0);
+                let d3 = V3::new(mx * dir.x * len, dir.y * len, 0.0);
+                (mx, a3, d3, Some((i, j)))
+            } else {
+                let hb = f.o21.x;
+                (1.0, V3::new(-hb, -w, 0.0), V3::new(2.0 * hb, 0.0, 0.0), None)
+            };
+            let (sp, tp, clamped) = closest_segments(a3, b3, p0, d2);
+            let n = a3 + b3 * sp;
+            let qa = p0 + d2 * tp;
+            let dv = qa - n;
+            let d = dv.norm();
+            let yc = dv / d;
+            let delta = r + w - d;
+            let pf = n + yc * w;
+            let po = qa - yc * r;
+            let (vf, jpm) = match jp {
+                Some((i, j)) => {
+                    let pl = V2::new(mx * pf.x, pf.y);
+                    let jm = fe[i].kin.point_jacobian(f, &fe[i].pose, pl, j == 1);
+                    let qd = if self.setup.fingers { Vector2::new(y[4 * i + 2], y[4 * i + 3]) } else { Vector2::zeros() };
+                    let vl = jm * qd;
+                    (V3::new(mx * vl.x, vl.y, 0.0), Some(jm))
+                }
+                None => (V3::zeros(), None),
+            };
+            let vo = v + om.cross(&(po - g));
+            let rel = vf - vo;
+            let dd = yc.dot(&rel);
+            let u = rel - yc * dd;
+            c[k] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: clamped };
+            if self.mem[k].active && delta > 0.0 {
+                let law = if k < 4 { &fm.friction } else { &self.law_palm };
+                let (fnm, ft) = point_force(kc, self.chi, law, delta, dd, self.mem[k].vminus, u);
+                piece = piece.with(12 + 2 * k as u32);
+                if 1.0 + self.chi * dd / self.mem[k].vminus <= 0.0 {
+                    piece = piece.with(13 + 2 * k as u32);
+                }
+                let on_finger = ft - yc * fnm;
+                force -= on_finger;
+                torque -= (po - g).cross(&on_finger);
+                c[k].normal = fnm;
+                if let (Some(jm), Some((i, _))) = (jpm, jp) {
+                    gen[i] += jm.transpose() * Vector2::new(mx * on_finger.x, on_finger.y);
+                }
+                v_el += 0.4 * kc * delta * delta * delta.sqrt();
+            }
+        }
+        // ground points
+        let kg = s.setup.ground_k;
+        let zg = -s.object.grasp_height;
+        for k in 0..self.ng {
+            let rk = rot * self.rim_body[k];
+            let delta = zg - (g.z + rk.z);
+            let vp = v + om.cross(&rk);
+            let dd = -vp.z;
+            let ci = 5 + k;
+            c[ci] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: false };
+            if self.mem[ci].active && delta > 0.0 {
+                let (fnm, ft) = point_force(kg, self.chi, &self.law_ground, delta, dd, self.mem[ci].vminus, V3::new(vp.x, vp.y, 0.0));
+                piece = piece.with(12 + 2 * ci as u32);
+                if 1.0 + self.chi * dd / self.mem[ci].vminus <= 0.0 {
+                    piece = piece.with(13 + 2 * ci as u32);
+                }
+                let fo = ft + V3::new(0.0, 0.0, fnm);
+                force += fo;
+                torque += rk.cross(&fo);
+                c[ci].normal = fnm;
+                v_el += 0.4 * kg * delta * delta * delta.sqrt();
+            }
+        }
+        for k in self.ng..NG_MAX {
+            c[5 + k].delta = -1.0;
+        }
+        if self.setup.push_x != 0.0 && a.z.abs() > 1e-12 {
+            let fp = V3::new(self.setup.push_x, 0.0, 0.0);
+            let lever = a * (-g.z / a.z);
+            force += fp;
+            torque += lever.cross(&fp);
+        }
+        let mut qdd = [Vector2::zeros(); 2];
+        if self.setup.fingers {
+            for i in 0..2 {
+                qdd[i] = fe[i].m.try_inverse()? * gen[i];
+            }
+        }
+        let i_w: Matrix3<f64> = rot * Matrix3::from_diagonal(&self.j_body) * rot.transpose();
+        let l = i_w * om;
+        let wdot = i_w.try_inverse()? * (torque - om.cross(&l));
+        let e_t = 0.5 * self.m * v.norm_squared();
+        let e_r = 0.5 * om.dot(&l);
+        let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * g.z + v_el } else { f64::NAN };
+        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: g, quat: q, omega: om, axis: a })
+    }
+
+    fn deriv(&self, y: &St, ev: &FreeEval) -> St {
+        let mut d = St::zeros();
+        if self.setup.fingers {
+            for i in 0..2 {
+                let o = 4 * i;
+                d[o] = y[o + 2];
+                d[o + 1] = y[o + 3];
+                d[o + 2] = ev.qdd[i][0];
+                d[o + 3] = ev.qdd[i][1];
+            }
+        }
+        let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
+        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+        let qn = [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
+        let qd = quat_mul([0.0, y[W0], y[W0 + 1], y[W0 + 2]], qn);
+        for j in 0..3 {
+            d[G0 + j] = y[V0 + j];
+            d[V0 + j] = ev.acc.0[j];
+            d[W0 + j] = ev.acc.1[j];
+        }
+        for j in 0..4 {
+            d[Q0 + j] = 0.5 * qd[j];
+        }
+        d
+    }
+
+    fn note(&mut self, ev: &FreeEval) {
+        let o = &mut self.out;
+        let dx = ev.pos.x - self.g_start.x;
+        let dy = ev.pos.y - self.g_start.y;
+        o.object_max_dx = o.object_max_dx.max(dx.abs());
+        o.object_max_dy = o.object_max_dy.max(dy.abs());
+        o.object_max_displacement = o.object_max_displacement.max(dx.hypot(dy));
+        o.object_max_tilt_deg = o.object_max_tilt_deg.max(ev.tilt.to_degrees());
+        o.object_max_tilt_y = o.object_max_tilt_y.max(ev.axis.x.abs());
+        o.object_max_spin = o.object_max_spin.max(2.0 * ev.quat[3].abs());
+        if self.first_open {
+            o.object_peak_e_trans = o.object_peak_e_trans.max(ev.e_obj.0);
+            o.object_peak_e_rot = o.object_peak_e_rot.max(ev.e_obj.1);
+        }
+        for k in 0..4 {
+            o.rim_contact |= ev.c[k].rim && ev.c[k].normal > 0.0;
+        }
+        if let Some(e0) = self.last_energy {
+            o.max_energy_rise = o.max_energy_rise.max(ev.energy - e0);
+        }
+        self.last_energy = Some(ev.energy);
+    }
+}
+
+impl Rhs<NF> for FreeScene<'_> {
+    fn eval(&mut self, _t: f64, y: &St) -> Option<St> {
+        self.evals += 1;
+        let ev = self.eval_with(y, false)?;
+        Some(self.deriv(y, &ev))
+    }
+    fn piece(&self, y: &St) -> Piece {
+        self.eval_with(y, false).map_or(Piece::UNDEFINED, |e| e.piece)
+    }
+    fn eval_piece(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
+        self.evals += 1;
+        let ev = self.eval_with(y, false)?;
+        Some((self.deriv(y, &ev), ev.piece))
+    }
+    fn eval_accepted(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
+        self.evals += 1;
+        let ev = self.eval_with(y, true)?;
+        let out = (self.deriv(y, &ev), ev.piece);
+        self.accepted = Some((*y, ev));
+        Some(out)
+    }
+}
+
+fn free_events() -> [EventKind; EF] {
+    let mut e = [EventKind::Stability; EF];
+    for (k, slot) in e.iter_mut().enumerate().take(NC) {
+        *slot = EventKind::Contact(k as u8);
+    }
+    e[NC] = EventKind::Singular(0);
+    e[NC + 1] = EventKind::Singular(1);
+    e[NC + 2] = EventKind::Stop(0);
+    e[NC + 3] = EventKind::Stop(1);
+    e
+}
+
+impl Scene<NF, EF> for FreeScene<'_> {
+    type Eval = FreeEval;
+    type Output = FreeResult;
+
+    fn events(&self) -> [EventKind; EF] {
+        free_events()
+    }
+    fn initial_state(&self) -> St {
+        let s = self.s;
+        let o = &self.model.finger.open;
+        let (r, lc, hc) = (s.object.radius, s.object.length, s.object.grasp_height);
+        let th = self.setup.tilt;
+        let mut y = St::zeros();
+        y.fixed_rows_mut::<4>(0).copy_from(&nalgebra::Vector4::new(o.q11, o.q21, 0.0, 0.0));
+        y.fixed_rows_mut::<4>(4).copy_from(&nalgebra::Vector4::new(o.q11, o.q21, 0.0, 0.0));
+        let gz = if th == 0.0 { lc / 2.0 - hc - self.presink() } else { -hc + r * th.sin() + (lc / 2.0) * th.cos() };
+        y[G0] = self.x_off;
+        y[G0 + 1] = r;
+        y[G0 + 2] = gz;
+        y[Q0] = (th / 2.0).cos();
+        y[Q0 + 2] = (th / 2.0).sin();
+        for j in 0..3 {
+            y[V0 + j] = self.setup.v0[j];
+        }
+        y
+    }
+    fn evaluate(&self, y: &St) -> Option<FreeEval> {
+        self.eval_with(y, true)
+    }
+    fn take_accepted(&mut self, y: &St) -> Option<FreeEval> {
+        match self.accepted.take() {
+            Some((ya, ev)) if ya == *y => Some(ev),
+            _ => None,
+        }
+    }
+    fn derivative(&self, y: &St, ev: &FreeEval) -> St {
+        self.deriv(y, ev)
+    }
+    fn event_values(&self, _y: &St, ev: &FreeEval) -> EventValues<EF> {
+        let eps = self.s.contact.eps_sep;
+        let mut g = [0.0; EF];
+        let mut rate = [0.0; EF];
+        for k in 0..NC {
+            g[k] = self.mem[k].event_value(ev.c[k].delta, eps);
+            rate[k] = ev.c[k].delta_dot;
+        }
+        let fingers = if self.setup.fingers { 1.0 } else { f64::NAN };
+        g[NC] = (ev.f[0].sin_q13.abs() - 1e-3) * fingers;
+        g[NC + 1] = (ev.f[1].sin_q13.abs() - 1e-3) * fingers;
+        g[NC + 2] = ev.f[0].theta2 * fingers;
+        g[NC + 3] = ev.f[1].theta2 * fingers;
+        rate[NC + 2] = ev.f[0].theta2_dot;
+        rate[NC + 3] = ev.f[1].theta2_dot;
+        EventValues { g, rate }
+    }
+    fn crossing(&self, i: usize) -> Option<Crossing> {
+        let kind = free_events()[i];
+        match kind {
+            EventKind::Contact(c) if (c as usize) >= 5 + self.ng => None,
+            EventKind::Contact(c) if (c as usize) < 4 && !self.setup.fingers => None,
+            EventKind::Singular(_) | EventKind::Stop(_) if !self.setup.fingers => None,
+            EventKind::Contact(c) => Some(kind.crossing(self.mem[c as usize].active)),
+            _ => Some(kind.crossing(false)),
+        }
+    }
+    fn begin(&mut self, y: &St, ev: &FreeEval, _g: &EventValues<EF>) -> bool {
+        self.g_start = V3::new(y[G0], y[G0 + 1], y[G0 + 2]);
+        // ground points pre-sunk at rest: in contact from the start
+        for k in 5..5 + self.ng {
+            if ev.c[k].delta > 0.0 {
+                self.mem[k] = Memory { active: true, vminus: self.s.contact.v_min };
+            }
+        }
+        if (0..5).any(|k| ev.c[k].delta > 1e-12) {
+            self.out.end = "initial penetration".into();
+            return false;
+        }
+        let ev1 = self.eval_with(y, true);
+        if let Some(e) = ev1 {
+            self.out.energy[0] = e.energy;
+            self.note(&e);
+        }
+        true
+    }
+    fn handle(&mut self, i: usize, t: f64, ev: &FreeEval, _end: &EventValues<EF>) -> Response {
+        let s = self.s;
+        match free_events()[i] {
+            EventKind::Contact(_) => {
+                for k in 0..5 + self.ng {
+                    let c = &ev.c[k];
+                    let ch = self.mem[k].update(c.delta, c.delta_dot, k == i, s.contact.eps_sep, s.contact.v_min);
+                    if k < 4 && ch == MemoryChange::Onset && self.first_k.is_none() {
+                        let fe = &ev.f[k / 2];
+                        let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
+                        let p = fe.pose;
+                        let f = self.model.finger;
+                        // contact row in the plane: δ̇ = a q̇ with a = J_Pᵀ n (n: in-plane normal)
+                        let geo = self.model.geometry(&p, V2::new(if k / 2 == 0 { self.x_off } else { -self.x_off }, s.object.radius));
+                        let g = geo[k % 2];
+                        let jp = fe.kin.point_jacobian(f, &p, g.point, k % 2 == 1);
+                        let row = jp.transpose() * g.normal;
+                        let mf = 1.0 / row.dot(&(minv * row));
+                        self.first_k = Some(k);
+                        self.first_open = true;
+                        self.out.first_contact_t = Some(t);
+                        self.out.first_contact_phalanx = Some((k % 2) as u8 + 1);
+                        self.out.first_impact = Some(impact(s, mf, c.delta_dot));
+                    } else if Some(k) == self.first_k && ch == MemoryChange::Separation {
+                        self.first_open = false;
+                    }
+                }
+                Response { restart: true, stop: false }
+            }
+            EventKind::Singular(_) => {
+                self.out.end = "singular".into();
+                Response { restart: false, stop: true }
+            }
+            _ => Response { restart: true, stop: false },
+        }
+    }
+    fn track(&mut self, _at: Point, ev: &FreeEval, _g: &EventValues<EF>) {
+        self.note(ev);
+    }
+    fn sample(&mut self, at: Point, t: f64, y: &St, ev: &FreeEval) {
+        if !self.record || at == Point::Grid {
+            return;
+        }
+        let pose = PoseSample { t, g: [y[G0], y[G0 + 1], y[G0 + 2]], q: ev.quat, tilt: ev.tilt, fingers: [y[0], y[1], y[4], y[5]], energy: ev.energy };
+        self.out.poses.push(pose);
+    }
+    fn finish(self, run: &Run<FreeEval>) -> FreeResult {
+        let mut o = self.out;
+        if o.end.is_empty() {
+            o.end = match run.end {
+                End::Stopped => "stopped",
+                End::TimeUp => "t_obs",
+                End::StepBudget => "step budget",
+                End::StepTooSmall => "step size underflow",
+                End::Undefined => "linkage not mountable",
+                End::Aborted => "aborted: more than 20000 events",
+                End::Declined => "declined",
+            }
+            .into();
+        }
+        o.t_end = run.t;
+        o.events = run.events;
+        o.stats = run.stats;
+        o.rhs_evals = self.evals + run.locate_evals;
+        if let Some(ev) = &run.last {
+            o.object_final_tilt_deg = ev.tilt.to_degrees();
+            o.object_final_displacement = (ev.pos.x - self.g_start.x).hypot(ev.pos.y - self.g_start.y);
+            o.escaped = self.setup.fingers && (0..4).all(|k| ev.c[k].normal <= 0.0);
+            o.energy[1] = ev.energy;
+        }
+        o.toppled = o.object_max_tilt_deg > 45.0;
+        let crit = &self.s.criteria;
+        o.moved = o.object_max_displacement > crit.dx_max || o.object_max_tilt_deg > crit.theta_max.to_degrees();
+        o
+    }
+}
+
+/// Tolerances of the free scene: fingers as the centred scene, the object's position and
+/// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
+fn tolerances(opts: &SimOptions) -> Tol<NF> {
+    let mut atol = St::repeat(opts.atol);
+    for j in 0..7 {
+        atol[G0 + j] = opts.atol * 0.1;
+    }
+    Tol { rtol: opts.rtol, atol }
+}
+
+/// Simulate the free scene of finger `f` (spring preload `tau_s0`) with the object at
+/// `x_off`, from t = 0 to min(t_max, t_obs) (`t_end` overrides it when given).
+pub fn simulate_free(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup, opts: &SimOptions, t_end: Option<f64>) -> FreeResult {
+    let clock = Instant::now();
+    let scene = FreeScene::new(f, s, tau_s0, x_off, setup, opts.record);
+    let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));
+    let mut r = driver::simulate(scene, opts, tolerances(opts), t_end);
+    r.cpu_s = clock.elapsed().as_secs_f64();
+    r
+}

@@ -1,0 +1,376 @@
+//! The offset scene (MODEL.md §14): both fingers close on the fixed object at (x_off, R).
+//! Finger 1 sees the centre (x_off, R), finger 2 (−x_off, R) in its local frame; the hand
+//! force is the sum of both fingers' forces in the world frame, and F_hand,x ≠ 0 in
+//! general. State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2: the same | F̄_x, F̄_y).
+
+use super::{Point, Response, Scene};
+use crate::math::V2;
+use crate::model::{grasp_at, Finger, StaticsResult};
+use crate::params::SceneParams;
+use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
+use crate::sim::driver::{self, End, Run};
+use crate::sim::equilibrium::finger_equilibrium;
+use crate::sim::events::{Crossing, EventKind, EventValues};
+use crate::sim::finger::{FingerEval, FingerModel, Kink};
+use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::memory::{Memory, MemoryChange};
+use crate::sim::result::{DynOutcome, DynamicsResult, Mode, SimOptions};
+use crate::sim::tracking::Tracker;
+use nalgebra::{Matrix2, SVector, Vector2};
+use std::time::Instant;
+
+/// State dimension of the offset scene.
+pub const NO: usize = 10;
+/// Number of event functions of the offset scene.
+pub const EO: usize = 10;
+type St = SVector<f64, NO>;
+
+/// The event functions of the offset scene: contacts 0, 1 (finger 1 proximal, distal),
+/// 2, 3 (finger 2), then the criteria and each finger's singularity and stop.
+pub const OFFSET_EVENTS: [EventKind; EO] = [
+    EventKind::Contact(0),
+    EventKind::Contact(1),
+    EventKind::Contact(2),
+    EventKind::Contact(3),
+    EventKind::Stability,
+    EventKind::Force,
+    EventKind::Singular(0),
+    EventKind::Singular(1),
+    EventKind::Stop(0),
+    EventKind::Stop(1),
+];
+const FORCE: usize = 5;
+
+/// Both fingers' evaluations at one state.
+#[derive(Debug, Clone, Copy)]
+pub struct PairEval {
+    /// Finger 1 and finger 2 (local frames).
+    pub f: [FingerEval; 2],
+    /// The hand force F_hand on the object (world).
+    pub hand: V2,
+    /// Total energy (both fingers).
+    pub energy: f64,
+}
+
+/// What an offset-scene run gives: the stage-3 results and the hand force at the end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OffsetResult {
+    /// The stage-3 results (criteria over both fingers; `onsets` per phalanx, the earlier finger).
+    pub dynamics: DynamicsResult,
+    /// The object offset x_off (m).
+    pub x_off: f64,
+    /// F_hand at the end of the run (world, N).
+    pub hand_end: [f64; 2],
+    /// F⁰_hand of the static model at the offset (world, N).
+    pub hand0: [f64; 2],
+}
+
+/// The offset scene during a run.
+pub struct OffsetScene<'a> {
+    model: FingerModel<'a>,
+    centre: [V2; 2],
+    mem: [Memory; 4],
+    s: &'a SceneParams,
+    v_star: f64,
+    fstar: [f64; 2],
+    threshold: f64,
+    r_area: f64,
+    static_margin: f64,
+    hand0: [f64; 2],
+    tracker: Tracker<4>,
+    evals: u64,
+    accepted: Option<(St, PairEval)>,
+    x_off: f64,
+}
+
+impl<'a> OffsetScene<'a> {
+    /// The scene of finger `f` (statics `st` of the centred grasp for the spring preload)
+    /// on the object at world offset `x_off`; `Err` names why it cannot start.
+    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, x_off: f64, opts: &SimOptions) -> Result<Self, DynOutcome> {
+        let model = FingerModel::new(f, s, st.tau_s0);
+        let r = s.object.radius;
+        let centre = [V2::new(x_off, r), V2::new(-x_off, r)];
+        let g = grasp_at(f, s, st.tau_s0, x_off).map_err(|_| DynOutcome::NoEquilibrium)?;
+        let f0 = [g.forces[0].f0, g.forces[1].f0];
+        let ra = r_area(s);
+        let hand0 = [g.hand0.x, g.hand0.y];
+        let static_margin = force_margin(s, ra, g.hand0);
+        // E_ex sums both fingers: the centred scene's per-finger threshold η U_min, once per finger
+        let threshold = 2.0 * s.criteria.eta_stab * u_min(s, f0[0]).min(u_min(s, f0[1]));
+        let mut sc = OffsetScene {
+            model,
+            centre,
+            mem: [Memory::default(); 4],
+            s,
+            v_star: f64::NAN,
+            fstar: [f64::NAN; 2],
+            threshold,
+            r_area: ra,
+            static_margin,
+            hand0,
+            tracker: Tracker::new(opts.mode == Mode::Pipeline),
+            evals: 0,
+            accepted: None,
+            x_off,
+        };
+        if static_margin < 0.0 {
+            sc.tracker.fail(DynOutcome::StaticForceLimit);
+        }
+        let e1 = finger_equilibrium(&sc.model, centre[0], s, f0[0]);
+        let e2 = finger_equilibrium(&sc.model, centre[1], s, f0[1]);
+        if let (Some(a), Some(b)) = (e1, e2) {
+            sc.v_star = a.v_star + b.v_star;
+            sc.fstar = [a.fstar[0].max(b.fstar[0]), a.fstar[1].max(b.fstar[1])];
+        } else {
+            return Err(DynOutcome::NoEquilibrium);
+        }
+        Ok(sc)
+    }
+
+    fn eval_with(&self, y: &St, full: bool) -> Option<PairEval> {
+        let mut f = [None, None];
+        for (i, slot) in f.iter_mut().enumerate() {
+            let o = 4 * i;
+            let mem = [self.mem[2 * i], self.mem[2 * i + 1]];
+            *slot = Some(self.model.evaluate(Vector2::new(y[o], y[o + 1]), Vector2::new(y[o + 2], y[o + 3]), self.centre[i], &mem, true, full)?);
+        }
+        let f = [f[0]?, f[1]?];
+        let hand = V2::new(f[0].object_force.x - f[1].object_force.x, f[0].object_force.y + f[1].object_force.y);
+        Some(PairEval { f, hand, energy: f[0].energy + f[1].energy })
+    }
+
+    fn piece_of(ev: &PairEval) -> Piece {
+        let mut p = ev.f[0].piece;
+        for b in 0..Kink::BITS {
+            if ev.f[1].piece.has(b) {
+                p = p.with(b + Kink::BITS);
+            }
+        }
+        p
+    }
+
+    fn deriv(&self, y: &St, ev: &PairEval) -> St {
+        let tf = self.s.criteria.t_filter;
+        let (a, b) = (&ev.f[0], &ev.f[1]);
+        St::from([y[2], y[3], a.qdd[0], a.qdd[1], y[6], y[7], b.qdd[0], b.qdd[1], (ev.hand.x - y[8]) / tf, (ev.hand.y - y[9]) / tf])
+    }
+}
+
+impl Rhs<NO> for OffsetScene<'_> {
+    fn eval(&mut self, _t: f64, y: &St) -> Option<St> {
+        self.evals += 1;
+        let ev = self.eval_with(y, false)?;
+        Some(self.deriv(y, &ev))
+    }
+    fn piece(&self, y: &St) -> Piece {
+        self.eval_with(y, false).map_or(Piece::UNDEFINED, |e| Self::piece_of(&e))
+    }
+    fn eval_piece(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
+        self.evals += 1;
+        let ev = self.eval_with(y, false)?;
+        Some((self.deriv(y, &ev), Self::piece_of(&ev)))
+    }
+    fn eval_accepted(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
+        self.evals += 1;
+        let ev = self.eval_with(y, true)?;
+        let out = (self.deriv(y, &ev), Self::piece_of(&ev));
+        self.accepted = Some((*y, ev));
+        Some(out)
+    }
+}
+
+impl Scene<NO, EO> for OffsetScene<'_> {
+    type Eval = PairEval;
+    type Output = OffsetResult;
+
+    fn events(&self) -> [EventKind; EO] {
+        OFFSET_EVENTS
+    }
+    fn initial_state(&self) -> St {
+        let o = &self.model.finger.open;
+        St::from([o.q11, o.q21, 0.0, 0.0, o.q11, o.q21, 0.0, 0.0, 0.0, 0.0])
+    }
+    fn evaluate(&self, y: &St) -> Option<PairEval> {
+        self.eval_with(y, true)
+    }
+    fn take_accepted(&mut self, y: &St) -> Option<PairEval> {
+        match self.accepted.take() {
+            Some((ya, ev)) if ya == *y => Some(ev),
+            _ => None,
+        }
+    }
+    fn derivative(&self, y: &St, ev: &PairEval) -> St {
+        self.deriv(y, ev)
+    }
+    fn event_values(&self, y: &St, ev: &PairEval) -> EventValues<EO> {
+        let eps = self.s.contact.eps_sep;
+        let c = |k: usize| &ev.f[k / 2].contacts[k % 2];
+        let g_c = |k: usize| self.mem[k].event_value(c(k).geom.delta, eps);
+        let stab = if self.tracker.first.is_some() { ev.energy - self.v_star - self.threshold } else { f64::INFINITY };
+        let force = force_margin(self.s, self.r_area, V2::new(y[8], y[9]));
+        EventValues {
+            g: [g_c(0), g_c(1), g_c(2), g_c(3), stab, force, ev.f[0].sin_q13.abs() - 1e-3, ev.f[1].sin_q13.abs() - 1e-3, ev.f[0].theta2, ev.f[1].theta2],
+            rate: [c(0).delta_dot, c(1).delta_dot, c(2).delta_dot, c(3).delta_dot, 0.0, 0.0, 0.0, 0.0, ev.f[0].theta2_dot, ev.f[1].theta2_dot],
+        }
+    }
+    fn crossing(&self, i: usize) -> Option<Crossing> {
+        match OFFSET_EVENTS[i] {
+            EventKind::Force if !self.tracker.force_armed => None,
+            EventKind::Contact(c) => Some(OFFSET_EVENTS[i].crossing(self.mem[c as usize].active)),
+            kind => Some(kind.crossing(false)),
+        }
+    }
+    fn begin(&mut self, _y: &St, ev: &PairEval, g: &EventValues<EO>) -> bool {
+        if ev.f.iter().any(|f| f.contacts.iter().any(|c| c.geom.delta > 1e-12)) {
+            self.tracker.outcome = DynOutcome::InitialPenetration;
+            return false;
+        }
+        if self.tracker.pipeline && self.tracker.outcome != DynOutcome::Stable {
+            return false;
+        }
+        self.tracker.min_force_margin = g.g[FORCE];
+        true
+    }
+    fn handle(&mut self, i: usize, t: f64, ev: &PairEval, end: &EventValues<EO>) -> Response {
+        let s = self.s;
+        match OFFSET_EVENTS[i] {
+            EventKind::Contact(_) => {
+                let mut impacts: [Option<Impact>; 4] = [None; 4];
+                let mut theta2 = f64::NAN;
+                for k in 0..4 {
+                    let fe = &ev.f[k / 2];
+                    let cs = &fe.contacts[k % 2];
+                    let located = OFFSET_EVENTS[i] == EventKind::Contact(k as u8);
+                    if self.mem[k].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min) == MemoryChange::Onset {
+                        self.tracker.onset(k, t);
+                        if self.tracker.first.is_none() {
+                            let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
+                            let mf = 1.0 / cs.row.dot(&(minv * cs.row));
+                            impacts[k] = Some(impact(s, mf, cs.delta_dot));
+                            if theta2.is_nan() || fe.theta2 > theta2 {
+                                theta2 = fe.theta2;
+                            }
+                        }
+                    }
+                }
+                let stop = self.tracker.first.is_none() && self.tracker.first_contact(s, t, &impacts, theta2);
+                if let Some(fc) = self.tracker.first.as_mut() {
+                    // contacts 2, 3 are finger 2's proximal and distal phalanges
+                    fc.phalanx = (fc.phalanx - 1) % 2 + 1;
+                }
+                Response { restart: true, stop }
+            }
+            EventKind::Stability => {
+                self.tracker.t_stab = Some(t);
+                Response { restart: false, stop: true }
+            }
+            EventKind::Force => Response { restart: false, stop: self.tracker.force_violated(t, end.g[FORCE]) },
+            EventKind::Singular(_) => {
+                self.tracker.outcome = DynOutcome::Singular;
+                Response { restart: false, stop: true }
+            }
+            EventKind::Stop(_) => Response { restart: true, stop: false },
+        }
+    }
+    fn track(&mut self, at: Point, ev: &PairEval, g: &EventValues<EO>) {
+        self.tracker.force_margin(g.g[FORCE]);
+        if at == Point::Step {
+            self.tracker.knuckle |= ev.f[0].knuckle_contact() || ev.f[1].knuckle_contact();
+        }
+    }
+    fn sample(&mut self, _at: Point, _t: f64, _y: &St, _ev: &PairEval) {}
+    fn finish(mut self, run: &Run<PairEval>) -> OffsetResult {
+        match run.end {
+            End::Stopped | End::Declined => {}
+            End::TimeUp => self.tracker.fail(DynOutcome::NoStability),
+            End::StepBudget => self.tracker.outcome = DynOutcome::StepBudget,
+            End::StepTooSmall => self.tracker.outcome = DynOutcome::StepTooSmall,
+            End::Undefined => self.tracker.outcome = DynOutcome::DgmFailure,
+            End::Aborted => self.tracker.outcome = DynOutcome::Aborted,
+        }
+        let k = &self.tracker;
+        let on = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(x), Some(y)) => Some(x.min(y)),
+            (x, y) => x.or(y),
+        };
+        let mut d = DynamicsResult {
+            outcome: k.outcome,
+            first: k.first,
+            impact_ok: k.impact_ok,
+            fold_ok: k.fold_ok,
+            min_force_margin: k.min_force_margin,
+            t_force_violation: k.t_force_violation,
+            static_force_margin: self.static_margin,
+            r_area: self.r_area,
+            t_stab: k.t_stab,
+            f_end: [0.0; 2],
+            fstar: self.fstar,
+            v_star: self.v_star,
+            threshold: self.threshold,
+            e_ex_end: f64::NAN,
+            max_qdd_end: f64::NAN,
+            t_end: run.t,
+            events: run.events,
+            stats: run.stats,
+            rhs_evals: self.evals + run.locate_evals,
+            cpu_s: 0.0,
+            knuckle_flag: k.knuckle,
+            onsets: [on(k.onsets[0], k.onsets[2]), on(k.onsets[1], k.onsets[3])],
+        };
+        let mut hand_end = [f64::NAN; 2];
+        if let Some(ev) = &run.last {
+            d.f_end = [ev.f[0].contacts[0].normal_force, ev.f[0].contacts[1].normal_force];
+            d.e_ex_end = ev.energy - self.v_star;
+            d.max_qdd_end = ev.f[0].qdd.amax().max(ev.f[1].qdd.amax());
+            hand_end = [ev.hand.x, ev.hand.y];
+        }
+        OffsetResult { dynamics: d, x_off: self.x_off, hand_end, hand0: self.hand0 }
+    }
+}
+
+/// Tolerances of the offset scene (the filter states in N: 1e4·atol).
+fn tolerances(opts: &SimOptions) -> Tol<NO> {
+    let mut atol = St::repeat(opts.atol);
+    atol[8] = opts.atol * 1e4;
+    atol[9] = opts.atol * 1e4;
+    Tol { rtol: opts.rtol, atol }
+}
+
+/// Simulate the grasp of the design's fingers on the fixed object at world offset `x_off`.
+pub fn simulate_offset(f: &Finger, s: &SceneParams, st: &StaticsResult, x_off: f64, opts: &SimOptions) -> OffsetResult {
+    let clock = Instant::now();
+    let mut res = match OffsetScene::new(f, s, st, x_off, opts) {
+        Ok(sc) => driver::simulate(sc, opts, tolerances(opts), s.criteria.t_max),
+        Err(why) => {
+            let nan2 = [f64::NAN; 2];
+            let d = DynamicsResult {
+                outcome: why,
+                first: None,
+                impact_ok: None,
+                fold_ok: None,
+                min_force_margin: f64::NAN,
+                t_force_violation: None,
+                static_force_margin: f64::NAN,
+                r_area: r_area(s),
+                t_stab: None,
+                f_end: nan2,
+                fstar: nan2,
+                v_star: f64::NAN,
+                threshold: f64::NAN,
+                e_ex_end: f64::NAN,
+                max_qdd_end: f64::NAN,
+                t_end: 0.0,
+                events: 0,
+                stats: Stats::default(),
+                rhs_evals: 0,
+                cpu_s: 0.0,
+                knuckle_flag: false,
+                onsets: [None; 2],
+            };
+            OffsetResult { dynamics: d, x_off, hand_end: nan2, hand0: nan2 }
+        }
+    };
+    res.dynamics.cpu_s = clock.elapsed().as_secs_f64();
+    res
+}
+

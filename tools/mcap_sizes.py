@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""Bytes per design by channel in gripopt recordings (docs/benchmarks.md).
+
+Each design is one zstd chunk. For the designs *with a grasp* (a non-empty trajectory:
+/grasp/series with samples, or, in recordings before issue 11, any /grasp/joints message),
+prints the mean file bytes per design and splits them by channel: a channel's share of a
+chunk's compressed bytes is its share of the chunk's uncompressed message bytes (record
+headers included); message-index bytes (stored uncompressed, 16 bytes per message plus a
+header per channel) are added to the channel they index. Usage: mcap_sizes.py DIR...
+"""
+import collections
+import pathlib
+import sys
+import warnings
+
+warnings.filterwarnings("ignore", category=DeprecationWarning)
+
+from mcap.reader import make_reader
+from mcap.records import Chunk, MessageIndex
+from mcap.stream_reader import StreamReader
+
+HEADER = 1 + 8 + 2 + 4 + 8 + 8  # opcode, length, channel, sequence, log and publish time
+
+
+def grasp_series_len(data):
+    """Number of t values in a gripopt.GraspSeries (field 4, packed doubles)."""
+    i = 0
+    while i < len(data):
+        key = 0
+        shift = 0
+        while True:
+            b = data[i]
+            i += 1
+            key |= (b & 0x7F) << shift
+            shift += 7
+            if b < 0x80:
+                break
+        field, wire = key >> 3, key & 7
+        if wire == 0:
+            while data[i] >= 0x80:
+                i += 1
+            i += 1
+        elif wire == 2:
+            n = 0
+            shift = 0
+            while True:
+                b = data[i]
+                i += 1
+                n |= (b & 0x7F) << shift
+                shift += 7
+                if b < 0x80:
+                    break
+            if field == 4:
+                return n // 8
+            i += n
+        elif wire == 1:
+            i += 8
+        elif wire == 5:
+            i += 4
+    return 0
+
+
+def main(dirs):
+    per_channel = collections.Counter()
+    total = 0
+    designs = 0
+    all_designs = 0
+    all_bytes = 0
+    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("*.mcap")):
+        all_bytes += p.stat().st_size
+        with open(p, "rb") as f:
+            reader = make_reader(f)
+            summary = reader.get_summary()
+            topics = {cid: ch.topic for cid, ch in summary.channels.items()}
+            for ci in summary.chunk_indexes:
+                all_designs += 1
+                raw = collections.Counter()
+                grasp = False
+                for _, channel, message in reader.iter_messages(start_time=ci.message_start_time, end_time=ci.message_end_time + 1):
+                    if message.log_time < ci.message_start_time or message.log_time > ci.message_end_time:
+                        continue
+                    raw[channel.topic] += HEADER + len(message.data)
+                    if channel.topic == "/grasp/joints" or (channel.topic == "/grasp/series" and grasp_series_len(message.data) > 0):
+                        grasp = True
+                if not grasp:
+                    continue
+                designs += 1
+                compressed = ci.compressed_size + 8 + 8 + 8 + 8 + 4 + 4 + len(ci.compression) + 8 + 1 + 8
+                index_bytes = ci.message_index_length
+                n_raw = sum(raw.values())
+                for t, b in raw.items():
+                    per_channel[t] += compressed * b / n_raw + index_bytes * b / n_raw
+                total += compressed + index_bytes
+    if designs == 0:
+        print("no design with a grasp found")
+        return 1
+    print(f"{designs} designs with a grasp (of {all_designs}); files: {all_bytes} bytes in all, {all_bytes / all_designs:.0f} per design")
+    print("| channel | bytes per design with a grasp |")
+    print("|---|---:|")
+    for t, b in sorted(per_channel.items()):
+        print(f"| `{t}` | {b / designs:,.0f} |")
+    print(f"| **chunk + message index, total** | **{total / designs:,.0f}** |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
