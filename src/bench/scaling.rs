@@ -13,7 +13,7 @@
 use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder};
-use crate::run::{CheckpointSpec, GripperInfo, GripperProblem, PersistStats, Persister};
+use crate::run::{Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister};
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::{State, KV};
@@ -84,7 +84,8 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
     let recorder = if b.record.enabled { Some(Arc::new(Mutex::new(Recorder::open(dir, problem.clone(), Default::default(), b.record, 0)?))) } else { None };
     let spec = CheckpointSpec { path: dir.join("checkpoint.json"), problem_hash: String::new(), settings: settings.clone(), options: serde_json::json!({}), wall_before: 0.0, start };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let persister = Persister::start(recorder, spec, threads, None)?;
+    let outputs = OutputsObserver { out: dir.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: Arc::new(Mutex::new(Archive::default())) };
+    let persister = Persister::start(Some(outputs), recorder, spec, threads, None)?;
     let timer = Arc::new(Mutex::new(Vec::new()));
     let (p2, t1) = (persister.clone(), Timer(timer.clone()));
     let state = Nsga2State::new().with_max_generations(b.generations);
@@ -114,7 +115,7 @@ const SIMULATED_S: f64 = 200e-6;
 /// serial (its encoding is parallel, so this is conservative).
 fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
     let n = m.gens.len().max(1) as f64;
-    let persist_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.checkpoint_s) / n;
+    let persist_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
     let handover_g = m.persist.handover_s / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work) = (0.0, 0.0, 0.0);
@@ -136,7 +137,7 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
     }
     let t = prev_finish.max(work / p as f64);
     let persister = t - main_t;
-    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (recording: serial zstd + MCAP framing per shard)")];
+    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (outputs, shard and checkpoint of each generation, one after another)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
     (t, work, what)
 }
@@ -163,7 +164,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         b.reps,
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    println!("threads  wall min / med   eff(min)  eval    strag.  serial  hand-over  rec.(bg)  ckpt(bg)  waited");
+    println!("threads  wall min / med   eff(min)  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
     let mut t1 = None;
     let mut best: Option<Measured> = None;
     for n in 1..=b.max_threads {
@@ -176,13 +177,15 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         let r = runs.iter().min_by(|a, b| a.wall_s.total_cmp(&b.wall_s)).expect("reps ≥ 1").clone();
         let t1v = *t1.get_or_insert(mn);
         let eval: f64 = r.gens.iter().map(|g| g.eval_s).sum();
+        let work: f64 = r.gens.iter().flat_map(|g| g.costs.iter()).sum();
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
         let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
         let p = r.persist;
         println!(
-            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>6.3}",
+            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
             100.0 * t1v / (n as f64 * mn),
             p.handover_s,
+            p.outputs_s,
             p.record_s,
             p.checkpoint_s,
             p.wait_s
@@ -192,8 +195,8 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         }
     }
     let _ = std::fs::remove_dir_all(dir);
-    println!("(eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
-    println!(" hand-over: cloning each generation for the persister; rec./ckpt: the persister's background wall time; waited: backpressure + final flush)");
+    println!("(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
+    println!(" hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
     let on = b.record.enabled;
     println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");

@@ -1,6 +1,7 @@
-//! Recording and checkpoints off the critical path: a background persister thread fed by a
-//! bounded channel (one generation queued besides the one being written = backpressure and
-//! bounded memory). For generation k it writes shard k durably and THEN checkpoint k, while
+//! Outputs, recording and checkpoints off the critical path: a background persister thread
+//! fed by a bounded channel (one generation queued besides the one being written =
+//! backpressure and bounded memory). For generation k it writes the outputs (archive, CSVs),
+//! then shard k durably, and THEN checkpoint k, while
 //! generation k+1 evaluates, so the crash guarantee is the one of synchronous observers:
 //! every shard up to the checkpoint's generation is durable, and a resume drops and
 //! rewrites later ones (nothing lost or duplicated after kill -9).
@@ -13,6 +14,7 @@
 
 use super::checkpoint::Checkpoint;
 use super::gripper::GripperInfo;
+use super::observers::OutputsObserver;
 use crate::optim::{Individual, Nsga2Settings, Nsga2State};
 use crate::record::Recorder;
 use crate::{Error, Result};
@@ -29,6 +31,8 @@ use std::time::Instant;
 pub struct PersistStats {
     /// Generations persisted.
     pub generations: u64,
+    /// Seconds writing the outputs (archive, CSVs).
+    pub outputs_s: f64,
     /// Seconds writing shards (encoding, compression, framing, fsync).
     pub record_s: f64,
     /// Seconds serialising and writing checkpoints.
@@ -57,9 +61,8 @@ pub struct CheckpointSpec {
 }
 
 struct Job {
-    generation: u64,
-    designs: Vec<Individual<GripperInfo>>,
-    checkpoint: Checkpoint<GripperInfo>,
+    state: Nsga2State<GripperInfo>,
+    wall_s: f64,
 }
 
 #[derive(Default)]
@@ -87,15 +90,15 @@ impl Persister {
     /// Start the thread. `recorder`: the shard recorder (None when recording is off);
     /// `threads`: the encoder's pool size; `crash_after`: test hook, fail once that
     /// generation is durable, as a crash would.
-    pub fn start(recorder: Option<Arc<Mutex<Recorder>>>, spec: CheckpointSpec, threads: usize, crash_after: Option<u64>) -> Result<Self> {
+    pub fn start(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, spec: CheckpointSpec, threads: usize, crash_after: Option<u64>) -> Result<Self> {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
         let (tx, rx) = sync_channel::<Job>(1);
         let shared = Arc::new((Mutex::new(Shared::default()), Condvar::new()));
         let sh = shared.clone();
-        let path = spec.path.clone();
+        let sp = spec.clone();
         let thread = std::thread::Builder::new()
             .name("gripopt-persist".into())
-            .spawn(move || persist_loop(rx, recorder, pool, path, sh))
+            .spawn(move || persist_loop(rx, outputs, recorder, pool, sp, sh))
             .map_err(|e| Error::io(&spec.path, "cannot start the persister thread for", e))?;
         Ok(Persister { tx: Arc::new(Mutex::new(Some(tx))), thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec), crash_after })
     }
@@ -125,12 +128,8 @@ impl Persister {
             return Err(e);
         }
         let t0 = Instant::now();
-        let mut state = st.clone();
-        let designs = std::mem::take(&mut state.last_evaluated);
         let sp = &self.spec;
-        let wall_s = sp.wall_before + sp.start.elapsed().as_secs_f64();
-        let checkpoint = Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), state, wall_s);
-        let job = Job { generation: st.generation, designs, checkpoint };
+        let job = Job { state: st.clone(), wall_s: sp.wall_before + sp.start.elapsed().as_secs_f64() };
         let t1 = Instant::now();
         let sent = match self.tx.lock().expect("persister lock").as_ref() {
             Some(tx) => tx.send(job).is_ok(),
@@ -184,27 +183,38 @@ impl Observe<Nsga2State<GripperInfo>> for Persister {
     }
 }
 
-fn persist_loop(rx: Receiver<Job>, recorder: Option<Arc<Mutex<Recorder>>>, pool: rayon::ThreadPool, path: PathBuf, shared: Arc<(Mutex<Shared>, Condvar)>) {
+fn persist_loop(rx: Receiver<Job>, mut outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, pool: rayon::ThreadPool, sp: CheckpointSpec, shared: Arc<(Mutex<Shared>, Condvar)>) {
     let (m, cv) = &*shared;
     for job in rx.iter() {
+        let g = job.state.generation;
         let t0 = Instant::now();
-        let rec = match &recorder {
-            Some(r) => {
-                let refs: Vec<&Individual<GripperInfo>> = job.designs.iter().collect();
-                pool.install(|| r.lock().expect("recorder lock").record_generation(job.generation, &refs))
-            }
+        // outputs and archive, then the shard, then the checkpoint (re-doing a generation
+        // after a crash is idempotent for the first two)
+        let out = match outputs.as_mut() {
+            Some(o) => o.observe_iter(&job.state, &KV::new()).map_err(|e| e.downcast::<Error>().unwrap_or_else(|e| Error::Optimiser(e.to_string()))),
             None => Ok(()),
         };
-        drop(job.designs);
         let t1 = Instant::now();
-        // the checkpoint only after its shard is durable
-        let res = rec.and_then(|()| job.checkpoint.save(&path));
+        let rec = out.and_then(|()| match &recorder {
+            Some(r) => {
+                let refs: Vec<&Individual<GripperInfo>> = job.state.last_evaluated.iter().collect();
+                pool.install(|| r.lock().expect("recorder lock").record_generation(g, &refs))
+            }
+            None => Ok(()),
+        });
+        let t2 = Instant::now();
+        let res = rec.and_then(|()| {
+            let mut state = job.state;
+            state.last_evaluated = vec![];
+            Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), state, job.wall_s).save(&sp.path)
+        });
         let mut s = m.lock().expect("persister lock");
-        s.stats.record_s += (t1 - t0).as_secs_f64();
-        s.stats.checkpoint_s += t1.elapsed().as_secs_f64();
+        s.stats.outputs_s += (t1 - t0).as_secs_f64();
+        s.stats.record_s += (t2 - t1).as_secs_f64();
+        s.stats.checkpoint_s += t2.elapsed().as_secs_f64();
         match res {
             Ok(()) => {
-                s.done = job.generation;
+                s.done = g;
                 s.stats.generations += 1;
                 cv.notify_all();
             }

@@ -280,12 +280,12 @@ fn drive(
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
     let outputs = OutputsObserver { out: out.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: archive.clone() };
-    // outputs and archive on this thread before the hand-over; then shard k and checkpoint k
-    // in that order on a background thread while k+1 evaluates (src/run/persist.rs)
+    // outputs and archive, shard k, then checkpoint k, in that order on a background thread
+    // while k+1 evaluates (src/run/persist.rs)
     let ckpt = CheckpointSpec { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
-    let persister = Persister::start(recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
+    let persister = Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
     let (pers2, prog2) = (persister.clone(), prog.clone());
-    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(observe(e, outputs), pers2), prog2), crash_after.is_none()));
+    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
     let result = match (result, persister.finish()) {
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
