@@ -115,8 +115,10 @@ const SIMULATED_S: f64 = 200e-6;
 /// serial (its encoding is parallel, so this is conservative).
 fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
     let n = m.gens.len().max(1) as f64;
-    let persist_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
+    // outputs and shard run side by side, then the checkpoint
+    let persist_g = ((if recording { m.persist.record_s } else { 0.0 }).max(m.persist.outputs_s) + m.persist.checkpoint_s) / n;
     let handover_g = m.persist.handover_s / n;
+    let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work) = (0.0, 0.0, 0.0);
     for g in &m.gens {
@@ -128,7 +130,7 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
         strag += ms - sum / p as f64;
         let ser = g.serial_s + handover_g;
         serial += ser;
-        work += sum + ser + persist_g;
+        work += sum + ser + persist_work_g;
         main_t += ms + ser;
         // hand-over: waits while the previous generation is still queued (capacity 1)
         main_t = main_t.max(prev_start);
@@ -136,8 +138,8 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
         prev_finish = prev_start + persist_g;
     }
     let t = prev_finish.max(work / p as f64);
-    let persister = t - main_t;
-    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (outputs, shard and checkpoint of each generation, one after another)")];
+    let persister = (prev_finish - main_t).max(0.0);
+    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: outputs beside the shard, then the checkpoint)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
     (t, work, what)
 }

@@ -8,7 +8,7 @@
 //!
 //! Errors of the persister are kept and returned by the observer at the next generation, or
 //! by [`Persister::finish`] at the end; a failed shard is never followed by its checkpoint.
-//! The shard encoder runs in the persister's own rayon pool (as many threads as the run's),
+//! The shard encoder runs in the persister's own rayon pool (a quarter of the run's threads),
 //! never in the evaluation pool, so the two cannot block each other; it collects the
 //! encoded designs in order, so the bytes do not depend on the thread count.
 
@@ -87,11 +87,14 @@ pub struct Persister {
 }
 
 impl Persister {
-    /// Start the thread. `recorder`: the shard recorder (None when recording is off);
-    /// `threads`: the encoder's pool size; `crash_after`: test hook, fail once that
+    /// Start the thread. `outputs`: the outputs observer (archive, CSVs); `recorder`: the
+    /// shard recorder (None when recording is off); `threads`: the run's thread count (the
+    /// persister's pool gets a quarter of it, at least one); `crash_after`: test hook, fail once that
     /// generation is durable, as a crash would.
     pub fn start(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, spec: CheckpointSpec, threads: usize, crash_after: Option<u64>) -> Result<Self> {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
+        // a quarter of the run's threads: enough to encode and compress beside the evaluation
+        // at many cores, without oversubscribing a few (measured: 2 threads better with 1)
+        let pool = rayon::ThreadPoolBuilder::new().num_threads((threads / 4).max(1)).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
         let (tx, rx) = sync_channel::<Job>(1);
         let shared = Arc::new((Mutex::new(Shared::default()), Condvar::new()));
         let sh = shared.clone();
@@ -187,21 +190,32 @@ fn persist_loop(rx: Receiver<Job>, mut outputs: Option<OutputsObserver>, recorde
     let (m, cv) = &*shared;
     for job in rx.iter() {
         let g = job.state.generation;
-        let t0 = Instant::now();
-        // outputs and archive, then the shard, then the checkpoint (re-doing a generation
-        // after a crash is idempotent for the first two)
-        let out = match outputs.as_mut() {
-            Some(o) => o.observe_iter(&job.state, &KV::new()).map_err(|e| e.downcast::<Error>().unwrap_or_else(|e| Error::Optimiser(e.to_string()))),
-            None => Ok(()),
+        // outputs and archive beside the shard (independent files; re-doing a generation after
+        // a crash is idempotent for both), then the checkpoint
+        let timed = |f: &mut dyn FnMut() -> Result<()>| {
+            let t = Instant::now();
+            (f(), t.elapsed().as_secs_f64())
         };
-        let t1 = Instant::now();
-        let rec = out.and_then(|()| match &recorder {
-            Some(r) => {
-                let refs: Vec<&Individual<GripperInfo>> = job.state.last_evaluated.iter().collect();
-                pool.install(|| r.lock().expect("recorder lock").record_generation(g, &refs))
-            }
-            None => Ok(()),
+        let ((out, out_s), (rec, rec_s)) = pool.install(|| {
+            rayon::join(
+                || {
+                    timed(&mut || match outputs.as_mut() {
+                        Some(o) => o.observe_iter(&job.state, &KV::new()).map_err(|e| e.downcast::<Error>().unwrap_or_else(|e| Error::Optimiser(e.to_string()))),
+                        None => Ok(()),
+                    })
+                },
+                || {
+                    timed(&mut || match &recorder {
+                        Some(r) => {
+                            let refs: Vec<&Individual<GripperInfo>> = job.state.last_evaluated.iter().collect();
+                            r.lock().expect("recorder lock").record_generation(g, &refs)
+                        }
+                        None => Ok(()),
+                    })
+                },
+            )
         });
+        let rec = out.and(rec);
         let t2 = Instant::now();
         let res = rec.and_then(|()| {
             let mut state = job.state;
@@ -209,8 +223,8 @@ fn persist_loop(rx: Receiver<Job>, mut outputs: Option<OutputsObserver>, recorde
             Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), state, job.wall_s).save(&sp.path)
         });
         let mut s = m.lock().expect("persister lock");
-        s.stats.outputs_s += (t1 - t0).as_secs_f64();
-        s.stats.record_s += (t2 - t1).as_secs_f64();
+        s.stats.outputs_s += out_s;
+        s.stats.record_s += rec_s;
         s.stats.checkpoint_s += t2.elapsed().as_secs_f64();
         match res {
             Ok(()) => {
