@@ -46,6 +46,8 @@ struct Gen {
     costs: Vec<f64>,
     eval_s: f64,
     serial_s: f64,
+    hv_s: f64,
+    order_s: f64,
 }
 
 /// One measured run.
@@ -66,7 +68,7 @@ impl Observe<Nsga2State<GripperInfo>> for Timer {
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
         let mut g = self.0.lock().expect("timer");
         let t = &st.timing;
-        g.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s });
+        g.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s, hv_s: t.hv_s, order_s: t.order_s });
         Ok(())
     }
 }
@@ -120,7 +122,7 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
     let handover_g = m.persist.handover_s / n;
     let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
-    let (mut strag, mut serial, mut work) = (0.0, 0.0, 0.0);
+    let (mut strag, mut serial, mut work, mut waited) = (0.0, 0.0, 0.0, 0.0);
     for g in &m.gens {
         // the solver's order: designs expected to be simulated first, then by index
         let mut order: Vec<f64> = g.costs.iter().filter(|&&c| c > SIMULATED_S).copied().collect();
@@ -133,12 +135,13 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
         work += sum + ser + persist_work_g;
         main_t += ms + ser;
         // hand-over: waits while the previous generation is still queued (capacity 1)
+        waited += (prev_start - main_t).max(0.0);
         main_t = main_t.max(prev_start);
         prev_start = main_t.max(prev_finish);
         prev_finish = prev_start + persist_g;
     }
     let t = prev_finish.max(work / p as f64);
-    let persister = (prev_finish - main_t).max(0.0);
+    let persister = waited + (prev_finish - main_t).max(0.0);
     let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: outputs beside the shard, then the checkpoint)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
     (t, work, what)
@@ -200,6 +203,8 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
     println!("(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
     println!(" hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
+    let (hv, order): (f64, f64) = (m.gens.iter().map(|g| g.hv_s).sum(), m.gens.iter().map(|g| g.order_s).sum());
+    println!("1 thread: of the serial step, the exact hypervolume took {hv:.3} s; ordering the work (stages 0–2 of every design once more) {order:.3} s of the evaluation");
     let on = b.record.enabled;
     println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
     for &p in &b.predict {
