@@ -10,6 +10,7 @@ mod force_model;
 mod kinematics;
 mod nominal;
 mod optimiser;
+mod persist;
 mod problem_files;
 mod properties;
 mod scenes;

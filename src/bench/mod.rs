@@ -10,6 +10,7 @@
 mod ensemble;
 mod nsga;
 mod replay;
+mod scaling;
 mod static_eval;
 mod table;
 mod work_precision;
@@ -17,6 +18,7 @@ mod work_precision;
 pub use ensemble::work_precision_ensemble;
 pub use nsga::nsga;
 pub use replay::{replay, ReplayBench};
+pub use scaling::{scaling, ScalingBench};
 pub use static_eval::static_pipeline;
 pub use table::{plot, print_table, print_targets, write_csv};
 pub use work_precision::{check_atol, work_precision, Measured, Reference, Row, WorkPrecision, RTOLS};

@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Subcommand;
-use gripopt::bench::{ReplayBench, WorkPrecision};
+use gripopt::bench::{ReplayBench, ScalingBench, WorkPrecision};
 use std::path::PathBuf;
 
 /// Benchmarks.
@@ -45,6 +45,34 @@ pub enum BenchCmd {
         /// Keep the synthetic run.
         #[arg(long)]
         keep: bool,
+    },
+    /// Parallel efficiency of a fixed optimisation at 1, 2, … threads, where the time goes,
+    /// and a list-scheduling prediction for 16 and 64 threads.
+    Scaling {
+        /// Problem file.
+        #[arg(default_value = "problems/bottle-1l.toml")]
+        problem: PathBuf,
+        /// Population size.
+        #[arg(long, default_value_t = 128)]
+        pop: usize,
+        /// Generations.
+        #[arg(long, default_value_t = 10)]
+        generations: u64,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Largest thread count (default: all cores).
+        #[arg(long)]
+        max_threads: Option<usize>,
+        /// Repetitions per thread count.
+        #[arg(long, default_value_t = 3)]
+        reps: usize,
+        /// Without recording.
+        #[arg(long)]
+        no_record: bool,
+        /// Folder of the benchmark runs (deleted afterwards).
+        #[arg(long, default_value = "results/bench/scaling-run")]
+        out: PathBuf,
     },
     /// CPU time against error (t of first contact, impact energy, t_stab, final forces) for
     /// rtol 1e-3 … 1e-10 and each integrator; writes work_precision.csv and .svg.
@@ -88,6 +116,13 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
+        }
+        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, reps, no_record, out } => {
+            let p = super::load_problem(&problem)?;
+            let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+            let record = if no_record { gripopt::record::RecordOptions::none() } else { gripopt::record::RecordOptions::default() };
+            let b = ScalingBench { pop, generations, seed, max_threads: max_threads.unwrap_or(cores), reps, record, predict: vec![2, 16, 64] };
+            Ok(gripopt::bench::scaling(&p, &b, &out)?)
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
         BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out: dir, atol, .. } => {

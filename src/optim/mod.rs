@@ -81,6 +81,13 @@ pub trait MooProblem: Sync {
     /// Evaluate one decision vector (must be deterministic: results may not depend on the
     /// thread that runs it).
     fn evaluate(&self, x: &[f64]) -> Evaluated<Self::Info>;
+    /// Expected relative cost of evaluating `x` (larger = slower), from a cheap partial
+    /// evaluation; `None` (the default) when unknown. Only orders the work of a generation
+    /// (most expensive first, so that no thread is left with a long design at the end);
+    /// results never depend on it.
+    fn expected_cost(&self, _x: &[f64]) -> Option<f64> {
+        None
+    }
     /// Number of variables.
     fn n_var(&self) -> usize {
         self.lower().len()
@@ -128,7 +135,7 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
 }
 
 pub use hv::{hypervolume, igd, nondominated_below};
-pub use nsga2::{Nsga2, Nsga2Settings, Nsga2State, execute, observe};
+pub use nsga2::{GenTiming, Nsga2, Nsga2Settings, Nsga2State, execute, observe};
 pub use operators::{Operators, polynomial_mutation, sbx};
 pub use serde_f64::{deserialize, serialize};
 pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};

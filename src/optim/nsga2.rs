@@ -63,12 +63,30 @@ pub struct Nsga2State<I> {
     /// Individuals evaluated in the last generation (for recorders; not checkpointed).
     #[serde(skip)]
     pub last_evaluated: Vec<Individual<I>>,
+    /// Where the last generation's time went (for benchmarks; not checkpointed).
+    #[serde(skip)]
+    pub timing: GenTiming,
     #[serde(skip)]
     status: TerminationStatus,
     #[serde(skip)]
     counts: HashMap<String, u64>,
     #[serde(skip)]
     time: Option<Duration>,
+}
+
+/// Wall-clock accounting of one generation inside the solver (not deterministic).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GenTiming {
+    /// Seconds evaluating (the parallel part, including waiting for its last design).
+    pub eval_s: f64,
+    /// Seconds ordering the work (expected costs); part of `eval_s`.
+    pub order_s: f64,
+    /// Seconds of the solver's own serial work (variation, survival, hypervolume).
+    pub serial_s: f64,
+    /// Of it, the exact hypervolume of the feasible front (history and progress).
+    pub hv_s: f64,
+    /// Wall seconds of each evaluation, in the order of `last_evaluated`.
+    pub costs: Vec<f64>,
 }
 
 impl<I> Nsga2State<I> {
@@ -99,6 +117,7 @@ impl<I> State for Nsga2State<I> {
             hv_history: vec![],
             feasible_history: vec![],
             last_evaluated: vec![],
+            timing: GenTiming::default(),
             status: TerminationStatus::NotTerminated,
             counts: HashMap::new(),
             time: None,
@@ -212,13 +231,58 @@ impl Nsga2 {
         Nsga2 { settings }
     }
 
-    fn evaluate_all<P: MooProblem>(&self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> Vec<Individual<P::Info>> {
-        let evals: Vec<_> = xs.par_iter().map(|x| p.evaluate(x)).collect();
-        xs.into_iter()
-            .zip(evals)
+    /// Evaluate a generation: expected costs first (when the problem gives them), then list
+    /// scheduling, most expensive first: each worker takes the next design from a shared
+    /// counter, so no thread idles while another still has a queue. Each evaluation is a
+    /// pure function of its vector and the results are put back in index order, so they do
+    /// not depend on the thread count or the schedule.
+    fn evaluate_all<P: MooProblem>(&self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> (Vec<Individual<P::Info>>, GenTiming) {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let t0 = std::time::Instant::now();
+        let n = xs.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        // on one thread the order cannot shorten anything: skip the extra partial evaluations
+        let expected: Option<Vec<f64>> = if rayon::current_num_threads() > 1 { xs.par_iter().map(|x| p.expected_cost(x)).collect() } else { None };
+        if let Some(c) = &expected {
+            order.sort_by(|&a, &b| c[b].total_cmp(&c[a]).then(a.cmp(&b)));
+        }
+        let order_s = t0.elapsed().as_secs_f64();
+        let next = AtomicUsize::new(0);
+        let workers = rayon::current_num_threads().min(n).max(1);
+        let done: Vec<(usize, super::Evaluated<P::Info>, f64)> = (0..workers)
+            .into_par_iter()
+            .with_max_len(1)
+            .flat_map_iter(|_| {
+                let mut mine = vec![];
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    if k >= n {
+                        break;
+                    }
+                    let i = order[k];
+                    let t = std::time::Instant::now();
+                    let e = p.evaluate(&xs[i]);
+                    mine.push((i, e, t.elapsed().as_secs_f64()));
+                }
+                mine
+            })
+            .collect();
+        let mut slots: Vec<Option<(super::Evaluated<P::Info>, f64)>> = (0..n).map(|_| None).collect();
+        for (i, e, s) in done {
+            slots[i] = Some((e, s));
+        }
+        let mut costs = Vec::with_capacity(n);
+        let pop = xs
+            .into_iter()
+            .zip(slots)
             .enumerate()
-            .map(|(k, (x, eval))| Individual { id: first_id + k as u64, generation, x, eval })
-            .collect()
+            .map(|(k, (x, slot))| {
+                let (eval, s) = slot.expect("every design evaluated once");
+                costs.push(s);
+                Individual { id: first_id + k as u64, generation, x, eval }
+            })
+            .collect();
+        (pop, GenTiming { eval_s: t0.elapsed().as_secs_f64(), order_s, serial_s: 0.0, hv_s: 0.0, costs })
     }
 
     fn normalised_hv<I>(&self, pop: &[Individual<I>], rank: &[usize]) -> f64 {
@@ -236,7 +300,9 @@ impl Nsga2 {
     }
 
     fn finish_generation<I: Clone>(&self, mut state: Nsga2State<I>, pop: Vec<Individual<I>>, rank: Vec<usize>, crowd: Vec<f64>, evaluated: Vec<Individual<I>>) -> Nsga2State<I> {
+        let t = std::time::Instant::now();
         state.hv_history.push(self.normalised_hv(&pop, &rank));
+        state.timing.hv_s = t.elapsed().as_secs_f64();
         state.feasible_history.push(pop.iter().filter(|p| p.eval.cv.is_feasible()).count());
         state.population = pop;
         state.rank = rank;
@@ -306,6 +372,7 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
         if !state.population.is_empty() {
             return Ok((state, None));
         }
+        let t_start = std::time::Instant::now();
         let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
         let (lo, hi) = (p.lower().to_vec(), p.upper().to_vec());
         let n = self.settings.pop_size;
@@ -315,7 +382,7 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
                 (0..lo.len()).map(|i| lo[i] + rng.random::<f64>() * (hi[i] - lo[i])).collect()
             })
             .collect();
-        let pop = self.evaluate_all(p, xs, 0, 1);
+        let (pop, timing) = self.evaluate_all(p, xs, 0, 1);
         *problem.counts.entry("evaluations").or_insert(0) += n as u64;
         let mut state = state;
         state.next_id = n as u64;
@@ -327,11 +394,13 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
             let cv: Vec<_> = pop.iter().map(|p| p.eval.cv).collect();
             rank_and_crowding(&f, &cv)
         };
-        let state = self.finish_generation(state, pop, rank, crowd, evaluated);
+        let mut state = self.finish_generation(state, pop, rank, crowd, evaluated);
+        state.timing = GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
         Ok((state, None))
     }
 
     fn next_iter(&mut self, problem: &mut Problem<P>, state: Nsga2State<P::Info>) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
+        let t_start = std::time::Instant::now();
         let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
         let (lo, hi) = (p.lower(), p.upper());
         let s = &self.settings;
@@ -366,7 +435,7 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
                 }
             }
         }
-        let offspring = self.evaluate_all(p, xs, state.next_id, g);
+        let (offspring, timing) = self.evaluate_all(p, xs, state.next_id, g);
         *problem.counts.entry("evaluations").or_insert(0) += n as u64;
         let mut state = state;
         state.next_id += n as u64;
@@ -381,7 +450,8 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
         };
         let mut slots: Vec<Option<Individual<P::Info>>> = merged.into_iter().map(Some).collect();
         let pop: Vec<_> = keep.iter().map(|&i| slots[i].take().expect("each survivor once")).collect();
-        let state = self.finish_generation(state, pop, rank, crowd, offspring);
+        let mut state = self.finish_generation(state, pop, rank, crowd, offspring);
+        state.timing = GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
         Ok((state, None))
     }
 

@@ -130,6 +130,13 @@ impl MooProblem for GripperProblem {
     fn n_obj(&self) -> usize {
         4
     }
+    /// Stages 0–2 (tens of µs) predict the cost: a design they discard costs nothing
+    /// further; one that passes is simulated (ms). Only orders the work.
+    fn expected_cost(&self, x: &[f64]) -> Option<f64> {
+        let arr: [f64; 6] = x.try_into().ok()?;
+        let ev = evaluate(&Design::from_array(&arr), &self.problem.scene, &EvalOptions { dynamics: false, ..self.options });
+        Some(if ev.discard.is_some() || !self.options.dynamics { 0.0 } else { 1.0 })
+    }
     fn evaluate(&self, x: &[f64]) -> Evaluated<GripperInfo> {
         let arr: [f64; 6] = x.try_into().expect("six design variables");
         let design = Design::from_array(&arr);

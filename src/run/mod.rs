@@ -14,6 +14,7 @@ mod limits;
 mod lock;
 mod observers;
 mod outputs;
+mod persist;
 mod plots;
 mod rundir;
 
@@ -24,6 +25,7 @@ pub use limits::{check_population, BYTES_PER_DESIGN};
 pub use lock::{RunLock, LOCK_FILE};
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use observers::{CheckpointObserver, CrashAfter, OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
+pub use persist::{CheckpointSpec, PersistStats, Persister};
 pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
 pub use plots::{hypervolume, pareto_matrix};
 pub use rundir::{Resume, RunInfo, RunSpec, RunStatus, RunSummary, optimise, resume};

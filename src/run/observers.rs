@@ -24,6 +24,7 @@ pub struct ProgressObserver {
     start: Instant,
     evals_at_start: Option<u64>,
     gen_at_start: Option<u64>,
+    first_shown: Option<Instant>,
     log_lines: bool,
 }
 
@@ -35,27 +36,31 @@ impl ProgressObserver {
         let terminal = std::io::stderr().is_terminal();
         let bar = if visible && terminal { indicatif::ProgressBar::new(total) } else { indicatif::ProgressBar::hidden() };
         bar.set_style(
-            indicatif::ProgressStyle::with_template("{prefix} [{bar:25}] gen {pos}/{len} {msg} ETA {eta}")
+            indicatif::ProgressStyle::with_template("{prefix} [{bar:25}] gen {pos}/{len} {msg}")
                 .expect("template")
                 .progress_chars("=> "),
         );
         bar.set_prefix("NSGA-II");
         bar.set_position(first.saturating_sub(1));
-        ProgressObserver { bar, start: Instant::now(), evals_at_start: None, gen_at_start: None, log_lines: visible && !terminal }
+        ProgressObserver { bar, start: Instant::now(), evals_at_start: None, gen_at_start: None, first_shown: None, log_lines: visible && !terminal }
     }
     fn show<I>(&mut self, s: &Nsga2State<I>) {
-        let e0 = *self.evals_at_start.get_or_insert(s.evaluations.saturating_sub(s.population.len() as u64));
-        let rate = (s.evaluations - e0) as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
+        // rate and ETA from the generations since the first one shown (measured between two
+        // observations, so neither start-up nor the first generation's own set-up skew it)
+        let now = Instant::now();
+        let e0 = *self.evals_at_start.get_or_insert(s.evaluations);
+        let g_first = *self.gen_at_start.get_or_insert(s.generation);
+        let t_first = *self.first_shown.get_or_insert(now);
+        let since = (now - t_first).as_secs_f64();
+        let rate = if s.evaluations > e0 { (s.evaluations - e0) as f64 / since.max(1e-9) } else { s.population.len() as f64 / (now - self.start).as_secs_f64().max(1e-9) };
+        let per_gen = if s.generation > g_first { since / (s.generation - g_first) as f64 } else { (now - self.start).as_secs_f64() };
+        let eta = per_gen * s.max_generations.saturating_sub(s.generation) as f64;
         let feas = s.feasible_history.last().copied().unwrap_or(0);
         let hv = s.hv_history.last().copied().unwrap_or(f64::NAN);
         self.bar.set_length(s.max_generations);
         self.bar.set_position(s.generation);
-        self.bar.set_message(format!("{rate:.0} evals/s, feasible {feas}/{}, HV {hv:.4}", s.population.len()));
+        self.bar.set_message(format!("{rate:.0} evals/s, feasible {feas}/{}, HV {hv:.4}, ETA {eta:.0} s", s.population.len()));
         if self.log_lines {
-            let g0 = *self.gen_at_start.get_or_insert(s.generation.saturating_sub(1));
-            let done = s.generation.saturating_sub(g0) as f64;
-            let left = s.max_generations.saturating_sub(s.generation) as f64;
-            let eta = self.start.elapsed().as_secs_f64() / done.max(1.0) * left;
             eprintln!(
                 "generation {}/{}  evaluations {}  feasible {feas}/{}  hypervolume {hv:.4}  {rate:.0} evaluations/s  ETA {eta:.0} s",
                 s.generation, s.max_generations, s.evaluations, s.population.len()

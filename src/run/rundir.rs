@@ -12,7 +12,8 @@ use super::checkpoint::{sha256_hex, settings_hash, Checkpoint};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::lock::{RunLock, LOCK_FILE};
 use super::archive::Archive;
-use super::observers::{CheckpointObserver, CrashAfter, OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
+use super::observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
+use super::persist::{CheckpointSpec, Persister};
 use super::outputs::write_outputs;
 use crate::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -279,24 +280,16 @@ fn drive(
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
     let outputs = OutputsObserver { out: out.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: archive.clone() };
-    let ckpt = CheckpointObserver { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
-    let prog2 = prog.clone();
-    let rec2 = recorder.clone();
-    let result = pool.install(|| {
-        execute(gp, settings, state, move |e| {
-            // recorder first: a generation is checkpointed only after its shard is complete
-            let e = match rec2 {
-                Some(r) => observe(e, r),
-                None => e,
-            };
-            // outputs and archive before the checkpoint (re-evaluating a generation is idempotent)
-            let e = observe(observe(observe(e, outputs), ckpt), prog2);
-            match crash_after {
-                Some(k) => observe(e, CrashAfter(k)),
-                None => e,
-            }
-        }, crash_after.is_none())
-    });
+    // outputs and archive, shard k, then checkpoint k, in that order on a background thread
+    // while k+1 evaluates (src/run/persist.rs)
+    let ckpt = CheckpointSpec { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
+    let persister = Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
+    let (pers2, prog2) = (persister.clone(), prog.clone());
+    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
+    let result = match (result, persister.finish()) {
+        (Ok(_), Err(e)) => Err(e),
+        (r, _) => r,
+    };
     prog.0.lock().expect("progress").finish();
     if let Some(r) = &recorder {
         let r = r.0.lock().expect("recorder");

@@ -1,0 +1,220 @@
+//! `gripopt bench scaling`: parallel efficiency of a fixed optimisation on this machine, where
+//! its time goes, and a list-scheduling prediction for many cores.
+//!
+//! Each run is the pipeline of `gripopt optimise` (recorder, background persister writing
+//! shard k then checkpoint k, NSGA-II in a pool of n threads) with a timing observer. From
+//! the measured per-design costs, the solver's serial time and the persister's time per
+//! generation, each generation is replayed on P simulated threads: the designs are list
+//! scheduled in the solver's order (designs that reach stage 3 first), the serial step
+//! follows, and the persister works through the shards as a pipeline beside it (one
+//! generation queued). The predicted time is the larger of that schedule and the total work
+//! divided by P, so the prediction is an upper bound on efficiency.
+
+use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
+use crate::params::Problem;
+use crate::record::{RecordOptions, Recorder};
+use crate::run::{Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister};
+use crate::{Error, Result};
+use argmin::core::observers::Observe;
+use argmin::core::{State, KV};
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct ScalingBench {
+    /// Population size.
+    pub pop: usize,
+    /// Generations.
+    pub generations: u64,
+    /// Seed.
+    pub seed: u64,
+    /// Largest thread count measured (1, 2, … up to it).
+    pub max_threads: usize,
+    /// Repetitions per thread count (min and median reported).
+    pub reps: usize,
+    /// Recording options (default: the defaults of `gripopt optimise`).
+    pub record: RecordOptions,
+    /// Thread counts to predict.
+    pub predict: Vec<usize>,
+}
+
+/// One generation as measured.
+#[derive(Debug, Clone, Default)]
+struct Gen {
+    costs: Vec<f64>,
+    eval_s: f64,
+    serial_s: f64,
+    hv_s: f64,
+    order_s: f64,
+}
+
+/// One measured run.
+#[derive(Debug, Clone, Default)]
+struct Measured {
+    wall_s: f64,
+    gens: Vec<Gen>,
+    persist: PersistStats,
+}
+
+#[derive(Clone)]
+struct Timer(Arc<Mutex<Vec<Gen>>>);
+
+impl Observe<Nsga2State<GripperInfo>> for Timer {
+    fn observe_init(&mut self, _n: &str, st: &Nsga2State<GripperInfo>, kv: &KV) -> std::result::Result<(), argmin::core::Error> {
+        self.observe_iter(st, kv)
+    }
+    fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
+        let mut g = self.0.lock().expect("timer");
+        let t = &st.timing;
+        g.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s, hv_s: t.hv_s, order_s: t.order_s });
+        Ok(())
+    }
+}
+
+fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> Result<Measured> {
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create the benchmark run folder", e))?;
+    let start = Instant::now();
+    let mut gp = GripperProblem::new(problem.clone());
+    if b.record.enabled {
+        gp.keep_trajectories = b.record.trajectories;
+    }
+    let (ideal, r) = gp.hv_points();
+    let settings = Nsga2Settings { pop_size: b.pop, seed: b.seed, operators: Operators::default(), eliminate_duplicates: true, hv_ideal: ideal, hv_ref: r };
+    let recorder = if b.record.enabled { Some(Arc::new(Mutex::new(Recorder::open(dir, problem.clone(), Default::default(), b.record, 0)?))) } else { None };
+    let spec = CheckpointSpec { path: dir.join("checkpoint.json"), problem_hash: String::new(), settings: settings.clone(), options: serde_json::json!({}), wall_before: 0.0, start };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let outputs = OutputsObserver { out: dir.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: Arc::new(Mutex::new(Archive::default())) };
+    let persister = Persister::start(Some(outputs), recorder, spec, threads, None)?;
+    let timer = Arc::new(Mutex::new(Vec::new()));
+    let (p2, t1) = (persister.clone(), Timer(timer.clone()));
+    let state = Nsga2State::new().with_max_generations(b.generations);
+    let res = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, t1), p2), false));
+    let persist = persister.finish()?;
+    res?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let gens = std::mem::take(&mut *timer.lock().expect("timer"));
+    Ok(Measured { wall_s, gens, persist })
+}
+
+/// Greedy list schedule of `costs` (in the given order) on `p` threads: the makespan.
+fn makespan(costs: &[f64], p: usize) -> f64 {
+    let mut free = vec![0.0f64; p.max(1)];
+    for &c in costs {
+        let (k, _) = free.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).expect("p ≥ 1");
+        free[k] += c;
+    }
+    free.into_iter().fold(0.0, f64::max)
+}
+
+/// A design that took longer than this was simulated (stage 3): the solver's cost classes.
+const SIMULATED_S: f64 = 200e-6;
+
+/// Prediction at `p` threads: (time, total work, limiting step). The per-design costs and
+/// the serial steps are as measured; the persister's time per generation is taken as
+/// serial (its encoding is parallel, so this is conservative).
+fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
+    let n = m.gens.len().max(1) as f64;
+    // outputs and shard run side by side, then the checkpoint
+    let persist_g = ((if recording { m.persist.record_s } else { 0.0 }).max(m.persist.outputs_s) + m.persist.checkpoint_s) / n;
+    let handover_g = m.persist.handover_s / n;
+    let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
+    let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut strag, mut serial, mut work, mut waited) = (0.0, 0.0, 0.0, 0.0);
+    for g in &m.gens {
+        // the solver's order: designs expected to be simulated first, then by index
+        let mut order: Vec<f64> = g.costs.iter().filter(|&&c| c > SIMULATED_S).copied().collect();
+        order.extend(g.costs.iter().filter(|&&c| c <= SIMULATED_S));
+        let sum: f64 = g.costs.iter().sum();
+        let ms = makespan(&order, p);
+        strag += ms - sum / p as f64;
+        let ser = g.serial_s + handover_g;
+        serial += ser;
+        work += sum + ser + persist_work_g;
+        main_t += ms + ser;
+        // hand-over: waits while the previous generation is still queued (capacity 1)
+        waited += (prev_start - main_t).max(0.0);
+        main_t = main_t.max(prev_start);
+        prev_start = main_t.max(prev_finish);
+        prev_finish = prev_start + persist_g;
+    }
+    let t = prev_finish.max(work / p as f64);
+    let persister = waited + (prev_finish - main_t).max(0.0);
+    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: outputs beside the shard, then the checkpoint)")];
+    let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
+    (t, work, what)
+}
+
+fn min_med(v: &[f64]) -> (f64, f64) {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2])
+}
+
+/// Run the benchmark: prints the table and the prediction; `dir` holds the run folders
+/// (deleted afterwards).
+pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
+    if b.pop < 4 || b.generations < 1 || b.max_threads < 1 || b.reps < 1 {
+        return Err(Error::Input(format!("bench scaling: --pop {} (≥ 4), --generations {} (≥ 1), --max-threads {} (≥ 1), --reps {} (≥ 1)", b.pop, b.generations, b.max_threads, b.reps)));
+    }
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "bench scaling: pop {} × {} generations, seed {}, recording {}, {} repetitions (min / median wall s); load average {}",
+        b.pop,
+        b.generations,
+        b.seed,
+        if b.record.enabled { "on (defaults)" } else { "off" },
+        b.reps,
+        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    );
+    println!("threads  wall min / med   eff(min)  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
+    let mut t1 = None;
+    let mut best: Option<Measured> = None;
+    for n in 1..=b.max_threads {
+        let mut runs = vec![];
+        for _ in 0..b.reps {
+            runs.push(run_once(problem, b, n, &dir.join(format!("t{n}")))?);
+        }
+        let walls: Vec<f64> = runs.iter().map(|r| r.wall_s).collect();
+        let (mn, md) = min_med(&walls);
+        let r = runs.iter().min_by(|a, b| a.wall_s.total_cmp(&b.wall_s)).expect("reps ≥ 1").clone();
+        let t1v = *t1.get_or_insert(mn);
+        let eval: f64 = r.gens.iter().map(|g| g.eval_s).sum();
+        let work: f64 = r.gens.iter().flat_map(|g| g.costs.iter()).sum();
+        let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
+        let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
+        let p = r.persist;
+        println!(
+            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
+            100.0 * t1v / (n as f64 * mn),
+            p.handover_s,
+            p.outputs_s,
+            p.record_s,
+            p.checkpoint_s,
+            p.wait_s
+        );
+        if n == 1 {
+            best = Some(r);
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+    println!("(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
+    println!(" hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
+    let m = best.expect("one thread measured");
+    let (hv, order): (f64, f64) = (m.gens.iter().map(|g| g.hv_s).sum(), m.gens.iter().map(|g| g.order_s).sum());
+    println!("1 thread: of the serial step, the exact hypervolume took {hv:.3} s; ordering the work (stages 0–2 of every design once more) {order:.3} s of the evaluation");
+    let on = b.record.enabled;
+    println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
+    for &p in &b.predict {
+        let (t, work, what) = predict(&m, p, on);
+        print!("  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+        if on {
+            let (t, work, what) = predict(&m, p, false);
+            print!("; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+        }
+        println!();
+    }
+    Ok(())
+}
