@@ -10,6 +10,7 @@
 //! generation queued). The predicted time is the larger of that schedule and the total work
 //! divided by P, so the prediction is an upper bound on efficiency.
 
+use super::say;
 use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder};
@@ -155,12 +156,21 @@ fn min_med(v: &[f64]) -> (f64, f64) {
 
 /// Run the benchmark: prints the table and the prediction; `dir` holds the run folders
 /// (deleted afterwards).
-pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
+pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out) -> Result<serde_json::Value> {
     if b.pop < 4 || b.generations < 1 || b.max_threads < 1 || b.reps < 1 {
         return Err(Error::Input(format!("bench scaling: --pop {} (≥ 4), --generations {} (≥ 1), --max-threads {} (≥ 1), --reps {} (≥ 1)", b.pop, b.generations, b.max_threads, b.reps)));
     }
+    // the benchmark's own run folders go below `dir`; a `dir` holding anything else is refused,
+    // so that removing them afterwards can never delete data this benchmark did not write
+    let ours = |n: &str| n.starts_with('t') && n[1..].parse::<usize>().is_ok();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        if let Some(other) = rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).find(|n| !ours(n)) {
+            return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("holds `{other}`, which `gripopt bench scaling` did not write: choose another --out (nothing was deleted)") });
+        }
+    }
+    let mut rows = vec![];
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    println!(
+    say!(out, 
         "bench scaling: pop {} × {} generations, seed {}, recording {}, {} repetitions (min / median wall s); load average {}",
         b.pop,
         b.generations,
@@ -169,7 +179,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         b.reps,
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    println!("threads  wall min / med   eff(min)  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
+    say!(out, "threads  wall min / med   eff(min)  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
     let mut t1 = None;
     let mut best: Option<Measured> = None;
     for n in 1..=b.max_threads {
@@ -186,7 +196,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
         let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
         let p = r.persist;
-        println!(
+        say!(out, 
             "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
             100.0 * t1v / (n as f64 * mn),
             p.handover_s,
@@ -195,26 +205,40 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path) -> Result<()> {
             p.checkpoint_s,
             p.wait_s
         );
+        rows.push(serde_json::json!({
+            "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "work_s": work, "eval_s": eval,
+            "straggler_s": strag, "serial_s": serial, "handover_s": p.handover_s, "outputs_bg_s": p.outputs_s, "record_bg_s": p.record_s,
+            "checkpoint_bg_s": p.checkpoint_s, "waited_s": p.wait_s,
+        }));
         if n == 1 {
             best = Some(r);
         }
     }
-    let _ = std::fs::remove_dir_all(dir);
-    println!("(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
-    println!(" hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
+    for n in 1..=b.max_threads {
+        let _ = std::fs::remove_dir_all(dir.join(format!("t{n}")));
+    }
+    let _ = std::fs::remove_dir(dir); // only if now empty
+    say!(out, "(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
+    say!(out, " hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
     let (hv, order): (f64, f64) = (m.gens.iter().map(|g| g.hv_s).sum(), m.gens.iter().map(|g| g.order_s).sum());
-    println!("1 thread: of the serial step, the exact hypervolume took {hv:.3} s; ordering the work (stages 0–2 of every design once more) {order:.3} s of the evaluation");
+    say!(out, "1 thread: of the serial step, the exact hypervolume took {hv:.3} s; ordering the work (stages 0–2 of every design once more) {order:.3} s of the evaluation");
     let on = b.record.enabled;
-    println!("prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
+    say!(out, "prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
+    let mut predictions = vec![];
     for &p in &b.predict {
         let (t, work, what) = predict(&m, p, on);
-        print!("  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+        predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what }));
+        write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
         if on {
             let (t, work, what) = predict(&m, p, false);
-            print!("; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t));
+            write!(out, "; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
         }
-        println!();
+        say!(out, );
     }
-    Ok(())
+    Ok(serde_json::json!({
+        "bench": "scaling", "pop": b.pop, "generations": b.generations, "seed": b.seed, "recording": b.record.enabled, "repetitions": b.reps,
+        "load_average": load.split_whitespace().take(3).collect::<Vec<_>>().join(" "), "rows": rows,
+        "hypervolume_s_1_thread": hv, "ordering_s_1_thread": order, "predictions": predictions,
+    }))
 }

@@ -117,12 +117,12 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             let p = super::load_problem(&problem)?;
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
         }
-        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, reps, no_record, out } => {
+        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, reps, no_record, out: dir } => {
             let p = super::load_problem(&problem)?;
             let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
             let record = if no_record { gripopt::record::RecordOptions::none() } else { gripopt::record::RecordOptions::default() };
             let b = ScalingBench { pop, generations, seed, max_threads: max_threads.unwrap_or(cores), reps, record, predict: vec![2, 16, 64] };
-            Ok(gripopt::bench::scaling(&p, &b, &out)?)
+            gripopt::bench::scaling(&p, &b, &dir, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
         BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out: dir, atol, .. } => {
