@@ -24,7 +24,7 @@ pub use checkpoint::{Checkpoint, ChecksumMismatch, FORMAT, VERSION, settings_has
 pub use limits::{check_population, BYTES_PER_DESIGN};
 pub use lock::{RunLock, LOCK_FILE};
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
-pub use observers::{CheckpointObserver, CrashAfter, OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
+pub use observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
 pub use persist::{CheckpointSpec, PersistStats, Persister};
 pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
 pub use plots::{hypervolume, pareto_matrix};

@@ -3,7 +3,6 @@
 //! Library errors pass through argmin's error unchanged and come back from
 //! [`crate::optim::execute`] as they were.
 
-use super::checkpoint::Checkpoint;
 use super::archive::Archive;
 use super::gripper::GripperInfo;
 use super::outputs::write_tables;
@@ -12,7 +11,6 @@ use crate::optim::Individual;
 use crate::record::Recorder;
 use argmin::core::observers::Observe;
 use argmin::core::{Error, KV};
-use serde::{de::DeserializeOwned, Serialize};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -88,39 +86,6 @@ impl<I> Observe<Nsga2State<I>> for SharedProgress {
     }
 }
 
-/// Writes a checkpoint after the initial population and after every generation.
-pub struct CheckpointObserver {
-    /// Checkpoint path.
-    pub path: PathBuf,
-    /// SHA-256 of the problem file.
-    pub problem_hash: String,
-    /// Algorithm settings.
-    pub settings: Nsga2Settings,
-    /// Run options that change results.
-    pub options: serde_json::Value,
-    /// Wall seconds before this process started.
-    pub wall_before: f64,
-    /// Start of this process's run.
-    pub start: Instant,
-}
-
-impl CheckpointObserver {
-    fn save<I: Serialize + DeserializeOwned + Clone>(&self, state: &Nsga2State<I>) -> Result<(), Error> {
-        let wall_s = self.wall_before + self.start.elapsed().as_secs_f64();
-        let cp = Checkpoint::new(self.problem_hash.clone(), self.settings.clone(), self.options.clone(), state.clone(), wall_s);
-        Ok(cp.save(&self.path)?)
-    }
-}
-
-impl<I: Serialize + DeserializeOwned + Clone> Observe<Nsga2State<I>> for CheckpointObserver {
-    fn observe_init(&mut self, _name: &str, state: &Nsga2State<I>, _kv: &KV) -> Result<(), Error> {
-        self.save(state)
-    }
-    fn observe_iter(&mut self, state: &Nsga2State<I>, _kv: &KV) -> Result<(), Error> {
-        self.save(state)
-    }
-}
-
 /// Rewrites the archive and the result CSVs after every generation (before the checkpoint),
 /// so that a running run can be watched; shared, so that the caller can use the archive.
 #[derive(Clone)]
@@ -171,21 +136,5 @@ impl Observe<Nsga2State<GripperInfo>> for RecordingObserver {
     }
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> Result<(), Error> {
         self.record(st)
-    }
-}
-
-/// Test hook: fails once generation `.0` is complete (after the observers added before it
-/// ran, so its checkpoint is written), as a crash would.
-pub struct CrashAfter(pub u64);
-
-impl<I> Observe<Nsga2State<I>> for CrashAfter {
-    fn observe_iter(&mut self, s: &Nsga2State<I>, _kv: &KV) -> Result<(), Error> {
-        if s.generation >= self.0 {
-            return Err(Error::msg(format!("simulated crash after generation {}", s.generation)));
-        }
-        Ok(())
-    }
-    fn observe_init(&mut self, _n: &str, s: &Nsga2State<I>, kv: &KV) -> Result<(), Error> {
-        self.observe_iter(s, kv)
     }
 }
