@@ -42,7 +42,7 @@ GENERATIONS ?= 25
 SEED ?= 1
 run: build
 	@mkdir -p results
-	@if [ -e $(OUT)/checkpoint.json ]; then echo "$(OUT) holds an earlier run: moving it to $(OUT).previous"; rm -rf $(OUT).previous; mv $(OUT) $(OUT).previous; fi
+	@if [ -e $(OUT) ]; then keep=$(OUT).$$(date +%Y%m%d-%H%M%S); echo "$(OUT) holds an earlier run: moving it to $$keep (nothing is deleted)"; mv $(OUT) $$keep; fi
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
