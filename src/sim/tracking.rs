@@ -3,7 +3,9 @@
 //! criterion. `C` is the number of contacts a scene tracks onsets of.
 
 use super::criteria::Impact;
+use super::events::EventKind;
 use super::result::{DynOutcome, FirstContact};
+use super::scene::Response;
 use crate::params::SceneParams;
 
 /// The criteria state of one grasp simulation.
@@ -106,5 +108,26 @@ impl<const C: usize> Tracker<C> {
         self.force_armed = false;
         self.fail(DynOutcome::ForceCriterion);
         self.pipeline
+    }
+
+    /// The response to the events every grasp scene handles alike, at time `t`
+    /// (`force_end`: the force margin at the end of the step): stability reached (stop), the
+    /// force criterion violated (stop in pipeline mode), a singular configuration (stop), a
+    /// distal stop engaging or releasing (restart: a kink of the right-hand side). Contact
+    /// events are the scene's own and get no response here.
+    pub fn on_event(&mut self, kind: EventKind, t: f64, force_end: f64) -> Response {
+        match kind {
+            EventKind::Stability => {
+                self.t_stab = Some(t);
+                Response { restart: false, stop: true }
+            }
+            EventKind::Force => Response { restart: false, stop: self.force_violated(t, force_end) },
+            EventKind::Singular(_) => {
+                self.outcome = DynOutcome::Singular;
+                Response { restart: false, stop: true }
+            }
+            EventKind::Stop(_) => Response { restart: true, stop: false },
+            EventKind::Contact(_) => Response { restart: false, stop: false },
+        }
     }
 }

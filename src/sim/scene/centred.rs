@@ -319,17 +319,7 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
                 // memory changed: f is discontinuous
                 Response { restart: true, stop }
             }
-            EventKind::Stability => {
-                self.tracker.t_stab = Some(t);
-                Response { restart: false, stop: true }
-            }
-            EventKind::Force => Response { restart: false, stop: self.tracker.force_violated(t, end.g[FORCE]) },
-            EventKind::Singular(_) => {
-                self.tracker.outcome = DynOutcome::Singular;
-                Response { restart: false, stop: true }
-            }
-            // the stop engages or releases: the right-hand side has a kink here
-            EventKind::Stop(_) => Response { restart: true, stop: false },
+            other => self.tracker.on_event(other, t, end.g[FORCE]),
         }
     }
 

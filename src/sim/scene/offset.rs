@@ -260,16 +260,7 @@ impl Scene<NO, EO> for OffsetScene<'_> {
                 }
                 Response { restart: true, stop }
             }
-            EventKind::Stability => {
-                self.tracker.t_stab = Some(t);
-                Response { restart: false, stop: true }
-            }
-            EventKind::Force => Response { restart: false, stop: self.tracker.force_violated(t, end.g[FORCE]) },
-            EventKind::Singular(_) => {
-                self.tracker.outcome = DynOutcome::Singular;
-                Response { restart: false, stop: true }
-            }
-            EventKind::Stop(_) => Response { restart: true, stop: false },
+            other => self.tracker.on_event(other, t, end.g[FORCE]),
         }
     }
     fn track(&mut self, at: Point, ev: &PairEval, g: &EventValues<EO>) {
