@@ -112,6 +112,42 @@ fn verify_matches_simulate_and_threads() {
     assert_eq!(a[0] + a[1] + b[0] + b[1], vrow.len());
 }
 
+/// `--all`: one row per distinct feasible id of population.csv and archive.csv; `--sample`:
+/// N designs, each passing stage 2 (checked independently with `evaluate --static-only`),
+/// identical for 1 and 2 threads.
+#[test]
+fn verify_all_and_sample() {
+    let dir = tiny_run("all");
+    let d = dir.display().to_string();
+    let o = run(&["verify", &d, "--all"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut ids = std::collections::BTreeSet::new();
+    for f in ["population.csv", "archive.csv"] {
+        let (h, rows) = table(&dir.join(f));
+        for r in rows.iter().filter(|r| r[col(&h, "feasible")] == "true") {
+            ids.insert(r[col(&h, "id")].parse::<u64>().unwrap());
+        }
+    }
+    let (vh, vrow) = table(&dir.join("verify.csv"));
+    let vids: Vec<u64> = vrow.iter().map(|r| r[col(&vh, "id")].parse().unwrap()).collect();
+    assert_eq!(vids, ids.into_iter().collect::<Vec<_>>());
+
+    assert!(run(&["verify", &d, "--sample", "6", "--seed", "3", "--threads", "1"]).status.success());
+    let s1 = std::fs::read_to_string(dir.join("verify_sample.csv")).unwrap();
+    assert!(run(&["verify", &d, "--sample", "6", "--seed", "3", "--threads", "2"]).status.success());
+    assert_eq!(s1, std::fs::read_to_string(dir.join("verify_sample.csv")).unwrap());
+    let (sh, srow) = table(&dir.join("verify_sample.csv"));
+    assert_eq!(srow.len(), 6);
+    let problem = dir.join("problem.toml").display().to_string();
+    for r in &srow {
+        let design = gripopt::params::DESIGN_NAMES.iter().map(|n| format!("{n}={}", r[col(&sh, n)])).collect::<Vec<_>>().join(",");
+        let o = run(&["evaluate", &problem, "--static-only", "--json", "--design", &design]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert!(j["failed_stage"].is_null(), "sample design {} fails stage {}", r[0], j["failed_stage"]);
+    }
+}
+
 #[test]
 fn verify_refuses_bad_folders() {
     let dir = tiny_run("bad");
