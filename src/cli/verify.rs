@@ -69,6 +69,9 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
     println!("verified {} designs in the free scene → {}", s.rows.len(), s.file.display());
+    if !s.skipped.is_empty() {
+        eprintln!("warning: {} designs are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
+    }
     print_table(&c);
     if c.total() > 0 {
         println!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);

@@ -120,6 +120,8 @@ pub struct VerifySummary {
     pub rows: Vec<VerifyRow>,
     /// Prediction against measurement.
     pub confusion: Confusion,
+    /// Ids of designs that stages 0–2 discarded on re-evaluation (left out of the CSV).
+    pub skipped: Vec<u64>,
     /// Median of peak object E_trans / §9.1's E_trans and of E_rot / E_rot (None: no rows with contact).
     pub median_energy_ratio: Option<(f64, f64)>,
 }
@@ -322,10 +324,11 @@ pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, tick_len: &d
     };
     tick_len(designs.len());
     let rows = verify_designs(&p, &designs, tick);
+    let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
     let file = dir.join(file);
     write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
     let et: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.0 / e.0)).collect();
     let er: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.1 / e.1)).collect();
     let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary { file, confusion: Confusion::of(&rows), rows, median_energy_ratio })
+    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio })
 }
