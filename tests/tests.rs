@@ -17,4 +17,5 @@ mod scenes;
 mod recording;
 mod statics;
 mod sweep;
+mod verify;
 mod robustness;

@@ -11,6 +11,7 @@ mod report;
 mod scenes;
 mod show;
 mod sweep;
+mod verify;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]
@@ -172,6 +173,8 @@ enum Cmd {
     },
     /// Parameter study: evaluate a grid of 1-3 varied names, write DIR/sweep.csv and plots.
     Sweep(sweep::SweepArgs),
+    /// Re-simulate a run's designs in the free scene and compare with the criteria's prediction (RUN_DIR/verify.csv).
+    Verify(verify::VerifyArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
         /// Print the figures as one JSON object on stdout (the text report goes to stderr).
@@ -343,5 +346,9 @@ pub fn run() -> Result<i32> {
         }
         Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),
         Cmd::Sweep(a) => sweep::run(a).map(|_| 0),
+        Cmd::Verify(a) => {
+            check_threads(a.threads)?;
+            verify::run(a).map(|_| 0)
+        }
     }
 }

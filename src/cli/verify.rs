@@ -1,0 +1,85 @@
+//! `gripopt verify RUN_DIR`: the free scene against the centred criteria's prediction.
+
+use anyhow::{bail, Context, Result};
+use gripopt::run::{verify, Confusion, VerifySource};
+use std::path::PathBuf;
+
+/// Arguments of `gripopt verify`.
+#[derive(clap::Args)]
+pub struct VerifyArgs {
+    /// Run folder (written by `gripopt optimise`).
+    pub run_dir: PathBuf,
+    /// Scene to measure in: free or free:X (object offset X metres; default: the problem's x_off).
+    #[arg(long, default_value = "free")]
+    pub scene: String,
+    /// Every feasible design of population.csv and archive.csv instead of pareto.csv.
+    #[arg(long)]
+    pub all: bool,
+    /// Worker threads (default: all cores; results do not depend on it).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Study: N designs drawn from the run's problem bounds that pass stage 2 (writes verify_sample.csv).
+    #[arg(long, hide = true)]
+    pub sample: Option<usize>,
+    /// Seed of `--sample`.
+    #[arg(long, hide = true, default_value_t = 1)]
+    pub seed: u64,
+}
+
+fn x_off_of(scene: &str) -> Result<Option<f64>> {
+    match scene.split_once(':') {
+        None if scene == "free" => Ok(None),
+        Some(("free", x)) => {
+            let v: f64 = x.parse().with_context(|| format!("--scene free:{x}: not a number"))?;
+            gripopt::params::limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene free:{x}: {r}"))?;
+            Ok(Some(v))
+        }
+        _ => bail!("--scene {scene}: verify measures in the free scene: free or free:X (metres)"),
+    }
+}
+
+/// Print the 2×2 table.
+fn print_table(c: &Confusion) {
+    println!("                     measured moved   measured stayed");
+    println!("  predicted moves    {:>14}   {:>15}", c.pred_moved, c.pred_stayed);
+    println!("  predicted stays    {:>14}   {:>15}", c.ok_moved, c.ok_stayed);
+}
+
+/// Run `gripopt verify`.
+pub fn run(a: VerifyArgs) -> Result<()> {
+    let x_off = x_off_of(&a.scene)?;
+    if a.sample.is_some() && a.all {
+        bail!("--sample and --all: give one");
+    }
+    let source = match a.sample {
+        Some(0) => bail!("--sample 0: must be at least 1"),
+        Some(n) => VerifySource::Sample { n, seed: a.seed },
+        None if a.all => VerifySource::All,
+        None => VerifySource::Pareto,
+    };
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = a.threads {
+        b = b.num_threads(t);
+    }
+    let pool = b.build()?;
+    let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) { indicatif::ProgressBar::new(0) } else { indicatif::ProgressBar::hidden() };
+    pb.set_style(indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"));
+    let s = pool.install(|| verify(&a.run_dir, source, x_off, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
+    pb.finish_and_clear();
+    let c = s.confusion;
+    let agree = c.pred_moved + c.ok_stayed;
+    println!("verified {} designs in the free scene → {}", s.rows.len(), s.file.display());
+    if !s.skipped.is_empty() {
+        eprintln!("warning: {} designs are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
+    }
+    print_table(&c);
+    if c.total() > 0 {
+        println!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
+    }
+    let n = |f: &dyn Fn(&gripopt::run::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
+    println!("  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}", n(&|r| r.toppled), n(&|r| r.escaped), n(&|r| r.rim_contact), n(&|r| r.impact_ratio.is_some_and(|x| x > 1.0)), n(&|r| r.force_margin < 0.0));
+    if let Some((t, r)) = s.median_energy_ratio {
+        println!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
+    }
+    Ok(())
+}

@@ -1,0 +1,334 @@
+//! `verify`: does the thesis's prediction hold? Every design of a run's front (or every
+//! feasible design, or a seeded sample of the problem's box) is simulated twice: in the
+//! centred scene, whose impact (§9.1) and force (§9.3) criteria *predict* whether the object
+//! moves, and in the free scene (MODEL.md §14), which *measures* it (§14.4's verdict). The
+//! rows go to `RUN_DIR/verify.csv` (or `verify_sample.csv`), written atomically under the
+//! run folder's lock; [`Confusion`] counts prediction against measurement.
+
+use super::lock::RunLock;
+use crate::eval::{evaluate, EvalOptions};
+use crate::fsutil::write_atomic;
+use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
+use crate::sim::{simulate_free, simulate_grasp, FreeSetup, SimOptions};
+use crate::{Error, Result};
+use rand::SeedableRng;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The verify results of a run's designs.
+pub const VERIFY_FILE: &str = "verify.csv";
+/// The verify results of a sample of the problem's box (`--sample`).
+pub const VERIFY_SAMPLE_FILE: &str = "verify_sample.csv";
+
+/// Which designs to verify.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VerifySource {
+    /// The designs of `pareto.csv`.
+    Pareto,
+    /// Every feasible design of `population.csv` and `archive.csv` (by id, once).
+    All,
+    /// `n` designs drawn from the problem's bounds with seed `seed` that pass stage 2.
+    Sample {
+        /// How many designs.
+        n: usize,
+        /// Seed of the draw (ChaCha8).
+        seed: u64,
+    },
+}
+
+/// One verified design: the centred scene's prediction and the free scene's measurement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VerifyRow {
+    /// Design id (the run's id, or the draw's index for a sample).
+    pub id: u64,
+    /// The design.
+    pub design: Design,
+    /// E_cyl / E_lim at the centred first contact (None: no contact).
+    pub impact_ratio: Option<f64>,
+    /// §9.1's E_trans and E_rot at the centred first contact (J).
+    pub e_trans_rot: Option<(f64, f64)>,
+    /// The smaller of the filtered (over the grasp) and static force margins (N).
+    pub force_margin: f64,
+    /// The centred grasp reached stability (t_stab found).
+    pub stable: bool,
+    /// The centred criteria predict motion: impact ratio > 1 or force margin < 0.
+    pub predicted_moves: bool,
+    /// Largest horizontal displacement of G in the free scene (m).
+    pub max_displacement: f64,
+    /// Largest tilt in the free scene (°).
+    pub max_tilt_deg: f64,
+    /// Peak translational and rotational kinetic energy of the object during the first contact (J).
+    pub peak_e: (f64, f64),
+    /// §14.4's verdict: the object moved more than Δx_max or θ_max.
+    pub moved: bool,
+    /// Tilt above 45°.
+    pub toppled: bool,
+    /// No phalanx in contact at t_end.
+    pub escaped: bool,
+    /// A phalanx met the rim or a face.
+    pub rim_contact: bool,
+}
+
+impl VerifyRow {
+    /// Prediction and measurement agree.
+    pub fn agrees(&self) -> bool {
+        self.predicted_moves == self.moved
+    }
+}
+
+/// The 2×2 table: predicted moves (rows) against measured moved (columns).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Confusion {
+    /// Predicted to move, moved.
+    pub pred_moved: usize,
+    /// Predicted to move, stayed (the criteria too strict).
+    pub pred_stayed: usize,
+    /// Predicted to stay, moved (the criteria too lax).
+    pub ok_moved: usize,
+    /// Predicted to stay, stayed.
+    pub ok_stayed: usize,
+}
+
+impl Confusion {
+    /// Count `rows`.
+    pub fn of(rows: &[VerifyRow]) -> Self {
+        let mut c = Confusion::default();
+        for r in rows {
+            match (r.predicted_moves, r.moved) {
+                (true, true) => c.pred_moved += 1,
+                (true, false) => c.pred_stayed += 1,
+                (false, true) => c.ok_moved += 1,
+                (false, false) => c.ok_stayed += 1,
+            }
+        }
+        c
+    }
+    /// Rows counted.
+    pub fn total(&self) -> usize {
+        self.pred_moved + self.pred_stayed + self.ok_moved + self.ok_stayed
+    }
+}
+
+/// What `verify` did.
+#[derive(Debug, Clone)]
+pub struct VerifySummary {
+    /// The file written.
+    pub file: PathBuf,
+    /// The rows, in id order.
+    pub rows: Vec<VerifyRow>,
+    /// Prediction against measurement.
+    pub confusion: Confusion,
+    /// Ids of designs that stages 0–2 discarded on re-evaluation (left out of the CSV).
+    pub skipped: Vec<u64>,
+    /// Median of peak object E_trans / §9.1's E_trans and of E_rot / E_rot (None: no rows with contact).
+    pub median_energy_ratio: Option<(f64, f64)>,
+}
+
+/// Verify one design of problem `p` (whose scene must be set up as the free scene to
+/// measure: kind, x_off). None when stages 0–2 discard it. The same options as
+/// `gripopt simulate --scene free` (diagnostic mode, the problem's solver settings).
+pub fn verify_design(p: &Problem, id: u64, x: &Design) -> Option<VerifyRow> {
+    let s = &p.scene;
+    let ev = evaluate(x, s, &EvalOptions::statics_only());
+    let (k, st) = (ev.kin?, ev.statics?);
+    let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
+    let c = simulate_grasp(&k.finger, s, &st, &o);
+    let f = simulate_free(&k.finger, s, st.tau_s0, s.setup.x_off, FreeSetup::default(), &o, None);
+    let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
+    let force_margin = c.min_force_margin.min(c.static_force_margin);
+    Some(VerifyRow {
+        id,
+        design: *x,
+        impact_ratio,
+        e_trans_rot: c.first.map(|fc| (fc.impact.e_trans, fc.impact.e_rot)),
+        force_margin,
+        stable: c.t_stab.is_some(),
+        predicted_moves: impact_ratio.is_some_and(|r| r > 1.0) || force_margin < 0.0,
+        max_displacement: f.object_max_displacement,
+        max_tilt_deg: f.object_max_tilt_deg,
+        peak_e: (f.object_peak_e_trans, f.object_peak_e_rot),
+        moved: f.moved,
+        toppled: f.toppled,
+        escaped: f.escaped,
+        rim_contact: f.rim_contact,
+    })
+}
+
+/// Split one CSV line into fields (double-quoted fields with `""` escapes).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(ch) = chars.next() {
+        match (ch, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(ch),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`
+/// lines skipped), feasible ones only.
+pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "cannot read the run's design table", e))?;
+    let bad = |line: usize, m: String| Error::RunDir { path: path.to_path_buf(), message: format!("line {line}: {m}") };
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
+    let Some((hl, header)) = lines.next() else { return Err(bad(1, "no header row".into())) };
+    let cols = split_csv(header);
+    let col = |name: &str| cols.iter().position(|c| c == name).ok_or_else(|| bad(hl + 1, format!("no column `{name}`")));
+    let id_c = col("id")?;
+    let feas_c = col("feasible")?;
+    let xs: Vec<usize> = DESIGN_NAMES.iter().map(|n| col(n)).collect::<Result<_>>()?;
+    let mut out = Vec::new();
+    for (i, l) in lines {
+        let f = split_csv(l);
+        let get = |c: usize| f.get(c).map(String::as_str).ok_or_else(|| bad(i + 1, format!("only {} fields", f.len())));
+        if get(feas_c)? != "true" {
+            continue;
+        }
+        let id: u64 = get(id_c)?.parse().map_err(|_| bad(i + 1, format!("id `{}` is not an integer", get(id_c).unwrap_or(""))))?;
+        let mut a = [0.0; 6];
+        for (k, &c) in xs.iter().enumerate() {
+            let v = get(c)?;
+            a[k] = v.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| bad(i + 1, format!("{} = `{v}` is not a number", DESIGN_NAMES[k])))?;
+        }
+        out.push((id, Design::from_array(&a)));
+    }
+    Ok(out)
+}
+
+/// The run's designs to verify, in id order.
+pub fn run_designs(dir: &Path, all: bool) -> Result<Vec<(u64, Design)>> {
+    let files: &[&str] = if all { &["population.csv", "archive.csv"] } else { &["pareto.csv"] };
+    let mut m = BTreeMap::new();
+    for f in files {
+        let path = dir.join(f);
+        if !path.is_file() {
+            return Err(Error::RunDir { path, message: "missing: the run has not written its first generation's results".into() });
+        }
+        for (id, x) in read_design_csv(&path)? {
+            m.entry(id).or_insert(x);
+        }
+    }
+    Ok(m.into_iter().collect())
+}
+
+/// `n` designs drawn from `p`'s bounds (ChaCha8 with `seed`, in draw order) that pass stages
+/// 0–2; ids are the draw's index. Deterministic, independent of the thread count.
+pub fn sample_designs(p: &Problem, n: usize, seed: u64) -> Vec<(u64, Design)> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::with_capacity(n);
+    let mut drawn = 0u64;
+    while out.len() < n {
+        let batch: Vec<(u64, Design)> = (0..(2 * n).max(16)).map(|k| (drawn + k as u64, p.bounds.sample(&mut rng))).collect();
+        drawn += batch.len() as u64;
+        let pass: Vec<bool> = batch.par_iter().map(|(_, x)| evaluate(x, &p.scene, &EvalOptions::statics_only()).statics.is_some()).collect();
+        out.extend(batch.into_iter().zip(pass).filter(|(_, ok)| *ok).map(|(d, _)| d).take(n - out.len()));
+        if drawn > 1000 * n as u64 + 10_000 {
+            break; // a box where almost nothing passes stage 2: return what was found
+        }
+    }
+    out
+}
+
+/// Verify `designs` in parallel (in the current rayon pool), calling `tick` after each;
+/// rows in the order given, designs discarded at stages 0–2 left out.
+pub fn verify_designs(p: &Problem, designs: &[(u64, Design)], tick: &(dyn Fn() + Sync)) -> Vec<VerifyRow> {
+    designs
+        .par_iter()
+        .map(|(id, x)| {
+            let r = verify_design(p, *id, x);
+            tick();
+            r
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map(|x| format!("{x}")).unwrap_or_default()
+}
+
+/// Columns of verify.csv.
+pub const VERIFY_COLUMNS: [&str; 24] = [
+    "id", "l21", "b", "t22", "r", "p", "psi_deg", "impact_ratio", "e_trans", "e_rot", "force_margin", "stable", "predicted_moves", "object_max_displacement", "object_max_tilt_deg",
+    "object_peak_e_trans", "object_peak_e_rot", "moved", "toppled", "escaped", "rim_contact", "agrees", "peak_e_trans_ratio", "peak_e_rot_ratio",
+];
+
+/// verify.csv's text (`#` header lines, then one row per design).
+pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
+    let mut s = String::from("# gripopt verify.csv: the centred criteria's prediction (impact ratio E_cyl/E_lim > 1 or force margin < 0 → predicted_moves) against the free scene's measured motion (MODEL.md §14.4)\n");
+    let _ = writeln!(s, "# scene free, x_off {x_off} m; units: lengths m, psi_deg and object_max_tilt_deg deg, energies J, force_margin N; *_ratio = object peak / §9.1 value");
+    s.push_str(&VERIFY_COLUMNS.join(","));
+    s.push('\n');
+    for r in rows {
+        let a = r.design.to_array();
+        let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.id, a[0], a[1], a[2], a[3], a[4], a[5], opt(r.impact_ratio), opt(et), opt(er), r.force_margin, r.stable, r.predicted_moves, r.max_displacement, r.max_tilt_deg,
+            r.peak_e.0, r.peak_e.1, r.moved, r.toppled, r.escaped, r.rim_contact, r.agrees(), opt(et.map(|e| r.peak_e.0 / e)), opt(er.map(|e| r.peak_e.1 / e)),
+        );
+    }
+    s
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+}
+
+/// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
+/// loads the run's problem, switches it to the free scene (at `x_off`, default the
+/// problem's), simulates the designs of `source` and writes the CSV atomically.
+pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, tick_len: &dyn Fn(usize), tick: &(dyn Fn() + Sync)) -> Result<VerifySummary> {
+    if !dir.is_dir() {
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
+    }
+    for f in ["run.json", "problem.toml"] {
+        if !dir.join(f).is_file() {
+            return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`") });
+        }
+    }
+    let _lock = RunLock::acquire(dir)?;
+    let mut p = Problem::load(dir.join("problem.toml"))?;
+    if p.scene.env.g_eq != 0.0 {
+        return Err(Error::RunDir { path: dir.join("problem.toml"), message: "environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into() });
+    }
+    p.scene.setup.kind = SceneKind::Free;
+    if let Some(x) = x_off {
+        p.scene.setup.x_off = x;
+    }
+    let (designs, file) = match source {
+        VerifySource::Pareto => (run_designs(dir, false)?, VERIFY_FILE),
+        VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
+        VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
+    };
+    tick_len(designs.len());
+    let rows = verify_designs(&p, &designs, tick);
+    let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
+    let file = dir.join(file);
+    write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
+    let et: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.0 / e.0)).collect();
+    let er: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.1 / e.1)).collect();
+    let median_energy_ratio = median(et).zip(median(er));
+    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio })
+}
