@@ -3,6 +3,7 @@
 //! criterion. `C` is the number of contacts a scene tracks onsets of.
 
 use super::criteria::Impact;
+use super::driver::End;
 use super::events::EventKind;
 use super::result::{DynOutcome, FirstContact};
 use super::scene::Response;
@@ -128,6 +129,19 @@ impl<const C: usize> Tracker<C> {
             }
             EventKind::Stop(_) => Response { restart: true, stop: false },
             EventKind::Contact(_) => Response { restart: false, stop: false },
+        }
+    }
+
+    /// Record how the driver ended (`Stopped`/`Declined` leave the outcome to the events;
+    /// running out of time without stability is the first failure only).
+    pub fn on_end(&mut self, end: End) {
+        match end {
+            End::Stopped | End::Declined => {}
+            End::TimeUp => self.fail(DynOutcome::NoStability),
+            End::StepBudget => self.outcome = DynOutcome::StepBudget,
+            End::StepTooSmall => self.outcome = DynOutcome::StepTooSmall,
+            End::Undefined => self.outcome = DynOutcome::DgmFailure,
+            End::Aborted => self.outcome = DynOutcome::Aborted,
         }
     }
 }

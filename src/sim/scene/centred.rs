@@ -10,7 +10,7 @@ use crate::model::Finger;
 use crate::model::StaticsResult;
 use crate::params::SceneParams;
 use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
-use crate::sim::driver::{self, End, Run};
+use crate::sim::driver::{self, Run};
 use crate::sim::equilibrium::{finger_equilibrium, Equilibrium};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel};
@@ -358,14 +358,7 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
     }
 
     fn finish(mut self, run: &Run<FingerEval>) -> DynamicsResult {
-        match run.end {
-            End::Stopped | End::Declined => {}
-            End::TimeUp => self.tracker.fail(DynOutcome::NoStability),
-            End::StepBudget => self.tracker.outcome = DynOutcome::StepBudget,
-            End::StepTooSmall => self.tracker.outcome = DynOutcome::StepTooSmall,
-            End::Undefined => self.tracker.outcome = DynOutcome::DgmFailure,
-            End::Aborted => self.tracker.outcome = DynOutcome::Aborted,
-        }
+        self.tracker.on_end(run.end);
         let mut res = self.result();
         if let Some(ev) = &run.last {
             res.t_end = run.t;

@@ -8,7 +8,7 @@ use crate::math::V2;
 use crate::model::{grasp_at, Finger, StaticsResult};
 use crate::params::SceneParams;
 use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
-use crate::sim::driver::{self, End, Run};
+use crate::sim::driver::{self, Run};
 use crate::sim::equilibrium::finger_equilibrium;
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel, Kink};
@@ -271,14 +271,7 @@ impl Scene<NO, EO> for OffsetScene<'_> {
     }
     fn sample(&mut self, _at: Point, _t: f64, _y: &St, _ev: &PairEval) {}
     fn finish(mut self, run: &Run<PairEval>) -> OffsetResult {
-        match run.end {
-            End::Stopped | End::Declined => {}
-            End::TimeUp => self.tracker.fail(DynOutcome::NoStability),
-            End::StepBudget => self.tracker.outcome = DynOutcome::StepBudget,
-            End::StepTooSmall => self.tracker.outcome = DynOutcome::StepTooSmall,
-            End::Undefined => self.tracker.outcome = DynOutcome::DgmFailure,
-            End::Aborted => self.tracker.outcome = DynOutcome::Aborted,
-        }
+        self.tracker.on_end(run.end);
         let k = &self.tracker;
         let on = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(x), Some(y)) => Some(x.min(y)),
