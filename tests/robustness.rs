@@ -205,8 +205,11 @@ fn absurd_inputs_are_refused_without_a_panic() {
 #[test]
 fn a_closed_output_pipe_ends_the_program_quietly() {
     for args in [vec!["evaluate", PROBLEM], vec!["moo-test", "zdt1", "--seeds", "1-40", "--json", "--pop", "8", "--generations", "2"]] {
-        let mut child = Command::new(BIN).args(&args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
-        drop(child.stdout.take()); // the reader goes away before the first line
+        // the reader is gone before the program starts (closing it after the spawn races
+        // with a fast program on a loaded machine)
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let child = Command::new(BIN).args(&args).stdout(writer).stderr(Stdio::piped()).spawn().unwrap();
         let out = child.wait_with_output().unwrap();
         let e = stderr(&out);
         assert!(!e.contains("panicked") && !e.contains("Broken pipe") && e.is_empty(), "{args:?}: {e}");

@@ -114,12 +114,14 @@ fn makespan(costs: &[f64], p: usize) -> f64 {
 const SIMULATED_S: f64 = 200e-6;
 
 /// Prediction at `p` threads: (time, total work, limiting step). The per-design costs and
-/// the serial steps are as measured; the persister's time per generation is taken as
-/// serial (its encoding is parallel, so this is conservative).
+/// the serial steps are as measured. The persister's thread updates the archive and views
+/// and commits (its time per generation is serial); the shards go to its pool of p/4
+/// threads, several at once (each shard's time taken as serial within it, which is
+/// conservative).
 fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
     let n = m.gens.len().max(1) as f64;
-    // outputs and shard run side by side, then the checkpoint
-    let persist_g = ((if recording { m.persist.record_s } else { 0.0 }).max(m.persist.outputs_s) + m.persist.checkpoint_s) / n;
+    let pool = (p / 4).max(1) as f64;
+    let persist_g = ((m.persist.outputs_s + m.persist.checkpoint_s) / n).max(if recording { m.persist.record_s / n / pool } else { 0.0 });
     let handover_g = m.persist.handover_s / n;
     let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
@@ -143,7 +145,7 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
     }
     let t = prev_finish.max(work / p as f64);
     let persister = waited + (prev_finish - main_t).max(0.0);
-    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: outputs beside the shard, then the checkpoint)")];
+    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: archive, views and checkpoint on its thread; shards in its pool)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
     (t, work, what)
 }
@@ -208,7 +210,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         rows.push(serde_json::json!({
             "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "work_s": work, "eval_s": eval,
             "straggler_s": strag, "serial_s": serial, "handover_s": p.handover_s, "outputs_bg_s": p.outputs_s, "record_bg_s": p.record_s,
-            "checkpoint_bg_s": p.checkpoint_s, "waited_s": p.wait_s,
+            "checkpoint_bg_s": p.checkpoint_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "persist_pool_threads": p.pool_threads,
         }));
         if n == 1 {
             best = Some(r);

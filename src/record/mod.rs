@@ -31,4 +31,4 @@ pub use options::{COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD
 pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use proto::{GraspSeries, SERIES_NAME};
 pub use replay::{Recorded, Replay, read_design, replay};
-pub use writer::{Recorder, ShardEntry, read_index, write_shard};
+pub use writer::{Recorder, ShardEntry, ShardTask, read_index, write_shard};

@@ -131,16 +131,22 @@ impl RecordOptions {
         }
         keep[0] = true;
         keep[n - 1] = true;
-        let peak = |f: &dyn Fn(&Sample) -> f64, i: usize| i > 0 && i + 1 < n && f(&samples[i]) > f(&samples[i - 1]) && f(&samples[i]) >= f(&samples[i + 1]);
+        // a local peak of |normal force 1|, |normal force 2| or |hand force|
+        let v = |s: &Sample, c: usize| match c {
+            0 => s.normal[0].abs(),
+            1 => s.normal[1].abs(),
+            _ => s.hand_fy.abs(),
+        };
         for i in 1..n {
             let (a, b) = (&samples[i - 1], &samples[i]);
             if (0..2).any(|c| (a.delta[c] > 0.0) != (b.delta[c] > 0.0)) {
                 keep[i - 1] = true;
                 keep[i] = true;
             }
-            let fs: [&dyn Fn(&Sample) -> f64; 3] = [&|s| s.normal[0].abs(), &|s| s.normal[1].abs(), &|s| s.hand_fy.abs()];
-            if fs.iter().any(|f| peak(*f, i)) {
-                keep[i] = true;
+            if let Some(z) = samples.get(i + 1) {
+                if (0..3).any(|c| v(b, c) > v(a, c) && v(b, c) >= v(z, c)) {
+                    keep[i] = true;
+                }
             }
         }
         let mut last_t = f64::NEG_INFINITY;

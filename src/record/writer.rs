@@ -13,8 +13,9 @@ use mcap::records::{MessageHeader, Metadata};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::io::BufWriter;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// One line of `index.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -83,7 +84,8 @@ fn fx<T: Encode>(m: &T) -> Vec<u8> {
 pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, designs: &[&R], opts: &RecordOptions) -> Result<u64> {
     let tmp = path.with_extension("mcap.tmp");
     let mc = |e: mcap::McapError| Error::Mcap { path: tmp.clone(), what: "cannot write".into(), source: e };
-    let file = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+    // the shard is framed in memory and written with one call (one chunk per design would
+    // otherwise be several small writes each)
     let mut w = mcap::WriteOptions::new()
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(opts.zstd_threads)
@@ -91,7 +93,7 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
         .chunk_size(Some(64 << 20))
         .profile("")
         .library(format!("gripopt {}", env!("CARGO_PKG_VERSION")))
-        .create(BufWriter::new(file))
+        .create(std::io::Cursor::new(Vec::with_capacity(1 << 20)))
         .map_err(mc)?;
     let mut meta = meta.clone();
     let ids: Vec<u64> = designs.iter().map(|d| d.entry().id).collect();
@@ -134,12 +136,13 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
         w.flush().map_err(mc)?; // one chunk per design
     }
     w.finish().map_err(mc)?;
-    let inner = w.into_inner();
-    let f = inner.into_inner().map_err(|e| Error::io(&tmp, "cannot write", e.into_error()))?;
+    let bytes = w.into_inner().into_inner();
+    let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+    f.write_all(&bytes).map_err(|e| Error::io(&tmp, "cannot write", e))?;
     f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
     drop(f);
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary shard into place", e))?;
-    Ok(std::fs::metadata(path).map_err(|e| Error::io(path, "cannot read the size of", e))?.len())
+    Ok(bytes.len() as u64)
 }
 
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
@@ -184,16 +187,49 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
 
 /// Records each generation's evaluated designs into one shard of `RUN_DIR/recording/` and
 /// keeps `index.jsonl` up to date (the run layer calls it from an optimiser observer).
+///
+/// Writing a shard and entering it in the index are separate steps ([`Recorder::task`],
+/// [`ShardTask::write`], [`Recorder::commit`]), so that several generations' shards can be
+/// encoded and compressed at once while the index stays in generation order.
 pub struct Recorder {
     dir: PathBuf,
-    problem: Problem,
+    problem: Arc<Problem>,
     meta: BTreeMap<String, String>,
     opts: RecordOptions,
     index: Vec<ShardEntry>,
     /// Bytes written by this process.
     pub bytes: u64,
-    /// Seconds spent recording in this process.
+    /// Seconds spent recording in this process (summed over shards written at once).
     pub seconds: f64,
+}
+
+/// One generation's shard, detached from its [`Recorder`]: write it on any thread, then
+/// hand the entry to [`Recorder::commit`].
+#[derive(Clone)]
+pub struct ShardTask {
+    path: PathBuf,
+    file: String,
+    generation: u64,
+    problem: Arc<Problem>,
+    meta: BTreeMap<String, String>,
+    opts: RecordOptions,
+}
+
+impl ShardTask {
+    /// Write the shard of `designs` (any order; written by id) durably, replacing a shard of
+    /// the same generation; its index entry, or None when `designs` is empty.
+    pub fn write<R: Recordable>(&self, designs: &[&R]) -> Result<Option<(ShardEntry, f64)>> {
+        if designs.is_empty() {
+            return Ok(None);
+        }
+        let t0 = std::time::Instant::now();
+        let mut designs: Vec<&R> = designs.to_vec();
+        designs.sort_by_key(|d| d.entry().id);
+        let bytes = write_shard(&self.path, &self.problem, &self.meta, &designs, &self.opts)?;
+        let (first_id, last_id) = (designs[0].entry().id, designs[designs.len() - 1].entry().id);
+        let e = ShardEntry { generation: self.generation, file: self.file.clone(), first_id, last_id, designs: designs.len() as u64, bytes };
+        Ok(Some((e, t0.elapsed().as_secs_f64())))
+    }
 }
 
 impl Recorder {
@@ -204,30 +240,40 @@ impl Recorder {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
         let index = super::recover::recover(&dir, completed)?.index; // never deletes what the checkpoint covers
         write_index(&dir, &index)?;
-        Ok(Recorder { dir, problem, meta, opts, index, bytes: 0, seconds: 0.0 })
+        Ok(Recorder { dir, problem: Arc::new(problem), meta, opts, index, bytes: 0, seconds: 0.0 })
+    }
+
+    /// The shard of generation `generation`, to be written by [`ShardTask::write`]; None
+    /// when recording is off.
+    pub fn task(&self, generation: u64) -> Option<ShardTask> {
+        if !self.opts.enabled {
+            return None;
+        }
+        let file = format!("gen-{generation:05}.mcap");
+        let mut meta = self.meta.clone();
+        meta.insert("generation".into(), generation.to_string());
+        Some(ShardTask { path: self.dir.join(&file), file, generation, problem: self.problem.clone(), meta, opts: self.opts })
+    }
+
+    /// Enter a written shard in `index.jsonl` (replacing an entry of the same generation;
+    /// entries stay in generation order) and count its bytes and seconds.
+    pub fn commit(&mut self, entry: ShardEntry, seconds: f64) -> Result<()> {
+        self.index.retain(|e| e.generation != entry.generation);
+        self.bytes += entry.bytes;
+        self.seconds += seconds;
+        let at = self.index.partition_point(|e| e.generation < entry.generation);
+        self.index.insert(at, entry);
+        write_index(&self.dir, &self.index)
     }
 
     /// Write generation `generation`'s evaluated designs (any order; written by id) as one
     /// shard, replacing a shard of the same generation, and update the index. Does nothing
     /// when recording is off or `designs` is empty.
     pub fn record_generation<R: Recordable>(&mut self, generation: u64, designs: &[&R]) -> Result<()> {
-        if !self.opts.enabled || designs.is_empty() {
-            return Ok(());
+        let Some(task) = self.task(generation) else { return Ok(()) };
+        match task.write(designs)? {
+            Some((e, s)) => self.commit(e, s),
+            None => Ok(()),
         }
-        let t0 = std::time::Instant::now();
-        let g = generation;
-        let file = format!("gen-{g:05}.mcap");
-        let mut designs: Vec<&R> = designs.to_vec();
-        designs.sort_by_key(|d| d.entry().id);
-        let mut meta = self.meta.clone();
-        meta.insert("generation".into(), g.to_string());
-        let bytes = write_shard(&self.dir.join(&file), &self.problem, &meta, &designs, &self.opts)?;
-        self.index.retain(|e| e.generation != g);
-        let (first_id, last_id) = (designs[0].entry().id, designs[designs.len() - 1].entry().id);
-        self.index.push(ShardEntry { generation: g, file, first_id, last_id, designs: designs.len() as u64, bytes });
-        write_index(&self.dir, &self.index)?;
-        self.bytes += bytes;
-        self.seconds += t0.elapsed().as_secs_f64();
-        Ok(())
     }
 }

@@ -42,9 +42,13 @@ impl Archive {
 
     /// Save atomically.
     pub fn save(&self, dir: &Path) -> Result<()> {
-        let p = dir.join(ARCHIVE_FILE);
-        let b = serde_json::to_vec(self).map_err(|source| Error::Json { path: p.clone(), what: "cannot serialise the archive", source })?;
-        write_atomic(&p, &b)
+        save_bytes(dir, &self.to_bytes(dir)?)
+    }
+
+    /// The bytes [`Archive::save`] writes into `dir` (serialised now, written later by
+    /// [`save_bytes`]).
+    pub fn to_bytes(&self, dir: &Path) -> Result<Vec<u8>> {
+        serde_json::to_vec(self).map_err(|source| Error::Json { path: dir.join(ARCHIVE_FILE), what: "cannot serialise the archive", source })
     }
 
     /// Add the feasible designs evaluated in `st`'s last generation, keep the non-dominated
@@ -72,6 +76,11 @@ impl Archive {
         }
         self.hv_history.push(normalised_hv(&self.members, settings));
     }
+}
+
+/// Write archive bytes from [`Archive::to_bytes`] atomically into `dir`.
+pub fn save_bytes(dir: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic(&dir.join(ARCHIVE_FILE), bytes)
 }
 
 /// Hypervolume of designs' minimisation objectives, normalised as the optimiser's progress

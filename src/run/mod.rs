@@ -26,7 +26,7 @@ pub use limits::{check_population, BYTES_PER_DESIGN};
 pub use lock::{RunLock, LOCK_FILE};
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
-pub use persist::{CheckpointSpec, PersistStats, Persister};
+pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
 pub use plots::{hypervolume, pareto_matrix};
 pub use verify::{read_design_csv, run_designs, sample_designs, verify, verify_csv, verify_design, verify_designs, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE};

@@ -102,10 +102,23 @@ pub struct OutputsObserver {
 
 impl OutputsObserver {
     fn write(&self, st: &Nsga2State<GripperInfo>) -> Result<(), Error> {
+        let bytes = self.update_archive(st)?;
+        super::archive::save_bytes(&self.out, &bytes)?;
+        Ok(self.write_views(st)?)
+    }
+
+    /// Add `st`'s last generation to the archive; the archive's bytes for `archive.json`
+    /// (written later, just before the generation's checkpoint).
+    pub fn update_archive(&self, st: &Nsga2State<GripperInfo>) -> crate::Result<Vec<u8>> {
         let mut a = self.archive.lock().expect("archive lock");
         a.update(st, &self.settings);
-        a.save(&self.out)?;
-        Ok(write_tables(&self.out, self.force_model, st, &a)?)
+        a.to_bytes(&self.out)
+    }
+
+    /// Rewrite the CSV views (pareto, population, archive, history) of `st` and the archive.
+    pub fn write_views(&self, st: &Nsga2State<GripperInfo>) -> crate::Result<()> {
+        let a = self.archive.lock().expect("archive lock");
+        write_tables(&self.out, self.force_model, st, &a)
     }
 }
 

@@ -1,27 +1,38 @@
 //! Outputs, recording and checkpoints off the critical path: a background persister thread
-//! fed by a bounded channel (one generation queued besides the one being written =
-//! backpressure and bounded memory). For generation k it writes the outputs (archive, CSVs),
-//! then shard k durably, and THEN checkpoint k, while
-//! generation k+1 evaluates, so the crash guarantee is the one of synchronous observers:
-//! every shard up to the checkpoint's generation is durable, and a resume drops and
-//! rewrites later ones (nothing lost or duplicated after kill -9).
+//! and its own small rayon pool. For generation k the thread updates the archive and
+//! rewrites the CSV views, and hands shard k to the pool, where it is encoded and compressed
+//! while the next generations evaluate; several generations' shards can be in the pool at
+//! once. Generations are committed strictly in order: once shard k is durable, its index
+//! line, `archive.json` and then checkpoint k are written. So the crash guarantee is the one
+//! of synchronous observers: every shard up to the checkpoint's generation is durable, and a
+//! resume drops and rewrites later ones (nothing lost or duplicated after kill -9); the
+//! archive is never more than one generation ahead of the checkpoint, which a resume
+//! re-evaluates identically.
+//!
+//! Bounded memory (backpressure): one generation queued for the thread, and at most the
+//! pool's threads + 1 generations handed over but not yet committed. The CSV views are
+//! rewritten at most every [`VIEWS_MIN_INTERVAL`], and not when the next generation is
+//! already queued (a later one rewrites them; the archive is still updated), so a persister
+//! that falls behind catches up instead of writing views nobody reads; every generation's
+//! shard, archive and checkpoint are always written, and the views of the last generation
+//! handed over too (also when the run stops early).
 //!
 //! Errors of the persister are kept and returned by the observer at the next generation, or
 //! by [`Persister::finish`] at the end; a failed shard is never followed by its checkpoint.
-//! The shard encoder runs in the persister's own rayon pool (a quarter of the run's threads),
-//! never in the evaluation pool, so the two cannot block each other; it collects the
-//! encoded designs in order, so the bytes do not depend on the thread count.
+//! The pool is not the evaluation pool, so the two cannot block each other; a shard's
+//! designs are encoded in parallel and written in id order, so the bytes do not depend on
+//! the thread count.
 
 use super::checkpoint::Checkpoint;
 use super::gripper::GripperInfo;
 use super::observers::OutputsObserver;
 use crate::optim::{Individual, Nsga2Settings, Nsga2State};
-use crate::record::Recorder;
+use crate::record::{Recorder, ShardEntry};
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::KV;
+use std::collections::VecDeque;
 use std::path::PathBuf;
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
@@ -31,12 +42,17 @@ use std::time::Instant;
 pub struct PersistStats {
     /// Generations persisted.
     pub generations: u64,
-    /// Seconds writing the outputs (archive, CSVs).
+    /// Seconds on the persister thread updating the archive and writing the CSV views.
     pub outputs_s: f64,
-    /// Seconds writing shards (encoding, compression, framing, fsync).
+    /// Seconds writing shards (encoding, compression, framing, fsync), summed over the
+    /// shards, which the pool writes several at a time.
     pub record_s: f64,
-    /// Seconds serialising and writing checkpoints.
+    /// Seconds committing generations (index line, archive.json, checkpoint).
     pub checkpoint_s: f64,
+    /// Generations whose CSV views were skipped because the next one was already queued.
+    pub views_skipped: u64,
+    /// Threads of the persister's pool.
+    pub pool_threads: usize,
     /// Seconds the optimiser waited for the persister (backpressure and the final flush).
     pub wait_s: f64,
     /// Seconds the optimiser spent handing generations over (cloning the state).
@@ -65,23 +81,42 @@ struct Job {
     wall_s: f64,
 }
 
+/// What the persister thread receives: generations from the optimiser, finished shards from
+/// its pool.
+enum Msg {
+    Job(Job),
+    Shard { generation: u64, result: Result<Option<(ShardEntry, f64)>> },
+}
+
 #[derive(Default)]
 struct Shared {
     /// Last generation whose shard and checkpoint are durable.
     done: u64,
     /// First error (kept until handed to the optimiser).
     error: Option<Error>,
-    /// The thread has stopped (error or channel closed).
+    /// The thread has stopped (error or closed and drained).
     stopped: bool,
     stats: PersistStats,
+    /// Messages for the thread, in arrival order.
+    inbox: VecDeque<Msg>,
+    /// Generations in `inbox` (at most one: backpressure).
+    queued: usize,
+    /// No more generations will come.
+    closed: bool,
 }
+
+type SharedState = Arc<(Mutex<Shared>, Condvar)>;
+
+/// The CSV views (pareto, population, archive, history) are rewritten at most this often
+/// while a run goes on (and always after its last generation): often enough to watch a
+/// run, and at many cores not a rewrite every few milliseconds.
+pub const VIEWS_MIN_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// The background persister and its argmin observer (clone the handle into the executor).
 #[derive(Clone)]
 pub struct Persister {
-    tx: Arc<Mutex<Option<SyncSender<Job>>>>,
     thread: Arc<Mutex<Option<JoinHandle<()>>>>,
-    shared: Arc<(Mutex<Shared>, Condvar)>,
+    shared: SharedState,
     spec: Arc<CheckpointSpec>,
     crash_after: Option<u64>,
 }
@@ -94,20 +129,17 @@ impl Persister {
     pub fn start(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, spec: CheckpointSpec, threads: usize, crash_after: Option<u64>) -> Result<Self> {
         // a quarter of the run's threads: enough to encode and compress beside the evaluation
         // at many cores, without oversubscribing a few (measured: 2 threads better with 1)
-        let pool = rayon::ThreadPoolBuilder::new().num_threads((threads / 4).max(1)).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
-        let (tx, rx) = sync_channel::<Job>(1);
-        let shared = Arc::new((Mutex::new(Shared::default()), Condvar::new()));
+        let pool_threads = (threads / 4).max(1);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(pool_threads).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
+        let shared: SharedState = Arc::new((Mutex::new(Shared::default()), Condvar::new()));
+        shared.0.lock().expect("persister lock").stats.pool_threads = pool_threads;
         let sh = shared.clone();
         let sp = spec.clone();
         let thread = std::thread::Builder::new()
             .name("gripopt-persist".into())
-            .spawn(move || persist_loop(rx, outputs, recorder, pool, sp, sh))
+            .spawn(move || persist_loop(outputs, recorder, pool, sp, sh))
             .map_err(|e| Error::io(&spec.path, "cannot start the persister thread for", e))?;
-        Ok(Persister { tx: Arc::new(Mutex::new(Some(tx))), thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec), crash_after })
-    }
-
-    fn take_error(&self) -> Option<Error> {
-        self.shared.0.lock().expect("persister lock").error.take()
+        Ok(Persister { thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec), crash_after })
     }
 
     /// Wait until generation `g` is durable (or the persister stopped); its first error.
@@ -127,31 +159,41 @@ impl Persister {
 
     /// Hand generation `st.generation` over (blocks while one generation is already queued).
     fn submit(&self, st: &Nsga2State<GripperInfo>) -> Result<()> {
-        if let Some(e) = self.take_error() {
+        let (m, cv) = &*self.shared;
+        if let Some(e) = m.lock().expect("persister lock").error.take() {
             return Err(e);
         }
         let t0 = Instant::now();
         let sp = &self.spec;
         let job = Job { state: st.clone(), wall_s: sp.wall_before + sp.start.elapsed().as_secs_f64() };
         let t1 = Instant::now();
-        let sent = match self.tx.lock().expect("persister lock").as_ref() {
-            Some(tx) => tx.send(job).is_ok(),
-            None => false,
-        };
-        let mut s = self.shared.0.lock().expect("persister lock");
+        let mut s = m.lock().expect("persister lock");
+        while s.queued >= 1 && !s.stopped && s.error.is_none() {
+            s = cv.wait(s).expect("persister lock");
+        }
         s.stats.handover_s += (t1 - t0).as_secs_f64();
         s.stats.wait_s += t1.elapsed().as_secs_f64();
-        if !sent {
-            return Err(s.error.take().unwrap_or_else(|| Error::Optimiser("the persister thread stopped".into())));
+        if let Some(e) = s.error.take() {
+            return Err(e);
         }
+        if s.stopped {
+            return Err(Error::Optimiser("the persister thread stopped".into()));
+        }
+        s.inbox.push_back(Msg::Job(job));
+        s.queued += 1;
+        cv.notify_all();
         Ok(())
     }
 
-    /// Close the channel, wait for every queued generation to be durable, and return what
+    /// Close the inbox, wait for every queued generation to be durable, and return what
     /// the persister did, or its first error not yet reported.
     pub fn finish(&self) -> Result<PersistStats> {
         let t0 = Instant::now();
-        self.tx.lock().expect("persister lock").take();
+        {
+            let mut s = self.shared.0.lock().expect("persister lock");
+            s.closed = true;
+            self.shared.1.notify_all();
+        }
         if let Some(h) = self.thread.lock().expect("persister lock").take() {
             if h.join().is_err() {
                 return Err(Error::Optimiser("the persister thread panicked".into()));
@@ -186,61 +228,137 @@ impl Observe<Nsga2State<GripperInfo>> for Persister {
     }
 }
 
-fn persist_loop(rx: Receiver<Job>, mut outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, pool: rayon::ThreadPool, sp: CheckpointSpec, shared: Arc<(Mutex<Shared>, Condvar)>) {
-    let (m, cv) = &*shared;
-    for job in rx.iter() {
-        let g = job.state.generation;
-        // outputs and archive beside the shard (independent files; re-doing a generation after
-        // a crash is idempotent for both), then the checkpoint
-        let timed = |f: &mut dyn FnMut() -> Result<()>| {
-            let t = Instant::now();
-            (f(), t.elapsed().as_secs_f64())
-        };
-        let ((out, out_s), (rec, rec_s)) = pool.install(|| {
-            rayon::join(
-                || {
-                    timed(&mut || match outputs.as_mut() {
-                        Some(o) => o.observe_iter(&job.state, &KV::new()).map_err(|e| e.downcast::<Error>().unwrap_or_else(|e| Error::Optimiser(e.to_string()))),
-                        None => Ok(()),
-                    })
-                },
-                || {
-                    timed(&mut || match &recorder {
-                        Some(r) => {
-                            let refs: Vec<&Individual<GripperInfo>> = job.state.last_evaluated.iter().collect();
-                            r.lock().expect("recorder lock").record_generation(g, &refs)
+/// A generation handed to the pool, waiting for its shard before it is committed.
+struct Pending {
+    generation: u64,
+    /// None while the shard is being written (Some(Ok(None)): nothing to record).
+    shard: Option<Result<Option<(ShardEntry, f64)>>>,
+    archive: Option<Vec<u8>>,
+    state: Nsga2State<GripperInfo>,
+    wall_s: f64,
+}
+
+/// The next message; generations only while fewer than `max_pending` wait for their
+/// shards. None once closed and nothing is left to do.
+fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<Msg> {
+    let (m, cv) = &**shared;
+    let mut s = m.lock().expect("persister lock");
+    loop {
+        let pos = if pending < max_pending { (!s.inbox.is_empty()).then_some(0) } else { s.inbox.iter().position(|m| matches!(m, Msg::Shard { .. })) };
+        if let Some(k) = pos {
+            let msg = s.inbox.remove(k).expect("position in the inbox");
+            if matches!(msg, Msg::Job(_)) {
+                s.queued -= 1;
+                cv.notify_all();
+            }
+            return Some(msg);
+        }
+        if s.closed && s.queued == 0 && pending == 0 {
+            return None;
+        }
+        s = cv.wait(s).expect("persister lock");
+    }
+}
+
+fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, pool: rayon::ThreadPool, sp: CheckpointSpec, shared: SharedState) {
+    let max_pending = pool.current_num_threads() + 1;
+    let mut pending: VecDeque<Pending> = VecDeque::new();
+    let (mut last_views, mut stale_views): (Option<Instant>, Option<Nsga2State<GripperInfo>>) = (None, None);
+    let res = (|| -> Result<()> {
+        while let Some(msg) = next_msg(&shared, pending.len(), max_pending) {
+            match msg {
+                Msg::Job(mut job) => {
+                    let g = job.state.generation;
+                    let t0 = Instant::now();
+                    let mut skipped = false;
+                    let archive = match &outputs {
+                        Some(o) => {
+                            let bytes = o.update_archive(&job.state)?;
+                            let designs = std::mem::take(&mut job.state.last_evaluated);
+                            // the next generation already waits, or the views were rewritten
+                            // moments ago: a later generation (or the end) rewrites them
+                            let behind = shared.0.lock().expect("persister lock").queued > 0;
+                            if behind || last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
+                                skipped = true;
+                                stale_views = Some(job.state.clone());
+                            } else {
+                                o.write_views(&job.state)?;
+                                last_views = Some(Instant::now());
+                                stale_views = None;
+                            }
+                            job.state.last_evaluated = designs;
+                            Some(bytes)
                         }
-                        None => Ok(()),
-                    })
-                },
-            )
-        });
-        let rec = out.and(rec);
-        let t2 = Instant::now();
-        let res = rec.and_then(|()| {
-            let mut state = job.state;
-            state.last_evaluated = vec![];
-            Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), state, job.wall_s).save(&sp.path)
-        });
-        let mut s = m.lock().expect("persister lock");
-        s.stats.outputs_s += out_s;
-        s.stats.record_s += rec_s;
-        s.stats.checkpoint_s += t2.elapsed().as_secs_f64();
-        match res {
-            Ok(()) => {
-                s.done = g;
+                        None => None,
+                    };
+                    let out_s = t0.elapsed().as_secs_f64();
+                    let designs: Vec<Individual<GripperInfo>> = std::mem::take(&mut job.state.last_evaluated);
+                    let task = recorder.as_ref().and_then(|r| r.lock().expect("recorder lock").task(g));
+                    let shard = match task {
+                        Some(task) => {
+                            let sh = shared.clone();
+                            pool.spawn(move || {
+                                let refs: Vec<&Individual<GripperInfo>> = designs.iter().collect();
+                                let result = task.write(&refs);
+                                drop(refs);
+                                drop(designs);
+                                let (m, cv) = &*sh;
+                                m.lock().expect("persister lock").inbox.push_back(Msg::Shard { generation: g, result });
+                                cv.notify_all();
+                            });
+                            None
+                        }
+                        None => Some(Ok(None)),
+                    };
+                    let mut s = shared.0.lock().expect("persister lock");
+                    s.stats.outputs_s += out_s;
+                    s.stats.views_skipped += skipped as u64;
+                    drop(s);
+                    pending.push_back(Pending { generation: g, shard, archive, state: job.state, wall_s: job.wall_s });
+                }
+                Msg::Shard { generation, result } => {
+                    if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {
+                        p.shard = Some(result);
+                    }
+                }
+            }
+            // commit, in generation order, every generation whose shard is durable
+            while pending.front().is_some_and(|p| p.shard.is_some()) {
+                let p = pending.pop_front().expect("front");
+                let t = Instant::now();
+                let shard = p.shard.expect("checked")?;
+                if let (Some((entry, secs)), Some(r)) = (shard, &recorder) {
+                    let mut s = shared.0.lock().expect("persister lock");
+                    s.stats.record_s += secs;
+                    drop(s);
+                    r.lock().expect("recorder lock").commit(entry, secs)?;
+                }
+                if let (Some(bytes), Some(o)) = (&p.archive, &outputs) {
+                    super::archive::save_bytes(&o.out, bytes)?;
+                }
+                Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), p.state, p.wall_s).save(&sp.path)?;
+                let (m, cv) = &*shared;
+                let mut s = m.lock().expect("persister lock");
+                s.stats.checkpoint_s += t.elapsed().as_secs_f64();
+                s.done = p.generation;
                 s.stats.generations += 1;
                 cv.notify_all();
             }
-            Err(e) => {
-                s.error = Some(e);
-                s.stopped = true;
-                cv.notify_all();
-                return; // later generations are dropped: nothing after a failed shard
-            }
         }
-    }
+        // the views of the last generation, if they were skipped
+        if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
+            let t = Instant::now();
+            o.write_views(&st)?;
+            shared.0.lock().expect("persister lock").stats.outputs_s += t.elapsed().as_secs_f64();
+        }
+        Ok(())
+    })();
+    let (m, cv) = &*shared;
     let mut s = m.lock().expect("persister lock");
+    if let Err(e) = res {
+        // later generations are dropped: nothing after a failed shard or checkpoint
+        s.error = Some(e);
+    }
     s.stopped = true;
     cv.notify_all();
 }
