@@ -31,14 +31,16 @@ pub struct ScalingBench {
     pub generations: u64,
     /// Seed.
     pub seed: u64,
-    /// Largest thread count measured (1, 2, … up to it).
-    pub max_threads: usize,
+    /// Thread counts measured (ascending, starting with 1).
+    pub threads: Vec<usize>,
     /// Repetitions per thread count (min and median reported).
     pub reps: usize,
     /// Recording options (default: the defaults of `gripopt optimise`).
     pub record: RecordOptions,
     /// Thread counts to predict.
     pub predict: Vec<usize>,
+    /// Also measure the hardware's ceiling: n independent 1-thread runs at once.
+    pub ceiling: bool,
 }
 
 /// One generation as measured.
@@ -159,8 +161,8 @@ fn min_med(v: &[f64]) -> (f64, f64) {
 /// Run the benchmark: prints the table and the prediction; `dir` holds the run folders
 /// (deleted afterwards).
 pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out) -> Result<serde_json::Value> {
-    if b.pop < 4 || b.generations < 1 || b.max_threads < 1 || b.reps < 1 {
-        return Err(Error::Input(format!("bench scaling: --pop {} (≥ 4), --generations {} (≥ 1), --max-threads {} (≥ 1), --reps {} (≥ 1)", b.pop, b.generations, b.max_threads, b.reps)));
+    if b.pop < 4 || b.generations < 1 || b.threads.first() != Some(&1) || b.threads.contains(&0) || b.reps < 1 {
+        return Err(Error::Input(format!("bench scaling: --pop {} (≥ 4), --generations {} (≥ 1), --threads {:?} (≥ 1, starting with 1), --reps {} (≥ 1)", b.pop, b.generations, b.threads, b.reps)));
     }
     // the benchmark's own run folders go below `dir`; a `dir` holding anything else is refused,
     // so that removing them afterwards can never delete data this benchmark did not write
@@ -181,26 +183,43 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         b.reps,
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    say!(out, "threads  wall min / med   eff(min)  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
+    say!(out, "threads  wall min / med   eff(min)  ceiling  of ceil.  work    eval    strag.  serial  hand-over  out.(bg)  rec.(bg)  ckpt(bg)  waited");
     let mut t1 = None;
     let mut best: Option<Measured> = None;
-    for n in 1..=b.max_threads {
+    for &n in &b.threads {
         let mut runs = vec![];
         for _ in 0..b.reps {
             runs.push(run_once(problem, b, n, &dir.join(format!("t{n}")))?);
+        }
+        // the hardware's ceiling: n independent 1-thread runs at once (nothing shared but the
+        // machine: clock, caches, memory); their wall time over one run's
+        let mut indep = vec![];
+        for _ in 0..if b.ceiling { b.reps } else { 0 } {
+            let t = Instant::now();
+            std::thread::scope(|sc| {
+                let hs: Vec<_> = (0..n).map(|k| sc.spawn(move || run_once(problem, b, 1, &dir.join(format!("t{n}")).join(format!("c{k}"))))).collect();
+                hs.into_iter().map(|h| h.join().map_err(|_| Error::Optimiser("a ceiling run panicked".into()))?.map(|_| ())).collect::<Result<Vec<()>>>()
+            })?;
+            indep.push(t.elapsed().as_secs_f64());
         }
         let walls: Vec<f64> = runs.iter().map(|r| r.wall_s).collect();
         let (mn, md) = min_med(&walls);
         let r = runs.iter().min_by(|a, b| a.wall_s.total_cmp(&b.wall_s)).expect("reps ≥ 1").clone();
         let t1v = *t1.get_or_insert(mn);
+        // efficiency the hardware allows (T1 / wall of n independent runs), and how much of it is reached
+        let ceil = (!indep.is_empty()).then(|| t1v / min_med(&indep).0);
+        let of_ceil = ceil.map(|c| t1v / (n as f64 * mn) / c);
+        let pct = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{:>6.1} %", 100.0 * v));
         let eval: f64 = r.gens.iter().map(|g| g.eval_s).sum();
         let work: f64 = r.gens.iter().flat_map(|g| g.costs.iter()).sum();
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
         let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
         let p = r.persist;
         say!(out, 
-            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
+            "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {} {}  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
             100.0 * t1v / (n as f64 * mn),
+            pct(ceil),
+            pct(of_ceil),
             p.handover_s,
             p.outputs_s,
             p.record_s,
@@ -208,7 +227,8 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
             p.wait_s
         );
         rows.push(serde_json::json!({
-            "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "work_s": work, "eval_s": eval,
+            "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "ceiling_efficiency": ceil, "of_ceiling": of_ceil,
+            "independent_wall_s": indep, "work_s": work, "eval_s": eval,
             "straggler_s": strag, "serial_s": serial, "handover_s": p.handover_s, "outputs_bg_s": p.outputs_s, "record_bg_s": p.record_s,
             "checkpoint_bg_s": p.checkpoint_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "persist_pool_threads": p.pool_threads,
         }));
@@ -216,11 +236,12 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
             best = Some(r);
         }
     }
-    for n in 1..=b.max_threads {
+    for n in &b.threads {
         let _ = std::fs::remove_dir_all(dir.join(format!("t{n}")));
     }
     let _ = std::fs::remove_dir(dir); // only if now empty
-    say!(out, "(work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
+    say!(out, "(ceiling: T1 over the wall time of n independent 1-thread runs at once, the efficiency the machine itself allows; of ceil.: eff(min) / ceiling;");
+    say!(out, " work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
     say!(out, " hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
     let (hv, order): (f64, f64) = (m.gens.iter().map(|g| g.hv_s).sum(), m.gens.iter().map(|g| g.order_s).sum());

@@ -64,12 +64,18 @@ pub enum BenchCmd {
         /// Largest thread count (default: all cores).
         #[arg(long)]
         max_threads: Option<usize>,
+        /// Thread counts to measure instead of 1, 2, … --max-threads (comma separated; 1 is always measured).
+        #[arg(long, value_delimiter = ',')]
+        threads: Vec<usize>,
         /// Repetitions per thread count.
         #[arg(long, default_value_t = 3)]
         reps: usize,
         /// Without recording.
         #[arg(long)]
         no_record: bool,
+        /// Skip the hardware ceiling (n independent 1-thread runs at once, per thread count).
+        #[arg(long)]
+        no_ceiling: bool,
         /// Folder of the benchmark runs (deleted afterwards).
         #[arg(long, default_value = "results/bench/scaling-run")]
         out: PathBuf,
@@ -117,11 +123,15 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             let p = super::load_problem(&problem)?;
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
         }
-        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, reps, no_record, out: dir } => {
+        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, threads, reps, no_record, no_ceiling, out: dir } => {
             let p = super::load_problem(&problem)?;
             let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
             let record = if no_record { gripopt::record::RecordOptions::none() } else { gripopt::record::RecordOptions::default() };
-            let b = ScalingBench { pop, generations, seed, max_threads: max_threads.unwrap_or(cores), reps, record, predict: vec![2, 16, 64] };
+            let mut threads = if threads.is_empty() { (1..=max_threads.unwrap_or(cores)).collect() } else { threads };
+            threads.push(1);
+            threads.sort_unstable();
+            threads.dedup();
+            let b = ScalingBench { pop, generations, seed, threads, reps, record, predict: vec![2, 16, 64], ceiling: !no_ceiling };
             gripopt::bench::scaling(&p, &b, &dir, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
