@@ -262,12 +262,12 @@ fn check_threads(t: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-/// The pipeline's stage 3 has no free-scene criteria yet: say so instead of letting
-/// `kind = "free"` look like it changed the verdicts.
-fn warn_free_scene(p: &gripopt::params::Problem) {
-    if p.scene.setup.kind == gripopt::params::SceneKind::Free {
-        eprintln!("warning: [scene] kind = \"free\": stage 3 of the pipeline applies the centred scene's criteria (the thesis's prediction); the free object's motion is `gripopt simulate --scene free`");
+/// A free-kind problem needs the hand horizontal (MODEL.md §14.1): g_eq = 0.
+fn check_free_scene(p: &gripopt::params::Problem) -> Result<()> {
+    if p.scene.setup.kind == gripopt::params::SceneKind::Free && p.scene.env.g_eq != 0.0 {
+        anyhow::bail!("[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
     }
+    Ok(())
 }
 
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
@@ -276,7 +276,7 @@ pub fn run() -> Result<i32> {
     match cli.cmd {
         Cmd::Evaluate { problem, design, json, static_only } => {
             let p = load_problem(&problem)?;
-            warn_free_scene(&p);
+            check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
@@ -301,7 +301,7 @@ pub fn run() -> Result<i32> {
         Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, record_full, json } => {
             check_threads(threads)?;
             if let Ok(p) = gripopt::params::Problem::load(&problem) {
-                warn_free_scene(&p);
+                check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             }
             if record_every == 0 {
                 anyhow::bail!("--record-every 0: must be at least 1");
