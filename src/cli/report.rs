@@ -77,9 +77,12 @@ fn print_dyn(r: &DynamicsRecord) {
 /// The free scene's measurement of a free-kind stage 3 (MODEL.md §14.4).
 fn print_free(f: &gripopt::eval::FreeRecord) {
     println!("stage 3    free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides", opt(f.object_x_off, 1e3, 3));
-    if f.moved.is_none() {
+    let Some(end) = f.free_end else {
         println!("  not run (the centred grasp was discarded first)");
         return;
+    };
+    if end != "t_obs" {
+        println!("  ended early: {end}");
     }
     println!("  object max displacement {} mm (dx {} mm, dy {} mm)  max tilt {} deg  final {} mm / {} deg", opt(f.object_max_displacement, 1e3, 4), opt(f.object_max_dx, 1e3, 4), opt(f.object_max_dy, 1e3, 4), opt(f.object_max_tilt_deg, 1.0, 4), opt(f.object_final_displacement, 1e3, 4), opt(f.object_final_tilt_deg, 1.0, 4));
     println!("  peak E_trans {} mJ  E_rot {} mJ during the first contact", opt(f.object_peak_e_trans, 1e3, 4), opt(f.object_peak_e_rot, 1e3, 4));

@@ -1,7 +1,7 @@
 //! The ONE place that flattens an evaluation into its record: the per-design JSON record
 //! of MODEL.md §10 (`gripopt evaluate --json`, CSV rows, recordings, sweeps).
 
-use super::free_stage::FreeMeasure;
+use super::free_stage::{FreeEnd, FreeMeasure};
 use super::stages::Evaluation;
 use crate::params::SceneKind;
 use crate::sim::DynamicsResult;
@@ -315,6 +315,9 @@ pub struct FreeRecord {
     pub rim_contact: Option<bool>,
     /// Object offset x_off of the free scene (m).
     pub object_x_off: Option<f64>,
+    /// How the free scene ended: "t_obs" (observed to min(t_max, t_obs)) or why it stopped
+    /// early (then the maxima cover the part simulated and the verdict flags are null).
+    pub free_end: Option<&'static str>,
     /// Accepted steps of the free scene.
     pub free_steps: Option<u64>,
     /// Right-hand-side evaluations of the free scene.
@@ -325,6 +328,7 @@ impl FreeRecord {
     /// Flatten a measurement (None → all null).
     pub fn from_measure(m: Option<&FreeMeasure>) -> Self {
         let Some(m) = m else { return Self::default() };
+        let observed = m.end == FreeEnd::Observed;
         FreeRecord {
             object_max_displacement: Some(m.max_displacement),
             object_max_dx: Some(m.max_dx),
@@ -334,11 +338,15 @@ impl FreeRecord {
             object_final_tilt_deg: Some(m.final_tilt_deg),
             object_peak_e_trans: Some(m.peak_e_trans),
             object_peak_e_rot: Some(m.peak_e_rot),
-            moved: Some(m.moved),
-            toppled: Some(m.toppled),
-            escaped: Some(m.escaped),
+            moved: observed.then_some(m.moved),
+            toppled: observed.then_some(m.toppled),
+            escaped: observed.then_some(m.escaped),
             rim_contact: Some(m.rim_contact),
             object_x_off: Some(m.x_off),
+            free_end: Some(match m.end {
+                FreeEnd::Observed => "t_obs",
+                FreeEnd::Early(why) => why,
+            }),
             free_steps: Some(m.steps),
             free_rhs_evals: Some(m.rhs_evals),
         }
