@@ -89,10 +89,9 @@ fn print_free(f: &gripopt::eval::FreeRecord) {
     println!("  moved {}  toppled {}  escaped {}  rim_contact {}", yes_no(f.moved), yes_no(f.toppled), yes_no(f.escaped), yes_no(f.rim_contact));
 }
 
-/// `gripopt simulate`.
+/// `gripopt simulate` in the centred scene (`extra`: keys added to the JSON object).
 #[allow(clippy::too_many_arguments)]
-#[allow(clippy::too_many_arguments)]
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>, plot: Option<&Path>) -> Result<()> {
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>, plot: Option<&Path>, extra: &serde_json::Map<String, serde_json::Value>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -135,6 +134,7 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
         m.insert("feasible".into(), serde_json::json!(verdict.0));
         m.insert("failed_stage".into(), serde_json::json!(verdict.1));
         m.insert("reason".into(), serde_json::json!(verdict.2));
+        m.extend(extra.clone());
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
