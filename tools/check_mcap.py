@@ -19,6 +19,13 @@ Foxglove schemas from `foxglove-schemas-protobuf`. For every *.mcap under the gi
    time running forward inside the window; where there is a scene, `/tf` (world → hand),
    `/scene/static` (deleting all, then ground, palm, object) and `/scene` (deleting all first)
    are at the window start, and the last `/scene` message is at the last recorded sample.
+5. a `gripopt verify` recording (metadata `gripopt.verify` instead of `gripopt.run`): window k
+   holds one `/verify` record (window k, at the window start); `/scene/static` at the window
+   start deletes all, then draws ground (frame world), palm (hand) and object (object); `/tf`
+   carries world → hand and hand → object at the window start, then hand → object only, one
+   per drawn pose (as many as the record says), time running forward, stamps equal to the log
+   times, unit quaternions, the last at the record's t_end; `/scene` deletes all first and
+   draws the two fingers only at pose times, the last at the last pose.
 
 Prints one line per file and 'N passed, N failed'; exits non-zero on any failure or when
 no file was found.
@@ -181,12 +188,18 @@ def check(path):
         if problems:
             raise ValueError("\n    " + "\n    ".join(problems))
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
-        if "gripopt.run" not in meta:
-            raise ValueError("no gripopt.run metadata record")
-        run = meta["gripopt.run"]
-        for k in ("generation", "first_id", "last_id", "designs", "epoch_s"):
+        if "gripopt.run" in meta:
+            name, first, last, per_design = "gripopt.run", "first_id", "last_id", check_design
+            keys = ("generation", "first_id", "last_id", "designs", "epoch_s")
+        elif "gripopt.verify" in meta:
+            name, first, last, per_design = "gripopt.verify", "first_window", "last_window", check_verify_design
+            keys = ("first_window", "last_window", "designs", "epoch_s", "scene_dt")
+        else:
+            raise ValueError("no gripopt.run (or gripopt.verify) metadata record")
+        run = meta[name]
+        for k in keys:
             if k not in run:
-                raise ValueError(f"gripopt.run metadata lacks {k!r}")
+                raise ValueError(f"{name} metadata lacks {k!r}")
         epoch = int(run["epoch_s"]) * NS
         n = 0
         by_design = {}
@@ -201,11 +214,11 @@ def check(path):
         if n != summary.statistics.message_count:
             raise ValueError(f"read {n} messages, statistics say {summary.statistics.message_count}")
         ids = sorted(by_design)
-        if [ids[0], ids[-1], len(ids)] != [int(run["first_id"]), int(run["last_id"]), int(run["designs"])]:
-            raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run['first_id']}..{run['last_id']} ({run['designs']})")
+        if [ids[0], ids[-1], len(ids)] != [int(run[first]), int(run[last]), int(run["designs"])]:
+            raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run[first]}..{run[last]} ({run['designs']})")
         scene = any(ch.topic == "/scene" for ch in summary.channels.values())
         for d, msgs in by_design.items():
-            check_design(d, epoch + d * NS, msgs, scene)
+            per_design(d, epoch + d * NS, msgs, scene)
         return n, len(summary.chunk_indexes)
 
 
@@ -243,6 +256,51 @@ def check_design(d, t0, msgs, scene):
         last = t0 + min(round(t[-1] * NS), NS - 1)
         if drawn[-1][0] != last:
             raise ValueError(f"design {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last sample at {last - t0} ns")
+
+
+def check_verify_design(d, t0, msgs, scene):
+    at = lambda topic: [(t, m) for tp, t, m in msgs if tp == topic]  # noqa: E731
+    rec = at("/verify")
+    if len(rec) != 1 or rec[0][0] != t0 or rec[0][1]["window"] != d:
+        raise ValueError(f"window {d}: /verify must hold one message, for window {d}, at the window start {t0}")
+    r = rec[0][1]
+    ws = r["window_start"]
+    if ws["sec"] * NS + ws["nsec"] != t0:
+        raise ValueError(f"window {d}: /verify.window_start {ws} is not the window start {t0}")
+    tf, static, fingers = at("/tf"), at("/scene/static"), at("/scene")
+    if len(static) != 1 or static[0][0] != t0:
+        raise ValueError(f"window {d}: /scene/static must hold one message at the window start")
+    st = static[0][1]
+    frames = {e.id: e.frame_id for e in st.entities}
+    if not st.deletions or st.deletions[0].type != 1 or frames != {"ground": "world", "palm": "hand", "object": "object"}:
+        raise ValueError(f"window {d}: /scene/static must delete all, then draw ground (world), palm (hand) and object (object); got {frames}")
+    if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
+        raise ValueError(f"window {d}: the first /scene message must be at the window start and delete the previous fingers")
+    if len(tf) != r["poses"]:
+        raise ValueError(f"window {d}: {len(tf)} /tf messages, the record says {r['poses']} poses")
+    if not tf:
+        return
+    pairs = [[(x.parent_frame_id, x.child_frame_id) for x in m.transforms] for _, m in tf]
+    if tf[0][0] != t0 or pairs[0] != [("world", "hand"), ("hand", "object")] or any(p != [("hand", "object")] for p in pairs[1:]):
+        raise ValueError(f"window {d}: /tf must carry world → hand and hand → object at the window start, then hand → object only")
+    times = [t for t, _ in tf]
+    if any(b <= a for a, b in zip(times, times[1:])) or times[-1] >= t0 + NS:
+        raise ValueError(f"window {d}: /tf times must run forward inside the window")
+    for t, m in tf:
+        for x in m.transforms:
+            if x.timestamp.seconds * NS + x.timestamp.nanos != t:
+                raise ValueError(f"window {d}: a /tf stamp differs from its log time {t}")
+        q = m.transforms[-1].rotation
+        if abs(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w - 1.0) > 1e-9:
+            raise ValueError(f"window {d}: hand → object rotation at {t} is not a unit quaternion")
+    last = t0 + min(round(r["t_end"] * NS), NS - 1)
+    if times[-1] != last:
+        raise ValueError(f"window {d}: the last object pose is at {times[-1] - t0} ns, the record's t_end at {last - t0} ns")
+    drawn = [(t, m) for t, m in fingers if m.entities]
+    if any(t not in set(times) for t, _ in drawn) or any(len(m.entities[0].lines) != 2 for _, m in drawn):
+        raise ValueError(f"window {d}: /scene must draw two fingers, only at object pose times")
+    if drawn and drawn[-1][0] != times[-1]:
+        raise ValueError(f"window {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last object pose at {times[-1] - t0} ns")
 
 
 def main(folders):

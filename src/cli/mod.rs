@@ -50,7 +50,7 @@ enum Cmd {
         /// Integration method.
         #[arg(long, value_enum, default_value = "radau5")]
         method: MethodArg,
-        /// Scene (MODEL.md §14): centred, offset:X (metres) or free (default: the problem's [scene]).
+        /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).
         #[arg(long)]
         scene: Option<String>,
         /// Print the stage-3 keys as one JSON object.
@@ -129,6 +129,11 @@ enum Cmd {
         /// Plot the recorded trajectory to this SVG file.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Replay in this scene: centred, offset:X or free[:X] (metres). The run's own scene
+        /// (default) verifies the recording; another one re-simulates the design there and
+        /// reports it like `simulate --scene` (it cannot be verified against the recording).
+        #[arg(long)]
+        scene: Option<String>,
     },
     /// Continue a stopped, killed or finished run.
     Resume {
@@ -262,12 +267,12 @@ fn check_threads(t: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-/// The pipeline's stage 3 has no free-scene criteria yet: say so instead of letting
-/// `kind = "free"` look like it changed the verdicts.
-fn warn_free_scene(p: &gripopt::params::Problem) {
-    if p.scene.setup.kind == gripopt::params::SceneKind::Free {
-        eprintln!("warning: [scene] kind = \"free\": stage 3 of the pipeline applies the centred scene's criteria (the thesis's prediction); the free object's motion is `gripopt simulate --scene free`");
+/// A free-kind problem needs the hand horizontal (MODEL.md §14.1): g_eq = 0.
+fn check_free_scene(p: &gripopt::params::Problem) -> Result<()> {
+    if p.scene.setup.kind == gripopt::params::SceneKind::Free && p.scene.env.g_eq != 0.0 {
+        anyhow::bail!("[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
     }
+    Ok(())
 }
 
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
@@ -276,7 +281,7 @@ pub fn run() -> Result<i32> {
     match cli.cmd {
         Cmd::Evaluate { problem, design, json, static_only } => {
             let p = load_problem(&problem)?;
-            warn_free_scene(&p);
+            check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
@@ -287,21 +292,13 @@ pub fn run() -> Result<i32> {
             }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
-            if p.scene.setup.kind != gripopt::params::SceneKind::Centred {
-                if plot.is_some() {
-                    anyhow::bail!("--plot: only the centred scene is plotted so far (use --csv for the {:?} scene)", p.scene.setup.kind);
-                }
-                scenes::simulate(&p, &x, rtol, json, csv.as_deref()).with_context(|| format!("simulating {}", problem.display()))?;
-                return Ok(0);
-            }
-            report::simulate(&p, &x, rtol, method.to_method(), !no_contact, trace, json, csv.as_deref(), plot.as_deref())
-                .with_context(|| format!("simulating {}", problem.display()))
-                .map(|_| 0)
+            let o = scenes::SimulateOpts { rtol, method: method.to_method(), contacts: !no_contact, trace, json, csv: csv.as_deref(), plot: plot.as_deref(), extra: Default::default() };
+            scenes::simulate_in_scene(&p, &x, &o).with_context(|| format!("simulating {}", problem.display())).map(|_| 0)
         }
         Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, record_full, json } => {
             check_threads(threads)?;
             if let Ok(p) = gripopt::params::Problem::load(&problem) {
-                warn_free_scene(&p);
+                check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             }
             if record_every == 0 {
                 anyhow::bail!("--record-every 0: must be at least 1");
@@ -327,7 +324,14 @@ pub fn run() -> Result<i32> {
             let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s, json)
         }
-        Cmd::Replay { run_dir, design, json, csv, plot } => optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref()),
+        Cmd::Replay { run_dir, design, json, csv, plot, scene } => {
+            if let Some(sc) = &scene {
+                if let Some(code) = scenes::replay_in_scene(&run_dir, design, sc, json, csv.as_deref(), plot.as_deref())? {
+                    return Ok(code);
+                }
+            }
+            optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref())
+        }
         Cmd::Resume { run_dir, generations, force, threads, json } => {
             check_threads(threads)?;
             let s = gripopt::run::resume(&run_dir, generations, force, threads, true)?;

@@ -47,6 +47,9 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     println!("  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}", opt(r.alpha, 1.0, 5), opt(r.mean_force, 1.0, 4), yes_no(r.form_closed_0), mm(r.max_offset.filter(|m| *m >= 0.0)), r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default());
     if !static_only {
         print_dyn(&r.dynamics);
+        if let Some(f) = &r.free {
+            print_free(f);
+        }
     }
     match (&r.failed_stage, &r.reason) {
         (Some(s), Some(why)) => println!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", r.violation.unwrap_or(0.0)),
@@ -71,10 +74,24 @@ fn print_dyn(r: &DynamicsRecord) {
     println!("  steps {} rejected {} rhs {} events {} cpu {} ms", r.steps.unwrap_or(0), r.rejected_steps.unwrap_or(0), r.rhs_evals.unwrap_or(0), r.events.unwrap_or(0), opt(r.cpu_s, 1e3, 3));
 }
 
-/// `gripopt simulate`.
+/// The free scene's measurement of a free-kind stage 3 (MODEL.md §14.4).
+fn print_free(f: &gripopt::eval::FreeRecord) {
+    println!("stage 3    free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides", opt(f.object_x_off, 1e3, 3));
+    let Some(end) = f.free_end else {
+        println!("  not run (the centred grasp was discarded first)");
+        return;
+    };
+    if end != "t_obs" {
+        println!("  ended early: {end}");
+    }
+    println!("  object max displacement {} mm (dx {} mm, dy {} mm)  max tilt {} deg  final {} mm / {} deg", opt(f.object_max_displacement, 1e3, 4), opt(f.object_max_dx, 1e3, 4), opt(f.object_max_dy, 1e3, 4), opt(f.object_max_tilt_deg, 1.0, 4), opt(f.object_final_displacement, 1e3, 4), opt(f.object_final_tilt_deg, 1.0, 4));
+    println!("  peak E_trans {} mJ  E_rot {} mJ during the first contact", opt(f.object_peak_e_trans, 1e3, 4), opt(f.object_peak_e_rot, 1e3, 4));
+    println!("  moved {}  toppled {}  escaped {}  rim_contact {}", yes_no(f.moved), yes_no(f.toppled), yes_no(f.escaped), yes_no(f.rim_contact));
+}
+
+/// `gripopt simulate` in the centred scene (`extra`: keys added to the JSON object).
 #[allow(clippy::too_many_arguments)]
-#[allow(clippy::too_many_arguments)]
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>, plot: Option<&Path>) -> Result<()> {
+pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, contacts: bool, trace: bool, json: bool, csv: Option<&Path>, plot: Option<&Path>, extra: &serde_json::Map<String, serde_json::Value>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -117,6 +134,7 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, method: Method, cont
         m.insert("feasible".into(), serde_json::json!(verdict.0));
         m.insert("failed_stage".into(), serde_json::json!(verdict.1));
         m.insert("reason".into(), serde_json::json!(verdict.2));
+        m.extend(extra.clone());
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }

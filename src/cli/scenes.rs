@@ -1,5 +1,7 @@
-//! `--scene centred|offset:X|free` for `simulate` (MODEL.md §14): parsing, and the offset
-//! and free scenes' reports (the centred scene keeps `report::simulate`).
+//! `--scene centred|offset:X|free[:X]` for `simulate` and `replay` (MODEL.md §14): parsing,
+//! the one dispatch of a diagnostic simulation to its scene's report (the centred scene's is
+//! `report::simulate`), the offset and free scenes' reports, and `replay --scene` in a scene
+//! other than the run's.
 
 use anyhow::{bail, Context, Result};
 use gripopt::eval::{evaluate as eval_design, EvalOptions};
@@ -8,7 +10,7 @@ use gripopt::sim::{simulate_free, simulate_grasp, simulate_offset, FreeSetup, Si
 use std::io::Write;
 use std::path::Path;
 
-/// Parse `centred`, `offset:X` (metres) or `free` into the problem's `[scene]`.
+/// Parse `centred`, `offset:X` or `free[:X]` (metres) into the problem's `[scene]`.
 pub fn apply_scene(p: &mut Problem, arg: &str) -> Result<()> {
     let setup = &mut p.scene.setup;
     match arg.split_once(':') {
@@ -26,7 +28,7 @@ pub fn apply_scene(p: &mut Problem, arg: &str) -> Result<()> {
             setup.kind = SceneKind::Free;
             setup.x_off = v;
         }
-        _ => bail!("--scene {arg}: must be centred, offset:X (metres) or free"),
+        _ => bail!("--scene {arg}: must be centred, offset:X or free[:X] (metres)"),
     }
     if setup.kind == SceneKind::Free && p.scene.env.g_eq != 0.0 {
         bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1)");
@@ -34,8 +36,40 @@ pub fn apply_scene(p: &mut Problem, arg: &str) -> Result<()> {
     Ok(())
 }
 
-/// `gripopt simulate` in the offset or free scene.
-pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<&Path>) -> Result<()> {
+/// How `simulate` (and `replay --scene`) runs a design: the diagnostic simulation's options
+/// and outputs.
+pub struct SimulateOpts<'a> {
+    /// Relative tolerance (default: the problem's).
+    pub rtol: Option<f64>,
+    /// Integration method (centred scene).
+    pub method: gripopt::sim::Method,
+    /// Contacts with the object (centred scene; false: the linkage alone).
+    pub contacts: bool,
+    /// Print every located event to stderr (centred scene).
+    pub trace: bool,
+    /// One JSON object instead of the text report.
+    pub json: bool,
+    /// Write the trajectory to this CSV file.
+    pub csv: Option<&'a Path>,
+    /// Plot the grasp to this SVG file (centred scene only).
+    pub plot: Option<&'a Path>,
+    /// Keys added to the JSON object.
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
+pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
+    if p.scene.setup.kind == SceneKind::Centred {
+        return crate::cli::report::simulate(p, x, o.rtol, o.method, o.contacts, o.trace, o.json, o.csv, o.plot, &o.extra);
+    }
+    if o.plot.is_some() {
+        bail!("--plot: only the centred scene is plotted so far (use --csv for the {} scene)", p.scene.setup.kind);
+    }
+    simulate(p, x, o.rtol, o.json, o.csv, &o.extra)
+}
+
+/// The offset or free scene.
+fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<&Path>, extra: &serde_json::Map<String, serde_json::Value>) -> Result<()> {
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
@@ -55,6 +89,8 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Opt
             "hand_x_end": r.hand_end[0], "hand_y_end": r.hand_end[1], "hand0_x": r.hand0[0], "hand0_y": r.hand0[1],
             "recentres": r.hand_end[0] * x_off < 0.0, "t_end": d.t_end, "steps": d.stats.steps, "cpu_s": d.cpu_s,
         });
+        let mut v = v;
+        v.as_object_mut().expect("object").extend(extra.clone());
         println!("{}", if json { serde_json::to_string_pretty(&v)? } else { serde_json::to_string(&v)? });
         return Ok(());
     }
@@ -85,6 +121,7 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Opt
     m.insert("static_force_margin".into(), serde_json::json!(centred.static_force_margin));
     m.insert("force_ok".into(), serde_json::json!(centred.t_force_violation.is_none() && centred.static_force_margin >= 0.0));
     m.insert("t_stab".into(), serde_json::json!(centred.t_stab));
+    m.extend(extra.clone());
     if json {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -96,4 +133,43 @@ pub fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Opt
         println!("  steps {} rhs {} events {} cpu {:.2} ms", r.stats.steps, r.rhs_evals, r.events, r.cpu_s * 1e3);
     }
     Ok(())
+}
+
+/// A scene as `--scene` spells it (`centred`, `offset:X`, `free:X`).
+fn scene_name(p: &Problem) -> String {
+    match p.scene.setup.kind {
+        SceneKind::Centred => "centred".into(),
+        k => format!("{k}:{}", p.scene.setup.x_off),
+    }
+}
+
+/// `gripopt replay RUN_DIR --design ID --scene S`. When S is the run's own scene (its
+/// `problem.toml`: kind, and x_off for offset/free) this returns `None` and the caller
+/// replays and verifies as usual. Otherwise it re-simulates the recorded design in S with
+/// the run's problem and reports it like `simulate --scene S` (text, `--json`, `--csv`),
+/// saying that a different scene cannot be verified against the recording; `Some(0)`.
+pub fn replay_in_scene(dir: &Path, id: u64, scene: &str, json: bool, csv: Option<&Path>, plot: Option<&Path>) -> Result<Option<i32>> {
+    let run_problem = Problem::load(dir.join("problem.toml"))?;
+    let mut p = run_problem.clone();
+    apply_scene(&mut p, scene)?;
+    let (ran, recorded) = (scene_name(&p), scene_name(&run_problem));
+    if ran == recorded {
+        return Ok(None);
+    }
+    let rec = gripopt::record::read_design(dir, id)?;
+    let x = rec.design()?;
+    let note = format!(
+        "design {id} of {} re-simulated in the {ran} scene; the run recorded the {recorded} scene, so a different scene cannot be verified against the recording (nothing compared)",
+        dir.display()
+    );
+    let mut extra = serde_json::Map::new();
+    extra.insert("replay".into(), serde_json::json!({"run_dir": dir.display().to_string(), "design": id, "file": rec.file.display().to_string(), "recorded_scene": recorded, "scene": ran}));
+    extra.insert("verified".into(), serde_json::Value::Null);
+    extra.insert("note".into(), serde_json::json!(note));
+    if !json {
+        println!("{note}");
+    }
+    let o = SimulateOpts { rtol: None, method: gripopt::sim::Method::Radau5, contacts: true, trace: false, json, csv, plot, extra };
+    simulate_in_scene(&p, &x, &o).with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;
+    Ok(Some(0))
 }

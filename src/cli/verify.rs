@@ -18,12 +18,25 @@ pub struct VerifyArgs {
     /// Worker threads (default: all cores; results do not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Record the free scene to MCAP (RUN_DIR/verify.mcap, or verify_sample.mcap with
+    /// --sample; open in Foxglove with RUN_DIR/foxglove-verify-layout.json): all, or none.
+    #[arg(long, value_enum, default_value = "all")]
+    pub record: VerifyRecordArg,
     /// Study: N designs drawn from the run's problem bounds that pass stage 2 (writes verify_sample.csv).
     #[arg(long, hide = true)]
     pub sample: Option<usize>,
     /// Seed of `--sample`.
     #[arg(long, hide = true, default_value_t = 1)]
     pub seed: u64,
+}
+
+/// What `verify` records.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum VerifyRecordArg {
+    /// Every verified design's free scene (the object's pose and the fingers).
+    All,
+    /// Nothing.
+    None,
 }
 
 fn x_off_of(scene: &str) -> Result<Option<f64>> {
@@ -64,11 +77,15 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     let pool = b.build()?;
     let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) { indicatif::ProgressBar::new(0) } else { indicatif::ProgressBar::hidden() };
     pb.set_style(indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"));
-    let s = pool.install(|| verify(&a.run_dir, source, x_off, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
+    let record = a.record == VerifyRecordArg::All;
+    let s = pool.install(|| verify(&a.run_dir, source, x_off, record, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
     pb.finish_and_clear();
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
     println!("verified {} designs in the free scene → {}", s.rows.len(), s.file.display());
+    if let Some(r) = &s.recording {
+        println!("recorded to {} (open in Foxglove with {}, see docs/recording.md)", r.display(), a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display());
+    }
     if !s.skipped.is_empty() {
         eprintln!("warning: {} designs are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
     }

@@ -3,10 +3,12 @@
 //! with discards and violations, and the one flattening of an evaluation into its record.
 //! Above `sim`, below `optim`/`record`/`run`.
 
+mod free_stage;
 mod record;
 mod stages;
 
-pub use record::{DynamicsRecord, Record};
+pub use free_stage::{FreeEnd, FreeMeasure, ObjectMotion};
+pub use record::{DynamicsRecord, FreeRecord, Record};
 pub use stages::{
     evaluate, evaluate_full, evaluate_with_trajectory, stage_kinematics, stage_statics, Discard, EvalOptions, Evaluation,
     KinematicsResult, Partial, PartialGrasp, Reason, StaticsResult, MISSING_POSE_VIOLATION,

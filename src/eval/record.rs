@@ -1,7 +1,9 @@
 //! The ONE place that flattens an evaluation into its record: the per-design JSON record
 //! of MODEL.md §10 (`gripopt evaluate --json`, CSV rows, recordings, sweeps).
 
+use super::free_stage::{FreeEnd, FreeMeasure};
 use super::stages::Evaluation;
+use crate::params::SceneKind;
 use crate::sim::DynamicsResult;
 use serde::Serialize;
 
@@ -97,6 +99,10 @@ pub struct Record {
     /// Stage-3 keys (flattened; all null when stage 3 did not run).
     #[serde(flatten)]
     pub dynamics: DynamicsRecord,
+    /// The free scene's §14.4 keys (flattened), present only when the problem's scene is
+    /// free (null when the free scene did not run); absent for the centred and offset scenes.
+    #[serde(flatten)]
+    pub free: Option<FreeRecord>,
     /// No stage discarded the design.
     pub feasible: bool,
     /// Stage that discarded it.
@@ -173,6 +179,7 @@ impl Record {
             mean_force_0: st.map(|s| s.mean_force_0),
             force_model: st.map(|s| s.force_model.as_str()),
             dynamics: DynamicsRecord::from_result(ev.dynamics.as_ref()),
+            free: (ev.scene == SceneKind::Free).then(|| FreeRecord::from_measure(ev.free.as_ref())),
             feasible: ev.feasible(),
             failed_stage: ev.discard.map(|d| d.stage),
             reason: ev.discard.map(|d| d.reason.to_string()),
@@ -274,6 +281,74 @@ impl DynamicsRecord {
             events: Some(d.events),
             cpu_s: Some(d.cpu_s),
             knuckle_contact: Some(d.knuckle_flag),
+        }
+    }
+}
+
+/// The free scene's keys of the JSON record (MODEL.md §14.4, the names of
+/// `simulate --scene free --json`); all `null` when the free scene did not run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FreeRecord {
+    /// Largest horizontal displacement of G (m).
+    pub object_max_displacement: Option<f64>,
+    /// Largest |Δx| of G (m).
+    pub object_max_dx: Option<f64>,
+    /// Largest |Δy| of G (m).
+    pub object_max_dy: Option<f64>,
+    /// Largest tilt (°).
+    pub object_max_tilt_deg: Option<f64>,
+    /// Horizontal displacement at the end (m).
+    pub object_final_displacement: Option<f64>,
+    /// Tilt at the end (°).
+    pub object_final_tilt_deg: Option<f64>,
+    /// Peak translational kinetic energy of the object during the first contact (J).
+    pub object_peak_e_trans: Option<f64>,
+    /// Peak rotational kinetic energy of the object during the first contact (J).
+    pub object_peak_e_rot: Option<f64>,
+    /// Max displacement > Δx_max or max tilt > θ_max.
+    pub moved: Option<bool>,
+    /// Tilt above 45° at some time.
+    pub toppled: Option<bool>,
+    /// No phalanx in contact at the end.
+    pub escaped: Option<bool>,
+    /// A loaded phalanx met the object's rim or a face.
+    pub rim_contact: Option<bool>,
+    /// Object offset x_off of the free scene (m).
+    pub object_x_off: Option<f64>,
+    /// How the free scene ended: "t_obs" (observed to min(t_max, t_obs)) or why it stopped
+    /// early (then the maxima cover the part simulated and the verdict flags are null).
+    pub free_end: Option<&'static str>,
+    /// Accepted steps of the free scene.
+    pub free_steps: Option<u64>,
+    /// Right-hand-side evaluations of the free scene.
+    pub free_rhs_evals: Option<u64>,
+}
+
+impl FreeRecord {
+    /// Flatten a measurement (None → all null).
+    pub fn from_measure(m: Option<&FreeMeasure>) -> Self {
+        let Some(m) = m else { return Self::default() };
+        let observed = m.end == FreeEnd::Observed;
+        FreeRecord {
+            object_max_displacement: Some(m.max_displacement),
+            object_max_dx: Some(m.max_dx),
+            object_max_dy: Some(m.max_dy),
+            object_max_tilt_deg: Some(m.max_tilt_deg),
+            object_final_displacement: Some(m.final_displacement),
+            object_final_tilt_deg: Some(m.final_tilt_deg),
+            object_peak_e_trans: Some(m.peak_e_trans),
+            object_peak_e_rot: Some(m.peak_e_rot),
+            moved: observed.then_some(m.moved),
+            toppled: observed.then_some(m.toppled),
+            escaped: observed.then_some(m.escaped),
+            rim_contact: Some(m.rim_contact),
+            object_x_off: Some(m.x_off),
+            free_end: Some(match m.end {
+                FreeEnd::Observed => "t_obs",
+                FreeEnd::Early(why) => why,
+            }),
+            free_steps: Some(m.steps),
+            free_rhs_evals: Some(m.rhs_evals),
         }
     }
 }

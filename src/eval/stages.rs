@@ -8,7 +8,8 @@ use crate::model::{Finger, GeomError};
 use crate::model::spring_preload;
 use crate::model::isotropy;
 pub use crate::model::StaticsResult;
-use crate::params::{Design, Problem, SceneParams};
+use super::free_stage::{stage3_free, FreeMeasure, ObjectMotion};
+use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
 use std::fmt;
 use std::time::Instant;
@@ -28,6 +29,10 @@ pub enum Reason {
     Grasp(OffsetFailure),
     /// Stage 3: a dynamic criterion or the simulation itself failed.
     Dynamics(DynOutcome),
+    /// Stage 3 of a free-kind problem: the free object did not barely move (§14.4).
+    ObjectMoved(ObjectMotion),
+    /// Stage 3 of a free-kind problem: the free scene ended before t_obs (why).
+    FreeSceneEnded(&'static str),
 }
 
 impl fmt::Display for Reason {
@@ -39,6 +44,8 @@ impl fmt::Display for Reason {
             Reason::SpringUndefined => write!(f, "spring preload undefined (singular open pose)"),
             Reason::Grasp(g) => write!(f, "{}", g.reason()),
             Reason::Dynamics(d) => write!(f, "{d}"),
+            Reason::ObjectMoved(m) => write!(f, "{m}"),
+            Reason::FreeSceneEnded(why) => write!(f, "free scene: {why}"),
         }
     }
 }
@@ -76,8 +83,13 @@ pub struct Evaluation {
     pub kin: Option<KinematicsResult>,
     /// Stage 2 values, if stage 2 passed.
     pub statics: Option<StaticsResult>,
-    /// Stage 3 values, if stage 3 ran (also when it discarded the design).
+    /// Stage 3 values, if stage 3 ran (also when it discarded the design). For a
+    /// free-kind problem: the centred scene's (in diagnostic mode).
     pub dynamics: Option<DynamicsResult>,
+    /// For a free-kind problem: the free scene's measurement, if it ran (MODEL.md §14.4).
+    pub free: Option<FreeMeasure>,
+    /// The scene stage 3 ran in (the problem's `[scene] kind`; centred when stage 3 did not run).
+    pub scene: SceneKind,
     /// `None` = feasible.
     pub discard: Option<Discard>,
     /// Values a discarding stage computed before it discarded the design (MODEL.md §10:
@@ -119,7 +131,7 @@ pub struct PartialGrasp {
 impl Evaluation {
     /// A design not evaluated yet.
     pub fn new(design: Design) -> Self {
-        Evaluation { design, kin: None, statics: None, dynamics: None, discard: None, partial: Partial::default(), stage_seconds: [0.0; 4] }
+        Evaluation { design, kin: None, statics: None, dynamics: None, free: None, scene: SceneKind::Centred, discard: None, partial: Partial::default(), stage_seconds: [0.0; 4] }
     }
     /// True when no stage discarded the design.
     pub fn feasible(&self) -> bool {
@@ -274,6 +286,13 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     if !opts.dynamics {
         return ev;
     }
+    ev.scene = s.setup.kind;
+    if s.setup.kind == SceneKind::Free {
+        let (dynr, free, discard) = stage3_free(&kin.finger, s, &st, &opts.sim, traj);
+        ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
+        (ev.dynamics, ev.free, ev.discard) = (Some(dynr), free, discard);
+        return ev;
+    }
     let dynr = stage3_scene(&kin.finger, s, &st, &opts.sim, traj);
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
@@ -284,11 +303,11 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
 }
 
 /// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
-/// on the object at x_off. The free scene's criteria are the centred scene's (the thesis's
-/// prediction); its measured motion is `simulate --scene free` and `verify`.
+/// on the object at x_off. (The free kind is `free_stage::stage3_free`: the centred scene
+/// plus the free object's measured motion.)
 fn stage3_scene(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
     match s.setup.kind {
-        crate::params::SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
+        SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
         _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
     }
 }

@@ -7,7 +7,7 @@ use super::options::{RecordOptions, Resolution};
 use crate::math::V2;
 use crate::model::Finger;
 use crate::params::{Design, SceneParams};
-use crate::sim::Sample;
+use crate::sim::{PoseSample, Sample};
 use foxglove::messages::{
     line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform, FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose,
     Quaternion, SceneEntity, SceneEntityDeletion, SceneUpdate, Timestamp, Vector3,
@@ -183,20 +183,37 @@ pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
 /// previous design on this topic, then draws the ground plane (frame `world`), the palm
 /// (width b + 2 cm) and the object (frame `hand`). Its latest message is always valid.
 pub fn static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
+    let r = sc.object.radius;
+    let object = object_entity(t_ns, "hand", id, sc, at(0.0, r, 0.0));
+    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object] }
+}
+
+/// The ground plane (frame `world`, top face at z = 0).
+fn ground_entity(t_ns: u64, id: u64) -> SceneEntity {
     let mut ground = entity(t_ns, "world", "ground", id);
     ground.cubes.push(CubePrimitive { pose: at(0.0, 0.0, -0.0005), size: Some(Vector3 { x: 0.6, y: 0.6, z: 0.001 }), color: rgba(0.55, 0.55, 0.5, 1.0) });
+    ground
+}
+
+/// The palm (frame `hand`: width b + 2 cm, its face the line y = 0, 4 cm across the plane).
+fn palm_entity(t_ns: u64, id: u64, design: &Design) -> SceneEntity {
     let mut palm = entity(t_ns, "hand", "palm", id);
     palm.cubes.push(CubePrimitive { pose: at(0.0, -0.005, 0.0), size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }), color: rgba(0.5, 0.5, 0.5, 1.0) });
+    palm
+}
+
+/// The bottle: a cylinder of radius R and length L_c along the z axis of `frame`, centred at `pose`.
+fn object_entity(t_ns: u64, frame: &str, id: u64, sc: &SceneParams, pose: Option<Pose>) -> SceneEntity {
     let r = sc.object.radius;
-    let mut object = entity(t_ns, "hand", "object", id);
+    let mut object = entity(t_ns, frame, "object", id);
     object.cylinders.push(CylinderPrimitive {
-        pose: at(0.0, r, 0.0),
+        pose,
         size: Some(Vector3 { x: 2.0 * r, y: 2.0 * r, z: sc.object.length }),
         bottom_scale: 1.0,
         top_scale: 1.0,
         color: rgba(0.2, 0.5, 0.9, 0.5),
     });
-    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground, palm, object] }
+    object
 }
 
 /// Round a coordinate to 2⁻²⁰ m (≈ 1 µm): invisible, and the zeroed low mantissa bits
@@ -215,18 +232,78 @@ pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, fi
     let Some((finger, p)) = pose else {
         return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
-    let chain: [V2; 6] = [finger.tip(&p), p.o22, finger.o21, p.o12, p.o13, p.o22];
     let mut e = entity(t_ns, "hand", "fingers", id);
     for mirror in [1.0, -1.0] {
-        e.lines.push(LinePrimitive {
-            r#type: line_primitive::Type::LineStrip as i32,
-            pose: at(0.0, 0.0, 0.0),
-            thickness: 2.0 * finger.w,
-            scale_invariant: false,
-            points: chain.iter().map(|v| Point3 { x: q(mirror * v.x), y: q(v.y), z: 0.0 }).collect(),
-            color: rgba(0.9, 0.4, 0.1, 1.0),
-            ..Default::default()
+        e.lines.push(finger_line(finger, &p, mirror));
+    }
+    Some(SceneUpdate { deletions, entities: vec![e] })
+}
+
+/// One finger at pose `p` as a line strip through tip, O22, base, O12, O13, O22 in the
+/// hand's plane (`mirror` −1: finger 2, mirrored in x).
+fn finger_line(finger: &Finger, p: &crate::model::Pose, mirror: f64) -> LinePrimitive {
+    let chain: [V2; 6] = [finger.tip(p), p.o22, finger.o21, p.o12, p.o13, p.o22];
+    LinePrimitive {
+        r#type: line_primitive::Type::LineStrip as i32,
+        pose: at(0.0, 0.0, 0.0),
+        thickness: 2.0 * finger.w,
+        scale_invariant: false,
+        points: chain.iter().map(|v| Point3 { x: q(mirror * v.x), y: q(v.y), z: 0.0 }).collect(),
+        color: rgba(0.9, 0.4, 0.1, 1.0),
+        ..Default::default()
+    }
+}
+
+// ---- the free scene (`gripopt verify`'s recording): the hand horizontal, the object a
+// ---- rigid body whose pose is the frame `object`
+
+/// `/tf` of the free scene at `t_ns`: with `hand`, `world` (z up, ground at z = 0) →
+/// `hand` (the free scene's frame, MODEL.md §14.1: the hand plane z = 0 at h_c above the
+/// ground, x along the palm, y toward the object, z up); always `hand` → `object` (origin at
+/// G, axes the body's: its axis along z) from the pose sample.
+pub fn free_frames(t_ns: u64, sc: &SceneParams, pose: &PoseSample, hand: bool) -> FrameTransforms {
+    let mut transforms = Vec::with_capacity(2);
+    if hand {
+        transforms.push(FrameTransform {
+            timestamp: Some(stamp(t_ns)),
+            parent_frame_id: "world".into(),
+            child_frame_id: "hand".into(),
+            translation: Some(Vector3 { x: 0.0, y: 0.0, z: sc.object.grasp_height }),
+            rotation: Some(Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }),
         });
     }
+    let [w, x, y, z] = pose.q;
+    let n = (w * w + x * x + y * y + z * z).sqrt();
+    transforms.push(FrameTransform {
+        timestamp: Some(stamp(t_ns)),
+        parent_frame_id: "hand".into(),
+        child_frame_id: "object".into(),
+        translation: Some(Vector3 { x: pose.g[0], y: pose.g[1], z: pose.g[2] }),
+        rotation: Some(Quaternion { x: x / n, y: y / n, z: z / n, w: w / n }),
+    });
+    FrameTransforms { transforms }
+}
+
+/// `/scene/static` of the free scene at a design's window start: deletes everything, then
+/// the ground (frame `world`), the palm (frame `hand`) and the bottle (frame `object`,
+/// centred at G, its axis along z).
+pub fn free_static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
+    let object = object_entity(t_ns, "object", id, sc, at(0.0, 0.0, 0.0));
+    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object] }
+}
+
+/// `/scene` of the free scene: both fingers, each at its own angles (`q`: q11, q21 of
+/// finger 1, then of finger 2 in its mirrored frame); with `first`, it first deletes the
+/// previous design's fingers. `None` when a pose cannot be assembled (then, with `first`,
+/// a message that only deletes).
+pub fn free_fingers(id: u64, t_ns: u64, finger: Option<&Finger>, q: [f64; 4], first: bool) -> Option<SceneUpdate> {
+    let deletions = if first { delete_all(t_ns) } else { vec![] };
+    let poses = finger.and_then(|f| Some((f, f.dgm(q[0], q[1]).ok()?, f.dgm(q[2], q[3]).ok()?)));
+    let Some((finger, p1, p2)) = poses else {
+        return first.then(|| SceneUpdate { deletions, entities: vec![] });
+    };
+    let mut e = entity(t_ns, "hand", "fingers", id);
+    e.lines.push(finger_line(finger, &p1, 1.0));
+    e.lines.push(finger_line(finger, &p2, -1.0));
     Some(SceneUpdate { deletions, entities: vec![e] })
 }

@@ -13,6 +13,9 @@
 //! This layer sits above the pipeline and the simulator and below the run layer: it never
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
 //! [`Recordable`] for their own types and call [`Recorder::record_generation`].
+//!
+//! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
+//! scene's object pose as a moving frame (see `verify_rec`).
 
 mod entry;
 mod messages;
@@ -22,6 +25,7 @@ mod recover;
 mod proto;
 mod replay;
 mod schema;
+mod verify_rec;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};
@@ -31,4 +35,5 @@ pub use options::{COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD
 pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use proto::{GraspSeries, SERIES_NAME};
 pub use replay::{Recorded, Replay, read_design, replay};
+pub use verify_rec::{keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA};
 pub use writer::{Recorder, ShardEntry, ShardTask, read_index, write_shard};

@@ -27,6 +27,19 @@ pub struct Recorded {
     pub resolution: Resolution,
 }
 
+impl Recorded {
+    /// The design of the `/designs` record (its `parameters`; errors name the shard).
+    pub fn design(&self) -> Result<Design> {
+        let p = &self.record["parameters"];
+        let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"]
+            .iter()
+            .map(|k| p[k].as_f64())
+            .collect::<Option<_>>()
+            .ok_or_else(|| Error::Recording { path: self.file.clone(), message: format!("design {}: field `parameters` incomplete", self.record["id"]) })?;
+        Ok(Design::from_array(&x.try_into().expect("six")))
+    }
+}
+
 /// Result of a replay.
 #[derive(Debug, Clone)]
 pub struct Replay {
@@ -127,13 +140,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
     let run: Value = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
     let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|source| Error::Json { path: run_json.clone(), what: "field `recording`", source })?;
-    let p = &recorded.record["parameters"];
-    let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"]
-        .iter()
-        .map(|k| p[k].as_f64())
-        .collect::<Option<_>>()
-        .ok_or_else(|| Error::Recording { path: recorded.file.clone(), message: format!("design {id}: field `parameters` incomplete") })?;
-    let design = Design::from_array(&x.try_into().expect("six"));
+    let design = recorded.design()?;
     let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
     let fresh: Vec<Sample> = match tr {
         Some(t) => {

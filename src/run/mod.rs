@@ -18,6 +18,7 @@ mod persist;
 mod plots;
 mod rundir;
 mod verify;
+mod verify_rec;
 
 pub use archive::{Archive, ARCHIVE_FILE};
 pub use grasp_plot::grasp_plot;
@@ -29,5 +30,6 @@ pub use observers::{OutputsObserver, ProgressObserver, RecordingObserver, Shared
 pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
 pub use plots::{hypervolume, pareto_matrix};
-pub use verify::{read_design_csv, run_designs, sample_designs, verify, verify_csv, verify_design, verify_designs, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE};
+pub use verify::{read_design_csv, run_designs, sample_designs, verify, verify_csv, verify_design, verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE};
+pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use rundir::{Resume, RunInfo, RunSpec, RunStatus, RunSummary, optimise, resume};

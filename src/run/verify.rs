@@ -6,10 +6,12 @@
 //! run folder's lock; [`Confusion`] counts prediction against measurement.
 
 use super::lock::RunLock;
+use super::verify_rec::VerifyRecording;
+use crate::record::keep_poses;
 use crate::eval::{evaluate, EvalOptions};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
-use crate::sim::{simulate_free, simulate_grasp, FreeSetup, SimOptions};
+use crate::sim::{simulate_free, simulate_grasp, FreeSetup, PoseSample, SimOptions};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
@@ -69,6 +71,8 @@ pub struct VerifyRow {
     pub escaped: bool,
     /// A phalanx met the rim or a face.
     pub rim_contact: bool,
+    /// Time the free scene reached (s; t_obs unless it ended early).
+    pub t_end: f64,
 }
 
 impl VerifyRow {
@@ -124,21 +128,31 @@ pub struct VerifySummary {
     pub skipped: Vec<u64>,
     /// Median of peak object E_trans / §9.1's E_trans and of E_rot / E_rot (None: no rows with contact).
     pub median_energy_ratio: Option<(f64, f64)>,
+    /// The MCAP recording written (verify.mcap or verify_sample.mcap), unless recording was off.
+    pub recording: Option<PathBuf>,
 }
 
 /// Verify one design of problem `p` (whose scene must be set up as the free scene to
 /// measure: kind, x_off). None when stages 0–2 discard it. The same options as
 /// `gripopt simulate --scene free` (diagnostic mode, the problem's solver settings).
 pub fn verify_design(p: &Problem, id: u64, x: &Design) -> Option<VerifyRow> {
+    verify_design_poses(p, id, x, None).map(|(r, _)| r)
+}
+
+/// [`verify_design`], with the free scene's poses to record every `scene_dt` of simulated
+/// time (and the last; `record::keep_poses`) when `scene_dt` is given (recording does not
+/// change the results).
+pub fn verify_design_poses(p: &Problem, id: u64, x: &Design, scene_dt: Option<f64>) -> Option<(VerifyRow, Vec<PoseSample>)> {
     let s = &p.scene;
     let ev = evaluate(x, s, &EvalOptions::statics_only());
     let (k, st) = (ev.kin?, ev.statics?);
     let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
     let c = simulate_grasp(&k.finger, s, &st, &o);
-    let f = simulate_free(&k.finger, s, st.tau_s0, s.setup.x_off, FreeSetup::default(), &o, None);
+    let f = simulate_free(&k.finger, s, st.tau_s0, s.setup.x_off, FreeSetup::default(), &SimOptions { record: scene_dt.is_some(), ..o }, None);
+    let poses = scene_dt.map(|dt| keep_poses(&f.poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
-    Some(VerifyRow {
+    let row = VerifyRow {
         id,
         design: *x,
         impact_ratio,
@@ -153,7 +167,9 @@ pub fn verify_design(p: &Problem, id: u64, x: &Design) -> Option<VerifyRow> {
         toppled: f.toppled,
         escaped: f.escaped,
         rim_contact: f.rim_contact,
-    })
+        t_end: f.t_end,
+    };
+    Some((row, poses))
 }
 
 /// Split one CSV line into fields (double-quoted fields with `""` escapes).
@@ -244,10 +260,15 @@ pub fn sample_designs(p: &Problem, n: usize, seed: u64) -> Vec<(u64, Design)> {
 /// Verify `designs` in parallel (in the current rayon pool), calling `tick` after each;
 /// rows in the order given, designs discarded at stages 0–2 left out.
 pub fn verify_designs(p: &Problem, designs: &[(u64, Design)], tick: &(dyn Fn() + Sync)) -> Vec<VerifyRow> {
+    verify_designs_poses(p, designs, None, tick).into_iter().map(|(r, _)| r).collect()
+}
+
+/// [`verify_designs`] with each row's poses to record (see [`verify_design_poses`]).
+pub fn verify_designs_poses(p: &Problem, designs: &[(u64, Design)], scene_dt: Option<f64>, tick: &(dyn Fn() + Sync)) -> Vec<(VerifyRow, Vec<PoseSample>)> {
     designs
         .par_iter()
         .map(|(id, x)| {
-            let r = verify_design(p, *id, x);
+            let r = verify_design_poses(p, *id, x, scene_dt);
             tick();
             r
         })
@@ -298,8 +319,10 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 
 /// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
 /// loads the run's problem, switches it to the free scene (at `x_off`, default the
-/// problem's), simulates the designs of `source` and writes the CSV atomically.
-pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, tick_len: &dyn Fn(usize), tick: &(dyn Fn() + Sync)) -> Result<VerifySummary> {
+/// problem's), simulates the designs of `source` and writes the CSV atomically; with
+/// `record`, also the MCAP recording of the free scene (verify.mcap or verify_sample.mcap,
+/// with the Foxglove layout `foxglove-verify-layout.json`).
+pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, record: bool, tick_len: &dyn Fn(usize), tick: &(dyn Fn() + Sync)) -> Result<VerifySummary> {
     if !dir.is_dir() {
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
     }
@@ -323,12 +346,18 @@ pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, tick_len: &d
         VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
     };
     tick_len(designs.len());
-    let rows = verify_designs(&p, &designs, tick);
+    let rec = if record { Some(VerifyRecording::new(dir, &source)?) } else { None };
+    let with_poses = verify_designs_poses(&p, &designs, rec.as_ref().map(|r| r.opts.scene_dt), tick);
+    let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
     let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
     let file = dir.join(file);
     write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
+    let recording = match rec {
+        Some(r) => Some(r.write(&p, with_poses)?),
+        None => None,
+    };
     let et: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.0 / e.0)).collect();
     let er: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.1 / e.1)).collect();
     let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio })
+    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio, recording })
 }

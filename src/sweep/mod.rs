@@ -387,6 +387,8 @@ pub fn verdict(ev: &Evaluation) -> &'static str {
             D::InitialPenetration => "initial_penetration",
             D::NoEquilibrium => "no_equilibrium",
         },
+        Reason::ObjectMoved(_) => "object_moved",
+        Reason::FreeSceneEnded(_) => "free_scene_aborted",
     }
 }
 

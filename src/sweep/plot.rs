@@ -35,6 +35,8 @@ const VERDICT_COLOURS: &[(&str, RGBColor)] = &[
     ("aborted", RGBColor(90, 90, 90)),
     ("initial_penetration", RGBColor(255, 0, 255)),
     ("no_equilibrium", RGBColor(90, 90, 90)),
+    ("object_moved", RGBColor(255, 120, 0)),
+    ("free_scene_aborted", RGBColor(60, 60, 60)),
 ];
 
 /// The colour of a verdict class.

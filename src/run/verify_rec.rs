@@ -1,0 +1,102 @@
+//! `gripopt verify`'s MCAP recording: the verify rows and the free scene's poses handed to
+//! the recorder ([`crate::record::write_verify`]) as `RUN_DIR/verify.mcap` (or
+//! `verify_sample.mcap` for `--sample`), on the run's own time axis (its recording epoch
+//! from run.json), so the file depends only on the run and the verified designs.
+
+use super::verify::{VerifyRow, VerifySource};
+use crate::params::Problem;
+use crate::record::{verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL};
+use crate::sim::PoseSample;
+use crate::{Error, Result};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The recording of the verify designs of a run.
+pub const VERIFY_MCAP: &str = "verify.mcap";
+/// The recording of a `--sample` study.
+pub const VERIFY_SAMPLE_MCAP: &str = "verify_sample.mcap";
+
+/// Where and how a verify run is recorded (prepared before the designs are simulated, so
+/// a bad run.json is reported before the work).
+pub(crate) struct VerifyRecording {
+    path: PathBuf,
+    dir: PathBuf,
+    meta: BTreeMap<String, String>,
+    /// Recording settings.
+    pub opts: VerifyRecordOptions,
+}
+
+impl VerifyRecording {
+    /// For run folder `dir` and the designs of `source`: the epoch is the run's
+    /// (`run.json` → `recording.epoch_s`; 0 = 1970 when the run has none).
+    pub fn new(dir: &Path, source: &VerifySource) -> Result<Self> {
+        let run_json = dir.join("run.json");
+        let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
+        let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
+        let epoch_s = match &run["recording"]["epoch_s"] {
+            serde_json::Value::Null => 0,
+            v => v.as_u64().ok_or_else(|| Error::RunDir { path: run_json.clone(), message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds") })?,
+        };
+        let (file, src) = match source {
+            VerifySource::Pareto => (VERIFY_MCAP, "pareto".to_string()),
+            VerifySource::All => (VERIFY_MCAP, "all".to_string()),
+            VerifySource::Sample { n, seed } => (VERIFY_SAMPLE_MCAP, format!("sample {n} seed {seed}")),
+        };
+        let mut meta = BTreeMap::new();
+        meta.insert("gripopt_version".into(), env!("CARGO_PKG_VERSION").into());
+        meta.insert("source".into(), src);
+        for k in ["problem_name", "problem_sha256"] {
+            if let Some(v) = run[k].as_str() {
+                meta.insert(k.into(), v.into());
+            }
+        }
+        let opts = VerifyRecordOptions { scene_dt: DEFAULT_SCENE_DT, epoch_s, zstd_level: DEFAULT_ZSTD_LEVEL };
+        Ok(VerifyRecording { path: dir.join(file), dir: dir.to_path_buf(), meta, opts })
+    }
+
+    /// Write the rows (in order: row k is window k) with their poses, and the layout file;
+    /// returns the recording's path.
+    pub fn write(self, p: &Problem, rows: Vec<(VerifyRow, Vec<PoseSample>)>) -> Result<PathBuf> {
+        let mut meta = self.meta;
+        let x_off = p.scene.setup.x_off;
+        meta.insert("scene".into(), format!("free:{x_off}"));
+        let entries: Vec<VerifyEntry> = rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
+        write_verify(&self.path, p, &meta, &entries, &self.opts)?;
+        write_verify_layout(&self.dir)?;
+        Ok(self.path)
+    }
+}
+
+/// The `/verify` message of a row (window fields are the writer's).
+fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
+    let fin = |v: f64| v.is_finite().then_some(v);
+    let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
+    VerifyRecord {
+        window: 0,
+        window_start: WindowStart { sec: 0, nsec: 0 },
+        window_start_s: 0.0,
+        epoch_s: 0,
+        id: r.id,
+        parameters: verify_parameters(&r.design),
+        x_off,
+        impact_ratio: r.impact_ratio.and_then(fin),
+        e_trans: et.and_then(fin),
+        e_rot: er.and_then(fin),
+        force_margin: fin(r.force_margin),
+        stable: r.stable,
+        predicted_moves: r.predicted_moves,
+        object_max_displacement: r.max_displacement,
+        object_max_tilt_deg: r.max_tilt_deg,
+        object_peak_e_trans: r.peak_e.0,
+        object_peak_e_rot: r.peak_e.1,
+        moved: r.moved,
+        toppled: r.toppled,
+        escaped: r.escaped,
+        rim_contact: r.rim_contact,
+        agrees: r.agrees(),
+        peak_e_trans_ratio: et.and_then(|e| fin(r.peak_e.0 / e)),
+        peak_e_rot_ratio: er.and_then(|e| fin(r.peak_e.1 / e)),
+        t_end: r.t_end,
+        poses: 0,
+    }
+}
