@@ -1,4 +1,5 @@
-//! The result files of a run folder, rewritten atomically after every generation so that a
+//! The result files of a run folder, rewritten atomically as generations finish (at most every
+//! 250 ms, see `persist::VIEWS_MIN_INTERVAL`, and after the last one) so that a
 //! running run can be watched: `pareto.csv` (the population's feasible non-dominated
 //! designs, deterministic), `archive.csv` (every feasible non-dominated design ever
 //! evaluated), `population.csv` (the whole population with discard stages and reasons; the
