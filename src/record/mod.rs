@@ -26,6 +26,7 @@ mod proto;
 mod replay;
 mod schema;
 mod verify_rec;
+mod mcapfile;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};

@@ -12,14 +12,13 @@ use crate::fsutil::write_atomic;
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::sim::PoseSample;
-use crate::{Error, Result};
+use crate::Result;
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
 use mcap::records::{MessageHeader, Metadata};
 use serde::Serialize;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 /// Name of the metadata record of a verify recording.
@@ -231,17 +230,9 @@ fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions
 /// record holds `designs`, `first_window`, `last_window`, `epoch_s`, `scene_dt` and
 /// `time_convention`. Returns the file size in bytes.
 pub fn write_verify(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, entries: &[VerifyEntry], opts: &VerifyRecordOptions) -> Result<u64> {
-    let tmp = path.with_extension("mcap.tmp");
-    let mc = |e: mcap::McapError| Error::Mcap { path: tmp.clone(), what: "cannot write".into(), source: e };
-    let file = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
-    let mut w = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .compression_level(opts.zstd_level)
-        .chunk_size(Some(64 << 20))
-        .profile("")
-        .library(format!("gripopt {}", env!("CARGO_PKG_VERSION")))
-        .create(BufWriter::new(file))
-        .map_err(mc)?;
+    let tmp = super::mcapfile::temporary(path);
+    let mc = super::mcapfile::error(&tmp);
+    let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
     let mut meta = meta.clone();
     meta.insert("designs".into(), entries.len().to_string());
     meta.insert("first_window".into(), "0".into());
@@ -271,12 +262,7 @@ pub fn write_verify(path: &Path, problem: &Problem, meta: &BTreeMap<String, Stri
         }
         w.flush().map_err(mc)?; // one chunk per design
     }
-    w.finish().map_err(mc)?;
-    let f = w.into_inner().into_inner().map_err(|e| Error::io(&tmp, "cannot write", e.into_error()))?;
-    f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary recording into place", e))?;
-    Ok(std::fs::metadata(path).map_err(|e| Error::io(path, "cannot read the size of", e))?.len())
+    super::mcapfile::finish(w, &tmp, path)
 }
 
 /// The Foxglove layout for verify recordings: the 3-D scene following the hand, and the

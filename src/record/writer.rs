@@ -13,7 +13,6 @@ use mcap::records::{MessageHeader, Metadata};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -82,19 +81,10 @@ fn fx<T: Encode>(m: &T) -> Vec<u8> {
 /// given: the first design's), `first_id`, `last_id`, `designs`, `epoch_s`, `resolution`
 /// and `time_convention`, so a lost `index.jsonl` can be rebuilt from the shards.
 pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, designs: &[&R], opts: &RecordOptions) -> Result<u64> {
-    let tmp = path.with_extension("mcap.tmp");
-    let mc = |e: mcap::McapError| Error::Mcap { path: tmp.clone(), what: "cannot write".into(), source: e };
-    // the shard is framed in memory and written with one call (one chunk per design would
-    // otherwise be several small writes each)
-    let mut w = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .compression_threads(opts.zstd_threads)
-        .compression_level(opts.zstd_level)
-        .chunk_size(Some(64 << 20))
-        .profile("")
-        .library(format!("gripopt {}", env!("CARGO_PKG_VERSION")))
-        .create(std::io::Cursor::new(Vec::with_capacity(1 << 20)))
-        .map_err(mc)?;
+    let tmp = super::mcapfile::temporary(path);
+    let mc = super::mcapfile::error(&tmp);
+    // the shard is framed in memory and written with one call
+    let mut w = super::mcapfile::open(&tmp, opts.zstd_level, opts.zstd_threads)?;
     let mut meta = meta.clone();
     let ids: Vec<u64> = designs.iter().map(|d| d.entry().id).collect();
     if let (Some(first), Some(last)) = (ids.iter().min(), ids.iter().max()) {
@@ -135,14 +125,7 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
         }
         w.flush().map_err(mc)?; // one chunk per design
     }
-    w.finish().map_err(mc)?;
-    let bytes = w.into_inner().into_inner();
-    let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
-    f.write_all(&bytes).map_err(|e| Error::io(&tmp, "cannot write", e))?;
-    f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary shard into place", e))?;
-    Ok(bytes.len() as u64)
+    super::mcapfile::finish(w, &tmp, path)
 }
 
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
