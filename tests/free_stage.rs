@@ -126,5 +126,10 @@ fn optimise_free_kind_end_to_end() {
         assert!(ev.feasible(), "design {id}");
         let m = ev.free.unwrap_or_else(|| panic!("design {id}: no free measurement"));
         assert!(m.max_displacement <= p.scene.criteria.dx_max && !m.moved, "design {id}");
+        // the recording's /designs record carries the same measured motion
+        let rec = gripopt::record::read_design(&out, id).unwrap();
+        let f = &rec.record["free_scene"];
+        assert_eq!(f["object_max_displacement"].as_f64(), Some(m.max_displacement), "design {id}: {f}");
+        assert_eq!(f["moved"].as_bool(), Some(false), "design {id}: {f}");
     }
 }

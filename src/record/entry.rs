@@ -30,6 +30,8 @@ pub struct DesignEntry<'a> {
     pub sim_work: Option<[u64; 2]>,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3].
     pub stage_seconds: [f64; 4],
+    /// The free scene's §14.4 keys (a JSON object), when the run's scene is free.
+    pub free: Option<&'a serde_json::Value>,
     /// The stage-3 trajectory, if kept.
     pub trajectory: Option<&'a Trajectory>,
 }

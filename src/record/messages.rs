@@ -71,6 +71,11 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> V
         o.insert("sim_steps".into(), json!(w[0]));
         o.insert("sim_rhs_evals".into(), json!(w[1]));
     }
+    if let Some(serde_json::Value::Object(f)) = i.free {
+        // like every other key, values not computed are left out (no nulls)
+        let f: serde_json::Map<String, Value> = f.iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k.clone(), v.clone())).collect();
+        o.insert("free_scene".into(), Value::Object(f));
+    }
     v
 }
 

@@ -29,6 +29,10 @@ pub struct GripperInfo {
     pub sim_work: Option<[u64; 2]>,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
     pub stage_seconds: [f64; 4],
+    /// The free scene's §14.4 keys (`eval::FreeRecord` as JSON) when the problem's scene
+    /// is free and stage 3 ran; absent otherwise (and in checkpoints of other scenes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free: Option<serde_json::Value>,
     /// The stage-3 trajectory, kept only until the recorder has written it (never
     /// checkpointed).
     #[serde(skip)]
@@ -52,6 +56,9 @@ impl GripperInfo {
             violation: ev.discard.map(|d| d.violation),
             sim_work: ev.dynamics.map(|d| [d.stats.steps, d.rhs_evals]),
             stage_seconds: ev.stage_seconds,
+            free: (ev.scene == crate::params::SceneKind::Free && ev.dynamics.is_some())
+                .then(|| serde_json::to_value(crate::eval::FreeRecord::from_measure(ev.free.as_ref())).ok())
+                .flatten(),
             trajectory: None,
         }
     }
@@ -72,6 +79,7 @@ impl Recordable for Individual<GripperInfo> {
             violation: i.violation,
             sim_work: i.sim_work,
             stage_seconds: i.stage_seconds,
+            free: i.free.as_ref(),
             trajectory: i.trajectory.as_deref(),
         }
     }
