@@ -14,13 +14,14 @@ mod radau5;
 mod trbdf2;
 
 pub use dense::hermite;
+pub use jacobian::fd_jacobian;
 pub use dopri5::Dopri5;
 pub use lu::{Lu, Scalar};
 pub use radau5::Radau5;
 pub use trbdf2::TrBdf2;
 
 use jacobian::JacobianCache;
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 /// Identifier of the smooth piece of a piecewise-smooth right-hand side: a set of on/off
 /// flags (stop engaged, a force clipped, …; the system names its flags, see
@@ -69,6 +70,13 @@ pub trait Rhs<const N: usize> {
     /// evaluation there for its driver).
     fn eval_accepted(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
         self.eval_piece(t, y)
+    }
+    /// The Jacobian ∂f/∂y at (t, y) into `jac`, with f = f(t, y) and `piece` = the piece of
+    /// y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined at a
+    /// state it needs. Default: [`fd_jacobian`], dense forward differences, N evaluations;
+    /// a system whose parts couple sparsely may exploit that.
+    fn jacobian(&mut self, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
+        fd_jacobian(self, t, y, f, piece, jac, stats)
     }
 }
 
