@@ -5,11 +5,13 @@
 //! State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2 | G (3) | quaternion (w, x, y, z) |
 //! v_G (3) | ω (3, world axes)). The run ends at min(t_max, t_obs).
 
+mod contacts;
+
 use super::{Point, Response, Scene};
 use crate::math::V2;
 use crate::model::{Finger, FrictionLaw};
 use crate::params::SceneParams;
-use crate::sim::contact3d::{closest_segments, point_force, quat_matrix, quat_mul, V3};
+use crate::sim::contact3d::{quat_mul, V3};
 use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver::{self, End, Run};
 use crate::sim::events::{Crossing, EventKind, EventValues};
@@ -17,7 +19,7 @@ use crate::sim::finger::{FingerEval, FingerModel, Kink};
 use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::SimOptions;
-use nalgebra::{Matrix2, Matrix3, SVector, Vector2};
+use nalgebra::{Matrix2, SVector, Vector2};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -271,36 +273,34 @@ impl<'a> FreeScene<'a> {
         (self.m * self.s.env.g / (self.ng as f64 * self.s.setup.ground_k)).powf(2.0 / 3.0)
     }
 
-    /// The model at `y`.
-    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
-        let s = self.s;
-        let (r, w, lc) = (s.object.radius, s.hand.w, s.object.length);
-        let fm = &self.model;
-        let f = fm.finger;
+    /// The finger evaluations at `y` (without contacts; their forces are added by the
+    /// scene).
+    #[inline(always)]
+    fn fingers(&self, y: &St, full: bool) -> Option<[FingerEval; 2]> {
+        let r = self.s.object.radius;
         let no_mem = [Memory::default(); 2];
         let mut fe = [None, None];
         for (i, slot) in fe.iter_mut().enumerate() {
             let o = 4 * i;
-            let qd = if self.setup.fingers { Vector2::new(y[o + 2], y[o + 3]) } else { Vector2::zeros() };
-            *slot = Some(fm.evaluate(Vector2::new(y[o], y[o + 1]), qd, V2::new(0.0, r), &no_mem, false, full)?);
+            *slot = Some(self.model.evaluate(Vector2::new(y[o], y[o + 1]), self.finger_rates(y, i), V2::new(0.0, r), &no_mem, false, full)?);
         }
-        let fe = [fe[0]?, fe[1]?];
-        let g = V3::new(y[G0], y[G0 + 1], y[G0 + 2]);
-        let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
-        let rot = quat_matrix(q);
-        let v = V3::new(y[V0], y[V0 + 1], y[V0 + 2]);
-        let om = V3::new(y[W0], y[W0 + 1], y[W0 + 2]);
-        let a = rot.column(2).into_owned();
-        let (p0, d2) = (g - a * (lc / 2.0), a * lc);
+        Some([fe[0]?, fe[1]?])
+    }
+
+    /// The model at `y`.
+    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
+        let s = self.s;
+        let fe = self.fingers(y, full)?;
+        let b = self.body(y);
         let mut c = [Contact3::default(); NC];
         let mut force = V3::new(0.0, 0.0, -self.m * s.env.g);
         let mut torque = V3::zeros();
         let mut gen = [fe[0].q_total, fe[1].q_total];
         let mut piece = Piece::SMOOTH;
         for i in 0..2 {
-            for b in 0..Kink::BITS {
-                if fe[i].piece.has(b) {
-                    piece = piece.with(b + Kink::BITS * i as u32);
+            for bit in 0..Kink::BITS {
+                if fe[i].piece.has(bit) {
+                    piece = piece.with(bit + Kink::BITS * i as u32);
                 }
             }
         }
@@ -312,90 +312,48 @@ impl<'a> FreeScene<'a> {
                 c[k].delta = -1.0;
                 continue;
             }
-            let (mx, a3, b3, jp) = if k < 4 {
-                let (i, j) = (k / 2, k % 2);
-                let p = &fe[i].pose;
-                let mx = if i == 0 { 1.0 } else { -1.0 };
-                let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, f.distal_dir(p), f.t22) };
-                let a3 = V3::new(mx * start.x, start.y, 0.0);
-                let d3 = V3::new(mx * dir.x * len, dir.y * len, 0.0);
-                (mx, a3, d3, Some((i, j)))
-            } else {
-                let hb = f.o21.x;
-                (1.0, V3::new(-hb, -w, 0.0), V3::new(2.0 * hb, 0.0, 0.0), None)
-            };
-            let (sp, tp, clamped) = closest_segments(a3, b3, p0, d2);
-            let n = a3 + b3 * sp;
-            let qa = p0 + d2 * tp;
-            let dv = qa - n;
-            let d = dv.norm();
-            let yc = dv / d;
-            let delta = r + w - d;
-            let pf = n + yc * w;
-            let po = qa - yc * r;
-            let (vf, jpm) = match jp {
-                Some((i, j)) => {
-                    let pl = V2::new(mx * pf.x, pf.y);
-                    let jm = fe[i].kin.point_jacobian(f, &fe[i].pose, pl, j == 1);
-                    let qd = if self.setup.fingers { Vector2::new(y[4 * i + 2], y[4 * i + 3]) } else { Vector2::zeros() };
-                    let vl = jm * qd;
-                    (V3::new(mx * vl.x, vl.y, 0.0), Some(jm))
-                }
-                None => (V3::zeros(), None),
-            };
-            let vo = v + om.cross(&(po - g));
-            let rel = vf - vo;
-            let dd = yc.dot(&rel);
-            let u = rel - yc * dd;
-            c[k] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: clamped };
-            if self.mem[k].active && delta > 0.0 {
-                let law = if k < 4 { &fm.friction } else { &self.law_palm };
-                let (fnm, ft) = point_force(kc, self.chi, law, delta, dd, self.mem[k].vminus, u);
+            let i = (k / 2).min(1);
+            let h = self.capsule_hit(k, &fe[i], self.finger_rates(y, i), &b);
+            c[k] = Contact3 { delta: h.delta, delta_dot: h.dd, normal: 0.0, rim: h.rim };
+            if self.loaded(k, h.delta) {
+                let (fnm, on_finger, clipped) = self.capsule_load(k, &h);
                 piece = piece.with(12 + 2 * k as u32);
-                if 1.0 + self.chi * dd / self.mem[k].vminus <= 0.0 {
+                if clipped {
                     piece = piece.with(13 + 2 * k as u32);
                 }
-                let on_finger = ft - yc * fnm;
                 force -= on_finger;
-                torque -= (po - g).cross(&on_finger);
+                torque -= (h.po - b.g).cross(&on_finger);
                 c[k].normal = fnm;
-                if let (Some(jm), Some((i, _))) = (jpm, jp) {
-                    gen[i] += jm.transpose() * Vector2::new(mx * on_finger.x, on_finger.y);
+                if k < 4 {
+                    gen[i] += Self::generalised(i, &h.jm, &on_finger);
                 }
-                v_el += 0.4 * kc * delta * delta * delta.sqrt();
+                v_el += 0.4 * kc * h.delta * h.delta * h.delta.sqrt();
             }
         }
         // ground points
         let kg = s.setup.ground_k;
-        let zg = -s.object.grasp_height;
         for k in 0..self.ng {
-            let rk = rot * self.rim_body[k];
-            let delta = zg - (g.z + rk.z);
-            let vp = v + om.cross(&rk);
-            let dd = -vp.z;
             let ci = 5 + k;
-            c[ci] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: false };
-            if self.mem[ci].active && delta > 0.0 {
-                let (fnm, ft) = point_force(kg, self.chi, &self.law_ground, delta, dd, self.mem[ci].vminus, V3::new(vp.x, vp.y, 0.0));
+            let h = self.ground_hit(k, &b);
+            c[ci] = Contact3 { delta: h.delta, delta_dot: -h.vp.z, normal: 0.0, rim: false };
+            if self.loaded(ci, h.delta) {
+                let (fnm, fo, clipped) = self.ground_load(ci, &h);
                 piece = piece.with(12 + 2 * ci as u32);
-                if 1.0 + self.chi * dd / self.mem[ci].vminus <= 0.0 {
+                if clipped {
                     piece = piece.with(13 + 2 * ci as u32);
                 }
-                let fo = ft + V3::new(0.0, 0.0, fnm);
                 force += fo;
-                torque += rk.cross(&fo);
+                torque += h.rk.cross(&fo);
                 c[ci].normal = fnm;
-                v_el += 0.4 * kg * delta * delta * delta.sqrt();
+                v_el += 0.4 * kg * h.delta * h.delta * h.delta.sqrt();
             }
         }
         for k in self.ng..NG_MAX {
             c[5 + k].delta = -1.0;
         }
-        if self.setup.push_x != 0.0 && a.z.abs() > 1e-12 {
-            let fp = V3::new(self.setup.push_x, 0.0, 0.0);
-            let lever = a * (-g.z / a.z);
+        if let Some((fp, tp)) = self.push(&b) {
             force += fp;
-            torque += lever.cross(&fp);
+            torque += tp;
         }
         let mut qdd = [Vector2::zeros(); 2];
         if self.setup.fingers {
@@ -403,13 +361,14 @@ impl<'a> FreeScene<'a> {
                 qdd[i] = fe[i].m.try_inverse()? * gen[i];
             }
         }
-        let i_w: Matrix3<f64> = rot * Matrix3::from_diagonal(&self.j_body) * rot.transpose();
+        let (v, om, a) = (b.v, b.om, b.a);
+        let i_w = self.inertia(&b);
         let l = i_w * om;
         let wdot = i_w.try_inverse()? * (torque - om.cross(&l));
         let e_t = 0.5 * self.m * v.norm_squared();
         let e_r = 0.5 * om.dot(&l);
-        let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * g.z + v_el } else { f64::NAN };
-        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: g, quat: q, omega: om, axis: a })
+        let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * b.g.z + v_el } else { f64::NAN };
+        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: b.g, quat: b.q, omega: om, axis: a })
     }
 
     fn deriv(&self, y: &St, ev: &FreeEval) -> St {
