@@ -7,6 +7,7 @@ mod architecture;
 mod constraints;
 mod dynamics;
 mod force_model;
+mod free_jacobian;
 mod kinematics;
 mod nominal;
 mod optimiser;

@@ -34,5 +34,5 @@ pub use scene::centred::{compliant_equilibrium, simulate_grasp, simulate_grasp_i
 pub use scene::{Point, Response, Scene};
 pub use tracking::Tracker;
 pub use contact3d::{closest_segments, quat_matrix, V3};
-pub use scene::free::{simulate_free, FreeEval, FreeResult, FreeScene, FreeSetup, PoseSample, EF as FREE_EVENTS, NF as FREE_NS};
+pub use scene::free::{simulate_free, free_tolerances, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, PoseSample, EF as FREE_EVENTS, NF as FREE_NS};
 pub use scene::offset::{simulate_offset, OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};

@@ -6,6 +6,9 @@
 //! v_G (3) | ω (3, world axes)). The run ends at min(t_max, t_obs).
 
 mod contacts;
+mod jacobian;
+
+pub use jacobian::FreeJacobian;
 
 use super::{Point, Response, Scene};
 use crate::math::V2;
@@ -16,7 +19,7 @@ use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver::{self, End, Run};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel, Kink};
-use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::integrate::{fd_jacobian, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::SimOptions;
 use nalgebra::{Matrix2, SVector, Vector2};
@@ -48,11 +51,14 @@ pub struct FreeSetup {
     pub tilt: f64,
     /// A constant force along x through the axis at z = 0 (N).
     pub push_x: f64,
+    /// The integrator's Jacobian by dense forward differences (21 evaluations) instead of
+    /// by blocks (for comparison).
+    pub dense_jacobian: bool,
 }
 
 impl Default for FreeSetup {
     fn default() -> Self {
-        FreeSetup { fingers: true, v0: [0.0; 3], tilt: 0.0, push_x: 0.0 }
+        FreeSetup { fingers: true, v0: [0.0; 3], tilt: 0.0, push_x: 0.0, dense_jacobian: false }
     }
 }
 
@@ -162,6 +168,9 @@ pub struct FreeResult {
     pub stats: Stats,
     /// Right-hand-side evaluations (including event location).
     pub rhs_evals: u64,
+    /// Partial evaluations of the block Jacobian (one per column: a finger and its
+    /// contacts, or the contacts alone).
+    pub jac_block_evals: u64,
     /// Wall seconds.
     pub cpu_s: f64,
     /// Energy at the start and at the end (J).
@@ -188,6 +197,8 @@ pub struct FreeScene<'a> {
     law_ground: FrictionLaw,
     x_off: f64,
     evals: u64,
+    jac_evals: u64,
+    last_sampled: Option<(f64, St)>,
     accepted: Option<(St, FreeEval)>,
     // tracking
     g_start: V3,
@@ -239,6 +250,7 @@ impl<'a> FreeScene<'a> {
             events: 0,
             stats: Stats::default(),
             rhs_evals: 0,
+            jac_block_evals: 0,
             cpu_s: 0.0,
             energy: [f64::NAN; 2],
             max_energy_rise: 0.0,
@@ -258,6 +270,8 @@ impl<'a> FreeScene<'a> {
             law_ground: FrictionLaw { mu_s: s.env.mu_g, mu_d: s.env.mu_g, v_s: s.setup.ground_v_s, v_d: s.setup.ground_v_d },
             x_off,
             evals: 0,
+            jac_evals: 0,
+            last_sampled: None,
             accepted: None,
             g_start: V3::zeros(),
             out,
@@ -266,6 +280,12 @@ impl<'a> FreeScene<'a> {
             last_energy: None,
             record,
         }
+    }
+
+    /// The last state sampled (when recording) and its time: with [`crate::sim::drive`],
+    /// a state reached mid-run with the contact memories of that moment.
+    pub fn last_sampled(&self) -> Option<(f64, St)> {
+        self.last_sampled
     }
 
     /// Pre-sink δ_g0 = (m_c g / (n_g K_g))^{2/3} of §14.1.
@@ -442,6 +462,13 @@ impl Rhs<NF> for FreeScene<'_> {
         self.accepted = Some((*y, ev));
         Some(out)
     }
+    fn jacobian(&mut self, t: f64, y: &St, f: &St, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
+        if self.setup.dense_jacobian {
+            fd_jacobian(self, t, y, f, piece, jac, stats)
+        } else {
+            self.block_jacobian(y, piece, jac)
+        }
+    }
 }
 
 fn free_events() -> [EventKind; EF] {
@@ -585,6 +612,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         }
         let pose = PoseSample { t, g: [y[G0], y[G0 + 1], y[G0 + 2]], q: ev.quat, tilt: ev.tilt, fingers: [y[0], y[1], y[4], y[5]], energy: ev.energy };
         self.out.poses.push(pose);
+        self.last_sampled = Some((t, *y));
     }
     fn finish(self, run: &Run<FreeEval>) -> FreeResult {
         let mut o = self.out;
@@ -604,6 +632,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         o.events = run.events;
         o.stats = run.stats;
         o.rhs_evals = self.evals + run.locate_evals;
+        o.jac_block_evals = self.jac_evals;
         if let Some(ev) = &run.last {
             o.object_final_tilt_deg = ev.tilt.to_degrees();
             o.object_final_displacement = (ev.pos.x - self.g_start.x).hypot(ev.pos.y - self.g_start.y);
@@ -619,7 +648,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
 
 /// Tolerances of the free scene: fingers as the centred scene, the object's position and
 /// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
-fn tolerances(opts: &SimOptions) -> Tol<NF> {
+pub fn free_tolerances(opts: &SimOptions) -> Tol<NF> {
     let mut atol = St::repeat(opts.atol);
     for j in 0..7 {
         atol[G0 + j] = opts.atol * 0.1;
@@ -633,7 +662,7 @@ pub fn simulate_free(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64, setup
     let clock = Instant::now();
     let scene = FreeScene::new(f, s, tau_s0, x_off, setup, opts.record);
     let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));
-    let mut r = driver::simulate(scene, opts, tolerances(opts), t_end);
+    let mut r = driver::simulate(scene, opts, free_tolerances(opts), t_end);
     r.cpu_s = clock.elapsed().as_secs_f64();
     r
 }
