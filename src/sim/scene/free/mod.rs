@@ -32,6 +32,8 @@ pub const NF: usize = 21;
 pub const NG_MAX: usize = 16;
 /// Contacts: 4 phalanges, the palm, the ground points.
 pub const NC: usize = 5 + NG_MAX;
+/// Contacts whose events fall within this time (s) of a located one change with it.
+const SIMULTANEOUS: f64 = 1e-10;
 /// Number of event functions of the free scene.
 pub const EF: usize = NC + 4;
 type St = SVector<f64, NF>;
@@ -573,7 +575,21 @@ impl Scene<NF, EF> for FreeScene<'_> {
             EventKind::Contact(_) => {
                 for k in 0..5 + self.ng {
                     let c = &ev.c[k];
-                    let ch = self.mem[k].update(c.delta, c.delta_dot, k == i, s.contact.eps_sep, s.contact.v_min);
+                    let mut ch = self.mem[k].update(c.delta, c.delta_dot, k == i, s.contact.eps_sep, s.contact.v_min);
+                    if ch == MemoryChange::Unchanged && k != i && self.crossing(k).is_some() {
+                        // a contact that crosses within SIMULTANEOUS of this one (the mirror
+                        // image of a symmetric pair, off by rounding) changes here too,
+                        // instead of as an event of its own an instant later
+                        let g = self.mem[k].event_value(c.delta, s.contact.eps_sep);
+                        let ahead = g + SIMULTANEOUS * c.delta_dot;
+                        if !self.mem[k].active && g <= 0.0 && ahead > 0.0 {
+                            self.mem[k] = Memory { active: true, vminus: c.delta_dot.max(s.contact.v_min) };
+                            ch = MemoryChange::Onset;
+                        } else if self.mem[k].active && g > 0.0 && ahead <= 0.0 {
+                            self.mem[k] = Memory::default();
+                            ch = MemoryChange::Separation;
+                        }
+                    }
                     if k < 4 && ch == MemoryChange::Onset && self.first_k.is_none() {
                         let fe = &ev.f[k / 2];
                         let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
