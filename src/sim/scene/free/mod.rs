@@ -310,6 +310,7 @@ impl<'a> FreeScene<'a> {
     }
 
     /// The model at `y`.
+    #[inline(always)]
     fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
         let s = self.s;
         let fe = self.fingers(y, full)?;
