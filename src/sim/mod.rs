@@ -27,7 +27,7 @@ pub use driver::{drive, simulate as simulate_scene, End, Run};
 pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventValues};
 pub use finger::{ContactState, FingerEval, FingerModel, Kink};
-pub use integrate::{fd_jacobian, hermite, Accepted, Dopri5, Lu, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol, TrBdf2};
+pub use integrate::{fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol, TrBdf2};
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample, SimOptions, Trajectory, MAX_EVENTS};
 pub use scene::centred::{compliant_equilibrium, simulate_grasp, simulate_grasp_into, simulate_grasp_traj, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS, NS};

@@ -11,6 +11,7 @@ mod dopri5;
 mod jacobian;
 mod lu;
 mod radau5;
+mod reduced;
 mod trbdf2;
 
 pub use dense::hermite;
@@ -18,6 +19,7 @@ pub use jacobian::fd_jacobian;
 pub use dopri5::Dopri5;
 pub use lu::{Lu, Scalar};
 pub use radau5::Radau5;
+pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
 use jacobian::JacobianCache;
@@ -77,6 +79,12 @@ pub trait Rhs<const N: usize> {
     /// a system whose parts couple sparsely may exploit that.
     fn jacobian(&mut self, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
         fd_jacobian(self, t, y, f, piece, jac, stats)
+    }
+    /// States the Newton solves may eliminate by blocks (see [`Partition`]): a second-order
+    /// system's positions, whose rates are velocities. Used by [`Radau5`] wherever the
+    /// Jacobian fits the partition. Default: none (dense LU).
+    fn newton_partition(&self) -> Option<Partition<N>> {
+        None
     }
 }
 

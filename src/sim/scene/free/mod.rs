@@ -19,7 +19,7 @@ use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver::{self, End, Run};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel, Kink};
-use crate::sim::integrate::{fd_jacobian, Piece, Rhs, Stats, Tol};
+use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::SimOptions;
 use nalgebra::{Matrix2, SVector, Vector2};
@@ -464,6 +464,11 @@ impl Rhs<NF> for FreeScene<'_> {
         let out = (self.deriv(y, &ev), ev.piece);
         self.accepted = Some((*y, ev));
         Some(out)
+    }
+    fn newton_partition(&self) -> Option<Partition<NF>> {
+        // the positions: both fingers' angles, G, and the quaternion (its rate depends on
+        // itself and ω only)
+        (!self.setup.dense_jacobian).then(|| Partition::new(&[&[0], &[1], &[4], &[5], &[G0], &[G0 + 1], &[G0 + 2], &[Q0, Q0 + 1, Q0 + 2, Q0 + 3]])).flatten()
     }
     fn jacobian(&mut self, t: f64, y: &St, f: &St, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
         if self.setup.dense_jacobian {
