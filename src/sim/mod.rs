@@ -26,7 +26,7 @@ pub use criteria::{force_margin, impact, impact_limits, r_area, u_min, Impact};
 pub use driver::{drive, simulate as simulate_scene, End, Run};
 pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventValues};
-pub use finger::{ContactState, FingerEval, FingerModel, Kink};
+pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
 pub use integrate::{fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol, TrBdf2};
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample, SimOptions, Trajectory, MAX_EVENTS};

@@ -7,7 +7,7 @@
 use super::{FreeScene, St, G0, Q0, V0, W0};
 use crate::math::V2;
 use crate::sim::contact3d::{closest_segments, point_force, quat_matrix, V3};
-use crate::sim::finger::FingerEval;
+use crate::sim::finger::FingerLinkage;
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
 /// The object's kinematics at a state.
@@ -100,14 +100,14 @@ impl FreeScene<'_> {
     /// Capsule contact `k` (0–3: phalanx k % 2 of finger k / 2, with that finger's
     /// evaluation `fe` and rates `qd`; 4: the palm, `fe` unused) against the object `b`.
     #[inline(always)]
-    pub(super) fn capsule_hit(&self, k: usize, fe: &FingerEval, qd: Vector2<f64>, b: &Body) -> CapsuleHit {
+    pub(super) fn capsule_hit(&self, k: usize, fe: &FingerLinkage, qd: Vector2<f64>, b: &Body) -> CapsuleHit {
         let (r, w) = (self.s.object.radius, self.s.hand.w);
         let f = self.model.finger;
         let (a3, b3) = if k < 4 {
             let (i, j) = (k / 2, k % 2);
             let p = &fe.pose;
             let mx = mirror(i);
-            let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, f.distal_dir(p), f.t22) };
+            let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, fe.xd, f.t22) };
             (V3::new(mx * start.x, start.y, 0.0), V3::new(mx * dir.x * len, dir.y * len, 0.0))
         } else {
             let hb = f.o21.x;
@@ -197,6 +197,12 @@ impl FreeScene<'_> {
     #[inline(always)]
     pub(super) fn inertia(&self, b: &Body) -> Matrix3<f64> {
         b.rot * Matrix3::from_diagonal(&self.j_body) * b.rot.transpose()
+    }
+
+    /// Its inverse.
+    #[inline(always)]
+    pub(super) fn inertia_inverse(&self, b: &Body) -> Matrix3<f64> {
+        b.rot * Matrix3::from_diagonal(&self.j_body.map(|j| 1.0 / j)) * b.rot.transpose()
     }
 
 }

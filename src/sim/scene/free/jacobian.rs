@@ -15,12 +15,10 @@
 //! full evaluations, and grows linearly with the number of bodies.
 
 use super::contacts::{Body, CapsuleHit, GroundHit};
-use super::{FreeScene, St, G0, NC, NF, Q0, V0, W0};
+use super::{FreeScene, St, G0, NC, NF, NG_MAX, Q0, V0, W0};
 use crate::sim::contact3d::V3;
-use crate::sim::finger::{FingerEval, Kink};
+use crate::sim::finger::{FingerLinkage, Kink};
 use crate::sim::integrate::Piece;
-use crate::math::V2;
-use crate::sim::memory::Memory;
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2};
 
 /// The Jacobian matrix of the free scene.
@@ -37,11 +35,12 @@ struct Load {
     clipped: bool,
 }
 
-/// Every contact at one state.
+/// Every contact whose memory is set, at one state (the others carry no load and cannot
+/// start to: their memory changes only at events).
 #[derive(Debug, Clone, Copy)]
 struct Loads {
     caps: [Option<CapsuleHit>; 5],
-    ground: [Option<GroundHit>; NC - 5],
+    ground: [Option<GroundHit>; NG_MAX],
     load: [Load; NC],
 }
 
@@ -59,17 +58,17 @@ fn sum(load: &[Load; NC], ks: std::ops::Range<usize>) -> (V3, V3, [Vector2<f64>;
     (f, t, g)
 }
 
-/// Do the flags of contacts `ks` (and of finger `finger`'s kinks, with its evaluation) at
-/// a perturbed state differ from `piece`'s?
-fn left_piece(piece: Piece, load: &[Load; NC], ks: std::ops::Range<usize>, finger: Option<(usize, &FingerEval)>) -> bool {
+/// Do the flags of contacts `ks` (and of finger `finger`'s kinks) at a perturbed state
+/// differ from `piece`'s?
+fn left_piece(piece: Piece, load: &[Load; NC], ks: std::ops::Range<usize>, finger: Option<(usize, Piece)>) -> bool {
     for k in ks {
         if load[k].loaded != piece.has(12 + 2 * k as u32) || (load[k].loaded && load[k].clipped) != piece.has(13 + 2 * k as u32) {
             return true;
         }
     }
-    if let Some((i, fe)) = finger {
+    if let Some((i, p)) = finger {
         for b in 0..Kink::BITS {
-            if fe.piece.has(b) != piece.has(b + Kink::BITS * i as u32) {
+            if p.has(b) != piece.has(b + Kink::BITS * i as u32) {
                 return true;
             }
         }
@@ -122,19 +121,32 @@ impl FreeScene<'_> {
         Load { f: fo, t: h.rk.cross(&fo), gen: Vector2::zeros(), loaded: true, clipped }
     }
 
-    /// Every contact at the object `b` with the fingers `fe` at rates `qd`.
-    fn loads(&self, fe: &[FingerEval; 2], qd: &[Vector2<f64>; 2], b: &Body) -> Loads {
-        let mut l = Loads { caps: [None; 5], ground: [None; NC - 5], load: [Load::default(); NC] };
-        for k in 0..5 {
-            if k < 4 && !self.setup.fingers {
-                continue;
-            }
+    /// Does the capsule contact `k` take part (fingers integrated, memory set)?
+    #[inline(always)]
+    fn capsule_on(&self, k: usize) -> bool {
+        (k == 4 || self.setup.fingers) && self.mem[k].active
+    }
+
+    /// The capsule contacts of `base` recomputed against the object `b` (fingers `fe` at
+    /// rates `qd`), into `load`.
+    fn capsules_at(&self, load: &mut [Load; NC], fe: &[FingerLinkage; 2], qd: &[Vector2<f64>; 2], b: &Body) {
+        for k in (0..5).filter(|&k| self.capsule_on(k)) {
+            let i = (k / 2).min(1);
+            load[k] = self.capsule_contrib(k, &self.capsule_hit(k, &fe[i], qd[i], b), b);
+        }
+    }
+
+    /// Every contact with its memory set, at the object `b` with the fingers `fe` at rates
+    /// `qd`.
+    fn loads(&self, fe: &[FingerLinkage; 2], qd: &[Vector2<f64>; 2], b: &Body) -> Loads {
+        let mut l = Loads { caps: [None; 5], ground: [None; NG_MAX], load: [Load::default(); NC] };
+        for k in (0..5).filter(|&k| self.capsule_on(k)) {
             let i = (k / 2).min(1);
             let h = self.capsule_hit(k, &fe[i], qd[i], b);
             l.load[k] = self.capsule_contrib(k, &h, b);
             l.caps[k] = Some(h);
         }
-        for k in 0..self.ng {
+        for k in (0..self.ng).filter(|&k| self.mem[5 + k].active) {
             let h = self.ground_hit(k, b);
             l.load[5 + k] = self.ground_contrib(k, &h);
             l.ground[k] = Some(h);
@@ -142,36 +154,31 @@ impl FreeScene<'_> {
         l
     }
 
-    /// As `base` (the contacts at the same positions) with the object's velocities of `b`.
-    fn loads_new_velocity(&self, base: &Loads, b: &Body) -> Loads {
-        let mut l = *base;
+    /// The loads of `base` (same positions) with the object's velocities of `b`, into
+    /// `load` (only the loaded contacts change).
+    fn loads_new_velocity(&self, base: &Loads, b: &Body, load: &mut [Load; NC]) {
         for k in 0..5 {
-            if let Some(h) = l.caps[k].as_mut() {
-                if l.load[k].loaded {
-                    h.relative_velocity(b);
-                    l.load[k] = self.capsule_contrib(k, h, b);
-                }
+            if let (Some(mut h), true) = (base.caps[k], base.load[k].loaded) {
+                h.relative_velocity(b);
+                load[k] = self.capsule_contrib(k, &h, b);
             }
         }
         for k in 0..self.ng {
-            if let Some(h) = l.ground[k].as_mut() {
-                if l.load[5 + k].loaded {
-                    h.vp = b.v + b.om.cross(&h.rk);
-                    l.load[5 + k] = self.ground_contrib(k, h);
-                }
+            if let (Some(mut h), true) = (base.ground[k], base.load[5 + k].loaded) {
+                h.vp = b.v + b.om.cross(&h.rk);
+                load[5 + k] = self.ground_contrib(k, &h);
             }
         }
-        l
     }
 
-    /// dω/dt of the object `b` under the contact torque `t` (the push added).
-    fn omega_dot(&self, b: &Body, t: V3) -> Option<V3> {
+    /// dω/dt of the object `b` (inverse inertia `i_inv`) under the contact torque `t`
+    /// (the push added).
+    fn omega_dot(&self, b: &Body, i_inv: &Matrix3<f64>, t: V3) -> V3 {
         let t = match self.push(b) {
             Some((_, tp)) => t + tp,
             None => t,
         };
-        let i_w = self.inertia(b);
-        Some(i_w.try_inverse()? * (t - b.om.cross(&(i_w * b.om))))
+        i_inv * (t - b.om.cross(&(self.inertia(b) * b.om)))
     }
 
     /// The Jacobian at `y` (on the smooth piece `piece`) into `jac`, by blocks; false where
@@ -192,8 +199,9 @@ impl FreeScene<'_> {
         let b = self.body(y);
         let base = self.loads(&fe, &qd, &b);
         let m_inv = [fe[0].m.try_inverse()?, fe[1].m.try_inverse()?];
+        let i_inv = self.inertia_inverse(&b);
         let (f0, t0, g0) = sum(&base.load, 0..NC);
-        let wdot0 = self.omega_dot(&b, t0)?;
+        let wdot0 = self.omega_dot(&b, &i_inv, t0);
         // ---- finger columns: that finger and its two phalanges ---------------------------
         if self.setup.fingers {
             for i in 0..2 {
@@ -202,7 +210,7 @@ impl FreeScene<'_> {
                 jac[(o + 1, o + 3)] = 1.0;
                 let ks = 2 * i..2 * i + 2;
                 let (fb, tb, gb) = sum(&base.load, ks.clone());
-                let qdd0 = m_inv[i] * (fe[i].q_total + gb[i]);
+                let qdd0 = m_inv[i] * (fe[i].gf - fe[i].c + gb[i]);
                 for j in 0..4 {
                     let mut dy = step(o + j);
                     let mut side = 0;
@@ -210,31 +218,33 @@ impl FreeScene<'_> {
                         let mut yp = *y;
                         yp[o + j] += dy;
                         evals += 1;
-                        let q = Vector2::new(yp[o], yp[o + 1]);
                         let qdp = Vector2::new(yp[o + 2], yp[o + 3]);
-                        let fp = self.model.evaluate(q, qdp, V2::new(0.0, self.s.object.radius), &[Memory::default(); 2], false, false)?;
+                        let fp = self.model.linkage(Vector2::new(yp[o], yp[o + 1]), qdp, false)?;
                         let mut load = base.load;
-                        for k in ks.clone() {
-                            let h = self.capsule_hit(k, &fp, qdp, &b);
-                            load[k] = self.capsule_contrib(k, &h, &b);
+                        for k in ks.clone().filter(|&k| self.capsule_on(k)) {
+                            load[k] = self.capsule_contrib(k, &self.capsule_hit(k, &fp, qdp, &b), &b);
                         }
-                        if side == 0 && left_piece(piece, &load, ks.clone(), Some((i, &fp))) {
+                        if side == 0 && left_piece(piece, &load, ks.clone(), Some((i, fp.piece))) {
                             dy = -dy;
                             side = 1;
                             continue;
                         }
                         let (fk, tk, gk) = sum(&load, ks.clone());
-                        let qdd = fp.m.try_inverse()? * (fp.q_total + gk[i]);
+                        let qdd = fp.m.try_inverse()? * (fp.gf - fp.c + gk[i]);
                         break (qdd - qdd0, fk - fb, tk - tb);
                     };
                     let c = o + j;
                     jac[(o + 2, c)] = col_qdd[0] / dy;
                     jac[(o + 3, c)] = col_qdd[1] / dy;
-                    self.object_rows(jac, c, &b, df / dy, dt / dy);
+                    let dw = i_inv * (dt / dy);
+                    for r in 0..3 {
+                        jac[(V0 + r, c)] = df[r] / dy / self.m;
+                        jac[(W0 + r, c)] = dw[r];
+                    }
                 }
             }
         }
-        // ---- object position and orientation: every contact, fingers kept ----------------
+        // ---- object position and orientation: the contacts, fingers kept -----------------
         let (dq_dq, dq_dw) = quat_rate_jacobian(b.q, b.om);
         for j in G0..Q0 + 4 {
             let mut dy = step(j);
@@ -244,7 +254,14 @@ impl FreeScene<'_> {
                 yp[j] += dy;
                 evals += 1;
                 let bp = self.body(&yp);
-                let load = self.loads(&fe, &qd, &bp).load;
+                let load = if j < G0 + 2 {
+                    // G_x, G_y: the ground points' δ and velocities do not change
+                    let mut load = base.load;
+                    self.capsules_at(&mut load, &fe, &qd, &bp);
+                    load
+                } else {
+                    self.loads(&fe, &qd, &bp).load
+                };
                 if side == 0 && left_piece(piece, &load, 0..NC, None) {
                     dy = -dy;
                     side = 1;
@@ -254,7 +271,7 @@ impl FreeScene<'_> {
             };
             let (f1, t1, g1) = sum(&load, 0..NC);
             self.finger_rows(jac, j, &m_inv, &g1, &g0, dy);
-            let wdot = self.omega_dot(&bp, t1)?;
+            let wdot = if j < Q0 { self.omega_dot(&bp, &i_inv, t1) } else { self.omega_dot(&bp, &self.inertia_inverse(&bp), t1) };
             let push_f = |b: &Body| self.push(b).map_or(V3::zeros(), |p| p.0);
             let df = (f1 + push_f(&bp)) - (f0 + push_f(&b));
             for r in 0..3 {
@@ -285,7 +302,8 @@ impl FreeScene<'_> {
                     bp.om[j - W0] += dy;
                 }
                 evals += 1;
-                let load = self.loads_new_velocity(&base, &bp).load;
+                let mut load = base.load;
+                self.loads_new_velocity(&base, &bp, &mut load);
                 if side == 0 && left_piece(piece, &load, 0..NC, None) {
                     dy = -dy;
                     side = 1;
@@ -295,24 +313,13 @@ impl FreeScene<'_> {
             };
             let (f1, t1, g1) = sum(&load, 0..NC);
             self.finger_rows(jac, j, &m_inv, &g1, &g0, dy);
-            let wdot = self.omega_dot(&bp, t1)?;
+            let wdot = self.omega_dot(&bp, &i_inv, t1);
             for r in 0..3 {
                 jac[(V0 + r, j)] = (f1[r] - f0[r]) / self.m / dy;
                 jac[(W0 + r, j)] = (wdot[r] - wdot0[r]) / dy;
             }
         }
         Some(evals)
-    }
-
-    /// Column `c` of the object's dynamic rows from the changes `df`, `dt` (per unit step)
-    /// of the contact force and torque on it (its inertia unchanged).
-    fn object_rows(&self, jac: &mut FreeJacobian, c: usize, b: &Body, df: V3, dt: V3) {
-        let i_inv: Matrix3<f64> = self.inertia(b).try_inverse().unwrap_or(Matrix3::zeros());
-        let dw = i_inv * dt;
-        for r in 0..3 {
-            jac[(V0 + r, c)] = df[r] / self.m;
-            jac[(W0 + r, c)] = dw[r];
-        }
     }
 
     /// Column `c` of the fingers' dynamic rows from the generalised contact forces `g1`

@@ -18,7 +18,7 @@ use crate::sim::contact3d::{quat_mul, V3};
 use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver::{self, End, Run};
 use crate::sim::events::{Crossing, EventKind, EventValues};
-use crate::sim::finger::{FingerEval, FingerModel, Kink};
+use crate::sim::finger::{FingerLinkage, FingerModel, Kink};
 use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::SimOptions;
@@ -80,8 +80,8 @@ pub struct Contact3 {
 /// The free scene's model at one state.
 #[derive(Debug, Clone, Copy)]
 pub struct FreeEval {
-    /// Finger 1 and 2 (local frames; their contact fields are unused).
-    pub f: [FingerEval; 2],
+    /// The linkages of finger 1 and 2 (local frames).
+    pub f: [FingerLinkage; 2],
     /// Every contact (0–3 phalanges, 4 palm, 5.. ground).
     pub c: [Contact3; NC],
     /// q̈ of both fingers.
@@ -104,6 +104,17 @@ pub struct FreeEval {
     pub omega: V3,
     /// The axis a (world).
     pub axis: V3,
+}
+
+/// What the forces at a state give (see `FreeScene::forces`).
+struct Forces {
+    fe: [FingerLinkage; 2],
+    b: contacts::Body,
+    qdd: [Vector2<f64>; 2],
+    acc: (V3, V3),
+    /// Angular momentum about G.
+    l: V3,
+    piece: Piece,
 }
 
 /// A sample of the object's pose (for `--csv` and recordings).
@@ -295,30 +306,24 @@ impl<'a> FreeScene<'a> {
         (self.m * self.s.env.g / (self.ng as f64 * self.s.setup.ground_k)).powf(2.0 / 3.0)
     }
 
-    /// The finger evaluations at `y` (without contacts; their forces are added by the
-    /// scene).
+    /// The fingers' linkages at `y` (their contact forces are added by the scene).
     #[inline(always)]
-    fn fingers(&self, y: &St, full: bool) -> Option<[FingerEval; 2]> {
-        let r = self.s.object.radius;
-        let no_mem = [Memory::default(); 2];
-        let mut fe = [None, None];
-        for (i, slot) in fe.iter_mut().enumerate() {
-            let o = 4 * i;
-            *slot = Some(self.model.evaluate(Vector2::new(y[o], y[o + 1]), self.finger_rates(y, i), V2::new(0.0, r), &no_mem, false, full)?);
-        }
-        Some([fe[0]?, fe[1]?])
+    fn fingers(&self, y: &St, full: bool) -> Option<[FingerLinkage; 2]> {
+        let l0 = self.model.linkage(Vector2::new(y[0], y[1]), self.finger_rates(y, 0), full)?;
+        let l1 = self.model.linkage(Vector2::new(y[4], y[5]), self.finger_rates(y, 1), full)?;
+        Some([l0, l1])
     }
 
-    /// The model at `y`.
+    /// The forces at `y`: every contact when `ALL` (their states into `c`, their elastic
+    /// energy into `v_el`), else only the loaded ones (all a right-hand side needs).
     #[inline(always)]
-    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
+    fn forces<const ALL: bool>(&self, y: &St, full: bool, c: &mut [Contact3; NC], v_el: &mut f64) -> Option<Forces> {
         let s = self.s;
         let fe = self.fingers(y, full)?;
         let b = self.body(y);
-        let mut c = [Contact3::default(); NC];
         let mut force = V3::new(0.0, 0.0, -self.m * s.env.g);
         let mut torque = V3::zeros();
-        let mut gen = [fe[0].q_total, fe[1].q_total];
+        let mut gen = [fe[0].gf - fe[0].c, fe[1].gf - fe[1].c];
         let mut piece = Piece::SMOOTH;
         for i in 0..2 {
             for bit in 0..Kink::BITS {
@@ -327,12 +332,14 @@ impl<'a> FreeScene<'a> {
                 }
             }
         }
-        let mut v_el = 0.0;
         let kc = s.contact.k_contact;
         // phalanges and palm: capsule (radius w) against the axis segment (radius R)
         for k in 0..5 {
             if k < 4 && !self.setup.fingers {
                 c[k].delta = -1.0;
+                continue;
+            }
+            if !ALL && !self.mem[k].active {
                 continue;
             }
             let i = (k / 2).min(1);
@@ -350,13 +357,18 @@ impl<'a> FreeScene<'a> {
                 if k < 4 {
                     gen[i] += Self::generalised(i, &h.jm, &on_finger);
                 }
-                v_el += 0.4 * kc * h.delta * h.delta * h.delta.sqrt();
+                if ALL {
+                    *v_el += 0.4 * kc * h.delta * h.delta * h.delta.sqrt();
+                }
             }
         }
         // ground points
         let kg = s.setup.ground_k;
         for k in 0..self.ng {
             let ci = 5 + k;
+            if !ALL && !self.mem[ci].active {
+                continue;
+            }
             let h = self.ground_hit(k, &b);
             c[ci] = Contact3 { delta: h.delta, delta_dot: -h.vp.z, normal: 0.0, rim: false };
             if self.loaded(ci, h.delta) {
@@ -368,7 +380,9 @@ impl<'a> FreeScene<'a> {
                 force += fo;
                 torque += h.rk.cross(&fo);
                 c[ci].normal = fnm;
-                v_el += 0.4 * kg * h.delta * h.delta * h.delta.sqrt();
+                if ALL {
+                    *v_el += 0.4 * kg * h.delta * h.delta * h.delta.sqrt();
+                }
             }
         }
         for k in self.ng..NG_MAX {
@@ -384,25 +398,48 @@ impl<'a> FreeScene<'a> {
                 qdd[i] = fe[i].m.try_inverse()? * gen[i];
             }
         }
+        let l = self.inertia(&b) * b.om;
+        let wdot = self.inertia_inverse(&b) * (torque - b.om.cross(&l));
+        Some(Forces { fe, b, qdd, acc: (force / self.m, wdot), l, piece })
+    }
+
+    /// The model at `y`.
+    #[inline(always)]
+    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
+        let mut c = [Contact3::default(); NC];
+        let mut v_el = 0.0;
+        let Forces { fe, b, qdd, acc, l, piece } = self.forces::<true>(y, full, &mut c, &mut v_el)?;
         let (v, om, a) = (b.v, b.om, b.a);
-        let i_w = self.inertia(&b);
-        let l = i_w * om;
-        let wdot = i_w.try_inverse()? * (torque - om.cross(&l));
         let e_t = 0.5 * self.m * v.norm_squared();
         let e_r = 0.5 * om.dot(&l);
-        let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * b.g.z + v_el } else { f64::NAN };
-        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: b.g, quat: b.q, omega: om, axis: a })
+        let energy = if full { fe[0].energy(self.finger_rates(y, 0)) + fe[1].energy(self.finger_rates(y, 1)) + e_t + e_r + self.m * self.s.env.g * b.g.z + v_el } else { f64::NAN };
+        Some(FreeEval { f: fe, c, qdd, acc, tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: b.g, quat: b.q, omega: om, axis: a })
+    }
+
+    /// The right-hand side at `y` and its piece (the loaded contacts only).
+    #[inline(always)]
+    fn rhs(&self, y: &St) -> Option<(St, Piece)> {
+        let mut c = [Contact3::default(); NC];
+        let mut v_el = 0.0;
+        let f = self.forces::<false>(y, false, &mut c, &mut v_el)?;
+        Some((self.deriv_of(y, &f.qdd, &f.acc), f.piece))
     }
 
     fn deriv(&self, y: &St, ev: &FreeEval) -> St {
+        self.deriv_of(y, &ev.qdd, &ev.acc)
+    }
+
+    /// y' from the fingers' q̈ and the object's dv_G/dt, dω/dt.
+    #[inline(always)]
+    fn deriv_of(&self, y: &St, qdd: &[Vector2<f64>; 2], acc: &(V3, V3)) -> St {
         let mut d = St::zeros();
         if self.setup.fingers {
             for i in 0..2 {
                 let o = 4 * i;
                 d[o] = y[o + 2];
                 d[o + 1] = y[o + 3];
-                d[o + 2] = ev.qdd[i][0];
-                d[o + 3] = ev.qdd[i][1];
+                d[o + 2] = qdd[i][0];
+                d[o + 3] = qdd[i][1];
             }
         }
         let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
@@ -411,8 +448,8 @@ impl<'a> FreeScene<'a> {
         let qd = quat_mul([0.0, y[W0], y[W0 + 1], y[W0 + 2]], qn);
         for j in 0..3 {
             d[G0 + j] = y[V0 + j];
-            d[V0 + j] = ev.acc.0[j];
-            d[W0 + j] = ev.acc.1[j];
+            d[V0 + j] = acc.0[j];
+            d[W0 + j] = acc.1[j];
         }
         for j in 0..4 {
             d[Q0 + j] = 0.5 * qd[j];
@@ -447,16 +484,14 @@ impl<'a> FreeScene<'a> {
 impl Rhs<NF> for FreeScene<'_> {
     fn eval(&mut self, _t: f64, y: &St) -> Option<St> {
         self.evals += 1;
-        let ev = self.eval_with(y, false)?;
-        Some(self.deriv(y, &ev))
+        Some(self.rhs(y)?.0)
     }
     fn piece(&self, y: &St) -> Piece {
-        self.eval_with(y, false).map_or(Piece::UNDEFINED, |e| e.piece)
+        self.rhs(y).map_or(Piece::UNDEFINED, |r| r.1)
     }
     fn eval_piece(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
         self.evals += 1;
-        let ev = self.eval_with(y, false)?;
-        Some((self.deriv(y, &ev), ev.piece))
+        self.rhs(y)
     }
     fn eval_accepted(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
         self.evals += 1;
@@ -538,8 +573,8 @@ impl Scene<NF, EF> for FreeScene<'_> {
             rate[k] = ev.c[k].delta_dot;
         }
         let fingers = if self.setup.fingers { 1.0 } else { f64::NAN };
-        g[NC] = (ev.f[0].sin_q13.abs() - 1e-3) * fingers;
-        g[NC + 1] = (ev.f[1].sin_q13.abs() - 1e-3) * fingers;
+        g[NC] = (ev.f[0].sin_q13().abs() - 1e-3) * fingers;
+        g[NC + 1] = (ev.f[1].sin_q13().abs() - 1e-3) * fingers;
         g[NC + 2] = ev.f[0].theta2 * fingers;
         g[NC + 3] = ev.f[1].theta2 * fingers;
         rate[NC + 2] = ev.f[0].theta2_dot;
