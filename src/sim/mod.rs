@@ -2,9 +2,10 @@
 //! finger model, contact memory, criteria.
 //!
 //! Layout (private modules, re-exported flat): `integrate/` (one file per method, LU,
-//! finite-difference Jacobian, Hermite dense output) → `events` (kinds, crossing rules, root
-//! locator) → `driver` (the step loop, generic over a [`Scene`]) ← `scene/` (what is
-//! integrated: today the centred scene, [`CentredScene`]) built from `finger` (one finger
+//! finite-difference Jacobian, block elimination of Newton matrices, Hermite dense output)
+//! → `events` (kinds, crossing rules, root locator) → `driver` (the step loop, generic over
+//! a [`Scene`]) ← `scene/` (what is integrated: the centred scene [`CentredScene`], the
+//! offset and the free scene, `contact3d` its 3-D contacts) built from `finger` (one finger
 //! against a given object), `memory` (the contact-memory rule), `tracking` (criteria during
 //! a grasp), `equilibrium` (§8.9) and `criteria` (§9); `result` holds what a simulation
 //! takes and gives. Nothing here imports the evaluation pipeline, the optimiser, the

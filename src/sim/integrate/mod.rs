@@ -2,9 +2,11 @@
 //! order 5 ([`Radau5`], stiff, the default), TR-BDF2 ([`TrBdf2`], stiff) and Dormand–Prince
 //! 5(4) ([`Dopri5`], explicit, for comparison). Each exposes accepted steps with (y, f) at
 //! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
-//! location. The implicit methods share the finite-difference Jacobian and its refresh
-//! policy (`jacobian`), the start of a step attempt (`prepare_attempt`) and the LU
-//! ([`Lu`]). No heap allocation.
+//! location. The implicit methods share the Jacobian's refresh policy (`jacobian`; the
+//! Jacobian itself is the system's [`Rhs::jacobian`], by default dense forward differences,
+//! [`fd_jacobian`]), the start of a step attempt (`prepare_attempt`) and the LU ([`Lu`]);
+//! Radau IIA also solves its Newton systems by block elimination over a system's
+//! [`Partition`] (`reduced`). No heap allocation.
 
 mod dense;
 mod dopri5;

@@ -6,10 +6,13 @@ use super::reduced::ReducedLu;
 use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, StepError, Stats, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
 
+/// The real and the complex reduced factorisations.
+type ReducedPair<const N: usize> = (ReducedLu<f64, N>, ReducedLu<Complex<f64>, N>);
+
 /// Radau IIA of order 5 after Hairer & Wanner's RADAU5: stiffly accurate, L-stable. The
 /// simplified Newton iteration uses their transformation A⁻¹ = T Λ T⁻¹, so each Jacobian
 /// costs one real N×N LU of γ/h − J and one complex N×N LU of (α + iβ)/h − J instead of a
-/// 3N×3N one (or, for a system with a [`Partition`] that J fits, LUs of its kept states'
+/// 3N×3N one (or, for a system with a [`Partition`](super::Partition) that J fits, LUs of its kept states'
 /// Schur complements only). Newton's contraction is carried across steps and a predicted non-convergence
 /// shrinks h early; the step size follows Gustafsson's predictive controller; the error
 /// estimate is RADAU5's, filtered by (γ/h − J)⁻¹.
@@ -24,7 +27,7 @@ pub struct Radau5<const N: usize> {
     lu_c: Option<Lu<Complex<f64>, N>>,
     /// The system's partition for the Newton solves (asked at the first step), with the
     /// storage of both reduced factorisations.
-    part: Option<Option<(ReducedLu<f64, N>, ReducedLu<Complex<f64>, N>)>>,
+    part: Option<Option<ReducedPair<N>>>,
     /// The reduced factorisations are the current ones (else `lu_r`, `lu_c`).
     reduced: bool,
     lu_h: f64,

@@ -29,7 +29,7 @@ pub struct Partition<const N: usize> {
 }
 
 impl<const N: usize> Partition<N> {
-    /// The partition eliminating `groups` (each of 1 to [`MAX_GROUP`] distinct state
+    /// The partition eliminating `groups` (each of 1 to `MAX_GROUP` = 4 distinct state
     /// indices below N) and keeping the other states; `None` if the groups are not so, or
     /// if they leave nothing to keep.
     pub fn new(groups: &[&[usize]]) -> Option<Self> {
