@@ -108,3 +108,29 @@ fn free_block_jacobian_equals_dense() {
         eprintln!("t {t_mid}: block vs dense: largest column difference {worst:.2e}, {noisy} columns beyond 1e-5 (dense rounding)");
     }
 }
+
+/// `gripopt bench free --json`: at rtol 1e-5 the block and the dense Jacobian both land
+/// within 1e-3 of the rtol-1e-10 reference on every output, with the reference's verdict,
+/// and the block rows make fewer full evaluations; bad rtols are refused.
+#[test]
+fn bench_free_rows() {
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    let dir = std::env::temp_dir().join(format!("gripopt-bench-free-{}", std::process::id()));
+    let out = std::process::Command::new(bin).args(["bench", "free", problem, "--rtols", "1e-5", "--reps", "1", "--json", "--out"]).arg(&dir).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{v}");
+    for r in rows {
+        assert!(r["err_max"].as_f64().unwrap() < 1e-3, "{r}");
+        assert_eq!(r["verdict_same"], true, "{r}");
+    }
+    assert!(rows[0]["rhs"].as_u64().unwrap() < rows[1]["rhs"].as_u64().unwrap(), "{v}");
+    assert_eq!(rows[1]["jac_block_evals"], 0);
+    assert!(dir.join("free_work_precision.csv").exists() && dir.join("free_work_precision.svg").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+    let bad = std::process::Command::new(bin).args(["bench", "free", problem, "--rtols", "2"]).output().unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--rtols"), "{}", String::from_utf8_lossy(&bad.stderr));
+}
