@@ -7,6 +7,7 @@ mod architecture;
 mod constraints;
 mod dynamics;
 mod force_model;
+mod free_jacobian;
 mod free_stage;
 mod replay_scene;
 mod kinematics;

@@ -8,6 +8,7 @@
 //! The top layer of the library: it may use everything below it.
 
 mod ensemble;
+mod free;
 mod nsga;
 mod replay;
 mod scaling;
@@ -16,6 +17,7 @@ mod table;
 mod work_precision;
 
 pub use ensemble::work_precision_ensemble;
+pub use free::{free_scene, FreeBench, FreeRow, FREE_REFERENCE_RTOL, FREE_RTOLS};
 pub use nsga::nsga;
 pub use replay::{replay, ReplayBench};
 pub use scaling::{scaling, ScalingBench};

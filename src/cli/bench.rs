@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Subcommand;
-use gripopt::bench::{ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::bench::{FreeBench, ReplayBench, ScalingBench, WorkPrecision};
 use std::path::PathBuf;
 
 /// Benchmarks.
@@ -109,6 +109,32 @@ pub enum BenchCmd {
         #[arg(long, value_delimiter = ',', default_values_t = gripopt::bench::RTOLS, conflicts_with = "sample")]
         rtols: Vec<f64>,
     },
+    /// The free scene (MODEL.md §14) of one design: CPU time, steps and evaluations against
+    /// the error of its outputs, per rtol, with the block and the dense Jacobian; writes
+    /// free_work_precision.csv and .svg.
+    Free {
+        /// Problem file.
+        #[arg(default_value = "problems/bottle-1l.toml")]
+        problem: PathBuf,
+        /// Design (default: the problem's nominal).
+        #[arg(long)]
+        design: Option<String>,
+        /// Output folder.
+        #[arg(long, default_value = "results/bench")]
+        out: PathBuf,
+        /// Maximum repetitions per point (each point also stops after ~1 s).
+        #[arg(long, default_value_t = 100)]
+        reps: usize,
+        /// Absolute tolerance at every rtol (default: 1e-3·rtol).
+        #[arg(long)]
+        atol: Option<f64>,
+        /// Relative tolerances, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = gripopt::bench::FREE_RTOLS)]
+        rtols: Vec<f64>,
+        /// Only the block Jacobian (no dense rows).
+        #[arg(long)]
+        no_dense: bool,
+    },
 }
 
 /// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
@@ -145,6 +171,11 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             let p = super::load_problem(&problem)?;
             let x = super::design_of(&p, &design)?;
             gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: dir, reps, atol, rtols }, out)?
+        }
+        BenchCmd::Free { problem, design, out: dir, reps, atol, rtols, no_dense } => {
+            let p = super::load_problem(&problem)?;
+            let x = super::design_of(&p, &design)?;
+            gripopt::bench::free_scene(&p, &x, &FreeBench { out_dir: dir, reps, atol, rtols, dense: !no_dense }, out)?
         }
     };
     if json {

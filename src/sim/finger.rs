@@ -99,6 +99,46 @@ impl FingerEval {
     }
 }
 
+/// One finger's linkage at a state, without contacts ([`FingerModel::linkage`]): a scene
+/// that computes the contacts itself adds their generalised forces to `gf`.
+#[derive(Debug, Clone, Copy)]
+pub struct FingerLinkage {
+    /// Linkage pose (q12, q13 not computed: NaN).
+    pub pose: Pose,
+    /// Kinematics.
+    pub kin: Kin,
+    /// Mass matrix.
+    pub m: Matrix2<f64>,
+    /// Velocity-dependent bias c (M q̈ = gf − c).
+    pub c: Vector2<f64>,
+    /// Direction of the distal phalanx.
+    pub xd: V2,
+    /// θ2 (NaN where not needed, see [`FingerModel::evaluate`]).
+    pub theta2: f64,
+    /// θ̇2.
+    pub theta2_dot: f64,
+    /// Generalised applied forces: actuator, spring, stop, gravity.
+    pub gf: Vector2<f64>,
+    /// Potential energy of those (NaN unless `full`).
+    pub v: f64,
+    /// The smooth piece (stop flags).
+    pub piece: Piece,
+}
+
+impl FingerLinkage {
+    /// sin q13 = cross(x12, x22) (parallel singularity at 0).
+    #[inline]
+    pub fn sin_q13(&self) -> f64 {
+        crate::math::cross(self.pose.x12, self.pose.x22)
+    }
+
+    /// Kinetic plus potential energy at rates `qd` (NaN unless evaluated `full`).
+    #[inline]
+    pub fn energy(&self, qd: Vector2<f64>) -> f64 {
+        0.5 * qd.dot(&(self.m * qd)) + self.v
+    }
+}
+
 /// Constants of one finger's dynamics.
 #[derive(Debug, Clone, Copy)]
 pub struct FingerModel<'a> {
@@ -153,15 +193,10 @@ impl<'a> FingerModel<'a> {
         [capsule(f.o21, p.x21, f.l21, centre, self.rw, f.w), capsule(p.o22, xd, f.t22, centre, self.rw, f.w)]
     }
 
-    /// The model at joint angles `q` = (q11, q21) and rates `qd` against the object
-    /// centred at `centre` (local frame) with contact memories `mem` (`touch = false`:
-    /// the phalanges pass through the object); `None` where the DGM or kinematics fail.
-    /// `full = false` is a right-hand side's lean path: the energy is NaN and θ2 (one
-    /// `atan2`) is computed only where a force needs it — a spring rate k_s ≠ 0, in-plane
-    /// gravity, or the stop engaged (sin θ2 < 0, equivalent to θ2 < 0 for θ2 = q22 + ψ with
-    /// q22 ∈ (−π, π] and ψ > 0); otherwise θ2 is NaN.
+    /// The linkage part of [`FingerModel::evaluate`] (everything but the contacts) at joint
+    /// angles `q` and rates `qd`; `None` where the DGM or kinematics fail. `full` as there.
     #[inline(always)]
-    pub fn evaluate(&self, q: Vector2<f64>, qd: Vector2<f64>, centre: V2, mem: &[Memory; 2], touch: bool, full: bool) -> Option<FingerEval> {
+    pub fn linkage(&self, q: Vector2<f64>, qd: Vector2<f64>, full: bool) -> Option<FingerLinkage> {
         let f = self.finger;
         let mut pose = f.dgm_fast(q[0], q[1]).ok()?;
         let kin = Kin::new(f, &pose)?;
@@ -197,6 +232,20 @@ impl<'a> FingerModel<'a> {
                 v += gravity_potential(f, &pose, self.scene);
             }
         }
+        Some(FingerLinkage { pose, kin, m: red.m, c: red.c, xd, theta2, theta2_dot, gf, v, piece })
+    }
+
+    /// The model at joint angles `q` = (q11, q21) and rates `qd` against the object
+    /// centred at `centre` (local frame) with contact memories `mem` (`touch = false`:
+    /// the phalanges pass through the object); `None` where the DGM or kinematics fail.
+    /// `full = false` is a right-hand side's lean path: the energy is NaN and θ2 (one
+    /// `atan2`) is computed only where a force needs it — a spring rate k_s ≠ 0, in-plane
+    /// gravity, or the stop engaged (sin θ2 < 0, equivalent to θ2 < 0 for θ2 = q22 + ψ with
+    /// q22 ∈ (−π, π] and ψ > 0); otherwise θ2 is NaN.
+    #[inline(always)]
+    pub fn evaluate(&self, q: Vector2<f64>, qd: Vector2<f64>, centre: V2, mem: &[Memory; 2], touch: bool, full: bool) -> Option<FingerEval> {
+        let f = self.finger;
+        let FingerLinkage { pose, kin, m, c: bias, xd, theta2, theta2_dot, mut gf, mut v, mut piece } = self.linkage(q, qd, full)?;
         let geo = [capsule(f.o21, pose.x21, f.l21, centre, self.rw, f.w), capsule(pose.o22, xd, f.t22, centre, self.rw, f.w)];
         let mut object_force = V2::zeros();
         let mut contacts = [ContactState {
@@ -235,11 +284,11 @@ impl<'a> FingerModel<'a> {
                 }
             }
         }
-        let q_total = gf - red.c;
-        let minv = red.m.try_inverse()?;
+        let q_total = gf - bias;
+        let minv = m.try_inverse()?;
         let qdd = minv * q_total;
-        let energy = if full { 0.5 * qd.dot(&(red.m * qd)) + v } else { f64::NAN };
+        let energy = if full { 0.5 * qd.dot(&(m * qd)) + v } else { f64::NAN };
         let sin_q13 = crate::math::cross(pose.x12, pose.x22);
-        Some(FingerEval { pose, kin, m: red.m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13, piece })
+        Some(FingerEval { pose, kin, m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13, piece })
     }
 }

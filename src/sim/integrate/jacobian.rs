@@ -44,30 +44,50 @@ impl<const N: usize> JacobianCache<N> {
         self.slow = false;
     }
 
-    /// Compute J at (t, y); false if f is undefined at a perturbed state.
+    /// Compute J at (t, y) with the system's [`Rhs::jacobian`]; false if f is undefined at
+    /// a perturbed state.
     pub(super) fn compute<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, stats: &mut Stats) -> bool {
-        let sq = f64::EPSILON.sqrt();
-        let mut yp = *y;
         self.piece = self.piece_of(sys, y);
-        for j in 0..N {
-            let mut dy = sq * y[j].abs().max(1e-3);
-            yp[j] = y[j] + dy;
-            stats.rhs += 1;
-            let Some((mut fp, p)) = sys.eval_piece(t, &yp) else { return false };
-            if p != self.piece {
-                // one-sided difference on the other side, inside the piece of y
-                dy = -dy;
-                yp[j] = y[j] + dy;
-                stats.rhs += 1;
-                let Some((fm, _)) = sys.eval_piece(t, &yp) else { return false };
-                fp = fm;
-            }
-            self.jac.set_column(j, &((fp - f) / dy));
-            yp[j] = y[j];
+        if !sys.jacobian(t, y, f, self.piece, &mut self.jac, stats) {
+            return false;
         }
         stats.jac += 1;
         self.valid = true;
         self.fresh = true;
         true
     }
+}
+
+/// The dense forward-difference Jacobian of `sys` at (t, y), f = f(t, y), into `jac`: one
+/// evaluation per column (counted in `stats.rhs`), step √ε·max(|y_j|, 1e-3); where the
+/// perturbed state leaves `piece` (the piece of y), the difference is taken on the other
+/// side. False if f is undefined at a perturbed state. [`Rhs::jacobian`]'s default.
+pub fn fd_jacobian<S: Rhs<N> + ?Sized, const N: usize>(
+    sys: &mut S,
+    t: f64,
+    y: &SVector<f64, N>,
+    f: &SVector<f64, N>,
+    piece: Piece,
+    jac: &mut SMatrix<f64, N, N>,
+    stats: &mut Stats,
+) -> bool {
+    let sq = f64::EPSILON.sqrt();
+    let mut yp = *y;
+    for j in 0..N {
+        let mut dy = sq * y[j].abs().max(1e-3);
+        yp[j] = y[j] + dy;
+        stats.rhs += 1;
+        let Some((mut fp, p)) = sys.eval_piece(t, &yp) else { return false };
+        if p != piece {
+            // one-sided difference on the other side, inside the piece of y
+            dy = -dy;
+            yp[j] = y[j] + dy;
+            stats.rhs += 1;
+            let Some((fm, _)) = sys.eval_piece(t, &yp) else { return false };
+            fp = fm;
+        }
+        jac.set_column(j, &((fp - f) / dy));
+        yp[j] = y[j];
+    }
+    true
 }

@@ -2,25 +2,30 @@
 //! order 5 ([`Radau5`], stiff, the default), TR-BDF2 ([`TrBdf2`], stiff) and Dormand–Prince
 //! 5(4) ([`Dopri5`], explicit, for comparison). Each exposes accepted steps with (y, f) at
 //! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
-//! location. The implicit methods share the finite-difference Jacobian and its refresh
-//! policy (`jacobian`), the start of a step attempt (`prepare_attempt`) and the LU
-//! ([`Lu`]). No heap allocation.
+//! location. The implicit methods share the Jacobian's refresh policy (`jacobian`; the
+//! Jacobian itself is the system's [`Rhs::jacobian`], by default dense forward differences,
+//! [`fd_jacobian`]), the start of a step attempt (`prepare_attempt`) and the LU ([`Lu`]);
+//! Radau IIA also solves its Newton systems by block elimination over a system's
+//! [`Partition`] (`reduced`). No heap allocation.
 
 mod dense;
 mod dopri5;
 mod jacobian;
 mod lu;
 mod radau5;
+mod reduced;
 mod trbdf2;
 
 pub use dense::hermite;
+pub use jacobian::fd_jacobian;
 pub use dopri5::Dopri5;
 pub use lu::{Lu, Scalar};
 pub use radau5::Radau5;
+pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
 use jacobian::JacobianCache;
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 /// Identifier of the smooth piece of a piecewise-smooth right-hand side: a set of on/off
 /// flags (stop engaged, a force clipped, …; the system names its flags, see
@@ -69,6 +74,19 @@ pub trait Rhs<const N: usize> {
     /// evaluation there for its driver).
     fn eval_accepted(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
         self.eval_piece(t, y)
+    }
+    /// The Jacobian ∂f/∂y at (t, y) into `jac`, with f = f(t, y) and `piece` = the piece of
+    /// y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined at a
+    /// state it needs. Default: [`fd_jacobian`], dense forward differences, N evaluations;
+    /// a system whose parts couple sparsely may exploit that.
+    fn jacobian(&mut self, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
+        fd_jacobian(self, t, y, f, piece, jac, stats)
+    }
+    /// States the Newton solves may eliminate by blocks (see [`Partition`]): a second-order
+    /// system's positions, whose rates are velocities. Used by [`Radau5`] wherever the
+    /// Jacobian fits the partition. Default: none (dense LU).
+    fn newton_partition(&self) -> Option<Partition<N>> {
+        None
     }
 }
 

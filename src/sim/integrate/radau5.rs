@@ -2,13 +2,18 @@
 
 use super::jacobian::JacobianCache;
 use super::lu::Lu;
+use super::reduced::ReducedLu;
 use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, StepError, Stats, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
+
+/// The real and the complex reduced factorisations.
+type ReducedPair<const N: usize> = (ReducedLu<f64, N>, ReducedLu<Complex<f64>, N>);
 
 /// Radau IIA of order 5 after Hairer & Wanner's RADAU5: stiffly accurate, L-stable. The
 /// simplified Newton iteration uses their transformation A⁻¹ = T Λ T⁻¹, so each Jacobian
 /// costs one real N×N LU of γ/h − J and one complex N×N LU of (α + iβ)/h − J instead of a
-/// 3N×3N one. Newton's contraction is carried across steps and a predicted non-convergence
+/// 3N×3N one (or, for a system with a [`Partition`](super::Partition) that J fits, LUs of its kept states'
+/// Schur complements only). Newton's contraction is carried across steps and a predicted non-convergence
 /// shrinks h early; the step size follows Gustafsson's predictive controller; the error
 /// estimate is RADAU5's, filtered by (γ/h − J)⁻¹.
 #[derive(Debug, Clone)]
@@ -20,6 +25,11 @@ pub struct Radau5<const N: usize> {
     lu_r: Option<Lu<f64, N>>,
     /// (α + iβ)/h − J.
     lu_c: Option<Lu<Complex<f64>, N>>,
+    /// The system's partition for the Newton solves (asked at the first step), with the
+    /// storage of both reduced factorisations.
+    part: Option<Option<ReducedPair<N>>>,
+    /// The reduced factorisations are the current ones (else `lu_r`, `lu_c`).
+    reduced: bool,
     lu_h: f64,
     stats: Stats,
     first: bool,
@@ -97,6 +107,8 @@ impl<const N: usize> Radau5<N> {
             jc: JacobianCache::new(),
             lu_r: None,
             lu_c: None,
+            part: None,
+            reduced: false,
             lu_h: 0.0,
             stats: Stats::default(),
             first: true,
@@ -112,10 +124,25 @@ impl<const N: usize> Radau5<N> {
     }
 
     fn factor_matrix(&mut self, h: f64) -> bool {
-        if self.lu_r.is_some() && self.lu_h == h {
+        if (self.reduced || self.lu_r.is_some()) && self.lu_h == h {
             return true;
         }
         let j = &self.jc.jac;
+        self.reduced = false;
+        if let Some(Some(red)) = self.part.as_mut() {
+            if red.0.partition().fits(j) {
+                self.stats.lu += 1;
+                let ac = Complex::new(self.eig.alpha / h, self.eig.beta / h);
+                if red.0.factor(j, self.eig.gamma / h) && red.1.factor(j, ac) {
+                    self.reduced = true;
+                    self.lu_h = h;
+                    return true;
+                }
+                self.lu_r = None;
+                self.lu_c = None;
+                return false;
+            }
+        }
         let e = SMatrix::<f64, N, N>::from_diagonal_element(self.eig.gamma / h) - j;
         let ac = Complex::new(self.eig.alpha / h, self.eig.beta / h);
         let ec = SMatrix::<Complex<f64>, N, N>::from_fn(|r, c| {
@@ -135,6 +162,24 @@ impl<const N: usize> Radau5<N> {
                 self.lu_c = None;
                 false
             }
+        }
+    }
+
+    /// Solve (γ/h − J) x = b with the current factorisation.
+    #[inline]
+    fn solve_r(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        match (&self.part, self.reduced) {
+            (Some(Some(red)), true) => red.0.solve(b),
+            _ => self.lu_r.as_ref().expect("factored").solve(b),
+        }
+    }
+
+    /// Solve ((α + iβ)/h − J) x = b with the current factorisation.
+    #[inline]
+    fn solve_c(&self, b: &SVector<Complex<f64>, N>) -> SVector<Complex<f64>, N> {
+        match (&self.part, self.reduced) {
+            (Some(Some(red)), true) => red.1.solve(b),
+            _ => self.lu_c.as_ref().expect("factored").solve(b),
         }
     }
 
@@ -188,8 +233,6 @@ impl<const N: usize> Radau5<N> {
         let mut eta = self.eta.max(f64::EPSILON).powf(0.8);
         let mut theta = self.theta_jac;
         let (mut prev, mut thq_old) = (0.0, 0.0);
-        let lu_r = self.lu_r.as_ref().expect("factored");
-        let lu_c = self.lu_c.as_ref().expect("factored");
         for it in 0..self.max_newton {
             self.stats.newton += 1;
             let mut fz = [SVector::<f64, N>::zeros(); 3];
@@ -201,8 +244,8 @@ impl<const N: usize> Radau5<N> {
             let r1 = r[0] - w[0] * gh;
             let r2 = r[1] - (w[1] * ah - w[2] * bh);
             let r3 = r[2] - (w[1] * bh + w[2] * ah);
-            let d1 = lu_r.solve(&r1);
-            let dc = lu_c.solve(&SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(r2[k], r3[k])));
+            let d1 = self.solve_r(&r1);
+            let dc = self.solve_c(&SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(r2[k], r3[k])));
             let d2 = dc.map(|c| c.re);
             let d3 = dc.map(|c| c.im);
             let n1 = self.tol.norm(&d1, y, y);
@@ -249,6 +292,7 @@ impl<const N: usize> NewtonMatrix<N> for Radau5<N> {
     }
     fn drop_factor(&mut self) {
         self.lu_r = None;
+        self.reduced = false;
     }
     fn factor(&mut self, h: f64) -> bool {
         self.factor_matrix(h)
@@ -264,6 +308,9 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
         f: &SVector<f64, N>,
         h_max: f64,
     ) -> Result<Accepted<N>, StepError> {
+        if self.part.is_none() {
+            self.part = Some(sys.newton_partition().map(|p| (ReducedLu::new(p), ReducedLu::new(p))));
+        }
         self.jc.start_step(sys, y);
         loop {
             let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
@@ -285,13 +332,12 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
             let y1 = y + z[2];
             // error estimate (RADAU5): (γ/h − J)⁻¹ (f0 + Σ dd_i Z_i / h)
             let f2 = (z[0] * DD[0] + z[1] * DD[1] + z[2] * DD[2]) / h;
-            let le = self.lu_r.as_ref().expect("factored");
-            let mut err_v = le.solve(&(f + f2));
+            let mut err_v = self.solve_r(&(f + f2));
             let mut err = self.tol.norm(&err_v, y, &y1);
             if err >= 1.0 && (self.first || self.last_rejected) {
                 self.stats.rhs += 1;
                 if let Some(f1) = sys.eval(t, &(y + err_v)) {
-                    err_v = le.solve(&(f1 + f2));
+                    err_v = self.solve_r(&(f1 + f2));
                     err = self.tol.norm(&err_v, y, &y1);
                 }
             }
@@ -341,6 +387,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
         self.h = h;
         self.jc.valid = false;
         self.lu_r = None;
+        self.reduced = false;
         self.first = true;
         self.prev_z = None;
         self.acc = None;

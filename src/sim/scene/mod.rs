@@ -2,8 +2,8 @@
 //! states), its event functions (`E` of them) and what they do, its criteria and its
 //! outputs; the generic [`driver`](crate::sim::driver) steps it, locates its events and
 //! samples it. Today's scene is [`centred`] (one finger, its mirror, the fixed centred
-//! object); an offset scene (two fingers, fixed object at x_off: N = 9) and the free scene
-//! (two fingers and the object as a rigid body: N = 22) are further implementations.
+//! object); the offset scene (two fingers, fixed object at x_off: N = 10) and the free scene
+//! (two fingers and the object as a rigid body: N = 21) are further implementations.
 
 pub mod centred;
 pub mod free;

@@ -3,21 +3,29 @@
 //! capsule against the object's axis segment, the palm capsule, and n_g rim points on the
 //! ground, all Hertz–Flores with memory and the 2-D regularised friction of §14.2.
 //! State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2 | G (3) | quaternion (w, x, y, z) |
-//! v_G (3) | ω (3, world axes)). The run ends at min(t_max, t_obs).
+//! v_G (3) | ω (3, world axes)). The run ends at min(t_max, t_obs). The parts (object
+//! kinematics, each contact) are in `contacts`; the integrator's Jacobian is computed by
+//! blocks (`jacobian`), and its Newton systems eliminate the positions ([`Partition`]).
+
+mod contacts;
+mod jacobian;
+mod rhs;
+
+pub use jacobian::FreeJacobian;
 
 use super::{Point, Response, Scene};
 use crate::math::V2;
 use crate::model::{Finger, FrictionLaw};
 use crate::params::SceneParams;
-use crate::sim::contact3d::{closest_segments, point_force, quat_matrix, quat_mul, V3};
+use crate::sim::contact3d::V3;
 use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver::{self, End, Run};
 use crate::sim::events::{Crossing, EventKind, EventValues};
-use crate::sim::finger::{FingerEval, FingerModel, Kink};
-use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::finger::{FingerLinkage, FingerModel};
+use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::SimOptions;
-use nalgebra::{Matrix2, Matrix3, SVector, Vector2};
+use nalgebra::{Matrix2, SVector, Vector2};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -27,6 +35,8 @@ pub const NF: usize = 21;
 pub const NG_MAX: usize = 16;
 /// Contacts: 4 phalanges, the palm, the ground points.
 pub const NC: usize = 5 + NG_MAX;
+/// Contacts whose events fall within this time (s) of a located one change with it.
+const SIMULTANEOUS: f64 = 1e-10;
 /// Number of event functions of the free scene.
 pub const EF: usize = NC + 4;
 type St = SVector<f64, NF>;
@@ -46,11 +56,14 @@ pub struct FreeSetup {
     pub tilt: f64,
     /// A constant force along x through the axis at z = 0 (N).
     pub push_x: f64,
+    /// The integrator's Jacobian by dense forward differences (21 evaluations) instead of
+    /// by blocks (for comparison).
+    pub dense_jacobian: bool,
 }
 
 impl Default for FreeSetup {
     fn default() -> Self {
-        FreeSetup { fingers: true, v0: [0.0; 3], tilt: 0.0, push_x: 0.0 }
+        FreeSetup { fingers: true, v0: [0.0; 3], tilt: 0.0, push_x: 0.0, dense_jacobian: false }
     }
 }
 
@@ -70,8 +83,8 @@ pub struct Contact3 {
 /// The free scene's model at one state.
 #[derive(Debug, Clone, Copy)]
 pub struct FreeEval {
-    /// Finger 1 and 2 (local frames; their contact fields are unused).
-    pub f: [FingerEval; 2],
+    /// The linkages of finger 1 and 2 (local frames).
+    pub f: [FingerLinkage; 2],
     /// Every contact (0–3 phalanges, 4 palm, 5.. ground).
     pub c: [Contact3; NC],
     /// q̈ of both fingers.
@@ -160,6 +173,9 @@ pub struct FreeResult {
     pub stats: Stats,
     /// Right-hand-side evaluations (including event location).
     pub rhs_evals: u64,
+    /// Partial evaluations of the block Jacobian (one per column: a finger and its
+    /// contacts, or the contacts alone).
+    pub jac_block_evals: u64,
     /// Wall seconds.
     pub cpu_s: f64,
     /// Energy at the start and at the end (J).
@@ -186,6 +202,8 @@ pub struct FreeScene<'a> {
     law_ground: FrictionLaw,
     x_off: f64,
     evals: u64,
+    jac_evals: u64,
+    last_sampled: Option<(f64, St)>,
     accepted: Option<(St, FreeEval)>,
     // tracking
     g_start: V3,
@@ -237,6 +255,7 @@ impl<'a> FreeScene<'a> {
             events: 0,
             stats: Stats::default(),
             rhs_evals: 0,
+            jac_block_evals: 0,
             cpu_s: 0.0,
             energy: [f64::NAN; 2],
             max_energy_rise: 0.0,
@@ -256,6 +275,8 @@ impl<'a> FreeScene<'a> {
             law_ground: FrictionLaw { mu_s: s.env.mu_g, mu_d: s.env.mu_g, v_s: s.setup.ground_v_s, v_d: s.setup.ground_v_d },
             x_off,
             evals: 0,
+            jac_evals: 0,
+            last_sampled: None,
             accepted: None,
             g_start: V3::zeros(),
             out,
@@ -266,176 +287,15 @@ impl<'a> FreeScene<'a> {
         }
     }
 
+    /// The last state sampled (when recording) and its time: with [`crate::sim::drive`],
+    /// a state reached mid-run with the contact memories of that moment.
+    pub fn last_sampled(&self) -> Option<(f64, St)> {
+        self.last_sampled
+    }
+
     /// Pre-sink δ_g0 = (m_c g / (n_g K_g))^{2/3} of §14.1.
     pub fn presink(&self) -> f64 {
         (self.m * self.s.env.g / (self.ng as f64 * self.s.setup.ground_k)).powf(2.0 / 3.0)
-    }
-
-    /// The model at `y`.
-    fn eval_with(&self, y: &St, full: bool) -> Option<FreeEval> {
-        let s = self.s;
-        let (r, w, lc) = (s.object.radius, s.hand.w, s.object.length);
-        let fm = &self.model;
-        let f = fm.finger;
-        let no_mem = [Memory::default(); 2];
-        let mut fe = [None, None];
-        for (i, slot) in fe.iter_mut().enumerate() {
-            let o = 4 * i;
-            let qd = if self.setup.fingers { Vector2::new(y[o + 2], y[o + 3]) } else { Vector2::zeros() };
-            *slot = Some(fm.evaluate(Vector2::new(y[o], y[o + 1]), qd, V2::new(0.0, r), &no_mem, false, full)?);
-        }
-        let fe = [fe[0]?, fe[1]?];
-        let g = V3::new(y[G0], y[G0 + 1], y[G0 + 2]);
-        let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
-        let rot = quat_matrix(q);
-        let v = V3::new(y[V0], y[V0 + 1], y[V0 + 2]);
-        let om = V3::new(y[W0], y[W0 + 1], y[W0 + 2]);
-        let a = rot.column(2).into_owned();
-        let (p0, d2) = (g - a * (lc / 2.0), a * lc);
-        let mut c = [Contact3::default(); NC];
-        let mut force = V3::new(0.0, 0.0, -self.m * s.env.g);
-        let mut torque = V3::zeros();
-        let mut gen = [fe[0].q_total, fe[1].q_total];
-        let mut piece = Piece::SMOOTH;
-        for i in 0..2 {
-            for b in 0..Kink::BITS {
-                if fe[i].piece.has(b) {
-                    piece = piece.with(b + Kink::BITS * i as u32);
-                }
-            }
-        }
-        let mut v_el = 0.0;
-        let kc = s.contact.k_contact;
-        // phalanges and palm: capsule (radius w) against the axis segment (radius R)
-        for k in 0..5 {
-            if k < 4 && !self.setup.fingers {
-                c[k].delta = -1.0;
-                continue;
-            }
-            let (mx, a3, b3, jp) = if k < 4 {
-                let (i, j) = (k / 2, k % 2);
-                let p = &fe[i].pose;
-                let mx = if i == 0 { 1.0 } else { -1.0 };
-                let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, f.distal_dir(p), f.t22) };
-                let a3 = V3::new(mx * start.x, start.y, 0.0);
-                let d3 = V3::new(mx * dir.x * len, dir.y * len, 0.0);
-                (mx, a3, d3, Some((i, j)))
-            } else {
-                let hb = f.o21.x;
-                (1.0, V3::new(-hb, -w, 0.0), V3::new(2.0 * hb, 0.0, 0.0), None)
-            };
-            let (sp, tp, clamped) = closest_segments(a3, b3, p0, d2);
-            let n = a3 + b3 * sp;
-            let qa = p0 + d2 * tp;
-            let dv = qa - n;
-            let d = dv.norm();
-            let yc = dv / d;
-            let delta = r + w - d;
-            let pf = n + yc * w;
-            let po = qa - yc * r;
-            let (vf, jpm) = match jp {
-                Some((i, j)) => {
-                    let pl = V2::new(mx * pf.x, pf.y);
-                    let jm = fe[i].kin.point_jacobian(f, &fe[i].pose, pl, j == 1);
-                    let qd = if self.setup.fingers { Vector2::new(y[4 * i + 2], y[4 * i + 3]) } else { Vector2::zeros() };
-                    let vl = jm * qd;
-                    (V3::new(mx * vl.x, vl.y, 0.0), Some(jm))
-                }
-                None => (V3::zeros(), None),
-            };
-            let vo = v + om.cross(&(po - g));
-            let rel = vf - vo;
-            let dd = yc.dot(&rel);
-            let u = rel - yc * dd;
-            c[k] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: clamped };
-            if self.mem[k].active && delta > 0.0 {
-                let law = if k < 4 { &fm.friction } else { &self.law_palm };
-                let (fnm, ft) = point_force(kc, self.chi, law, delta, dd, self.mem[k].vminus, u);
-                piece = piece.with(12 + 2 * k as u32);
-                if 1.0 + self.chi * dd / self.mem[k].vminus <= 0.0 {
-                    piece = piece.with(13 + 2 * k as u32);
-                }
-                let on_finger = ft - yc * fnm;
-                force -= on_finger;
-                torque -= (po - g).cross(&on_finger);
-                c[k].normal = fnm;
-                if let (Some(jm), Some((i, _))) = (jpm, jp) {
-                    gen[i] += jm.transpose() * Vector2::new(mx * on_finger.x, on_finger.y);
-                }
-                v_el += 0.4 * kc * delta * delta * delta.sqrt();
-            }
-        }
-        // ground points
-        let kg = s.setup.ground_k;
-        let zg = -s.object.grasp_height;
-        for k in 0..self.ng {
-            let rk = rot * self.rim_body[k];
-            let delta = zg - (g.z + rk.z);
-            let vp = v + om.cross(&rk);
-            let dd = -vp.z;
-            let ci = 5 + k;
-            c[ci] = Contact3 { delta, delta_dot: dd, normal: 0.0, rim: false };
-            if self.mem[ci].active && delta > 0.0 {
-                let (fnm, ft) = point_force(kg, self.chi, &self.law_ground, delta, dd, self.mem[ci].vminus, V3::new(vp.x, vp.y, 0.0));
-                piece = piece.with(12 + 2 * ci as u32);
-                if 1.0 + self.chi * dd / self.mem[ci].vminus <= 0.0 {
-                    piece = piece.with(13 + 2 * ci as u32);
-                }
-                let fo = ft + V3::new(0.0, 0.0, fnm);
-                force += fo;
-                torque += rk.cross(&fo);
-                c[ci].normal = fnm;
-                v_el += 0.4 * kg * delta * delta * delta.sqrt();
-            }
-        }
-        for k in self.ng..NG_MAX {
-            c[5 + k].delta = -1.0;
-        }
-        if self.setup.push_x != 0.0 && a.z.abs() > 1e-12 {
-            let fp = V3::new(self.setup.push_x, 0.0, 0.0);
-            let lever = a * (-g.z / a.z);
-            force += fp;
-            torque += lever.cross(&fp);
-        }
-        let mut qdd = [Vector2::zeros(); 2];
-        if self.setup.fingers {
-            for i in 0..2 {
-                qdd[i] = fe[i].m.try_inverse()? * gen[i];
-            }
-        }
-        let i_w: Matrix3<f64> = rot * Matrix3::from_diagonal(&self.j_body) * rot.transpose();
-        let l = i_w * om;
-        let wdot = i_w.try_inverse()? * (torque - om.cross(&l));
-        let e_t = 0.5 * self.m * v.norm_squared();
-        let e_r = 0.5 * om.dot(&l);
-        let energy = if full { fe[0].energy + fe[1].energy + e_t + e_r + self.m * s.env.g * g.z + v_el } else { f64::NAN };
-        Some(FreeEval { f: fe, c, qdd, acc: (force / self.m, wdot), tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: g, quat: q, omega: om, axis: a })
-    }
-
-    fn deriv(&self, y: &St, ev: &FreeEval) -> St {
-        let mut d = St::zeros();
-        if self.setup.fingers {
-            for i in 0..2 {
-                let o = 4 * i;
-                d[o] = y[o + 2];
-                d[o + 1] = y[o + 3];
-                d[o + 2] = ev.qdd[i][0];
-                d[o + 3] = ev.qdd[i][1];
-            }
-        }
-        let q = [y[Q0], y[Q0 + 1], y[Q0 + 2], y[Q0 + 3]];
-        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-        let qn = [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
-        let qd = quat_mul([0.0, y[W0], y[W0 + 1], y[W0 + 2]], qn);
-        for j in 0..3 {
-            d[G0 + j] = y[V0 + j];
-            d[V0 + j] = ev.acc.0[j];
-            d[W0 + j] = ev.acc.1[j];
-        }
-        for j in 0..4 {
-            d[Q0 + j] = 0.5 * qd[j];
-        }
-        d
     }
 
     fn note(&mut self, ev: &FreeEval) {
@@ -465,16 +325,14 @@ impl<'a> FreeScene<'a> {
 impl Rhs<NF> for FreeScene<'_> {
     fn eval(&mut self, _t: f64, y: &St) -> Option<St> {
         self.evals += 1;
-        let ev = self.eval_with(y, false)?;
-        Some(self.deriv(y, &ev))
+        Some(self.rhs(y)?.0)
     }
     fn piece(&self, y: &St) -> Piece {
-        self.eval_with(y, false).map_or(Piece::UNDEFINED, |e| e.piece)
+        self.rhs(y).map_or(Piece::UNDEFINED, |r| r.1)
     }
     fn eval_piece(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
         self.evals += 1;
-        let ev = self.eval_with(y, false)?;
-        Some((self.deriv(y, &ev), ev.piece))
+        self.rhs(y)
     }
     fn eval_accepted(&mut self, _t: f64, y: &St) -> Option<(St, Piece)> {
         self.evals += 1;
@@ -482,6 +340,18 @@ impl Rhs<NF> for FreeScene<'_> {
         let out = (self.deriv(y, &ev), ev.piece);
         self.accepted = Some((*y, ev));
         Some(out)
+    }
+    fn newton_partition(&self) -> Option<Partition<NF>> {
+        // the positions: both fingers' angles, G, and the quaternion (its rate depends on
+        // itself and ω only)
+        (!self.setup.dense_jacobian).then(|| Partition::new(&[&[0], &[1], &[4], &[5], &[G0], &[G0 + 1], &[G0 + 2], &[Q0, Q0 + 1, Q0 + 2, Q0 + 3]])).flatten()
+    }
+    fn jacobian(&mut self, t: f64, y: &St, f: &St, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
+        if self.setup.dense_jacobian {
+            fd_jacobian(self, t, y, f, piece, jac, stats)
+        } else {
+            self.block_jacobian(y, piece, jac)
+        }
     }
 }
 
@@ -544,8 +414,8 @@ impl Scene<NF, EF> for FreeScene<'_> {
             rate[k] = ev.c[k].delta_dot;
         }
         let fingers = if self.setup.fingers { 1.0 } else { f64::NAN };
-        g[NC] = (ev.f[0].sin_q13.abs() - 1e-3) * fingers;
-        g[NC + 1] = (ev.f[1].sin_q13.abs() - 1e-3) * fingers;
+        g[NC] = (ev.f[0].sin_q13().abs() - 1e-3) * fingers;
+        g[NC + 1] = (ev.f[1].sin_q13().abs() - 1e-3) * fingers;
         g[NC + 2] = ev.f[0].theta2 * fingers;
         g[NC + 3] = ev.f[1].theta2 * fingers;
         rate[NC + 2] = ev.f[0].theta2_dot;
@@ -587,7 +457,21 @@ impl Scene<NF, EF> for FreeScene<'_> {
             EventKind::Contact(_) => {
                 for k in 0..5 + self.ng {
                     let c = &ev.c[k];
-                    let ch = self.mem[k].update(c.delta, c.delta_dot, k == i, s.contact.eps_sep, s.contact.v_min);
+                    let mut ch = self.mem[k].update(c.delta, c.delta_dot, k == i, s.contact.eps_sep, s.contact.v_min);
+                    if ch == MemoryChange::Unchanged && k != i && self.crossing(k).is_some() {
+                        // a contact that crosses within SIMULTANEOUS of this one (the mirror
+                        // image of a symmetric pair, off by rounding) changes here too,
+                        // instead of as an event of its own an instant later
+                        let g = self.mem[k].event_value(c.delta, s.contact.eps_sep);
+                        let ahead = g + SIMULTANEOUS * c.delta_dot;
+                        if !self.mem[k].active && g <= 0.0 && ahead > 0.0 {
+                            self.mem[k] = Memory { active: true, vminus: c.delta_dot.max(s.contact.v_min) };
+                            ch = MemoryChange::Onset;
+                        } else if self.mem[k].active && g > 0.0 && ahead <= 0.0 {
+                            self.mem[k] = Memory::default();
+                            ch = MemoryChange::Separation;
+                        }
+                    }
                     if k < 4 && ch == MemoryChange::Onset && self.first_k.is_none() {
                         let fe = &ev.f[k / 2];
                         let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
@@ -626,6 +510,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         }
         let pose = PoseSample { t, g: [y[G0], y[G0 + 1], y[G0 + 2]], q: ev.quat, tilt: ev.tilt, fingers: [y[0], y[1], y[4], y[5]], energy: ev.energy };
         self.out.poses.push(pose);
+        self.last_sampled = Some((t, *y));
     }
     fn finish(self, run: &Run<FreeEval>) -> FreeResult {
         let mut o = self.out;
@@ -645,6 +530,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         o.events = run.events;
         o.stats = run.stats;
         o.rhs_evals = self.evals + run.locate_evals;
+        o.jac_block_evals = self.jac_evals;
         if let Some(ev) = &run.last {
             o.object_final_tilt_deg = ev.tilt.to_degrees();
             o.object_final_displacement = (ev.pos.x - self.g_start.x).hypot(ev.pos.y - self.g_start.y);
@@ -660,7 +546,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
 
 /// Tolerances of the free scene: fingers as the centred scene, the object's position and
 /// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
-fn tolerances(opts: &SimOptions) -> Tol<NF> {
+pub fn free_tolerances(opts: &SimOptions) -> Tol<NF> {
     let mut atol = St::repeat(opts.atol);
     for j in 0..7 {
         atol[G0 + j] = opts.atol * 0.1;
@@ -674,7 +560,7 @@ pub fn simulate_free(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64, setup
     let clock = Instant::now();
     let scene = FreeScene::new(f, s, tau_s0, x_off, setup, opts.record);
     let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));
-    let mut r = driver::simulate(scene, opts, tolerances(opts), t_end);
+    let mut r = driver::simulate(scene, opts, free_tolerances(opts), t_end);
     r.cpu_s = clock.elapsed().as_secs_f64();
     r
 }
