@@ -120,7 +120,7 @@ const SIMULATED_S: f64 = 200e-6;
 /// and commits (its time per generation is serial); the shards go to its pool of p/4
 /// threads, several at once (each shard's time taken as serial within it, which is
 /// conservative).
-fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) {
+fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str, f64) {
     let n = m.gens.len().max(1) as f64;
     let pool = (p / 4).max(1) as f64;
     let persist_g = ((m.persist.outputs_s + m.persist.checkpoint_s) / n).max(if recording { m.persist.record_s / n / pool } else { 0.0 });
@@ -128,12 +128,19 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
     let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work, mut waited) = (0.0, 0.0, 0.0, 0.0);
+    // the same generations with every design's cost known in advance (longest first): the
+    // best any order could do, so what is left is the designs' own costs
+    let (mut lpt_t, mut eval_sum) = (0.0, 0.0);
     for g in &m.gens {
         // the solver's order: designs expected to be simulated first, then by index
         let mut order: Vec<f64> = g.costs.iter().filter(|&&c| c > SIMULATED_S).copied().collect();
         order.extend(g.costs.iter().filter(|&&c| c <= SIMULATED_S));
         let sum: f64 = g.costs.iter().sum();
         let ms = makespan(&order, p);
+        let mut lpt = g.costs.clone();
+        lpt.sort_by(|a, b| b.total_cmp(a));
+        lpt_t += makespan(&lpt, p);
+        eval_sum += sum;
         strag += ms - sum / p as f64;
         let ser = g.serial_s + handover_g;
         serial += ser;
@@ -149,7 +156,7 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str) 
     let persister = waited + (prev_finish - main_t).max(0.0);
     let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: archive, views and checkpoint on its thread; shards in its pool)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
-    (t, work, what)
+    (t, work, what, eval_sum / (p as f64 * lpt_t.max(1e-300)))
 }
 
 fn min_med(v: &[f64]) -> (f64, f64) {
@@ -250,11 +257,12 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     say!(out, "prediction from the 1-thread run's per-design costs (list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
     let mut predictions = vec![];
     for &p in &b.predict {
-        let (t, work, what) = predict(&m, p, on);
-        predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what }));
+        let (t, work, what, lpt) = predict(&m, p, on);
+        predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what, "evaluation_efficiency_longest_first": lpt }));
         write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
+        write!(out, "; the evaluation alone with every cost known in advance (longest first): {:.1} %", 100.0 * lpt).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
         if on {
-            let (t, work, what) = predict(&m, p, false);
+            let (t, work, what, _) = predict(&m, p, false);
             write!(out, "; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
         }
         say!(out, );
