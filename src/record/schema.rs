@@ -36,7 +36,16 @@ pub fn design() -> Value {
             "stage_seconds": obj(json!({"stages_0_1": num(), "stage_2": num(), "stage_3": num()}), &["stages_0_1", "stage_2", "stage_3"]),
             "sim_steps": int(),
             "sim_rhs_evals": int(),
-            "free_scene": {"type": "object", "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `simulate --scene free --json` (keys not computed, where the free scene did not run to t_obs, are left out)"},
+            "free_scene": {
+                "type": "object",
+                "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `simulate --scene free --json` (keys not computed, where the free scene did not run to t_obs, are left out)",
+                "properties": {
+                    "object_max_displacement": num(), "object_max_dx": num(), "object_max_dy": num(), "object_max_tilt_deg": num(),
+                    "object_final_displacement": num(), "object_final_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(),
+                    "moved": {"type": "boolean"}, "toppled": {"type": "boolean"}, "escaped": {"type": "boolean"}, "rim_contact": {"type": "boolean"},
+                    "object_x_off": num(), "free_end": {"type": "string"}, "free_steps": int(), "free_rhs_evals": int()
+                }
+            },
             "trajectory_samples": int()
         }),
         &["id", "generation", "problem", "window_start", "window_start_s", "epoch_s", "parameters", "derived", "stages_passed", "feasible", "objectives", "stage_seconds", "trajectory_samples"],
