@@ -10,14 +10,37 @@ use std::path::Path;
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|s| s.to_str()).unwrap_or("checkpoint")));
-    {
+    let written = (|| {
         let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
         f.write_all(bytes).map_err(|e| Error::io(&tmp, "cannot write", e))?;
         f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
+        drop(f);
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary file into place", e))
+    })();
+    if written.is_err() {
+        // no temporary file left behind (the file at `path`, if any, is untouched)
+        let _ = std::fs::remove_file(&tmp);
     }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary file into place", e))?;
+    written?;
     if let Ok(d) = std::fs::File::open(dir) {
         let _ = d.sync_all();
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_failed_write_leaves_the_target_and_no_temporary_file() {
+        let d = std::env::temp_dir().join(format!("gripopt-fsutil-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        // the target is a folder: the rename fails after the temporary file was written
+        let target = d.join("out.csv");
+        std::fs::create_dir_all(target.join("inside")).unwrap();
+        let e = super::write_atomic(&target, b"x").unwrap_err().to_string();
+        assert!(e.contains("out.csv"), "{e}");
+        assert!(!d.join(".out.csv.tmp").exists(), "temporary file left behind");
+        assert!(target.join("inside").is_dir(), "the target was touched");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }

@@ -304,7 +304,8 @@ def check_verify_design(d, t0, msgs, scene):
 
 
 def main(folders):
-    files = sorted(p for d in folders for p in pathlib.Path(d).rglob("*.mcap"))
+    # folders are searched recursively; a file argument is checked as given
+    files = sorted(p for d in folders for p in ([pathlib.Path(d)] if pathlib.Path(d).is_file() else pathlib.Path(d).rglob("*.mcap")))
     ok = bad = 0
     for p in files:
         try:
@@ -316,7 +317,7 @@ def main(folders):
             bad += 1
     print(f"mcap: {ok} passed, {bad} failed")
     if not files:
-        print("no MCAP files found in", folders)
+        print("no MCAP files found in", folders, "(give MCAP files or folders holding them)")
         return 1
     return 1 if bad else 0
 

@@ -38,10 +38,16 @@ pub(super) fn open(tmp: &Path, level: u32, threads: u32) -> Result<MemWriter> {
 pub(super) fn finish(mut w: MemWriter, tmp: &Path, path: &Path) -> Result<u64> {
     w.finish().map_err(error(tmp))?;
     let bytes = w.into_inner().into_inner();
-    let mut f = std::fs::File::create(tmp).map_err(|e| Error::io(tmp, "cannot create", e))?;
-    f.write_all(&bytes).map_err(|e| Error::io(tmp, "cannot write", e))?;
-    f.sync_all().map_err(|e| Error::io(tmp, "cannot sync", e))?;
-    drop(f);
-    std::fs::rename(tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary recording into place", e))?;
+    let written = (|| {
+        let mut f = std::fs::File::create(tmp).map_err(|e| Error::io(tmp, "cannot create", e))?;
+        f.write_all(&bytes).map_err(|e| Error::io(tmp, "cannot write", e))?;
+        f.sync_all().map_err(|e| Error::io(tmp, "cannot sync", e))?;
+        drop(f);
+        std::fs::rename(tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary recording into place", e))
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(tmp); // nothing half-written left behind
+    }
+    written?;
     Ok(bytes.len() as u64)
 }
