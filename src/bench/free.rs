@@ -231,41 +231,10 @@ fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
 /// Plots median CPU time against the largest relative error, one line per Jacobian, to
 /// the SVG file `path`.
 fn plot_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
-    use plotters::prelude::*;
-    let e = |e| Error::bench_from(format!("plot {}", path.display()), e);
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(e)?;
-    let pts: Vec<_> = rows.iter().filter(|r| r.err_max.is_finite() && r.err_max > 0.0).collect();
-    let (xmin, xmax) = pts.iter().fold((1e-9f64, 1e-2f64), |(a, b), r| (a.min(r.err_max), b.max(r.err_max)));
-    let (ymin, ymax) = pts.iter().fold((1e-3f64, 1e-2f64), |(a, b), r| (a.min(r.cpu_med), b.max(r.cpu_med)));
-    let mut chart = ChartBuilder::on(&root)
-        .caption("work-precision: the free scene (nominal design, to t_obs)", ("sans-serif", 22))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d((xmin * 0.5..xmax * 2.0).log_scale(), (ymin * 0.8..ymax * 1.25).log_scale())
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc("largest relative error of the §14.4 outputs")
-        .y_desc("CPU time, median (s)")
-        .x_label_formatter(&|v| format!("{v:.0e}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .draw()
-        .map_err(e)?;
-    for (label, color) in [("blocks", RED), ("dense", BLUE)] {
-        let series: Vec<(f64, f64)> = pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect();
-        if series.is_empty() {
-            continue;
-        }
-        chart
-            .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
-            .map_err(e)?
-            .label(format!("Radau IIA, {label} Jacobian"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-        chart.draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(e)?;
-    }
-    chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw().map_err(e)?;
-    root.present().map_err(e)?;
-    Ok(())
+    let pts: Vec<&FreeRow> = rows.iter().filter(|r| r.err_max.is_finite() && r.err_max > 0.0).collect();
+    let series: Vec<(String, Vec<(f64, f64)>)> = ["blocks", "dense"]
+        .iter()
+        .map(|&label| (format!("Radau IIA, {label} Jacobian"), pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect()))
+        .collect();
+    super::table::work_precision_chart(path, "work-precision: the free scene (nominal design, to t_obs)", "largest relative error of the §14.4 outputs", &series, (1e-9, 1e-2), (1e-3, 1e-2))
 }

@@ -51,15 +51,23 @@ pub fn print_targets(rows: &[Row], out: super::Out) -> Result<()> {
 /// Plots median CPU time against the relative error in t_stab, one line per method, to the
 /// SVG file `path`.
 pub fn plot(rows: &[Row], path: &Path) -> Result<()> {
+    let pts: Vec<&Row> = rows.iter().filter(|r| r.err_t_stab.is_finite() && r.err_t_stab > 0.0).collect();
+    let series: Vec<(String, Vec<(f64, f64)>)> =
+        labels(rows).into_iter().map(|m| (m.to_string(), pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect())).collect();
+    work_precision_chart(path, "work-precision: nominal grasp to t_stab", "relative error in t_stab", &series, (1e-14, 1.0), (1e-4, 1e-3))
+}
+
+/// A log–log work-precision chart (median CPU time against an error) with one line per
+/// `(label, points)` series, to the SVG file `path`; the axes cover at least `x0` and `y0`.
+pub fn work_precision_chart(path: &Path, caption: &str, x_desc: &str, series: &[(String, Vec<(f64, f64)>)], x0: (f64, f64), y0: (f64, f64)) -> Result<()> {
     use plotters::prelude::*;
     let e = |e| Error::bench_from(format!("plot {}", path.display()), e);
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
-    let pts: Vec<_> = rows.iter().filter(|r| r.err_t_stab.is_finite() && r.err_t_stab > 0.0).collect();
-    let (xmin, xmax) = pts.iter().fold((1e-14f64, 1.0f64), |(a, b), r| (a.min(r.err_t_stab), b.max(r.err_t_stab)));
-    let (ymin, ymax) = pts.iter().fold((1e-4f64, 1e-3f64), |(a, b), r| (a.min(r.cpu_med), b.max(r.cpu_med)));
+    let all = series.iter().flat_map(|(_, p)| p.iter());
+    let (xmin, xmax, ymin, ymax) = all.fold((x0.0, x0.1, y0.0, y0.1), |(a, b, c, d), &(x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)));
     let mut chart = ChartBuilder::on(&root)
-        .caption("work-precision: nominal grasp to t_stab", ("sans-serif", 22))
+        .caption(caption, ("sans-serif", 22))
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -67,22 +75,21 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<()> {
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc("relative error in t_stab")
+        .x_desc(x_desc)
         .y_desc("CPU time, median (s)")
         .x_label_formatter(&|v| format!("{v:.0e}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(e)?;
     let palette = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK, RGBColor(255, 140, 0)];
-    for (j, m) in labels(rows).into_iter().enumerate() {
+    for (j, (label, pts)) in series.iter().filter(|(_, p)| !p.is_empty()).enumerate() {
         let color = palette[j % palette.len()];
-        let series: Vec<(f64, f64)> = pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect();
         chart
-            .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
             .map_err(e)?
-            .label(m.to_string())
+            .label(label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-        chart.draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(e)?;
+        chart.draw_series(pts.iter().map(|&(x, y)| Circle::new((x, y), 4, color.filled()))).map_err(e)?;
     }
     chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw().map_err(e)?;
     root.present().map_err(e)?;
