@@ -208,3 +208,24 @@ fn cli_sweep_writes_csv_and_plots() {
         assert!(t.starts_with("<svg"), "{f}");
     }
 }
+
+#[test]
+fn the_scene_fields_can_be_swept() {
+    // the offset scene at x_off = 0 and 2 mm (docs/scenes.md): at 0 it is the centred scene
+    // (the nominal fails the impact criterion); at 2 mm the static force criterion is
+    // violated (the recentring force exceeds what the ground friction holds)
+    let mut s = spec(&["scene.x_off=0:0.002:2"], Stage::Dynamic);
+    s.problem.scene.setup.kind = gripopt::params::SceneKind::Offset;
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let d = out_dir("x-off");
+    sweep::write_csv(&d, &s, &rows).unwrap();
+    let (h, r) = read_csv(&d);
+    let (ix, iv) = (col(&h, "scene.x_off"), col(&h, "verdict"));
+    assert_eq!(r.len(), 2);
+    close_rel(r[1][ix].parse().unwrap(), 0.002, 1e-12, "x_off grid");
+    assert_eq!(r[0][iv], "impact", "{:?}", r[0]);
+    assert_eq!(r[1][iv], "static_force", "{:?}", r[1]);
+    // the ground's transition velocities keep their order
+    let e = sweep::set_field(&mut s.problem.clone(), "scene.ground_v_s", 1.0).unwrap_err().to_string();
+    assert!(e.contains("scene.ground_v_d must stay > scene.ground_v_s"), "{e}");
+}

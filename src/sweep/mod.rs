@@ -340,10 +340,19 @@ pub fn set_field(p: &mut Problem, field: &str, v: f64) -> Result<()> {
         "solver.rtol" => p.solver.rtol = v,
         "solver.atol" => p.solver.atol = v,
         "solver.max_steps" => p.solver.max_steps = v.round() as u64,
+        "scene.x_off" => s.setup.x_off = v,
+        "scene.t_obs" => s.setup.t_obs = v,
+        "scene.ground_points" => s.setup.ground_points = v.round() as usize,
+        "scene.ground_k" => s.setup.ground_k = v,
+        "scene.ground_v_s" => s.setup.ground_v_s = v,
+        "scene.ground_v_d" => s.setup.ground_v_d = v,
         other => return Err(Error::Input(format!("--vary {other}: not a numeric field a sweep can set"))),
     }
     if p.scene.contact.v_d <= p.scene.contact.v_s {
         return Err(Error::Input(format!("--vary {field} = {v}: contact.v_d must stay > contact.v_s")));
+    }
+    if p.scene.setup.ground_v_d <= p.scene.setup.ground_v_s {
+        return Err(Error::Input(format!("--vary {field} = {v}: scene.ground_v_d must stay > scene.ground_v_s")));
     }
     Ok(())
 }
