@@ -156,7 +156,7 @@ impl Checker<'_> {
         limit(field).check(v).map_err(|rule| Error::InvalidField {
             file: self.file.to_path_buf(),
             field: field.to_string(),
-            value: format!("{v}"),
+            value: super::limits::num(v),
             rule,
         })
     }
