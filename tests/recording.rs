@@ -55,6 +55,12 @@ fn every_design_is_recorded_and_replays_verified() {
             assert!(r.samples.windows(2).all(|w| w[0].t <= w[1].t), "time runs forward");
             assert_eq!(r.samples[0].t, 0.0);
         }
+        // never the optimiser's negative placeholder for max_offset (MODEL.md §6.7)
+        match r.record["form_closed"].as_bool() {
+            Some(true) => assert!(r.record["objectives"]["max_offset"].as_f64().is_some_and(|m| m >= 0.0), "design {id}"),
+            Some(false) => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}: {}", r.record),
+            None => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}"),
+        }
         if r.record["feasible"].as_bool().unwrap() {
             feasible += 1;
         } else {

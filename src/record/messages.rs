@@ -38,7 +38,9 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> V
     }
     let mut objectives = serde_json::Map::new();
     for (k, v) in ["max_offset", "alpha", "mean_force", "t_stab"].iter().zip(i.objectives) {
-        if let Some(v) = v {
+        // MODEL.md §6.7: a design not form closed at 0 carries max_offset = −Δ_off inside the
+        // optimiser; the record says form_closed = false and leaves max_offset out (as the CSVs)
+        if let Some(v) = v.filter(|v| *k != "max_offset" || *v >= 0.0) {
             objectives.insert(k.to_string(), json!(v));
         }
     }
@@ -58,6 +60,9 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> V
         "trajectory_samples": i.trajectory.map_or(0, |t| t.samples.len()),
     });
     let o = v.as_object_mut().expect("object");
+    if let Some(m) = i.objectives[0] {
+        o.insert("form_closed".into(), json!(m >= 0.0));
+    }
     if let Some(s) = i.failed_stage {
         o.insert("failed_stage".into(), json!(s));
     }

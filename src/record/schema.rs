@@ -29,6 +29,7 @@ pub fn design() -> Value {
             "derived": obj(json!({"l11": num(), "l12": num(), "l22": num(), "l_hand": num()}), &["l_hand"]),
             "stages_passed": int(),
             "feasible": {"type": "boolean"},
+            "form_closed": {"type": "boolean"},
             "failed_stage": int(),
             "reason": {"type": "string"},
             "violation": num(),
