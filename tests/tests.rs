@@ -17,6 +17,7 @@ mod persist;
 mod problem_files;
 mod properties;
 mod scenes;
+mod scene_cli;
 mod recording;
 mod statics;
 mod sweep;

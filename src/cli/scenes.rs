@@ -4,7 +4,7 @@
 //! other than the run's.
 
 use anyhow::{bail, Context, Result};
-use gripopt::eval::{evaluate as eval_design, EvalOptions};
+use gripopt::eval::{evaluate as eval_design, EvalOptions, FreeMeasure, FreeRecord};
 use gripopt::params::{limit, Design, Problem, SceneKind};
 use gripopt::sim::{simulate_free, simulate_grasp, simulate_offset, FreeSetup, SimOptions};
 use std::io::Write;
@@ -62,21 +62,40 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
     if p.scene.setup.kind == SceneKind::Centred {
         return crate::cli::report::simulate(p, x, o.rtol, o.method, o.contacts, o.trace, o.json, o.csv, o.plot, &o.extra);
     }
+    let kind = p.scene.setup.kind;
     if o.plot.is_some() {
-        bail!("--plot: only the centred scene is plotted so far (use --csv for the {} scene)", p.scene.setup.kind);
+        bail!("--plot: only the centred scene is plotted so far{}", if kind == SceneKind::Free { " (use --csv for the free scene)" } else { "" });
     }
-    simulate(p, x, o.rtol, o.json, o.csv, &o.extra)
+    if !o.contacts {
+        bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
+    }
+    if kind == SceneKind::Offset && o.csv.is_some() {
+        bail!("--csv: the offset scene writes no trajectory yet (the centred and free scenes do)");
+    }
+    simulate(p, x, o)
+}
+
+/// "yes", "no", or "—" (not known).
+fn flag(v: Option<bool>) -> &'static str {
+    match v {
+        Some(true) => "yes",
+        Some(false) => "no",
+        None => "—",
+    }
 }
 
 /// The offset or free scene.
-fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<&Path>, extra: &serde_json::Map<String, serde_json::Value>) -> Result<()> {
+fn simulate(p: &Problem, x: &Design, so: &SimulateOpts<'_>) -> Result<()> {
+    let (rtol, json, csv, extra) = (so.rtol, so.json, so.csv, &so.extra);
     let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
     let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
         let d = ev.discard.expect("a design without statics was discarded");
         bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
     };
     let s = &p.scene;
-    let o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
+    let mut o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
+    o.method = so.method;
+    o.trace = so.trace;
     let x_off = s.setup.x_off;
     if s.setup.kind == SceneKind::Offset {
         let r = simulate_offset(&k.finger, s, &st, x_off, &o);
@@ -91,7 +110,17 @@ fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<
         });
         let mut v = v;
         v.as_object_mut().expect("object").extend(extra.clone());
-        println!("{}", if json { serde_json::to_string_pretty(&v)? } else { serde_json::to_string(&v)? });
+        if json {
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        } else {
+            let ms = |t: Option<f64>| t.map_or("—".to_string(), |t| format!("{:.4} ms", t * 1e3));
+            println!("problem {}  scene offset  x_off {x_off} m", p.name);
+            println!("  outcome {}", d.outcome);
+            println!("  first contact {} on phalanx {}  E_cyl {} mJ (limit {} mJ)", ms(d.first.map(|f| f.t)), d.first.map_or("—".into(), |f| f.phalanx.to_string()), d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_cyl * 1e3)), d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_lim * 1e3)));
+            println!("  t_stab {}  force margin min {:.4} N (static {:.4} N)", ms(d.t_stab), d.min_force_margin, d.static_force_margin);
+            println!("  hand force at the end ({:.4}, {:.4}) N (static ({:.4}, {:.4}) N); recentres {}", r.hand_end[0], r.hand_end[1], r.hand0[0], r.hand0[1], if r.hand_end[0] * x_off < 0.0 { "yes" } else { "no" });
+            println!("  t_end {:.4} ms  steps {} cpu {:.2} ms", d.t_end * 1e3, d.stats.steps, d.cpu_s * 1e3);
+        }
         return Ok(());
     }
     let centred = simulate_grasp(&k.finger, s, &st, &SimOptions { mode: gripopt::sim::Mode::Diagnostic, ..o });
@@ -105,8 +134,14 @@ fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<
         }
         w.flush()?;
     }
+    let fr = FreeRecord::from_measure(Some(&FreeMeasure::from_result(&r, x_off)));
     let mut v = serde_json::to_value(&r)?;
     let m = v.as_object_mut().expect("object");
+    // the verdict only when the free scene ran to t_obs (as `evaluate` records it)
+    m.insert("moved".into(), serde_json::json!(fr.moved));
+    m.insert("toppled".into(), serde_json::json!(fr.toppled));
+    m.insert("escaped".into(), serde_json::json!(fr.escaped));
+    m.insert("free_end".into(), serde_json::json!(fr.free_end));
     let fc = centred.first;
     m.insert("scene".into(), serde_json::json!("free"));
     m.insert("x_off".into(), serde_json::json!(x_off));
@@ -128,8 +163,16 @@ fn simulate(p: &Problem, x: &Design, rtol: Option<f64>, json: bool, csv: Option<
         println!("problem {}  scene free  x_off {x_off} m", p.name);
         println!("  object: max displacement {:.3e} m (dx {:.3e}, dy {:.3e})  max tilt {:.4}°  final {:.3e} m / {:.4}°", r.object_max_displacement, r.object_max_dx, r.object_max_dy, r.object_max_tilt_deg, r.object_final_displacement, r.object_final_tilt_deg);
         println!("  peak E_trans {:.4e} J  E_rot {:.4e} J during the first contact", r.object_peak_e_trans, r.object_peak_e_rot);
-        println!("  moved {}  toppled {}  escaped {}  rim_contact {}", r.moved, r.toppled, r.escaped, r.rim_contact);
-        println!("  centred criteria: impact {:?}  outcome {}", centred.impact_ok, centred.outcome);
+        if let Some(why) = fr.free_end.filter(|e| *e != "t_obs") {
+            println!("  ended early at t {:.4} ms: {why} (nothing observed: no verdict)", r.t_end * 1e3);
+        }
+        println!("  moved {}  toppled {}  escaped {}  rim_contact {}", flag(fr.moved), flag(fr.toppled), flag(fr.escaped), flag(Some(r.rim_contact)));
+        let impact = match centred.impact_ok {
+            Some(true) => "holds",
+            Some(false) => "fails",
+            None => "— (no contact)",
+        };
+        println!("  centred criteria: impact criterion {impact}  outcome {}", centred.outcome);
         println!("  steps {} rhs {} events {} cpu {:.2} ms", r.stats.steps, r.rhs_evals, r.events, r.cpu_s * 1e3);
     }
     Ok(())
@@ -153,7 +196,9 @@ pub fn replay_in_scene(dir: &Path, id: u64, scene: &str, json: bool, csv: Option
     let mut p = run_problem.clone();
     apply_scene(&mut p, scene)?;
     let (ran, recorded) = (scene_name(&p), scene_name(&run_problem));
-    if ran == recorded {
+    let (a, b) = (&p.scene.setup, &run_problem.scene.setup);
+    // numerically: free:-0 is the run's free:0
+    if a.kind == b.kind && (a.kind == SceneKind::Centred || a.x_off == b.x_off) {
         return Ok(None);
     }
     let rec = gripopt::record::read_design(dir, id)?;

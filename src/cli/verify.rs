@@ -25,9 +25,9 @@ pub struct VerifyArgs {
     /// Study: N designs drawn from the run's problem bounds that pass stage 2 (writes verify_sample.csv).
     #[arg(long, hide = true)]
     pub sample: Option<usize>,
-    /// Seed of `--sample`.
-    #[arg(long, hide = true, default_value_t = 1)]
-    pub seed: u64,
+    /// Seed of `--sample` (default 1).
+    #[arg(long, hide = true)]
+    pub seed: Option<u64>,
 }
 
 /// What `verify` records.
@@ -64,9 +64,12 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if a.sample.is_some() && a.all {
         bail!("--sample and --all: give one");
     }
+    if a.seed.is_some() && a.sample.is_none() {
+        bail!("--seed: only with --sample N (the designs of the run are not drawn)");
+    }
     let source = match a.sample {
         Some(0) => bail!("--sample 0: must be at least 1"),
-        Some(n) => VerifySource::Sample { n, seed: a.seed },
+        Some(n) => VerifySource::Sample { n, seed: a.seed.unwrap_or(1) },
         None if a.all => VerifySource::All,
         None => VerifySource::Pareto,
     };
@@ -82,19 +85,33 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     pb.finish_and_clear();
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
-    println!("verified {} designs in the free scene → {}", s.rows.len(), s.file.display());
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    println!("verified {} design{} in the free scene → {}", s.rows.len(), plural(s.rows.len()), s.file.display());
+    if let VerifySource::Sample { n, .. } = source {
+        if s.designs < n {
+            eprintln!("warning: --sample {n}: only {} drawn design{} pass stages 0–2 (the draw gives up after {} designs)", s.designs, plural(s.designs), 1000 * n + 10_000);
+        }
+    }
     if let Some(r) = &s.recording {
         println!("recorded to {} (open in Foxglove with {}, see docs/recording.md)", r.display(), a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display());
     }
     if !s.skipped.is_empty() {
-        eprintln!("warning: {} designs are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
+        eprintln!("warning: {} design(s) are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
     }
     print_table(&c);
+    if c.not_observed > 0 {
+        let mut why = std::collections::BTreeMap::<&str, usize>::new();
+        for r in s.rows.iter().filter(|r| !r.observed()) {
+            *why.entry(r.free_end()).or_default() += 1;
+        }
+        let why: Vec<String> = why.into_iter().map(|(w, k)| format!("{k} {w}")).collect();
+        println!("  not observed (the free scene ended before t_obs; left out of the table): {} ({})", c.not_observed, why.join(", "));
+    }
     if c.total() > 0 {
         println!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
     }
     let n = |f: &dyn Fn(&gripopt::run::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
-    println!("  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}", n(&|r| r.toppled), n(&|r| r.escaped), n(&|r| r.rim_contact), n(&|r| r.impact_ratio.is_some_and(|x| x > 1.0)), n(&|r| r.force_margin < 0.0));
+    println!("  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}", n(&|r| r.toppled == Some(true)), n(&|r| r.escaped == Some(true)), n(&|r| r.rim_contact), n(&|r| r.impact_ratio.is_some_and(|x| x > 1.0)), n(&|r| r.force_margin < 0.0));
     if let Some((t, r)) = s.median_energy_ratio {
         println!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
     }

@@ -68,16 +68,23 @@ pub struct VerifyRecord {
     pub object_peak_e_trans: f64,
     /// Measured: peak rotational kinetic energy during the first contact (J).
     pub object_peak_e_rot: f64,
+    /// How the free scene ended: "t_obs", or why it stopped early (then no verdict: the
+    /// verdict flags, `agrees` and the ratios are left out).
+    pub free_end: String,
     /// §14.4's verdict.
-    pub moved: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub moved: Option<bool>,
     /// Tilt above 45°.
-    pub toppled: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub toppled: Option<bool>,
     /// No phalanx in contact at t_end.
-    pub escaped: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub escaped: Option<bool>,
     /// A phalanx met the rim or a face.
     pub rim_contact: bool,
     /// Prediction and measurement agree.
-    pub agrees: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub agrees: Option<bool>,
     /// Object peak E_trans / §9.1's E_trans.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_e_trans_ratio: Option<f64>,
@@ -127,13 +134,13 @@ pub fn verify_schema() -> Value {
             "window": int(), "window_start": obj(json!({"sec": int(), "nsec": int()}), &["sec", "nsec"]), "window_start_s": num(), "epoch_s": int(), "id": int(),
             "parameters": obj(json!({"l21": num(), "b": num(), "t22": num(), "r": num(), "p": num(), "psi_deg": num()}), &["l21", "b", "t22", "r", "p", "psi_deg"]),
             "x_off": num(), "impact_ratio": num(), "e_trans": num(), "e_rot": num(), "force_margin": num(), "stable": boolean(), "predicted_moves": boolean(),
-            "object_max_displacement": num(), "object_max_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(),
+            "object_max_displacement": num(), "object_max_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(), "free_end": json!({"type": "string"}),
             "moved": boolean(), "toppled": boolean(), "escaped": boolean(), "rim_contact": boolean(), "agrees": boolean(),
             "peak_e_trans_ratio": num(), "peak_e_rot_ratio": num(), "t_end": num(), "poses": int()
         }),
         &[
             "window", "window_start", "window_start_s", "epoch_s", "id", "parameters", "x_off", "stable", "predicted_moves", "object_max_displacement", "object_max_tilt_deg",
-            "object_peak_e_trans", "object_peak_e_rot", "moved", "toppled", "escaped", "rim_contact", "agrees", "t_end", "poses",
+            "object_peak_e_trans", "object_peak_e_rot", "free_end", "rim_contact", "t_end", "poses",
         ],
     );
     s["title"] = "gripopt.Verify".into();

@@ -8,7 +8,7 @@
 use super::lock::RunLock;
 use super::verify_rec::VerifyRecording;
 use crate::record::keep_poses;
-use crate::eval::{evaluate, EvalOptions};
+use crate::eval::{evaluate, EvalOptions, FreeEnd, FreeMeasure};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
 use crate::sim::{simulate_free, simulate_grasp, FreeSetup, PoseSample, SimOptions};
@@ -63,22 +63,41 @@ pub struct VerifyRow {
     pub max_tilt_deg: f64,
     /// Peak translational and rotational kinetic energy of the object during the first contact (J).
     pub peak_e: (f64, f64),
-    /// §14.4's verdict: the object moved more than Δx_max or θ_max.
-    pub moved: bool,
-    /// Tilt above 45°.
-    pub toppled: bool,
-    /// No phalanx in contact at t_end.
-    pub escaped: bool,
+    /// §14.4's verdict: the object moved more than Δx_max or θ_max (None: not observed,
+    /// the free scene ended before t_obs).
+    pub moved: Option<bool>,
+    /// Tilt above 45° (None: not observed).
+    pub toppled: Option<bool>,
+    /// No phalanx in contact at t_end (None: not observed).
+    pub escaped: Option<bool>,
     /// A phalanx met the rim or a face.
     pub rim_contact: bool,
+    /// How the free scene ended (observed to t_obs, or why it stopped early).
+    pub end: FreeEnd,
     /// Time the free scene reached (s; t_obs unless it ended early).
     pub t_end: f64,
 }
 
 impl VerifyRow {
-    /// Prediction and measurement agree.
-    pub fn agrees(&self) -> bool {
-        self.predicted_moves == self.moved
+    /// The free scene ran to t_obs, so the motion was observed.
+    pub fn observed(&self) -> bool {
+        self.end == FreeEnd::Observed
+    }
+    /// Prediction and measurement agree (None: not observed).
+    pub fn agrees(&self) -> Option<bool> {
+        self.moved.map(|m| self.predicted_moves == m)
+    }
+    /// Object peak E_trans and E_rot over §9.1's (None: no centred contact, or not observed).
+    pub fn energy_ratios(&self) -> (Option<f64>, Option<f64>) {
+        let e = self.e_trans_rot.filter(|_| self.observed());
+        (e.map(|e| self.peak_e.0 / e.0), e.map(|e| self.peak_e.1 / e.1))
+    }
+    /// `free_end` as verify.csv writes it: "t_obs", or why the free scene stopped early.
+    pub fn free_end(&self) -> &'static str {
+        match self.end {
+            FreeEnd::Observed => "t_obs",
+            FreeEnd::Early(why) => why,
+        }
     }
 }
 
@@ -93,6 +112,8 @@ pub struct Confusion {
     pub ok_moved: usize,
     /// Predicted to stay, stayed.
     pub ok_stayed: usize,
+    /// Rows left out: the free scene ended before t_obs (nothing observed).
+    pub not_observed: usize,
 }
 
 impl Confusion {
@@ -101,15 +122,16 @@ impl Confusion {
         let mut c = Confusion::default();
         for r in rows {
             match (r.predicted_moves, r.moved) {
-                (true, true) => c.pred_moved += 1,
-                (true, false) => c.pred_stayed += 1,
-                (false, true) => c.ok_moved += 1,
-                (false, false) => c.ok_stayed += 1,
+                (_, None) => c.not_observed += 1,
+                (true, Some(true)) => c.pred_moved += 1,
+                (true, Some(false)) => c.pred_stayed += 1,
+                (false, Some(true)) => c.ok_moved += 1,
+                (false, Some(false)) => c.ok_stayed += 1,
             }
         }
         c
     }
-    /// Rows counted.
+    /// Rows counted in the table (observed ones).
     pub fn total(&self) -> usize {
         self.pred_moved + self.pred_stayed + self.ok_moved + self.ok_stayed
     }
@@ -130,6 +152,8 @@ pub struct VerifySummary {
     pub median_energy_ratio: Option<(f64, f64)>,
     /// The MCAP recording written (verify.mcap or verify_sample.mcap), unless recording was off.
     pub recording: Option<PathBuf>,
+    /// Designs verified (found in the file, or drawn and passing stages 0–2 for a sample).
+    pub designs: usize,
 }
 
 /// Verify one design of problem `p` (whose scene must be set up as the free scene to
@@ -152,6 +176,8 @@ pub fn verify_design_poses(p: &Problem, id: u64, x: &Design, scene_dt: Option<f6
     let poses = scene_dt.map(|dt| keep_poses(&f.poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
+    let end = FreeMeasure::from_result(&f, s.setup.x_off).end;
+    let seen = |v: bool| (end == FreeEnd::Observed).then_some(v);
     let row = VerifyRow {
         id,
         design: *x,
@@ -163,10 +189,11 @@ pub fn verify_design_poses(p: &Problem, id: u64, x: &Design, scene_dt: Option<f6
         max_displacement: f.object_max_displacement,
         max_tilt_deg: f.object_max_tilt_deg,
         peak_e: (f.object_peak_e_trans, f.object_peak_e_rot),
-        moved: f.moved,
-        toppled: f.toppled,
-        escaped: f.escaped,
+        moved: seen(f.moved),
+        toppled: seen(f.toppled),
+        escaped: seen(f.escaped),
         rim_contact: f.rim_contact,
+        end,
         t_end: f.t_end,
     };
     Some((row, poses))
@@ -278,30 +305,41 @@ pub fn verify_designs_poses(p: &Problem, designs: &[(u64, Design)], scene_dt: Op
         .collect()
 }
 
-fn opt(v: Option<f64>) -> String {
+fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
+/// A CSV field: quoted when it holds a comma or a quote.
+fn field(v: &str) -> String {
+    if v.contains([',', '"']) {
+        format!("\"{}\"", v.replace('"', "\"\""))
+    } else {
+        v.to_string()
+    }
+}
+
 /// Columns of verify.csv.
-pub const VERIFY_COLUMNS: [&str; 24] = [
+pub const VERIFY_COLUMNS: [&str; 25] = [
     "id", "l21", "b", "t22", "r", "p", "psi_deg", "impact_ratio", "e_trans", "e_rot", "force_margin", "stable", "predicted_moves", "object_max_displacement", "object_max_tilt_deg",
-    "object_peak_e_trans", "object_peak_e_rot", "moved", "toppled", "escaped", "rim_contact", "agrees", "peak_e_trans_ratio", "peak_e_rot_ratio",
+    "object_peak_e_trans", "object_peak_e_rot", "free_end", "moved", "toppled", "escaped", "rim_contact", "agrees", "peak_e_trans_ratio", "peak_e_rot_ratio",
 ];
 
 /// verify.csv's text (`#` header lines, then one row per design).
 pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
     let mut s = String::from("# gripopt verify.csv: the centred criteria's prediction (impact ratio E_cyl/E_lim > 1 or force margin < 0 → predicted_moves) against the free scene's measured motion (MODEL.md §14.4)\n");
     let _ = writeln!(s, "# scene free, x_off {x_off} m; units: lengths m, psi_deg and object_max_tilt_deg deg, energies J, force_margin N; *_ratio = object peak / §9.1 value");
+    s.push_str("# free_end: t_obs, or why the free scene stopped early (then moved, toppled, escaped, agrees and the ratios are empty: nothing observed)\n");
     s.push_str(&VERIFY_COLUMNS.join(","));
     s.push('\n');
     for r in rows {
         let a = r.design.to_array();
-        let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
+        let (et, er) = r.energy_ratios();
+        let (pt, pr) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.id, a[0], a[1], a[2], a[3], a[4], a[5], opt(r.impact_ratio), opt(et), opt(er), r.force_margin, r.stable, r.predicted_moves, r.max_displacement, r.max_tilt_deg,
-            r.peak_e.0, r.peak_e.1, r.moved, r.toppled, r.escaped, r.rim_contact, r.agrees(), opt(et.map(|e| r.peak_e.0 / e)), opt(er.map(|e| r.peak_e.1 / e)),
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.id, a[0], a[1], a[2], a[3], a[4], a[5], opt(r.impact_ratio), opt(pt), opt(pr), r.force_margin, r.stable, r.predicted_moves, r.max_displacement, r.max_tilt_deg,
+            r.peak_e.0, r.peak_e.1, field(r.free_end()), opt(r.moved), opt(r.toppled), opt(r.escaped), r.rim_contact, opt(r.agrees()), opt(et), opt(er),
         );
     }
     s
@@ -345,19 +383,34 @@ pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, record: bool
         VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
         VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
     };
+    if designs.is_empty() {
+        let message = match source {
+            VerifySource::Sample { n, seed } => format!("--sample {n} --seed {seed}: no drawn design passes stages 0–2 of problem.toml; nothing to verify, nothing written"),
+            _ => "no feasible design to verify; nothing written".into(),
+        };
+        let path = match source {
+            VerifySource::Pareto => dir.join("pareto.csv"),
+            VerifySource::All => dir.join("population.csv"),
+            VerifySource::Sample { .. } => dir.join("problem.toml"),
+        };
+        return Err(Error::RunDir { path, message });
+    }
     tick_len(designs.len());
     let rec = if record { Some(VerifyRecording::new(dir, &source)?) } else { None };
     let with_poses = verify_designs_poses(&p, &designs, rec.as_ref().map(|r| r.opts.scene_dt), tick);
     let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
     let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
+    if rows.is_empty() {
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written", designs.len()) });
+    }
     let file = dir.join(file);
     write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
     let recording = match rec {
         Some(r) => Some(r.write(&p, with_poses)?),
         None => None,
     };
-    let et: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.0 / e.0)).collect();
-    let er: Vec<f64> = rows.iter().filter_map(|r| r.e_trans_rot.map(|e| r.peak_e.1 / e.1)).collect();
+    let et: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().0).collect();
+    let er: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().1).collect();
     let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio, recording })
+    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio, recording, designs: designs.len() })
 }

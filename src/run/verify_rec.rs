@@ -71,6 +71,7 @@ impl VerifyRecording {
 fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
     let fin = |v: f64| v.is_finite().then_some(v);
     let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
+    let (rt, rr) = r.energy_ratios();
     VerifyRecord {
         window: 0,
         window_start: WindowStart { sec: 0, nsec: 0 },
@@ -93,9 +94,10 @@ fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
         toppled: r.toppled,
         escaped: r.escaped,
         rim_contact: r.rim_contact,
+        free_end: r.free_end().to_string(),
         agrees: r.agrees(),
-        peak_e_trans_ratio: et.and_then(|e| fin(r.peak_e.0 / e)),
-        peak_e_rot_ratio: er.and_then(|e| fin(r.peak_e.1 / e)),
+        peak_e_trans_ratio: rt.and_then(fin),
+        peak_e_rot_ratio: rr.and_then(fin),
         t_end: r.t_end,
         poses: 0,
     }
