@@ -142,5 +142,25 @@ fn replay_minus_zero_is_the_recorded_scene() {
         // the replay of the recording (not a re-simulation in "another" scene with its note)
         assert!(j.get("note").is_none() && j.get("replay").is_none() && j.get("compared_samples").is_some(), "{scene}: {j}");
     }
+    // the offset scene records no trajectory: every design verifies by its record's values
+    // (stage, reason, violation, objectives, simulation work), exit 0 ...
+    let ids: Vec<String> = pop.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').nth(id_col).unwrap().to_string()).collect();
+    for id in &ids {
+        let o = run(&["replay", &d, "--design", id, "--json"]);
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{id}: {e}: {}", text(&o)));
+        assert_eq!((o.status.code(), j["verified"].as_bool()), (Some(0), Some(true)), "design {id}: {j}");
+        assert!(j["compared_values"].as_u64().unwrap() >= 3, "design {id}: {j}");
+    }
+    // ... and a run whose problem was changed afterwards does not (exit 3)
+    let p = dir.join("problem.toml");
+    let text0 = std::fs::read_to_string(&p).unwrap();
+    let tau_line = text0.lines().find(|l| l.trim_start().starts_with("tau")).unwrap().to_string();
+    std::fs::write(&p, text0.replacen(&tau_line, "tau = 0.45", 1)).unwrap();
+    let changed = ids.iter().any(|id| {
+        let o = run(&["replay", &d, "--design", id, "--json"]);
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        o.status.code() == Some(3) && j["verified"] == false
+    });
+    assert!(changed, "a changed actuator torque must show in some design's replay");
     let _ = std::fs::remove_dir_all(&base);
 }

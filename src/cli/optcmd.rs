@@ -100,8 +100,9 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     let r = gripopt::record::replay(dir, id)?;
     let secs = t0.elapsed().as_secs_f64();
     let samples = &r.recorded.samples;
-    // verified means a trajectory was re-simulated and compared: never for 0 samples
-    let verified = r.verified && r.compared > 0;
+    // verified means something was re-computed and compared: the trajectory, or (recorded
+    // without one) the record's stage, reason, violation, objectives and simulation work
+    let verified = r.verified && (r.compared > 0 || r.values_compared > 0);
     let code = if verified { 0 } else { 3 };
     if let Some(path) = csv {
         let mut w = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?);
@@ -120,6 +121,7 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         v["verdict_agrees"] = serde_json::json!(r.recomputed_feasible == v["feasible"].as_bool().unwrap_or(false));
         v["max_difference"] = serde_json::json!(if r.max_difference.is_finite() { Some(r.max_difference) } else { None });
         v["compared_samples"] = serde_json::json!(r.compared);
+        v["compared_values"] = serde_json::json!(r.values_compared);
         v["file"] = serde_json::json!(r.recorded.file.display().to_string());
         v["replay_s"] = serde_json::json!(secs);
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -134,8 +136,10 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         None => println!("  feasible; objectives {}", rec["objectives"]),
     }
     println!("  trajectory: {} samples{}", samples.len(), samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default());
-    if r.compared == 0 {
-        println!("  NOT verified: no trajectory was recorded for this design, so nothing was compared (recomputed feasible: {})", r.recomputed_feasible);
+    if r.compared == 0 && verified {
+        println!("  verified (no trajectory recorded for this design): the re-evaluation reproduces the record's stage, reason, violation, objectives and simulation work ({} values)", r.values_compared);
+    } else if r.compared == 0 {
+        println!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);
     } else if verified {
         let precision = if r.recorded.resolution == gripopt::record::Resolution::Full { "every sample, f64" } else { "compact subset, to the recorded f32 precision" };
         println!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);

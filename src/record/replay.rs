@@ -53,8 +53,57 @@ pub struct Replay {
     pub max_difference: f64,
     /// Samples compared.
     pub compared: usize,
+    /// Values of the `/designs` record compared with the re-evaluation (failing stage,
+    /// reason, violation, objectives, simulation steps and RHS evaluations): what verifies a
+    /// design recorded without a trajectory (discarded before stage 3, or a scene whose
+    /// trajectory is not recorded).
+    pub values_compared: usize,
     /// Verdict recomputed.
     pub recomputed_feasible: bool,
+}
+
+/// Compare the record's values with the re-evaluation `ev`: (values compared, all present
+/// on both sides alike, largest relative difference of the numbers).
+fn compare_values(rec: &Value, ev: &crate::eval::Evaluation) -> (usize, bool, f64) {
+    let st = ev.statics;
+    let t_stab = ev.dynamics.as_ref().and_then(|d| d.t_stab);
+    // the optimiser's negative max_offset placeholder (MODEL.md §6.7) is not a value
+    let fresh_obj = [st.map(|s| s.max_offset).filter(|m| *m >= 0.0), st.map(|s| s.alpha).filter(|a| a.is_finite()), st.map(|s| s.mean_force), t_stab];
+    let o = &rec["objectives"];
+    let rec_obj = [o["max_offset"].as_f64().filter(|m| *m >= 0.0), o["alpha"].as_f64(), o["mean_force"].as_f64(), o["t_stab"].as_f64()];
+    let (mut n, mut alike, mut maxd) = (0usize, true, 0.0f64);
+    let mut num = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) => {
+            n += 1;
+            maxd = maxd.max(rel(a, b));
+        }
+        (None, None) => {}
+        _ => {
+            n += 1;
+            alike = false;
+        }
+    };
+    for (a, b) in fresh_obj.into_iter().zip(rec_obj) {
+        num(a, b);
+    }
+    num(ev.discard.map(|d| d.violation), rec["violation"].as_f64());
+    let ints = [
+        (ev.discard.map(|d| d.stage as u64), rec["failed_stage"].as_u64()),
+        (ev.dynamics.as_ref().map(|d| d.stats.steps), rec["sim_steps"].as_u64()),
+        (ev.dynamics.as_ref().map(|d| d.rhs_evals), rec["sim_rhs_evals"].as_u64()),
+    ];
+    for (a, b) in ints {
+        if a.is_some() || b.is_some() {
+            n += 1;
+            alike &= a == b;
+        }
+    }
+    let reason = ev.discard.map(|d| d.reason.to_string());
+    if reason.is_some() || rec["reason"].is_string() {
+        n += 1;
+        alike &= reason.as_deref() == rec["reason"].as_str();
+    }
+    (n, alike, maxd)
 }
 
 fn mmap(path: &Path) -> Result<memmap2::Mmap> {
@@ -185,6 +234,8 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         Resolution::Full => 1e-12,
         Resolution::Compact => f32::EPSILON as f64,
     };
-    let verified = same_len && maxd <= tol && feasible_rec == ev.feasible();
-    Ok(Replay { compared: fresh.len().min(recorded.samples.len()), recorded, verified, max_difference: if same_len { maxd } else { f64::INFINITY }, recomputed_feasible: ev.feasible() })
+    let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &ev);
+    let verified = same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol;
+    let maxd = maxd.max(vmaxd);
+    Ok(Replay { compared: fresh.len().min(recorded.samples.len()), values_compared, recorded, verified, max_difference: if same_len && alike { maxd } else { f64::INFINITY }, recomputed_feasible: ev.feasible() })
 }
