@@ -44,6 +44,8 @@ pub struct PersistStats {
     pub generations: u64,
     /// Seconds on the persister thread updating the archive and writing the CSV views.
     pub outputs_s: f64,
+    /// Of `outputs_s`, the archive's update (its hypervolume measured in the pool).
+    pub archive_s: f64,
     /// Seconds writing shards (encoding, compression, framing, fsync), summed over the
     /// shards, which the pool writes several at a time.
     pub record_s: f64,
@@ -273,7 +275,10 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                     let mut skipped = false;
                     let archive = match &outputs {
                         Some(o) => {
-                            let bytes = o.update_archive(&job.state)?;
+                            // in the persister's pool: the archive's hypervolume is measured in parallel
+                            let ta = Instant::now();
+                            let bytes = pool.install(|| o.update_archive(&job.state))?;
+                            shared.0.lock().expect("persister lock").stats.archive_s += ta.elapsed().as_secs_f64();
                             let designs = std::mem::take(&mut job.state.last_evaluated);
                             // the next generation already waits, or the views were rewritten
                             // moments ago: a later generation (or the end) rewrites them
