@@ -3,8 +3,6 @@
 //! `simulate --scene S` reports for the design read from pareto.csv, says it cannot be
 //! verified (`verified: null`) and exits 0; a bad scene is refused with exit 2.
 
-use gripopt::run::{optimise, RunSpec};
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
@@ -28,22 +26,7 @@ fn untimed(mut v: serde_json::Value) -> serde_json::Value {
 
 #[test]
 fn replay_in_another_scene() {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let dir = base.join("replay-scene");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&base).unwrap();
-    let spec = RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: dir.clone(),
-        pop: 8,
-        generations: 2,
-        seed: 16,
-        threads: Some(1),
-        progress: false,
-        crash_after: None,
-        record: gripopt::record::RecordOptions::default(),
-    };
-    optimise(&spec).unwrap();
+    let dir = crate::common::tiny_run("replay-scene", std::path::Path::new(crate::common::BOTTLE_FILE), 8, 2);
     let front = gripopt::run::read_design_csv(&dir.join("pareto.csv")).unwrap();
     let (id, x) = front[0];
     let (d, ids) = (dir.display().to_string(), id.to_string());

@@ -3,7 +3,6 @@
 //! refused with exit 2 instead of being ignored, `verify` with nothing to verify writes
 //! nothing, and `replay --scene` compares the scene's offset numerically (-0 = 0).
 
-use gripopt::run::{optimise, RunSpec};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -20,13 +19,7 @@ fn text(o: &Output) -> String {
 
 /// A tiny run of `problem` (pop `pop`, `generations`, seed 16) under target/mcap-check/.
 fn tiny_run(name: &str, problem: &Path, pop: usize, generations: u64) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("scene-cli-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    let spec = RunSpec { problem_path: problem.to_path_buf(), out: d.clone(), pop, generations, seed: 16, threads: Some(1), progress: false, crash_after: None, record: gripopt::record::RecordOptions::default() };
-    optimise(&spec).unwrap();
-    d
+    crate::common::tiny_run(&format!("scene-cli-{name}"), problem, pop, generations)
 }
 
 /// On bottle-1l at x_off = 20 mm the open finger (its tip 0.1 m from the palm) already

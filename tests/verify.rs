@@ -3,7 +3,7 @@
 //! the printed confusion table adds up to the rows and matches the CSV, the CSV does not
 //! depend on the thread count, and bad folders are refused with exit 2, nothing deleted.
 
-use gripopt::run::{optimise, RunLock, RunSpec};
+use gripopt::run::RunLock;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -12,23 +12,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
 /// A tiny run (pop 8, 2 generations; seed 16 has 4 designs on its front) under
 /// target/mcap-check/ so that `make test` checks its recording.
 fn tiny_run(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("verify-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    let spec = RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: d.clone(),
-        pop: 8,
-        generations: 2,
-        seed: 16,
-        threads: Some(1),
-        progress: false,
-        crash_after: None,
-        record: gripopt::record::RecordOptions::default(),
-    };
-    optimise(&spec).unwrap();
-    d
+    crate::common::tiny_run(&format!("verify-{name}"), std::path::Path::new(crate::common::BOTTLE_FILE), 8, 2)
 }
 
 fn run(args: &[&str]) -> Output {

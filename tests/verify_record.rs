@@ -7,30 +7,13 @@
 
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Decode;
-use gripopt::run::{optimise, RunSpec};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
 
 fn tiny_run(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("verify-record-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    let spec = RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: d.clone(),
-        pop: 8,
-        generations: 2,
-        seed: 16,
-        threads: Some(1),
-        progress: false,
-        crash_after: None,
-        record: gripopt::record::RecordOptions::default(),
-    };
-    optimise(&spec).unwrap();
-    d
+    crate::common::tiny_run(&format!("verify-record-{name}"), Path::new(crate::common::BOTTLE_FILE), 8, 2)
 }
 
 /// Messages of a file as (topic, log time, bytes), in file order.

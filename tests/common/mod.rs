@@ -34,3 +34,30 @@ pub fn close_abs(a: f64, b: f64, abs: f64, what: &str) {
 pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
     bottle().bounds.sample(rng)
 }
+
+/// A tiny recorded run of `problem` (seed 16, one thread; on bottle-1l pop 8 × 2 generations
+/// has 4 designs on its front) in `target/mcap-check/NAME` (or `$GRIPOPT_MCAP_CHECK_DIR`),
+/// so that `make test` checks its recording with the independent reader.
+pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: u64) -> std::path::PathBuf {
+    use std::path::PathBuf;
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let d = base.join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&base).unwrap();
+    let spec = gripopt::run::RunSpec {
+        problem_path: problem.to_path_buf(),
+        out: d.clone(),
+        pop,
+        generations,
+        seed: 16,
+        threads: Some(1),
+        progress: false,
+        crash_after: None,
+        record: gripopt::record::RecordOptions::default(),
+    };
+    gripopt::run::optimise(&spec).unwrap();
+    d
+}
+
+/// The default problem file, bottle-1l.
+pub const BOTTLE_FILE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
