@@ -274,30 +274,31 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                     let t0 = Instant::now();
                     let mut skipped = false;
                     let archive = match &outputs {
+                        // in the persister's pool: the archive's hypervolume is measured in parallel
                         Some(o) => {
-                            // in the persister's pool: the archive's hypervolume is measured in parallel
                             let ta = Instant::now();
                             let bytes = pool.install(|| o.update_archive(&job.state))?;
                             shared.0.lock().expect("persister lock").stats.archive_s += ta.elapsed().as_secs_f64();
-                            let designs = std::mem::take(&mut job.state.last_evaluated);
-                            // the next generation already waits, or the views were rewritten
-                            // moments ago: a later generation (or the end) rewrites them
-                            let behind = shared.0.lock().expect("persister lock").queued > 0;
-                            if behind || last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
-                                skipped = true;
-                                stale_views = Some(job.state.clone());
-                            } else {
-                                o.write_views(&job.state)?;
-                                last_views = Some(Instant::now());
-                                stale_views = None;
-                            }
-                            job.state.last_evaluated = designs;
                             Some(bytes)
                         }
                         None => None,
                     };
-                    let out_s = t0.elapsed().as_secs_f64();
+                    // the shard's designs (with their trajectories) leave the state here
                     let designs: Vec<Individual<GripperInfo>> = std::mem::take(&mut job.state.last_evaluated);
+                    if let Some(o) = &outputs {
+                        // the next generation already waits, or the views were rewritten
+                        // moments ago: a later generation (or the end) rewrites them
+                        let behind = shared.0.lock().expect("persister lock").queued > 0;
+                        if behind || last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
+                            skipped = true;
+                            stale_views = Some(job.state.clone());
+                        } else {
+                            o.write_views(&job.state)?;
+                            last_views = Some(Instant::now());
+                            stale_views = None;
+                        }
+                    }
+                    let out_s = t0.elapsed().as_secs_f64();
                     let task = recorder.as_ref().and_then(|r| r.lock().expect("recorder lock").task(g));
                     let shard = match task {
                         Some(task) => {

@@ -36,6 +36,18 @@ impl<const N: usize> JacobianCache<N> {
         }
     }
 
+    /// After a Newton iteration failed with step `h`: with a fresh Jacobian the step is
+    /// to blame, and the smaller step `h · shrink` is returned; with a stale one the
+    /// Jacobian is dropped (recomputed at the next attempt) and the step kept (None).
+    pub(super) fn newton_failed(&mut self, h: f64, shrink: f64) -> Option<f64> {
+        if self.fresh {
+            Some(h * shrink)
+        } else {
+            self.valid = false;
+            None
+        }
+    }
+
     /// At the start of a step: drop a stale Jacobian.
     pub(super) fn start_step<S: Rhs<N>>(&mut self, sys: &S, y: &SVector<f64, N>) {
         if self.valid && !self.fresh && (self.slow || self.piece_of(sys, y) != self.piece) {

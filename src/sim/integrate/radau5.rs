@@ -412,10 +412,8 @@ impl<const N: usize> Radau5<N> {
         self.stats.rejected += 1;
         self.stats.newton_fail += 1;
         self.last_rejected = true;
-        if self.jc.fresh {
-            self.h = h * 0.5;
-        } else {
-            self.jc.valid = false;
+        if let Some(h) = self.jc.newton_failed(h, 0.5) {
+            self.h = h;
         }
     }
 }

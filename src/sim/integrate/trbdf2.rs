@@ -196,10 +196,8 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
 impl<const N: usize> TrBdf2<N> {
     fn newton_failed(&mut self, h: f64) {
         self.stats.rejected += 1;
-        if self.jc.fresh {
-            self.h = h * 0.25;
-        } else {
-            self.jc.valid = false;
+        if let Some(h) = self.jc.newton_failed(h, 0.25) {
+            self.h = h;
         }
     }
 }
