@@ -174,3 +174,75 @@ fn reference_hypervolume_bands() {
         assert!(hv[5] >= lo && hv[5] <= hi, "{}: median {} outside [{lo}, {hi}]", p.name(), hv[5]);
     }
 }
+
+/// The solver's order of work (issue 15): every design's start says whether the rest is
+/// costly, costly designs go first, the order is the same for any thread count, and once
+/// the cost model has learnt from earlier generations it orders the simulated designs by
+/// their work (right-hand-side evaluations, deterministic) better than chance: the Spearman
+/// rank correlation between position and work is clearly negative (longest first).
+#[test]
+fn work_is_ordered_by_the_learnt_cost_model() {
+    use argmin::core::observers::Observe;
+    use argmin::core::State;
+    use gripopt::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
+    use gripopt::run::{GripperInfo, GripperProblem};
+    use std::sync::{Arc, Mutex};
+    type Gens = Arc<Mutex<Vec<(Vec<usize>, usize, Vec<Option<u64>>)>>>;
+    struct Obs(Gens);
+    impl Observe<Nsga2State<GripperInfo>> for Obs {
+        fn observe_init(&mut self, _: &str, st: &Nsga2State<GripperInfo>, _: &argmin::core::KV) -> Result<(), argmin::core::Error> {
+            self.observe_iter(st, &argmin::core::KV::new())
+        }
+        fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _: &argmin::core::KV) -> Result<(), argmin::core::Error> {
+            let work = st.last_evaluated.iter().map(|i| i.eval.info.sim_work.map(|w| w[1])).collect();
+            self.0.lock().unwrap().push((st.timing.order.clone(), st.timing.costly, work));
+            Ok(())
+        }
+    }
+    let run = |threads: usize| {
+        let problem = gripopt::params::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap();
+        let gp = GripperProblem::new(problem);
+        let (ideal, r) = gp.hv_points();
+        let settings = Nsga2Settings { pop_size: 64, seed: 5, operators: Operators::default(), eliminate_duplicates: true, hv_ideal: ideal, hv_ref: r };
+        let gens: Gens = Arc::default();
+        let obs = Obs(gens.clone());
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| execute(gp, settings, Nsga2State::new().with_max_generations(8), move |e| observe(e, obs), false)).unwrap();
+        Arc::try_unwrap(gens).unwrap().into_inner().unwrap()
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one, two, "the order and the work do not depend on the thread count");
+    let mut rho_sum = (0.0, 0);
+    for (g, (order, costly, work)) in one.iter().enumerate() {
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..work.len()).collect::<Vec<_>>(), "generation {}: the order is a permutation", g + 1);
+        // designs not simulated (or ended before the simulation) are cheap, and come last
+        for &i in &order[*costly..] {
+            assert!(work[i].unwrap_or(0) == 0, "generation {}: design {i} was called cheap but simulated", g + 1);
+        }
+        // generations after the model has rows: rank correlation of position and work
+        let sims: Vec<(usize, f64)> = order[..*costly].iter().enumerate().filter_map(|(pos, &i)| work[i].filter(|&w| w > 0).map(|w| (pos, w as f64))).collect();
+        if g >= 3 && sims.len() >= 10 {
+            let rank = |v: Vec<f64>| {
+                let mut idx: Vec<usize> = (0..v.len()).collect();
+                idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+                let mut r = vec![0.0; v.len()];
+                for (k, &i) in idx.iter().enumerate() {
+                    r[i] = k as f64;
+                }
+                r
+            };
+            let (a, b) = (rank(sims.iter().map(|s| s.0 as f64).collect()), rank(sims.iter().map(|s| s.1).collect()));
+            let n = a.len() as f64;
+            let m = (n - 1.0) / 2.0;
+            let cov: f64 = a.iter().zip(&b).map(|(x, y)| (x - m) * (y - m)).sum();
+            let var: f64 = a.iter().map(|x| (x - m) * (x - m)).sum();
+            rho_sum.0 += cov / var;
+            rho_sum.1 += 1;
+        }
+    }
+    assert!(rho_sum.1 >= 3, "enough generations with simulated designs: {}", rho_sum.1);
+    let rho = rho_sum.0 / rho_sum.1 as f64;
+    assert!(rho < -0.3, "longest first: mean Spearman ρ(position, work) = {rho:.2}");
+}

@@ -4,8 +4,9 @@
 //! Each run is the pipeline of `gripopt optimise` (recorder, background persister writing
 //! shard k then checkpoint k, NSGA-II in a pool of n threads) with a timing observer. From
 //! the measured per-design costs, the solver's serial time and the persister's time per
-//! generation, each generation is replayed on P simulated threads: the designs are list
-//! scheduled in the solver's order (designs that reach stage 3 first), the serial step
+//! generation, each generation is replayed on P simulated threads: every design's cheap
+//! start (stages 0–2), then the rest list scheduled in the order the solver used (its cost
+//! model's: predicted longest first, the same at any thread count), the serial step
 //! follows, and the persister works through the shards as a pipeline beside it (one
 //! generation queued). The predicted time is the larger of that schedule and the total work
 //! divided by P, so the prediction is an upper bound on efficiency.
@@ -14,7 +15,7 @@ use super::say;
 use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder};
-use crate::run::{Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister};
+use crate::run::{Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::{State, KV};
@@ -47,6 +48,9 @@ pub struct ScalingBench {
 #[derive(Debug, Clone, Default)]
 struct Gen {
     costs: Vec<f64>,
+    start_costs: Vec<f64>,
+    order: Vec<usize>,
+    costly: usize,
     eval_s: f64,
     serial_s: f64,
     hv_s: f64,
@@ -71,7 +75,7 @@ impl Observe<Nsga2State<GripperInfo>> for Timer {
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
         let mut g = self.0.lock().expect("timer");
         let t = &st.timing;
-        g.push(Gen { costs: t.costs.clone(), eval_s: t.eval_s, serial_s: t.serial_s, hv_s: t.hv_s, order_s: t.order_s });
+        g.push(Gen { costs: t.costs.clone(), start_costs: t.start_costs.clone(), order: t.order.clone(), costly: t.costly, eval_s: t.eval_s, serial_s: t.serial_s, hv_s: t.hv_s, order_s: t.order_s });
         Ok(())
     }
 }
@@ -112,34 +116,63 @@ fn makespan(costs: &[f64], p: usize) -> f64 {
     free.into_iter().fold(0.0, f64::max)
 }
 
-/// A design that took longer than this was simulated (stage 3): the solver's cost classes.
-const SIMULATED_S: f64 = 200e-6;
-
 /// Prediction at `p` threads: (time, total work, limiting step). The per-design costs and
 /// the serial steps are as measured. The persister's thread updates the archive and views
 /// and commits (its time per generation is serial); the shards go to its pool of p/4
 /// threads, several at once (each shard's time taken as serial within it, which is
 /// conservative).
-fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str, f64) {
+/// A prediction at some thread count.
+struct Prediction {
+    /// Predicted wall time (s).
+    t: f64,
+    /// All the work on one core (s).
+    work: f64,
+    /// The largest loss.
+    what: &'static str,
+    /// Efficiency of the evaluation alone, longest first.
+    lpt: f64,
+    /// Finish passes summed over the generations (s): the solver's order, classes only, longest first.
+    ordering: [f64; 3],
+}
+
+fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
     let n = m.gens.len().max(1) as f64;
     let pool = (p / 4).max(1) as f64;
     // the archive's update runs in the pool (its hypervolume in parallel): taken as spread
-    // over the pool's threads; the views and the commit are serial on the persister thread
-    let archive = m.persist.archive_s;
-    let persist_g = ((m.persist.outputs_s - archive + archive / pool + m.persist.checkpoint_s) / n).max(if recording { m.persist.record_s / n / pool } else { 0.0 });
-    let handover_g = m.persist.handover_s / n;
-    let persist_work_g = (if recording { m.persist.record_s } else { 0.0 } + m.persist.outputs_s + m.persist.checkpoint_s) / n;
+    // over the pool's threads; the commit is serial on the persister thread; shards and
+    // checkpoints are serialised in the pool; the CSV views follow their time rule (below)
+    let ps = &m.persist;
+    let archive = ps.archive_s;
+    let pool_g = if recording { ps.record_s } else { 0.0 } + ps.checkpoint_pool_s;
+    let persist_g = ((ps.outputs_s - ps.views_s - archive + archive / pool + ps.checkpoint_s) / n).max(pool_g / n / pool);
+    let handover_g = ps.handover_s / n;
+    let persist_work_g = (if recording { ps.record_s } else { 0.0 } + ps.outputs_s + ps.checkpoint_s + ps.checkpoint_pool_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work, mut waited) = (0.0, 0.0, 0.0, 0.0);
     // the same generations with every design's cost known in advance (longest first): the
     // best any order could do, so what is left is the designs' own costs
     let (mut lpt_t, mut eval_sum) = (0.0, 0.0);
+    let mut ordering = [0.0; 3];
     for g in &m.gens {
-        // the solver's order: designs expected to be simulated first, then by index
-        let mut order: Vec<f64> = g.costs.iter().filter(|&&c| c > SIMULATED_S).copied().collect();
-        order.extend(g.costs.iter().filter(|&&c| c <= SIMULATED_S));
+        // the solver's two passes: every design's start (fine-grained, index order), then
+        // the rest in the solver's order (its cost model's, the same at any thread count)
+        let finish: Vec<f64> = g.order.iter().map(|&i| g.costs[i] - g.start_costs.get(i).copied().unwrap_or(0.0)).collect();
         let sum: f64 = g.costs.iter().sum();
-        let ms = makespan(&order, p);
+        let ms = makespan(&g.start_costs, p) + makespan(&finish, p);
+        // the finish pass in the solver's order, in its classes only (costly then cheap,
+        // each by index: no cost model) and longest first
+        let mut classes: Vec<usize> = g.order[..g.costly.min(g.order.len())].to_vec();
+        classes.sort_unstable();
+        let mut rest: Vec<usize> = g.order[classes.len()..].to_vec();
+        rest.sort_unstable();
+        classes.extend(rest);
+        let fin = |i: usize| g.costs[i] - g.start_costs.get(i).copied().unwrap_or(0.0);
+        let mut longest: Vec<f64> = (0..g.costs.len()).map(fin).collect();
+        longest.sort_by(|a, b| b.total_cmp(a));
+        let classes: Vec<f64> = classes.into_iter().map(fin).collect();
+        ordering[0] += makespan(&finish, p);
+        ordering[1] += makespan(&classes, p);
+        ordering[2] += makespan(&longest, p);
         let mut lpt = g.costs.clone();
         lpt.sort_by(|a, b| b.total_cmp(a));
         lpt_t += makespan(&lpt, p);
@@ -155,11 +188,16 @@ fn predict(m: &Measured, p: usize, recording: bool) -> (f64, f64, &'static str, 
         prev_start = main_t.max(prev_finish);
         prev_finish = prev_start + persist_g;
     }
+    // the views: written at most every VIEWS_MIN_INTERVAL and after the last generation,
+    // each as long as in the measured run, all taken as on the critical path
+    let per_view = if ps.views_written > 0 { ps.views_s / ps.views_written as f64 } else { 0.0 };
+    let writes = 1.0 + (prev_finish / VIEWS_MIN_INTERVAL.as_secs_f64()).floor();
+    prev_finish += writes * per_view;
     let t = prev_finish.max(work / p as f64);
     let persister = waited + (prev_finish - main_t).max(0.0);
     let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: archive, views and checkpoint on its thread; shards in its pool)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
-    (t, work, what, eval_sum / (p as f64 * lpt_t.max(1e-300)))
+    Prediction { t, work, what, lpt: eval_sum / (p as f64 * lpt_t.max(1e-300)), ordering }
 }
 
 /// `best` with each design's cost (and each generation's serial time) replaced by its
@@ -171,6 +209,9 @@ fn per_design_min(mut best: Measured, runs: &[Measured]) -> Measured {
         let same: Vec<&Gen> = runs.iter().filter_map(|r| r.gens.get(gi)).filter(|o| o.costs.len() == g.costs.len()).collect();
         for (k, c) in g.costs.iter_mut().enumerate() {
             *c = same.iter().map(|o| o.costs[k]).fold(*c, f64::min);
+        }
+        for (k, c) in g.start_costs.iter_mut().enumerate() {
+            *c = same.iter().filter_map(|o| o.start_costs.get(k)).fold(*c, |a, &b| a.min(b));
         }
         g.serial_s = same.iter().map(|o| o.serial_s).fold(g.serial_s, f64::min);
     }
@@ -255,7 +296,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
             "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "ceiling_efficiency": ceil, "of_ceiling": of_ceil,
             "independent_wall_s": indep, "work_s": work, "eval_s": eval,
             "straggler_s": strag, "serial_s": serial, "handover_s": p.handover_s, "outputs_bg_s": p.outputs_s, "record_bg_s": p.record_s,
-            "checkpoint_bg_s": p.checkpoint_s, "archive_bg_s": p.archive_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "persist_pool_threads": p.pool_threads,
+            "checkpoint_bg_s": p.checkpoint_s, "archive_bg_s": p.archive_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "views_written": p.views_written, "views_s": p.views_s, "checkpoint_pool_s": p.checkpoint_pool_s, "persist_pool_threads": p.pool_threads,
         }));
         if n == 1 {
             best = Some(per_design_min(r, &runs));
@@ -270,19 +311,24 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     say!(out, " hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");
     let (hv, order): (f64, f64) = (m.gens.iter().map(|g| g.hv_s).sum(), m.gens.iter().map(|g| g.order_s).sum());
-    say!(out, "1 thread: of the serial step, the exact hypervolume took {hv:.3} s; ordering the work (stages 0–2 of every design once more) {order:.3} s of the evaluation");
+    say!(out, "1 thread: of the serial step, the exact hypervolume took {hv:.3} s; the first pass (stages 0–2 of every design, and ordering) {order:.3} s of the evaluation");
     let on = b.record.enabled;
     say!(out, "prediction from the 1-thread runs' per-design costs (each design's minimum over the repetitions; list scheduling of each generation, persister pipelined beside it; efficiency against all the work on one core):");
     let mut predictions = vec![];
     for &p in &b.predict {
-        let (t, work, what, lpt) = predict(&m, p, on);
-        predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what, "evaluation_efficiency_longest_first": lpt }));
-        write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
-        write!(out, "; the evaluation alone with every cost known in advance (longest first): {:.1} %", 100.0 * lpt).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
+        let Prediction { t, work, what, lpt, ordering: o } = predict(&m, p, on);
+        // how much of the gap between no cost model and every cost known the model closes
+        let closed = if o[1] > o[2] { (o[1] - o[0]) / (o[1] - o[2]) } else { f64::NAN };
+        predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what, "evaluation_efficiency_longest_first": lpt,
+            "finish_pass_s": { "cost_model_order": o[0], "classes_only": o[1], "longest_first": o[2] } }));
+        let w = |e: std::io::Error| Error::io("<benchmark report>", "cannot write the report", e);
+        write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(w)?;
+        write!(out, "; the evaluation alone with every cost known in advance (longest first): {:.1} %", 100.0 * lpt).map_err(w)?;
         if on {
-            let (t, work, what, _) = predict(&m, p, false);
-            write!(out, "; if recording took no time: {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(|e| Error::io("<benchmark report>", "cannot write the report", e))?;
+            let q = predict(&m, p, false);
+            write!(out, "; if recording took no time: {:.1} %, limited by {}", 100.0 * q.work / (p as f64 * q.t), q.what).map_err(w)?;
         }
+        write!(out, "; simulation pass {:.1} ms in the cost model's order, {:.1} ms without it (costly first), {:.1} ms longest first ({:.0} % of that gap closed)", 1e3 * o[0], 1e3 * o[1], 1e3 * o[2], 100.0 * closed).map_err(w)?;
         say!(out, );
     }
     Ok(serde_json::json!({

@@ -257,6 +257,17 @@ pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions)
 }
 
 fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
+    let ev = evaluate_statics(x, s);
+    if !opts.dynamics {
+        return ev;
+    }
+    evaluate_dynamics(ev, s, opts, traj)
+}
+
+/// Stages 0–2 of a design (tens of µs): the evaluation so far, with `statics` set when the
+/// design passed them. [`evaluate_dynamics`] finishes it; the two together are
+/// [`evaluate`], bit for bit.
+pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
     let mut ev = Evaluation::new(*x);
     let t0 = Instant::now();
     let kin = match kinematics_partial(x, s) {
@@ -272,20 +283,23 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     let t1 = Instant::now();
     ev.stage_seconds[1] = (t1 - t0).as_secs_f64();
     let st = statics_partial(&kin.finger, s);
-    let t2 = Instant::now();
-    ev.stage_seconds[2] = (t2 - t1).as_secs_f64();
-    let st = match st {
-        Ok(st) => st,
+    ev.stage_seconds[2] = t1.elapsed().as_secs_f64();
+    match st {
+        Ok(st) => ev.statics = Some(st),
         Err((d, partial)) => {
             ev.discard = Some(d);
             ev.partial = partial;
-            return ev;
         }
-    };
-    ev.statics = Some(st);
-    if !opts.dynamics {
-        return ev;
     }
+    ev
+}
+
+/// Stage 3 of an evaluation from [`evaluate_statics`] in the problem's scene, recording the
+/// trajectory into `traj` when given; an evaluation that did not pass stages 0–2 comes
+/// back unchanged.
+pub fn evaluate_dynamics(mut ev: Evaluation, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
+    let (Some(kin), Some(st), None) = (ev.kin, ev.statics, ev.discard) else { return ev };
+    let t2 = Instant::now();
     ev.scene = s.setup.kind;
     if s.setup.kind == SceneKind::Free {
         let (dynr, free, discard) = stage3_free(&kin.finger, s, &st, &opts.sim, traj);
@@ -300,6 +314,14 @@ fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<
     }
     ev.dynamics = Some(dynr);
     ev
+}
+
+/// True when stage 3 of a design that passed stages 0–2 is known to end before its
+/// simulation starts: the centred scene in pipeline mode with a violated static force
+/// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
+pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams) -> bool {
+    use crate::sim::{force_margin, r_area};
+    s.setup.kind == SceneKind::Centred && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
 }
 
 /// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers

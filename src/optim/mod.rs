@@ -5,6 +5,7 @@
 //!   infeasibility, per-design info kept for reports);
 //! - [`nsga2`]: the algorithm (argmin `Solver`) and its state (argmin `State`);
 //! - [`sort`]: non-dominated sorting and crowding; [`operators`]: SBX, polynomial mutation;
+//! - [`schedule`]: the order of a generation's work (cost hints, a learnt cost model);
 //! - [`hv`]: exact hypervolume and IGD; [`testproblems`]: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
 //! - [`serde_f64`]: exact (bit-preserving) serialisation of floats, so a state can be saved
 //!   and restored.
@@ -17,6 +18,7 @@ mod nsga2;
 mod operators;
 mod serde_f64;
 mod sort;
+mod schedule;
 mod testproblems;
 
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
@@ -78,14 +80,24 @@ pub trait MooProblem: Sync {
     fn upper(&self) -> &[f64];
     /// Number of objectives.
     fn n_obj(&self) -> usize;
+    /// What the cheap first part of an evaluation leaves for [`MooProblem::finish`].
+    type Started: Send;
     /// Evaluate one decision vector (must be deterministic: results may not depend on the
-    /// thread that runs it).
-    fn evaluate(&self, x: &[f64]) -> Evaluated<Self::Info>;
-    /// Expected relative cost of evaluating `x` (larger = slower), from a cheap partial
-    /// evaluation; `None` (the default) when unknown. Only orders the work of a generation
-    /// (most expensive first, so that no thread is left with a long design at the end);
-    /// results never depend on it.
-    fn expected_cost(&self, _x: &[f64]) -> Option<f64> {
+    /// thread that runs it). The default is [`MooProblem::start`] then [`MooProblem::finish`].
+    fn evaluate(&self, x: &[f64]) -> Evaluated<Self::Info> {
+        let (s, _) = self.start(x);
+        self.finish(x, s)
+    }
+    /// The cheap first part of evaluating `x`, and what it says of the rest's cost. The
+    /// solver starts every design of a generation, then finishes them longest first; the
+    /// hint only orders the work, results never depend on it.
+    fn start(&self, x: &[f64]) -> (Self::Started, CostHint);
+    /// The rest of the evaluation of `x` after [`MooProblem::start`].
+    fn finish(&self, x: &[f64], started: Self::Started) -> Evaluated<Self::Info>;
+    /// A deterministic measure of the work an evaluation took (e.g. right-hand-side
+    /// evaluations of a simulation), which the solver's [`CostModel`] learns to predict from
+    /// the hints' features; `None` (the default) when there is none.
+    fn work(&self, _e: &Evaluated<Self::Info>) -> Option<f64> {
         None
     }
     /// Number of variables.
@@ -137,6 +149,7 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
 pub use hv::{hypervolume, igd, nondominated_below};
 pub use nsga2::{GenTiming, Nsga2, Nsga2Settings, Nsga2State, execute, observe};
 pub use operators::{Operators, polynomial_mutation, sbx};
+pub use schedule::{CostHint, CostModel};
 pub use serde_f64::{deserialize, serialize};
 pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};
 pub use testproblems::{Test, TestProblem, TestRun, c2_constraint, reference_settings, run_test};

@@ -6,7 +6,7 @@
 
 use super::operators::{polynomial_mutation, sbx, Operators};
 use super::sort::{rank_and_crowding, survivors_with_attributes};
-use super::{hv::hypervolume, Individual, MooProblem};
+use super::{hv::hypervolume, CostHint, CostModel, Individual, MooProblem};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
 use rand::{Rng, SeedableRng};
@@ -79,14 +79,20 @@ pub struct Nsga2State<I> {
 pub struct GenTiming {
     /// Seconds evaluating (the parallel part, including waiting for its last design).
     pub eval_s: f64,
-    /// Seconds ordering the work (expected costs); part of `eval_s`.
+    /// Seconds of the first pass (every design's cheap start) and ordering; part of `eval_s`.
     pub order_s: f64,
     /// Seconds of the solver's own serial work (variation, survival, hypervolume).
     pub serial_s: f64,
     /// Of it, the exact hypervolume of the feasible front (history and progress).
     pub hv_s: f64,
-    /// Wall seconds of each evaluation, in the order of `last_evaluated`.
+    /// Wall seconds of each evaluation (start + finish), in the order of `last_evaluated`.
     pub costs: Vec<f64>,
+    /// Of it, the cheap start (the first pass).
+    pub start_costs: Vec<f64>,
+    /// The order in which the designs were finished (indices into `last_evaluated`).
+    pub order: Vec<usize>,
+    /// How many designs their start called costly (the first ones of `order`).
+    pub costly: usize,
 }
 
 impl<I> Nsga2State<I> {
@@ -189,6 +195,9 @@ impl<I> State for Nsga2State<I> {
 pub struct Nsga2 {
     /// Settings.
     pub settings: Nsga2Settings,
+    /// What this run has learnt of the designs' costs (orders the work only; not part of
+    /// the state: a resumed run learns again).
+    model: CostModel,
 }
 
 fn stream(seed: u64, generation: u64, k: u64) -> ChaCha8Rng {
@@ -228,24 +237,41 @@ type FxSet<T> = HashSet<T, std::hash::BuildHasherDefault<Fx>>;
 impl Nsga2 {
     /// New solver.
     pub fn new(settings: Nsga2Settings) -> Self {
-        Nsga2 { settings }
+        Nsga2 { settings, model: CostModel::new() }
     }
 
-    /// Evaluate a generation: expected costs first (when the problem gives them), then list
-    /// scheduling, most expensive first: each worker takes the next design from a shared
-    /// counter, so no thread idles while another still has a queue. Each evaluation is a
-    /// pure function of its vector and the results are put back in index order, so they do
-    /// not depend on the thread count or the schedule.
-    fn evaluate_all<P: MooProblem>(&self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> (Vec<Individual<P::Info>>, GenTiming) {
+    /// Evaluate a generation in two passes. First every design's cheap start, in parallel
+    /// (fine-grained); then the rest by list scheduling in the cost model's order, the
+    /// designs predicted to take longest first: each worker takes the next design from a
+    /// shared counter, so no thread idles while another still has a queue. Each evaluation
+    /// is a pure function of its vector and the results are put back in index order, so
+    /// they do not depend on the thread count or the schedule. Afterwards the model learns
+    /// the generation's work.
+    fn evaluate_all<P: MooProblem>(&mut self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> (Vec<Individual<P::Info>>, GenTiming) {
         use std::sync::atomic::{AtomicUsize, Ordering};
+        use std::sync::Mutex;
         let t0 = std::time::Instant::now();
         let n = xs.len();
-        let mut order: Vec<usize> = (0..n).collect();
-        // on one thread the order cannot shorten anything: skip the extra partial evaluations
-        let expected: Option<Vec<f64>> = if rayon::current_num_threads() > 1 { xs.par_iter().map(|x| p.expected_cost(x)).collect() } else { None };
-        if let Some(c) = &expected {
-            order.sort_by(|&a, &b| c[b].total_cmp(&c[a]).then(a.cmp(&b)));
-        }
+        let started: Vec<(P::Started, CostHint, f64)> = xs
+            .par_iter()
+            .map(|x| {
+                let t = std::time::Instant::now();
+                let (s, h) = p.start(x);
+                (s, h, t.elapsed().as_secs_f64())
+            })
+            .collect();
+        let mut hints = Vec::with_capacity(n);
+        let mut start_costs = Vec::with_capacity(n);
+        let slots: Vec<Mutex<Option<P::Started>>> = started
+            .into_iter()
+            .map(|(s, h, c)| {
+                hints.push(h);
+                start_costs.push(c);
+                Mutex::new(Some(s))
+            })
+            .collect();
+        let order = self.model.order(&hints);
+        let costly = hints.iter().filter(|h| matches!(h, CostHint::Costly(_))).count();
         let order_s = t0.elapsed().as_secs_f64();
         let next = AtomicUsize::new(0);
         let workers = rayon::current_num_threads().min(n).max(1);
@@ -261,28 +287,35 @@ impl Nsga2 {
                     }
                     let i = order[k];
                     let t = std::time::Instant::now();
-                    let e = p.evaluate(&xs[i]);
+                    let st = slots[i].lock().map(|mut g| g.take()).ok().flatten().expect("each design finished once");
+                    let e = p.finish(&xs[i], st);
                     mine.push((i, e, t.elapsed().as_secs_f64()));
                 }
                 mine
             })
             .collect();
-        let mut slots: Vec<Option<(super::Evaluated<P::Info>, f64)>> = (0..n).map(|_| None).collect();
+        let mut results: Vec<Option<(super::Evaluated<P::Info>, f64)>> = (0..n).map(|_| None).collect();
         for (i, e, s) in done {
-            slots[i] = Some((e, s));
+            results[i] = Some((e, s));
         }
         let mut costs = Vec::with_capacity(n);
-        let pop = xs
+        let pop: Vec<Individual<P::Info>> = xs
             .into_iter()
-            .zip(slots)
+            .zip(results)
             .enumerate()
             .map(|(k, (x, slot))| {
                 let (eval, s) = slot.expect("every design evaluated once");
-                costs.push(s);
+                costs.push(start_costs[k] + s);
                 Individual { id: first_id + k as u64, generation, x, eval }
             })
             .collect();
-        (pop, GenTiming { eval_s: t0.elapsed().as_secs_f64(), order_s, serial_s: 0.0, hv_s: 0.0, costs })
+        for (h, ind) in hints.iter().zip(&pop) {
+            if let (CostHint::Costly(f), Some(w)) = (h, p.work(&ind.eval)) {
+                self.model.add(f, w);
+            }
+        }
+        self.model.refit();
+        (pop, GenTiming { eval_s: t0.elapsed().as_secs_f64(), order_s, serial_s: 0.0, hv_s: 0.0, costs, start_costs, order, costly })
     }
 
     fn normalised_hv<I>(&self, pop: &[Individual<I>], rank: &[usize]) -> f64 {

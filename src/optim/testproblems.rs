@@ -186,6 +186,7 @@ fn dtlz2(x: &[f64], m: usize) -> Vec<f64> {
 
 impl MooProblem for Test {
     type Info = ();
+    type Started = ();
     fn name(&self) -> String {
         self.which.name().into()
     }
@@ -201,7 +202,11 @@ impl MooProblem for Test {
             _ => 2,
         }
     }
-    fn evaluate(&self, x: &[f64]) -> Evaluated<()> {
+    /// Nothing is cheap to start: every evaluation is one formula.
+    fn start(&self, _x: &[f64]) -> ((), super::CostHint) {
+        ((), super::CostHint::Costly(vec![]))
+    }
+    fn finish(&self, x: &[f64], _: ()) -> Evaluated<()> {
         let pos = |g: f64| g.max(0.0);
         let (f, v) = match self.which {
             TestProblem::Zdt1 | TestProblem::Zdt2 | TestProblem::Zdt3 => {

@@ -89,12 +89,16 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
 
     /// Save atomically, with the content checksum `sha256`.
     pub fn save(&self, path: &Path) -> Result<()> {
+        write_atomic(path, &self.to_bytes(path)?)
+    }
+
+    /// The file's bytes, with the content checksum `sha256` (errors name `path`).
+    pub fn to_bytes(&self, path: &Path) -> Result<Vec<u8>> {
         let ser = |source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source };
         let mut v = serde_json::to_value(self).map_err(ser)?;
         let sum = content_sha256(&v).map_err(ser)?;
         v["sha256"] = serde_json::Value::String(sum);
-        let bytes = serde_json::to_vec(&v).map_err(ser)?;
-        write_atomic(path, &bytes)
+        serde_json::to_vec(&v).map_err(ser)
     }
 
     /// Load, check the format and the content checksum (a mismatch is an error).

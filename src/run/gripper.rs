@@ -2,8 +2,8 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use crate::optim::{Evaluated, Individual, Infeasibility, MooProblem};
-use crate::eval::{evaluate, evaluate_with_trajectory, EvalOptions, Evaluation};
+use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
+use crate::eval::{evaluate_dynamics, evaluate_statics, stage3_ends_at_once, EvalOptions, Evaluation};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, Recordable};
 use serde::{Deserialize, Serialize};
@@ -138,21 +138,37 @@ impl MooProblem for GripperProblem {
     fn n_obj(&self) -> usize {
         4
     }
-    /// Stages 0–2 (tens of µs) predict the cost: a design they discard costs nothing
-    /// further; one that passes is simulated (ms). Only orders the work.
-    fn expected_cost(&self, x: &[f64]) -> Option<f64> {
-        let arr: [f64; 6] = x.try_into().ok()?;
-        let ev = evaluate(&Design::from_array(&arr), &self.problem.scene, &EvalOptions { dynamics: false, ..self.options });
-        Some(if ev.discard.is_some() || !self.options.dynamics { 0.0 } else { 1.0 })
+    /// Stages 0–2 (tens of µs): a design they discard, or whose stage 3 ends before its
+    /// simulation, is cheap; one that is simulated (ms) is costly, described for the solver's
+    /// cost model by its design vector, derived lengths l11, l12, l22 and the stage-2
+    /// objectives (more stage-2 values, e.g. spring preload, contact angles and forces,
+    /// ordered worse on the bottle problem: too many features for the few rows of the
+    /// first generations).
+    type Started = Evaluation;
+    fn start(&self, x: &[f64]) -> (Evaluation, CostHint) {
+        let ev = evaluate_statics(&design_of(x), &self.problem.scene);
+        let hint = match (&ev.kin, &ev.statics) {
+            (Some(k), Some(st)) if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene) => {
+                let f = &k.finger;
+                let mut v = x.to_vec();
+                v.extend([f.l11, f.l12, f.l22, st.alpha, st.mean_force, st.max_offset]);
+                CostHint::Costly(v)
+            }
+            _ => CostHint::Cheap,
+        };
+        (ev, hint)
     }
-    fn evaluate(&self, x: &[f64]) -> Evaluated<GripperInfo> {
-        let arr: [f64; 6] = x.try_into().expect("six design variables");
-        let design = Design::from_array(&arr);
+    /// Stage 3 (the simulation in the problem's scene), keeping the trajectory for the
+    /// recorder as `keep_trajectories` says.
+    fn finish(&self, _x: &[f64], started: Evaluation) -> Evaluated<GripperInfo> {
+        let (scene, opts) = (&self.problem.scene, &self.options);
         let (ev, traj) = match self.keep_trajectories {
-            TrajectoryKeep::None => (evaluate(&design, &self.problem.scene, &self.options), None),
+            _ if !opts.dynamics => (started, None),
+            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, None), None),
             keep => {
-                let (ev, tr) = evaluate_with_trajectory(&design, &self.problem.scene, &self.options);
-                let tr = if keep == TrajectoryKeep::Feasible && ev.discard.is_some() { None } else { tr };
+                let mut tr = crate::sim::Trajectory::default();
+                let ev = evaluate_dynamics(started, scene, opts, Some(&mut tr));
+                let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) { None } else { Some(tr) };
                 (ev, tr)
             }
         };
@@ -164,4 +180,15 @@ impl MooProblem for GripperProblem {
         info.trajectory = traj.map(std::sync::Arc::new);
         Evaluated { f: self.minimisation_objectives(&ev), cv, info }
     }
+    /// The simulation's right-hand-side evaluations (deterministic; proportional to its
+    /// time within a few per cent).
+    fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
+        e.info.sim_work.map(|w| w[1] as f64)
+    }
+}
+
+/// The design of a decision vector (the solver always passes six variables).
+fn design_of(x: &[f64]) -> Design {
+    let arr: [f64; 6] = x.try_into().expect("six design variables");
+    Design::from_array(&arr)
 }

@@ -28,6 +28,7 @@ use super::gripper::GripperInfo;
 use super::observers::OutputsObserver;
 use crate::optim::{Individual, Nsga2Settings, Nsga2State};
 use crate::record::{Recorder, ShardEntry};
+use crate::fsutil::write_atomic;
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::KV;
@@ -51,6 +52,12 @@ pub struct PersistStats {
     pub record_s: f64,
     /// Seconds committing generations (index line, archive.json, checkpoint).
     pub checkpoint_s: f64,
+    /// Seconds serialising checkpoints in the pool (before their commit).
+    pub checkpoint_pool_s: f64,
+    /// CSV view writes (at most one per `VIEWS_MIN_INTERVAL`, and the last generation's).
+    pub views_written: u64,
+    /// Seconds on the persister thread writing the CSV views (part of `outputs_s`).
+    pub views_s: f64,
     /// Generations whose CSV views were skipped because the next one was already queued.
     pub views_skipped: u64,
     /// Threads of the persister's pool.
@@ -88,6 +95,8 @@ struct Job {
 enum Msg {
     Job(Job),
     Shard { generation: u64, result: Result<Option<(ShardEntry, f64)>> },
+    /// A checkpoint's bytes, serialised in the pool, and the seconds it took.
+    Checkpoint { generation: u64, result: Result<Vec<u8>>, secs: f64 },
 }
 
 #[derive(Default)]
@@ -236,8 +245,8 @@ struct Pending {
     /// None while the shard is being written (Some(Ok(None)): nothing to record).
     shard: Option<Result<Option<(ShardEntry, f64)>>>,
     archive: Option<Vec<u8>>,
-    state: Nsga2State<GripperInfo>,
-    wall_s: f64,
+    /// None while the checkpoint is being serialised.
+    checkpoint: Option<Result<Vec<u8>>>,
 }
 
 /// The next message; generations only while fewer than `max_pending` wait for their
@@ -246,7 +255,7 @@ fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<
     let (m, cv) = &**shared;
     let mut s = m.lock().expect("persister lock");
     loop {
-        let pos = if pending < max_pending { (!s.inbox.is_empty()).then_some(0) } else { s.inbox.iter().position(|m| matches!(m, Msg::Shard { .. })) };
+        let pos = if pending < max_pending { (!s.inbox.is_empty()).then_some(0) } else { s.inbox.iter().position(|m| !matches!(m, Msg::Job(_))) };
         if let Some(k) = pos {
             let msg = s.inbox.remove(k).expect("position in the inbox");
             if matches!(msg, Msg::Job(_)) {
@@ -293,7 +302,12 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                             skipped = true;
                             stale_views = Some(job.state.clone());
                         } else {
+                            let tv = Instant::now();
                             o.write_views(&job.state)?;
+                            let mut s = shared.0.lock().expect("persister lock");
+                            s.stats.views_written += 1;
+                            s.stats.views_s += tv.elapsed().as_secs_f64();
+                            drop(s);
                             last_views = Some(Instant::now());
                             stale_views = None;
                         }
@@ -320,16 +334,31 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                     s.stats.outputs_s += out_s;
                     s.stats.views_skipped += skipped as u64;
                     drop(s);
-                    pending.push_back(Pending { generation: g, shard, archive, state: job.state, wall_s: job.wall_s });
+                    // the checkpoint is serialised in the pool too; only its write is serial
+                    let (sh, spc, state, wall_s) = (shared.clone(), sp.clone(), job.state, job.wall_s);
+                    pool.spawn(move || {
+                        let t = Instant::now();
+                        let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s).to_bytes(&spc.path);
+                        let (m, cv) = &*sh;
+                        m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint { generation: g, result, secs: t.elapsed().as_secs_f64() });
+                        cv.notify_all();
+                    });
+                    pending.push_back(Pending { generation: g, shard, archive, checkpoint: None });
                 }
                 Msg::Shard { generation, result } => {
                     if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {
                         p.shard = Some(result);
                     }
                 }
+                Msg::Checkpoint { generation, result, secs } => {
+                    shared.0.lock().expect("persister lock").stats.checkpoint_pool_s += secs;
+                    if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.checkpoint.is_none()) {
+                        p.checkpoint = Some(result);
+                    }
+                }
             }
             // commit, in generation order, every generation whose shard is durable
-            while pending.front().is_some_and(|p| p.shard.is_some()) {
+            while pending.front().is_some_and(|p| p.shard.is_some() && p.checkpoint.is_some()) {
                 let p = pending.pop_front().expect("front");
                 let t = Instant::now();
                 let shard = p.shard.expect("checked")?;
@@ -342,7 +371,7 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                 if let (Some(bytes), Some(o)) = (&p.archive, &outputs) {
                     super::archive::save_bytes(&o.out, bytes)?;
                 }
-                Checkpoint::new(sp.problem_hash.clone(), sp.settings.clone(), sp.options.clone(), p.state, p.wall_s).save(&sp.path)?;
+                write_atomic(&sp.path, &p.checkpoint.expect("checked")?)?;
                 let (m, cv) = &*shared;
                 let mut s = m.lock().expect("persister lock");
                 s.stats.checkpoint_s += t.elapsed().as_secs_f64();
@@ -355,7 +384,10 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
         if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
             let t = Instant::now();
             o.write_views(&st)?;
-            shared.0.lock().expect("persister lock").stats.outputs_s += t.elapsed().as_secs_f64();
+            let mut s = shared.0.lock().expect("persister lock");
+            s.stats.outputs_s += t.elapsed().as_secs_f64();
+            s.stats.views_s += t.elapsed().as_secs_f64();
+            s.stats.views_written += 1;
         }
         Ok(())
     })();
