@@ -189,8 +189,10 @@ fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
         prev_finish = prev_start + persist_g;
     }
     // the views: written at most every VIEWS_MIN_INTERVAL and after the last generation,
-    // each as long as in the measured run, all taken as on the critical path
-    let per_view = if ps.views_written > 0 { ps.views_s / ps.views_written as f64 } else { 0.0 };
+    // their five files in parallel in the pool (never faster than the longest file), all
+    // taken as on the critical path
+    let written = ps.views_written.max(1) as f64;
+    let per_view = (ps.views_longest_s / written).max(ps.views_files_s / written / pool);
     let writes = 1.0 + (prev_finish / VIEWS_MIN_INTERVAL.as_secs_f64()).floor();
     prev_finish += writes * per_view;
     let t = prev_finish.max(work / p as f64);
@@ -296,7 +298,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
             "threads": n, "wall_min_s": mn, "wall_median_s": md, "efficiency_min": t1v / (n as f64 * mn), "ceiling_efficiency": ceil, "of_ceiling": of_ceil,
             "independent_wall_s": indep, "work_s": work, "eval_s": eval,
             "straggler_s": strag, "serial_s": serial, "handover_s": p.handover_s, "outputs_bg_s": p.outputs_s, "record_bg_s": p.record_s,
-            "checkpoint_bg_s": p.checkpoint_s, "archive_bg_s": p.archive_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "views_written": p.views_written, "views_s": p.views_s, "checkpoint_pool_s": p.checkpoint_pool_s, "persist_pool_threads": p.pool_threads,
+            "checkpoint_bg_s": p.checkpoint_s, "archive_bg_s": p.archive_s, "waited_s": p.wait_s, "views_skipped": p.views_skipped, "views_written": p.views_written, "views_s": p.views_s, "views_files_s": p.views_files_s, "views_longest_s": p.views_longest_s, "checkpoint_pool_s": p.checkpoint_pool_s, "persist_pool_threads": p.pool_threads,
         }));
         if n == 1 {
             best = Some(per_design_min(r, &runs));

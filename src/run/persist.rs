@@ -56,8 +56,13 @@ pub struct PersistStats {
     pub checkpoint_pool_s: f64,
     /// CSV view writes (at most one per `VIEWS_MIN_INTERVAL`, and the last generation's).
     pub views_written: u64,
-    /// Seconds on the persister thread writing the CSV views (part of `outputs_s`).
+    /// Seconds on the persister thread writing the CSV views (part of `outputs_s`; the
+    /// files are written in parallel in the pool).
     pub views_s: f64,
+    /// The views' files' own seconds, summed (what one thread would take).
+    pub views_files_s: f64,
+    /// The longest file of each views write, summed (the least any pool could take).
+    pub views_longest_s: f64,
     /// Generations whose CSV views were skipped because the next one was already queued.
     pub views_skipped: u64,
     /// Threads of the persister's pool.
@@ -66,6 +71,15 @@ pub struct PersistStats {
     pub wait_s: f64,
     /// Seconds the optimiser spent handing generations over (cloning the state).
     pub handover_s: f64,
+}
+
+impl PersistStats {
+    fn add_views(&mut self, wall_s: f64, files: &[f64]) {
+        self.views_written += 1;
+        self.views_s += wall_s;
+        self.views_files_s += files.iter().sum::<f64>();
+        self.views_longest_s += files.iter().copied().fold(0.0, f64::max);
+    }
 }
 
 /// Fixed parts of every checkpoint.
@@ -114,6 +128,8 @@ struct Shared {
     queued: usize,
     /// No more generations will come.
     closed: bool,
+    /// Write the last generation's views at the end if they were skipped (set on close).
+    final_views: bool,
 }
 
 type SharedState = Arc<(Mutex<Shared>, Condvar)>;
@@ -197,11 +213,19 @@ impl Persister {
     }
 
     /// Close the inbox, wait for every queued generation to be durable, and return what
-    /// the persister did, or its first error not yet reported.
+    /// the persister did, or its first error not yet reported. The CSV views of the last
+    /// generation are written if they were skipped.
     pub fn finish(&self) -> Result<PersistStats> {
+        self.finish_with(true)
+    }
+
+    /// [`Persister::finish`]; with `final_views` false, views skipped at the end are left
+    /// to the caller (who writes every output of the final state anyway).
+    pub fn finish_with(&self, final_views: bool) -> Result<PersistStats> {
         let t0 = Instant::now();
         {
             let mut s = self.shared.0.lock().expect("persister lock");
+            s.final_views = final_views;
             s.closed = true;
             self.shared.1.notify_all();
         }
@@ -303,11 +327,8 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                             stale_views = Some(job.state.clone());
                         } else {
                             let tv = Instant::now();
-                            o.write_views(&job.state)?;
-                            let mut s = shared.0.lock().expect("persister lock");
-                            s.stats.views_written += 1;
-                            s.stats.views_s += tv.elapsed().as_secs_f64();
-                            drop(s);
+                            let files = pool.install(|| o.write_views(&job.state))?;
+                            shared.0.lock().expect("persister lock").stats.add_views(tv.elapsed().as_secs_f64(), &files);
                             last_views = Some(Instant::now());
                             stale_views = None;
                         }
@@ -381,13 +402,13 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
             }
         }
         // the views of the last generation, if they were skipped
-        if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
+        let final_views = shared.0.lock().expect("persister lock").final_views;
+        if let (Some(st), Some(o), true) = (stale_views.take(), &outputs, final_views) {
             let t = Instant::now();
-            o.write_views(&st)?;
+            let files = pool.install(|| o.write_views(&st))?;
             let mut s = shared.0.lock().expect("persister lock");
             s.stats.outputs_s += t.elapsed().as_secs_f64();
-            s.stats.views_s += t.elapsed().as_secs_f64();
-            s.stats.views_written += 1;
+            s.stats.add_views(t.elapsed().as_secs_f64(), &files);
         }
         Ok(())
     })();

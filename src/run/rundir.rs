@@ -286,7 +286,10 @@ fn drive(
     let persister = Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
     let (pers2, prog2) = (persister.clone(), prog.clone());
     let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
-    let result = match (result, persister.finish()) {
+    // on success every output of the final state is written below: the persister need
+    // not write the last views too
+    let ok = result.is_ok();
+    let result = match (result, persister.finish_with(!ok)) {
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
     };
