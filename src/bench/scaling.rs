@@ -116,11 +116,6 @@ fn makespan(costs: &[f64], p: usize) -> f64 {
     free.into_iter().fold(0.0, f64::max)
 }
 
-/// Prediction at `p` threads: (time, total work, limiting step). The per-design costs and
-/// the serial steps are as measured. The persister's thread updates the archive and views
-/// and commits (its time per generation is serial); the shards go to its pool of p/4
-/// threads, several at once (each shard's time taken as serial within it, which is
-/// conservative).
 /// A prediction at some thread count.
 struct Prediction {
     /// Predicted wall time (s).
@@ -135,6 +130,11 @@ struct Prediction {
     ordering: [f64; 3],
 }
 
+/// Prediction at `p` threads. The per-design costs and the serial steps are as measured.
+/// The persister's thread updates the archive and commits (its time per generation is
+/// serial); the shards and the checkpoints' serialisation go to its pool of p/4 threads,
+/// several at once (each shard's time taken as serial within it, which is conservative);
+/// the CSV views follow their time rule, their files in parallel in the pool.
 fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
     let n = m.gens.len().max(1) as f64;
     let pool = (p / 4).max(1) as f64;
@@ -193,11 +193,11 @@ fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
     // taken as on the critical path
     let written = ps.views_written.max(1) as f64;
     let per_view = (ps.views_longest_s / written).max(ps.views_files_s / written / pool);
-    let writes = 1.0 + (prev_finish / VIEWS_MIN_INTERVAL.as_secs_f64()).floor();
+    let writes = (1.0 + (prev_finish / VIEWS_MIN_INTERVAL.as_secs_f64()).floor()).min(n);
     prev_finish += writes * per_view;
     let t = prev_finish.max(work / p as f64);
     let persister = waited + (prev_finish - main_t).max(0.0);
-    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: archive, views and checkpoint on its thread; shards in its pool)")];
+    let losses = [(strag, "waiting for the slowest design of each generation"), (serial, "the serial step between generations (solver + hand-over)"), (persister, "the persister (per generation: archive and commit on its thread; shards and checkpoints serialised in its pool; the CSV views)")];
     let what = losses.iter().copied().fold((f64::MIN, ""), |a, b| if b.0 > a.0 { b } else { a }).1;
     Prediction { t, work, what, lpt: eval_sum / (p as f64 * lpt_t.max(1e-300)), ordering }
 }
@@ -320,7 +320,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     for &p in &b.predict {
         let Prediction { t, work, what, lpt, ordering: o } = predict(&m, p, on);
         // how much of the gap between no cost model and every cost known the model closes
-        let closed = if o[1] > o[2] { (o[1] - o[0]) / (o[1] - o[2]) } else { f64::NAN };
+        let closed = if o[1] > o[2] { format!("{:.0} % of that gap closed", 100.0 * (o[1] - o[0]) / (o[1] - o[2])) } else { "no gap to close".to_string() };
         predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what, "evaluation_efficiency_longest_first": lpt,
             "finish_pass_s": { "cost_model_order": o[0], "classes_only": o[1], "longest_first": o[2] } }));
         let w = |e: std::io::Error| Error::io("<benchmark report>", "cannot write the report", e);
@@ -330,7 +330,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
             let q = predict(&m, p, false);
             write!(out, "; if recording took no time: {:.1} %, limited by {}", 100.0 * q.work / (p as f64 * q.t), q.what).map_err(w)?;
         }
-        write!(out, "; simulation pass {:.1} ms in the cost model's order, {:.1} ms without it (costly first), {:.1} ms longest first ({:.0} % of that gap closed)", 1e3 * o[0], 1e3 * o[1], 1e3 * o[2], 100.0 * closed).map_err(w)?;
+        write!(out, "; simulation pass {:.1} ms in the cost model's order, {:.1} ms without it (costly first), {:.1} ms longest first ({closed})", 1e3 * o[0], 1e3 * o[1], 1e3 * o[2]).map_err(w)?;
         say!(out, );
     }
     Ok(serde_json::json!({

@@ -319,9 +319,9 @@ pub fn evaluate_dynamics(mut ev: Evaluation, s: &SceneParams, opts: &EvalOptions
 /// True when stage 3 of a design that passed stages 0–2 is known to end before its
 /// simulation starts: the centred scene in pipeline mode with a violated static force
 /// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
-pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams) -> bool {
-    use crate::sim::{force_margin, r_area};
-    s.setup.kind == SceneKind::Centred && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
+pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
+    use crate::sim::{force_margin, r_area, Mode};
+    opts.sim.mode == Mode::Pipeline && s.setup.kind == SceneKind::Centred && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
 }
 
 /// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers

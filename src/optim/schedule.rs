@@ -4,7 +4,7 @@
 //! [`CostModel`] learns the problem's deterministic work measure
 //! ([`MooProblem::work`](super::MooProblem::work)) from those features over the
 //! generations already evaluated, so that the designs predicted to take longest are
-//! started first and no thread is left with a long one at the end. The order never changes
+//! finished first and no thread is left with a long one at the end. The order never changes
 //! a result: evaluations are pure and go back in index order.
 
 use nalgebra::{DMatrix, DVector};

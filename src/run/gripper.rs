@@ -148,7 +148,7 @@ impl MooProblem for GripperProblem {
     fn start(&self, x: &[f64]) -> (Evaluation, CostHint) {
         let ev = evaluate_statics(&design_of(x), &self.problem.scene);
         let hint = match (&ev.kin, &ev.statics) {
-            (Some(k), Some(st)) if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene) => {
+            (Some(k), Some(st)) if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene, &self.options) => {
                 let f = &k.finger;
                 let mut v = x.to_vec();
                 v.extend([f.l11, f.l12, f.l22, st.alpha, st.mean_force, st.max_offset]);

@@ -1,8 +1,9 @@
 //! Outputs, recording and checkpoints off the critical path: a background persister thread
 //! and its own small rayon pool. For generation k the thread updates the archive and
 //! rewrites the CSV views, and hands shard k to the pool, where it is encoded and compressed
-//! while the next generations evaluate; several generations' shards can be in the pool at
-//! once. Generations are committed strictly in order: once shard k is durable, its index
+//! while the next generations evaluate, and checkpoint k, which is serialised there too;
+//! several generations can be in the pool at once. Generations are committed strictly in
+//! order: once shard k is durable and checkpoint k serialised, its index
 //! line, `archive.json` and then checkpoint k are written. So the crash guarantee is the one
 //! of synchronous observers: every shard up to the checkpoint's generation is durable, and a
 //! resume drops and rewrites later ones (nothing lost or duplicated after kill -9); the
@@ -263,7 +264,8 @@ impl Observe<Nsga2State<GripperInfo>> for Persister {
     }
 }
 
-/// A generation handed to the pool, waiting for its shard before it is committed.
+/// A generation handed to the pool, waiting for its shard and its checkpoint's bytes
+/// before it is committed.
 struct Pending {
     generation: u64,
     /// None while the shard is being written (Some(Ok(None)): nothing to record).
@@ -274,7 +276,8 @@ struct Pending {
 }
 
 /// The next message; generations only while fewer than `max_pending` wait for their
-/// shards. None once closed and nothing is left to do.
+/// shards and checkpoints (the pool's reports are always taken). None once closed and
+/// nothing is left to do.
 fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<Msg> {
     let (m, cv) = &**shared;
     let mut s = m.lock().expect("persister lock");
@@ -378,11 +381,14 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                     }
                 }
             }
-            // commit, in generation order, every generation whose shard is durable
+            // commit, in generation order, every generation whose shard is durable and whose
+            // checkpoint is serialised
             while pending.front().is_some_and(|p| p.shard.is_some() && p.checkpoint.is_some()) {
                 let p = pending.pop_front().expect("front");
                 let t = Instant::now();
                 let shard = p.shard.expect("checked")?;
+                // nothing of generation k is committed unless its checkpoint can follow
+                let checkpoint = p.checkpoint.expect("checked")?;
                 if let (Some((entry, secs)), Some(r)) = (shard, &recorder) {
                     let mut s = shared.0.lock().expect("persister lock");
                     s.stats.record_s += secs;
@@ -392,7 +398,7 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                 if let (Some(bytes), Some(o)) = (&p.archive, &outputs) {
                     super::archive::save_bytes(&o.out, bytes)?;
                 }
-                write_atomic(&sp.path, &p.checkpoint.expect("checked")?)?;
+                write_atomic(&sp.path, &checkpoint)?;
                 let (m, cv) = &*shared;
                 let mut s = m.lock().expect("persister lock");
                 s.stats.checkpoint_s += t.elapsed().as_secs_f64();
