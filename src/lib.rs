@@ -5,7 +5,7 @@
 //! values) → [`model`] (finger geometry, kinematics, statics, closure) → [`sim`]
 //! (integrators, events, the driver, scenes) → [`eval`] (the staged pipeline and its
 //! record) → [`optim`] (pure NSGA-II) → [`record`] (MCAP) → [`run`] (run folders,
-//! checkpoints, observers, the gripper problem) → [`bench`] (speed figures); the `gripopt`
+//! checkpoints, observers, the gripper problem) → [`bench`](mod@bench) (speed figures); the `gripopt`
 //! binary's CLI sits on top. See docs/architecture.md.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: a NaN must fail every physical check.

@@ -95,7 +95,7 @@ pub struct Evaluation {
     /// Values a discarding stage computed before it discarded the design (MODEL.md §10:
     /// every value computed before a discard is reported).
     pub partial: Partial,
-    /// Wall time per stage (s): 0–1 together in [1], 2, 3.
+    /// Wall time per stage (s): 0–1 together in index 1, then 2, 3.
     pub stage_seconds: [f64; 4],
 }
 

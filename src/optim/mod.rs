@@ -3,11 +3,11 @@
 //!
 //! - [`MooProblem`]: what is optimised (bounds, objectives in minimisation form, staged
 //!   infeasibility, per-design info kept for reports);
-//! - [`nsga2`]: the algorithm (argmin `Solver`) and its state (argmin `State`);
-//! - [`sort`]: non-dominated sorting and crowding; [`operators`]: SBX, polynomial mutation;
-//! - [`schedule`]: the order of a generation's work (cost hints, a learnt cost model);
-//! - [`hv`]: exact hypervolume and IGD; [`testproblems`]: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
-//! - [`serde_f64`]: exact (bit-preserving) serialisation of floats, so a state can be saved
+//! - `nsga2`: the algorithm (argmin `Solver`) and its state (argmin `State`);
+//! - `sort`: non-dominated sorting and crowding; `operators`: SBX, polynomial mutation;
+//! - `schedule`: the order of a generation's work (cost hints, a learnt cost model);
+//! - `hv`: exact hypervolume and IGD; `testproblems`: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
+//! - `serde_f64`: exact (bit-preserving) serialisation of floats, so a state can be saved
 //!   and restored.
 //!
 //! This layer is pure: no files, no recording, no gripper. Runs with run folders,

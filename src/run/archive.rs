@@ -46,7 +46,7 @@ impl Archive {
     }
 
     /// The bytes [`Archive::save`] writes into `dir` (serialised now, written later by
-    /// [`save_bytes`]).
+    /// `save_bytes`).
     pub fn to_bytes(&self, dir: &Path) -> Result<Vec<u8>> {
         serde_json::to_vec(self).map_err(|source| Error::Json { path: dir.join(ARCHIVE_FILE), what: "cannot serialise the archive", source })
     }

@@ -31,7 +31,7 @@ fn gib(b: f64) -> String {
 
 /// Check `--pop` and `--generations` before a run allocates anything: pop ≥ 4, generations
 /// ≥ 1, pop × generations within the recording's id space, and the memory estimate
-/// (pop × [`BYTES_PER_DESIGN`], plus 2 × pop × [`BYTES_PER_TRAJECTORY`] when recording)
+/// (pop × [`BYTES_PER_DESIGN`], plus 2 × pop × `BYTES_PER_TRAJECTORY` when recording)
 /// within half of the available memory (64 GiB when unknown).
 pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result<()> {
     let field = |f: &str, v: String, rule: String| Error::InvalidField { file: "command line".into(), field: f.into(), value: v, rule };

@@ -16,7 +16,9 @@
 //! already queued (a later one rewrites them; the archive is still updated), so a persister
 //! that falls behind catches up instead of writing views nobody reads; every generation's
 //! shard, archive and checkpoint are always written, and the views of the last generation
-//! handed over too (also when the run stops early).
+//! handed over too (also when the run stops early), unless the caller says it writes the
+//! final outputs itself ([`Persister::finish_with`], as `optimise` does after a run that
+//! did not fail).
 //!
 //! Errors of the persister are kept and returned by the observer at the next generation, or
 //! by [`Persister::finish`] at the end; a failed shard is never followed by its checkpoint.
