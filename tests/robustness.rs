@@ -427,3 +427,17 @@ fn bench_replay_refuses_to_clear_a_folder_it_did_not_write() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a synthetic run"));
     assert_eq!(std::fs::read_to_string(dir.join("precious.csv")).unwrap(), "keep me");
 }
+
+/// Too few designs per thread draw a note on stderr (the run still succeeds, and its
+/// results do not depend on the thread count); enough designs per thread draw none.
+#[test]
+fn few_designs_per_thread_draw_a_note() {
+    let (a, b) = (tmp("note-few"), tmp("note-enough"));
+    let few = cli(&["optimise", PROBLEM, "--pop", "8", "--generations", "1", "--threads", "4", "--record", "none", "--out", a.to_str().unwrap()]);
+    assert_eq!(code(&few), 0, "{}", stderr(&few));
+    assert!(stderr(&few).contains("--pop 8 on 4 threads is 2.0 designs per thread"), "{}", stderr(&few));
+    let enough = cli(&["optimise", PROBLEM, "--pop", "8", "--generations", "1", "--threads", "2", "--record", "none", "--out", b.to_str().unwrap()]);
+    assert_eq!(code(&enough), 0, "{}", stderr(&enough));
+    assert!(!stderr(&enough).contains("designs per thread"), "{}", stderr(&enough));
+    assert_eq!(read(&a.join("population.csv")), read(&b.join("population.csv")));
+}
