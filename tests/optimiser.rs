@@ -62,6 +62,11 @@ fn crash_and_resume_is_bit_identical() {
     assert!(e.contains("resume"), "{e}");
     let run: serde_json::Value = serde_json::from_str(&read(&cut.join("run.json"))).unwrap();
     assert_eq!(run["status"], "interrupted");
+    // run.json says what the checkpoint holds
+    let cp: serde_json::Value = serde_json::from_str(&read(&cut.join("checkpoint.json"))).unwrap();
+    assert_eq!(run["completed_generations"], 3);
+    assert_eq!(run["completed_generations"], cp["state"]["generation"]);
+    assert_eq!(run["evaluations"], cp["state"]["evaluations"]);
     let r = resume(&cut, None, false, Some(1), false).unwrap();
     assert_eq!(r.generations, 6);
     assert_eq!(read(&full.join("pareto.csv")), read(&cut.join("pareto.csv")));
@@ -245,4 +250,24 @@ fn work_is_ordered_by_the_learnt_cost_model() {
     assert!(rho_sum.1 >= 3, "enough generations with simulated designs: {}", rho_sum.1);
     let rho = rho_sum.0 / rho_sum.1 as f64;
     assert!(rho < -0.3, "longest first: mean Spearman ρ(position, work) = {rho:.2}");
+}
+
+/// A folder left by a run killed before its first checkpoint (run.json, the layout, the
+/// first views, a recording index, but no checkpoint) can be given to `optimise` again;
+/// the same output names without a run.json are someone else's files and are refused.
+#[test]
+fn a_folder_left_before_the_first_checkpoint_is_reused() {
+    let (done, left, other) = (tmp("left-src"), tmp("left"), tmp("left-other"));
+    optimise(&spec(&done, 1, 1)).unwrap();
+    std::fs::create_dir_all(left.join("recording")).unwrap();
+    for f in ["run.json", "problem.toml", "foxglove-layout.json", "pareto.csv", "pareto_timings.csv", "history.csv"] {
+        std::fs::copy(done.join(f), left.join(f)).unwrap();
+    }
+    let s = optimise(&spec(&left, 2, 2)).unwrap();
+    assert_eq!(s.generations, 2);
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::copy(done.join("pareto.csv"), other.join("pareto.csv")).unwrap();
+    let e = optimise(&spec(&other, 1, 1)).unwrap_err().to_string();
+    assert!(e.contains("not a gripopt run") && e.contains("pareto.csv"), "{e}");
+    assert!(other.join("pareto.csv").exists(), "a refused folder is left as it was");
 }

@@ -435,7 +435,11 @@ fn few_designs_per_thread_draw_a_note() {
     let (a, b) = (tmp("note-few"), tmp("note-enough"));
     let few = cli(&["optimise", PROBLEM, "--pop", "8", "--generations", "1", "--threads", "4", "--record", "none", "--out", a.to_str().unwrap()]);
     assert_eq!(code(&few), 0, "{}", stderr(&few));
-    assert!(stderr(&few).contains("--pop 8 on 4 threads is 2.0 designs per thread"), "{}", stderr(&few));
+    assert!(stderr(&few).contains("a population of 8 on 4 threads is 2.0 designs per thread"), "{}", stderr(&few));
+    // a bad value is refused first, without the note
+    let bad = cli(&["optimise", PROBLEM, "--pop", "2", "--generations", "1", "--threads", "4", "--out", tmp("note-bad").to_str().unwrap()]);
+    assert_eq!(code(&bad), 2, "{}", stderr(&bad));
+    assert!(!stderr(&bad).contains("designs per thread"), "{}", stderr(&bad));
     let enough = cli(&["optimise", PROBLEM, "--pop", "8", "--generations", "1", "--threads", "2", "--record", "none", "--out", b.to_str().unwrap()]);
     assert_eq!(code(&enough), 0, "{}", stderr(&enough));
     assert!(!stderr(&enough).contains("designs per thread"), "{}", stderr(&enough));

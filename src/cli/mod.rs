@@ -247,10 +247,6 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
     Ok(x)
 }
 
-/// Fewer designs per thread than this draw a note: with 2 per thread (pop 128 on 64
-/// threads) `bench scaling` predicts about 50 % efficiency, with 8 (on 16) about 90 %.
-const MIN_DESIGNS_PER_THREAD: usize = 4;
-
 /// Most worker threads a run may ask for.
 const MAX_THREADS: usize = 1024;
 
@@ -324,15 +320,6 @@ pub fn run() -> Result<i32> {
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
             let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads, resolution: if record_full { gripopt::record::Resolution::Full } else { gripopt::record::Resolution::Compact }, epoch_s: 0 };
-            // few designs per thread: the generation barrier idles threads (docs/benchmarks.md)
-            let t = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            if t > 1 && pop < MIN_DESIGNS_PER_THREAD * t {
-                eprintln!(
-                    "note: --pop {pop} on {t} threads is {:.1} designs per thread per generation; each generation waits for its slowest design, so threads idle at the end of every generation (a population of at least {} uses them better; `gripopt bench scaling --pop {pop}` predicts the efficiency at 16 and 64 threads)",
-                    pop as f64 / t as f64,
-                    MIN_DESIGNS_PER_THREAD * t
-                );
-            }
             let spec = gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
             let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s, json)

@@ -23,7 +23,7 @@ mod verify_rec;
 pub use archive::{Archive, ARCHIVE_FILE};
 pub use grasp_plot::grasp_plot;
 pub use checkpoint::{Checkpoint, ChecksumMismatch, FORMAT, VERSION, settings_hash, sha256_hex};
-pub use limits::{check_population, BYTES_PER_DESIGN};
+pub use limits::{check_population, threads_note, BYTES_PER_DESIGN, MIN_DESIGNS_PER_THREAD};
 pub use lock::{RunLock, LOCK_FILE};
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};

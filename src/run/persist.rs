@@ -172,6 +172,11 @@ impl Persister {
         Ok(Persister { thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec), crash_after })
     }
 
+    /// The last generation whose shard and checkpoint are durable (0: none yet).
+    pub fn durable_generation(&self) -> u64 {
+        self.shared.0.lock().map(|s| s.done).unwrap_or(0)
+    }
+
     /// Wait until generation `g` is durable (or the persister stopped); its first error.
     fn wait_for(&self, g: u64) -> Result<()> {
         let t0 = Instant::now();

@@ -20,7 +20,7 @@ use crate::fsutil::write_atomic;
 use crate::optim::{execute, observe, Nsga2Settings, Nsga2State};
 use crate::optim::Operators;
 use crate::params::Problem;
-use crate::record::{RecordOptions, Recorder};
+use crate::record::{RecordOptions, Recorder, LAYOUT_FILE};
 use argmin::core::State;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -277,6 +277,11 @@ fn drive(
         None
     };
     let first = state.generation.max(1);
+    if progress {
+        if let Some(note) = super::limits::threads_note(settings.pop_size, info.threads) {
+            eprintln!("{note}");
+        }
+    }
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
     let outputs = OutputsObserver { out: out.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: archive.clone() };
@@ -302,6 +307,12 @@ fn drive(
     let (gp, st) = match result {
         Ok(r) => r,
         Err(e) => {
+            // what the checkpoint holds: the last generation the persister made durable
+            let done = persister.durable_generation();
+            if done > info.completed_generations {
+                info.completed_generations = done;
+                info.evaluations = done * info.settings.pop_size as u64;
+            }
             info.status = RunStatus::Interrupted;
             info.wall_s = wall_before + start.elapsed().as_secs_f64();
             let _ = write_json(&out.join("run.json"), &info);
@@ -335,10 +346,14 @@ fn drive(
 fn check_new_run_folder(dir: &Path) -> Result<()> {
     let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the run folder", e))?;
     let ours = ["run.json", "problem.toml", "recording", "checkpoint.json", LOCK_FILE];
-    let foreign: Vec<String> = rd
-        .flatten()
-        .map(|f| f.file_name().to_string_lossy().to_string())
-        .filter(|n| !ours.contains(&n.as_str()) && !(n.starts_with('.') && n.ends_with(".tmp")))
+    // what a run writes before its first checkpoint (and at its end); accepted only beside
+    // the run.json of that run
+    let outputs = [LAYOUT_FILE, "archive.json", "pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv", "pareto_matrix.svg", "hypervolume.svg"];
+    let names: Vec<String> = rd.flatten().map(|f| f.file_name().to_string_lossy().to_string()).collect();
+    let run_json = names.iter().any(|n| n == "run.json");
+    let foreign: Vec<String> = names
+        .into_iter()
+        .filter(|n| !ours.contains(&n.as_str()) && !(run_json && outputs.contains(&n.as_str())) && !(n.starts_with('.') && n.ends_with(".tmp")))
         .collect();
     if foreign.is_empty() {
         return Ok(());
