@@ -445,3 +445,89 @@ fn few_designs_per_thread_draw_a_note() {
     assert!(!stderr(&enough).contains("designs per thread"), "{}", stderr(&enough));
     assert_eq!(read(&a.join("population.csv")), read(&b.join("population.csv")));
 }
+
+/// `bench scaling` names the one flag out of range, with its value and range (exit 2);
+/// thread counts have the limit of `optimise --threads` (1024). Nothing is run.
+#[test]
+fn bench_scaling_names_the_flag_out_of_range() {
+    let out = tmp("scaling-flags");
+    let o = out.to_str().unwrap();
+    for (flag, value, range) in [("--threads", "0", "1 to 1024"), ("--threads", "1025", "1 to 1024"), ("--max-threads", "0", "1 to 1024"), ("--max-threads", "1025", "1 to 1024"), ("--reps", "0", "at least 1"), ("--pop", "0", "at least 4"), ("--generations", "0", "at least 1")] {
+        let r = cli(&["bench", "scaling", PROBLEM, flag, value, "--no-record", "--out", o]);
+        let e = stderr(&r);
+        assert_eq!(code(&r), 2, "{flag} {value}: {e}");
+        assert!(e.contains(&format!("{flag} {value}:")) && e.contains(range), "{flag} {value}: {e}");
+        // only the offending flag is named
+        let others = ["--threads", "--max-threads", "--reps", "--pop", "--generations"].into_iter().filter(|f| *f != flag && !flag.ends_with(&f[2..]) && !f.ends_with(&flag[2..]));
+        for f in others {
+            assert!(!e.contains(&format!("{f} ")), "{flag} {value} names {f} too: {e}");
+        }
+        assert!(!out.exists(), "{flag} {value}: the benchmark ran");
+    }
+}
+
+/// At 1 thread the hardware ceiling is 100 % by definition: not measured, "-" in the text
+/// and null in JSON; at 2 threads it is measured (two independent runs' walls).
+#[test]
+fn bench_scaling_has_no_ceiling_at_one_thread() {
+    let out = tmp("scaling-ceiling");
+    let r = cli(&["bench", "--json", "scaling", PROBLEM, "--pop", "8", "--generations", "1", "--reps", "1", "--threads", "2", "--no-record", "--out", out.to_str().unwrap()]);
+    assert_eq!(code(&r), 0, "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0]["threads"], 1);
+    assert!(rows[0]["ceiling_efficiency"].is_null() && rows[0]["of_ceiling"].is_null(), "{}", rows[0]);
+    assert_eq!(rows[0]["independent_wall_s"].as_array().map(Vec::len), Some(0), "the 1-thread ceiling was run: {}", rows[0]);
+    assert_eq!(rows[1]["threads"], 2);
+    assert!(rows[1]["ceiling_efficiency"].as_f64().is_some_and(|c| c > 0.0), "{}", rows[1]);
+    assert_eq!(rows[1]["independent_wall_s"].as_array().map(Vec::len), Some(1));
+    // the text row at 1 thread: eff 100.0 %, then "-" for ceiling and of ceil.
+    let text = stderr(&r);
+    let one = text.lines().find(|l| l.trim_start().starts_with("1 ")).unwrap_or_else(|| panic!("{text}"));
+    let cells: Vec<&str> = one.split_whitespace().collect();
+    assert_eq!(&cells[4..8], &["100.0", "%", "-", "-"], "{one}");
+}
+
+/// `show` on a run folder lacking or with damaged files: an error naming the file (and the
+/// line of a cut-short row), exit 2, never a half row or "(?, null generations)".
+#[test]
+fn show_refuses_a_missing_or_damaged_file_naming_it() {
+    let dir = tmp("show-damaged");
+    let d = dir.to_str().unwrap();
+    // seed 4: three designs in the final front
+    let o = cli(&["optimise", PROBLEM, "--pop", "12", "--generations", "2", "--seed", "4", "--record", "none", "--out", d]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let ok = cli(&["show", d]);
+    assert_eq!(code(&ok), 0, "{}", stderr(&ok));
+    let pareto = read(&dir.join("pareto.csv"));
+    let run_json = read(&dir.join("run.json"));
+    let data = pareto.lines().filter(|l| !l.starts_with('#')).count() - 1;
+    assert!(data >= 2, "{pareto}");
+    // pareto.csv cut in its last row
+    std::fs::write(dir.join("pareto.csv"), &pareto[..pareto.len() - 40]).unwrap();
+    let last = pareto.lines().count();
+    for args in [vec!["show", d], vec!["show", d, "--json"]] {
+        let r = cli(&args);
+        let e = stderr(&r);
+        assert_eq!(code(&r), 2, "{args:?}: {e}\n{}", String::from_utf8_lossy(&r.stdout));
+        assert!(e.contains("pareto.csv") && e.contains(&format!("line {last}")), "{args:?}: {e}");
+    }
+    // pareto.csv missing
+    std::fs::remove_file(dir.join("pareto.csv")).unwrap();
+    let r = cli(&["show", d]);
+    assert_eq!(code(&r), 2, "{}", stderr(&r));
+    assert!(stderr(&r).contains("pareto.csv"), "{}", stderr(&r));
+    std::fs::write(dir.join("pareto.csv"), &pareto).unwrap();
+    // run.json not JSON, or JSON without the run's status
+    for bad in [&run_json[..run_json.len() / 2], "[]", ""] {
+        std::fs::write(dir.join("run.json"), bad).unwrap();
+        let r = cli(&["show", d]);
+        let out = String::from_utf8_lossy(&r.stdout).to_string();
+        assert_eq!(code(&r), 2, "{bad:?}: {}\n{out}", stderr(&r));
+        assert!(stderr(&r).contains("run.json") && !out.contains("null generations"), "{bad:?}: {}", stderr(&r));
+    }
+    std::fs::write(dir.join("run.json"), &run_json).unwrap();
+    let again = cli(&["show", d]);
+    assert_eq!((code(&again), again.stdout), (0, ok.stdout));
+}

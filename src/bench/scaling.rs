@@ -40,7 +40,8 @@ pub struct ScalingBench {
     pub record: RecordOptions,
     /// Thread counts to predict.
     pub predict: Vec<usize>,
-    /// Also measure the hardware's ceiling: n independent 1-thread runs at once.
+    /// Also measure the hardware's ceiling: n independent 1-thread runs at once (at n ≥ 2;
+    /// at 1 thread it is 100 % by definition and not measured).
     pub ceiling: bool,
 }
 
@@ -229,8 +230,22 @@ fn min_med(v: &[f64]) -> (f64, f64) {
 /// Run the benchmark: prints the table and the prediction; `dir` holds the run folders
 /// (deleted afterwards).
 pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out) -> Result<serde_json::Value> {
-    if b.pop < 4 || b.generations < 1 || b.threads.first() != Some(&1) || b.threads.contains(&0) || b.reps < 1 {
-        return Err(Error::Input(format!("bench scaling: --pop {} (≥ 4), --generations {} (≥ 1), --threads {:?} (≥ 1, starting with 1), --reps {} (≥ 1)", b.pop, b.generations, b.threads, b.reps)));
+    // each setting on its own, named with its value and range
+    let bad = |m: String| Err(Error::Input(format!("bench scaling: {m}")));
+    if b.pop < 4 {
+        return bad(format!("--pop {}: must be at least 4", b.pop));
+    }
+    if b.generations < 1 {
+        return bad(format!("--generations {}: must be at least 1", b.generations));
+    }
+    if b.reps < 1 {
+        return bad(format!("--reps {}: must be at least 1", b.reps));
+    }
+    if let Some(t) = b.threads.iter().find(|&&t| t == 0) {
+        return bad(format!("--threads {t}: each thread count must be at least 1"));
+    }
+    if b.threads.first() != Some(&1) || !b.threads.windows(2).all(|w| w[0] < w[1]) {
+        return bad(format!("thread counts {:?}: must be ascending and start with 1 (the reference)", b.threads));
     }
     // the benchmark's own run folders go below `dir`; a `dir` holding anything else is refused,
     // so that removing them afterwards can never delete data this benchmark did not write
@@ -261,8 +276,10 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         }
         // the hardware's ceiling: n independent 1-thread runs at once (nothing shared but the
         // machine: clock, caches, memory); their wall time over one run's
+        // at 1 thread the ceiling is 100 % by definition (T1 over one independent 1-thread
+        // run is the same measurement twice): not measured, shown as "-" (null in JSON)
         let mut indep = vec![];
-        for _ in 0..if b.ceiling { b.reps } else { 0 } {
+        for _ in 0..if b.ceiling && n > 1 { b.reps } else { 0 } {
             let t = Instant::now();
             std::thread::scope(|sc| {
                 let hs: Vec<_> = (0..n).map(|k| sc.spawn(move || run_once(problem, b, 1, &dir.join(format!("t{n}")).join(format!("c{k}"))))).collect();
@@ -277,7 +294,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         // efficiency the hardware allows (T1 / wall of n independent runs), and how much of it is reached
         let ceil = (!indep.is_empty()).then(|| t1v / min_med(&indep).0);
         let of_ceil = ceil.map(|c| t1v / (n as f64 * mn) / c);
-        let pct = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{:>6.1} %", 100.0 * v));
+        let pct = |v: Option<f64>| v.map_or(format!("{:>8}", "-"), |v| format!("{:>6.1} %", 100.0 * v));
         let eval: f64 = r.gens.iter().map(|g| g.eval_s).sum();
         let work: f64 = r.gens.iter().flat_map(|g| g.costs.iter()).sum();
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
@@ -308,7 +325,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         let _ = std::fs::remove_dir_all(dir.join(format!("t{n}")));
     }
     let _ = std::fs::remove_dir(dir); // only if now empty
-    say!(out, "(ceiling: T1 over the wall time of n independent 1-thread runs at once, the efficiency the machine itself allows; of ceil.: eff(min) / ceiling;");
+    say!(out, "(ceiling: T1 over the wall time of n independent 1-thread runs at once, the efficiency the machine itself allows, - at 1 thread where it is 100 % by definition; of ceil.: eff(min) / ceiling;");
     say!(out, " work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");
     say!(out, " hand-over: cloning each generation for the persister; out./rec./ckpt: the persister's background wall time (outputs, shards, checkpoints); waited: backpressure + final flush)");
     let m = best.expect("one thread measured");

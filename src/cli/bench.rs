@@ -137,6 +137,29 @@ pub enum BenchCmd {
     },
 }
 
+/// The flags of `bench scaling`, each on its own: the first one out of range is named with
+/// its value and range (exit 2). Thread counts have the limit of `optimise --threads`.
+fn check_scaling_flags(pop: usize, generations: u64, max_threads: Option<usize>, threads: &[usize], reps: usize) -> Result<()> {
+    let max = super::MAX_THREADS;
+    if pop < 4 {
+        anyhow::bail!("--pop {pop}: must be at least 4");
+    }
+    if generations < 1 {
+        anyhow::bail!("--generations {generations}: must be at least 1");
+    }
+    if reps < 1 {
+        anyhow::bail!("--reps {reps}: must be at least 1");
+    }
+    match max_threads {
+        Some(m) if !(1..=max).contains(&m) => anyhow::bail!("--max-threads {m}: must be 1 to {max}"),
+        _ => {}
+    }
+    if let Some(&t) = threads.iter().find(|&&t| !(1..=max).contains(&t)) {
+        anyhow::bail!("--threads {t}: each thread count must be 1 to {max}");
+    }
+    Ok(())
+}
+
 /// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
 /// the figures as one JSON object on stdout.
 pub fn run(b: BenchCmd, json: bool) -> Result<()> {
@@ -150,6 +173,7 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
         }
         BenchCmd::Scaling { problem, pop, generations, seed, max_threads, threads, reps, no_record, no_ceiling, out: dir } => {
+            check_scaling_flags(pop, generations, max_threads, &threads, reps)?;
             let p = super::load_problem(&problem)?;
             let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
             let record = if no_record { gripopt::record::RecordOptions::none() } else { gripopt::record::RecordOptions::default() };

@@ -29,13 +29,43 @@ pub struct ShowArgs {
     json: bool,
 }
 
-/// Rows of a design CSV as (header, rows), skipping `#` lines.
+/// Rows of a design CSV as (header, rows), skipping `#` lines. A missing or unreadable
+/// file, an empty one, or a row cut short (the files are written whole, ending in a line
+/// break, with every row as long as the header) is an error naming the file (and line):
+/// exit 2, the run folder is bad input.
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read (is this a run folder with a completed generation?)", path.display()))?;
-    let mut lines = text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
-    let head: Vec<String> = lines.next().with_context(|| format!("{}: empty", path.display()))?.split(',').map(String::from).collect();
-    let rows = lines.map(split_row).collect();
+    let text = std::fs::read_to_string(path).map_err(|e| gripopt::Error::io(path, "cannot read (is this a run folder with a completed generation?)", e))?;
+    let bad = |line: usize, what: String| gripopt::Error::RunDir { path: path.to_path_buf(), message: format!("line {line}: {what}; the file is damaged or truncated (gripopt rewrites it whole every generation)") };
+    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
+    let Some((_, head)) = lines.next() else { return Err(gripopt::Error::RunDir { path: path.to_path_buf(), message: "empty: no header line".into() }.into()) };
+    let head: Vec<String> = head.split(',').map(String::from).collect();
+    if head.first().map(String::as_str) != Some("id") {
+        return Err(gripopt::Error::RunDir { path: path.to_path_buf(), message: format!("header `{}` does not start with `id`: not a gripopt design CSV", head.join(",")) }.into());
+    }
+    let mut rows = vec![];
+    for (n, l) in lines {
+        let r = split_row(l);
+        if r.len() != head.len() {
+            return Err(bad(n, format!("{} fields, the header has {}", r.len(), head.len())).into());
+        }
+        rows.push(r);
+    }
+    if !text.ends_with('\n') {
+        return Err(bad(text.lines().count(), "the last line ends without a line break".into()).into());
+    }
     Ok((head, rows))
+}
+
+/// `run.json` of the run folder: its status and completed generations. Missing, not JSON,
+/// or without those fields is an error naming the file (exit 2).
+fn read_run_json(dir: &Path) -> Result<serde_json::Value> {
+    let p = dir.join("run.json");
+    let text = std::fs::read_to_string(&p).map_err(|e| gripopt::Error::io(&p, "cannot read (is this a run folder?)", e))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|source| gripopt::Error::Json { path: p.clone(), what: "invalid run.json", source })?;
+    if !v["status"].is_string() || !v["completed_generations"].is_u64() {
+        return Err(gripopt::Error::RunDir { path: p, message: "no `status` text or `completed_generations` count: the file is damaged".into() }.into());
+    }
+    Ok(v)
 }
 
 /// Split a CSV line (only `reason` is quoted, without inner quotes).
@@ -65,18 +95,21 @@ pub fn run(a: ShowArgs) -> Result<()> {
         bail!("--best {}: expected one of max_offset, alpha, mean_force, t_stab", a.best);
     };
     let file = if a.archive { "archive.csv" } else { "pareto.csv" };
+    let run = read_run_json(dir)?;
     let (head, mut rows) = read_csv(&dir.join(file))?;
     let col = |n: &str| head.iter().position(|h| h == n);
-    let run: serde_json::Value = std::fs::read_to_string(dir.join("run.json")).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let replay = |id: &str| format!("gripopt replay {} --design {id}", dir.display());
     if let Some(id) = a.design {
         let mut found = None;
         for f in ["pareto.csv", "archive.csv", "population.csv"] {
-            if let Ok((h, r)) = read_csv(&dir.join(f)) {
-                if let Some(row) = r.into_iter().find(|r| r.first().map(String::as_str) == Some(&id.to_string())) {
-                    found = Some((h, row, f));
-                    break;
-                }
+            // a file not written (yet) is skipped; a damaged one is an error
+            if !dir.join(f).exists() {
+                continue;
+            }
+            let (h, r) = read_csv(&dir.join(f))?;
+            if let Some(row) = r.into_iter().find(|r| r.first().map(String::as_str) == Some(&id.to_string())) {
+                found = Some((h, row, f));
+                break;
             }
         }
         let Some((h, row, f)) = found else { bail!("--design {id}: not in pareto.csv, archive.csv or population.csv of {} (older designs: `{}`)", dir.display(), replay(&id.to_string())) };
