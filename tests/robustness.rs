@@ -531,3 +531,46 @@ fn show_refuses_a_missing_or_damaged_file_naming_it() {
     let again = cli(&["show", d]);
     assert_eq!((code(&again), again.stdout), (0, ok.stdout));
 }
+
+/// `show --best OBJ` puts designs without that value last, whether the objective is
+/// maximised (max_offset) or minimised (t_stab), and breaks ties by numeric id.
+#[test]
+fn show_puts_missing_values_last() {
+    let dir = tmp("show-missing");
+    let d = dir.to_str().unwrap();
+    let o = cli(&["optimise", PROBLEM, "--pop", "12", "--generations", "2", "--seed", "4", "--record", "none", "--out", d]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // blank max_offset and t_stab of the front's first design
+    let path = dir.join("pareto.csv");
+    let text = read(&path);
+    let header = text.lines().find(|l| l.starts_with("id,")).unwrap().split(',').map(str::to_string).collect::<Vec<_>>();
+    let (mo, ts) = (header.iter().position(|c| c == "max_offset").unwrap(), header.iter().position(|c| c == "t_stab").unwrap());
+    let mut blanked = None;
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if blanked.is_none() && !l.starts_with('#') && !l.starts_with("id,") {
+                let mut c: Vec<&str> = l.split(',').collect();
+                blanked = Some(c[0].to_string());
+                c[mo] = "";
+                c[ts] = "";
+                return c.join(",");
+            }
+            l.to_string()
+        })
+        .collect();
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let id = blanked.expect("a front row");
+    for best in ["max_offset", "t_stab"] {
+        let r = cli(&["show", d, "--best", best, "--json"]);
+        assert_eq!(code(&r), 0, "{}", stderr(&r));
+        let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        let designs = v["designs"].as_array().unwrap_or_else(|| panic!("{v}"));
+        assert!(designs.len() >= 2, "{v}");
+        // every design without the value comes after every design with one
+        let has: Vec<bool> = designs.iter().map(|x| x[best].is_number()).collect();
+        assert!(has.windows(2).all(|w| w[0] || !w[1]), "--best {best}: {has:?}");
+        assert!(has.iter().any(|h| *h) && !has[has.len() - 1], "--best {best}: {has:?}");
+        assert!(designs.iter().any(|x| x["id"].to_string().trim_matches('"') == id), "{v}");
+    }
+}

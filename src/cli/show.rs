@@ -135,9 +135,16 @@ pub fn run(a: ShowArgs) -> Result<()> {
     let k = col(obj).with_context(|| format!("{file}: no column {obj}"))?;
     let val = |r: &Vec<String>| r.get(k).and_then(|v| v.parse::<f64>().ok());
     rows.sort_by(|x, y| {
-        let (a, b) = (val(x).unwrap_or(f64::NAN), val(y).unwrap_or(f64::NAN));
-        let o = if maximise { b.total_cmp(&a) } else { a.total_cmp(&b) };
-        o.then_with(|| x[0].cmp(&y[0]))
+        // designs without the value go last, whichever way the objective is better
+        let (a, b) = (val(x).filter(|v| !v.is_nan()), val(y).filter(|v| !v.is_nan()));
+        let o = match (a, b) {
+            (Some(a), Some(b)) if maximise => b.total_cmp(&a),
+            (Some(a), Some(b)) => a.total_cmp(&b),
+            (Some(_), None) => std::cmp::Ordering::Less,
+            (None, Some(_)) => std::cmp::Ordering::Greater,
+            (None, None) => std::cmp::Ordering::Equal,
+        };
+        o.then_with(|| x[0].parse::<u64>().ok().cmp(&y[0].parse::<u64>().ok()))
     });
     if a.limit > 0 {
         rows.truncate(a.limit);
