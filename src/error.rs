@@ -234,7 +234,7 @@ pub(crate) fn one_line(text: &str) -> String {
         if c == '\u{1b}' {
             // CSI: ESC [ parameters final byte (0x40..=0x7e); other escapes: one character
             if chars.next_if_eq(&'[').is_some() {
-                while let Some(d) = chars.next() {
+                for d in chars.by_ref() {
                     if ('\u{40}'..='\u{7e}').contains(&d) {
                         break;
                     }
