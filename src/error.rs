@@ -53,16 +53,28 @@ pub enum Error {
         #[source]
         source: serde_json::Error,
     },
-    /// An MCAP file could not be read or written.
+    /// An MCAP file could not be written.
     #[error("{}: {what}: {source}", path.display())]
     Mcap {
         /// The file.
         path: PathBuf,
-        /// What failed (e.g. "cannot read the MCAP summary; the file is truncated or corrupt").
+        /// What failed (e.g. "cannot write").
         what: String,
         /// The mcap crate's error.
         #[source]
-        source: mcap::McapError,
+        source: McapFault,
+    },
+    /// A recording file (an MCAP shard) cannot be parsed: it is truncated or damaged (bad
+    /// input: exit code 2).
+    #[error("{}: {what}: {source}", path.display())]
+    DamagedRecording {
+        /// The file.
+        path: PathBuf,
+        /// What could not be read (e.g. "cannot read the MCAP summary").
+        what: String,
+        /// The mcap crate's error.
+        #[source]
+        source: McapFault,
     },
     /// A checkpoint is not valid, or does not match the run's inputs.
     #[error("{}: not a valid gripopt checkpoint: {message}", file.display())]
@@ -150,7 +162,7 @@ impl Error {
     pub fn is_input(&self) -> bool {
         use std::io::ErrorKind as K;
         match self {
-            Error::ProblemParse { .. } | Error::InvalidField { .. } | Error::Input(_) | Error::RunDir { .. } | Error::Checkpoint { .. } | Error::Locked { .. } | Error::Recording { .. } => true,
+            Error::ProblemParse { .. } | Error::InvalidField { .. } | Error::Input(_) | Error::RunDir { .. } | Error::Checkpoint { .. } | Error::Locked { .. } | Error::Recording { .. } | Error::DamagedRecording { .. } => true,
             Error::Json { .. } => true,
             Error::Io { source, .. } => matches!(source.kind(), K::NotFound | K::PermissionDenied | K::InvalidInput | K::InvalidData | K::IsADirectory | K::NotADirectory | K::AlreadyExists),
             _ => false,
@@ -172,4 +184,94 @@ impl Error {
     pub fn bench_from(message: impl Into<String>, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
         Error::Bench { message: message.into(), source: Some(source.into()) }
     }
+}
+
+/// The mcap crate's error, shown on one clean line: its parse errors carry a multi-line
+/// backtrace with ANSI colours and the crate's source paths, which a message must not
+/// carry. `Display` shows the error and its causes, keeping the error texts of that block (control characters, frame numbers,
+/// source locations and the banner removed); `Debug` and [`McapFault::inner`] keep all.
+#[derive(Debug)]
+pub struct McapFault(pub mcap::McapError);
+
+impl McapFault {
+    /// The mcap crate's error.
+    pub fn inner(&self) -> &mcap::McapError {
+        &self.0
+    }
+}
+
+impl From<mcap::McapError> for McapFault {
+    fn from(e: mcap::McapError) -> Self {
+        McapFault(e)
+    }
+}
+
+impl std::fmt::Display for McapFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // the error and its causes (binrw's backtrace block is the cause of a parse error)
+        let mut text = one_line(&self.0.to_string());
+        let mut cause = std::error::Error::source(&self.0);
+        while let Some(c) = cause {
+            let t = one_line(&c.to_string());
+            if !text.contains(&t) {
+                text = format!("{text}: {t}");
+            }
+            cause = c.source();
+        }
+        f.write_str(&text)
+    }
+}
+
+impl std::error::Error for McapFault {}
+
+/// `text` without ANSI escape sequences and control characters, its lines' banners
+/// (box-drawing characters, "Backtrace"), frame numbers and source locations (`at PATH:LINE`)
+/// removed, the remaining texts joined with "; ", at most 300 characters.
+pub(crate) fn one_line(text: &str) -> String {
+    let mut plain = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // CSI: ESC [ parameters final byte (0x40..=0x7e); other escapes: one character
+            if chars.next_if_eq(&'[').is_some() {
+                for d in chars.by_ref() {
+                    if ('\u{40}'..='\u{7e}').contains(&d) {
+                        break;
+                    }
+                }
+            } else {
+                chars.next();
+            }
+        } else if c == '\n' || !c.is_control() {
+            plain.push(c);
+        } else if c == '\t' {
+            plain.push(' ');
+        }
+    }
+    let mut parts: Vec<String> = vec![];
+    for line in plain.lines() {
+        let line: String = line.chars().filter(|c| !('\u{2500}'..='\u{257f}').contains(c)).collect();
+        let line = line.replace("Backtrace", "");
+        let mut l = line.trim();
+        if l.starts_with("at ") {
+            continue; // a source location of the crate
+        }
+        if let Some((n, rest)) = l.split_once(": ") {
+            if !n.is_empty() && n.chars().all(|c| c.is_ascii_digit()) {
+                l = rest.trim(); // a frame number
+            }
+        }
+        let l = l.strip_prefix("Error: ").unwrap_or(l).trim().trim_end_matches(':').trim();
+        if !l.is_empty() {
+            parts.push(l.to_string());
+        }
+    }
+    let mut s = parts.join("; ");
+    if s.is_empty() {
+        s = "unknown MCAP error".into();
+    }
+    if s.chars().count() > 300 {
+        s = s.chars().take(299).collect::<String>() + "…";
+    }
+    s
 }

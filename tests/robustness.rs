@@ -574,3 +574,122 @@ fn show_puts_missing_values_last() {
         assert!(designs.iter().any(|x| x["id"].to_string().trim_matches('"') == id), "{v}");
     }
 }
+
+/// A run folder for damaged recordings, outside `target/mcap-check` (whose MCAP files
+/// `make test` checks with the independent reader).
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/damaged-recordings")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(d.parent().unwrap()).unwrap();
+    d
+}
+
+/// Invert every `step`-th byte of `path` from `from` on (`from` < 0: counted from the end).
+fn flip(path: &Path, from: i64, step: usize) {
+    let mut b = std::fs::read(path).unwrap();
+    let start = if from < 0 { b.len() - (-from) as usize } else { from as usize };
+    for i in (start..b.len()).step_by(step) {
+        b[i] ^= 0xFF;
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+/// One line on stderr that names `file`, without the mcap crate's backtrace block, ANSI
+/// colours or source paths.
+#[track_caller]
+fn clean_error(o: &Output, file: &str) {
+    let e = stderr(o);
+    assert!(e.trim_end().lines().count() == 1 && e.contains(file), "{e}");
+    assert!(!e.contains("Backtrace") && !e.contains('\u{1b}') && !e.contains(".cargo") && !e.contains("records.rs"), "{e}");
+}
+
+#[test]
+fn a_damaged_shard_is_an_input_error_on_one_clean_line() {
+    let dir = scratch("replay");
+    optimise(&spec(&dir, 3)).unwrap();
+    let rdir = dir.join("recording");
+    let g2 = read_index(&rdir).unwrap()[1].clone();
+    let shard = rdir.join(&g2.file);
+    let pristine = std::fs::read(&shard).unwrap();
+    let d = dir.display().to_string();
+    let replay = |id: u64| cli(&["replay", &d, "--design", &id.to_string()]);
+    // the summary damaged (the last 2 KiB, every 7th byte), or the file cut in half
+    flip(&shard, -2048, 7);
+    let o = replay(g2.first_id);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    clean_error(&o, &g2.file);
+    std::fs::write(&shard, &pristine[..pristine.len() / 2]).unwrap();
+    let o = replay(g2.first_id);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    clean_error(&o, &g2.file);
+    // a chunk whose uncompressed size field says 2^63 - 1 bytes (the reader used to
+    // allocate that, a panic): the chunk index gives the true size
+    let buf = pristine.clone();
+    let summary = mcap::Summary::read(&buf).unwrap().unwrap();
+    let epoch_ns = summary.chunk_indexes.iter().map(|c| c.message_start_time).min().unwrap() - g2.first_id * 1_000_000_000;
+    let ci = summary.chunk_indexes.iter().find(|c| c.message_start_time >= epoch_ns + g2.first_id * 1_000_000_000).unwrap();
+    let at = ci.chunk_start_offset as usize + 25;
+    assert_eq!(u64::from_le_bytes(buf[at..at + 8].try_into().unwrap()), ci.uncompressed_size, "chunk record layout");
+    let mut bad = buf.clone();
+    bad[at..at + 8].copy_from_slice(&(i64::MAX as u64).to_le_bytes());
+    std::fs::write(&shard, &bad).unwrap();
+    let o = replay(g2.first_id);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    clean_error(&o, &g2.file);
+    assert!(stderr(&o).contains("uncompressed size"), "{}", stderr(&o));
+    // bytes inverted every 3 KiB (the tester's damage): each design is an input error or
+    // replays, never a panic or a backtrace
+    std::fs::write(&shard, &pristine).unwrap();
+    flip(&shard, 1000, 3072);
+    for id in g2.first_id..=g2.last_id {
+        let o = replay(id);
+        assert!([0, 2, 3].contains(&code(&o)), "design {id}: exit {}: {}", code(&o), stderr(&o));
+        if code(&o) == 2 {
+            clean_error(&o, &g2.file);
+        }
+    }
+}
+
+/// Every file under `dir` with its content, sorted by name.
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().flatten().filter(|f| f.path().is_file()).map(|f| (f.file_name().to_string_lossy().to_string(), std::fs::read(f.path()).unwrap())).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_missing_index_and_an_unreadable_shard_stop_a_resume_and_a_moved_shard_is_named() {
+    let dir = scratch("resume");
+    optimise(&spec(&dir, 3)).unwrap();
+    let rdir = dir.join("recording");
+    let original = read_index(&rdir).unwrap();
+    let g2 = original[1].clone();
+    flip(&rdir.join(&g2.file), -2048, 7); // its summary and metadata unreadable
+    std::fs::remove_file(rdir.join("index.jsonl")).unwrap();
+    // leftovers a successful recovery removes: they must stay when it refuses
+    std::fs::write(rdir.join("gen-00004.mcap"), b"partial").unwrap();
+    std::fs::write(rdir.join("gen-00004.mcap.tmp"), b"partial").unwrap();
+    let (rec_before, cp_before) = (snapshot(&rdir), std::fs::read(dir.join("checkpoint.json")).unwrap());
+    let e = recover(&rdir, 3).unwrap_err();
+    assert!(e.is_input() && e.to_string().contains(&g2.file) && e.to_string().contains("restore"), "{e}");
+    let o = cli(&["resume", &dir.display().to_string(), "--generations", "4"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    clean_error(&o, &g2.file);
+    assert!(stderr(&o).contains("index cannot be rebuilt"), "{}", stderr(&o));
+    assert!(snapshot(&rdir) == rec_before, "the recording folder was changed");
+    assert!(std::fs::read(dir.join("checkpoint.json")).unwrap() == cp_before, "the checkpoint was changed");
+    // the shard moved away: the resume goes on, the generation is reported missing, and
+    // replay names it for its ids instead of a range that contains them
+    std::fs::rename(rdir.join(&g2.file), dir.join("moved-away.mcap")).unwrap();
+    let r = recover(&rdir, 3).unwrap();
+    assert_eq!(r.missing, vec![2]);
+    assert!(r.warnings(&rdir).iter().any(|w| w.contains("generation 2") && w.contains(&g2.file)), "{:?}", r.warnings(&rdir));
+    resume(&dir, Some(4), false, Some(2), false).unwrap();
+    let gens: Vec<u64> = read_index(&rdir).unwrap().iter().map(|e| e.generation).collect();
+    assert_eq!(gens, vec![1, 3, 4]);
+    let e = gripopt::record::read_design(&dir, (g2.first_id + g2.last_id) / 2).unwrap_err().to_string();
+    assert!(e.contains("generation 2") && e.contains(&g2.file) && e.contains(&format!("{}..={}", g2.first_id, g2.last_id)), "{e}");
+    let o = cli(&["replay", &dir.display().to_string(), "--design", &g2.first_id.to_string()]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(!stderr(&o).contains(&format!("0..={}", read_index(&rdir).unwrap().last().unwrap().last_id)), "{}", stderr(&o));
+}

@@ -16,7 +16,7 @@ pub(super) fn temporary(path: &Path) -> PathBuf {
 
 /// An MCAP error while writing `path`'s temporary file.
 pub(super) fn error(tmp: &Path) -> impl Fn(mcap::McapError) -> Error + Copy + '_ {
-    move |source| Error::Mcap { path: tmp.to_path_buf(), what: "cannot write".into(), source }
+    move |source| Error::Mcap { path: tmp.to_path_buf(), what: "cannot write".into(), source: source.into() }
 }
 
 /// A writer with zstd `level` (and `threads` zstd workers, 0 = on the calling thread);

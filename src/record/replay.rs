@@ -4,7 +4,7 @@
 
 use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
-use super::writer::read_index;
+use super::writer::{read_index, ShardEntry};
 use super::{RecordOptions, Resolution};
 use prost::Message;
 use crate::{Error, Result};
@@ -113,6 +113,75 @@ fn mmap(path: &Path) -> Result<memmap2::Mmap> {
     unsafe { memmap2::Mmap::map(&f) }.map_err(|e| Error::io(path, "cannot map", e))
 }
 
+/// Why design `id` is in none of `index`'s shards: the recorded id ranges, and where `id`
+/// falls in a gap between two shards (a generation whose shard was moved away or could not
+/// be read when the index was rebuilt), the generations and shard files of the gap.
+fn not_indexed(dir: &Path, index: &[ShardEntry], id: u64) -> String {
+    let mut by_id: Vec<&ShardEntry> = index.iter().collect();
+    by_id.sort_by_key(|e| e.first_id);
+    // recorded ranges, contiguous shards merged
+    let mut ranges: Vec<(u64, u64)> = vec![];
+    for e in &by_id {
+        match ranges.last_mut() {
+            Some(r) if e.first_id <= r.1 + 1 => r.1 = r.1.max(e.last_id),
+            _ => ranges.push((e.first_id, e.last_id)),
+        }
+    }
+    let recorded = if ranges.is_empty() { "none".to_string() } else { ranges.iter().map(|(a, b)| format!("{a}..={b}")).collect::<Vec<_>>().join(", ") };
+    let before = by_id.iter().rev().find(|e| e.last_id < id);
+    let Some(after) = by_id.iter().find(|e| e.first_id > id) else {
+        return format!("design {id} is not in this index (recorded ids: {recorded})");
+    };
+    let (lo, g0) = before.map_or((0, 1), |b| (b.last_id + 1, b.generation + 1));
+    let g1 = after.generation.saturating_sub(1);
+    let gens = match g1.cmp(&g0) {
+        std::cmp::Ordering::Less => "no generation between them".to_string(),
+        std::cmp::Ordering::Equal => {
+            let f = format!("gen-{g0:05}.mcap");
+            let state = if dir.join(&f).exists() { "is on disk but not indexed" } else { "is missing" };
+            format!("generation {g0}, whose shard {f} {state}")
+        }
+        std::cmp::Ordering::Greater => {
+            let files: Vec<String> = (g0..=g1).map(|g| format!("gen-{g:05}.mcap")).filter(|f| !dir.join(f).exists()).collect();
+            format!("generations {g0}..={g1} (missing shards: {})", if files.is_empty() { "none".into() } else { files.join(", ") })
+        }
+    };
+    format!(
+        "design {id} is not recorded: ids {lo}..={} are missing from the index ({gens}; the shard was moved away or could not be read when the index was rebuilt); recorded ids: {recorded}",
+        after.first_id - 1
+    )
+}
+
+/// Largest chunk a replay decompresses (the writer closes chunks at 64 MiB).
+const MAX_CHUNK_BYTES: u64 = 1 << 30;
+
+/// Check that the chunk record `ci` points to agrees with `ci` (opcode, length, times,
+/// uncompressed size) before the mcap crate reads it: a damaged size field makes its
+/// reader allocate without bound (a panic), where this is an error naming the field.
+fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Result<(), String> {
+    let u64_at = |at: usize| buf.get(at..at + 8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
+    let start = usize::try_from(ci.chunk_start_offset).map_err(|_| "offset beyond the file".to_string())?;
+    ci.chunk_start_offset.checked_add(ci.chunk_length).filter(|e| *e <= buf.len() as u64).ok_or("the chunk index points beyond the end of the file")?;
+    if buf.get(start) != Some(&0x06) {
+        return Err("no chunk record at the offset the chunk index gives".into());
+    }
+    let fields = [
+        ("record length", u64_at(start + 1), ci.chunk_length.checked_sub(9)),
+        ("message start time", u64_at(start + 9), Some(ci.message_start_time)),
+        ("message end time", u64_at(start + 17), Some(ci.message_end_time)),
+        ("uncompressed size", u64_at(start + 25), Some(ci.uncompressed_size)),
+    ];
+    for (name, in_file, in_index) in fields {
+        if in_file.is_none() || in_file != in_index {
+            return Err(format!("its {name} ({}) differs from the chunk index's ({})", in_file.map_or("missing".into(), |v| v.to_string()), in_index.map_or("invalid".into(), |v| v.to_string())));
+        }
+    }
+    if ci.uncompressed_size > MAX_CHUNK_BYTES {
+        return Err(format!("uncompressed size {} exceeds {MAX_CHUNK_BYTES} bytes", ci.uncompressed_size));
+    }
+    Ok(())
+}
+
 /// Find design `id` in the recording of `run_dir`.
 pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
@@ -123,16 +192,13 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let entry = index
         .iter()
         .find(|e| e.first_id <= id && id <= e.last_id)
-        .ok_or_else(|| {
-            let max = index.iter().map(|e| e.last_id).max();
-            Error::Recording { path: dir.join("index.jsonl"), message: format!("design {id} is not in this index (recorded ids: 0..={})", max.map_or("none".into(), |m| m.to_string())) }
-        })?;
+        .ok_or_else(|| Error::Recording { path: dir.join("index.jsonl"), message: not_indexed(&dir, &index, id) })?;
     let path = dir.join(&entry.file);
     let buf = mmap(&path)?;
     let bad = |message: String| Error::Recording { path: path.clone(), message };
-    let mc = |what: String| |source| Error::Mcap { path: path.clone(), what, source };
+    let mc = |what: String| |source: mcap::McapError| Error::DamagedRecording { path: path.clone(), what, source: source.into() };
     let summary = mcap::Summary::read(&buf)
-        .map_err(mc("cannot read the MCAP summary; the file is truncated or corrupt".into()))?
+        .map_err(mc("cannot read the MCAP summary (the file is truncated or damaged)".into()))?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
     // the epoch and the resolution from the shard's metadata record
     let meta = summary
@@ -151,8 +217,10 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let (lo, hi) = (window_start_ns(epoch_ns, id), window_start_ns(epoch_ns, id + 1));
     let (mut design, mut series) = (None, None);
     for ci in summary.chunk_indexes.iter().filter(|c| c.message_start_time < hi && c.message_end_time >= lo) {
-        for m in summary.stream_chunk(&buf, ci).map_err(mc(format!("chunk at offset {}", ci.chunk_start_offset)))? {
-            let m = m.map_err(mc("message".into()))?;
+        check_chunk(&buf, ci).map_err(|m| bad(format!("the file is damaged: chunk at offset {}: {m}", ci.chunk_start_offset)))?;
+        let at = ci.chunk_start_offset;
+        for m in summary.stream_chunk(&buf, ci).map_err(mc(format!("cannot read the chunk at offset {at} (the file is damaged)")))? {
+            let m = m.map_err(mc(format!("cannot read a message of the chunk at offset {at} (the file is damaged)")))?;
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }

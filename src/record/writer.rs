@@ -184,6 +184,9 @@ pub struct Recorder {
     pub bytes: u64,
     /// Seconds spent recording in this process (summed over shards written at once).
     pub seconds: f64,
+    /// Warnings of the recovery at [`Recorder::open`] (generations the checkpoint covers
+    /// without a shard, see [`super::Recovery::warnings`]); the caller shows them.
+    pub warnings: Vec<String>,
 }
 
 /// One generation's shard, detached from its [`Recorder`]: write it on any thread, then
@@ -217,13 +220,17 @@ impl ShardTask {
 
 impl Recorder {
     /// Open `RUN_DIR/recording`, dropping shards of generations after `completed` (left by a
-    /// generation that was being recorded when the run stopped).
+    /// generation that was being recorded when the run stopped); an error when a covered
+    /// shard cannot be re-indexed (see `recover`).
     pub fn open(run_dir: &Path, problem: Problem, meta: BTreeMap<String, String>, opts: RecordOptions, completed: u64) -> Result<Self> {
         let dir = run_dir.join("recording");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
-        let index = super::recover::recover(&dir, completed)?.index; // never deletes what the checkpoint covers
-        write_index(&dir, &index)?;
-        Ok(Recorder { dir, problem: Arc::new(problem), meta, opts, index, bytes: 0, seconds: 0.0 })
+        // never deletes what the checkpoint covers; refuses (touching nothing) when a covered
+        // shard must be re-indexed but cannot be read
+        let recovery = super::recover::recover(&dir, completed)?;
+        let warnings = recovery.warnings(&dir);
+        write_index(&dir, &recovery.index)?;
+        Ok(Recorder { dir, problem: Arc::new(problem), meta, opts, index: recovery.index, bytes: 0, seconds: 0.0, warnings })
     }
 
     /// The shard of generation `generation`, to be written by [`ShardTask::write`]; None
