@@ -670,6 +670,7 @@ fn a_missing_index_and_an_unreadable_shard_stop_a_resume_and_a_moved_shard_is_na
     std::fs::write(rdir.join("gen-00004.mcap"), b"partial").unwrap();
     std::fs::write(rdir.join("gen-00004.mcap.tmp"), b"partial").unwrap();
     let (rec_before, cp_before) = (snapshot(&rdir), std::fs::read(dir.join("checkpoint.json")).unwrap());
+    let run_before = std::fs::read(dir.join("run.json")).unwrap();
     let e = recover(&rdir, 3).unwrap_err();
     assert!(e.is_input() && e.to_string().contains(&g2.file) && e.to_string().contains("restore"), "{e}");
     let o = cli(&["resume", &dir.display().to_string(), "--generations", "4"]);
@@ -678,6 +679,7 @@ fn a_missing_index_and_an_unreadable_shard_stop_a_resume_and_a_moved_shard_is_na
     assert!(stderr(&o).contains("index cannot be rebuilt"), "{}", stderr(&o));
     assert!(snapshot(&rdir) == rec_before, "the recording folder was changed");
     assert!(std::fs::read(dir.join("checkpoint.json")).unwrap() == cp_before, "the checkpoint was changed");
+    assert!(std::fs::read(dir.join("run.json")).unwrap() == run_before, "run.json was changed by a refused resume");
     // the shard moved away: the resume goes on, the generation is reported missing, and
     // replay names it for its ids instead of a range that contains them
     std::fs::rename(rdir.join(&g2.file), dir.join("moved-away.mcap")).unwrap();

@@ -262,20 +262,26 @@ fn drive(
     let start = Instant::now();
     let pool = pool(threads)?;
     info.threads = pool.current_num_threads();
-    write_json(&out.join("run.json"), &info)?;
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
     let options = run_options(&gp, &info.recording);
     let mut gp = gp;
     if info.recording.enabled {
         gp.keep_trajectories = info.recording.trajectories;
     }
+    // the recording first: a resume it refuses (an unreadable shard) leaves run.json as it was
     let recorder = if info.recording.enabled {
         let meta = recording_metadata(&gp, &settings, &info);
         let r = Recorder::open(out, gp.problem.clone(), meta, info.recording, state.generation)?;
+        if progress {
+            for w in &r.warnings {
+                eprintln!("warning: {w}");
+            }
+        }
         Some(RecordingObserver(Arc::new(Mutex::new(r))))
     } else {
         None
     };
+    write_json(&out.join("run.json"), &info)?;
     let first = state.generation.max(1);
     if progress {
         if let Some(note) = super::limits::threads_note(settings.pop_size, info.threads) {
