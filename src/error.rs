@@ -136,6 +136,16 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// An optimisation run stopped before its first checkpoint: there is nothing to resume,
+    /// and the folder can be given to `optimise` again.
+    #[error("run in {} stopped before its first checkpoint: {source}; nothing to resume: run `gripopt optimise` with `--out {}` again", path.display(), path.display())]
+    StoppedBeforeCheckpoint {
+        /// The run folder.
+        path: PathBuf,
+        /// Why it stopped.
+        #[source]
+        source: Box<Error>,
+    },
     /// A benchmark could not run as set up (a design discarded, a reference run that does
     /// not reach stability, a failed plot or step of the benchmark).
     #[error("{message}")]

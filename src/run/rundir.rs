@@ -322,7 +322,11 @@ fn drive(
             info.status = RunStatus::Interrupted;
             info.wall_s = wall_before + start.elapsed().as_secs_f64();
             let _ = write_json(&out.join("run.json"), &info);
-            return Err(Error::Stopped { path: out.to_path_buf(), source: Box::new(e) });
+            return Err(if out.join("checkpoint.json").exists() {
+                Error::Stopped { path: out.to_path_buf(), source: Box::new(e) }
+            } else {
+                Error::StoppedBeforeCheckpoint { path: out.to_path_buf(), source: Box::new(e) }
+            });
         }
     };
     let interrupted = matches!(st.get_termination_reason(), Some(argmin::core::TerminationReason::Interrupt));
