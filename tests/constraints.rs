@@ -54,7 +54,7 @@ fn designs_just_inside_and_outside_the_30_degree_margin() {
     assert!((30.0..30.1).contains(&mi), "inside margin {mi}");
     assert!(mo < 30.0 && mo > 29.9, "outside margin {mo}");
     let ei = evaluate(&inside, &s, &opts);
-    assert!(ei.discard.map_or(true, |d| d.stage > 1), "inside discarded at stage 1: {:?}", ei.discard);
+    assert!(ei.discard.is_none_or(|d| d.stage > 1), "inside discarded at stage 1: {:?}", ei.discard);
     let eo = evaluate(&outside, &s, &opts);
     let d = eo.discard.expect("outside must be discarded");
     assert_eq!(d.stage, 1);

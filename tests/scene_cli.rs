@@ -105,7 +105,7 @@ fn verify_without_observation_and_with_nothing_to_verify() {
         std::fs::remove_file(dir.join(f)).unwrap();
     }
     let p = dir.join("pareto.csv");
-    let header = std::fs::read_to_string(&p).unwrap().lines().filter(|l| !l.starts_with('#')).next().unwrap().to_string();
+    let header = std::fs::read_to_string(&p).unwrap().lines().find(|l| !l.starts_with('#')).unwrap().to_string();
     std::fs::write(&p, format!("{header}\n")).unwrap();
     let o = run(&["verify", &d]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));

@@ -110,7 +110,7 @@ struct Job {
 /// What the persister thread receives: generations from the optimiser, finished shards from
 /// its pool.
 enum Msg {
-    Job(Job),
+    Job(Box<Job>),
     Shard { generation: u64, result: Result<Option<(ShardEntry, f64)>> },
     /// A checkpoint's bytes, serialised in the pool, and the seconds it took.
     Checkpoint { generation: u64, result: Result<Vec<u8>>, secs: f64 },
@@ -214,7 +214,7 @@ impl Persister {
         if s.stopped {
             return Err(Error::Optimiser("the persister thread stopped".into()));
         }
-        s.inbox.push_back(Msg::Job(job));
+        s.inbox.push_back(Msg::Job(Box::new(job)));
         s.queued += 1;
         cv.notify_all();
         Ok(())

@@ -363,7 +363,10 @@ fn check_new_run_folder(dir: &Path) -> Result<()> {
     let run_json = names.iter().any(|n| n == "run.json");
     let foreign: Vec<String> = names
         .into_iter()
-        .filter(|n| !ours.contains(&n.as_str()) && !(run_json && outputs.contains(&n.as_str())) && !(n.starts_with('.') && n.ends_with(".tmp")))
+        .filter(|n| {
+            let tmp = n.starts_with('.') && n.ends_with(".tmp");
+            !(ours.contains(&n.as_str()) || (run_json && outputs.contains(&n.as_str())) || tmp)
+        })
         .collect();
     if foreign.is_empty() {
         return Ok(());

@@ -222,7 +222,7 @@ impl<'a> FreeScene<'a> {
         for k in 0..ng {
             // mirror images (x → −x) of each other exactly where the set is symmetric, so a
             // symmetric grasp stays symmetric to rounding
-            let m = if ng % 2 == 0 { (ng / 2 + ng - k) % ng } else { k };
+            let m = if ng.is_multiple_of(2) { (ng / 2 + ng - k) % ng } else { k };
             rim_body[k] = if m < k {
                 V3::new(-rim_body[m].x, rim_body[m].y, rim_body[m].z)
             } else {
