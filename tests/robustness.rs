@@ -489,15 +489,20 @@ fn bench_scaling_has_no_ceiling_at_one_thread() {
     assert_eq!(&cells[4..8], &["100.0", "%", "-", "-"], "{one}");
 }
 
+/// A small finished run (seed 4: three designs in the final front), without recording.
+fn small_front_run(name: &str) -> PathBuf {
+    let dir = tmp(name);
+    let o = cli(&["optimise", PROBLEM, "--pop", "12", "--generations", "2", "--seed", "4", "--record", "none", "--out", dir.to_str().unwrap()]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    dir
+}
+
 /// `show` on a run folder lacking or with damaged files: an error naming the file (and the
 /// line of a cut-short row), exit 2, never a half row or "(?, null generations)".
 #[test]
 fn show_refuses_a_missing_or_damaged_file_naming_it() {
-    let dir = tmp("show-damaged");
+    let dir = small_front_run("show-damaged");
     let d = dir.to_str().unwrap();
-    // seed 4: three designs in the final front
-    let o = cli(&["optimise", PROBLEM, "--pop", "12", "--generations", "2", "--seed", "4", "--record", "none", "--out", d]);
-    assert_eq!(code(&o), 0, "{}", stderr(&o));
     let ok = cli(&["show", d]);
     assert_eq!(code(&ok), 0, "{}", stderr(&ok));
     let pareto = read(&dir.join("pareto.csv"));
@@ -536,10 +541,8 @@ fn show_refuses_a_missing_or_damaged_file_naming_it() {
 /// maximised (max_offset) or minimised (t_stab), and breaks ties by numeric id.
 #[test]
 fn show_puts_missing_values_last() {
-    let dir = tmp("show-missing");
+    let dir = small_front_run("show-missing");
     let d = dir.to_str().unwrap();
-    let o = cli(&["optimise", PROBLEM, "--pop", "12", "--generations", "2", "--seed", "4", "--record", "none", "--out", d]);
-    assert_eq!(code(&o), 0, "{}", stderr(&o));
     // blank max_offset and t_stab of the front's first design
     let path = dir.join("pareto.csv");
     let text = read(&path);
