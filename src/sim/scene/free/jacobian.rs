@@ -60,6 +60,19 @@ fn sum(load: &[Load; NC], ks: std::ops::Range<usize>) -> (V3, V3, [Vector2<f64>;
 
 /// Do the flags of contacts `ks` (and of finger `finger`'s kinks) at a perturbed state
 /// differ from `piece`'s?
+/// One column's perturbed evaluation that stays on the current smooth piece: `eval(dy)`,
+/// or `eval(-dy)` when +dy leaves the piece (`left`); the step used and the result, with
+/// the evaluations counted in `evals`.
+fn on_piece<T>(dy: f64, eval: impl Fn(f64) -> T, left: impl Fn(&T) -> bool, evals: &mut u64) -> (f64, T) {
+    *evals += 1;
+    let r = eval(dy);
+    if !left(&r) {
+        return (dy, r);
+    }
+    *evals += 1;
+    (-dy, eval(-dy))
+}
+
 fn left_piece(piece: Piece, load: &[Load; NC], ks: std::ops::Range<usize>, finger: Option<(usize, Piece)>) -> bool {
     for k in ks {
         if load[k].loaded != piece.has(12 + 2 * k as u32) || (load[k].loaded && load[k].clipped) != piece.has(13 + 2 * k as u32) {
@@ -247,12 +260,9 @@ impl FreeScene<'_> {
         // ---- object position and orientation: the contacts, fingers kept -----------------
         let (dq_dq, dq_dw) = quat_rate_jacobian(b.q, b.om);
         for j in G0..Q0 + 4 {
-            let mut dy = step(j);
-            let mut side = 0;
-            let (load, bp) = loop {
+            let eval = |dy: f64| {
                 let mut yp = *y;
                 yp[j] += dy;
-                evals += 1;
                 let bp = self.body(&yp);
                 let load = if j < G0 + 2 {
                     // G_x, G_y: the ground points' δ and velocities do not change
@@ -262,13 +272,9 @@ impl FreeScene<'_> {
                 } else {
                     self.loads(&fe, &qd, &bp).load
                 };
-                if side == 0 && left_piece(piece, &load, 0..NC, None) {
-                    dy = -dy;
-                    side = 1;
-                    continue;
-                }
-                break (load, bp);
+                (load, bp)
             };
+            let (dy, (load, bp)) = on_piece(step(j), eval, |r| left_piece(piece, &r.0, 0..NC, None), &mut evals);
             let (f1, t1, g1) = sum(&load, 0..NC);
             self.finger_rows(jac, j, &m_inv, &g1, &g0, dy);
             let wdot = if j < Q0 { self.omega_dot(&bp, &i_inv, t1) } else { self.omega_dot(&bp, &self.inertia_inverse(&bp), t1) };
@@ -292,25 +298,18 @@ impl FreeScene<'_> {
             jac[(G0 + r, V0 + r)] = 1.0;
         }
         for j in V0..W0 + 3 {
-            let mut dy = step(j);
-            let mut side = 0;
-            let (load, bp) = loop {
+            let eval = |dy: f64| {
                 let mut bp = b;
                 if j < W0 {
                     bp.v[j - V0] += dy;
                 } else {
                     bp.om[j - W0] += dy;
                 }
-                evals += 1;
                 let mut load = base.load;
                 self.loads_new_velocity(&base, &bp, &mut load);
-                if side == 0 && left_piece(piece, &load, 0..NC, None) {
-                    dy = -dy;
-                    side = 1;
-                    continue;
-                }
-                break (load, bp);
+                (load, bp)
             };
+            let (dy, (load, bp)) = on_piece(step(j), eval, |r| left_piece(piece, &r.0, 0..NC, None), &mut evals);
             let (f1, t1, g1) = sum(&load, 0..NC);
             self.finger_rows(jac, j, &m_inv, &g1, &g0, dy);
             let wdot = self.omega_dot(&bp, &i_inv, t1);
