@@ -25,10 +25,16 @@ $(VENV)/.installed-3:
 
 venv: $(VENV)/.installed-3
 
+# The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
+.PHONY: lint
+lint:
+	$(CARGO) fmt --all --check
+	$(CARGO) clippy --all-targets --locked -- -D warnings
+
 # Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
 # then the independent reader over every MCAP file the tests wrote, then the pandas example of
 # docs/python.md on a run the tests wrote.
-test: $(VENV)/.installed-3
+test: $(VENV)/.installed-3 lint
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check

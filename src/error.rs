@@ -172,9 +172,25 @@ impl Error {
     pub fn is_input(&self) -> bool {
         use std::io::ErrorKind as K;
         match self {
-            Error::ProblemParse { .. } | Error::InvalidField { .. } | Error::Input(_) | Error::RunDir { .. } | Error::Checkpoint { .. } | Error::Locked { .. } | Error::Recording { .. } | Error::DamagedRecording { .. } => true,
+            Error::ProblemParse { .. }
+            | Error::InvalidField { .. }
+            | Error::Input(_)
+            | Error::RunDir { .. }
+            | Error::Checkpoint { .. }
+            | Error::Locked { .. }
+            | Error::Recording { .. }
+            | Error::DamagedRecording { .. } => true,
             Error::Json { .. } => true,
-            Error::Io { source, .. } => matches!(source.kind(), K::NotFound | K::PermissionDenied | K::InvalidInput | K::InvalidData | K::IsADirectory | K::NotADirectory | K::AlreadyExists),
+            Error::Io { source, .. } => matches!(
+                source.kind(),
+                K::NotFound
+                    | K::PermissionDenied
+                    | K::InvalidInput
+                    | K::InvalidData
+                    | K::IsADirectory
+                    | K::NotADirectory
+                    | K::AlreadyExists
+            ),
             _ => false,
         }
     }
@@ -182,7 +198,11 @@ impl Error {
     /// The process exit code this error ends the CLI with (see docs/exit-codes in the README):
     /// 2 for bad input, 1 for a failed run.
     pub fn exit_code(&self) -> i32 {
-        if self.is_input() { 2 } else { 1 }
+        if self.is_input() {
+            2
+        } else {
+            1
+        }
     }
 
     /// A benchmark error with `message` and no source.

@@ -16,15 +16,15 @@
 // The layers, lowest first (docs/architecture.md). Each is a namespace whose own modules
 // are private: what the CLI, tests and benches need is re-exported flat from the layer
 // (`gripopt::sim::Radau5`, `gripopt::model::closed_pose`).
-pub mod params;
-pub mod model;
-pub mod sim;
+pub mod bench;
 pub mod eval;
+pub mod model;
 pub mod optim;
+pub mod params;
 pub mod record;
 pub mod run;
+pub mod sim;
 pub mod sweep;
-pub mod bench;
 
 // Shared below every layer.
 mod error;

@@ -5,6 +5,9 @@
 //! 130 interrupted by ctrl-c after the checkpoint of the current generation (resumable);
 //! 141 the output pipe was closed by its reader (quietly, like a program ended by SIGPIPE).
 
+// Index loops mirror the formulas of MODEL.md, as in the library.
+#![allow(clippy::needless_range_loop)]
+
 mod cli;
 
 /// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
@@ -47,7 +50,12 @@ fn main() {
     // `println!` panics when stdout is a closed pipe (`gripopt … | head -1`): end quietly
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        let text = info.payload().downcast_ref::<String>().map(String::as_str).or_else(|| info.payload().downcast_ref::<&str>().copied()).unwrap_or("");
+        let text = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
         if text.contains("Broken pipe") || text.contains("os error 32") {
             std::process::exit(EXIT_BROKEN_PIPE);
         }

@@ -1,9 +1,9 @@
 //! Stage-1/2 boundary cases (MODEL.md §7, §10, §13 items 1, 2).
 use crate::common::*;
-use gripopt::math::dist_to_singular;
-use gripopt::model::{singularity_sweep, SweepFailure};
-use gripopt::model::Finger;
 use gripopt::eval::{evaluate, EvalOptions, Reason};
+use gripopt::math::dist_to_singular;
+use gripopt::model::Finger;
+use gripopt::model::{singularity_sweep, SweepFailure};
 use gripopt::params::Design;
 
 fn margin_deg(x: &Design) -> Option<f64> {
@@ -63,7 +63,8 @@ fn designs_just_inside_and_outside_the_30_degree_margin() {
     assert!((d.violation - (30.0 - mo)).abs() < 1e-9, "violation {} vs {}", d.violation, 30.0 - mo);
     // independent check of the margin at the open pose, where the nominal family attains it
     let f = Finger::new(&outside, &s).unwrap();
-    let open_margin = [f.open.q12, f.open.q22, f.open.q13].iter().map(|a| dist_to_singular(*a)).fold(f64::INFINITY, f64::min);
+    let open_margin =
+        [f.open.q12, f.open.q22, f.open.q13].iter().map(|a| dist_to_singular(*a)).fold(f64::INFINITY, f64::min);
     assert!(open_margin.to_degrees() >= mo - 1e-9);
 }
 
@@ -128,7 +129,9 @@ fn unmountable_linkage() {
         for p in [1.2, 1.5, 2.0] {
             let x = Design { r, p, ..nominal() };
             if let Some(d) = evaluate(&x, &s, &EvalOptions::statics_only()).discard {
-                if d.stage == 1 && (d.reason.to_string().contains("mountable") || d.reason.to_string().contains("assembly")) {
+                if d.stage == 1
+                    && (d.reason.to_string().contains("mountable") || d.reason.to_string().contains("assembly"))
+                {
                     saw = true;
                     assert_eq!(d.violation, 90.0);
                 }

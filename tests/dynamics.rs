@@ -1,13 +1,13 @@
 //! Grasp dynamics: MODEL.md §11 items 3, 4, 6, 7; free closing vs an independent RK4;
 //! tolerance stability; the hard cases of §13.
 use crate::common::*;
+use gripopt::eval::{stage_kinematics, stage_statics, StaticsResult};
 use gripopt::model::flores_normal;
 use gripopt::model::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};
-use gripopt::eval::{stage_kinematics, stage_statics, StaticsResult};
 use gripopt::params::{Design, SceneParams};
-use gripopt::sim::{FingerOde, State};
 use gripopt::sim::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};
+use gripopt::sim::{FingerOde, State};
 use gripopt::sim::{Radau5, Rhs, Stepper, Tol};
 use nalgebra::Vector2;
 
@@ -199,7 +199,14 @@ fn answer_is_stable_when_the_tolerance_is_tightened() {
         assert!((v / t[3] - 1.0).abs() < 2e-5, "t_stab {t:?}");
     }
     // a stable design too (verdict and t_stab)
-    let x = Design::from_array(&[0.0314812790333402, 0.0592539782261482, 0.04095582920013548, 0.21629169703988735, 1.1573988282886218, 98.90469106036313]);
+    let x = Design::from_array(&[
+        0.0314812790333402,
+        0.0592539782261482,
+        0.04095582920013548,
+        0.21629169703988735,
+        1.1573988282886218,
+        98.90469106036313,
+    ]);
     let rs: Vec<_> = [1e-6, 1e-9].iter().map(|r| sim(&x, &s, *r)).collect();
     assert_eq!(rs[0].outcome, DynOutcome::Stable);
     assert_eq!(rs[1].outcome, DynOutcome::Stable);
@@ -271,7 +278,14 @@ fn clipped_spring_and_spring_rate() {
     // §13 item 10: τ_s^min ≤ 0 (spring clipped) and k_s > 0
     let s = scene();
     // a design (found by a survey of the box) whose actuator alone keeps the distal open
-    let x = Design::from_array(&[0.045775882726483925, 0.0747267161144618, 0.04806484510334899, 0.2726934299477707, 0.5570175903893245, 108.48544848828604]);
+    let x = Design::from_array(&[
+        0.045775882726483925,
+        0.0747267161144618,
+        0.04806484510334899,
+        0.2726934299477707,
+        0.5570175903893245,
+        108.48544848828604,
+    ]);
     let (f, st) = prepare(&x, &s);
     assert!(st.tau_s_min < 0.0 && st.tau_s0 == 0.0, "τ_s^min {}", st.tau_s_min);
     let r = simulate_grasp(&f, &s, &st, &diag(1e-6));
@@ -289,7 +303,14 @@ fn clipped_spring_and_spring_rate() {
 fn creep_ends_cleanly_at_t_max() {
     // §13 item 13: a weakly loaded proximal creeps; no stability by t_max, clean stop
     let s = scene();
-    let x = Design::from_array(&[0.03453158864311287, 0.06309810698376056, 0.05035836915663862, 0.2583106669397255, 0.5490595743201696, 116.93600537588802]);
+    let x = Design::from_array(&[
+        0.03453158864311287,
+        0.06309810698376056,
+        0.05035836915663862,
+        0.2583106669397255,
+        0.5490595743201696,
+        116.93600537588802,
+    ]);
     let r = sim(&x, &s, 1e-6);
     assert_eq!(r.outcome, DynOutcome::NoStability);
     assert!((r.t_end - s.criteria.t_max).abs() < 1e-12);
@@ -347,7 +368,14 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
 fn free_closing_into_the_parallel_singularity_aborts_cleanly() {
     let mut s = scene();
     s.criteria.t_max = 0.05;
-    let x = Design::from_array(&[0.04549204603835802, 0.05890255558786177, 0.0307206768455294, 0.6474382809963541, 0.6134575256373511, 126.19868905695499]);
+    let x = Design::from_array(&[
+        0.04549204603835802,
+        0.05890255558786177,
+        0.0307206768455294,
+        0.6474382809963541,
+        0.6134575256373511,
+        126.19868905695499,
+    ]);
     let (f, st) = prepare(&x, &s);
     for rtol in [1e-6, 1e-9] {
         let o = SimOptions { contacts: false, ..diag(rtol) };
@@ -427,16 +455,23 @@ fn cli_no_contact_and_bad_bench_flags() {
     let bin = env!("CARGO_BIN_EXE_gripopt");
     let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
     let design = "l21=0.04549204603835802,b=0.05890255558786177,t22=0.0307206768455294,r=0.6474382809963541,p=0.6134575256373511,psi_deg=126.19868905695499";
-    let out = std::process::Command::new(bin).args(["simulate", problem, "--design", design, "--no-contact", "--json"]).output().unwrap();
+    let out = std::process::Command::new(bin)
+        .args(["simulate", problem, "--design", design, "--no-contact", "--json"])
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(j["reason"].as_str().unwrap().starts_with("singular"), "{j}");
     assert!(j["t_first_contact"].is_null());
-    let out = std::process::Command::new(bin).args(["bench", "work-precision", problem, "--sample", "0"]).output().unwrap();
+    let out =
+        std::process::Command::new(bin).args(["bench", "work-precision", problem, "--sample", "0"]).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--sample 0"));
     for bad in ["0", "-1e-9", "nan"] {
-        let out = std::process::Command::new(bin).args(["bench", "work-precision", problem, &format!("--atol={bad}")]).output().unwrap();
+        let out = std::process::Command::new(bin)
+            .args(["bench", "work-precision", problem, &format!("--atol={bad}")])
+            .output()
+            .unwrap();
         assert!(!out.status.success(), "--atol {bad} accepted");
         assert!(String::from_utf8_lossy(&out.stderr).contains("--atol"), "{}", String::from_utf8_lossy(&out.stderr));
     }
@@ -518,7 +553,14 @@ fn knuckle_contact_in_a_full_simulation() {
     // two tolerances.
     use gripopt::model::spring_preload;
     let s = scene();
-    let x = Design::from_array(&[0.03392756151429064, 0.07619270279217326, 0.01884084531015458, 0.23214368246908246, 0.33786516909439185, 99.28639227950096]);
+    let x = Design::from_array(&[
+        0.03392756151429064,
+        0.07619270279217326,
+        0.01884084531015458,
+        0.23214368246908246,
+        0.33786516909439185,
+        99.28639227950096,
+    ]);
     let f = stage_kinematics(&x, &s).expect("stage 1").finger;
     assert!(stage_statics(&f, &s).is_err(), "stage 2 discards a knuckle grasp");
     let (_, mut st) = prepare(&nominal(), &s);
@@ -533,7 +575,10 @@ fn knuckle_contact_in_a_full_simulation() {
         let rise = tr.samples.windows(2).map(|w| w[1].energy - w[0].energy).fold(f64::NEG_INFINITY, f64::max);
         assert!(rise <= 1e-6 * scale, "rtol {rtol}: energy rose by {rise:e} J (scale {scale:e})");
         assert!(
-            !matches!(r.outcome, DynOutcome::Aborted | DynOutcome::StepBudget | DynOutcome::StepTooSmall | DynOutcome::DgmFailure),
+            !matches!(
+                r.outcome,
+                DynOutcome::Aborted | DynOutcome::StepBudget | DynOutcome::StepTooSmall | DynOutcome::DgmFailure
+            ),
             "rtol {rtol}: {:?}",
             r.outcome
         );

@@ -1,8 +1,8 @@
 //! D22 (MODEL.md v2 §6.5): α and F̃ follow `[criteria] force_model`; both pairs always reported.
 
 use crate::common::{bottle, close_rel};
-use gripopt::params::{Design, ForceModel, Problem};
 use gripopt::eval::{evaluate, EvalOptions, Record};
+use gripopt::params::{Design, ForceModel, Problem};
 use std::path::Path;
 
 const ALPHA_MU: f64 = 0.630876786547;
@@ -66,7 +66,8 @@ fn force_model_key_is_required_and_checked() {
     let bad = bottle_text().replace("force_model = \"mobilised\"", "force_model = \"coulomb\"");
     let e = Problem::from_toml_str(&bad, Path::new("x.toml")).unwrap_err().to_string();
     assert!(e.contains("criteria.force_model") && e.contains("mobilised"), "{e}");
-    let missing: String = bottle_text().lines().filter(|l| !l.starts_with("force_model")).map(|l| format!("{l}\n")).collect();
+    let missing: String =
+        bottle_text().lines().filter(|l| !l.starts_with("force_model")).map(|l| format!("{l}\n")).collect();
     let e = Problem::from_toml_str(&missing, Path::new("x.toml")).unwrap_err().to_string();
     assert!(e.contains("force_model"), "{e}");
 }

@@ -4,7 +4,9 @@
 
 use crate::common::{bottle, nominal};
 use gripopt::eval::{stage_kinematics, stage_statics};
-use gripopt::sim::{drive, fd_jacobian, free_tolerances, FreeJacobian, FreeScene, FreeSetup, Radau5, Rhs, SimOptions, Stats};
+use gripopt::sim::{
+    drive, fd_jacobian, free_tolerances, FreeJacobian, FreeScene, FreeSetup, Radau5, Rhs, SimOptions, Stats,
+};
 
 /// State layout of the free scene (docs/scenes.md): fingers 0..8, G 8..11, q 11..15,
 /// v_G 15..18, ω 18..21.
@@ -64,7 +66,12 @@ fn free_block_jacobian_equals_dense() {
             for r in 0..21 {
                 let d = (jb[(r, c)] - jd[(r, c)]).abs();
                 let noise = 4.0 * f64::EPSILON * f[r].abs() / dy;
-                assert!(d <= 1e-5 * norm + noise, "t {t_mid}: J({r}, {c}) block {} dense {} (column norm {norm:.3e}, rounding {noise:.2e})", jb[(r, c)], jd[(r, c)]);
+                assert!(
+                    d <= 1e-5 * norm + noise,
+                    "t {t_mid}: J({r}, {c}) block {} dense {} (column norm {norm:.3e}, rounding {noise:.2e})",
+                    jb[(r, c)],
+                    jd[(r, c)]
+                );
                 needs_noise |= d > 1e-5 * norm;
             }
             noisy += needs_noise as usize;
@@ -117,7 +124,11 @@ fn bench_free_rows() {
     let bin = env!("CARGO_BIN_EXE_gripopt");
     let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
     let dir = std::env::temp_dir().join(format!("gripopt-bench-free-{}", std::process::id()));
-    let out = std::process::Command::new(bin).args(["bench", "free", problem, "--rtols", "1e-5", "--reps", "1", "--json", "--out"]).arg(&dir).output().unwrap();
+    let out = std::process::Command::new(bin)
+        .args(["bench", "free", problem, "--rtols", "1e-5", "--reps", "1", "--json", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
     let rows = v["rows"].as_array().unwrap();

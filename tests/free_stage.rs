@@ -13,7 +13,11 @@ use std::path::PathBuf;
 /// bottle-1l.toml with `[scene] kind = "free"` and the given x_off (written under target/).
 fn free_problem(x_off: f64, name: &str) -> (Problem, PathBuf) {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap();
-    let text = text.replacen("kind = \"centred\"", "kind = \"free\"", 1).replacen("x_off = 0.0 ", &format!("x_off = {x_off:e} "), 1);
+    let text = text.replacen("kind = \"centred\"", "kind = \"free\"", 1).replacen(
+        "x_off = 0.0 ",
+        &format!("x_off = {x_off:e} "),
+        1,
+    );
     let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/free-stage-tests"));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.toml"));
@@ -44,7 +48,11 @@ fn nominal_feasible_in_free_kind_discarded_in_centred_kind() {
     // the prediction: the centred grasp in diagnostic mode (impact criterion fails, stable)
     let c = simulate_grasp(&k.finger, s, &st, &o);
     let fc = c.first.unwrap();
-    assert!(fc.impact.e_cyl > fc.impact.e_lim && (fc.impact.e_cyl - 5.83e-3).abs() < 0.01e-3, "E_cyl {}", fc.impact.e_cyl);
+    assert!(
+        fc.impact.e_cyl > fc.impact.e_lim && (fc.impact.e_cyl - 5.83e-3).abs() < 0.01e-3,
+        "E_cyl {}",
+        fc.impact.e_cyl
+    );
     assert_eq!(ev.objectives()[3], c.t_stab.unwrap(), "t_stab is the centred grasp's");
     // the measurement: the free scene, and §14.4's limits
     let f = simulate_free(&k.finger, s, st.tau_s0, 0.0, FreeSetup::default(), &o, None);
@@ -61,7 +69,10 @@ fn nominal_feasible_in_free_kind_discarded_in_centred_kind() {
     assert_eq!(r["e_cyl"].as_f64(), Some(fc.impact.e_cyl));
     assert_eq!(r["feasible"], serde_json::json!(true));
     let rc = serde_json::to_value(Record::from_eval(&centred)).unwrap();
-    assert!(rc.get("object_max_displacement").is_none() && rc.get("moved").is_none(), "no free keys in the centred kind");
+    assert!(
+        rc.get("object_max_displacement").is_none() && rc.get("moved").is_none(),
+        "no free keys in the centred kind"
+    );
 }
 
 /// With the object 4 mm off centre the hand pushes it back toward the centre (the static
@@ -84,14 +95,19 @@ fn offset_object_moves_and_is_discarded() {
     let o = SimOptions { record: true, ..SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps) };
     let f = simulate_free(&k.finger, s, st.tau_s0, x_off, FreeSetup::default(), &o, None);
     assert!(f.moved && f.object_max_displacement > 1.5 * s.criteria.dx_max, "{}", f.object_max_displacement);
-    let v = (f.object_max_displacement / s.criteria.dx_max).max(f.object_max_tilt_deg / s.criteria.theta_max.to_degrees()) - 1.0;
+    let v = (f.object_max_displacement / s.criteria.dx_max)
+        .max(f.object_max_tilt_deg / s.criteria.theta_max.to_degrees())
+        - 1.0;
     assert!((d.violation - v).abs() <= 1e-12 * v, "violation {} vs {v}", d.violation);
     // pushed back toward the centre: G's x moves from x_off toward 0
     let (g0, g1) = (f.poses.first().unwrap().g[0], f.poses.last().unwrap().g[0]);
     assert_eq!(g0, x_off);
     assert!(g1 < x_off - s.criteria.dx_max && g1 > -x_off, "G_x {g0} → {g1}");
     // the prediction (the centred scene) does not depend on x_off
-    assert_eq!(ev.dynamics.unwrap().first, evaluate_full(&free_problem(0.0, "offset4-ref").0, &nominal()).dynamics.unwrap().first);
+    assert_eq!(
+        ev.dynamics.unwrap().first,
+        evaluate_full(&free_problem(0.0, "offset4-ref").0, &nominal()).dynamics.unwrap().first
+    );
 }
 
 /// `optimise` of a free-kind problem with a tiny population runs end to end (recording
@@ -100,7 +116,9 @@ fn offset_object_moves_and_is_discarded() {
 #[test]
 fn optimise_free_kind_end_to_end() {
     let (_, path) = free_problem(0.0, "optimise");
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
     let out = base.join("free-kind-optimise");
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&base).unwrap();

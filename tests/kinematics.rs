@@ -109,7 +109,11 @@ fn point_jacobians_match_differences() {
             for j in 0..2 {
                 let d = d_dq(Vector2::new(p.q11, p.q21), j, |q| point(&f.dgm(q[0], q[1]).unwrap()));
                 let sc = jp.column(j).amax().max(1e-3);
-                assert!((jp.column(j) - d).amax() < 1e-7 * sc, "J_P col {j} distal {distal}: {:?} vs {d:?}", jp.column(j));
+                assert!(
+                    (jp.column(j) - d).amax() < 1e-7 * sc,
+                    "J_P col {j} distal {distal}: {:?} vs {d:?}",
+                    jp.column(j)
+                );
             }
         }
     }

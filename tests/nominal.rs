@@ -1,7 +1,7 @@
 //! MODEL.md §3.4 nominal values (1e-9 relative) and §4 object properties.
 use crate::common::*;
-use gripopt::model::singularity_sweep;
 use gripopt::model::closed_pose;
+use gripopt::model::singularity_sweep;
 use gripopt::model::Finger;
 
 const REL: f64 = 1e-9;

@@ -1,13 +1,15 @@
 //! Optimiser runs: determinism, exact resume (crash, kill -9, extension), refusal of
 //! changed inputs, corrupt checkpoints, and the reference hypervolume bands.
-use gripopt::run::{optimise, resume, RunSpec};
 use gripopt::optim::{run_test, TestProblem};
+use gripopt::run::{optimise, resume, RunSpec};
 use std::path::{Path, PathBuf};
 
 /// Run folders go under target/mcap-check/ so that `make test` checks their recordings
 /// with the independent reader.
 fn tmp(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
     let d = base.join(format!("optimiser-{name}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&base).unwrap();
@@ -95,11 +97,29 @@ fn kill_minus_9_and_resume_via_the_cli() {
     let bin = env!("CARGO_BIN_EXE_gripopt");
     let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
     let (full, cut) = (tmp("cli-full"), tmp("cli-cut"));
-    let args = |out: &Path| vec!["optimise".to_string(), problem.into(), "--out".into(), out.display().to_string(), "--pop".into(), "16".into(), "--generations".into(), "12".into(), "--seed".into(), "3".into()];
+    let args = |out: &Path| {
+        vec![
+            "optimise".to_string(),
+            problem.into(),
+            "--out".into(),
+            out.display().to_string(),
+            "--pop".into(),
+            "16".into(),
+            "--generations".into(),
+            "12".into(),
+            "--seed".into(),
+            "3".into(),
+        ]
+    };
     let st = std::process::Command::new(bin).args(args(&full)).output().unwrap();
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     // start again and kill it once a few generations are checkpointed
-    let mut child = std::process::Command::new(bin).args(args(&cut)).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
+    let mut child = std::process::Command::new(bin)
+        .args(args(&cut))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
     let t0 = std::time::Instant::now();
     loop {
         let g = std::fs::read(cut.join("checkpoint.json"))
@@ -195,24 +215,44 @@ fn work_is_ordered_by_the_learnt_cost_model() {
     type Gens = Arc<Mutex<Vec<(Vec<usize>, usize, Vec<Option<u64>>)>>>;
     struct Obs(Gens);
     impl Observe<Nsga2State<GripperInfo>> for Obs {
-        fn observe_init(&mut self, _: &str, st: &Nsga2State<GripperInfo>, _: &argmin::core::KV) -> Result<(), argmin::core::Error> {
+        fn observe_init(
+            &mut self,
+            _: &str,
+            st: &Nsga2State<GripperInfo>,
+            _: &argmin::core::KV,
+        ) -> Result<(), argmin::core::Error> {
             self.observe_iter(st, &argmin::core::KV::new())
         }
-        fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _: &argmin::core::KV) -> Result<(), argmin::core::Error> {
+        fn observe_iter(
+            &mut self,
+            st: &Nsga2State<GripperInfo>,
+            _: &argmin::core::KV,
+        ) -> Result<(), argmin::core::Error> {
             let work = st.last_evaluated.iter().map(|i| i.eval.info.sim_work.map(|w| w[1])).collect();
             self.0.lock().unwrap().push((st.timing.order.clone(), st.timing.costly, work));
             Ok(())
         }
     }
     let run = |threads: usize| {
-        let problem = gripopt::params::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap();
+        let problem =
+            gripopt::params::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap();
         let gp = GripperProblem::new(problem);
         let (ideal, r) = gp.hv_points();
-        let settings = Nsga2Settings { pop_size: 64, seed: 5, operators: Operators::default(), eliminate_duplicates: true, hv_ideal: ideal, hv_ref: r };
+        let settings = Nsga2Settings {
+            pop_size: 64,
+            seed: 5,
+            operators: Operators::default(),
+            eliminate_duplicates: true,
+            hv_ideal: ideal,
+            hv_ref: r,
+        };
         let gens: Gens = Arc::default();
         let obs = Obs(gens.clone());
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| execute(gp, settings, Nsga2State::new().with_max_generations(8), move |e| observe(e, obs), false)).unwrap();
+        pool.install(|| {
+            execute(gp, settings, Nsga2State::new().with_max_generations(8), move |e| observe(e, obs), false)
+        })
+        .unwrap();
         Arc::try_unwrap(gens).unwrap().into_inner().unwrap()
     };
     let (one, two) = (run(1), run(2));
@@ -227,7 +267,11 @@ fn work_is_ordered_by_the_learnt_cost_model() {
             assert!(work[i].unwrap_or(0) == 0, "generation {}: design {i} was called cheap but simulated", g + 1);
         }
         // generations after the model has rows: rank correlation of position and work
-        let sims: Vec<(usize, f64)> = order[..*costly].iter().enumerate().filter_map(|(pos, &i)| work[i].filter(|&w| w > 0).map(|w| (pos, w as f64))).collect();
+        let sims: Vec<(usize, f64)> = order[..*costly]
+            .iter()
+            .enumerate()
+            .filter_map(|(pos, &i)| work[i].filter(|&w| w > 0).map(|w| (pos, w as f64)))
+            .collect();
         if g >= 3 && sims.len() >= 10 {
             let rank = |v: Vec<f64>| {
                 let mut idx: Vec<usize> = (0..v.len()).collect();

@@ -39,12 +39,14 @@ fn a_failed_checkpoint_is_reported_and_nothing_is_persisted_after_it() {
     assert!(!bad.join("checkpoint.json").exists());
     let run: serde_json::Value = serde_json::from_slice(&std::fs::read(bad.join("run.json")).unwrap()).unwrap();
     assert_eq!(run["status"], "interrupted");
-    let gens: Vec<u64> = gripopt::record::read_index(&bad.join("recording")).unwrap().iter().map(|e| e.generation).collect();
+    let gens: Vec<u64> =
+        gripopt::record::read_index(&bad.join("recording")).unwrap().iter().map(|e| e.generation).collect();
     assert_eq!(gens, vec![1], "the persister stops at its first error");
     // the folder can be given to `optimise` again once the obstacle is gone
     std::fs::remove_dir_all(bad.join(".checkpoint.json.tmp")).unwrap();
     let s = optimise(&spec(&bad, 2, 2)).unwrap();
     assert_eq!(s.generations, 2);
-    let gens: Vec<u64> = gripopt::record::read_index(&bad.join("recording")).unwrap().iter().map(|e| e.generation).collect();
+    let gens: Vec<u64> =
+        gripopt::record::read_index(&bad.join("recording")).unwrap().iter().map(|e| e.generation).collect();
     assert_eq!(gens, vec![1, 2]);
 }

@@ -73,7 +73,10 @@ fn design_assignments() {
     assert!(Design::parse_assignments("l21=0.05,l21=0.04").unwrap_err().to_string().contains("twice"));
     assert!(Design::parse_assignments("x=1").unwrap_err().to_string().contains("unknown"));
     assert!(Design::parse_assignments("l21=abc").unwrap_err().to_string().contains("not a number"));
-    assert!(Design::parse_assignments("l21=nan,b=1,t22=1,r=1,p=1,psi_deg=1").unwrap_err().to_string().contains("finite"));
+    assert!(Design::parse_assignments("l21=nan,b=1,t22=1,r=1,p=1,psi_deg=1")
+        .unwrap_err()
+        .to_string()
+        .contains("finite"));
 }
 
 /// Sets `section.key` of the default file to `value` (a TOML value) and returns the error text.
@@ -131,7 +134,8 @@ fn endless_or_huge_files_are_refused() {
 fn the_documented_limits_are_the_checked_ones() {
     let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/problem-files.md")).unwrap();
     for l in gripopt::params::LIMITS {
-        let name = if l.field.contains('.') { l.field.to_string() } else { format!("nominal.{0}, bounds.{0}", l.field) };
+        let name =
+            if l.field.contains('.') { l.field.to_string() } else { format!("nominal.{0}, bounds.{0}", l.field) };
         let row = format!("| `{name}` | {} | {} |", l.range(), l.unit);
         assert!(doc.contains(&row), "docs/problem-files.md lacks the row {row}");
     }

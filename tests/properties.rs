@@ -8,7 +8,15 @@ fn check_finite(ev: &Evaluation) -> Result<(), String> {
     let bad = |name: &str, v: f64| if v.is_finite() { Ok(()) } else { Err(format!("{name} = {v}")) };
     if let Some(k) = &ev.kin {
         let f = &k.finger;
-        for (n, v) in [("l11", f.l11), ("l12", f.l12), ("l22", f.l22), ("q11_0", f.open.q11), ("q12_0", f.open.q12), ("q13_0", f.open.q13), ("margin", k.sweep.min_margin)] {
+        for (n, v) in [
+            ("l11", f.l11),
+            ("l12", f.l12),
+            ("l22", f.l22),
+            ("q11_0", f.open.q11),
+            ("q12_0", f.open.q12),
+            ("q13_0", f.open.q13),
+            ("margin", k.sweep.min_margin),
+        ] {
             bad(n, v)?;
         }
         for v in f.mass.m.iter().chain(f.mass.i.iter()) {
@@ -16,7 +24,24 @@ fn check_finite(ev: &Evaluation) -> Result<(), String> {
         }
     }
     if let Some(s) = &ev.statics {
-        for v in [s.tau_s0, s.theta[0], s.theta[1], s.k[0], s.k[1], s.f0[0], s.f0[1], s.fmu[0], s.fmu[1], s.hand0[0], s.hand0[1], s.hand_mu[0], s.hand_mu[1], s.max_offset, s.alpha, s.mean_force] {
+        for v in [
+            s.tau_s0,
+            s.theta[0],
+            s.theta[1],
+            s.k[0],
+            s.k[1],
+            s.f0[0],
+            s.f0[1],
+            s.fmu[0],
+            s.fmu[1],
+            s.hand0[0],
+            s.hand0[1],
+            s.hand_mu[0],
+            s.hand_mu[1],
+            s.max_offset,
+            s.alpha,
+            s.mean_force,
+        ] {
             bad("statics", v)?;
         }
     }
@@ -32,7 +57,10 @@ fn check_finite(ev: &Evaluation) -> Result<(), String> {
         bad("f_end", d.f_end[0])?;
         bad("f_end", d.f_end[1])?;
         bad("t_end", d.t_end)?;
-        let early = matches!(d.outcome, DynOutcome::NoEquilibrium | DynOutcome::StaticForceLimit | DynOutcome::InitialPenetration);
+        let early = matches!(
+            d.outcome,
+            DynOutcome::NoEquilibrium | DynOutcome::StaticForceLimit | DynOutcome::InitialPenetration
+        );
         if !early {
             bad("v_star", d.v_star)?;
             bad("fstar", d.fstar[0])?;

@@ -1,14 +1,16 @@
 //! MCAP recording: round trip, replay verification, corrupt files, crash/resume without
 //! duplicates. Runs are written under target/mcap-check/ so that `make test` also checks
 //! every file with the independent Python reader (tools/check_mcap.py).
-use gripopt::run::{optimise, resume, RunSpec};
-use gripopt::record::{read_design, replay};
 use gripopt::record::read_index;
+use gripopt::record::{read_design, replay};
 use gripopt::record::{RecordOptions, Resolution};
+use gripopt::run::{optimise, resume, RunSpec};
 use std::path::{Path, PathBuf};
 
 fn dir(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
     let d = base.join(name);
     let _ = std::fs::remove_dir_all(&d);
     d
@@ -57,7 +59,9 @@ fn every_design_is_recorded_and_replays_verified() {
         }
         // never the optimiser's negative placeholder for max_offset (MODEL.md §6.7)
         match r.record["form_closed"].as_bool() {
-            Some(true) => assert!(r.record["objectives"]["max_offset"].as_f64().is_some_and(|m| m >= 0.0), "design {id}"),
+            Some(true) => {
+                assert!(r.record["objectives"]["max_offset"].as_f64().is_some_and(|m| m >= 0.0), "design {id}")
+            }
             Some(false) => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}: {}", r.record),
             None => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}"),
         }
@@ -71,9 +75,16 @@ fn every_design_is_recorded_and_replays_verified() {
     assert!(with_traj > 0 && feasible > 0 && discarded > 0, "{with_traj} {feasible} {discarded}");
     // replay: a feasible design, a stage-3 discard and an early discard all verify
     let pareto = std::fs::read_to_string(d.join("pareto.csv")).unwrap();
-    let front_id: u64 = pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    let front_id: u64 =
+        pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
     let r = replay(&d, front_id).unwrap();
-    assert!(r.verified && r.max_difference == 0.0 && r.compared > 20, "{} {} {}", r.verified, r.max_difference, r.compared);
+    assert!(
+        r.verified && r.max_difference == 0.0 && r.compared > 20,
+        "{} {} {}",
+        r.verified,
+        r.max_difference,
+        r.compared
+    );
     for id in 0..s.evaluations {
         let rec = read_design(&d, id).unwrap().record;
         if rec["failed_stage"].as_u64().is_some() {
@@ -189,16 +200,30 @@ fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
         }
         with_traj += 1;
         assert!(c.samples.len() < f.samples.len() || f.samples.len() < 10, "design {id}: compact is a subset");
-        let find = |t: f64| c.samples.iter().find(|x| x.t.to_bits() == t.to_bits()).unwrap_or_else(|| panic!("design {id}: sample at t = {t} missing"));
+        let find = |t: f64| {
+            c.samples
+                .iter()
+                .find(|x| x.t.to_bits() == t.to_bits())
+                .unwrap_or_else(|| panic!("design {id}: sample at t = {t} missing"))
+        };
         let same = |a: &gripopt::sim::Sample, b: &gripopt::sim::Sample| {
             let r = |x: f64| x as f32 as f64;
-            b.q == a.q.map(r) && b.normal == a.normal.map(r) && b.delta == a.delta.map(r) && b.hand_fy == r(a.hand_fy) && b.energy == r(a.energy)
+            b.q == a.q.map(r)
+                && b.normal == a.normal.map(r)
+                && b.delta == a.delta.map(r)
+                && b.hand_fy == r(a.hand_fy)
+                && b.energy == r(a.energy)
         };
         let m = f.samples.len();
         for i in 0..m {
             let a = &f.samples[i];
             let onset = i > 0 && (0..2).any(|k| (f.samples[i - 1].delta[k] > 0.0) != (a.delta[k] > 0.0));
-            let peak = i > 0 && i + 1 < m && (0..2).any(|k| a.normal[k].abs() > f.samples[i - 1].normal[k].abs() && a.normal[k].abs() >= f.samples[i + 1].normal[k].abs());
+            let peak = i > 0
+                && i + 1 < m
+                && (0..2).any(|k| {
+                    a.normal[k].abs() > f.samples[i - 1].normal[k].abs()
+                        && a.normal[k].abs() >= f.samples[i + 1].normal[k].abs()
+                });
             if onset || peak || i + 1 == m || i == 0 {
                 assert!(same(a, find(a.t)), "design {id}: sample {i} (t = {}) not kept exactly", a.t);
                 contacts += onset as usize;
@@ -206,16 +231,19 @@ fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
             }
         }
         // no gap in time larger than the regular spacing
-        assert!(c.samples.windows(2).all(|w| w[1].t - w[0].t <= gripopt::record::COMPACT_DT + f.samples.windows(2).map(|w| w[1].t - w[0].t).fold(0.0, f64::max)));
+        assert!(c.samples.windows(2).all(|w| w[1].t - w[0].t
+            <= gripopt::record::COMPACT_DT + f.samples.windows(2).map(|w| w[1].t - w[0].t).fold(0.0, f64::max)));
     }
     assert!(with_traj > 0 && contacts > 0 && peaks > 0, "{with_traj} {contacts} {peaks}");
     // both verify; the full one bitwise at f64, the compact one bitwise at f32
     let pareto = std::fs::read_to_string(full.join("pareto.csv")).unwrap();
-    let id: u64 = pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    let id: u64 =
+        pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
     for d in [&full, &compact] {
         let r = replay(d, id).unwrap();
         assert!(r.verified && r.max_difference == 0.0, "{}: {} {}", d.display(), r.verified, r.max_difference);
-        let layout: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join(gripopt::record::LAYOUT_FILE)).unwrap()).unwrap();
+        let layout: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(gripopt::record::LAYOUT_FILE)).unwrap()).unwrap();
         assert_eq!(layout["configById"]["3D!grasp"]["followTf"], "hand");
         assert_eq!(layout["configById"]["Plot!forces"]["xAxisPath"]["value"], "/grasp/series.t[:]");
         assert_eq!(layout["configById"]["RawMessages!designs"]["topicPath"], "/designs");

@@ -31,7 +31,12 @@ fn replay_in_another_scene() {
     let (id, x) = front[0];
     let (d, ids) = (dir.display().to_string(), id.to_string());
     let problem = dir.join("problem.toml").display().to_string();
-    let design = gripopt::params::DESIGN_NAMES.iter().zip(x.to_array()).map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(",");
+    let design = gripopt::params::DESIGN_NAMES
+        .iter()
+        .zip(x.to_array())
+        .map(|(n, v)| format!("{n}={v}"))
+        .collect::<Vec<_>>()
+        .join(",");
 
     // the run's own scene (centred): verification, unchanged by --scene
     let plain = untimed(json(&run(&["replay", &d, "--design", &ids, "--json"])));

@@ -60,7 +60,11 @@ fn simulate_refuses_flags_it_cannot_honour() {
     // --trace prints the located events of the free scene too (the nominal has 46)
     let o = run(&["simulate", BOTTLE, "--scene", "free", "--trace"]);
     assert!(o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.starts_with("event ")).count() > 10, "{}", text(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.starts_with("event ")).count() > 10,
+        "{}",
+        text(&o)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -89,15 +93,28 @@ fn verify_without_observation_and_with_nothing_to_verify() {
         }
     }
     let t = String::from_utf8_lossy(&o.stdout).to_string();
-    assert!(t.contains(&format!("not observed (the free scene ended before t_obs; left out of the table): {}", rows.len())), "{t}");
+    assert!(
+        t.contains(&format!("not observed (the free scene ended before t_obs; left out of the table): {}", rows.len())),
+        "{t}"
+    );
     assert!(!t.contains("agreement"), "nothing observed, no agreement: {t}");
     assert!(t.contains(&format!("verified {} design{}", rows.len(), if rows.len() == 1 { "" } else { "s" })), "{t}");
     // the recording: no verdict on /verify, but free_end
     let buf = std::fs::read(dir.join("verify.mcap")).unwrap();
-    let recs: Vec<serde_json::Value> = mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()).filter(|m| m.channel.topic == "/verify").map(|m| serde_json::from_slice(&m.data).unwrap()).collect();
+    let recs: Vec<serde_json::Value> = mcap::MessageStream::new(&buf)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == "/verify")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect();
     assert_eq!(recs.len(), rows.len());
     for v in &recs {
-        assert!(v.get("moved").is_none() && v.get("agrees").is_none() && v["free_end"].as_str().is_some_and(|e| e != "t_obs"), "{v}");
+        assert!(
+            v.get("moved").is_none()
+                && v.get("agrees").is_none()
+                && v["free_end"].as_str().is_some_and(|e| e != "t_obs"),
+            "{v}"
+        );
     }
 
     // an empty front: refused, naming pareto.csv, nothing written
@@ -131,16 +148,26 @@ fn replay_minus_zero_is_the_recorded_scene() {
     let d = dir.display().to_string();
     for scene in ["offset:0", "offset:-0", "offset:0e0"] {
         let o = run(&["replay", &d, "--design", &id, "--json", "--scene", scene]);
-        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{scene}: {e}: {}", text(&o)));
+        let j: serde_json::Value =
+            serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{scene}: {e}: {}", text(&o)));
         // the replay of the recording (not a re-simulation in "another" scene with its note)
-        assert!(j.get("note").is_none() && j.get("replay").is_none() && j.get("compared_samples").is_some(), "{scene}: {j}");
+        assert!(
+            j.get("note").is_none() && j.get("replay").is_none() && j.get("compared_samples").is_some(),
+            "{scene}: {j}"
+        );
     }
     // the offset scene records no trajectory: every design verifies by its record's values
     // (stage, reason, violation, objectives, simulation work), exit 0 ...
-    let ids: Vec<String> = pop.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').nth(id_col).unwrap().to_string()).collect();
+    let ids: Vec<String> = pop
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').nth(id_col).unwrap().to_string())
+        .collect();
     for id in &ids {
         let o = run(&["replay", &d, "--design", id, "--json"]);
-        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{id}: {e}: {}", text(&o)));
+        let j: serde_json::Value =
+            serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{id}: {e}: {}", text(&o)));
         assert_eq!((o.status.code(), j["verified"].as_bool()), (Some(0), Some(true)), "design {id}: {j}");
         assert!(j["compared_values"].as_u64().unwrap() >= 3, "design {id}: {j}");
     }

@@ -34,12 +34,22 @@ fn offset_at_zero_equals_centred() {
     let (fc, fd) = (c.first.unwrap(), d.first.unwrap());
     assert_eq!(fc.phalanx, fd.phalanx);
     assert!((fc.t - fd.t).abs() <= 1e-9 * fc.t, "first contact {} vs {}", fc.t, fd.t);
-    assert!((fc.impact.e_cyl - fd.impact.e_cyl).abs() <= 1e-9 * fc.impact.e_cyl, "E_cyl {} vs {}", fc.impact.e_cyl, fd.impact.e_cyl);
+    assert!(
+        (fc.impact.e_cyl - fd.impact.e_cyl).abs() <= 1e-9 * fc.impact.e_cyl,
+        "E_cyl {} vs {}",
+        fc.impact.e_cyl,
+        fd.impact.e_cyl
+    );
     let (tc, td) = (c.t_stab.unwrap(), d.t_stab.unwrap());
     assert!((tc - td).abs() <= 1e-9 * tc.max(1e-2) * 10.0, "t_stab {tc} vs {td}");
     assert!((c.v_star * 2.0 - d.v_star).abs() <= 1e-9 * c.v_star.abs(), "V*");
     // (the minimum force margin is sampled at accepted steps, which differ: 1e-5)
-    assert!((c.min_force_margin - d.min_force_margin).abs() <= 1e-5 * c.r_area, "force margin {} vs {}", c.min_force_margin, d.min_force_margin);
+    assert!(
+        (c.min_force_margin - d.min_force_margin).abs() <= 1e-5 * c.r_area,
+        "force margin {} vs {}",
+        c.min_force_margin,
+        d.min_force_margin
+    );
     assert_eq!(c.outcome, d.outcome);
 }
 
@@ -83,7 +93,11 @@ fn free_sliding_distance() {
     let r = free(&s, setup, &SimOptions::diagnostic(1e-6, 1e-9, 200_000), Some(0.1));
     let expect = 0.1f64.powi(2) / (2.0 * s.env.mu_g * s.env.g);
     assert!((expect - 2.548e-3).abs() < 1e-6);
-    assert!((r.object_final_displacement - expect).abs() < 0.02 * expect, "slid {} expected {expect}", r.object_final_displacement);
+    assert!(
+        (r.object_final_displacement - expect).abs() < 0.02 * expect,
+        "slid {} expected {expect}",
+        r.object_final_displacement
+    );
     assert!(r.object_max_tilt_deg < 0.01, "tilt {}", r.object_max_tilt_deg);
 }
 
@@ -99,7 +113,12 @@ fn free_tipping_force() {
     // the force is a step at t = 0: the stiff ground contacts overshoot and the object
     // rocks (0.16° at most) but does not tip; §14.5's 0.01° holds for a quasi-static load
     let below = free(&s, FreeSetup { push_x: 0.98 * f_tip, ..alone() }, &o, Some(0.6));
-    assert!(below.object_max_tilt_deg < 0.5 && below.object_final_tilt_deg < 0.5, "0.98x: tilt {} / {}", below.object_max_tilt_deg, below.object_final_tilt_deg);
+    assert!(
+        below.object_max_tilt_deg < 0.5 && below.object_final_tilt_deg < 0.5,
+        "0.98x: tilt {} / {}",
+        below.object_max_tilt_deg,
+        below.object_final_tilt_deg
+    );
     let above = free(&s, FreeSetup { push_x: 1.02 * f_tip, ..alone() }, &o, Some(0.6));
     assert!(above.object_final_tilt_deg > 1.0, "1.02x: tilt {}", above.object_final_tilt_deg);
 }
@@ -128,7 +147,15 @@ fn free_heavy_object_limit() {
     let st = stage_statics(&k.finger, &s).unwrap();
     let o = tight();
     let c = simulate_grasp(&k.finger, &s, &st, &o);
-    let r = simulate_free(&k.finger, &s, st.tau_s0, 0.0, FreeSetup::default(), &SimOptions::diagnostic(1e-8, 1e-11, 2_000_000), Some(0.03));
+    let r = simulate_free(
+        &k.finger,
+        &s,
+        st.tau_s0,
+        0.0,
+        FreeSetup::default(),
+        &SimOptions::diagnostic(1e-8, 1e-11, 2_000_000),
+        Some(0.03),
+    );
     let (fc, t) = (c.first.unwrap(), r.first_contact_t.unwrap());
     assert!((fc.t - t).abs() <= 1e-6 * fc.t, "first contact {} vs {t}", fc.t);
     let v = r.first_impact.unwrap().v_impact;

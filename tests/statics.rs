@@ -1,10 +1,12 @@
 //! Statics, spring sizing, symmetry and form closure (MODEL.md §6, §11 items 5, 8, 9, §13.11).
 use crate::common::*;
-use gripopt::model::{admissible, closure_matrix, form_closure_test, grasp_at, max_offset, ClosureMatrix, OffsetFailure};
+use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::model::mass_matrix;
+use gripopt::model::{
+    admissible, closure_matrix, form_closure_test, grasp_at, max_offset, ClosureMatrix, OffsetFailure,
+};
 use gripopt::model::{birglen_residual, closed_pose, finger_forces, spring_preload, tangent_angles, ClosedPoseError};
 use gripopt::model::{Finger, Kin};
-use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::sim::{FingerOde, State};
 use nalgebra::{SMatrix, SVector};
 use rand::{Rng, SeedableRng};
@@ -131,7 +133,7 @@ fn brute_force_closed(m: &ClosureMatrix) -> bool {
     let basis: Vec<SVector<f64, 6>> = idx[2..].iter().map(|&i| vt.row(i).transpose()).collect();
     let nmat = SMatrix::<f64, 6, 4>::from_columns(&[basis[0], basis[1], basis[2], basis[3]]);
     let au = a.fixed_rows::<5>(0).into_owned() * nmat; // 5×4
-    // lineality: a common kernel of all 5 rows means not closed
+                                                       // lineality: a common kernel of all 5 rows means not closed
     let s5 = au.svd(false, false).singular_values;
     if s5.iter().cloned().fold(f64::INFINITY, f64::min) < 1e-10 {
         return false;
@@ -177,7 +179,8 @@ fn kernel_test_agrees_with_brute_force_on_random_matrices() {
         if case % 2 == 0 {
             // make it closable: choose y with positive unilateral part and fix the last
             // unilateral row so that M_cᵀ y = 0
-            let y: Vec<f64> = (0..7).map(|i| if i < 5 { rng.random_range(0.1..1.0) } else { rng.random_range(-1.0..1.0) }).collect();
+            let y: Vec<f64> =
+                (0..7).map(|i| if i < 5 { rng.random_range(0.1..1.0) } else { rng.random_range(-1.0..1.0) }).collect();
             let mut acc = SVector::<f64, 6>::zeros();
             for r in 0..7 {
                 if r != 4 {

@@ -9,7 +9,14 @@ use std::path::PathBuf;
 fn spec(vary: &[&str], stage: Stage) -> SweepSpec {
     let p = bottle();
     let design = p.nominal;
-    SweepSpec { problem: p, design, vary: vary.iter().map(|s| Vary::parse(s).unwrap()).collect(), stage, hold_l_hand: false, psi_rule: false }
+    SweepSpec {
+        problem: p,
+        design,
+        vary: vary.iter().map(|s| Vary::parse(s).unwrap()).collect(),
+        stage,
+        hold_l_hand: false,
+        psi_rule: false,
+    }
 }
 
 fn out_dir(name: &str) -> PathBuf {
@@ -41,7 +48,9 @@ fn tau_sweep_writes_tau_e_cyl_e_lim_static_and_dynamic() {
     let (h, r) = read_csv(&d);
     assert_eq!(r.len(), 11);
     let (it, ie, il) = (col(&h, "tau"), col(&h, "e_cyl"), col(&h, "e_lim"));
-    assert!(h.contains(&"verdict".to_string()) && h.contains(&"t_stab".to_string()) && h.contains(&"alpha".to_string()));
+    assert!(
+        h.contains(&"verdict".to_string()) && h.contains(&"t_stab".to_string()) && h.contains(&"alpha".to_string())
+    );
     // E_lim by hand (MODEL.md §9.1): min(mu_g m_c g dx, m_c g [(L/2)(cos th - 1) + R sin th])
     let m_c = 1000.0 * std::f64::consts::PI * 0.04f64.powi(2) * 0.2;
     let th = 1f64.to_radians();
@@ -133,8 +142,10 @@ fn bisection_finds_a_boundary_the_verdict_flips_across() {
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let s = spec(&["r=0.3:0.7:3", "b=0.05:0.06:2"], Stage::Static);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
-    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
+    let one =
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
+    let two =
+        rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| sweep::run(&s, &|| ()).unwrap());
     assert_eq!(sweep::to_csv(&s, &one), sweep::to_csv(&s, &two));
     // the first name varies fastest
     assert_eq!(one[1].values, vec![0.5, 0.05]);
@@ -181,7 +192,14 @@ fn bad_flags_are_errors_naming_the_flag() {
         vec!["--vary", "tau=0.3:0.4:2", "--bisect", "b"],
         vec!["--vary", "tau=0.3:0.4:2", "--threads", "0"],
     ] {
-        let o = std::process::Command::new(bin).arg("sweep").arg(problem).args(&args).arg("--out").arg(&d).output().unwrap();
+        let o = std::process::Command::new(bin)
+            .arg("sweep")
+            .arg(problem)
+            .args(&args)
+            .arg("--out")
+            .arg(&d)
+            .output()
+            .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(matches!(o.status.code(), Some(1 | 2)), "{args:?}: exit {:?}: {err}", o.status.code());
         assert!(err.contains("--") && !err.contains("panicked"), "{args:?}: {err}");
@@ -195,7 +213,19 @@ fn cli_sweep_writes_csv_and_plots() {
     let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
     let d = out_dir("cli-map");
     let o = std::process::Command::new(bin)
-        .args(["sweep", problem, "--vary", "r=0.3:0.7:3", "--vary", "p=0.3:0.5:2", "--stage", "static", "--color", "max_offset", "--out"])
+        .args([
+            "sweep",
+            problem,
+            "--vary",
+            "r=0.3:0.7:3",
+            "--vary",
+            "p=0.3:0.5:2",
+            "--stage",
+            "static",
+            "--color",
+            "max_offset",
+            "--out",
+        ])
         .arg(&d)
         .output()
         .unwrap();

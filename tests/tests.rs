@@ -1,6 +1,9 @@
 //! The one integration-test binary (one link step in CI instead of nine): one module per
 //! area, sharing the test models and helpers of `common`.
 
+// Index loops mirror the formulas of MODEL.md, as in the library.
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 mod architecture;
@@ -9,18 +12,19 @@ mod dynamics;
 mod force_model;
 mod free_jacobian;
 mod free_stage;
-mod replay_scene;
 mod kinematics;
 mod nominal;
 mod optimiser;
 mod persist;
 mod problem_files;
 mod properties;
-mod scenes;
-mod scene_cli;
 mod recording;
+mod replay_scene;
+mod robustness;
+mod robustness_cli;
+mod scene_cli;
+mod scenes;
 mod statics;
 mod sweep;
 mod verify;
 mod verify_record;
-mod robustness;

@@ -41,7 +41,11 @@ fn verify_matches_simulate_and_threads() {
     let csv1 = std::fs::read_to_string(dir.join("verify.csv")).unwrap();
     let out2 = run(&["verify", &d, "--threads", "2"]);
     assert!(out2.status.success());
-    assert_eq!(csv1, std::fs::read_to_string(dir.join("verify.csv")).unwrap(), "verify.csv depends on the thread count");
+    assert_eq!(
+        csv1,
+        std::fs::read_to_string(dir.join("verify.csv")).unwrap(),
+        "verify.csv depends on the thread count"
+    );
 
     let (ph, prow) = table(&dir.join("pareto.csv"));
     let (vh, vrow) = table(&dir.join("verify.csv"));
@@ -57,7 +61,11 @@ fn verify_matches_simulate_and_threads() {
     let mut counts = [0usize; 4];
     for r in &prow {
         let id = &r[col(&ph, "id")];
-        let design = gripopt::params::DESIGN_NAMES.iter().map(|n| format!("{n}={}", r[col(&ph, n)])).collect::<Vec<_>>().join(",");
+        let design = gripopt::params::DESIGN_NAMES
+            .iter()
+            .map(|n| format!("{n}={}", r[col(&ph, n)]))
+            .collect::<Vec<_>>()
+            .join(",");
         let o = run(&["simulate", &problem, "--scene", "free", "--json", "--design", &design]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -88,7 +96,10 @@ fn verify_matches_simulate_and_threads() {
     // the printed table: two rows of two counts, adding up to the rows
     let text = String::from_utf8_lossy(&out.stdout);
     let nums = |prefix: &str| -> Vec<usize> {
-        let l = text.lines().find(|l| l.trim_start().starts_with(prefix)).unwrap_or_else(|| panic!("no `{prefix}` line in {text}"));
+        let l = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(prefix))
+            .unwrap_or_else(|| panic!("no `{prefix}` line in {text}"));
         l.split_whitespace().filter_map(|w| w.parse().ok()).collect()
     };
     let (a, b) = (nums("predicted moves"), nums("predicted stays"));
@@ -124,7 +135,11 @@ fn verify_all_and_sample() {
     assert_eq!(srow.len(), 6);
     let problem = dir.join("problem.toml").display().to_string();
     for r in &srow {
-        let design = gripopt::params::DESIGN_NAMES.iter().map(|n| format!("{n}={}", r[col(&sh, n)])).collect::<Vec<_>>().join(",");
+        let design = gripopt::params::DESIGN_NAMES
+            .iter()
+            .map(|n| format!("{n}={}", r[col(&sh, n)]))
+            .collect::<Vec<_>>()
+            .join(",");
         let o = run(&["evaluate", &problem, "--static-only", "--json", "--design", &design]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();

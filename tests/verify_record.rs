@@ -19,7 +19,11 @@ fn tiny_run(name: &str) -> PathBuf {
 /// Messages of a file as (topic, log time, bytes), in file order.
 fn messages(path: &Path) -> Vec<(String, u64, Vec<u8>)> {
     let buf = std::fs::read(path).unwrap();
-    mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()).map(|m| (m.channel.topic.clone(), m.log_time, m.data.to_vec())).collect()
+    mcap::MessageStream::new(&buf)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .map(|m| (m.channel.topic.clone(), m.log_time, m.data.to_vec()))
+        .collect()
 }
 
 fn csv_rows(p: &Path) -> (Vec<String>, Vec<Vec<String>>) {
@@ -71,13 +75,20 @@ fn verify_recording_holds_rows_and_object_pose() {
         assert_eq!(v["moved"].as_bool().unwrap(), row[c("moved")] == "true");
         // the object's frame: one hand → object per pose, from G(0) to the end, never further
         // from G(0) horizontally than the measured maximum
-        let tfs: Vec<(u64, FrameTransforms)> = win.iter().filter(|m| m.0 == "/tf").map(|m| (m.1, FrameTransforms::decode(&m.2[..]).unwrap())).collect();
+        let tfs: Vec<(u64, FrameTransforms)> =
+            win.iter().filter(|m| m.0 == "/tf").map(|m| (m.1, FrameTransforms::decode(&m.2[..]).unwrap())).collect();
         assert_eq!(tfs.len() as u64, v["poses"].as_u64().unwrap());
         // drawn at least 2 ms of simulated time apart (the last pose excepted), so at most
         // 0.1 s / 2 ms + 2 poses; the integrator's steps grow beyond 2 ms once settled
         assert!(tfs.len() >= 10 && tfs.len() <= 52, "{} poses", tfs.len());
-        assert!(tfs[..tfs.len() - 1].windows(2).all(|w| w[1].0 - w[0].0 >= 2_000_000), "window {k}: poses closer than 2 ms");
-        assert_eq!((tfs[0].1.transforms[0].parent_frame_id.as_str(), tfs[0].1.transforms[0].child_frame_id.as_str()), ("world", "hand"));
+        assert!(
+            tfs[..tfs.len() - 1].windows(2).all(|w| w[1].0 - w[0].0 >= 2_000_000),
+            "window {k}: poses closer than 2 ms"
+        );
+        assert_eq!(
+            (tfs[0].1.transforms[0].parent_frame_id.as_str(), tfs[0].1.transforms[0].child_frame_id.as_str()),
+            ("world", "hand")
+        );
         assert_eq!(tfs[0].1.transforms[0].translation.unwrap().z, hc, "the hand plane at h_c above the ground");
         let obj = |t: &FrameTransforms| {
             let x = t.transforms.last().unwrap();
@@ -85,22 +96,30 @@ fn verify_recording_holds_rows_and_object_pose() {
             x.translation.unwrap()
         };
         let first = obj(&tfs[0].1);
-        assert!((first.x - g0[0]).abs() < 1e-15 && (first.y - g0[1]).abs() < 1e-15 && (first.z - g0[2]).abs() < 1e-12, "G(0) {first:?} vs {g0:?}");
+        assert!(
+            (first.x - g0[0]).abs() < 1e-15 && (first.y - g0[1]).abs() < 1e-15 && (first.z - g0[2]).abs() < 1e-12,
+            "G(0) {first:?} vs {g0:?}"
+        );
         let dmax = row[c("object_max_displacement")].parse::<f64>().unwrap();
         for (_, t) in &tfs {
             let g = obj(t);
-            assert!((g.x - g0[0]).hypot(g.y - g0[1]) <= dmax * (1.0 + 1e-12), "window {k}: a drawn pose beyond the measured maximum");
+            assert!(
+                (g.x - g0[0]).hypot(g.y - g0[1]) <= dmax * (1.0 + 1e-12),
+                "window {k}: a drawn pose beyond the measured maximum"
+            );
         }
         let t_end = v["t_end"].as_f64().unwrap();
         assert!((t_end - s.setup.t_obs).abs() < 1e-12, "observed to t_obs");
         assert_eq!(tfs.last().unwrap().0, lo + (t_end * 1e9).round() as u64, "the last pose is the final state");
         // the scene: the bottle in the object frame, both fingers at the pose times
-        let st: Vec<SceneUpdate> = win.iter().filter(|m| m.0 == "/scene/static").map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).collect();
+        let st: Vec<SceneUpdate> =
+            win.iter().filter(|m| m.0 == "/scene/static").map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).collect();
         let bottle = st[0].entities.iter().find(|e| e.id == "object").unwrap();
         assert_eq!(bottle.frame_id, "object");
         let size = bottle.cylinders[0].size.unwrap();
         assert_eq!((size.x, size.z), (2.0 * r, lc));
-        let fingers: Vec<(u64, SceneUpdate)> = win.iter().filter(|m| m.0 == "/scene").map(|m| (m.1, SceneUpdate::decode(&m.2[..]).unwrap())).collect();
+        let fingers: Vec<(u64, SceneUpdate)> =
+            win.iter().filter(|m| m.0 == "/scene").map(|m| (m.1, SceneUpdate::decode(&m.2[..]).unwrap())).collect();
         assert_eq!(fingers.len(), tfs.len());
         assert!(fingers.iter().zip(&tfs).all(|(f, t)| f.0 == t.0 && f.1.entities[0].lines.len() == 2));
     }

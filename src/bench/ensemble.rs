@@ -3,10 +3,10 @@
 use super::say;
 use super::work_precision::{check_atol, rel};
 use super::{progress, time_it};
-use crate::{Error, Result};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::params::Problem;
 use crate::sim::{simulate_grasp, Method, SimOptions};
+use crate::{Error, Result};
 use rand::SeedableRng;
 use std::io::Write;
 use std::path::Path;
@@ -26,7 +26,15 @@ fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
 /// median / 90th-percentile relative errors in t_stab and E_cyl against Radau IIA at rtol
 /// 1e-11, and how many verdicts differ. `atol` as in [`super::WorkPrecision`]; `path` is
 /// the problem file, for messages. Writes work_precision_ensemble.csv into `out_dir`.
-pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u64, out_dir: &Path, atol: Option<f64>, out: super::Out) -> Result<serde_json::Value> {
+pub fn work_precision_ensemble(
+    problem: &Problem,
+    path: &Path,
+    n: usize,
+    seed: u64,
+    out_dir: &Path,
+    atol: Option<f64>,
+    out: super::Out,
+) -> Result<serde_json::Value> {
     if n == 0 {
         return Err(Error::Input("--sample 0: must be at least 1".into()));
     }
@@ -34,7 +42,10 @@ pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u
     let p = problem;
     let s = &p.scene;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let diag = |m: Method, rtol: f64| SimOptions { method: m, ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000) };
+    let diag = |m: Method, rtol: f64| SimOptions {
+        method: m,
+        ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000)
+    };
     let tight = SimOptions::diagnostic(1e-11, 1e-14, 5_000_000);
     let mut cases = vec![];
     let mut drawn = 0usize;
@@ -53,7 +64,10 @@ pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u
     }
     pb.finish_and_clear();
     if cases.is_empty() {
-        return Err(Error::bench(format!("{}: no random design of the box passed stage 2 and reached stability in {drawn} draws", path.display())));
+        return Err(Error::bench(format!(
+            "{}: no random design of the box passed stage 2 and reached stability in {drawn} draws",
+            path.display()
+        )));
     }
     say!(out, "ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
@@ -61,7 +75,19 @@ pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u
     let io = |e| Error::io(&csv, "cannot write", e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
     writeln!(w, "method,rtol,designs,cpu_median_s,steps_median,rhs_median,err_t_stab_median,err_t_stab_p90,err_e_cyl_median,err_e_cyl_p90,verdicts_differing").map_err(io)?;
-    say!(out, "{:<8} {:>7} {:>10} {:>7} {:>7} {:>11} {:>11} {:>11} {:>11} verdicts differ", "method", "rtol", "cpu med", "steps", "rhs", "t_stab med", "t_stab p90", "E_cyl med", "E_cyl p90");
+    say!(
+        out,
+        "{:<8} {:>7} {:>10} {:>7} {:>7} {:>11} {:>11} {:>11} {:>11} verdicts differ",
+        "method",
+        "rtol",
+        "cpu med",
+        "steps",
+        "rhs",
+        "t_stab med",
+        "t_stab p90",
+        "E_cyl med",
+        "E_cyl p90"
+    );
     let mut summary = vec![];
     for m in [Method::Radau5, Method::Dopri5, Method::TrBdf2] {
         for rtol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
@@ -81,16 +107,50 @@ pub fn work_precision_ensemble(problem: &Problem, path: &Path, n: usize, seed: u
                 differ += usize::from(r.outcome != reference.outcome);
             }
             let q = quantile;
-            let row = (q(cpu, 0.5), q(steps, 0.5), q(rhs, 0.5), q(ets.clone(), 0.5), q(ets, 0.9), q(ee.clone(), 0.5), q(ee, 0.9));
+            let row = (
+                q(cpu, 0.5),
+                q(steps, 0.5),
+                q(rhs, 0.5),
+                q(ets.clone(), 0.5),
+                q(ets, 0.9),
+                q(ee.clone(), 0.5),
+                q(ee, 0.9),
+            );
             summary.push(serde_json::json!({
                 "method": format!("{m:?}"), "rtol": rtol, "cpu_median_s": row.0, "steps_median": row.1, "rhs_median": row.2,
                 "err_t_stab_median": row.3, "err_t_stab_p90": row.4, "err_e_cyl_median": row.5, "err_e_cyl_p90": row.6, "verdicts_differing": differ,
             }));
-            writeln!(w, "{m:?},{rtol:e},{},{:e},{},{},{:e},{:e},{:e},{:e},{differ}", cases.len(), row.0, row.1, row.2, row.3, row.4, row.5, row.6).map_err(io)?;
-            say!(out, "{:<8} {:>7.0e} {:>8.3}ms {:>7} {:>7} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {differ}", format!("{m:?}"), rtol, row.0 * 1e3, row.1, row.2, row.3, row.4, row.5, row.6);
+            writeln!(
+                w,
+                "{m:?},{rtol:e},{},{:e},{},{},{:e},{:e},{:e},{:e},{differ}",
+                cases.len(),
+                row.0,
+                row.1,
+                row.2,
+                row.3,
+                row.4,
+                row.5,
+                row.6
+            )
+            .map_err(io)?;
+            say!(
+                out,
+                "{:<8} {:>7.0e} {:>8.3}ms {:>7} {:>7} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {differ}",
+                format!("{m:?}"),
+                rtol,
+                row.0 * 1e3,
+                row.1,
+                row.2,
+                row.3,
+                row.4,
+                row.5,
+                row.6
+            );
         }
     }
     w.flush().map_err(io)?;
     say!(out, "wrote {}", csv.display());
-    Ok(serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }))
+    Ok(
+        serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
+    )
 }

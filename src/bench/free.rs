@@ -37,7 +37,13 @@ pub struct FreeBench {
 
 impl Default for FreeBench {
     fn default() -> Self {
-        FreeBench { out_dir: PathBuf::from("results/bench"), reps: 100, atol: None, rtols: FREE_RTOLS.to_vec(), dense: true }
+        FreeBench {
+            out_dir: PathBuf::from("results/bench"),
+            reps: 100,
+            atol: None,
+            rtols: FREE_RTOLS.to_vec(),
+            dense: true,
+        }
     }
 }
 
@@ -107,7 +113,8 @@ fn same_verdict(a: &FreeResult, b: &FreeResult) -> bool {
 /// The design's finger and spring preload (stages 1–2).
 fn finger_of(problem: &Problem, design: &Design) -> Result<(Finger, f64)> {
     let s = &problem.scene;
-    let discarded = |d: crate::eval::Discard| Error::bench(format!("design discarded at stage {}: {}", d.stage, d.reason));
+    let discarded =
+        |d: crate::eval::Discard| Error::bench(format!("design discarded at stage {}: {}", d.stage, d.reason));
     let k = stage_kinematics(design, s).map_err(discarded)?;
     let st = stage_statics(&k.finger, s).map_err(discarded)?;
     Ok((k.finger, st.tau_s0))
@@ -129,7 +136,9 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
     }
     let s = &problem.scene;
     if s.env.g_eq != 0.0 {
-        return Err(Error::Input("bench free: environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into()));
+        return Err(Error::Input(
+            "bench free: environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into(),
+        ));
     }
     let (f, tau_s0) = finger_of(problem, design)?;
     let atol_at = |rtol: f64| b.atol.unwrap_or(rtol * 1e-3);
@@ -141,11 +150,22 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
     }
     let check = run(&f, s, tau_s0, true, &tight);
     let r = &reference;
-    say!(out, "free scene, x_off {} m, to t_obs {} s; atol {}", s.setup.x_off, r.t_end, b.atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol")));
+    say!(
+        out,
+        "free scene, x_off {} m, to t_obs {} s; atol {}",
+        s.setup.x_off,
+        r.t_end,
+        b.atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol"))
+    );
     say!(out, "reference (rtol {FREE_REFERENCE_RTOL:e}, block Jacobian): max displacement {:.9e} m, max tilt {:.9e}°, final {:.9e} m, peak E_trans {:.9e} J, E_rot {:.9e} J, first contact {:.12e} s", r.object_max_displacement, r.object_max_tilt_deg, r.object_final_displacement, r.object_peak_e_trans, r.object_peak_e_rot, r.first_contact_t.unwrap_or(f64::NAN));
     let e = errors(&check, r);
-    say!(out, "           dense Jacobian at the same rtol differs by {:.1e} (largest relative difference of the six outputs)", e.iter().cloned().fold(0.0, f64::max));
-    let jacs: &[(&'static str, bool)] = if b.dense { &[("blocks", false), ("dense", true)] } else { &[("blocks", false)] };
+    say!(
+        out,
+        "           dense Jacobian at the same rtol differs by {:.1e} (largest relative difference of the six outputs)",
+        e.iter().cloned().fold(0.0, f64::max)
+    );
+    let jacs: &[(&'static str, bool)] =
+        if b.dense { &[("blocks", false), ("dense", true)] } else { &[("blocks", false)] };
     let pb = progress((jacs.len() * b.rtols.len()) as u64, "bench free [{bar:30}] {pos}/{len} {msg}");
     let mut rows = vec![];
     for &(label, dense) in jacs {
@@ -223,7 +243,31 @@ fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
     writeln!(w, "jacobian,rtol,cpu_min_s,cpu_median_s,reps,steps,rejected,rhs_evals,jacobians,jac_block_evals,lu,events,err_max_displacement,err_max_tilt,err_final_displacement,err_peak_e_trans,err_peak_e_rot,err_t_first_contact,err_max,same_verdict").map_err(io)?;
     for r in rows {
-        writeln!(w, "{},{:e},{:e},{:e},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}", r.jacobian, r.rtol, r.cpu_min, r.cpu_med, r.reps, r.steps, r.rejected, r.rhs, r.jac, r.jac_block_evals, r.lu, r.events, r.err_max_disp, r.err_max_tilt, r.err_final_disp, r.err_peak_e_trans, r.err_peak_e_rot, r.err_t_first, r.err_max, r.verdict_same).map_err(io)?;
+        writeln!(
+            w,
+            "{},{:e},{:e},{:e},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
+            r.jacobian,
+            r.rtol,
+            r.cpu_min,
+            r.cpu_med,
+            r.reps,
+            r.steps,
+            r.rejected,
+            r.rhs,
+            r.jac,
+            r.jac_block_evals,
+            r.lu,
+            r.events,
+            r.err_max_disp,
+            r.err_max_tilt,
+            r.err_final_disp,
+            r.err_peak_e_trans,
+            r.err_peak_e_rot,
+            r.err_t_first,
+            r.err_max,
+            r.verdict_same
+        )
+        .map_err(io)?;
     }
     w.flush().map_err(io)
 }
@@ -234,7 +278,19 @@ fn plot_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
     let pts: Vec<&FreeRow> = rows.iter().filter(|r| r.err_max.is_finite() && r.err_max > 0.0).collect();
     let series: Vec<(String, Vec<(f64, f64)>)> = ["blocks", "dense"]
         .iter()
-        .map(|&label| (format!("Radau IIA, {label} Jacobian"), pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect()))
+        .map(|&label| {
+            (
+                format!("Radau IIA, {label} Jacobian"),
+                pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect(),
+            )
+        })
         .collect();
-    super::table::work_precision_chart(path, "work-precision: the free scene (nominal design, to t_obs)", "largest relative error of the §14.4 outputs", &series, (1e-9, 1e-2), (1e-3, 1e-2))
+    super::table::work_precision_chart(
+        path,
+        "work-precision: the free scene (nominal design, to t_obs)",
+        "largest relative error of the §14.4 outputs",
+        &series,
+        (1e-9, 1e-2),
+        (1e-3, 1e-2),
+    )
 }

@@ -67,4 +67,3 @@ fn progress(len: u64, template: &'static str) -> indicatif::ProgressBar {
     pb.set_style(indicatif::ProgressStyle::with_template(template).expect("template"));
     pb
 }
-

@@ -1,10 +1,10 @@
 //! `gripopt bench nsga`: non-dominated sorting and the optimiser's own overhead.
 
 use super::{min_med, say, Out};
-use crate::{Error, Result};
 use crate::optim::rank_and_crowding;
 use crate::optim::{reference_settings, TestProblem};
 use crate::optim::{Infeasibility, MooProblem};
+use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 
 /// Non-dominated sort + crowding distance on uniform random sets (2 and 4 objectives, 200 to
@@ -14,7 +14,10 @@ use rand::{Rng, SeedableRng};
 pub fn nsga(reps: usize, out: Out) -> Result<serde_json::Value> {
     let reps = reps.max(3);
     let mut sorts = vec![];
-    say!(out, "non-dominated sort + crowding distance, uniform random points, 1 thread, {reps} repetitions (min / median)");
+    say!(
+        out,
+        "non-dominated sort + crowding distance, uniform random points, 1 thread, {reps} repetitions (min / median)"
+    );
     for m in [2usize, 4] {
         for n in [200usize, 1000, 10000] {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64 + m as u64);
@@ -45,7 +48,10 @@ pub fn nsga(reps: usize, out: Out) -> Result<serde_json::Value> {
     }
     let eval_s = t0.elapsed().as_secs_f64() / k as f64;
     for rep in 0..reps.min(10) {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| Error::bench_from("bench nsga: thread pool", e))?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .map_err(|e| Error::bench_from("bench nsga: thread pool", e))?;
         let t0 = std::time::Instant::now();
         pool.install(|| {
             use argmin::core::State;

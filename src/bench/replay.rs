@@ -1,12 +1,12 @@
 //! `gripopt bench replay`: finding, reading and replaying designs in a large recorded run.
 
-use super::say;
 use super::min_med;
-use crate::{Error, Result};
-use crate::run::{GripperProblem, TrajectoryKeep};
+use super::say;
 use crate::optim::{Individual, MooProblem};
 use crate::params::Problem;
 use crate::record::{write_shard, ShardEntry};
+use crate::run::{GripperProblem, TrajectoryKeep};
+use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 
@@ -36,7 +36,10 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     let per_shard = b.per_shard.max(1);
     if out.exists() {
         // never delete a folder this benchmark did not write (a real run, say)
-        let synthetic = std::fs::read_to_string(out.join("run.json")).ok().and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok()).is_some_and(|v| v["synthetic"] == true);
+        let synthetic = std::fs::read_to_string(out.join("run.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .is_some_and(|v| v["synthetic"] == true);
         let empty = std::fs::read_dir(out).map(|mut d| d.next().is_none()).unwrap_or(false);
         if !synthetic && !empty {
             return Err(Error::RunDir { path: out.to_path_buf(), message: "exists and is not a synthetic run of `gripopt bench replay`: choose another --out (nothing was deleted)".into() });
@@ -49,7 +52,8 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     std::fs::write(&problem_toml, &p.source_text).map_err(|e| Error::io(&problem_toml, "cannot write", e))?;
     let opts = crate::record::RecordOptions { scene_dt: 0.0, ..Default::default() };
     let run_json = out.join("run.json");
-    let text = serde_json::to_string_pretty(&serde_json::json!({ "synthetic": true, "recording": opts })).map_err(json_err(&run_json))?;
+    let text = serde_json::to_string_pretty(&serde_json::json!({ "synthetic": true, "recording": opts }))
+        .map_err(json_err(&run_json))?;
     std::fs::write(&run_json, text).map_err(|e| Error::io(&run_json, "cannot write", e))?;
     // the nominal design's real evaluation and recorded grasp, under every id
     let mut gp = GripperProblem::new(p.clone());
@@ -66,13 +70,22 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     let index_path = rec_dir.join("index.jsonl");
     for k in 0..shards {
         let ids = (k * per_shard)..((k + 1) * per_shard).min(n);
-        let inds: Vec<Individual<_>> = ids.clone().map(|id| Individual { id, generation: k + 1, x: x.clone(), eval: eval.clone() }).collect();
+        let inds: Vec<Individual<_>> =
+            ids.clone().map(|id| Individual { id, generation: k + 1, x: x.clone(), eval: eval.clone() }).collect();
         let refs: Vec<&Individual<_>> = inds.iter().collect();
         let file = format!("gen-{:05}.mcap", k + 1);
         let shard = rec_dir.join(&file);
-        let b = write_shard(&shard, p, &meta, &refs, &opts).map_err(|e| Error::bench_from(format!("bench replay: writing {}", shard.display()), e))?;
+        let b = write_shard(&shard, p, &meta, &refs, &opts)
+            .map_err(|e| Error::bench_from(format!("bench replay: writing {}", shard.display()), e))?;
         bytes += b;
-        let entry = ShardEntry { generation: k + 1, file, first_id: ids.start, last_id: ids.end - 1, designs: ids.end - ids.start, bytes: b };
+        let entry = ShardEntry {
+            generation: k + 1,
+            file,
+            first_id: ids.start,
+            last_id: ids.end - 1,
+            designs: ids.end - ids.start,
+            bytes: b,
+        };
         index.push_str(&serde_json::to_string(&entry).map_err(json_err(&index_path))?);
         index.push('\n');
         pb.inc(1);
@@ -86,13 +99,18 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     for _ in 0..50 {
         let id = rng.random_range(0..n);
         let a = std::time::Instant::now();
-        let r = crate::record::read_design(out, id).map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
+        let r = crate::record::read_design(out, id)
+            .map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
         t_read.push(a.elapsed().as_secs_f64());
         if r.record["id"].as_u64() != Some(id) {
-            return Err(Error::Recording { path: r.file, message: format!("asked for design {id}, wrong design returned") });
+            return Err(Error::Recording {
+                path: r.file,
+                message: format!("asked for design {id}, wrong design returned"),
+            });
         }
         let a = std::time::Instant::now();
-        let rp = crate::record::replay(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
+        let rp = crate::record::replay(out, id)
+            .map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
         t_full.push(a.elapsed().as_secs_f64());
         if !rp.verified {
             return Err(Error::Recording { path: rp.recorded.file, message: format!("design {id} did not verify") });
@@ -100,7 +118,12 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     }
     let (r0, r1) = min_med(t_read);
     let (f0, f1) = min_med(t_full);
-    say!(out_text, "find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)", r0 * 1e3, r1 * 1e3);
+    say!(
+        out_text,
+        "find + read one design (index, MCAP summary, one chunk): {:.2} / {:.2} ms (min / median of 50 random ids)",
+        r0 * 1e3,
+        r1 * 1e3
+    );
     say!(out_text, "replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
     if !b.keep {
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e))?;

@@ -15,7 +15,9 @@ use super::say;
 use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder};
-use crate::run::{Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister, VIEWS_MIN_INTERVAL};
+use crate::run::{
+    Archive, CheckpointSpec, GripperInfo, GripperProblem, OutputsObserver, PersistStats, Persister, VIEWS_MIN_INTERVAL,
+};
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::{State, KV};
@@ -70,13 +72,27 @@ struct Measured {
 struct Timer(Arc<Mutex<Vec<Gen>>>);
 
 impl Observe<Nsga2State<GripperInfo>> for Timer {
-    fn observe_init(&mut self, _n: &str, st: &Nsga2State<GripperInfo>, kv: &KV) -> std::result::Result<(), argmin::core::Error> {
+    fn observe_init(
+        &mut self,
+        _n: &str,
+        st: &Nsga2State<GripperInfo>,
+        kv: &KV,
+    ) -> std::result::Result<(), argmin::core::Error> {
         self.observe_iter(st, kv)
     }
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
         let mut g = self.0.lock().expect("timer");
         let t = &st.timing;
-        g.push(Gen { costs: t.costs.clone(), start_costs: t.start_costs.clone(), order: t.order.clone(), costly: t.costly, eval_s: t.eval_s, serial_s: t.serial_s, hv_s: t.hv_s, order_s: t.order_s });
+        g.push(Gen {
+            costs: t.costs.clone(),
+            start_costs: t.start_costs.clone(),
+            order: t.order.clone(),
+            costly: t.costly,
+            eval_s: t.eval_s,
+            serial_s: t.serial_s,
+            hv_s: t.hv_s,
+            order_s: t.order_s,
+        });
         Ok(())
     }
 }
@@ -90,11 +106,34 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
         gp.keep_trajectories = b.record.trajectories;
     }
     let (ideal, r) = gp.hv_points();
-    let settings = Nsga2Settings { pop_size: b.pop, seed: b.seed, operators: Operators::default(), eliminate_duplicates: true, hv_ideal: ideal, hv_ref: r };
-    let recorder = if b.record.enabled { Some(Arc::new(Mutex::new(Recorder::open(dir, problem.clone(), Default::default(), b.record, 0)?))) } else { None };
-    let spec = CheckpointSpec { path: dir.join("checkpoint.json"), problem_hash: String::new(), settings: settings.clone(), options: serde_json::json!({}), wall_before: 0.0, start };
+    let settings = Nsga2Settings {
+        pop_size: b.pop,
+        seed: b.seed,
+        operators: Operators::default(),
+        eliminate_duplicates: true,
+        hv_ideal: ideal,
+        hv_ref: r,
+    };
+    let recorder = if b.record.enabled {
+        Some(Arc::new(Mutex::new(Recorder::open(dir, problem.clone(), Default::default(), b.record, 0)?)))
+    } else {
+        None
+    };
+    let spec = CheckpointSpec {
+        path: dir.join("checkpoint.json"),
+        problem_hash: String::new(),
+        settings: settings.clone(),
+        options: serde_json::json!({}),
+        wall_before: 0.0,
+        start,
+    };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let outputs = OutputsObserver { out: dir.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: Arc::new(Mutex::new(Archive::default())) };
+    let outputs = OutputsObserver {
+        out: dir.to_path_buf(),
+        force_model: gp.problem.scene.criteria.force_model.as_str(),
+        settings: settings.clone(),
+        archive: Arc::new(Mutex::new(Archive::default())),
+    };
     let persister = Persister::start(Some(outputs), recorder, spec, threads, None)?;
     let timer = Arc::new(Mutex::new(Vec::new()));
     let (p2, t1) = (persister.clone(), Timer(timer.clone()));
@@ -145,9 +184,11 @@ fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
     let ps = &m.persist;
     let archive = ps.archive_s;
     let pool_g = if recording { ps.record_s } else { 0.0 } + ps.checkpoint_pool_s;
-    let persist_g = ((ps.outputs_s - ps.views_s - archive + archive / pool + ps.checkpoint_s) / n).max(pool_g / n / pool);
+    let persist_g =
+        ((ps.outputs_s - ps.views_s - archive + archive / pool + ps.checkpoint_s) / n).max(pool_g / n / pool);
     let handover_g = ps.handover_s / n;
-    let persist_work_g = (if recording { ps.record_s } else { 0.0 } + ps.outputs_s + ps.checkpoint_s + ps.checkpoint_pool_s) / n;
+    let persist_work_g =
+        (if recording { ps.record_s } else { 0.0 } + ps.outputs_s + ps.checkpoint_s + ps.checkpoint_pool_s) / n;
     let (mut main_t, mut prev_start, mut prev_finish) = (0.0f64, 0.0f64, 0.0f64);
     let (mut strag, mut serial, mut work, mut waited) = (0.0, 0.0, 0.0, 0.0);
     // the same generations with every design's cost known in advance (longest first): the
@@ -157,7 +198,8 @@ fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
     for g in &m.gens {
         // the solver's two passes: every design's start (fine-grained, index order), then
         // the rest in the solver's order (its cost model's, the same at any thread count)
-        let finish: Vec<f64> = g.order.iter().map(|&i| g.costs[i] - g.start_costs.get(i).copied().unwrap_or(0.0)).collect();
+        let finish: Vec<f64> =
+            g.order.iter().map(|&i| g.costs[i] - g.start_costs.get(i).copied().unwrap_or(0.0)).collect();
         let sum: f64 = g.costs.iter().sum();
         let ms = makespan(&g.start_costs, p) + makespan(&finish, p);
         // the finish pass in the solver's order, in its classes only (costly then cheap,
@@ -209,7 +251,8 @@ fn predict(m: &Measured, p: usize, recording: bool) -> Prediction {
 /// process) from the costs the prediction schedules.
 fn per_design_min(mut best: Measured, runs: &[Measured]) -> Measured {
     for (gi, g) in best.gens.iter_mut().enumerate() {
-        let same: Vec<&Gen> = runs.iter().filter_map(|r| r.gens.get(gi)).filter(|o| o.costs.len() == g.costs.len()).collect();
+        let same: Vec<&Gen> =
+            runs.iter().filter_map(|r| r.gens.get(gi)).filter(|o| o.costs.len() == g.costs.len()).collect();
         for (k, c) in g.costs.iter_mut().enumerate() {
             *c = same.iter().map(|o| o.costs[k]).fold(*c, f64::min);
         }
@@ -257,7 +300,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     }
     let mut rows = vec![];
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    say!(out, 
+    say!(out,
         "bench scaling: pop {} × {} generations, seed {}, recording {}, {} repetitions (min / median wall s); load average {}",
         b.pop,
         b.generations,
@@ -282,8 +325,14 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         for _ in 0..if b.ceiling && n > 1 { b.reps } else { 0 } {
             let t = Instant::now();
             std::thread::scope(|sc| {
-                let hs: Vec<_> = (0..n).map(|k| sc.spawn(move || run_once(problem, b, 1, &dir.join(format!("t{n}")).join(format!("c{k}"))))).collect();
-                hs.into_iter().map(|h| h.join().map_err(|_| Error::Optimiser("a ceiling run panicked".into()))?.map(|_| ())).collect::<Result<Vec<()>>>()
+                let hs: Vec<_> = (0..n)
+                    .map(|k| {
+                        sc.spawn(move || run_once(problem, b, 1, &dir.join(format!("t{n}")).join(format!("c{k}"))))
+                    })
+                    .collect();
+                hs.into_iter()
+                    .map(|h| h.join().map_err(|_| Error::Optimiser("a ceiling run panicked".into()))?.map(|_| ()))
+                    .collect::<Result<Vec<()>>>()
             })?;
             indep.push(t.elapsed().as_secs_f64());
         }
@@ -300,7 +349,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
         let strag: f64 = r.gens.iter().map(|g| g.eval_s - g.costs.iter().sum::<f64>() / n as f64).sum();
         let serial: f64 = r.gens.iter().map(|g| g.serial_s).sum();
         let p = r.persist;
-        say!(out, 
+        say!(out,
             "{n:>7}  {mn:>6.3} / {md:>6.3}   {:>6.1} %  {} {}  {work:>6.3}  {eval:>6.3}  {strag:>6.3}  {serial:>6.3}  {:>9.3}  {:>8.3}  {:>8.3}  {:>8.3}  {:>6.3}",
             100.0 * t1v / (n as f64 * mn),
             pct(ceil),
@@ -337,18 +386,30 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     for &p in &b.predict {
         let Prediction { t, work, what, lpt, ordering: o } = predict(&m, p, on);
         // how much of the gap between no cost model and every cost known the model closes
-        let closed = if o[1] > o[2] { format!("{:.0} % of that gap closed", 100.0 * (o[1] - o[0]) / (o[1] - o[2])) } else { "no gap to close".to_string() };
+        let closed = if o[1] > o[2] {
+            format!("{:.0} % of that gap closed", 100.0 * (o[1] - o[0]) / (o[1] - o[2]))
+        } else {
+            "no gap to close".to_string()
+        };
         predictions.push(serde_json::json!({ "threads": p, "wall_s": t, "efficiency": work / (p as f64 * t), "limited_by": what, "evaluation_efficiency_longest_first": lpt,
             "finish_pass_s": { "cost_model_order": o[0], "classes_only": o[1], "longest_first": o[2] } }));
         let w = |e: std::io::Error| Error::io("<benchmark report>", "cannot write the report", e);
-        write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t)).map_err(w)?;
-        write!(out, "; the evaluation alone with every cost known in advance (longest first): {:.1} %", 100.0 * lpt).map_err(w)?;
+        write!(out, "  {p:>3} threads: {t:.3} s, efficiency {:.1} %, limited by {what}", 100.0 * work / (p as f64 * t))
+            .map_err(w)?;
+        write!(out, "; the evaluation alone with every cost known in advance (longest first): {:.1} %", 100.0 * lpt)
+            .map_err(w)?;
         if on {
             let q = predict(&m, p, false);
-            write!(out, "; if recording took no time: {:.1} %, limited by {}", 100.0 * q.work / (p as f64 * q.t), q.what).map_err(w)?;
+            write!(
+                out,
+                "; if recording took no time: {:.1} %, limited by {}",
+                100.0 * q.work / (p as f64 * q.t),
+                q.what
+            )
+            .map_err(w)?;
         }
         write!(out, "; simulation pass {:.1} ms in the cost model's order, {:.1} ms without it (costly first), {:.1} ms longest first ({closed})", 1e3 * o[0], 1e3 * o[1], 1e3 * o[2]).map_err(w)?;
-        say!(out, );
+        say!(out,);
     }
     Ok(serde_json::json!({
         "bench": "scaling", "pop": b.pop, "generations": b.generations, "seed": b.seed, "recording": b.record.enabled, "repetitions": b.reps,

@@ -1,9 +1,9 @@
 //! `gripopt bench static`: throughput of the static pipeline (stages 0–2).
 
 use super::{say, Out};
-use crate::Result;
 use crate::eval::{evaluate, EvalOptions};
 use crate::params::{Design, Problem};
+use crate::Result;
 use rand::SeedableRng;
 use std::path::Path;
 
@@ -38,8 +38,19 @@ pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64, out:
     pb.finish_and_clear();
     times.sort_by(f64::total_cmp);
     let (tmin, tmed) = (times[0], times[times.len() / 2]);
-    say!(out, "static pipeline (stages 0-2), {} random designs in the bounds of {}, seed {seed}, 1 thread, 5 repetitions", n, path.display());
-    say!(out, "  designs/s: min-time {:.0}  median-time {:.0}   ({:.2} us/design at min)", n as f64 / tmin, n as f64 / tmed, tmin / n as f64 * 1e6);
+    say!(
+        out,
+        "static pipeline (stages 0-2), {} random designs in the bounds of {}, seed {seed}, 1 thread, 5 repetitions",
+        n,
+        path.display()
+    );
+    say!(
+        out,
+        "  designs/s: min-time {:.0}  median-time {:.0}   ({:.2} us/design at min)",
+        n as f64 / tmin,
+        n as f64 / tmed,
+        tmin / n as f64 * 1e6
+    );
     for (s, c) in counts.iter().enumerate() {
         say!(out, "  discarded at stage {s}: {c} ({:.1} %)", 100.0 * *c as f64 / n as f64);
     }

@@ -1,9 +1,9 @@
 //! The work-precision table as CSV, as a printed table, and as an SVG plot.
 
-use std::io::Write as _;
 use super::say;
 use super::work_precision::Row;
 use crate::{Error, Result};
+use std::io::Write as _;
 use std::path::Path;
 
 /// Writes `rows` as CSV to `path` (its folder created if need be).
@@ -15,16 +15,58 @@ pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
     writeln!(w, "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict").map_err(io)?;
     for r in rows {
-        writeln!(w, "{},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}", r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, r.verdict_same).map_err(io)?;
+        writeln!(
+            w,
+            "{},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}",
+            r.method,
+            r.rtol,
+            r.cpu_min,
+            r.cpu_med,
+            r.steps,
+            r.rhs,
+            r.err_t_first,
+            r.err_e_cyl,
+            r.err_t_stab,
+            r.err_force,
+            r.verdict_same
+        )
+        .map_err(io)?;
     }
     w.flush().map_err(io)
 }
 
 /// Writes `rows` as a table to `out`.
 pub fn print_table(rows: &[Row], out: super::Out) -> Result<()> {
-    say!(out, "{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} verdict", "method", "rtol", "cpu min", "cpu med", "steps", "rhs", "e(t_fc)", "e(E_cyl)", "e(t_stab)", "e(f_stab)");
+    say!(
+        out,
+        "{:<8} {:>7} {:>10} {:>10} {:>7} {:>8} {:>10} {:>10} {:>10} {:>10} verdict",
+        "method",
+        "rtol",
+        "cpu min",
+        "cpu med",
+        "steps",
+        "rhs",
+        "e(t_fc)",
+        "e(E_cyl)",
+        "e(t_stab)",
+        "e(f_stab)"
+    );
     for r in rows {
-        say!(out, "{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}", r.method, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rhs, r.err_t_first, r.err_e_cyl, r.err_t_stab, r.err_force, if r.verdict_same { "same" } else { "DIFFERS" });
+        say!(
+            out,
+            "{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}",
+            r.method,
+            r.rtol,
+            r.cpu_min * 1e3,
+            r.cpu_med * 1e3,
+            r.steps,
+            r.rhs,
+            r.err_t_first,
+            r.err_e_cyl,
+            r.err_t_stab,
+            r.err_force,
+            if r.verdict_same { "same" } else { "DIFFERS" }
+        );
     }
     Ok(())
 }
@@ -39,9 +81,18 @@ fn labels(rows: &[Row]) -> Vec<&'static str> {
 /// Writes to `out`, per method, the cheapest run (median CPU) with t_stab within 1e-5.
 pub fn print_targets(rows: &[Row], out: super::Out) -> Result<()> {
     for m in labels(rows) {
-        let best = rows.iter().filter(|r| r.method == m && r.err_t_stab <= 1e-5).min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
+        let best = rows
+            .iter()
+            .filter(|r| r.method == m && r.err_t_stab <= 1e-5)
+            .min_by(|a, b| a.cpu_med.total_cmp(&b.cpu_med));
         match best {
-            Some(r) => say!(out, "{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)", r.rtol, r.cpu_med * 1e3, r.cpu_min * 1e3),
+            Some(r) => say!(
+                out,
+                "{m}: t_stab within 1e-5 at rtol {:e} in {:.3} ms (min {:.3} ms)",
+                r.rtol,
+                r.cpu_med * 1e3,
+                r.cpu_min * 1e3
+            ),
             None => say!(out, "{m}: no tolerance reached 1e-5 on t_stab"),
         }
     }
@@ -52,20 +103,37 @@ pub fn print_targets(rows: &[Row], out: super::Out) -> Result<()> {
 /// SVG file `path`.
 pub fn plot(rows: &[Row], path: &Path) -> Result<()> {
     let pts: Vec<&Row> = rows.iter().filter(|r| r.err_t_stab.is_finite() && r.err_t_stab > 0.0).collect();
-    let series: Vec<(String, Vec<(f64, f64)>)> =
-        labels(rows).into_iter().map(|m| (m.to_string(), pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect())).collect();
-    work_precision_chart(path, "work-precision: nominal grasp to t_stab", "relative error in t_stab", &series, (1e-14, 1.0), (1e-4, 1e-3))
+    let series: Vec<(String, Vec<(f64, f64)>)> = labels(rows)
+        .into_iter()
+        .map(|m| (m.to_string(), pts.iter().filter(|r| r.method == m).map(|r| (r.err_t_stab, r.cpu_med)).collect()))
+        .collect();
+    work_precision_chart(
+        path,
+        "work-precision: nominal grasp to t_stab",
+        "relative error in t_stab",
+        &series,
+        (1e-14, 1.0),
+        (1e-4, 1e-3),
+    )
 }
 
 /// A log–log work-precision chart (median CPU time against an error) with one line per
 /// `(label, points)` series, to the SVG file `path`; the axes cover at least `x0` and `y0`.
-pub fn work_precision_chart(path: &Path, caption: &str, x_desc: &str, series: &[(String, Vec<(f64, f64)>)], x0: (f64, f64), y0: (f64, f64)) -> Result<()> {
+pub fn work_precision_chart(
+    path: &Path,
+    caption: &str,
+    x_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    x0: (f64, f64),
+    y0: (f64, f64),
+) -> Result<()> {
     use plotters::prelude::*;
     let e = |e| Error::bench_from(format!("plot {}", path.display()), e);
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
     let all = series.iter().flat_map(|(_, p)| p.iter());
-    let (xmin, xmax, ymin, ymax) = all.fold((x0.0, x0.1, y0.0, y0.1), |(a, b, c, d), &(x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)));
+    let (xmin, xmax, ymin, ymax) =
+        all.fold((x0.0, x0.1, y0.0, y0.1), |(a, b, c, d), &(x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)));
     let mut chart = ChartBuilder::on(&root)
         .caption(caption, ("sans-serif", 22))
         .margin(15)

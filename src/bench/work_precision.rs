@@ -2,14 +2,14 @@
 //! against a tight reference run. The reference, the error measures and the table are also
 //! what the diffsol comparison (`benches/diffsol.rs`) uses.
 
-use super::{say, Out};
 use super::table::{plot, print_table, print_targets, write_csv};
 use super::{progress, time_it};
-use crate::{Error, Result};
-use crate::model::Finger;
+use super::{say, Out};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
+use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
 use crate::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use crate::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -172,7 +172,7 @@ impl Reference {
     pub fn print(&self, atol: Option<f64>, out: Out) -> Result<()> {
         let r = &self.run;
         say!(out, "atol: {}", atol.map_or("1e-3·rtol".to_string(), |a| format!("{a:e} at every rtol")));
-        say!(out, 
+        say!(out,
             "reference: Radau IIA rtol 1e-12: t_first {:.12e} s, E_cyl {:.12e} J, t_stab {:.12e} s, f_stab ({:.9}, {:.9}) N",
             r.first.map(|x| x.t).unwrap_or(f64::NAN),
             r.first.map(|x| x.impact.e_cyl).unwrap_or(f64::NAN),
@@ -241,9 +241,14 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     check_atol(wp.atol)?;
     check_rtols(&wp.rtols)?;
     let reference = Reference::new(problem, design)?;
-    let check = simulate_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
+    let check =
+        simulate_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
     reference.print(wp.atol, out)?;
-    say!(out, "           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab", rel(check.t_stab, reference.run.t_stab));
+    say!(
+        out,
+        "           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab",
+        rel(check.t_stab, reference.run.t_stab)
+    );
     let rows = reference.own_rows(wp);
     say!(out, "(diffsol rows: `cargo bench -p gripopt-diffsol-bench --bench diffsol`, as `make bench` does)");
     let csv = wp.out_dir.join("work_precision.csv");
@@ -261,7 +266,14 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     }
     ts.sort_by(f64::total_cmp);
     let ev = evaluate(design, s, &opts);
-    say!(out, "whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}", problem.solver.rtol, ts[0] * 1e3, ts[ts.len() / 2] * 1e3, ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into()));
+    say!(
+        out,
+        "whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        problem.solver.rtol,
+        ts[0] * 1e3,
+        ts[ts.len() / 2] * 1e3,
+        ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into())
+    );
     let svg = wp.out_dir.join("work_precision.svg");
     plot(&rows, &svg)?;
     say!(out, "wrote {} and {}", csv.display(), svg.display());

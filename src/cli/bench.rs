@@ -139,7 +139,13 @@ pub enum BenchCmd {
 
 /// The flags of `bench scaling`, each on its own: the first one out of range is named with
 /// its value and range (exit 2). Thread counts have the limit of `optimise --threads`.
-fn check_scaling_flags(pop: usize, generations: u64, max_threads: Option<usize>, threads: &[usize], reps: usize) -> Result<()> {
+fn check_scaling_flags(
+    pop: usize,
+    generations: u64,
+    max_threads: Option<usize>,
+    threads: &[usize],
+    reps: usize,
+) -> Result<()> {
     let max = super::MAX_THREADS;
     if pop < 4 {
         anyhow::bail!("--pop {pop}: must be at least 4");
@@ -166,22 +172,48 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
     let (mut stdout, mut stderr) = (std::io::stdout().lock(), std::io::stderr().lock());
     let out: gripopt::bench::Out = if json { &mut stderr } else { &mut stdout };
     let summary = match b {
-        BenchCmd::Static { problem, n, seed } => gripopt::bench::static_pipeline(&super::load_problem(&problem)?, &problem, n, seed, out)?,
+        BenchCmd::Static { problem, n, seed } => {
+            gripopt::bench::static_pipeline(&super::load_problem(&problem)?, &problem, n, seed, out)?
+        }
         BenchCmd::Nsga { reps } => gripopt::bench::nsga(reps, out)?,
         BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
         }
-        BenchCmd::Scaling { problem, pop, generations, seed, max_threads, threads, reps, no_record, no_ceiling, out: dir } => {
+        BenchCmd::Scaling {
+            problem,
+            pop,
+            generations,
+            seed,
+            max_threads,
+            threads,
+            reps,
+            no_record,
+            no_ceiling,
+            out: dir,
+        } => {
             check_scaling_flags(pop, generations, max_threads, &threads, reps)?;
             let p = super::load_problem(&problem)?;
             let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-            let record = if no_record { gripopt::record::RecordOptions::none() } else { gripopt::record::RecordOptions::default() };
+            let record = if no_record {
+                gripopt::record::RecordOptions::none()
+            } else {
+                gripopt::record::RecordOptions::default()
+            };
             let mut threads = if threads.is_empty() { (1..=max_threads.unwrap_or(cores)).collect() } else { threads };
             threads.push(1);
             threads.sort_unstable();
             threads.dedup();
-            let b = ScalingBench { pop, generations, seed, threads, reps, record, predict: vec![2, 16, 64], ceiling: !no_ceiling };
+            let b = ScalingBench {
+                pop,
+                generations,
+                seed,
+                threads,
+                reps,
+                record,
+                predict: vec![2, 16, 64],
+                ceiling: !no_ceiling,
+            };
             gripopt::bench::scaling(&p, &b, &dir, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),

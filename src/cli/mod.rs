@@ -241,7 +241,11 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
     for k in 0..6 {
         let (lo, hi) = (p.bounds.lo[k], p.bounds.hi[k]);
         if !(a[k] >= lo && a[k] <= hi) {
-            eprintln!("warning: {} = {} is outside the problem's bounds [{lo}, {hi}]; evaluating it anyway", gripopt::params::DESIGN_NAMES[k], a[k]);
+            eprintln!(
+                "warning: {} = {} is outside the problem's bounds [{lo}, {hi}]; evaluating it anyway",
+                gripopt::params::DESIGN_NAMES[k],
+                a[k]
+            );
         }
     }
     Ok(x)
@@ -270,7 +274,10 @@ fn check_threads(t: Option<usize>) -> Result<()> {
 /// A free-kind problem needs the hand horizontal (MODEL.md §14.1): g_eq = 0.
 fn check_free_scene(p: &gripopt::params::Problem) -> Result<()> {
     if p.scene.setup.kind == gripopt::params::SceneKind::Free && p.scene.env.g_eq != 0.0 {
-        anyhow::bail!("[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
+        anyhow::bail!(
+            "[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}",
+            p.scene.env.g_eq
+        );
     }
     Ok(())
 }
@@ -292,10 +299,35 @@ pub fn run() -> Result<i32> {
             }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
-            let o = scenes::SimulateOpts { rtol, method: method.to_method(), contacts: !no_contact, trace, json, csv: csv.as_deref(), plot: plot.as_deref(), extra: Default::default() };
-            scenes::simulate_in_scene(&p, &x, &o).with_context(|| format!("simulating {}", problem.display())).map(|_| 0)
+            let o = scenes::SimulateOpts {
+                rtol,
+                method: method.to_method(),
+                contacts: !no_contact,
+                trace,
+                json,
+                csv: csv.as_deref(),
+                plot: plot.as_deref(),
+                extra: Default::default(),
+            };
+            scenes::simulate_in_scene(&p, &x, &o)
+                .with_context(|| format!("simulating {}", problem.display()))
+                .map(|_| 0)
         }
-        Cmd::Optimise { problem, out, pop, generations, seed, threads, record, record_every, scene_ms, zstd_level, zstd_threads, record_full, json } => {
+        Cmd::Optimise {
+            problem,
+            out,
+            pop,
+            generations,
+            seed,
+            threads,
+            record,
+            record_every,
+            scene_ms,
+            zstd_level,
+            zstd_threads,
+            record_full,
+            json,
+        } => {
             check_threads(threads)?;
             if let Ok(p) = gripopt::params::Problem::load(&problem) {
                 check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
@@ -319,14 +351,39 @@ pub fn run() -> Result<i32> {
                 RecordArg::Designs => (true, TrajectoryKeep::None),
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
-            let rec = gripopt::record::RecordOptions { enabled, trajectories, every: record_every, scene_dt: scene_ms * 1e-3, zstd_level, zstd_threads, resolution: if record_full { gripopt::record::Resolution::Full } else { gripopt::record::Resolution::Compact }, epoch_s: 0 };
-            let spec = gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, progress: true, crash_after: None, record: rec };
+            let rec = gripopt::record::RecordOptions {
+                enabled,
+                trajectories,
+                every: record_every,
+                scene_dt: scene_ms * 1e-3,
+                zstd_level,
+                zstd_threads,
+                resolution: if record_full {
+                    gripopt::record::Resolution::Full
+                } else {
+                    gripopt::record::Resolution::Compact
+                },
+                epoch_s: 0,
+            };
+            let spec = gripopt::run::RunSpec {
+                problem_path: problem,
+                out,
+                pop,
+                generations,
+                seed,
+                threads,
+                progress: true,
+                crash_after: None,
+                record: rec,
+            };
             let s = gripopt::run::optimise(&spec)?;
             optcmd::summary(&s, json)
         }
         Cmd::Replay { run_dir, design, json, csv, plot, scene } => {
             if let Some(sc) = &scene {
-                if let Some(code) = scenes::replay_in_scene(&run_dir, design, sc, json, csv.as_deref(), plot.as_deref())? {
+                if let Some(code) =
+                    scenes::replay_in_scene(&run_dir, design, sc, json, csv.as_deref(), plot.as_deref())?
+                {
                     return Ok(code);
                 }
             }

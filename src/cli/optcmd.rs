@@ -4,11 +4,23 @@ use anyhow::{bail, Context, Result};
 use gripopt::optim::{run_test, TestProblem};
 
 /// `gripopt moo-test NAME --seed S | --seeds A-B [--json]`.
-pub fn moo_test(name: &str, seed: Option<u64>, seeds: Option<String>, json: bool, pop: usize, generations: Option<u64>) -> Result<()> {
+pub fn moo_test(
+    name: &str,
+    seed: Option<u64>,
+    seeds: Option<String>,
+    json: bool,
+    pop: usize,
+    generations: Option<u64>,
+) -> Result<()> {
     let probs: Vec<TestProblem> = if name.eq_ignore_ascii_case("all") {
         TestProblem::ALL.to_vec()
     } else {
-        vec![TestProblem::parse(name).with_context(|| format!("unknown test problem `{name}` (expected one of {} or all)", TestProblem::ALL.map(|p| p.name()).join(", ")))?]
+        vec![TestProblem::parse(name).with_context(|| {
+            format!(
+                "unknown test problem `{name}` (expected one of {} or all)",
+                TestProblem::ALL.map(|p| p.name()).join(", ")
+            )
+        })?]
     };
     let seed_list: Vec<u64> = match (seed, seeds) {
         (Some(s), None) => vec![s],
@@ -83,7 +95,10 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
         return Ok(code);
     }
     if s.interrupted {
-        println!("interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`", s.generations, s.evaluations);
+        println!(
+            "interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`",
+            s.generations, s.evaluations
+        );
     } else {
         println!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
     }
@@ -94,7 +109,13 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
 /// `gripopt replay`.
 /// Exit code 3 when the recording is not verified, which includes a design with no recorded
 /// trajectory (nothing was compared).
-pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path::Path>, plot: Option<&std::path::Path>) -> Result<i32> {
+pub fn replay(
+    dir: &std::path::Path,
+    id: u64,
+    json: bool,
+    csv: Option<&std::path::Path>,
+    plot: Option<&std::path::Path>,
+) -> Result<i32> {
     use std::io::Write;
     let t0 = std::time::Instant::now();
     let r = gripopt::record::replay(dir, id)?;
@@ -105,10 +126,31 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     let verified = r.verified && (r.compared > 0 || r.values_compared > 0);
     let code = if verified { 0 } else { 3 };
     if let Some(path) = csv {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?);
+        let mut w = std::io::BufWriter::new(
+            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+        );
         writeln!(w, "t,q11,q21,q11_dot,q21_dot,theta2,delta_1,delta_2,fn_1,fn_2,ft_1,ft_2,hand_fy,filtered_fy,energy,energy_excess")?;
         for s in samples {
-            writeln!(w, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.t, s.q[0], s.q[1], s.qd[0], s.qd[1], s.theta2, s.delta[0], s.delta[1], s.normal[0], s.normal[1], s.friction[0], s.friction[1], s.hand_fy, s.filtered_fy, s.energy, s.energy_excess)?;
+            writeln!(
+                w,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                s.t,
+                s.q[0],
+                s.q[1],
+                s.qd[0],
+                s.qd[1],
+                s.theta2,
+                s.delta[0],
+                s.delta[1],
+                s.normal[0],
+                s.normal[1],
+                s.friction[0],
+                s.friction[1],
+                s.hand_fy,
+                s.filtered_fy,
+                s.energy,
+                s.energy_excess
+            )?;
         }
         w.flush()?;
     }
@@ -119,7 +161,8 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
         let mut v = r.recorded.record.clone();
         v["verified"] = serde_json::json!(verified);
         v["verdict_agrees"] = serde_json::json!(r.recomputed_feasible == v["feasible"].as_bool().unwrap_or(false));
-        v["max_difference"] = serde_json::json!(if r.max_difference.is_finite() { Some(r.max_difference) } else { None });
+        v["max_difference"] =
+            serde_json::json!(if r.max_difference.is_finite() { Some(r.max_difference) } else { None });
         v["compared_samples"] = serde_json::json!(r.compared);
         v["compared_values"] = serde_json::json!(r.values_compared);
         v["file"] = serde_json::json!(r.recorded.file.display().to_string());
@@ -132,19 +175,34 @@ pub fn replay(dir: &std::path::Path, id: u64, json: bool, csv: Option<&std::path
     println!("  parameters {}", rec["parameters"]);
     println!("  derived    {}", rec["derived"]);
     match rec["failed_stage"].as_u64() {
-        Some(s) => println!("  DISCARDED at stage {s}: {} (violation {})", rec["reason"].as_str().unwrap_or(""), rec["violation"]),
+        Some(s) => println!(
+            "  DISCARDED at stage {s}: {} (violation {})",
+            rec["reason"].as_str().unwrap_or(""),
+            rec["violation"]
+        ),
         None => println!("  feasible; objectives {}", rec["objectives"]),
     }
-    println!("  trajectory: {} samples{}", samples.len(), samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default());
+    println!(
+        "  trajectory: {} samples{}",
+        samples.len(),
+        samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default()
+    );
     if r.compared == 0 && verified {
         println!("  verified (no trajectory recorded for this design): the re-evaluation reproduces the record's stage, reason, violation, objectives and simulation work ({} values)", r.values_compared);
     } else if r.compared == 0 {
         println!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);
     } else if verified {
-        let precision = if r.recorded.resolution == gripopt::record::Resolution::Full { "every sample, f64" } else { "compact subset, to the recorded f32 precision" };
+        let precision = if r.recorded.resolution == gripopt::record::Resolution::Full {
+            "every sample, f64"
+        } else {
+            "compact subset, to the recorded f32 precision"
+        };
         println!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
     } else {
-        println!("  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})", r.max_difference, r.compared, r.recomputed_feasible);
+        println!(
+            "  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})",
+            r.max_difference, r.compared, r.recomputed_feasible
+        );
     }
     println!("  ({:.1} ms)", secs * 1e3);
     Ok(code)

@@ -60,11 +60,16 @@ pub struct SimulateOpts<'a> {
 /// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
 pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
     if p.scene.setup.kind == SceneKind::Centred {
-        return crate::cli::report::simulate(p, x, o.rtol, o.method, o.contacts, o.trace, o.json, o.csv, o.plot, &o.extra);
+        return crate::cli::report::simulate(
+            p, x, o.rtol, o.method, o.contacts, o.trace, o.json, o.csv, o.plot, &o.extra,
+        );
     }
     let kind = p.scene.setup.kind;
     if o.plot.is_some() {
-        bail!("--plot: only the centred scene is plotted so far{}", if kind == SceneKind::Free { " (use --csv for the free scene)" } else { "" });
+        bail!(
+            "--plot: only the centred scene is plotted so far{}",
+            if kind == SceneKind::Free { " (use --csv for the free scene)" } else { "" }
+        );
     }
     if !o.contacts {
         bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
@@ -116,9 +121,27 @@ fn simulate(p: &Problem, x: &Design, so: &SimulateOpts<'_>) -> Result<()> {
             let ms = |t: Option<f64>| t.map_or("—".to_string(), |t| format!("{:.4} ms", t * 1e3));
             println!("problem {}  scene offset  x_off {x_off} m", p.name);
             println!("  outcome {}", d.outcome);
-            println!("  first contact {} on phalanx {}  E_cyl {} mJ (limit {} mJ)", ms(d.first.map(|f| f.t)), d.first.map_or("—".into(), |f| f.phalanx.to_string()), d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_cyl * 1e3)), d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_lim * 1e3)));
-            println!("  t_stab {}  force margin min {:.4} N (static {:.4} N)", ms(d.t_stab), d.min_force_margin, d.static_force_margin);
-            println!("  hand force at the end ({:.4}, {:.4}) N (static ({:.4}, {:.4}) N); recentres {}", r.hand_end[0], r.hand_end[1], r.hand0[0], r.hand0[1], if r.hand_end[0] * x_off < 0.0 { "yes" } else { "no" });
+            println!(
+                "  first contact {} on phalanx {}  E_cyl {} mJ (limit {} mJ)",
+                ms(d.first.map(|f| f.t)),
+                d.first.map_or("—".into(), |f| f.phalanx.to_string()),
+                d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_cyl * 1e3)),
+                d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_lim * 1e3))
+            );
+            println!(
+                "  t_stab {}  force margin min {:.4} N (static {:.4} N)",
+                ms(d.t_stab),
+                d.min_force_margin,
+                d.static_force_margin
+            );
+            println!(
+                "  hand force at the end ({:.4}, {:.4}) N (static ({:.4}, {:.4}) N); recentres {}",
+                r.hand_end[0],
+                r.hand_end[1],
+                r.hand0[0],
+                r.hand0[1],
+                if r.hand_end[0] * x_off < 0.0 { "yes" } else { "no" }
+            );
             println!("  t_end {:.4} ms  steps {} cpu {:.2} ms", d.t_end * 1e3, d.stats.steps, d.cpu_s * 1e3);
         }
         return Ok(());
@@ -127,10 +150,29 @@ fn simulate(p: &Problem, x: &Design, so: &SimulateOpts<'_>) -> Result<()> {
     let rec_o = SimOptions { record: csv.is_some(), ..o };
     let r = simulate_free(&k.finger, s, st.tau_s0, x_off, FreeSetup::default(), &rec_o, None);
     if let Some(path) = csv {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?);
+        let mut w = std::io::BufWriter::new(
+            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+        );
         writeln!(w, "t,gx,gy,gz,qw,qx,qy,qz,tilt_deg,q11_1,q21_1,q11_2,q21_2,energy")?;
         for p in &r.poses {
-            writeln!(w, "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}", p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), p.fingers[0], p.fingers[1], p.fingers[2], p.fingers[3], p.energy)?;
+            writeln!(
+                w,
+                "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                p.t,
+                p.g[0],
+                p.g[1],
+                p.g[2],
+                p.q[0],
+                p.q[1],
+                p.q[2],
+                p.q[3],
+                p.tilt.to_degrees(),
+                p.fingers[0],
+                p.fingers[1],
+                p.fingers[2],
+                p.fingers[3],
+                p.energy
+            )?;
         }
         w.flush()?;
     }
@@ -154,19 +196,39 @@ fn simulate(p: &Problem, x: &Design, so: &SimulateOpts<'_>) -> Result<()> {
     m.insert("t_first_contact".into(), serde_json::json!(fc.map(|f| f.t)));
     m.insert("min_force_margin".into(), serde_json::json!(centred.min_force_margin));
     m.insert("static_force_margin".into(), serde_json::json!(centred.static_force_margin));
-    m.insert("force_ok".into(), serde_json::json!(centred.t_force_violation.is_none() && centred.static_force_margin >= 0.0));
+    m.insert(
+        "force_ok".into(),
+        serde_json::json!(centred.t_force_violation.is_none() && centred.static_force_margin >= 0.0),
+    );
     m.insert("t_stab".into(), serde_json::json!(centred.t_stab));
     m.extend(extra.clone());
     if json {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!("problem {}  scene free  x_off {x_off} m", p.name);
-        println!("  object: max displacement {:.3e} m (dx {:.3e}, dy {:.3e})  max tilt {:.4}°  final {:.3e} m / {:.4}°", r.object_max_displacement, r.object_max_dx, r.object_max_dy, r.object_max_tilt_deg, r.object_final_displacement, r.object_final_tilt_deg);
-        println!("  peak E_trans {:.4e} J  E_rot {:.4e} J during the first contact", r.object_peak_e_trans, r.object_peak_e_rot);
+        println!(
+            "  object: max displacement {:.3e} m (dx {:.3e}, dy {:.3e})  max tilt {:.4}°  final {:.3e} m / {:.4}°",
+            r.object_max_displacement,
+            r.object_max_dx,
+            r.object_max_dy,
+            r.object_max_tilt_deg,
+            r.object_final_displacement,
+            r.object_final_tilt_deg
+        );
+        println!(
+            "  peak E_trans {:.4e} J  E_rot {:.4e} J during the first contact",
+            r.object_peak_e_trans, r.object_peak_e_rot
+        );
         if let Some(why) = fr.free_end.filter(|e| *e != "t_obs") {
             println!("  ended early at t {:.4} ms: {why} (nothing observed: no verdict)", r.t_end * 1e3);
         }
-        println!("  moved {}  toppled {}  escaped {}  rim_contact {}", flag(fr.moved), flag(fr.toppled), flag(fr.escaped), flag(Some(r.rim_contact)));
+        println!(
+            "  moved {}  toppled {}  escaped {}  rim_contact {}",
+            flag(fr.moved),
+            flag(fr.toppled),
+            flag(fr.escaped),
+            flag(Some(r.rim_contact))
+        );
         let impact = match centred.impact_ok {
             Some(true) => "holds",
             Some(false) => "fails",
@@ -191,7 +253,14 @@ fn scene_name(p: &Problem) -> String {
 /// replays and verifies as usual. Otherwise it re-simulates the recorded design in S with
 /// the run's problem and reports it like `simulate --scene S` (text, `--json`, `--csv`),
 /// saying that a different scene cannot be verified against the recording; `Some(0)`.
-pub fn replay_in_scene(dir: &Path, id: u64, scene: &str, json: bool, csv: Option<&Path>, plot: Option<&Path>) -> Result<Option<i32>> {
+pub fn replay_in_scene(
+    dir: &Path,
+    id: u64,
+    scene: &str,
+    json: bool,
+    csv: Option<&Path>,
+    plot: Option<&Path>,
+) -> Result<Option<i32>> {
     let run_problem = Problem::load(dir.join("problem.toml"))?;
     let mut p = run_problem.clone();
     apply_scene(&mut p, scene)?;
@@ -214,7 +283,17 @@ pub fn replay_in_scene(dir: &Path, id: u64, scene: &str, json: bool, csv: Option
     if !json {
         println!("{note}");
     }
-    let o = SimulateOpts { rtol: None, method: gripopt::sim::Method::Radau5, contacts: true, trace: false, json, csv, plot, extra };
-    simulate_in_scene(&p, &x, &o).with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;
+    let o = SimulateOpts {
+        rtol: None,
+        method: gripopt::sim::Method::Radau5,
+        contacts: true,
+        trace: false,
+        json,
+        csv,
+        plot,
+        extra,
+    };
+    simulate_in_scene(&p, &x, &o)
+        .with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;
     Ok(Some(0))
 }

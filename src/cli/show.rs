@@ -34,13 +34,26 @@ pub struct ShowArgs {
 /// break, with every row as long as the header) is an error naming the file (and line):
 /// exit 2, the run folder is bad input.
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
-    let text = std::fs::read_to_string(path).map_err(|e| gripopt::Error::io(path, "cannot read (is this a run folder with a completed generation?)", e))?;
-    let bad = |line: usize, what: String| gripopt::Error::RunDir { path: path.to_path_buf(), message: format!("line {line}: {what}; the file is damaged or truncated (gripopt rewrites it whole every generation)") };
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
-    let Some((_, head)) = lines.next() else { return Err(gripopt::Error::RunDir { path: path.to_path_buf(), message: "empty: no header line".into() }.into()) };
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| gripopt::Error::io(path, "cannot read (is this a run folder with a completed generation?)", e))?;
+    let bad = |line: usize, what: String| gripopt::Error::RunDir {
+        path: path.to_path_buf(),
+        message: format!(
+            "line {line}: {what}; the file is damaged or truncated (gripopt rewrites it whole every generation)"
+        ),
+    };
+    let mut lines =
+        text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
+    let Some((_, head)) = lines.next() else {
+        return Err(gripopt::Error::RunDir { path: path.to_path_buf(), message: "empty: no header line".into() }.into());
+    };
     let head: Vec<String> = head.split(',').map(String::from).collect();
     if head.first().map(String::as_str) != Some("id") {
-        return Err(gripopt::Error::RunDir { path: path.to_path_buf(), message: format!("header `{}` does not start with `id`: not a gripopt design CSV", head.join(",")) }.into());
+        return Err(gripopt::Error::RunDir {
+            path: path.to_path_buf(),
+            message: format!("header `{}` does not start with `id`: not a gripopt design CSV", head.join(",")),
+        }
+        .into());
     }
     let mut rows = vec![];
     for (n, l) in lines {
@@ -60,10 +73,19 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
 /// or without those fields is an error naming the file (exit 2).
 fn read_run_json(dir: &Path) -> Result<serde_json::Value> {
     let p = dir.join("run.json");
-    let text = std::fs::read_to_string(&p).map_err(|e| gripopt::Error::io(&p, "cannot read (is this a run folder?)", e))?;
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|source| gripopt::Error::Json { path: p.clone(), what: "invalid run.json", source })?;
+    let text =
+        std::fs::read_to_string(&p).map_err(|e| gripopt::Error::io(&p, "cannot read (is this a run folder?)", e))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|source| gripopt::Error::Json {
+        path: p.clone(),
+        what: "invalid run.json",
+        source,
+    })?;
     if !v["status"].is_string() || !v["completed_generations"].is_u64() {
-        return Err(gripopt::Error::RunDir { path: p, message: "no `status` text or `completed_generations` count: the file is damaged".into() }.into());
+        return Err(gripopt::Error::RunDir {
+            path: p,
+            message: "no `status` text or `completed_generations` count: the file is damaged".into(),
+        }
+        .into());
     }
     Ok(v)
 }
@@ -112,7 +134,13 @@ pub fn run(a: ShowArgs) -> Result<()> {
                 break;
             }
         }
-        let Some((h, row, f)) = found else { bail!("--design {id}: not in pareto.csv, archive.csv or population.csv of {} (older designs: `{}`)", dir.display(), replay(&id.to_string())) };
+        let Some((h, row, f)) = found else {
+            bail!(
+                "--design {id}: not in pareto.csv, archive.csv or population.csv of {} (older designs: `{}`)",
+                dir.display(),
+                replay(&id.to_string())
+            )
+        };
         if a.json {
             let mut m = serde_json::Map::new();
             for (k, v) in h.iter().zip(&row) {
@@ -162,7 +190,8 @@ pub fn run(a: ShowArgs) -> Result<()> {
                 serde_json::Value::Object(m)
             })
             .collect();
-        let units: serde_json::Map<String, serde_json::Value> = DESIGN_COLUMNS.iter().map(|c| (c.0.to_string(), serde_json::json!(c.1))).collect();
+        let units: serde_json::Map<String, serde_json::Value> =
+            DESIGN_COLUMNS.iter().map(|c| (c.0.to_string(), serde_json::json!(c.1))).collect();
         let v = serde_json::json!({
             "run_dir": dir.display().to_string(), "status": run["status"], "completed_generations": run["completed_generations"],
             "file": file, "sorted_by": obj, "direction": if maximise { "maximise" } else { "minimise" }, "units": units, "designs": designs,
@@ -170,7 +199,14 @@ pub fn run(a: ShowArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    println!("{} ({}, {} generations): {} designs of {file}, sorted by {obj} ({}), best first", dir.display(), run["status"].as_str().unwrap_or("?"), run["completed_generations"], rows.len(), if maximise { "higher is better" } else { "lower is better" });
+    println!(
+        "{} ({}, {} generations): {} designs of {file}, sorted by {obj} ({}), best first",
+        dir.display(),
+        run["status"].as_str().unwrap_or("?"),
+        run["completed_generations"],
+        rows.len(),
+        if maximise { "higher is better" } else { "lower is better" }
+    );
     let label = |n: &str| match n {
         "max_offset" => "max_offset mm".to_string(),
         "t_stab" => "t_stab ms".to_string(),
@@ -186,7 +222,10 @@ pub fn run(a: ShowArgs) -> Result<()> {
             .iter()
             .map(|n| {
                 let v = col(n).and_then(|k| r.get(k)).map(String::as_str).unwrap_or("");
-                let scale = match *n { "max_offset" | "t_stab" | "l21" | "b" | "t22" => 1e3, _ => 1.0 };
+                let scale = match *n {
+                    "max_offset" | "t_stab" | "l21" | "b" | "t22" => 1e3,
+                    _ => 1.0,
+                };
                 match (v.parse::<f64>(), *n) {
                     (_, "id") => format!(" {v:>13}"),
                     // small values (alpha near isotropy) keep their significant digits

@@ -82,7 +82,10 @@ pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
     spec.validate()?;
     for b in &a.bisect {
         if !spec.vary.iter().any(|v| &v.name == b) {
-            anyhow::bail!("--bisect {b}: not one of the varied names ({})", spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", "));
+            anyhow::bail!(
+                "--bisect {b}: not one of the varied names ({})",
+                spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
+            );
         }
     }
     if a.threads == Some(0) {
@@ -103,7 +106,9 @@ pub fn run(a: SweepArgs) -> Result<()> {
     }
     let pool = b.build()?;
     let pb = indicatif::ProgressBar::new(spec.len() as u64);
-    pb.set_style(indicatif::ProgressStyle::with_template("sweep [{bar:30}] {pos}/{len} points, ETA {eta}").expect("template"));
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("sweep [{bar:30}] {pos}/{len} points, ETA {eta}").expect("template"),
+    );
     let rows = pool.install(|| sweep::run(&spec, &|| pb.inc(1)))?;
     pb.finish_and_clear();
     sweep::write_csv(&a.out, &spec, &rows)?;
@@ -113,7 +118,8 @@ pub fn run(a: SweepArgs) -> Result<()> {
     }
     if !a.bisect.is_empty() {
         let f = a.out.join("boundaries.csv");
-        std::fs::write(&f, sweep::boundaries_csv(&spec, &bounds)).with_context(|| format!("writing {}", f.display()))?;
+        std::fs::write(&f, sweep::boundaries_csv(&spec, &bounds))
+            .with_context(|| format!("writing {}", f.display()))?;
     }
     let ys: Vec<String> = if !a.ys.is_empty() {
         a.ys.clone()
@@ -137,7 +143,11 @@ fn summary(out: &Path, rows: &[sweep::Row], bounds: &[sweep::Boundary], files: &
             None => counts.push((r.verdict, 1)),
         }
     }
-    println!("{} points: {}", rows.len(), counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", "));
+    println!(
+        "{} points: {}",
+        rows.len(),
+        counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", ")
+    );
     for b in bounds {
         let o = if b.others.is_empty() { String::new() } else { format!(" at {:?}", b.others) };
         println!("boundary {}{}: {} at {} | {} at {}", b.name, o, b.verdict_lo, b.lo, b.verdict_hi, b.hi);

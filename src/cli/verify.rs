@@ -78,8 +78,14 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         b = b.num_threads(t);
     }
     let pool = b.build()?;
-    let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) { indicatif::ProgressBar::new(0) } else { indicatif::ProgressBar::hidden() };
-    pb.set_style(indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"));
+    let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        indicatif::ProgressBar::new(0)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"),
+    );
     let record = a.record == VerifyRecordArg::All;
     let s = pool.install(|| verify(&a.run_dir, source, x_off, record, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
     pb.finish_and_clear();
@@ -89,14 +95,27 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     println!("verified {} design{} in the free scene → {}", s.rows.len(), plural(s.rows.len()), s.file.display());
     if let VerifySource::Sample { n, .. } = source {
         if s.designs < n {
-            eprintln!("warning: --sample {n}: only {} drawn design{} pass stages 0–2 (the draw gives up after {} designs)", s.designs, plural(s.designs), 1000 * n + 10_000);
+            eprintln!(
+                "warning: --sample {n}: only {} drawn design{} pass stages 0–2 (the draw gives up after {} designs)",
+                s.designs,
+                plural(s.designs),
+                1000 * n + 10_000
+            );
         }
     }
     if let Some(r) = &s.recording {
-        println!("recorded to {} (open in Foxglove with {}, see docs/recording.md)", r.display(), a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display());
+        println!(
+            "recorded to {} (open in Foxglove with {}, see docs/recording.md)",
+            r.display(),
+            a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
+        );
     }
     if !s.skipped.is_empty() {
-        eprintln!("warning: {} design(s) are discarded at stages 0–2 on re-evaluation and left out: ids {:?}", s.skipped.len(), s.skipped);
+        eprintln!(
+            "warning: {} design(s) are discarded at stages 0–2 on re-evaluation and left out: ids {:?}",
+            s.skipped.len(),
+            s.skipped
+        );
     }
     print_table(&c);
     if c.not_observed > 0 {
@@ -105,13 +124,24 @@ pub fn run(a: VerifyArgs) -> Result<()> {
             *why.entry(r.free_end()).or_default() += 1;
         }
         let why: Vec<String> = why.into_iter().map(|(w, k)| format!("{k} {w}")).collect();
-        println!("  not observed (the free scene ended before t_obs; left out of the table): {} ({})", c.not_observed, why.join(", "));
+        println!(
+            "  not observed (the free scene ended before t_obs; left out of the table): {} ({})",
+            c.not_observed,
+            why.join(", ")
+        );
     }
     if c.total() > 0 {
         println!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
     }
     let n = |f: &dyn Fn(&gripopt::run::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
-    println!("  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}", n(&|r| r.toppled == Some(true)), n(&|r| r.escaped == Some(true)), n(&|r| r.rim_contact), n(&|r| r.impact_ratio.is_some_and(|x| x > 1.0)), n(&|r| r.force_margin < 0.0));
+    println!(
+        "  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}",
+        n(&|r| r.toppled == Some(true)),
+        n(&|r| r.escaped == Some(true)),
+        n(&|r| r.rim_contact),
+        n(&|r| r.impact_ratio.is_some_and(|x| x > 1.0)),
+        n(&|r| r.force_margin < 0.0)
+    );
     if let Some((t, r)) = s.median_energy_ratio {
         println!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
     }

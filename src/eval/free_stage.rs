@@ -10,7 +10,9 @@
 use super::stages::{Discard, Reason, StaticsResult};
 use crate::model::Finger;
 use crate::params::SceneParams;
-use crate::sim::{simulate_free, simulate_grasp_into, DynOutcome, DynamicsResult, FreeResult, FreeSetup, Mode, SimOptions, Trajectory};
+use crate::sim::{
+    simulate_free, simulate_grasp_into, DynOutcome, DynamicsResult, FreeResult, FreeSetup, Mode, SimOptions, Trajectory,
+};
 use std::fmt;
 
 /// How the free scene's run ended.
@@ -191,7 +193,13 @@ fn finger_discard(c: &DynamicsResult) -> Option<Discard> {
 /// trajectory into `traj`), then, unless the finger's own criteria discard the design, the
 /// free scene at the problem's x_off. Returns the centred result, the measurement (None
 /// when the free scene did not run) and the discard.
-pub(crate) fn stage3_free(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions, traj: Option<&mut Trajectory>) -> (DynamicsResult, Option<FreeMeasure>, Option<Discard>) {
+pub(crate) fn stage3_free(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    o: &SimOptions,
+    traj: Option<&mut Trajectory>,
+) -> (DynamicsResult, Option<FreeMeasure>, Option<Discard>) {
     let c = simulate_grasp_into(f, s, st, &SimOptions { mode: Mode::Diagnostic, ..*o }, traj);
     if let Some(d) = finger_discard(&c) {
         return (c, None, Some(d));

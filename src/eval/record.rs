@@ -123,7 +123,10 @@ impl Record {
         let st = ev.statics;
         let spring = st.map(|s| [s.tau_s_min, s.tau_s0]).or(ev.partial.spring);
         let pg = ev.partial.grasp;
-        let grasp = |a: fn(&super::stages::StaticsResult) -> [f64; 2], b: fn(&super::stages::PartialGrasp) -> [f64; 2]| st.as_ref().map(a).or(pg.as_ref().map(b));
+        let grasp = |a: fn(&super::stages::StaticsResult) -> [f64; 2],
+                     b: fn(&super::stages::PartialGrasp) -> [f64; 2]| {
+            st.as_ref().map(a).or(pg.as_ref().map(b))
+        };
         let theta = grasp(|s| s.theta, |g| g.theta);
         let k = grasp(|s| s.k, |g| g.k);
         let f0 = grasp(|s| s.f0, |g| g.f0);

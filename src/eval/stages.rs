@@ -2,13 +2,13 @@
 //! reason and a non-negative violation (0 = satisfied), so an optimiser can rank infeasible
 //! designs. No heap allocation per evaluation.
 
+use super::free_stage::{stage3_free, FreeMeasure, ObjectMotion};
+use crate::model::isotropy;
+use crate::model::spring_preload;
+pub use crate::model::StaticsResult;
 use crate::model::{closure_matrix, form_closure_test, grasp_at, max_offset, OffsetFailure};
 use crate::model::{singularity_sweep, Sweep, SweepFailure};
 use crate::model::{Finger, GeomError};
-use crate::model::spring_preload;
-use crate::model::isotropy;
-pub use crate::model::StaticsResult;
-use super::free_stage::{stage3_free, FreeMeasure, ObjectMotion};
 use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
 use std::fmt;
@@ -131,7 +131,17 @@ pub struct PartialGrasp {
 impl Evaluation {
     /// A design not evaluated yet.
     pub fn new(design: Design) -> Self {
-        Evaluation { design, kin: None, statics: None, dynamics: None, free: None, scene: SceneKind::Centred, discard: None, partial: Partial::default(), stage_seconds: [0.0; 4] }
+        Evaluation {
+            design,
+            kin: None,
+            statics: None,
+            dynamics: None,
+            free: None,
+            scene: SceneKind::Centred,
+            discard: None,
+            partial: Partial::default(),
+            stage_seconds: [0.0; 4],
+        }
     }
     /// True when no stage discarded the design.
     pub fn feasible(&self) -> bool {
@@ -182,6 +192,8 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
 }
 
 /// Stages 0 and 1, with the finger when the sweep discarded it.
+// The large error carries the partial values by value: an evaluation allocates nothing.
+#[allow(clippy::result_large_err)]
 fn kinematics_partial(x: &Design, s: &SceneParams) -> Result<KinematicsResult, (Discard, Partial)> {
     let finger = Finger::new(x, s).map_err(|g| match g {
         GeomError::InvalidLength => Discard { stage: 0, reason: Reason::InvalidDesign, violation: 1.0 },
@@ -196,18 +208,34 @@ fn kinematics_partial(x: &Design, s: &SceneParams) -> Result<KinematicsResult, (
 }
 
 /// Stage 2, with what was computed before a discard.
+#[allow(clippy::result_large_err)]
 fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discard, Partial)> {
     let d2 = |reason, violation| Discard { stage: 2, reason, violation };
-    let (tau_s_min, tau_s0) = spring_preload(f, s).ok_or((d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION), Partial::default()))?;
+    let (tau_s_min, tau_s0) =
+        spring_preload(f, s).ok_or((d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION), Partial::default()))?;
     let spring = Partial { spring: Some([tau_s_min, tau_s0]), ..Partial::default() };
     let g = grasp_at(f, s, tau_s0, 0.0).map_err(|e| (d2(Reason::Grasp(e), MISSING_POSE_VIOLATION), spring))?;
     let fmin = g.min_force();
     if !(fmin > 0.0) || !(g.hand_mu.y < 0.0) {
-        let why = if !(fmin > 0.0) { OffsetFailure::ForceNotPositive(fmin) } else { OffsetFailure::PalmForceNotPositive(g.hand_mu.y) };
+        let why = if !(fmin > 0.0) {
+            OffsetFailure::ForceNotPositive(fmin)
+        } else {
+            OffsetFailure::PalmForceNotPositive(g.hand_mu.y)
+        };
         let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
         let (cp, ff) = (&g.cp[0], &g.forces[0]);
-        let grasp = PartialGrasp { theta: [cp.theta1, cp.theta2], k: [cp.k1, cp.k2], f0: ff.f0, fmu: ff.fmu, hand0: [g.hand0.x, g.hand0.y], hand_mu: [g.hand_mu.x, g.hand_mu.y] };
-        return Err((d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }), Partial { grasp: Some(grasp), ..spring }));
+        let grasp = PartialGrasp {
+            theta: [cp.theta1, cp.theta2],
+            k: [cp.k1, cp.k2],
+            f0: ff.f0,
+            fmu: ff.fmu,
+            hand0: [g.hand0.x, g.hand0.y],
+            hand_mu: [g.hand_mu.x, g.hand_mu.y],
+        };
+        return Err((
+            d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }),
+            Partial { grasp: Some(grasp), ..spring },
+        ));
     }
     let form_closed_0 = form_closure_test(&closure_matrix(f, &g.cp)).closed;
     let scan = max_offset(f, s, tau_s0);
@@ -297,7 +325,12 @@ pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
 /// Stage 3 of an evaluation from [`evaluate_statics`] in the problem's scene, recording the
 /// trajectory into `traj` when given; an evaluation that did not pass stages 0–2 comes
 /// back unchanged.
-pub fn evaluate_dynamics(mut ev: Evaluation, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
+pub fn evaluate_dynamics(
+    mut ev: Evaluation,
+    s: &SceneParams,
+    opts: &EvalOptions,
+    traj: Option<&mut Trajectory>,
+) -> Evaluation {
     let (Some(kin), Some(st), None) = (ev.kin, ev.statics, ev.discard) else { return ev };
     let t2 = Instant::now();
     ev.scene = s.setup.kind;
@@ -321,13 +354,21 @@ pub fn evaluate_dynamics(mut ev: Evaluation, s: &SceneParams, opts: &EvalOptions
 /// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
 pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
     use crate::sim::{force_margin, r_area, Mode};
-    opts.sim.mode == Mode::Pipeline && s.setup.kind == SceneKind::Centred && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
+    opts.sim.mode == Mode::Pipeline
+        && s.setup.kind == SceneKind::Centred
+        && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
 }
 
 /// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
 /// on the object at x_off. (The free kind is `free_stage::stage3_free`: the centred scene
 /// plus the free object's measured motion.)
-fn stage3_scene(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+fn stage3_scene(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    o: &SimOptions,
+    traj: Option<&mut Trajectory>,
+) -> DynamicsResult {
     match s.setup.kind {
         SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
         _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
@@ -338,4 +379,3 @@ fn stage3_scene(f: &Finger, s: &SceneParams, st: &StaticsResult, o: &SimOptions,
 pub fn evaluate_full(p: &Problem, x: &Design) -> Evaluation {
     evaluate(x, &p.scene, &EvalOptions::full(p))
 }
-

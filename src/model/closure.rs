@@ -134,7 +134,11 @@ impl Grasp {
 /// Closed poses and static forces of both fingers at world offset `x_off`.
 pub fn grasp_at(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64) -> Result<Grasp, OffsetFailure> {
     let cp0 = closed_pose(f, s.object.radius, x_off).map_err(|e| OffsetFailure::NoClosedPose(0, e))?;
-    let cp1 = if x_off == 0.0 { cp0 } else { closed_pose(f, s.object.radius, -x_off).map_err(|e| OffsetFailure::NoClosedPose(1, e))? };
+    let cp1 = if x_off == 0.0 {
+        cp0
+    } else {
+        closed_pose(f, s.object.radius, -x_off).map_err(|e| OffsetFailure::NoClosedPose(1, e))?
+    };
     let f0 = finger_forces(f, s, &cp0, tau_s0).ok_or(OffsetFailure::SingularForces)?;
     let f1 = if x_off == 0.0 { f0 } else { finger_forces(f, s, &cp1, tau_s0).ok_or(OffsetFailure::SingularForces)? };
     let hand0 = to_world(f0.force0, 0) + to_world(f1.force0, 1);

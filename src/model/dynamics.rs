@@ -9,7 +9,16 @@ use nalgebra::{Matrix2, Vector2, Vector4};
 /// Mass matrix and bias of one open chain (eq. 2.49, 2.53–2.54).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn chain(i1: f64, l1: f64, m2: f64, i2: f64, s: V2, cs_beta: (f64, f64), adot: f64, bdot: f64) -> (Matrix2<f64>, Vector2<f64>) {
+fn chain(
+    i1: f64,
+    l1: f64,
+    m2: f64,
+    i2: f64,
+    s: V2,
+    cs_beta: (f64, f64),
+    adot: f64,
+    bdot: f64,
+) -> (Matrix2<f64>, Vector2<f64>) {
     let (cb, sb) = cs_beta;
     let h = m2 * l1 * (s.x * cb - s.y * sb);
     let g = m2 * l1 * (s.x * sb + s.y * cb);

@@ -194,7 +194,22 @@ impl Finger {
             i: [rod_i(m11, l11), rod_i(m12, l12), rod_i(m21, x.l21), rod_i(lam * l22, l22) + rod_i(lam * x.t22, x.t22)],
             s22,
         };
-        Ok(Finger { l11, l12, l21: x.l21, l22, t22: x.t22, psi: x.psi, w, o21, gamma, sigma, k10, open, mass, psi_cs: V2::new(cp, sp) })
+        Ok(Finger {
+            l11,
+            l12,
+            l21: x.l21,
+            l22,
+            t22: x.t22,
+            psi: x.psi,
+            w,
+            o21,
+            gamma,
+            sigma,
+            k10,
+            open,
+            mass,
+            psi_cs: V2::new(cp, sp),
+        })
     }
 
     /// Direct geometric model (MODEL.md §5.1): pose from the active angles.

@@ -11,11 +11,14 @@ const PARALLEL_SLABS: usize = 256;
 
 /// Points strictly better than `r` in every objective, non-dominated among themselves.
 pub fn nondominated_below(points: &[Vec<f64>], r: &[f64]) -> Vec<Vec<f64>> {
-    let inside: Vec<&[f64]> = points.iter().filter(|p| p.iter().zip(r).all(|(a, b)| a < b)).map(|p| p.as_slice()).collect();
+    let inside: Vec<&[f64]> =
+        points.iter().filter(|p| p.iter().zip(r).all(|(a, b)| a < b)).map(|p| p.as_slice()).collect();
     // first front by the fast non-dominated sort, then drop repeated points
     let rank = super::sort::pareto_ranks(&inside);
     let mut out: Vec<Vec<f64>> = inside.iter().zip(&rank).filter(|(_, r)| **r == 0).map(|(p, _)| p.to_vec()).collect();
-    out.sort_by(|a, b| a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal));
+    out.sort_by(|a, b| {
+        a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
+    });
     out.dedup();
     out
 }
@@ -28,7 +31,11 @@ pub fn nondominated_below(points: &[Vec<f64>], r: &[f64]) -> Vec<Vec<f64>> {
 /// staircase's moves); more: slices along the last objective, each measured in one
 /// dimension less (O(n^(d−2)) sweeps; four objectives: ≈ 0.1 ms for 128 points).
 pub fn hypervolume(points: &[Vec<f64>], r: &[f64]) -> f64 {
-    let inside: Vec<&[f64]> = points.iter().filter(|p| p.len() == r.len() && p.iter().zip(r).all(|(a, b)| a < b)).map(|p| p.as_slice()).collect();
+    let inside: Vec<&[f64]> = points
+        .iter()
+        .filter(|p| p.len() == r.len() && p.iter().zip(r).all(|(a, b)| a < b))
+        .map(|p| p.as_slice())
+        .collect();
     hv_slices(inside, r)
 }
 
@@ -79,7 +86,11 @@ fn hv_slices(mut pts: Vec<&[f64]>, r: &[f64]) -> f64 {
             };
             // the slabs are independent: in parallel (in the caller's rayon pool) for large
             // sets, summed in order, so the result does not depend on the thread count
-            let slabs: Vec<f64> = if pts.len() >= PARALLEL_SLABS { (0..pts.len()).into_par_iter().map(slab).collect() } else { (0..pts.len()).map(slab).collect() };
+            let slabs: Vec<f64> = if pts.len() >= PARALLEL_SLABS {
+                (0..pts.len()).into_par_iter().map(slab).collect()
+            } else {
+                (0..pts.len()).map(slab).collect()
+            };
             let mut hv = 0.0;
             for v in slabs {
                 hv += v;
@@ -121,7 +132,12 @@ pub fn igd(points: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
     }
     let s: f64 = reference
         .iter()
-        .map(|z| points.iter().map(|p| p.iter().zip(z).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()).fold(f64::INFINITY, f64::min))
+        .map(|z| {
+            points
+                .iter()
+                .map(|p| p.iter().zip(z).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt())
+                .fold(f64::INFINITY, f64::min)
+        })
         .sum();
     s / reference.len() as f64
 }
@@ -211,7 +227,20 @@ mod tests {
                 let n = 1 + case * 3 % (if d == 5 { 25 } else { 70 });
                 // a coarse grid in some cases: ties, repeated and weakly dominated points
                 let grid = case % 3 == 0;
-                let mut pts: Vec<Vec<f64>> = (0..n).map(|_| (0..d).map(|_| if grid { rng.random_range(0..5) as f64 / 4.0 } else { rng.random_range(-0.1..1.1) }).collect()).collect();
+                let mut pts: Vec<Vec<f64>> =
+                    (0..n)
+                        .map(|_| {
+                            (0..d)
+                                .map(|_| {
+                                    if grid {
+                                        rng.random_range(0..5) as f64 / 4.0
+                                    } else {
+                                        rng.random_range(-0.1..1.1)
+                                    }
+                                })
+                                .collect()
+                        })
+                        .collect();
                 // points on a front (sum of squares = 1) make most of them non-dominated
                 if case % 3 == 1 {
                     for p in &mut pts {
@@ -239,7 +268,9 @@ mod tests {
             })
             .collect();
         let r = [1.0; 4];
-        let on = |n: usize| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| hypervolume(&pts, &r));
+        let on = |n: usize| {
+            rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| hypervolume(&pts, &r))
+        };
         let (one, three) = (on(1), on(3));
         assert_eq!(one.to_bits(), three.to_bits(), "1 thread {one}, 3 threads {three}");
         let b = hso(&pts, &r);

@@ -16,9 +16,9 @@
 mod hv;
 mod nsga2;
 mod operators;
+mod schedule;
 mod serde_f64;
 mod sort;
-mod schedule;
 mod testproblems;
 
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
@@ -147,9 +147,9 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
 }
 
 pub use hv::{hypervolume, igd, nondominated_below};
-pub use nsga2::{GenTiming, Nsga2, Nsga2Settings, Nsga2State, execute, observe};
-pub use operators::{Operators, polynomial_mutation, sbx};
+pub use nsga2::{execute, observe, GenTiming, Nsga2, Nsga2Settings, Nsga2State};
+pub use operators::{polynomial_mutation, sbx, Operators};
 pub use schedule::{CostHint, CostModel};
 pub use serde_f64::{deserialize, serialize};
 pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};
-pub use testproblems::{Test, TestProblem, TestRun, c2_constraint, reference_settings, run_test};
+pub use testproblems::{c2_constraint, reference_settings, run_test, Test, TestProblem, TestRun};

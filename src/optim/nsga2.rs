@@ -98,7 +98,12 @@ pub struct GenTiming {
 impl<I> Nsga2State<I> {
     /// Members of the first front that are feasible.
     pub fn feasible_front(&self) -> Vec<&Individual<I>> {
-        self.population.iter().zip(&self.rank).filter(|(p, r)| **r == 0 && p.eval.cv.is_feasible()).map(|(p, _)| p).collect()
+        self.population
+            .iter()
+            .zip(&self.rank)
+            .filter(|(p, r)| **r == 0 && p.eval.cv.is_feasible())
+            .map(|(p, _)| p)
+            .collect()
     }
     /// Set the total number of generations (resume with a new total).
     pub fn with_max_generations(mut self, g: u64) -> Self {
@@ -247,7 +252,13 @@ impl Nsga2 {
     /// is a pure function of its vector and the results are put back in index order, so
     /// they do not depend on the thread count or the schedule. Afterwards the model learns
     /// the generation's work.
-    fn evaluate_all<P: MooProblem>(&mut self, p: &P, xs: Vec<Vec<f64>>, first_id: u64, generation: u64) -> (Vec<Individual<P::Info>>, GenTiming) {
+    fn evaluate_all<P: MooProblem>(
+        &mut self,
+        p: &P,
+        xs: Vec<Vec<f64>>,
+        first_id: u64,
+        generation: u64,
+    ) -> (Vec<Individual<P::Info>>, GenTiming) {
         use std::sync::atomic::{AtomicUsize, Ordering};
         use std::sync::Mutex;
         let t0 = std::time::Instant::now();
@@ -315,7 +326,19 @@ impl Nsga2 {
             }
         }
         self.model.refit();
-        (pop, GenTiming { eval_s: t0.elapsed().as_secs_f64(), order_s, serial_s: 0.0, hv_s: 0.0, costs, start_costs, order, costly })
+        (
+            pop,
+            GenTiming {
+                eval_s: t0.elapsed().as_secs_f64(),
+                order_s,
+                serial_s: 0.0,
+                hv_s: 0.0,
+                costs,
+                start_costs,
+                order,
+                costly,
+            },
+        )
     }
 
     fn normalised_hv<I>(&self, pop: &[Individual<I>], rank: &[usize]) -> f64 {
@@ -327,12 +350,21 @@ impl Nsga2 {
             .iter()
             .zip(rank)
             .filter(|(p, r)| **r == 0 && p.eval.cv.is_feasible())
-            .map(|(p, _)| p.eval.f.iter().enumerate().map(|(k, v)| (v - s.hv_ideal[k]) / (s.hv_ref[k] - s.hv_ideal[k])).collect())
+            .map(|(p, _)| {
+                p.eval.f.iter().enumerate().map(|(k, v)| (v - s.hv_ideal[k]) / (s.hv_ref[k] - s.hv_ideal[k])).collect()
+            })
             .collect();
         hypervolume(&pts, &vec![1.0; s.hv_ref.len()])
     }
 
-    fn finish_generation<I: Clone>(&self, mut state: Nsga2State<I>, pop: Vec<Individual<I>>, rank: Vec<usize>, crowd: Vec<f64>, evaluated: Vec<Individual<I>>) -> Nsga2State<I> {
+    fn finish_generation<I: Clone>(
+        &self,
+        mut state: Nsga2State<I>,
+        pop: Vec<Individual<I>>,
+        rank: Vec<usize>,
+        crowd: Vec<f64>,
+        evaluated: Vec<Individual<I>>,
+    ) -> Nsga2State<I> {
         let t = std::time::Instant::now();
         state.hv_history.push(self.normalised_hv(&pop, &rank));
         state.timing.hv_s = t.elapsed().as_secs_f64();
@@ -401,7 +433,11 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
 
     /// Generation 1: a random population (idempotent: a state that already has a
     /// population, e.g. from a checkpoint, is returned unchanged).
-    fn init(&mut self, problem: &mut Problem<P>, state: Nsga2State<P::Info>) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
+    fn init(
+        &mut self,
+        problem: &mut Problem<P>,
+        state: Nsga2State<P::Info>,
+    ) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
         if !state.population.is_empty() {
             return Ok((state, None));
         }
@@ -428,18 +464,27 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
             rank_and_crowding(&f, &cv)
         };
         let mut state = self.finish_generation(state, pop, rank, crowd, evaluated);
-        state.timing = GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
+        state.timing =
+            GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
         Ok((state, None))
     }
 
-    fn next_iter(&mut self, problem: &mut Problem<P>, state: Nsga2State<P::Info>) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<P>,
+        state: Nsga2State<P::Info>,
+    ) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
         let t_start = std::time::Instant::now();
         let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
         let (lo, hi) = (p.lower(), p.upper());
         let s = &self.settings;
         let n = s.pop_size;
         let g = state.generation + 1;
-        let mut seen: FxSet<Vec<u64>> = if s.eliminate_duplicates { state.population.iter().map(|p| bits(&p.x)).collect() } else { FxSet::default() };
+        let mut seen: FxSet<Vec<u64>> = if s.eliminate_duplicates {
+            state.population.iter().map(|p| bits(&p.x)).collect()
+        } else {
+            FxSet::default()
+        };
         let mut xs: Vec<Vec<f64>> = Vec::with_capacity(n + 1);
         let matings = n.div_ceil(2);
         // candidates for 2 tournaments (of 2) per mating; extra rounds if duplicates force more
@@ -484,7 +529,8 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
         let mut slots: Vec<Option<Individual<P::Info>>> = merged.into_iter().map(Some).collect();
         let pop: Vec<_> = keep.iter().map(|&i| slots[i].take().expect("each survivor once")).collect();
         let mut state = self.finish_generation(state, pop, rank, crowd, offspring);
-        state.timing = GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
+        state.timing =
+            GenTiming { serial_s: t_start.elapsed().as_secs_f64() - timing.eval_s, hv_s: state.timing.hv_s, ..timing };
         Ok((state, None))
     }
 
@@ -502,7 +548,13 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
 /// Returns the problem and the final state; with `ctrlc`, a ctrl-c stops after the current
 /// generation (observers see it). An observer's [`crate::Error`] comes back as it
 /// was; any other executor error becomes [`crate::Error::Optimiser`].
-pub fn execute<P, O>(problem: P, settings: Nsga2Settings, state: Nsga2State<P::Info>, observers: O, ctrlc: bool) -> crate::Result<(P, Nsga2State<P::Info>)>
+pub fn execute<P, O>(
+    problem: P,
+    settings: Nsga2Settings,
+    state: Nsga2State<P::Info>,
+    observers: O,
+    ctrlc: bool,
+) -> crate::Result<(P, Nsga2State<P::Info>)>
 where
     P: MooProblem + 'static,
     P::Info: 'static,
@@ -511,13 +563,17 @@ where
     use crate::Error as LibError;
     let exec = Executor::new(problem, Nsga2::new(settings)).configure(|_| state).ctrlc(ctrlc).timer(false);
     let exec = observers(exec);
-    let mut res = exec.run().map_err(|e| e.downcast::<LibError>().unwrap_or_else(|e| LibError::Optimiser(e.to_string())))?;
+    let mut res =
+        exec.run().map_err(|e| e.downcast::<LibError>().unwrap_or_else(|e| LibError::Optimiser(e.to_string())))?;
     let p = res.problem.take_problem().ok_or_else(|| LibError::Optimiser("problem lost".into()))?;
     Ok((p, res.state))
 }
 
 /// Add an observer to an executor, called after the initial population and every generation.
-pub fn observe<P, OBS>(exec: Executor<P, Nsga2, Nsga2State<P::Info>>, obs: OBS) -> Executor<P, Nsga2, Nsga2State<P::Info>>
+pub fn observe<P, OBS>(
+    exec: Executor<P, Nsga2, Nsga2State<P::Info>>,
+    obs: OBS,
+) -> Executor<P, Nsga2, Nsga2State<P::Info>>
 where
     P: MooProblem,
     OBS: Observe<Nsga2State<P::Info>> + 'static,

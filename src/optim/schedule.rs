@@ -54,7 +54,13 @@ impl Fit {
         if f.len() != self.coef.len() {
             return None;
         }
-        let z = f.iter().zip(&self.mean).zip(&self.scale).zip(&self.coef).map(|(((v, m), s), c)| (v - m) / s * c).sum::<f64>();
+        let z = f
+            .iter()
+            .zip(&self.mean)
+            .zip(&self.scale)
+            .zip(&self.coef)
+            .map(|(((v, m), s), c)| (v - m) / s * c)
+            .sum::<f64>();
         Some(self.intercept + z).filter(|v| v.is_finite())
     }
 }
@@ -112,7 +118,11 @@ impl CostModel {
         let scale: Vec<f64> = (0..d)
             .map(|j| {
                 let v = rows.iter().map(|r| (r.0[j] - mean[j]).powi(2)).sum::<f64>() / n as f64;
-                if v > 0.0 { v.sqrt() } else { 1.0 }
+                if v > 0.0 {
+                    v.sqrt()
+                } else {
+                    1.0
+                }
             })
             .collect();
         // normal equations of [Z 1] c = ln w with λ on the feature coefficients
@@ -191,7 +201,8 @@ mod tests {
         }
         m.refit();
         assert!(!m.is_fitted());
-        let hints = vec![CostHint::Cheap, CostHint::Costly(vec![1.0, 1.0]), CostHint::Cheap, CostHint::Costly(vec![2.0, 1.0])];
+        let hints =
+            vec![CostHint::Cheap, CostHint::Costly(vec![1.0, 1.0]), CostHint::Cheap, CostHint::Costly(vec![2.0, 1.0])];
         assert_eq!(m.order(&hints), vec![1, 3, 0, 2]);
     }
 }

@@ -66,7 +66,15 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
         let mut v: Vec<f64> = (0..20000).map(|_| f64::from_bits(rng.random::<u64>())).filter(|x| !x.is_nan()).collect();
-        v.extend([f64::INFINITY, f64::NEG_INFINITY, 0.0, -0.0, f64::MIN_POSITIVE, 105.1438757555396, 105.14387575553963]);
+        v.extend([
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            105.1438757555396,
+            105.14387575553963,
+        ]);
         let s = serde_json::to_string(&W(v.clone())).unwrap();
         let back: W = serde_json::from_str(&s).unwrap();
         for (a, b) in v.iter().zip(&back.0) {

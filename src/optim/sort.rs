@@ -220,7 +220,8 @@ mod tests {
         let mut left: Vec<usize> = (0..n).collect();
         let mut r = 0;
         while !left.is_empty() {
-            let front: Vec<usize> = left.iter().copied().filter(|&i| !left.iter().any(|&j| dominates(f[j], f[i]))).collect();
+            let front: Vec<usize> =
+                left.iter().copied().filter(|&i| !left.iter().any(|&j| dominates(f[j], f[i]))).collect();
             for &i in &front {
                 rank[i] = r;
             }
@@ -238,7 +239,8 @@ mod tests {
             for _ in 0..50 {
                 let n = rng.random_range(1..120);
                 // coarse grid values make ties and duplicates frequent
-                let pts: Vec<Vec<f64>> = (0..n).map(|_| (0..m).map(|_| rng.random_range(0..8) as f64).collect()).collect();
+                let pts: Vec<Vec<f64>> =
+                    (0..n).map(|_| (0..m).map(|_| rng.random_range(0..8) as f64).collect()).collect();
                 let f: Vec<&[f64]> = pts.iter().map(|p| p.as_slice()).collect();
                 assert_eq!(pareto_ranks(&f), brute(&f), "m = {m}");
             }

@@ -35,7 +35,8 @@ pub struct Test {
 
 impl TestProblem {
     /// All, in the order of the issue.
-    pub const ALL: [TestProblem; 8] = [Self::Zdt1, Self::Zdt2, Self::Zdt3, Self::Dtlz2, Self::Bnh, Self::Tnk, Self::Osy, Self::C2Dtlz2];
+    pub const ALL: [TestProblem; 8] =
+        [Self::Zdt1, Self::Zdt2, Self::Zdt3, Self::Dtlz2, Self::Bnh, Self::Tnk, Self::Osy, Self::C2Dtlz2];
 
     /// Parse a name (case-insensitive).
     pub fn parse(s: &str) -> Option<Self> {
@@ -238,7 +239,11 @@ impl MooProblem for Test {
                 (vec![x[0], x[1]], pos(g1) + pos(g2))
             }
             TestProblem::Osy => {
-                let f1 = -(25.0 * (x[0] - 2.0).powi(2) + (x[1] - 2.0).powi(2) + (x[2] - 1.0).powi(2) + (x[3] - 4.0).powi(2) + (x[4] - 1.0).powi(2));
+                let f1 = -(25.0 * (x[0] - 2.0).powi(2)
+                    + (x[1] - 2.0).powi(2)
+                    + (x[2] - 1.0).powi(2)
+                    + (x[3] - 4.0).powi(2)
+                    + (x[4] - 1.0).powi(2));
                 let f2: f64 = x.iter().map(|v| v * v).sum();
                 let g = [
                     -(x[0] + x[1] - 2.0) / 2.0,

@@ -108,7 +108,12 @@ impl Limit {
             return Err(format!("must be {} {}", if self.lo_open { ">" } else { ">=" }, num(self.lo)));
         }
         if v > self.hi {
-            return Err(format!("must be <= {} {} (the admissible range is {})", num(self.hi), self.unit, self.range()));
+            return Err(format!(
+                "must be <= {} {} (the admissible range is {})",
+                num(self.hi),
+                self.unit,
+                self.range()
+            ));
         }
         Ok(v)
     }

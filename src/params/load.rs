@@ -5,10 +5,10 @@
 
 use super::design::{Bounds, Design, DESIGN_NAMES};
 use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
-use super::scene_kind::{SceneKind, SceneSetup};
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
-use crate::{Error, Result};
+use super::scene_kind::{SceneKind, SceneSetup};
 use crate::math::deg;
+use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
 use std::path::Path;
@@ -205,7 +205,13 @@ impl Problem {
         let cr = &raw.criteria;
         let sc = &raw.scene;
         let setup = SceneSetup {
-            kind: SceneKind::parse(&sc.kind).ok_or_else(|| c.fail("scene.kind", format!("{:?}", sc.kind), "must be \"centred\", \"offset\" or \"free\" (MODEL.md §14)"))?,
+            kind: SceneKind::parse(&sc.kind).ok_or_else(|| {
+                c.fail(
+                    "scene.kind",
+                    format!("{:?}", sc.kind),
+                    "must be \"centred\", \"offset\" or \"free\" (MODEL.md §14)",
+                )
+            })?,
             x_off: c.check("scene.x_off", sc.x_off)?,
             t_obs: c.check("scene.t_obs", sc.t_obs)?,
             ground_points: {
@@ -276,12 +282,22 @@ impl Problem {
                 force_model: match cr.force_model.as_str() {
                     "mobilised" => ForceModel::Mobilised,
                     "frictionless" => ForceModel::Frictionless,
-                    other => return Err(c.fail("criteria.force_model", format!("{other:?}"), "must be \"mobilised\" or \"frictionless\" (MODEL.md D22)")),
+                    other => {
+                        return Err(c.fail(
+                            "criteria.force_model",
+                            format!("{other:?}"),
+                            "must be \"mobilised\" or \"frictionless\" (MODEL.md D22)",
+                        ))
+                    }
                 },
             },
         };
         if cr.r_sing.len() > MAX_R_SING {
-            return Err(c.fail("criteria.r_sing", format!("{} radii", cr.r_sing.len()), &format!("must list at most {MAX_R_SING} radii")));
+            return Err(c.fail(
+                "criteria.r_sing",
+                format!("{} radii", cr.r_sing.len()),
+                &format!("must list at most {MAX_R_SING} radii"),
+            ));
         }
         if cr.r_sing.is_empty() {
             return Err(c.fail("criteria.r_sing", "[]".into(), "must list at least one radius"));
@@ -290,7 +306,11 @@ impl Problem {
             return Err(c.fail("contact.v_d", format!("{}", scene.contact.v_d), "must be > contact.v_s"));
         }
         if scene.criteria.offset_max / scene.criteria.offset_step > 1e5 {
-            return Err(c.fail("criteria.offset_step", format!("{}", scene.criteria.offset_step), "gives more than 1e5 offsets"));
+            return Err(c.fail(
+                "criteria.offset_step",
+                format!("{}", scene.criteria.offset_step),
+                "gives more than 1e5 offsets",
+            ));
         }
         let s = &raw.solver;
         c.check("solver.rtol", s.rtol)?;

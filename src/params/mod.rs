@@ -10,8 +10,8 @@ mod scene;
 mod scene_kind;
 
 pub use design::{Bounds, Design, DESIGN_NAMES};
-pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub(crate) use limits::num as fmt_num;
+pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
-pub use scene_kind::{SceneKind, SceneSetup};
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
+pub use scene_kind::{SceneKind, SceneSetup};

@@ -64,6 +64,14 @@ pub struct SceneSetup {
 impl SceneSetup {
     /// MODEL.md §14's defaults with the centred scene (for code that builds scenes by hand).
     pub fn centred(k_contact: f64) -> Self {
-        SceneSetup { kind: SceneKind::Centred, x_off: 0.0, t_obs: 0.1, ground_points: 16, ground_k: k_contact, ground_v_s: 1e-4, ground_v_d: 2e-4 }
+        SceneSetup {
+            kind: SceneKind::Centred,
+            x_off: 0.0,
+            t_obs: 0.1,
+            ground_points: 16,
+            ground_k: k_contact,
+            ground_v_s: 1e-4,
+            ground_v_d: 2e-4,
+        }
     }
 }

@@ -52,9 +52,18 @@ pub fn layout() -> Value {
     });
     let forces = plot(
         "Contact forces (N) vs simulated time (s) of the current design",
-        &[("proximal_normal_force", "proximal normal"), ("distal_normal_force", "distal normal"), ("proximal_friction_force", "proximal friction"), ("distal_friction_force", "distal friction"), ("filtered_hand_force", "hand (filtered)")],
+        &[
+            ("proximal_normal_force", "proximal normal"),
+            ("distal_normal_force", "distal normal"),
+            ("proximal_friction_force", "proximal friction"),
+            ("distal_friction_force", "distal friction"),
+            ("filtered_hand_force", "hand (filtered)"),
+        ],
     );
-    let joints = plot("Joint angles (rad) vs simulated time (s) of the current design", &[("q11", "q11"), ("q21", "q21 = θ1"), ("theta2", "θ2")]);
+    let joints = plot(
+        "Joint angles (rad) vs simulated time (s) of the current design",
+        &[("q11", "q11"), ("q21", "q21 = θ1"), ("theta2", "θ2")],
+    );
     json!({
         "configById": {
             "3D!grasp": three_d,

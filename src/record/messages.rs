@@ -2,15 +2,16 @@
 //! `gripopt.GraspSeries` columns, and the Foxglove scene (official `foxglove` SDK types).
 
 use super::entry::DesignEntry;
-use super::proto::GraspSeries;
 use super::options::{RecordOptions, Resolution};
+use super::proto::GraspSeries;
 use crate::math::V2;
 use crate::model::Finger;
 use crate::params::{Design, SceneParams};
 use crate::sim::{PoseSample, Sample};
 use foxglove::messages::{
-    line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform, FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose,
-    Quaternion, SceneEntity, SceneEntityDeletion, SceneUpdate, Timestamp, Vector3,
+    line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
+    FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity, SceneEntityDeletion,
+    SceneUpdate, Timestamp, Vector3,
 };
 use serde_json::{json, Value};
 
@@ -78,7 +79,8 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> V
     }
     if let Some(serde_json::Value::Object(f)) = i.free {
         // like every other key, values not computed are left out (no nulls)
-        let f: serde_json::Map<String, Value> = f.iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k.clone(), v.clone())).collect();
+        let f: serde_json::Map<String, Value> =
+            f.iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k.clone(), v.clone())).collect();
         o.insert("free_scene".into(), Value::Object(f));
     }
     v
@@ -96,7 +98,12 @@ pub fn at_precision(x: f64, res: Resolution) -> f64 {
 /// design has no trajectory).
 pub fn series(id: u64, samples: &[Sample], kept: &[usize], opts: &RecordOptions) -> GraspSeries {
     let r = opts.resolution;
-    let mut m = GraspSeries { design_id: id, full_resolution: r == Resolution::Full, simulated_samples: samples.len() as u32, ..Default::default() };
+    let mut m = GraspSeries {
+        design_id: id,
+        full_resolution: r == Resolution::Full,
+        simulated_samples: samples.len() as u32,
+        ..Default::default()
+    };
     for &k in kept {
         let s = &samples[k];
         let p = |x: f64| at_precision(x, r);
@@ -124,8 +131,21 @@ pub fn series(id: u64, samples: &[Sample], kept: &[usize], opts: &RecordOptions)
 pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
     let n = m.t.len();
     let cols = [
-        &m.q11, &m.q21, &m.q11_dot, &m.q21_dot, &m.theta2, &m.proximal_penetration, &m.distal_penetration, &m.proximal_normal_force, &m.distal_normal_force,
-        &m.proximal_friction_force, &m.distal_friction_force, &m.hand_force, &m.filtered_hand_force, &m.energy, &m.energy_excess,
+        &m.q11,
+        &m.q21,
+        &m.q11_dot,
+        &m.q21_dot,
+        &m.theta2,
+        &m.proximal_penetration,
+        &m.distal_penetration,
+        &m.proximal_normal_force,
+        &m.distal_normal_force,
+        &m.proximal_friction_force,
+        &m.distal_friction_force,
+        &m.hand_force,
+        &m.filtered_hand_force,
+        &m.energy,
+        &m.energy_excess,
     ];
     if cols.iter().any(|c| c.len() != n) {
         return None;
@@ -169,7 +189,11 @@ fn entity(t_ns: u64, frame: &str, id: &str, design_id: u64) -> SceneEntity {
 }
 
 fn delete_all(t_ns: u64) -> Vec<SceneEntityDeletion> {
-    vec![SceneEntityDeletion { timestamp: Some(stamp(t_ns)), r#type: scene_entity_deletion::Type::All as i32, id: String::new() }]
+    vec![SceneEntityDeletion {
+        timestamp: Some(stamp(t_ns)),
+        r#type: scene_entity_deletion::Type::All as i32,
+        id: String::new(),
+    }]
 }
 
 /// `/tf` message at a design's window start: `world` (z up, ground at z = 0) → `hand`
@@ -195,20 +219,31 @@ pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
 pub fn static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
     let r = sc.object.radius;
     let object = object_entity(t_ns, "hand", id, sc, at(0.0, r, 0.0));
-    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object] }
+    SceneUpdate {
+        deletions: delete_all(t_ns),
+        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object],
+    }
 }
 
 /// The ground plane (frame `world`, top face at z = 0).
 fn ground_entity(t_ns: u64, id: u64) -> SceneEntity {
     let mut ground = entity(t_ns, "world", "ground", id);
-    ground.cubes.push(CubePrimitive { pose: at(0.0, 0.0, -0.0005), size: Some(Vector3 { x: 0.6, y: 0.6, z: 0.001 }), color: rgba(0.55, 0.55, 0.5, 1.0) });
+    ground.cubes.push(CubePrimitive {
+        pose: at(0.0, 0.0, -0.0005),
+        size: Some(Vector3 { x: 0.6, y: 0.6, z: 0.001 }),
+        color: rgba(0.55, 0.55, 0.5, 1.0),
+    });
     ground
 }
 
 /// The palm (frame `hand`: width b + 2 cm, its face the line y = 0, 4 cm across the plane).
 fn palm_entity(t_ns: u64, id: u64, design: &Design) -> SceneEntity {
     let mut palm = entity(t_ns, "hand", "palm", id);
-    palm.cubes.push(CubePrimitive { pose: at(0.0, -0.005, 0.0), size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }), color: rgba(0.5, 0.5, 0.5, 1.0) });
+    palm.cubes.push(CubePrimitive {
+        pose: at(0.0, -0.005, 0.0),
+        size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }),
+        color: rgba(0.5, 0.5, 0.5, 1.0),
+    });
     palm
 }
 
@@ -299,7 +334,10 @@ pub fn free_frames(t_ns: u64, sc: &SceneParams, pose: &PoseSample, hand: bool) -
 /// centred at G, its axis along z).
 pub fn free_static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
     let object = object_entity(t_ns, "object", id, sc, at(0.0, 0.0, 0.0));
-    SceneUpdate { deletions: delete_all(t_ns), entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object] }
+    SceneUpdate {
+        deletions: delete_all(t_ns),
+        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object],
+    }
 }
 
 /// `/scene` of the free scene: both fingers, each at its own angles (`q`: q11, q21 of

@@ -18,23 +18,28 @@
 //! scene's object pose as a moving frame (see `verify_rec`).
 
 mod entry;
-mod messages;
 mod layout;
+mod mcapfile;
+mod messages;
 mod options;
-mod recover;
 mod proto;
+mod recover;
 mod replay;
 mod schema;
 mod verify_rec;
-mod mcapfile;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};
 pub use layout::{layout, write_layout, LAYOUT_FILE};
 pub use messages::{samples_from, window_start_ns};
-pub use options::{COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, RecordOptions, Resolution, TrajectoryKeep};
-pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
+pub use options::{
+    RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
+};
 pub use proto::{GraspSeries, SERIES_NAME};
-pub use replay::{Recorded, Replay, read_design, replay};
-pub use verify_rec::{keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA};
-pub use writer::{Recorder, ShardEntry, ShardTask, read_index, write_shard};
+pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
+pub use replay::{read_design, replay, Recorded, Replay};
+pub use verify_rec::{
+    keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout,
+    Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA,
+};
+pub use writer::{read_index, write_shard, Recorder, ShardEntry, ShardTask};

@@ -85,14 +85,32 @@ pub struct RecordOptions {
 
 impl Default for RecordOptions {
     fn default() -> Self {
-        RecordOptions { enabled: true, trajectories: TrajectoryKeep::All, every: 1, scene_dt: DEFAULT_SCENE_DT, zstd_level: DEFAULT_ZSTD_LEVEL, zstd_threads: DEFAULT_ZSTD_THREADS, resolution: Resolution::Compact, epoch_s: 0 }
+        RecordOptions {
+            enabled: true,
+            trajectories: TrajectoryKeep::All,
+            every: 1,
+            scene_dt: DEFAULT_SCENE_DT,
+            zstd_level: DEFAULT_ZSTD_LEVEL,
+            zstd_threads: DEFAULT_ZSTD_THREADS,
+            resolution: Resolution::Compact,
+            epoch_s: 0,
+        }
     }
 }
 
 impl RecordOptions {
     /// Nothing recorded.
     pub fn none() -> Self {
-        RecordOptions { enabled: false, trajectories: TrajectoryKeep::None, every: 1, scene_dt: 0.0, zstd_level: DEFAULT_ZSTD_LEVEL, zstd_threads: DEFAULT_ZSTD_THREADS, resolution: Resolution::Compact, epoch_s: 0 }
+        RecordOptions {
+            enabled: false,
+            trajectories: TrajectoryKeep::None,
+            every: 1,
+            scene_dt: 0.0,
+            zstd_level: DEFAULT_ZSTD_LEVEL,
+            zstd_threads: DEFAULT_ZSTD_THREADS,
+            resolution: Resolution::Compact,
+            epoch_s: 0,
+        }
     }
     /// These options with the epoch set to the current time when it is still 0 (called
     /// once, where a run folder is created; the epoch is then stored in run.json).

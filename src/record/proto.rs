@@ -108,7 +108,11 @@ pub fn series_descriptor() -> Vec<u8> {
         json_name: Some(name.into()),
         ..Default::default()
     };
-    let msg = DescriptorProto { name: Some("GraspSeries".into()), field: SERIES_FIELDS.into_iter().map(field).collect(), ..Default::default() };
+    let msg = DescriptorProto {
+        name: Some("GraspSeries".into()),
+        field: SERIES_FIELDS.into_iter().map(field).collect(),
+        ..Default::default()
+    };
     let file = FileDescriptorProto {
         name: Some("gripopt/GraspSeries.proto".into()),
         package: Some("gripopt".into()),
@@ -128,9 +132,22 @@ mod tests {
         // every field gets a distinct value; decode the bytes by hand with the table
         let mut m = GraspSeries { design_id: 7, full_resolution: true, simulated_samples: 3, ..Default::default() };
         let cols: [&mut Vec<f64>; 16] = [
-            &mut m.t, &mut m.q11, &mut m.q21, &mut m.q11_dot, &mut m.q21_dot, &mut m.theta2, &mut m.proximal_penetration, &mut m.distal_penetration,
-            &mut m.proximal_normal_force, &mut m.distal_normal_force, &mut m.proximal_friction_force, &mut m.distal_friction_force, &mut m.hand_force,
-            &mut m.filtered_hand_force, &mut m.energy, &mut m.energy_excess,
+            &mut m.t,
+            &mut m.q11,
+            &mut m.q21,
+            &mut m.q11_dot,
+            &mut m.q21_dot,
+            &mut m.theta2,
+            &mut m.proximal_penetration,
+            &mut m.distal_penetration,
+            &mut m.proximal_normal_force,
+            &mut m.distal_normal_force,
+            &mut m.proximal_friction_force,
+            &mut m.distal_friction_force,
+            &mut m.hand_force,
+            &mut m.filtered_hand_force,
+            &mut m.energy,
+            &mut m.energy_excess,
         ];
         for (k, c) in cols.into_iter().enumerate() {
             c.push(k as f64 + 0.5);

@@ -46,7 +46,11 @@ impl Recovery {
                 b += 1;
             }
             k += 1;
-            let (gens, files) = if a == b { (format!("generation {a} has"), format!("gen-{a:05}.mcap")) } else { (format!("generations {a}..={b} have"), format!("gen-{a:05}.mcap..gen-{b:05}.mcap")) };
+            let (gens, files) = if a == b {
+                (format!("generation {a} has"), format!("gen-{a:05}.mcap"))
+            } else {
+                (format!("generations {a}..={b} have"), format!("gen-{a:05}.mcap..gen-{b:05}.mcap"))
+            };
             out.push(format!("{}: {gens} no shard ({files}): those designs are not in the recording; restore the file(s) and resume again to index them", dir.display()));
         }
         out
@@ -64,11 +68,19 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
     let bad = |message: String| Error::Recording { path: path.to_path_buf(), message };
     let buf = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the shard", e))?;
     let summary = mcap::Summary::read(&buf)
-        .map_err(|source| Error::DamagedRecording { path: path.to_path_buf(), what: "cannot read the MCAP summary (the file is truncated or damaged)".into(), source: source.into() })?
+        .map_err(|source| Error::DamagedRecording {
+            path: path.to_path_buf(),
+            what: "cannot read the MCAP summary (the file is truncated or damaged)".into(),
+            source: source.into(),
+        })?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
     let (mut generation, mut first, mut last, mut count, mut epoch_s) = (None, None, None, None, 0u64);
     for mi in summary.metadata_indexes.iter().filter(|m| m.name == "gripopt.run") {
-        let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording { path: path.to_path_buf(), what: "cannot read the metadata record".into(), source: source.into() })?;
+        let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording {
+            path: path.to_path_buf(),
+            what: "cannot read the metadata record".into(),
+            source: source.into(),
+        })?;
         let num = |k: &str| m.metadata.get(k).and_then(|g| g.parse::<u64>().ok());
         generation = num("generation");
         first = num("first_id");
@@ -76,19 +88,29 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         count = num("designs");
         epoch_s = num("epoch_s").unwrap_or(0);
     }
-    let generation = generation.or_else(|| shard_generation(&file)).ok_or_else(|| bad("no generation in the metadata or the file name".into()))?;
+    let generation = generation
+        .or_else(|| shard_generation(&file))
+        .ok_or_else(|| bad("no generation in the metadata or the file name".into()))?;
     let start = summary.chunk_indexes.iter().map(|c| c.message_start_time).min();
     let end = summary.chunk_indexes.iter().map(|c| c.message_end_time).max();
     let (Some(start), Some(end)) = (start, end) else { return Err(bad("the shard holds no messages".into())) };
     let designs_channel = summary.channels.values().find(|c| c.topic == "/designs").map(|c| c.id);
-    let designs = count.or(match (&summary.stats, designs_channel) {
-        (Some(st), Some(ch)) => st.channel_message_counts.get(&ch).copied(),
-        _ => None,
-    })
-    .unwrap_or(summary.chunk_indexes.len() as u64);
+    let designs = count
+        .or(match (&summary.stats, designs_channel) {
+            (Some(st), Some(ch)) => st.channel_message_counts.get(&ch).copied(),
+            _ => None,
+        })
+        .unwrap_or(summary.chunk_indexes.len() as u64);
     let bytes = buf.len() as u64;
     let id_at = |t: u64| (t / 1_000_000_000).saturating_sub(epoch_s);
-    Ok(ShardEntry { generation, file, first_id: first.unwrap_or(id_at(start)), last_id: last.unwrap_or(id_at(end)), designs, bytes })
+    Ok(ShardEntry {
+        generation,
+        file,
+        first_id: first.unwrap_or(id_at(start)),
+        last_id: last.unwrap_or(id_at(end)),
+        designs,
+        bytes,
+    })
 }
 
 /// What is wrong with a shard, without its path (the caller names it).
@@ -144,16 +166,23 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
                 continue;
             }
         }
-        let refuse = |why: String| Error::Recording {
+        let refuse = |why: String| {
+            Error::Recording {
             path: p.clone(),
             message: format!("{why}; the index cannot be rebuilt without it (generation {g} is covered by the checkpoint): restore the file, or move it away to resume without its designs"),
+        }
         };
         match index_entry_from_shard(&p) {
             Ok(e) if e.generation == g => {
                 out.rebuilt.push(n.clone());
                 out.index.push(e);
             }
-            Ok(e) => return Err(refuse(format!("its metadata names generation {}, its file name generation {g}", e.generation))),
+            Ok(e) => {
+                return Err(refuse(format!(
+                    "its metadata names generation {}, its file name generation {g}",
+                    e.generation
+                )))
+            }
             Err(e) => return Err(refuse(format!("cannot read its metadata ({})", detail(&e)))),
         }
     }
@@ -161,7 +190,11 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
     out.missing = (1..=completed).filter(|g| !out.index.iter().any(|e| e.generation == *g)).collect();
     for n in remove {
         let p = dir.join(&n);
-        let what = if n.ends_with(".tmp") { "cannot remove the temporary file" } else { "cannot remove the shard of a generation after the checkpoint" };
+        let what = if n.ends_with(".tmp") {
+            "cannot remove the temporary file"
+        } else {
+            "cannot remove the shard of a generation after the checkpoint"
+        };
         std::fs::remove_file(&p).map_err(|e| Error::io(&p, what, e))?;
         out.removed.push(n);
     }

@@ -6,11 +6,11 @@ use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
 use super::writer::{read_index, ShardEntry};
 use super::{RecordOptions, Resolution};
-use prost::Message;
-use crate::{Error, Result};
 use crate::eval::{evaluate_with_trajectory, EvalOptions};
 use crate::params::{Design, Problem};
 use crate::sim::Sample;
+use crate::{Error, Result};
+use prost::Message;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -31,11 +31,13 @@ impl Recorded {
     /// The design of the `/designs` record (its `parameters`; errors name the shard).
     pub fn design(&self) -> Result<Design> {
         let p = &self.record["parameters"];
-        let x: Vec<f64> = ["l21", "b", "t22", "r", "p", "psi_deg"]
-            .iter()
-            .map(|k| p[k].as_f64())
-            .collect::<Option<_>>()
-            .ok_or_else(|| Error::Recording { path: self.file.clone(), message: format!("design {}: field `parameters` incomplete", self.record["id"]) })?;
+        let x: Vec<f64> =
+            ["l21", "b", "t22", "r", "p", "psi_deg"].iter().map(|k| p[k].as_f64()).collect::<Option<_>>().ok_or_else(
+                || Error::Recording {
+                    path: self.file.clone(),
+                    message: format!("design {}: field `parameters` incomplete", self.record["id"]),
+                },
+            )?;
         Ok(Design::from_array(&x.try_into().expect("six")))
     }
 }
@@ -68,9 +70,19 @@ fn compare_values(rec: &Value, ev: &crate::eval::Evaluation) -> (usize, bool, f6
     let st = ev.statics;
     let t_stab = ev.dynamics.as_ref().and_then(|d| d.t_stab);
     // the optimiser's negative max_offset placeholder (MODEL.md §6.7) is not a value
-    let fresh_obj = [st.map(|s| s.max_offset).filter(|m| *m >= 0.0), st.map(|s| s.alpha).filter(|a| a.is_finite()), st.map(|s| s.mean_force), t_stab];
+    let fresh_obj = [
+        st.map(|s| s.max_offset).filter(|m| *m >= 0.0),
+        st.map(|s| s.alpha).filter(|a| a.is_finite()),
+        st.map(|s| s.mean_force),
+        t_stab,
+    ];
     let o = &rec["objectives"];
-    let rec_obj = [o["max_offset"].as_f64().filter(|m| *m >= 0.0), o["alpha"].as_f64(), o["mean_force"].as_f64(), o["t_stab"].as_f64()];
+    let rec_obj = [
+        o["max_offset"].as_f64().filter(|m| *m >= 0.0),
+        o["alpha"].as_f64(),
+        o["mean_force"].as_f64(),
+        o["t_stab"].as_f64(),
+    ];
     let (mut n, mut alike, mut maxd) = (0usize, true, 0.0f64);
     let mut num = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (Some(a), Some(b)) => {
@@ -127,7 +139,11 @@ fn not_indexed(dir: &Path, index: &[ShardEntry], id: u64) -> String {
             _ => ranges.push((e.first_id, e.last_id)),
         }
     }
-    let recorded = if ranges.is_empty() { "none".to_string() } else { ranges.iter().map(|(a, b)| format!("{a}..={b}")).collect::<Vec<_>>().join(", ") };
+    let recorded = if ranges.is_empty() {
+        "none".to_string()
+    } else {
+        ranges.iter().map(|(a, b)| format!("{a}..={b}")).collect::<Vec<_>>().join(", ")
+    };
     let before = by_id.iter().rev().find(|e| e.last_id < id);
     let Some(after) = by_id.iter().find(|e| e.first_id > id) else {
         return format!("design {id} is not in this index (recorded ids: {recorded})");
@@ -142,8 +158,12 @@ fn not_indexed(dir: &Path, index: &[ShardEntry], id: u64) -> String {
             format!("generation {g0}, whose shard {f} {state}")
         }
         std::cmp::Ordering::Greater => {
-            let files: Vec<String> = (g0..=g1).map(|g| format!("gen-{g:05}.mcap")).filter(|f| !dir.join(f).exists()).collect();
-            format!("generations {g0}..={g1} (missing shards: {})", if files.is_empty() { "none".into() } else { files.join(", ") })
+            let files: Vec<String> =
+                (g0..=g1).map(|g| format!("gen-{g:05}.mcap")).filter(|f| !dir.join(f).exists()).collect();
+            format!(
+                "generations {g0}..={g1} (missing shards: {})",
+                if files.is_empty() { "none".into() } else { files.join(", ") }
+            )
         }
     };
     format!(
@@ -161,7 +181,10 @@ const MAX_CHUNK_BYTES: u64 = 1 << 30;
 fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Result<(), String> {
     let u64_at = |at: usize| buf.get(at..at + 8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
     let start = usize::try_from(ci.chunk_start_offset).map_err(|_| "offset beyond the file".to_string())?;
-    ci.chunk_start_offset.checked_add(ci.chunk_length).filter(|e| *e <= buf.len() as u64).ok_or("the chunk index points beyond the end of the file")?;
+    ci.chunk_start_offset
+        .checked_add(ci.chunk_length)
+        .filter(|e| *e <= buf.len() as u64)
+        .ok_or("the chunk index points beyond the end of the file")?;
     if buf.get(start) != Some(&0x06) {
         return Err("no chunk record at the offset the chunk index gives".into());
     }
@@ -173,7 +196,11 @@ fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Resul
     ];
     for (name, in_file, in_index) in fields {
         if in_file.is_none() || in_file != in_index {
-            return Err(format!("its {name} ({}) differs from the chunk index's ({})", in_file.map_or("missing".into(), |v| v.to_string()), in_index.map_or("invalid".into(), |v| v.to_string())));
+            return Err(format!(
+                "its {name} ({}) differs from the chunk index's ({})",
+                in_file.map_or("missing".into(), |v| v.to_string()),
+                in_index.map_or("invalid".into(), |v| v.to_string())
+            ));
         }
     }
     if ci.uncompressed_size > MAX_CHUNK_BYTES {
@@ -186,7 +213,10 @@ fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Resul
 pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
     if !dir.exists() {
-        return Err(Error::Recording { path: run_dir.to_path_buf(), message: format!("no recording ({} is missing; was the run started with --record none?)", dir.display()) });
+        return Err(Error::Recording {
+            path: run_dir.to_path_buf(),
+            message: format!("no recording ({} is missing; was the run started with --record none?)", dir.display()),
+        });
     }
     let index = read_index(&dir)?;
     let entry = index
@@ -196,7 +226,9 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let path = dir.join(&entry.file);
     let buf = mmap(&path)?;
     let bad = |message: String| Error::Recording { path: path.clone(), message };
-    let mc = |what: String| |source: mcap::McapError| Error::DamagedRecording { path: path.clone(), what, source: source.into() };
+    let mc = |what: String| {
+        |source: mcap::McapError| Error::DamagedRecording { path: path.clone(), what, source: source.into() }
+    };
     let summary = mcap::Summary::read(&buf)
         .map_err(mc("cannot read the MCAP summary (the file is truncated or damaged)".into()))?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
@@ -206,8 +238,12 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
         .iter()
         .find(|m| m.name == "gripopt.run")
         .ok_or_else(|| bad("no gripopt.run metadata record".into()))
-        .and_then(|mi| mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into())))?;
-    let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into()))?;
+        .and_then(|mi| {
+            mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into()))
+        })?;
+    let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| {
+        bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into())
+    })?;
     let resolution = match meta.metadata.get("resolution").map(String::as_str) {
         Some("full") => Resolution::Full,
         Some("compact") => Resolution::Compact,
@@ -217,16 +253,31 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let (lo, hi) = (window_start_ns(epoch_ns, id), window_start_ns(epoch_ns, id + 1));
     let (mut design, mut series) = (None, None);
     for ci in summary.chunk_indexes.iter().filter(|c| c.message_start_time < hi && c.message_end_time >= lo) {
-        check_chunk(&buf, ci).map_err(|m| bad(format!("the file is damaged: chunk at offset {}: {m}", ci.chunk_start_offset)))?;
+        check_chunk(&buf, ci)
+            .map_err(|m| bad(format!("the file is damaged: chunk at offset {}: {m}", ci.chunk_start_offset)))?;
         let at = ci.chunk_start_offset;
-        for m in summary.stream_chunk(&buf, ci).map_err(mc(format!("cannot read the chunk at offset {at} (the file is damaged)")))? {
-            let m = m.map_err(mc(format!("cannot read a message of the chunk at offset {at} (the file is damaged)")))?;
+        for m in summary
+            .stream_chunk(&buf, ci)
+            .map_err(mc(format!("cannot read the chunk at offset {at} (the file is damaged)")))?
+        {
+            let m =
+                m.map_err(mc(format!("cannot read a message of the chunk at offset {at} (the file is damaged)")))?;
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }
             match m.channel.topic.as_str() {
-                "/designs" => design = Some(serde_json::from_slice::<Value>(&m.data).map_err(|e| bad(format!("/designs message at {} ns is not JSON: {e}", m.log_time)))?),
-                "/grasp/series" => series = Some(GraspSeries::decode(&m.data[..]).map_err(|e| bad(format!("/grasp/series message at {} ns: {e}", m.log_time)))?),
+                "/designs" => {
+                    design = Some(
+                        serde_json::from_slice::<Value>(&m.data)
+                            .map_err(|e| bad(format!("/designs message at {} ns is not JSON: {e}", m.log_time)))?,
+                    )
+                }
+                "/grasp/series" => {
+                    series = Some(
+                        GraspSeries::decode(&m.data[..])
+                            .map_err(|e| bad(format!("/grasp/series message at {} ns: {e}", m.log_time)))?,
+                    )
+                }
                 _ => {}
             }
         }
@@ -236,7 +287,8 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     if series.design_id != id {
         return Err(bad(format!("the /grasp/series message in design {id}'s window is design {}'s", series.design_id)));
     }
-    let samples = samples_from(&series).ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
+    let samples = samples_from(&series)
+        .ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
     Ok(Recorded { file: path, record, samples, resolution })
 }
 
@@ -255,8 +307,16 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let problem = Problem::load(run_dir.join("problem.toml"))?;
     let run_json = run_dir.join("run.json");
     let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
-    let run: Value = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
-    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|source| Error::Json { path: run_json.clone(), what: "field `recording`", source })?;
+    let run: Value = serde_json::from_str(&text).map_err(|source| Error::Json {
+        path: run_json.clone(),
+        what: "invalid run.json",
+        source,
+    })?;
+    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|source| Error::Json {
+        path: run_json.clone(),
+        what: "field `recording`",
+        source,
+    })?;
     let design = recorded.design()?;
     let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
     let fresh: Vec<Sample> = match tr {
@@ -286,10 +346,22 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let same_len = fresh.len() == recorded.samples.len();
     for (a, b) in fresh.iter().zip(&recorded.samples) {
         let pairs = [
-            (a.t, b.t), (a.q[0], b.q[0]), (a.q[1], b.q[1]), (a.qd[0], b.qd[0]), (a.qd[1], b.qd[1]), (a.theta2, b.theta2),
-            (a.delta[0], b.delta[0]), (a.delta[1], b.delta[1]), (a.normal[0], b.normal[0]), (a.normal[1], b.normal[1]),
-            (a.friction[0], b.friction[0]), (a.friction[1], b.friction[1]), (a.hand_fy, b.hand_fy), (a.filtered_fy, b.filtered_fy),
-            (a.energy, b.energy), (a.energy_excess, b.energy_excess),
+            (a.t, b.t),
+            (a.q[0], b.q[0]),
+            (a.q[1], b.q[1]),
+            (a.qd[0], b.qd[0]),
+            (a.qd[1], b.qd[1]),
+            (a.theta2, b.theta2),
+            (a.delta[0], b.delta[0]),
+            (a.delta[1], b.delta[1]),
+            (a.normal[0], b.normal[0]),
+            (a.normal[1], b.normal[1]),
+            (a.friction[0], b.friction[0]),
+            (a.friction[1], b.friction[1]),
+            (a.hand_fy, b.hand_fy),
+            (a.filtered_fy, b.filtered_fy),
+            (a.energy, b.energy),
+            (a.energy_excess, b.energy_excess),
         ];
         for (u, v) in pairs {
             maxd = maxd.max(rel(u, v));
@@ -305,5 +377,12 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &ev);
     let verified = same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol;
     let maxd = maxd.max(vmaxd);
-    Ok(Replay { compared: fresh.len().min(recorded.samples.len()), values_compared, recorded, verified, max_difference: if same_len && alike { maxd } else { f64::INFINITY }, recomputed_feasible: ev.feasible() })
+    Ok(Replay {
+        compared: fresh.len().min(recorded.samples.len()),
+        values_compared,
+        recorded,
+        verified,
+        max_difference: if same_len && alike { maxd } else { f64::INFINITY },
+        recomputed_feasible: ev.feasible(),
+    })
 }

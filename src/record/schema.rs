@@ -49,7 +49,21 @@ pub fn design() -> Value {
             },
             "trajectory_samples": int()
         }),
-        &["id", "generation", "problem", "window_start", "window_start_s", "epoch_s", "parameters", "derived", "stages_passed", "feasible", "objectives", "stage_seconds", "trajectory_samples"],
+        &[
+            "id",
+            "generation",
+            "problem",
+            "window_start",
+            "window_start_s",
+            "epoch_s",
+            "parameters",
+            "derived",
+            "stages_passed",
+            "feasible",
+            "objectives",
+            "stage_seconds",
+            "trajectory_samples",
+        ],
     );
     s["title"] = "gripopt.Design".into();
     s

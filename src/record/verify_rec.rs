@@ -139,8 +139,23 @@ pub fn verify_schema() -> Value {
             "peak_e_trans_ratio": num(), "peak_e_rot_ratio": num(), "t_end": num(), "poses": int()
         }),
         &[
-            "window", "window_start", "window_start_s", "epoch_s", "id", "parameters", "x_off", "stable", "predicted_moves", "object_max_displacement", "object_max_tilt_deg",
-            "object_peak_e_trans", "object_peak_e_rot", "free_end", "rim_contact", "t_end", "poses",
+            "window",
+            "window_start",
+            "window_start_s",
+            "epoch_s",
+            "id",
+            "parameters",
+            "x_off",
+            "stable",
+            "predicted_moves",
+            "object_max_displacement",
+            "object_max_tilt_deg",
+            "object_peak_e_trans",
+            "object_peak_e_rot",
+            "free_end",
+            "rim_contact",
+            "t_end",
+            "poses",
         ],
     );
     s["title"] = "gripopt.Verify".into();
@@ -236,7 +251,13 @@ fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions
 /// statistics, chunk and message indexes). Besides `meta`, the `gripopt.verify` metadata
 /// record holds `designs`, `first_window`, `last_window`, `epoch_s`, `scene_dt` and
 /// `time_convention`. Returns the file size in bytes.
-pub fn write_verify(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, entries: &[VerifyEntry], opts: &VerifyRecordOptions) -> Result<u64> {
+pub fn write_verify(
+    path: &Path,
+    problem: &Problem,
+    meta: &BTreeMap<String, String>,
+    entries: &[VerifyEntry],
+    opts: &VerifyRecordOptions,
+) -> Result<u64> {
     let tmp = super::mcapfile::temporary(path);
     let mc = super::mcapfile::error(&tmp);
     let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
@@ -250,13 +271,16 @@ pub fn write_verify(path: &Path, problem: &Problem, meta: &BTreeMap<String, Stri
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
     let none = BTreeMap::new();
-    let verify_schema = w.add_schema("gripopt.Verify", "jsonschema", &serde_json::to_vec(&verify_schema()).expect("schema serialises")).map_err(mc)?;
+    let verify_schema = w
+        .add_schema("gripopt.Verify", "jsonschema", &serde_json::to_vec(&verify_schema()).expect("schema serialises"))
+        .map_err(mc)?;
     let mut fox = |s: Option<foxglove::Schema>| -> Result<u16> {
         let s = s.expect("the SDK's message types have schemas");
         w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
     };
     let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
-    let schema_of = [(verify_schema, "json"), (tf_schema, "protobuf"), (scene_schema, "protobuf"), (scene_schema, "protobuf")];
+    let schema_of =
+        [(verify_schema, "json"), (tf_schema, "protobuf"), (scene_schema, "protobuf"), (scene_schema, "protobuf")];
     let mut chans = [0u16; 4];
     for (k, topic) in TOPICS.iter().enumerate() {
         chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
@@ -265,7 +289,11 @@ pub fn write_verify(path: &Path, problem: &Problem, meta: &BTreeMap<String, Stri
     for (k, e) in entries.iter().enumerate() {
         for (c, t_ns, data) in encode(k as u64, e, problem, opts) {
             seq[c] += 1;
-            w.write_to_known_channel(&MessageHeader { channel_id: chans[c], sequence: seq[c], log_time: t_ns, publish_time: t_ns }, &data).map_err(mc)?;
+            w.write_to_known_channel(
+                &MessageHeader { channel_id: chans[c], sequence: seq[c], log_time: t_ns, publish_time: t_ns },
+                &data,
+            )
+            .map_err(mc)?;
         }
         w.flush().map_err(mc)?; // one chunk per design
     }

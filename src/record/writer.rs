@@ -2,14 +2,14 @@
 
 use super::entry::{DesignEntry, Recordable};
 use super::{messages, proto, schema, RecordOptions};
-use foxglove::messages::{FrameTransforms, SceneUpdate};
-use foxglove::Encode;
-use prost::Message;
-use crate::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::model::Finger;
 use crate::params::{Design, Problem};
+use crate::{Error, Result};
+use foxglove::messages::{FrameTransforms, SceneUpdate};
+use foxglove::Encode;
 use mcap::records::{MessageHeader, Metadata};
+use prost::Message;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -40,7 +40,10 @@ pub fn read_index(dir: &Path) -> Result<Vec<ShardEntry>> {
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(k, l)| serde_json::from_str(l).map_err(|e| Error::Recording { path: p.clone(), message: format!("line {}: {e}", k + 1) }))
+        .map(|(k, l)| {
+            serde_json::from_str(l)
+                .map_err(|e| Error::Recording { path: p.clone(), message: format!("line {}: {e}", k + 1) })
+        })
         .collect()
 }
 
@@ -48,7 +51,11 @@ fn write_index(dir: &Path, entries: &[ShardEntry]) -> Result<()> {
     let path = dir.join("index.jsonl");
     let mut s = String::new();
     for e in entries {
-        s.push_str(&serde_json::to_string(e).map_err(|source| Error::Json { path: path.clone(), what: "cannot serialise an index line", source })?);
+        s.push_str(&serde_json::to_string(e).map_err(|source| Error::Json {
+            path: path.clone(),
+            what: "cannot serialise an index line",
+            source,
+        })?);
         s.push('\n');
     }
     write_atomic(&path, s.as_bytes())
@@ -80,7 +87,13 @@ fn fx<T: Encode>(m: &T) -> Vec<u8> {
 /// Besides `meta`, the shard's `gripopt.run` metadata record holds `generation` (unless
 /// given: the first design's), `first_id`, `last_id`, `designs`, `epoch_s`, `resolution`
 /// and `time_convention`, so a lost `index.jsonl` can be rebuilt from the shards.
-pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMap<String, String>, designs: &[&R], opts: &RecordOptions) -> Result<u64> {
+pub fn write_shard<R: Recordable>(
+    path: &Path,
+    problem: &Problem,
+    meta: &BTreeMap<String, String>,
+    designs: &[&R],
+    opts: &RecordOptions,
+) -> Result<u64> {
     let tmp = super::mcapfile::temporary(path);
     let mc = super::mcapfile::error(&tmp);
     // the shard is framed in memory and written with one call
@@ -94,19 +107,33 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
     }
     meta.insert("designs".into(), designs.len().to_string());
     meta.insert("epoch_s".into(), opts.epoch_s.to_string());
-    meta.insert("resolution".into(), serde_json::to_value(opts.resolution).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default());
-    meta.insert("time_convention".into(), "design k: log_time in [epoch_s + k s, epoch_s + k s + 1 s); simulated time t at epoch_s + k s + t".into());
+    meta.insert(
+        "resolution".into(),
+        serde_json::to_value(opts.resolution).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(),
+    );
+    meta.insert(
+        "time_convention".into(),
+        "design k: log_time in [epoch_s + k s, epoch_s + k s + 1 s); simulated time t at epoch_s + k s + t".into(),
+    );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
     let none = BTreeMap::new();
-    let design_schema = w.add_schema("gripopt.Design", "jsonschema", &serde_json::to_vec(&schema::design()).expect("schema serialises")).map_err(mc)?;
+    let design_schema = w
+        .add_schema("gripopt.Design", "jsonschema", &serde_json::to_vec(&schema::design()).expect("schema serialises"))
+        .map_err(mc)?;
     let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
     let mut fox = |s: Option<foxglove::Schema>| -> Result<u16> {
         let s = s.expect("the SDK's message types have schemas");
         w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
     };
     let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
-    let schema_of = [(design_schema, "json"), (series_schema, "protobuf"), (tf_schema, "protobuf"), (scene_schema, "protobuf"), (scene_schema, "protobuf")];
+    let schema_of = [
+        (design_schema, "json"),
+        (series_schema, "protobuf"),
+        (tf_schema, "protobuf"),
+        (scene_schema, "protobuf"),
+        (scene_schema, "protobuf"),
+    ];
     let mut chans = [0u16; 5];
     for (k, topic) in TOPICS.iter().enumerate() {
         if k >= Ch::Tf as usize && opts.scene_dt <= 0.0 {
@@ -115,13 +142,18 @@ pub fn write_shard<R: Recordable>(path: &Path, problem: &Problem, meta: &BTreeMa
         chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
     }
     // encode every design's messages in parallel, then write them in order
-    let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> = designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
+    let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> =
+        designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
     let mut seq = [0u32; 5];
     for msgs in encoded {
         for (k, t_ns, data) in msgs {
             let k = k as usize;
             seq[k] += 1;
-            w.write_to_known_channel(&MessageHeader { channel_id: chans[k], sequence: seq[k], log_time: t_ns, publish_time: t_ns }, &data).map_err(mc)?;
+            w.write_to_known_channel(
+                &MessageHeader { channel_id: chans[k], sequence: seq[k], log_time: t_ns, publish_time: t_ns },
+                &data,
+            )
+            .map_err(mc)?;
         }
         w.flush().map_err(mc)?; // one chunk per design
     }
@@ -138,7 +170,8 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let samples = d.trajectory.map_or(&[][..], |t| &t.samples[..]);
     let kept = opts.kept_samples(samples);
     let record = serde_json::to_vec(&messages::design(d, &problem.name, t0, opts.epoch_s)).expect("records serialise");
-    let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
+    let mut out =
+        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
     if opts.scene_dt <= 0.0 {
         return out;
     }
@@ -213,7 +246,14 @@ impl ShardTask {
         designs.sort_by_key(|d| d.entry().id);
         let bytes = write_shard(&self.path, &self.problem, &self.meta, &designs, &self.opts)?;
         let (first_id, last_id) = (designs[0].entry().id, designs[designs.len() - 1].entry().id);
-        let e = ShardEntry { generation: self.generation, file: self.file.clone(), first_id, last_id, designs: designs.len() as u64, bytes };
+        let e = ShardEntry {
+            generation: self.generation,
+            file: self.file.clone(),
+            first_id,
+            last_id,
+            designs: designs.len() as u64,
+            bytes,
+        };
         Ok(Some((e, t0.elapsed().as_secs_f64())))
     }
 }
@@ -222,7 +262,13 @@ impl Recorder {
     /// Open `RUN_DIR/recording`, dropping shards of generations after `completed` (left by a
     /// generation that was being recorded when the run stopped); an error when a covered
     /// shard cannot be re-indexed (see `recover`).
-    pub fn open(run_dir: &Path, problem: Problem, meta: BTreeMap<String, String>, opts: RecordOptions, completed: u64) -> Result<Self> {
+    pub fn open(
+        run_dir: &Path,
+        problem: Problem,
+        meta: BTreeMap<String, String>,
+        opts: RecordOptions,
+        completed: u64,
+    ) -> Result<Self> {
         let dir = run_dir.join("recording");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
         // never deletes what the checkpoint covers; refuses (touching nothing) when a covered
@@ -230,7 +276,16 @@ impl Recorder {
         let recovery = super::recover::recover(&dir, completed)?;
         let warnings = recovery.warnings(&dir);
         write_index(&dir, &recovery.index)?;
-        Ok(Recorder { dir, problem: Arc::new(problem), meta, opts, index: recovery.index, bytes: 0, seconds: 0.0, warnings })
+        Ok(Recorder {
+            dir,
+            problem: Arc::new(problem),
+            meta,
+            opts,
+            index: recovery.index,
+            bytes: 0,
+            seconds: 0.0,
+            warnings,
+        })
     }
 
     /// The shard of generation `generation`, to be written by [`ShardTask::write`]; None
@@ -242,7 +297,14 @@ impl Recorder {
         let file = format!("gen-{generation:05}.mcap");
         let mut meta = self.meta.clone();
         meta.insert("generation".into(), generation.to_string());
-        Some(ShardTask { path: self.dir.join(&file), file, generation, problem: self.problem.clone(), meta, opts: self.opts })
+        Some(ShardTask {
+            path: self.dir.join(&file),
+            file,
+            generation,
+            problem: self.problem.clone(),
+            meta,
+            opts: self.opts,
+        })
     }
 
     /// Enter a written shard in `index.jsonl` (replacing an entry of the same generation;

@@ -10,9 +10,9 @@
 //! resumed run equals that of an uninterrupted one.
 
 use super::gripper::GripperInfo;
-use crate::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::optim::{hypervolume, pareto_ranks, Individual, Nsga2Settings, Nsga2State};
+use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -34,7 +34,11 @@ impl Archive {
     pub fn load(dir: &Path) -> Result<Self> {
         let p = dir.join(ARCHIVE_FILE);
         match std::fs::read(&p) {
-            Ok(b) => serde_json::from_slice(&b).map_err(|source| Error::Json { path: p, what: "not a valid archive", source }),
+            Ok(b) => serde_json::from_slice(&b).map_err(|source| Error::Json {
+                path: p,
+                what: "not a valid archive",
+                source,
+            }),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Archive::default()),
             Err(e) => Err(Error::io(p, "cannot read the archive", e)),
         }
@@ -48,7 +52,11 @@ impl Archive {
     /// The bytes [`Archive::save`] writes into `dir` (serialised now, written later by
     /// `save_bytes`).
     pub fn to_bytes(&self, dir: &Path) -> Result<Vec<u8>> {
-        serde_json::to_vec(self).map_err(|source| Error::Json { path: dir.join(ARCHIVE_FILE), what: "cannot serialise the archive", source })
+        serde_json::to_vec(self).map_err(|source| Error::Json {
+            path: dir.join(ARCHIVE_FILE),
+            what: "cannot serialise the archive",
+            source,
+        })
     }
 
     /// Add the feasible designs evaluated in `st`'s last generation, keep the non-dominated
@@ -89,6 +97,11 @@ pub fn normalised_hv(members: &[Individual<GripperInfo>], s: &Nsga2Settings) -> 
     if s.hv_ref.is_empty() {
         return f64::NAN;
     }
-    let pts: Vec<Vec<f64>> = members.iter().map(|p| p.eval.f.iter().enumerate().map(|(k, v)| (v - s.hv_ideal[k]) / (s.hv_ref[k] - s.hv_ideal[k])).collect()).collect();
+    let pts: Vec<Vec<f64>> = members
+        .iter()
+        .map(|p| {
+            p.eval.f.iter().enumerate().map(|(k, v)| (v - s.hv_ideal[k]) / (s.hv_ref[k] - s.hv_ideal[k])).collect()
+        })
+        .collect();
     hypervolume(&pts, &vec![1.0; s.hv_ref.len()])
 }

@@ -4,9 +4,9 @@
 //! of its own content (`sha256`: the canonical JSON of every other field, keys sorted), so
 //! that a hand-edited or damaged checkpoint is refused (unless forced).
 
-use crate::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::optim::{Nsga2Settings, Nsga2State};
+use crate::{Error, Result};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -82,9 +82,24 @@ pub fn settings_hash(settings: &Nsga2Settings, options: &serde_json::Value) -> S
 
 impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     /// A checkpoint of `state` in the current format, with the hash of `settings` and `options`.
-    pub fn new(problem_hash: String, settings: Nsga2Settings, options: serde_json::Value, state: Nsga2State<I>, wall_s: f64) -> Self {
+    pub fn new(
+        problem_hash: String,
+        settings: Nsga2Settings,
+        options: serde_json::Value,
+        state: Nsga2State<I>,
+        wall_s: f64,
+    ) -> Self {
         let settings_hash = settings_hash(&settings, &options);
-        Checkpoint { format: FORMAT.into(), version: VERSION, problem_hash, settings_hash, settings, options, state, wall_s }
+        Checkpoint {
+            format: FORMAT.into(),
+            version: VERSION,
+            problem_hash,
+            settings_hash,
+            settings,
+            options,
+            state,
+            wall_s,
+        }
     }
 
     /// Save atomically, with the content checksum `sha256`.
@@ -115,8 +130,11 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     pub fn load_unverified(path: &Path) -> Result<(Self, Option<ChecksumMismatch>)> {
         let invalid = |message: String| Error::Checkpoint { file: path.to_path_buf(), message };
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the checkpoint", e))?;
-        let head: serde_json::Value =
-            serde_json::from_slice(&bytes).map_err(|source| Error::Json { path: path.to_path_buf(), what: "not a valid gripopt checkpoint: not JSON; the file may be truncated", source })?;
+        let head: serde_json::Value = serde_json::from_slice(&bytes).map_err(|source| Error::Json {
+            path: path.to_path_buf(),
+            what: "not a valid gripopt checkpoint: not JSON; the file may be truncated",
+            source,
+        })?;
         let fmt = head.get("format").and_then(|v| v.as_str());
         if fmt != Some(FORMAT) {
             return Err(invalid(format!("field `format` is {fmt:?}, expected \"{FORMAT}\"")));
@@ -127,9 +145,18 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         }
         let mut head = head;
         let stored = head.as_object_mut().and_then(|m| m.remove("sha256")).and_then(|v| v.as_str().map(String::from));
-        let computed = content_sha256(&head).map_err(|source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source })?;
-        let mismatch = (stored.as_deref() != Some(computed.as_str())).then(|| ChecksumMismatch { stored: stored.clone(), computed });
-        let cp: Self = serde_json::from_value(head).map_err(|source| Error::Json { path: path.to_path_buf(), what: "not a valid gripopt checkpoint", source })?;
+        let computed = content_sha256(&head).map_err(|source| Error::Json {
+            path: path.to_path_buf(),
+            what: "cannot serialise the checkpoint",
+            source,
+        })?;
+        let mismatch = (stored.as_deref() != Some(computed.as_str()))
+            .then(|| ChecksumMismatch { stored: stored.clone(), computed });
+        let cp: Self = serde_json::from_value(head).map_err(|source| Error::Json {
+            path: path.to_path_buf(),
+            what: "not a valid gripopt checkpoint",
+            source,
+        })?;
         let st = &cp.state;
         let consistent = st.population.len() == cp.settings.pop_size
             && st.rank.len() == st.population.len()
@@ -137,7 +164,9 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             && st.generation >= 1
             && st.hv_history.len() as u64 == st.generation;
         if !consistent {
-            return Err(invalid("field `state` is inconsistent (population, ranks, generation and history disagree)".into()));
+            return Err(invalid(
+                "field `state` is inconsistent (population, ranks, generation and history disagree)".into(),
+            ));
         }
         Ok((cp, mismatch))
     }

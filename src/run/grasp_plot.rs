@@ -14,7 +14,8 @@ pub fn grasp_plot(path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
     let panels = root.split_evenly((3, 1));
     let tmax = samples.last().map_or(1e-3, |x| x.t).max(1e-6) * 1e3;
     let range = |vals: &mut dyn Iterator<Item = f64>| {
-        let (lo, hi) = vals.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        let (lo, hi) =
+            vals.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
         if lo.is_finite() {
             let pad = 0.05 * (hi - lo).max(1e-9);
             (lo - pad, hi + pad)
@@ -63,7 +64,10 @@ pub fn grasp_plot(path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
     let clip = |v: f64| v.clamp(-3.0 * fscale, 3.0 * fscale);
     let (lo, hi) = range(&mut samples.iter().flat_map(|x| [clip(x.hand_fy), x.filtered_fy]));
     let mut c = ChartBuilder::on(&panels[2])
-        .caption("hand force F_hand,y on the object (N): low-pass filtered (force criterion) and raw, clipped", ("sans-serif", 16))
+        .caption(
+            "hand force F_hand,y on the object (N): low-pass filtered (force criterion) and raw, clipped",
+            ("sans-serif", 16),
+        )
         .margin(10)
         .x_label_area_size(30)
         .y_label_area_size(60)

@@ -2,8 +2,8 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::eval::{evaluate_dynamics, evaluate_statics, stage3_ends_at_once, EvalOptions, Evaluation};
+use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, Recordable};
 use serde::{Deserialize, Serialize};
@@ -50,7 +50,12 @@ impl GripperInfo {
         GripperInfo {
             lengths: ev.kin.map(|k| [k.finger.l11, k.finger.l12, k.finger.l22]),
             l_hand: ev.design.l_hand(),
-            objectives: [st.map(|s| s.max_offset), st.map(|s| s.alpha).filter(|a| a.is_finite()), st.map(|s| s.mean_force), t_stab],
+            objectives: [
+                st.map(|s| s.max_offset),
+                st.map(|s| s.alpha).filter(|a| a.is_finite()),
+                st.map(|s| s.mean_force),
+                t_stab,
+            ],
             failed_stage: ev.discard.map(|d| d.stage),
             reason: ev.discard.map(|d| d.reason.to_string()),
             violation: ev.discard.map(|d| d.violation),
@@ -148,7 +153,9 @@ impl MooProblem for GripperProblem {
     fn start(&self, x: &[f64]) -> (Evaluation, CostHint) {
         let ev = evaluate_statics(&design_of(x), &self.problem.scene);
         let hint = match (&ev.kin, &ev.statics) {
-            (Some(k), Some(st)) if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene, &self.options) => {
+            (Some(k), Some(st))
+                if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene, &self.options) =>
+            {
                 let f = &k.finger;
                 let mut v = x.to_vec();
                 v.extend([f.l11, f.l12, f.l22, st.alpha, st.mean_force, st.max_offset]);
@@ -168,7 +175,11 @@ impl MooProblem for GripperProblem {
             keep => {
                 let mut tr = crate::sim::Trajectory::default();
                 let ev = evaluate_dynamics(started, scene, opts, Some(&mut tr));
-                let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) { None } else { Some(tr) };
+                let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) {
+                    None
+                } else {
+                    Some(tr)
+                };
                 (ev, tr)
             }
         };
@@ -185,7 +196,8 @@ impl MooProblem for GripperProblem {
     /// free scene's weighted by `FREE_RHS_WEIGHT`.
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
         let centred = e.info.sim_work.map(|w| w[1] as f64);
-        let free = e.info.free.as_ref().and_then(|v| v.get("free_rhs_evals")?.as_u64()).map(|r| FREE_RHS_WEIGHT * r as f64);
+        let free =
+            e.info.free.as_ref().and_then(|v| v.get("free_rhs_evals")?.as_u64()).map(|r| FREE_RHS_WEIGHT * r as f64);
         match (centred, free) {
             (None, None) => None,
             (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),

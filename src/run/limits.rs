@@ -42,7 +42,11 @@ fn available_memory() -> Option<u64> {
 }
 
 fn gib(b: f64) -> String {
-    if b >= (1u64 << 30) as f64 { format!("{:.1} GiB", b / (1u64 << 30) as f64) } else { format!("{:.0} MiB", b / (1u64 << 20) as f64) }
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.1} GiB", b / (1u64 << 30) as f64)
+    } else {
+        format!("{:.0} MiB", b / (1u64 << 20) as f64)
+    }
 }
 
 /// Check `--pop` and `--generations` before a run allocates anything: pop ≥ 4, generations
@@ -50,7 +54,12 @@ fn gib(b: f64) -> String {
 /// (pop × [`BYTES_PER_DESIGN`], plus 2 × pop × `BYTES_PER_TRAJECTORY` when recording)
 /// within half of the available memory (64 GiB when unknown).
 pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result<()> {
-    let field = |f: &str, v: String, rule: String| Error::InvalidField { file: "command line".into(), field: f.into(), value: v, rule };
+    let field = |f: &str, v: String, rule: String| Error::InvalidField {
+        file: "command line".into(),
+        field: f.into(),
+        value: v,
+        rule,
+    };
     if pop < 4 {
         return Err(field("--pop", pop.to_string(), "must be at least 4".into()));
     }

@@ -5,8 +5,8 @@
 
 use super::archive::Archive;
 use super::gripper::GripperInfo;
-use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::optim::Individual;
+use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::record::Recorder;
 use argmin::core::observers::Observe;
 use argmin::core::{Error, KV};
@@ -31,7 +31,8 @@ impl ProgressObserver {
     pub fn new(total: u64, first: u64, visible: bool) -> Self {
         use std::io::IsTerminal;
         let terminal = std::io::stderr().is_terminal();
-        let bar = if visible && terminal { indicatif::ProgressBar::new(total) } else { indicatif::ProgressBar::hidden() };
+        let bar =
+            if visible && terminal { indicatif::ProgressBar::new(total) } else { indicatif::ProgressBar::hidden() };
         bar.set_style(
             indicatif::ProgressStyle::with_template("{prefix} [{bar:25}] gen {pos}/{len} {msg}")
                 .expect("template")
@@ -39,7 +40,14 @@ impl ProgressObserver {
         );
         bar.set_prefix("NSGA-II");
         bar.set_position(first.saturating_sub(1));
-        ProgressObserver { bar, start: Instant::now(), evals_at_start: None, gen_at_start: None, first_shown: None, log_lines: visible && !terminal }
+        ProgressObserver {
+            bar,
+            start: Instant::now(),
+            evals_at_start: None,
+            gen_at_start: None,
+            first_shown: None,
+            log_lines: visible && !terminal,
+        }
     }
     fn show<I>(&mut self, s: &Nsga2State<I>) {
         // rate and ETA from the generations since the first one shown (measured between two
@@ -49,14 +57,25 @@ impl ProgressObserver {
         let g_first = *self.gen_at_start.get_or_insert(s.generation);
         let t_first = *self.first_shown.get_or_insert(now);
         let since = (now - t_first).as_secs_f64();
-        let rate = if s.evaluations > e0 { (s.evaluations - e0) as f64 / since.max(1e-9) } else { s.population.len() as f64 / (now - self.start).as_secs_f64().max(1e-9) };
-        let per_gen = if s.generation > g_first { since / (s.generation - g_first) as f64 } else { (now - self.start).as_secs_f64() };
+        let rate = if s.evaluations > e0 {
+            (s.evaluations - e0) as f64 / since.max(1e-9)
+        } else {
+            s.population.len() as f64 / (now - self.start).as_secs_f64().max(1e-9)
+        };
+        let per_gen = if s.generation > g_first {
+            since / (s.generation - g_first) as f64
+        } else {
+            (now - self.start).as_secs_f64()
+        };
         let eta = per_gen * s.max_generations.saturating_sub(s.generation) as f64;
         let feas = s.feasible_history.last().copied().unwrap_or(0);
         let hv = s.hv_history.last().copied().unwrap_or(f64::NAN);
         self.bar.set_length(s.max_generations);
         self.bar.set_position(s.generation);
-        self.bar.set_message(format!("{rate:.0} evals/s, feasible {feas}/{}, HV {hv:.4}, ETA {eta:.0} s", s.population.len()));
+        self.bar.set_message(format!(
+            "{rate:.0} evals/s, feasible {feas}/{}, HV {hv:.4}, ETA {eta:.0} s",
+            s.population.len()
+        ));
         if self.log_lines {
             eprintln!(
                 "generation {}/{}  evaluations {}  feasible {feas}/{}  hypervolume {hv:.4}  {rate:.0} evaluations/s  ETA {eta:.0} s",

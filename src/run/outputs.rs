@@ -13,10 +13,10 @@
 
 use super::archive::Archive;
 use super::gripper::{GripperInfo, GripperProblem};
-use crate::Result;
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
 use crate::optim::Nsga2State;
+use crate::Result;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -97,11 +97,23 @@ fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>
         i.failed_stage.map(|s| s.to_string()).unwrap_or_default(),
         opt(i.violation),
         i.reason.clone().unwrap_or_default().replace('"', "'"),
-        x[0], x[1], x[2], x[3], x[4], x[5],
-        opt(l[0]), opt(l[1]), opt(l[2]), i.l_hand,
+        x[0],
+        x[1],
+        x[2],
+        x[3],
+        x[4],
+        x[5],
+        opt(l[0]),
+        opt(l[1]),
+        opt(l[2]),
+        i.l_hand,
         form_closed.map(|b| b.to_string()).unwrap_or_default(),
-        opt(max_offset), opt(i.objectives[1]), opt(i.objectives[2]), opt(i.objectives[3]),
-        w.0, w.1,
+        opt(max_offset),
+        opt(i.objectives[1]),
+        opt(i.objectives[2]),
+        opt(i.objectives[3]),
+        w.0,
+        w.1,
         if i.objectives[0].is_some() { force_model } else { "" },
     );
 }
@@ -121,14 +133,20 @@ pub fn write_tables(out: &Path, force_model: &str, st: &Nsga2State<GripperInfo>,
 /// [`write_tables`], the five files built and written in parallel (in the current rayon
 /// pool): the seconds each took (built and written), in the order pareto, pareto_timings,
 /// archive, population, history.
-pub fn write_tables_timed(out: &Path, force_model: &str, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<[f64; 5]> {
+pub fn write_tables_timed(
+    out: &Path,
+    force_model: &str,
+    st: &Nsga2State<GripperInfo>,
+    archive: &Archive,
+) -> Result<[f64; 5]> {
     use rayon::prelude::*;
     const FILES: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
     let front = final_front(st);
     let build = |k: usize| -> String {
         match k {
             0 => {
-                let mut csv = header("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
+                let mut csv =
+                    header("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
                 for ind in &front {
                     design_row(&mut csv, ind, Some(0), force_model);
                 }
@@ -138,12 +156,19 @@ pub fn write_tables_timed(out: &Path, force_model: &str, st: &Nsga2State<Gripper
                 let mut tim = String::from("# gripopt pareto_timings.csv: wall-clock seconds per stage (not deterministic)\nid,stage01_s,stage2_s,stage3_s\n");
                 for ind in &front {
                     let i = &ind.eval.info;
-                    let _ = writeln!(tim, "{},{},{},{}", ind.id, i.stage_seconds[1], i.stage_seconds[2], i.stage_seconds[3]);
+                    let _ = writeln!(
+                        tim,
+                        "{},{},{},{}",
+                        ind.id, i.stage_seconds[1], i.stage_seconds[2], i.stage_seconds[3]
+                    );
                 }
                 tim
             }
             2 => {
-                let mut arc = header("archive.csv: every feasible non-dominated design evaluated in the run, by id", &DESIGN_COLUMNS);
+                let mut arc = header(
+                    "archive.csv: every feasible non-dominated design evaluated in the run, by id",
+                    &DESIGN_COLUMNS,
+                );
                 for ind in &archive.members {
                     design_row(&mut arc, ind, None, force_model);
                 }
@@ -162,7 +187,15 @@ pub fn write_tables_timed(out: &Path, force_model: &str, st: &Nsga2State<Gripper
                 let mut hist = header("history.csv: per generation", &HISTORY_COLUMNS);
                 for (g, (hv, fe)) in st.hv_history.iter().zip(&st.feasible_history).enumerate() {
                     let ahv = archive.hv_history.get(g).copied().filter(|v| v.is_finite());
-                    let _ = writeln!(hist, "{},{},{},{},{}", g + 1, (g as u64 + 1) * st.population.len() as u64, fe, hv, opt(ahv));
+                    let _ = writeln!(
+                        hist,
+                        "{},{},{},{},{}",
+                        g + 1,
+                        (g as u64 + 1) * st.population.len() as u64,
+                        fe,
+                        hv,
+                        opt(ahv)
+                    );
                 }
                 hist
             }

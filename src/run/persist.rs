@@ -29,9 +29,9 @@
 use super::checkpoint::Checkpoint;
 use super::gripper::GripperInfo;
 use super::observers::OutputsObserver;
+use crate::fsutil::write_atomic;
 use crate::optim::{Individual, Nsga2Settings, Nsga2State};
 use crate::record::{Recorder, ShardEntry};
-use crate::fsutil::write_atomic;
 use crate::{Error, Result};
 use argmin::core::observers::Observe;
 use argmin::core::KV;
@@ -111,9 +111,16 @@ struct Job {
 /// its pool.
 enum Msg {
     Job(Box<Job>),
-    Shard { generation: u64, result: Result<Option<(ShardEntry, f64)>> },
+    Shard {
+        generation: u64,
+        result: Result<Option<(ShardEntry, f64)>>,
+    },
     /// A checkpoint's bytes, serialised in the pool, and the seconds it took.
-    Checkpoint { generation: u64, result: Result<Vec<u8>>, secs: f64 },
+    Checkpoint {
+        generation: u64,
+        result: Result<Vec<u8>>,
+        secs: f64,
+    },
 }
 
 #[derive(Default)]
@@ -156,11 +163,20 @@ impl Persister {
     /// shard recorder (None when recording is off); `threads`: the run's thread count (the
     /// persister's pool gets a quarter of it, at least one); `crash_after`: test hook, fail once that
     /// generation is durable, as a crash would.
-    pub fn start(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, spec: CheckpointSpec, threads: usize, crash_after: Option<u64>) -> Result<Self> {
+    pub fn start(
+        outputs: Option<OutputsObserver>,
+        recorder: Option<Arc<Mutex<Recorder>>>,
+        spec: CheckpointSpec,
+        threads: usize,
+        crash_after: Option<u64>,
+    ) -> Result<Self> {
         // a quarter of the run's threads: enough to encode and compress beside the evaluation
         // at many cores, without oversubscribing a few (measured: 2 threads better with 1)
         let pool_threads = (threads / 4).max(1);
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(pool_threads).thread_name(|k| format!("gripopt-persist-{k}")).build()?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(pool_threads)
+            .thread_name(|k| format!("gripopt-persist-{k}"))
+            .build()?;
         let shared: SharedState = Arc::new((Mutex::new(Shared::default()), Condvar::new()));
         shared.0.lock().expect("persister lock").stats.pool_threads = pool_threads;
         let sh = shared.clone();
@@ -263,7 +279,12 @@ impl Persister {
 }
 
 impl Observe<Nsga2State<GripperInfo>> for Persister {
-    fn observe_init(&mut self, _name: &str, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
+    fn observe_init(
+        &mut self,
+        _name: &str,
+        st: &Nsga2State<GripperInfo>,
+        _kv: &KV,
+    ) -> std::result::Result<(), argmin::core::Error> {
         self.observe_state(st)
     }
     fn observe_iter(&mut self, st: &Nsga2State<GripperInfo>, _kv: &KV) -> std::result::Result<(), argmin::core::Error> {
@@ -289,7 +310,11 @@ fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<
     let (m, cv) = &**shared;
     let mut s = m.lock().expect("persister lock");
     loop {
-        let pos = if pending < max_pending { (!s.inbox.is_empty()).then_some(0) } else { s.inbox.iter().position(|m| !matches!(m, Msg::Job(_))) };
+        let pos = if pending < max_pending {
+            (!s.inbox.is_empty()).then_some(0)
+        } else {
+            s.inbox.iter().position(|m| !matches!(m, Msg::Job(_)))
+        };
         if let Some(k) = pos {
             let msg = s.inbox.remove(k).expect("position in the inbox");
             if matches!(msg, Msg::Job(_)) {
@@ -305,7 +330,13 @@ fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<
     }
 }
 
-fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Recorder>>>, pool: rayon::ThreadPool, sp: CheckpointSpec, shared: SharedState) {
+fn persist_loop(
+    outputs: Option<OutputsObserver>,
+    recorder: Option<Arc<Mutex<Recorder>>>,
+    pool: rayon::ThreadPool,
+    sp: CheckpointSpec,
+    shared: SharedState,
+) {
     let max_pending = pool.current_num_threads() + 1;
     let mut pending: VecDeque<Pending> = VecDeque::new();
     let (mut last_views, mut stale_views): (Option<Instant>, Option<Nsga2State<GripperInfo>>) = (None, None);
@@ -338,7 +369,12 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                         } else {
                             let tv = Instant::now();
                             let files = pool.install(|| o.write_views(&job.state))?;
-                            shared.0.lock().expect("persister lock").stats.add_views(tv.elapsed().as_secs_f64(), &files);
+                            shared
+                                .0
+                                .lock()
+                                .expect("persister lock")
+                                .stats
+                                .add_views(tv.elapsed().as_secs_f64(), &files);
                             last_views = Some(Instant::now());
                             stale_views = None;
                         }
@@ -369,9 +405,14 @@ fn persist_loop(outputs: Option<OutputsObserver>, recorder: Option<Arc<Mutex<Rec
                     let (sh, spc, state, wall_s) = (shared.clone(), sp.clone(), job.state, job.wall_s);
                     pool.spawn(move || {
                         let t = Instant::now();
-                        let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s).to_bytes(&spc.path);
+                        let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s)
+                            .to_bytes(&spc.path);
                         let (m, cv) = &*sh;
-                        m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint { generation: g, result, secs: t.elapsed().as_secs_f64() });
+                        m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint {
+                            generation: g,
+                            result,
+                            secs: t.elapsed().as_secs_f64(),
+                        });
                         cv.notify_all();
                     });
                     pending.push_back(Pending { generation: g, shard, archive, checkpoint: None });

@@ -1,8 +1,8 @@
 //! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
 
 use super::gripper::{GripperInfo, GripperProblem};
-use crate::{Error, Result};
 use crate::optim::Nsga2State;
+use crate::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -15,7 +15,12 @@ fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl
 /// the non-dominated front in red, other feasible designs in grey, the problem's nominal
 /// design as a blue cross; axis names say which way is better.
 pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
-    let names = ["max_offset (mm), higher better", "alpha, lower better", "mean force (N), higher better", "t_stab (ms), lower better"];
+    let names = [
+        "max_offset (mm), higher better",
+        "alpha, lower better",
+        "mean force (N), higher better",
+        "t_stab (ms), lower better",
+    ];
     let nominal = {
         use crate::optim::MooProblem;
         let ev = gp.evaluate(&gp.problem.nominal.to_array());
@@ -35,13 +40,22 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
         .collect();
     let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_error(path))?;
-    let title = format!("generation {}: {} feasible; red = Pareto front ({}), grey = dominated, blue cross = nominal design", st.generation, pts.len(), pts.iter().filter(|p| p.1).count());
+    let title = format!(
+        "generation {}: {} feasible; red = Pareto front ({}), grey = dominated, blue cross = nominal design",
+        st.generation,
+        pts.len(),
+        pts.iter().filter(|p| p.1).count()
+    );
     let root = root.titled(&title, ("sans-serif", 16)).map_err(plot_error(path))?;
     let cells = root.split_evenly((4, 4));
     for (idx, cell) in cells.iter().enumerate() {
         let (row, col) = (idx / 4, idx % 4);
         let range = |k: usize| {
-            let (lo, hi) = pts.iter().map(|p| p.0[k]).filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+            let (lo, hi) = pts
+                .iter()
+                .map(|p| p.0[k])
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
             if lo.is_finite() && hi > lo {
                 let m = 0.05 * (hi - lo);
                 (lo - m)..(hi + m)
@@ -70,11 +84,19 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
             continue;
         }
         chart
-            .draw_series(pts.iter().filter(|p| !p.1).map(|p| Circle::new((p.0[col], p.0[row]), 2, RGBColor(150, 150, 150).filled())))
+            .draw_series(
+                pts.iter()
+                    .filter(|p| !p.1)
+                    .map(|p| Circle::new((p.0[col], p.0[row]), 2, RGBColor(150, 150, 150).filled())),
+            )
             .map_err(plot_error(path))?;
-        chart.draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled()))).map_err(plot_error(path))?;
+        chart
+            .draw_series(pts.iter().filter(|p| p.1).map(|p| Circle::new((p.0[col], p.0[row]), 3, RED.filled())))
+            .map_err(plot_error(path))?;
         if nominal[col].is_finite() && nominal[row].is_finite() {
-            chart.draw_series(std::iter::once(Cross::new((nominal[col], nominal[row]), 5, BLUE.stroke_width(2)))).map_err(plot_error(path))?;
+            chart
+                .draw_series(std::iter::once(Cross::new((nominal[col], nominal[row]), 5, BLUE.stroke_width(2))))
+                .map_err(plot_error(path))?;
         }
     }
     root.present().map_err(plot_error(path))?;
@@ -97,16 +119,28 @@ pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
         .map_err(plot_error(path))?;
     chart.configure_mesh().x_desc("generation").y_desc("hypervolume").draw().map_err(plot_error(path))?;
     chart
-        .draw_series(LineSeries::new(hv.iter().enumerate().map(|(g, v)| (g as f64 + 1.0, if v.is_finite() { *v } else { 0.0 })), BLUE.stroke_width(2)))
+        .draw_series(LineSeries::new(
+            hv.iter().enumerate().map(|(g, v)| (g as f64 + 1.0, if v.is_finite() { *v } else { 0.0 })),
+            BLUE.stroke_width(2),
+        ))
         .map_err(plot_error(path))?
         .label("population's front")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLUE));
     chart
-        .draw_series(LineSeries::new(archive_hv.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(g, v)| (g as f64 + 1.0, *v)), RED.stroke_width(2)))
+        .draw_series(LineSeries::new(
+            archive_hv.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(g, v)| (g as f64 + 1.0, *v)),
+            RED.stroke_width(2),
+        ))
         .map_err(plot_error(path))?
         .label("archive (every non-dominated design found)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RED));
-    chart.configure_series_labels().position(SeriesLabelPosition::LowerRight).background_style(WHITE).border_style(BLACK).draw().map_err(plot_error(path))?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE)
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_error(path))?;
     root.present().map_err(plot_error(path))?;
     Ok(())
 }

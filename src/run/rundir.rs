@@ -8,19 +8,19 @@
 //! stage timings, which are not deterministic), `population.csv` (the whole final
 //! population with discard stages and reasons), `pareto_matrix.svg`, `hypervolume.svg`.
 
-use super::checkpoint::{sha256_hex, settings_hash, Checkpoint};
+use super::archive::Archive;
+use super::checkpoint::{settings_hash, sha256_hex, Checkpoint};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::lock::{RunLock, LOCK_FILE};
-use super::archive::Archive;
 use super::observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
-use super::persist::{CheckpointSpec, Persister};
 use super::outputs::write_outputs;
-use crate::{Error, Result};
+use super::persist::{CheckpointSpec, Persister};
 use crate::fsutil::write_atomic;
-use crate::optim::{execute, observe, Nsga2Settings, Nsga2State};
 use crate::optim::Operators;
+use crate::optim::{execute, observe, Nsga2Settings, Nsga2State};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder, LAYOUT_FILE};
+use crate::{Error, Result};
 use argmin::core::State;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -137,7 +137,14 @@ pub struct RunSummary {
 
 fn settings_for(p: &GripperProblem, pop: usize, seed: u64) -> Nsga2Settings {
     let (ideal, r) = p.hv_points();
-    Nsga2Settings { pop_size: pop, seed, operators: Operators::default(), eliminate_duplicates: true, hv_ideal: ideal, hv_ref: r }
+    Nsga2Settings {
+        pop_size: pop,
+        seed,
+        operators: Operators::default(),
+        eliminate_duplicates: true,
+        hv_ideal: ideal,
+        hv_ref: r,
+    }
 }
 
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
@@ -156,7 +163,10 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     let cp_path = spec.out.join("checkpoint.json");
     let holds_run = || -> Result<()> {
         if cp_path.exists() {
-            let message = format!("already holds a run (checkpoint.json); use `gripopt resume {}` or another --out", spec.out.display());
+            let message = format!(
+                "already holds a run (checkpoint.json); use `gripopt resume {}` or another --out",
+                spec.out.display()
+            );
             return Err(Error::RunDir { path: spec.out.clone(), message });
         }
         Ok(())
@@ -191,10 +201,21 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
 }
 
 /// Continue a stopped, killed or finished run; `generations` is the new total.
-pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option<usize>, progress: bool) -> Result<RunSummary> {
+pub fn resume(
+    dir: &Path,
+    generations: Option<u64>,
+    force: bool,
+    threads: Option<usize>,
+    progress: bool,
+) -> Result<RunSummary> {
     let run_json = dir.join("run.json");
-    let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read (is its folder a run folder?)", e))?;
-    let mut info: RunInfo = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
+    let text = std::fs::read_to_string(&run_json)
+        .map_err(|e| Error::io(&run_json, "cannot read (is its folder a run folder?)", e))?;
+    let mut info: RunInfo = serde_json::from_str(&text).map_err(|source| Error::Json {
+        path: run_json.clone(),
+        what: "invalid run.json",
+        source,
+    })?;
     let _lock = RunLock::acquire(dir)?;
     let cp_path = dir.join("checkpoint.json");
     let (cp, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
@@ -203,14 +224,25 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
         if !force {
             return Err(m.error(&cp_path));
         }
-        forced_notes.push(format!("forced: checkpoint content checksum mismatch (stored {}, content {})", m.stored.as_deref().map(|s| &s[..s.len().min(12)]).unwrap_or("none"), &m.computed[..12]));
+        forced_notes.push(format!(
+            "forced: checkpoint content checksum mismatch (stored {}, content {})",
+            m.stored.as_deref().map(|s| &s[..s.len().min(12)]).unwrap_or("none"),
+            &m.computed[..12]
+        ));
     }
-    let modified = |what: &str| Error::RunDir { path: cp_path.clone(), message: format!("{what} differ from {} (the run folder was modified); refusing to resume", run_json.display()) };
+    let modified = |what: &str| Error::RunDir {
+        path: cp_path.clone(),
+        message: format!("{what} differ from {} (the run folder was modified); refusing to resume", run_json.display()),
+    };
     if cp.settings != info.settings || cp.settings_hash != settings_hash(&cp.settings, &cp.options) {
         return Err(modified("settings"));
     }
     // problem file: the original path, or the copy in the run folder if it is gone
-    let (problem_path, note) = if info.problem_path.exists() { (info.problem_path.clone(), String::new()) } else { (dir.join("problem.toml"), format!("{} not found; used the run's copy", info.problem_path.display())) };
+    let (problem_path, note) = if info.problem_path.exists() {
+        (info.problem_path.clone(), String::new())
+    } else {
+        (dir.join("problem.toml"), format!("{} not found; used the run's copy", info.problem_path.display()))
+    };
     let problem = Problem::load(&problem_path)?;
     let now = sha256_hex(problem.source_text.as_bytes());
     let mut note = note;
@@ -230,16 +262,28 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
         forced_notes.insert(0, note);
     }
     let note = forced_notes.join("; ");
-    let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json { path: run_json.clone(), what: "field `recording`", source })?;
+    let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json {
+        path: run_json.clone(),
+        what: "field `recording`",
+        source,
+    })?;
     if cp.options.get("recording") != Some(&recording) {
         return Err(modified("recording options"));
     }
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
     if total < cp.state.generation {
-        return Err(Error::Input(format!("--generations {total}: the run already has {} generations", cp.state.generation)));
+        return Err(Error::Input(format!(
+            "--generations {total}: the run already has {} generations",
+            cp.state.generation
+        )));
     }
-    info.resumes.push(Resume { at_generation: cp.state.generation, generations: total, forced: (force && now != cp.problem_hash) || checksum_forced, note });
+    info.resumes.push(Resume {
+        at_generation: cp.state.generation,
+        generations: total,
+        forced: (force && now != cp.problem_hash) || checksum_forced,
+        note,
+    });
     info.generations = total;
     info.status = RunStatus::Running;
     let gp = GripperProblem::new(problem);
@@ -290,13 +334,27 @@ fn drive(
     }
     let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
-    let outputs = OutputsObserver { out: out.to_path_buf(), force_model: gp.problem.scene.criteria.force_model.as_str(), settings: settings.clone(), archive: archive.clone() };
+    let outputs = OutputsObserver {
+        out: out.to_path_buf(),
+        force_model: gp.problem.scene.criteria.force_model.as_str(),
+        settings: settings.clone(),
+        archive: archive.clone(),
+    };
     // outputs and archive, shard k, then checkpoint k, in that order on a background thread
     // while k+1 evaluates (src/run/persist.rs)
-    let ckpt = CheckpointSpec { path: out.join("checkpoint.json"), problem_hash, settings: settings.clone(), options, wall_before, start };
-    let persister = Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
+    let ckpt = CheckpointSpec {
+        path: out.join("checkpoint.json"),
+        problem_hash,
+        settings: settings.clone(),
+        options,
+        wall_before,
+        start,
+    };
+    let persister =
+        Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
     let (pers2, prog2) = (persister.clone(), prog.clone());
-    let result = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
+    let result = pool
+        .install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
     // on success every output of the final state is written below: the persister need
     // not write the last views too
     let ok = result.is_ok();
@@ -358,7 +416,17 @@ fn check_new_run_folder(dir: &Path) -> Result<()> {
     let ours = ["run.json", "problem.toml", "recording", "checkpoint.json", LOCK_FILE];
     // what a run writes before its first checkpoint (and at its end); accepted only beside
     // the run.json of that run
-    let outputs = [LAYOUT_FILE, "archive.json", "pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv", "pareto_matrix.svg", "hypervolume.svg"];
+    let outputs = [
+        LAYOUT_FILE,
+        "archive.json",
+        "pareto.csv",
+        "pareto_timings.csv",
+        "archive.csv",
+        "population.csv",
+        "history.csv",
+        "pareto_matrix.svg",
+        "hypervolume.svg",
+    ];
     let names: Vec<String> = rd.flatten().map(|f| f.file_name().to_string_lossy().to_string()).collect();
     let run_json = names.iter().any(|n| n == "run.json");
     let foreign: Vec<String> = names
@@ -373,12 +441,20 @@ fn check_new_run_folder(dir: &Path) -> Result<()> {
     }
     let mut shown: Vec<&str> = foreign.iter().map(String::as_str).take(3).collect();
     shown.sort();
-    let message = format!("--out: the folder is not empty and is not a gripopt run (it holds {}{}); give a new or empty folder", shown.join(", "), if foreign.len() > 3 { ", …" } else { "" });
+    let message = format!(
+        "--out: the folder is not empty and is not a gripopt run (it holds {}{}); give a new or empty folder",
+        shown.join(", "),
+        if foreign.len() > 3 { ", …" } else { "" }
+    );
     Err(Error::RunDir { path: dir.to_path_buf(), message })
 }
 
 /// Metadata written into every shard of the recording.
-fn recording_metadata(gp: &GripperProblem, settings: &Nsga2Settings, info: &RunInfo) -> std::collections::BTreeMap<String, String> {
+fn recording_metadata(
+    gp: &GripperProblem,
+    settings: &Nsga2Settings,
+    info: &RunInfo,
+) -> std::collections::BTreeMap<String, String> {
     let mut meta = std::collections::BTreeMap::new();
     meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
     meta.insert("problem".to_string(), gp.problem.name.clone());
@@ -386,7 +462,10 @@ fn recording_metadata(gp: &GripperProblem, settings: &Nsga2Settings, info: &RunI
     // plain structs of numbers, strings and enums: serialising cannot fail
     meta.insert("settings".to_string(), serde_json::to_string(settings).expect("settings serialise"));
     meta.insert("recording".to_string(), serde_json::to_string(&info.recording).expect("recording options serialise"));
-    meta.insert("time_convention".to_string(), "design k: log_time in [k s, k s + 1 s); field t = simulated time".to_string());
+    meta.insert(
+        "time_convention".to_string(),
+        "design k: log_time in [k s, k s + 1 s); field t = simulated time".to_string(),
+    );
     meta
 }
 
@@ -396,8 +475,11 @@ fn run_options(gp: &GripperProblem, rec: &RecordOptions) -> serde_json::Value {
 }
 
 fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<()> {
-    let mut s = serde_json::to_string_pretty(v).map_err(|source| Error::Json { path: path.to_path_buf(), what: "cannot serialise", source })?;
+    let mut s = serde_json::to_string_pretty(v).map_err(|source| Error::Json {
+        path: path.to_path_buf(),
+        what: "cannot serialise",
+        source,
+    })?;
     s.push('\n');
     write_atomic(path, s.as_bytes())
 }
-

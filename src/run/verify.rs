@@ -7,10 +7,10 @@
 
 use super::lock::RunLock;
 use super::verify_rec::VerifyRecording;
-use crate::record::keep_poses;
 use crate::eval::{evaluate, EvalOptions, FreeEnd, FreeMeasure};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
+use crate::record::keep_poses;
 use crate::sim::{simulate_free, simulate_grasp, FreeSetup, PoseSample, SimOptions};
 use crate::{Error, Result};
 use rand::SeedableRng;
@@ -166,13 +166,26 @@ pub fn verify_design(p: &Problem, id: u64, x: &Design) -> Option<VerifyRow> {
 /// [`verify_design`], with the free scene's poses to record every `scene_dt` of simulated
 /// time (and the last; `record::keep_poses`) when `scene_dt` is given (recording does not
 /// change the results).
-pub fn verify_design_poses(p: &Problem, id: u64, x: &Design, scene_dt: Option<f64>) -> Option<(VerifyRow, Vec<PoseSample>)> {
+pub fn verify_design_poses(
+    p: &Problem,
+    id: u64,
+    x: &Design,
+    scene_dt: Option<f64>,
+) -> Option<(VerifyRow, Vec<PoseSample>)> {
     let s = &p.scene;
     let ev = evaluate(x, s, &EvalOptions::statics_only());
     let (k, st) = (ev.kin?, ev.statics?);
     let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
     let c = simulate_grasp(&k.finger, s, &st, &o);
-    let f = simulate_free(&k.finger, s, st.tau_s0, s.setup.x_off, FreeSetup::default(), &SimOptions { record: scene_dt.is_some(), ..o }, None);
+    let f = simulate_free(
+        &k.finger,
+        s,
+        st.tau_s0,
+        s.setup.x_off,
+        FreeSetup::default(),
+        &SimOptions { record: scene_dt.is_some(), ..o },
+        None,
+    );
     let poses = scene_dt.map(|dt| keep_poses(&f.poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
@@ -228,7 +241,8 @@ pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
     let Some((hl, header)) = lines.next() else { return Err(bad(1, "no header row".into())) };
     let cols = split_csv(header);
-    let col = |name: &str| cols.iter().position(|c| c == name).ok_or_else(|| bad(hl + 1, format!("no column `{name}`")));
+    let col =
+        |name: &str| cols.iter().position(|c| c == name).ok_or_else(|| bad(hl + 1, format!("no column `{name}`")));
     let id_c = col("id")?;
     let feas_c = col("feasible")?;
     let xs: Vec<usize> = DESIGN_NAMES.iter().map(|n| col(n)).collect::<Result<_>>()?;
@@ -239,11 +253,17 @@ pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
         if get(feas_c)? != "true" {
             continue;
         }
-        let id: u64 = get(id_c)?.parse().map_err(|_| bad(i + 1, format!("id `{}` is not an integer", get(id_c).unwrap_or(""))))?;
+        let id: u64 = get(id_c)?
+            .parse()
+            .map_err(|_| bad(i + 1, format!("id `{}` is not an integer", get(id_c).unwrap_or(""))))?;
         let mut a = [0.0; 6];
         for (k, &c) in xs.iter().enumerate() {
             let v = get(c)?;
-            a[k] = v.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| bad(i + 1, format!("{} = `{v}` is not a number", DESIGN_NAMES[k])))?;
+            a[k] = v
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| bad(i + 1, format!("{} = `{v}` is not a number", DESIGN_NAMES[k])))?;
         }
         out.push((id, Design::from_array(&a)));
     }
@@ -257,7 +277,10 @@ pub fn run_designs(dir: &Path, all: bool) -> Result<Vec<(u64, Design)>> {
     for f in files {
         let path = dir.join(f);
         if !path.is_file() {
-            return Err(Error::RunDir { path, message: "missing: the run has not written its first generation's results".into() });
+            return Err(Error::RunDir {
+                path,
+                message: "missing: the run has not written its first generation's results".into(),
+            });
         }
         for (id, x) in read_design_csv(&path)? {
             m.entry(id).or_insert(x);
@@ -273,9 +296,13 @@ pub fn sample_designs(p: &Problem, n: usize, seed: u64) -> Vec<(u64, Design)> {
     let mut out = Vec::with_capacity(n);
     let mut drawn = 0u64;
     while out.len() < n {
-        let batch: Vec<(u64, Design)> = (0..(2 * n).max(16)).map(|k| (drawn + k as u64, p.bounds.sample(&mut rng))).collect();
+        let batch: Vec<(u64, Design)> =
+            (0..(2 * n).max(16)).map(|k| (drawn + k as u64, p.bounds.sample(&mut rng))).collect();
         drawn += batch.len() as u64;
-        let pass: Vec<bool> = batch.par_iter().map(|(_, x)| evaluate(x, &p.scene, &EvalOptions::statics_only()).statics.is_some()).collect();
+        let pass: Vec<bool> = batch
+            .par_iter()
+            .map(|(_, x)| evaluate(x, &p.scene, &EvalOptions::statics_only()).statics.is_some())
+            .collect();
         out.extend(batch.into_iter().zip(pass).filter(|(_, ok)| *ok).map(|(d, _)| d).take(n - out.len()));
         if drawn > 1000 * n as u64 + 10_000 {
             break; // a box where almost nothing passes stage 2: return what was found
@@ -291,7 +318,12 @@ pub fn verify_designs(p: &Problem, designs: &[(u64, Design)], tick: &(dyn Fn() +
 }
 
 /// [`verify_designs`] with each row's poses to record (see [`verify_design_poses`]).
-pub fn verify_designs_poses(p: &Problem, designs: &[(u64, Design)], scene_dt: Option<f64>, tick: &(dyn Fn() + Sync)) -> Vec<(VerifyRow, Vec<PoseSample>)> {
+pub fn verify_designs_poses(
+    p: &Problem,
+    designs: &[(u64, Design)],
+    scene_dt: Option<f64>,
+    tick: &(dyn Fn() + Sync),
+) -> Vec<(VerifyRow, Vec<PoseSample>)> {
     designs
         .par_iter()
         .map(|(id, x)| {
@@ -320,8 +352,31 @@ fn field(v: &str) -> String {
 
 /// Columns of verify.csv.
 pub const VERIFY_COLUMNS: [&str; 25] = [
-    "id", "l21", "b", "t22", "r", "p", "psi_deg", "impact_ratio", "e_trans", "e_rot", "force_margin", "stable", "predicted_moves", "object_max_displacement", "object_max_tilt_deg",
-    "object_peak_e_trans", "object_peak_e_rot", "free_end", "moved", "toppled", "escaped", "rim_contact", "agrees", "peak_e_trans_ratio", "peak_e_rot_ratio",
+    "id",
+    "l21",
+    "b",
+    "t22",
+    "r",
+    "p",
+    "psi_deg",
+    "impact_ratio",
+    "e_trans",
+    "e_rot",
+    "force_margin",
+    "stable",
+    "predicted_moves",
+    "object_max_displacement",
+    "object_max_tilt_deg",
+    "object_peak_e_trans",
+    "object_peak_e_rot",
+    "free_end",
+    "moved",
+    "toppled",
+    "escaped",
+    "rim_contact",
+    "agrees",
+    "peak_e_trans_ratio",
+    "peak_e_rot_ratio",
 ];
 
 /// verify.csv's text (`#` header lines, then one row per design).
@@ -338,8 +393,31 @@ pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
         let _ = writeln!(
             s,
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.id, a[0], a[1], a[2], a[3], a[4], a[5], opt(r.impact_ratio), opt(pt), opt(pr), r.force_margin, r.stable, r.predicted_moves, r.max_displacement, r.max_tilt_deg,
-            r.peak_e.0, r.peak_e.1, field(r.free_end()), opt(r.moved), opt(r.toppled), opt(r.escaped), r.rim_contact, opt(r.agrees()), opt(et), opt(er),
+            r.id,
+            a[0],
+            a[1],
+            a[2],
+            a[3],
+            a[4],
+            a[5],
+            opt(r.impact_ratio),
+            opt(pt),
+            opt(pr),
+            r.force_margin,
+            r.stable,
+            r.predicted_moves,
+            r.max_displacement,
+            r.max_tilt_deg,
+            r.peak_e.0,
+            r.peak_e.1,
+            field(r.free_end()),
+            opt(r.moved),
+            opt(r.toppled),
+            opt(r.escaped),
+            r.rim_contact,
+            opt(r.agrees()),
+            opt(et),
+            opt(er),
         );
     }
     s
@@ -360,19 +438,32 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 /// problem's), simulates the designs of `source` and writes the CSV atomically; with
 /// `record`, also the MCAP recording of the free scene (verify.mcap or verify_sample.mcap,
 /// with the Foxglove layout `foxglove-verify-layout.json`).
-pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, record: bool, tick_len: &dyn Fn(usize), tick: &(dyn Fn() + Sync)) -> Result<VerifySummary> {
+pub fn verify(
+    dir: &Path,
+    source: VerifySource,
+    x_off: Option<f64>,
+    record: bool,
+    tick_len: &dyn Fn(usize),
+    tick: &(dyn Fn() + Sync),
+) -> Result<VerifySummary> {
     if !dir.is_dir() {
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
     }
     for f in ["run.json", "problem.toml"] {
         if !dir.join(f).is_file() {
-            return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`") });
+            return Err(Error::RunDir {
+                path: dir.to_path_buf(),
+                message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
+            });
         }
     }
     let _lock = RunLock::acquire(dir)?;
     let mut p = Problem::load(dir.join("problem.toml"))?;
     if p.scene.env.g_eq != 0.0 {
-        return Err(Error::RunDir { path: dir.join("problem.toml"), message: "environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into() });
+        return Err(Error::RunDir {
+            path: dir.join("problem.toml"),
+            message: "environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into(),
+        });
     }
     p.scene.setup.kind = SceneKind::Free;
     if let Some(x) = x_off {
@@ -401,7 +492,13 @@ pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, record: bool
     let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
     let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
     if rows.is_empty() {
-        return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written", designs.len()) });
+        return Err(Error::RunDir {
+            path: dir.to_path_buf(),
+            message: format!(
+                "all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written",
+                designs.len()
+            ),
+        });
     }
     let file = dir.join(file);
     write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
@@ -412,5 +509,13 @@ pub fn verify(dir: &Path, source: VerifySource, x_off: Option<f64>, record: bool
     let et: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().0).collect();
     let er: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().1).collect();
     let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary { file, skipped, confusion: Confusion::of(&rows), rows, median_energy_ratio, recording, designs: designs.len() })
+    Ok(VerifySummary {
+        file,
+        skipped,
+        confusion: Confusion::of(&rows),
+        rows,
+        median_energy_ratio,
+        recording,
+        designs: designs.len(),
+    })
 }

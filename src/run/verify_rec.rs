@@ -5,7 +5,10 @@
 
 use super::verify::{VerifyRow, VerifySource};
 use crate::params::Problem;
-use crate::record::{verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL};
+use crate::record::{
+    verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart,
+    DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
+};
 use crate::sim::PoseSample;
 use crate::{Error, Result};
 use std::collections::BTreeMap;
@@ -32,10 +35,17 @@ impl VerifyRecording {
     pub fn new(dir: &Path, source: &VerifySource) -> Result<Self> {
         let run_json = dir.join("run.json");
         let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
-        let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json", source })?;
+        let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json {
+            path: run_json.clone(),
+            what: "invalid run.json",
+            source,
+        })?;
         let epoch_s = match &run["recording"]["epoch_s"] {
             serde_json::Value::Null => 0,
-            v => v.as_u64().ok_or_else(|| Error::RunDir { path: run_json.clone(), message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds") })?,
+            v => v.as_u64().ok_or_else(|| Error::RunDir {
+                path: run_json.clone(),
+                message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds"),
+            })?,
         };
         let (file, src) = match source {
             VerifySource::Pareto => (VERIFY_MCAP, "pareto".to_string()),
@@ -60,7 +70,8 @@ impl VerifyRecording {
         let mut meta = self.meta;
         let x_off = p.scene.setup.x_off;
         meta.insert("scene".into(), format!("free:{x_off}"));
-        let entries: Vec<VerifyEntry> = rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
+        let entries: Vec<VerifyEntry> =
+            rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
         write_verify(&self.path, p, &meta, &entries, &self.opts)?;
         write_verify_layout(&self.dir)?;
         Ok(self.path)

@@ -24,7 +24,9 @@ pub struct Impact {
 pub fn impact_limits(s: &SceneParams) -> (f64, f64) {
     let mc = s.object.mass();
     let trans = s.env.mu_g * mc * s.env.g * s.criteria.dx_max;
-    let rot = mc * s.env.g * ((s.object.length / 2.0) * (s.criteria.theta_max.cos() - 1.0) + s.object.radius * s.criteria.theta_max.sin());
+    let rot = mc
+        * s.env.g
+        * ((s.object.length / 2.0) * (s.criteria.theta_max.cos() - 1.0) + s.object.radius * s.criteria.theta_max.sin());
     (trans, rot)
 }
 
@@ -65,7 +67,9 @@ pub fn force_margin(s: &SceneParams, r_area: f64, f: V2) -> f64 {
 
 /// U_min = min_i (2/5) K^{−2/3} (f⁰_i)^{5/3} (§9.4).
 pub fn u_min(s: &SceneParams, f0: [f64; 2]) -> f64 {
-    f0.iter().map(|&f| 0.4 * s.contact.k_contact.powf(-2.0 / 3.0) * f.max(0.0).powf(5.0 / 3.0)).fold(f64::INFINITY, f64::min)
+    f0.iter()
+        .map(|&f| 0.4 * s.contact.k_contact.powf(-2.0 / 3.0) * f.max(0.0).powf(5.0 / 3.0))
+        .fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]

@@ -47,7 +47,12 @@ pub struct Run<Ev> {
 
 /// Run `scene` from t = 0 to `t_end` with the method, budget, recording and tracing of
 /// `opts` and the tolerances `tol`, and return the scene's output.
-pub fn simulate<const N: usize, const E: usize, Sc: Scene<N, E>>(mut scene: Sc, opts: &SimOptions, tol: Tol<N>, t_end: f64) -> Sc::Output {
+pub fn simulate<const N: usize, const E: usize, Sc: Scene<N, E>>(
+    mut scene: Sc,
+    opts: &SimOptions,
+    tol: Tol<N>,
+    t_end: f64,
+) -> Sc::Output {
     let run = match opts.method {
         Method::Radau5 => drive(&mut scene, &mut Radau5::<N>::new(tol, 1e-5), opts, t_end),
         Method::TrBdf2 => drive(&mut scene, &mut TrBdf2::new(tol, 1e-5), opts, t_end),
@@ -57,7 +62,12 @@ pub fn simulate<const N: usize, const E: usize, Sc: Scene<N, E>>(mut scene: Sc, 
 }
 
 /// The step loop with a given stepper.
-pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>>(scene: &mut Sc, stepper: &mut St, opts: &SimOptions, t_max: f64) -> Run<Sc::Eval> {
+pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>>(
+    scene: &mut Sc,
+    stepper: &mut St,
+    opts: &SimOptions,
+    t_max: f64,
+) -> Run<Sc::Eval> {
     let mut run = Run { end: End::Undefined, t: 0.0, last: None, events: 0, stats: Stats::default(), locate_evals: 0 };
     let mut t = 0.0;
     let mut y = scene.initial_state();

@@ -25,11 +25,15 @@ pub fn finger_equilibrium(model: &FingerModel, centre: V2, s: &SceneParams, f0: 
     let mem = [Memory { active: true, vminus: 1.0 }; 2];
     let f = model.finger;
     let cp = closed_pose(f, s.object.radius, centre.x).ok()?;
-    let at = |q: Vector2<f64>| -> Option<FingerEval> { model.evaluate(q, Vector2::new(0.0, 0.0), centre, &mem, true, true) };
+    let at =
+        |q: Vector2<f64>| -> Option<FingerEval> { model.evaluate(q, Vector2::new(0.0, 0.0), centre, &mem, true, true) };
     let q_rigid = Vector2::new(cp.pose.q11, cp.pose.q21);
     let e0 = at(q_rigid)?;
     let a = Matrix2::from_rows(&[e0.contacts[0].row.transpose(), e0.contacts[1].row.transpose()]);
-    let dl = Vector2::new((f0[0].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0), (f0[1].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0));
+    let dl = Vector2::new(
+        (f0[0].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0),
+        (f0[1].max(0.0) / s.contact.k_contact).powf(2.0 / 3.0),
+    );
     let mut q = q_rigid + a.try_inverse()? * dl;
     let tol = 1e-9 * s.hand.tau;
     for _ in 0..2000 {

@@ -166,11 +166,17 @@ mod tests {
             let (da, db) = (rng.random_range(-1.0..1.0) * 1e-5 / h, rng.random_range(-1.0..1.0) * 1e-5 / h);
             let p = |s: f64| {
                 let (s2, s3) = (s * s, s * s * s);
-                (2.0 * s3 - 3.0 * s2 + 1.0) * a + (s3 - 2.0 * s2 + s) * h * da + (-2.0 * s3 + 3.0 * s2) * b + (s3 - s2) * h * db
+                (2.0 * s3 - 3.0 * s2 + 1.0) * a
+                    + (s3 - 2.0 * s2 + s) * h * da
+                    + (-2.0 * s3 + 3.0 * s2) * b
+                    + (s3 - s2) * h * db
             };
             // the extreme excursion to the other side, by dense sampling
             let n = 4000;
-            let worst = (1..n).map(|i| p(i as f64 / n as f64)).map(|v| if a > 0.0 { -v } else { v }).fold(f64::NEG_INFINITY, f64::max);
+            let worst = (1..n)
+                .map(|i| p(i as f64 / n as f64))
+                .map(|v| if a > 0.0 { -v } else { v })
+                .fold(f64::NEG_INFINITY, f64::max);
             let scale = a.abs().max(b.abs()) + h * (da.abs() + db.abs());
             if worst.abs() < 1e-6 * scale {
                 continue; // tangency: either answer is right

@@ -6,10 +6,10 @@
 use super::integrate::Piece;
 use super::memory::Memory;
 use crate::math::V2;
+use crate::model::Kin;
 use crate::model::{capsule, flores_normal, CapsuleGeom, CapsulePart, FrictionLaw};
 use crate::model::{gravity_potential, gravity_tree, reduce_tree_force, reduced};
 use crate::model::{Finger, Pose};
-use crate::model::Kin;
 use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 
@@ -178,7 +178,12 @@ impl<'a> FingerModel<'a> {
             c_stop: scene.hand.c_stop,
             k_contact: scene.contact.k_contact,
             chi: scene.contact.chi(),
-            friction: FrictionLaw { mu_s: scene.contact.mu_s, mu_d: scene.contact.mu_d, v_s: scene.contact.v_s, v_d: scene.contact.v_d },
+            friction: FrictionLaw {
+                mu_s: scene.contact.mu_s,
+                mu_d: scene.contact.mu_d,
+                v_s: scene.contact.v_s,
+                v_d: scene.contact.v_d,
+            },
             rw: scene.object.radius + scene.hand.w,
             scene,
         }
@@ -215,7 +220,8 @@ impl<'a> FingerModel<'a> {
         // actuator, spring, stop, gravity
         let spring = if self.k_s != 0.0 { self.tau_s0 + self.k_s * theta2 } else { self.tau_s0 };
         let mut gf = Vector2::new(self.tau, 0.0) - spring * j;
-        let mut v = if full { -self.tau * q[0] + self.tau_s0 * theta2 + 0.5 * self.k_s * theta2 * theta2 } else { f64::NAN };
+        let mut v =
+            if full { -self.tau * q[0] + self.tau_s0 * theta2 + 0.5 * self.k_s * theta2 * theta2 } else { f64::NAN };
         let phi = -theta2;
         if phi > 0.0 {
             piece = piece.with(Kink::StopEngaged.bit());
@@ -243,10 +249,20 @@ impl<'a> FingerModel<'a> {
     /// gravity, or the stop engaged (sin θ2 < 0, equivalent to θ2 < 0 for θ2 = q22 + ψ with
     /// q22 ∈ (−π, π] and ψ > 0); otherwise θ2 is NaN.
     #[inline(always)]
-    pub fn evaluate(&self, q: Vector2<f64>, qd: Vector2<f64>, centre: V2, mem: &[Memory; 2], touch: bool, full: bool) -> Option<FingerEval> {
+    pub fn evaluate(
+        &self,
+        q: Vector2<f64>,
+        qd: Vector2<f64>,
+        centre: V2,
+        mem: &[Memory; 2],
+        touch: bool,
+        full: bool,
+    ) -> Option<FingerEval> {
         let f = self.finger;
-        let FingerLinkage { pose, kin, m, c: bias, xd, theta2, theta2_dot, mut gf, mut v, mut piece } = self.linkage(q, qd, full)?;
-        let geo = [capsule(f.o21, pose.x21, f.l21, centre, self.rw, f.w), capsule(pose.o22, xd, f.t22, centre, self.rw, f.w)];
+        let FingerLinkage { pose, kin, m, c: bias, xd, theta2, theta2_dot, mut gf, mut v, mut piece } =
+            self.linkage(q, qd, full)?;
+        let geo =
+            [capsule(f.o21, pose.x21, f.l21, centre, self.rw, f.w), capsule(pose.o22, xd, f.t22, centre, self.rw, f.w)];
         let mut object_force = V2::zeros();
         let mut contacts = [ContactState {
             geom: geo[0],
@@ -289,6 +305,19 @@ impl<'a> FingerModel<'a> {
         let qdd = minv * q_total;
         let energy = if full { 0.5 * qd.dot(&(m * qd)) + v } else { f64::NAN };
         let sin_q13 = crate::math::cross(pose.x12, pose.x22);
-        Some(FingerEval { pose, kin, m, q_total, qdd, contacts, object_force, theta2, theta2_dot, energy, sin_q13, piece })
+        Some(FingerEval {
+            pose,
+            kin,
+            m,
+            q_total,
+            qdd,
+            contacts,
+            object_force,
+            theta2,
+            theta2_dot,
+            energy,
+            sin_q13,
+            piece,
+        })
     }
 }

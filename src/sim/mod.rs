@@ -23,17 +23,26 @@ mod result;
 mod scene;
 mod tracking;
 
+pub use contact3d::{closest_segments, quat_matrix, V3};
 pub use criteria::{force_margin, impact, impact_limits, r_area, u_min, Impact};
 pub use driver::{drive, simulate as simulate_scene, End, Run};
 pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventValues};
 pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
-pub use integrate::{fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol, TrBdf2};
+pub use integrate::{
+    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol,
+    TrBdf2,
+};
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample, SimOptions, Trajectory, MAX_EVENTS};
-pub use scene::centred::{compliant_equilibrium, simulate_grasp, simulate_grasp_into, simulate_grasp_traj, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS, NS};
+pub use scene::centred::{
+    compliant_equilibrium, simulate_grasp, simulate_grasp_into, simulate_grasp_traj, CentredScene, FingerOde, State,
+    EVENTS as CENTRED_EVENTS, NS,
+};
+pub use scene::free::{
+    free_tolerances, simulate_free, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, PoseSample,
+    EF as FREE_EVENTS, NF as FREE_NS,
+};
+pub use scene::offset::{simulate_offset, OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};
 pub use scene::{Point, Response, Scene};
 pub use tracking::Tracker;
-pub use contact3d::{closest_segments, quat_matrix, V3};
-pub use scene::free::{simulate_free, free_tolerances, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, PoseSample, EF as FREE_EVENTS, NF as FREE_NS};
-pub use scene::offset::{simulate_offset, OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};

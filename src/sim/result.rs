@@ -53,7 +53,17 @@ pub struct SimOptions {
 impl SimOptions {
     /// Pipeline-mode options with Radau IIA.
     pub fn pipeline(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions { rtol, atol, max_steps, mode: Mode::Pipeline, method: Method::Radau5, record: false, grid_dt: None, contacts: true, trace: false }
+        SimOptions {
+            rtol,
+            atol,
+            max_steps,
+            mode: Mode::Pipeline,
+            method: Method::Radau5,
+            record: false,
+            grid_dt: None,
+            contacts: true,
+            trace: false,
+        }
     }
     /// Diagnostic-mode options with Radau IIA.
     pub fn diagnostic(rtol: f64, atol: f64, max_steps: u64) -> Self {
@@ -230,4 +240,3 @@ pub struct Trajectory {
     /// Samples on the uniform grid, if requested.
     pub grid: Vec<Sample>,
 }
-

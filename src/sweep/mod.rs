@@ -17,9 +17,9 @@
 
 pub mod plot;
 
-use crate::{Error, Result};
-use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::eval::{evaluate, stage_kinematics, EvalOptions, Evaluation, Reason, Record};
+use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
+use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::de::{Deserializer, MapAccess, Visitor};
 use std::fmt::Write as _;
@@ -90,8 +90,9 @@ pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
     if let Some(i) = LIMITS.iter().position(|l| l.field == name && is_field(&l)) {
         return Ok(Knob::Field(i));
     }
-    let short: Vec<usize> =
-        (0..LIMITS.len()).filter(|&i| is_field(&&LIMITS[i]) && LIMITS[i].field.rsplit('.').next() == Some(name)).collect();
+    let short: Vec<usize> = (0..LIMITS.len())
+        .filter(|&i| is_field(&&LIMITS[i]) && LIMITS[i].field.rsplit('.').next() == Some(name))
+        .collect();
     match short.as_slice() {
         [i] => Ok(Knob::Field(*i)),
         [] => Err(bad(
@@ -122,7 +123,8 @@ impl Vary {
     /// Parse `NAME=LO:HI:N`, checking the name, N and the range against the field's limits.
     pub fn parse(s: &str) -> Result<Vary> {
         let flag = "--vary";
-        let (name, spec) = s.split_once('=').ok_or_else(|| bad(flag, s, "expected NAME=LO:HI:N, e.g. tau=0.30:0.40:11"))?;
+        let (name, spec) =
+            s.split_once('=').ok_or_else(|| bad(flag, s, "expected NAME=LO:HI:N, e.g. tau=0.30:0.40:11"))?;
         let name = name.trim();
         let knob = resolve(name, flag)?;
         let parts: Vec<&str> = spec.split(':').map(str::trim).collect();
@@ -138,7 +140,8 @@ impl Vary {
         };
         let lo = num(parts[0], "LO")?;
         let hi = num(parts[1], "HI")?;
-        let n: usize = parts[2].parse().map_err(|_| bad(flag, s, format!("N `{}` is not a whole number >= 1", parts[2])))?;
+        let n: usize =
+            parts[2].parse().map_err(|_| bad(flag, s, format!("N `{}` is not a whole number >= 1", parts[2])))?;
         if n < 1 {
             return Err(bad(flag, s, "N must be at least 1"));
         }
@@ -177,7 +180,15 @@ impl Vary {
             return vec![self.lo];
         }
         (0..self.n)
-            .map(|i| if i + 1 == self.n { self.hi } else { self.lo + (self.hi - self.lo) * i as f64 / (self.n - 1) as f64 })
+            .map(
+                |i| {
+                    if i + 1 == self.n {
+                        self.hi
+                    } else {
+                        self.lo + (self.hi - self.lo) * i as f64 / (self.n - 1) as f64
+                    }
+                },
+            )
             .collect()
     }
 }
@@ -226,7 +237,8 @@ impl SweepSpec {
         if has(Knob::LHand) && has(design("t22")) {
             return Err(Error::Input("--vary l_hand and --vary t22: l_hand sets t22".into()));
         }
-        let total: usize = self.vary.iter().map(|v| v.n).try_fold(1usize, |a, n| a.checked_mul(n)).unwrap_or(usize::MAX);
+        let total: usize =
+            self.vary.iter().map(|v| v.n).try_fold(1usize, |a, n| a.checked_mul(n)).unwrap_or(usize::MAX);
         if total > MAX_POINTS {
             return Err(Error::Input(format!("--vary: {total} grid points is more than {MAX_POINTS}")));
         }
@@ -360,9 +372,9 @@ pub fn set_field(p: &mut Problem, field: &str, v: f64) -> Result<()> {
 /// The verdict class of an evaluation: `pass` or what discarded it, as a short word
 /// (`singular_open`, `singular_closing`, `mode_change`, `impact`, `force`, …).
 pub fn verdict(ev: &Evaluation) -> &'static str {
+    use crate::model::GeomError as G;
     use crate::model::OffsetFailure as O;
     use crate::model::SweepFailure as S;
-    use crate::model::GeomError as G;
     use crate::sim::DynOutcome as D;
     let Some(d) = ev.discard else { return "pass" };
     match d.reason {
@@ -530,11 +542,15 @@ pub fn run(spec: &SweepSpec, tick: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
 pub fn to_csv(spec: &SweepSpec, rows: &[Row]) -> String {
     let mut s = String::new();
     let names: Vec<&str> = spec.vary.iter().map(|v| v.name.as_str()).collect();
-    let keys: Vec<&str> = rows.first().map(|r| r.cells.iter().map(|(k, _)| k.as_str()).filter(|k| !names.contains(k)).collect()).unwrap_or_default();
+    let keys: Vec<&str> = rows
+        .first()
+        .map(|r| r.cells.iter().map(|(k, _)| k.as_str()).filter(|k| !names.contains(k)).collect())
+        .unwrap_or_default();
     let _ = writeln!(s, "{},verdict,{}", names.join(","), keys.join(","));
     for r in rows {
         let vals: Vec<String> = r.values.iter().map(|v| format!("{v}")).collect();
-        let cells: Vec<&str> = r.cells.iter().filter(|(k, _)| !names.contains(&k.as_str())).map(|(_, v)| v.as_str()).collect();
+        let cells: Vec<&str> =
+            r.cells.iter().filter(|(k, _)| !names.contains(&k.as_str())).map(|(_, v)| v.as_str()).collect();
         let _ = writeln!(s, "{},{},{}", vals.join(","), r.verdict, cells.join(","));
     }
     s
@@ -560,11 +576,12 @@ pub struct Boundary {
 /// For every line of the grid along the varied name `name`, every pair of neighbours with
 /// different verdicts is narrowed by `steps` bisections (in parallel).
 pub fn bisect(spec: &SweepSpec, rows: &[Row], name: &str, steps: u32) -> Result<Vec<Boundary>> {
-    let axis = spec
-        .vary
-        .iter()
-        .position(|v| v.name == name)
-        .ok_or_else(|| Error::Input(format!("--bisect {name}: not one of the varied names ({})", spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", "))))?;
+    let axis = spec.vary.iter().position(|v| v.name == name).ok_or_else(|| {
+        Error::Input(format!(
+            "--bisect {name}: not one of the varied names ({})",
+            spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
+        ))
+    })?;
     if steps > 60 {
         return Err(Error::Input(format!("--bisect-steps {steps}: at most 60")));
     }
@@ -607,11 +624,26 @@ pub fn boundaries_csv(spec: &SweepSpec, b: &[Boundary]) -> String {
     let mut s = String::new();
     for bd in b.iter().take(1) {
         let others: Vec<&str> = spec.vary.iter().filter(|v| v.name != bd.name).map(|v| v.name.as_str()).collect();
-        let _ = writeln!(s, "bisected,{}{}lo,hi,verdict_lo,verdict_hi", others.join(","), if others.is_empty() { "" } else { "," });
+        let _ = writeln!(
+            s,
+            "bisected,{}{}lo,hi,verdict_lo,verdict_hi",
+            others.join(","),
+            if others.is_empty() { "" } else { "," }
+        );
     }
     for bd in b {
         let o: Vec<String> = bd.others.iter().map(|v| format!("{v}")).collect();
-        let _ = writeln!(s, "{},{}{}{},{},{},{}", bd.name, o.join(","), if o.is_empty() { "" } else { "," }, bd.lo, bd.hi, bd.verdict_lo, bd.verdict_hi);
+        let _ = writeln!(
+            s,
+            "{},{}{}{},{},{},{}",
+            bd.name,
+            o.join(","),
+            if o.is_empty() { "" } else { "," },
+            bd.lo,
+            bd.hi,
+            bd.verdict_lo,
+            bd.verdict_hi
+        );
     }
     s
 }

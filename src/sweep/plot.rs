@@ -46,7 +46,8 @@ pub fn verdict_colour(v: &str) -> RGBColor {
 
 /// Viridis-like colour for t in [0, 1].
 fn ramp(t: f64) -> RGBColor {
-    const S: [(f64, f64, f64); 5] = [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    const S: [(f64, f64, f64); 5] =
+        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
     let x = t * 4.0;
     let i = (x.floor() as usize).min(3);
@@ -57,7 +58,8 @@ fn ramp(t: f64) -> RGBColor {
 }
 
 fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = v.filter(|x| x.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let (lo, hi) =
+        v.filter(|x| x.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
     if !lo.is_finite() {
         (0.0, 1.0)
     } else if hi > lo {
@@ -68,7 +70,14 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Draw every plot for the sweep; returns the files written.
-pub fn plot_all(dir: &Path, spec: &SweepSpec, rows: &[Row], ys: &[String], colours: &[String], bounds: &[Boundary]) -> Result<Vec<PathBuf>> {
+pub fn plot_all(
+    dir: &Path,
+    spec: &SweepSpec,
+    rows: &[Row],
+    ys: &[String],
+    colours: &[String],
+    bounds: &[Boundary],
+) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let one_d = spec.vary[0].n > 1 && spec.vary[1..].iter().all(|v| v.n == 1);
     match if one_d { 1 } else { spec.vary.len() } {
@@ -105,7 +114,13 @@ fn line(path: &Path, spec: &SweepSpec, rows: &[Row], ys: &str, bounds: &[Boundar
     let root = SVGBackend::new(path, (800, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(&e)?;
     let verdicts = distinct(rows);
-    let title = format!("{} against {} ({} points; markers: verdict {})", ys, spec.vary[0].name, rows.len(), verdicts.join(", "));
+    let title = format!(
+        "{} against {} ({} points; markers: verdict {})",
+        ys,
+        spec.vary[0].name,
+        rows.len(),
+        verdicts.join(", ")
+    );
     let mut ch = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 15))
         .margin(10)
@@ -118,8 +133,15 @@ fn line(path: &Path, spec: &SweepSpec, rows: &[Row], ys: &str, bounds: &[Boundar
     for (i, k) in keys.iter().enumerate() {
         let c = styles[i % styles.len()];
         let pts: Vec<(f64, f64)> = rows.iter().filter_map(|r| r.num(k).map(|y| (r.values[0], y))).collect();
-        ch.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(&e)?.label(*k).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
-        ch.draw_series(rows.iter().filter_map(|r| r.num(k).map(|y| Circle::new((r.values[0], y), 4, verdict_colour(r.verdict).filled())))).map_err(&e)?;
+        ch.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+            .map_err(&e)?
+            .label(*k)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+        ch.draw_series(
+            rows.iter()
+                .filter_map(|r| r.num(k).map(|y| Circle::new((r.values[0], y), 4, verdict_colour(r.verdict).filled()))),
+        )
+        .map_err(&e)?;
     }
     for b in bounds {
         let xb = 0.5 * (b.lo + b.hi);
@@ -166,7 +188,11 @@ fn maps(path: &Path, spec: &SweepSpec, rows: &[Row], key: Option<&str>) -> Resul
     let per = spec.vary[0].n * spec.vary[1].n;
     for (pi, &slice) in panels.iter().enumerate() {
         let sub = &rows[slice * per..(slice + 1) * per];
-        let cap = if spec.vary.len() == 3 { format!("{} = {:.4}", spec.vary[2].name, sub[0].values[2]) } else { String::new() };
+        let cap = if spec.vary.len() == 3 {
+            format!("{} = {:.4}", spec.vary[2].name, sub[0].values[2])
+        } else {
+            String::new()
+        };
         panel(&cells[pi], spec, sub, key, (vmin, vmax), &cap).map_err(&e)?;
     }
     legend(&side, rows, key, (vmin, vmax)).map_err(&e)?;
@@ -184,7 +210,14 @@ fn half_step(v: &super::Vary) -> f64 {
     }
 }
 
-fn panel(area: &DrawingArea<SVGBackend, Shift>, spec: &SweepSpec, rows: &[Row], key: Option<&str>, (vmin, vmax): (f64, f64), cap: &str) -> DrawResult<()> {
+fn panel(
+    area: &DrawingArea<SVGBackend, Shift>,
+    spec: &SweepSpec,
+    rows: &[Row],
+    key: Option<&str>,
+    (vmin, vmax): (f64, f64),
+    cap: &str,
+) -> DrawResult<()> {
     let (vx, vy) = (&spec.vary[0], &spec.vary[1]);
     let (hx, hy) = (half_step(vx), half_step(vy));
     let mut ch = ChartBuilder::on(area)
@@ -193,7 +226,13 @@ fn panel(area: &DrawingArea<SVGBackend, Shift>, spec: &SweepSpec, rows: &[Row], 
         .x_label_area_size(35)
         .y_label_area_size(55)
         .build_cartesian_2d((vx.lo - hx)..(vx.hi + hx), (vy.lo - hy)..(vy.hi + hy))?;
-    ch.configure_mesh().disable_mesh().x_desc(vx.name.as_str()).y_desc(vy.name.as_str()).x_labels(5).y_labels(5).draw()?;
+    ch.configure_mesh()
+        .disable_mesh()
+        .x_desc(vx.name.as_str())
+        .y_desc(vy.name.as_str())
+        .x_labels(5)
+        .y_labels(5)
+        .draw()?;
     ch.draw_series(rows.iter().map(|r| {
         let c = match key {
             None => verdict_colour(r.verdict),
@@ -208,7 +247,12 @@ fn panel(area: &DrawingArea<SVGBackend, Shift>, spec: &SweepSpec, rows: &[Row], 
     Ok(())
 }
 
-fn legend(area: &DrawingArea<SVGBackend, Shift>, rows: &[Row], key: Option<&str>, (vmin, vmax): (f64, f64)) -> DrawResult<()> {
+fn legend(
+    area: &DrawingArea<SVGBackend, Shift>,
+    rows: &[Row],
+    key: Option<&str>,
+    (vmin, vmax): (f64, f64),
+) -> DrawResult<()> {
     let font = ("sans-serif", 13).into_font();
     match key {
         None => {

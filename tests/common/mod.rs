@@ -21,7 +21,11 @@ pub fn nominal() -> Design {
 /// Assert |a − b| ≤ rel·|b| with a message.
 #[track_caller]
 pub fn close_rel(a: f64, b: f64, rel: f64, what: &str) {
-    assert!((a - b).abs() <= rel * b.abs(), "{what}: got {a:.15e}, expected {b:.15e} (rel {:.2e})", (a - b).abs() / b.abs());
+    assert!(
+        (a - b).abs() <= rel * b.abs(),
+        "{what}: got {a:.15e}, expected {b:.15e} (rel {:.2e})",
+        (a - b).abs() / b.abs()
+    );
 }
 
 /// Assert |a − b| ≤ abs.
@@ -40,7 +44,9 @@ pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
 /// so that `make test` checks its recording with the independent reader.
 pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: u64) -> std::path::PathBuf {
     use std::path::PathBuf;
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
     let d = base.join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&base).unwrap();

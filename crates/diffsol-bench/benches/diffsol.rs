@@ -16,13 +16,13 @@ use anyhow::Result;
 use clap::Parser;
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use gripopt::bench::{print_table, print_targets, time_it, Measured, Reference, Row, WorkPrecision};
-use gripopt::model::Finger;
 use gripopt::eval::StaticsResult;
+use gripopt::model::Finger;
 use gripopt::params::{Design, Problem, SceneParams};
-use gripopt::sim::{impact, u_min};
-use gripopt::sim::{FingerOde, State, NS};
 use gripopt::sim::compliant_equilibrium;
 use gripopt::sim::Rhs;
+use gripopt::sim::{impact, u_min};
+use gripopt::sim::{FingerOde, State, NS};
 use gripopt::sim::{Memory, MemoryChange, MAX_EVENTS};
 use std::cell::{Cell, RefCell};
 use std::path::PathBuf;
@@ -105,7 +105,15 @@ fn diffsol_rows(reference: &Reference, wp: &WorkPrecision) -> Vec<Row> {
             let (r, tmin, tmed) = time_it(|| simulate(f, s, st, m, rtol, wp.atol_at(rtol)), 1.0, wp.reps);
             match r {
                 Ok(r) => {
-                    let measured = Measured { t_first: r.t_first, e_cyl: r.e_cyl, t_stab: r.t_stab, f_end: r.f_end, steps: r.steps, rhs: r.rhs, same_verdict: r.t_stab.is_some() == reference.run.t_stab.is_some() };
+                    let measured = Measured {
+                        t_first: r.t_first,
+                        e_cyl: r.e_cyl,
+                        t_stab: r.t_stab,
+                        f_end: r.f_end,
+                        steps: r.steps,
+                        rhs: r.rhs,
+                        same_verdict: r.t_stab.is_some() == reference.run.t_stab.is_some(),
+                    };
                     rows.push(reference.row(m.label(), rtol, tmin, tmed, &measured));
                 }
                 Err(e) => pb.suspend(|| eprintln!("{} rtol {rtol:e}: failed ({e})", m.label())),
@@ -160,7 +168,14 @@ struct DsResult {
 
 /// Simulate the nominal-scene grasp of finger `f` with a diffsol method at `rtol` (atol as
 /// in `sim::grasp`: `atol` on angles and rates, 1e4·atol on the filtered force).
-fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, method: DsMethod, rtol: f64, atol: f64) -> anyhow::Result<DsResult> {
+fn simulate(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    method: DsMethod,
+    rtol: f64,
+    atol: f64,
+) -> anyhow::Result<DsResult> {
     let base = FingerOde::new(f, s, st.tau_s0, 0.0);
     let eq = compliant_equilibrium(&base, s, st.f0).ok_or_else(|| anyhow::anyhow!("no compliant equilibrium"))?;
     let threshold = s.criteria.eta_stab * u_min(s, st.f0);
@@ -305,7 +320,14 @@ where
 /// (separation). diffsol's root finder may return a time where the event function is exactly
 /// zero; the simulator's locator returns a time past the crossing, and that is what the
 /// memory rule's "located" contact means. Steps of 1, 2, 4, … ulps; `tr` if none crosses.
-fn past_crossing<'a, Eqn, S>(solver: &S, s: &SceneParams, ode: &RefCell<FingerOde>, mem: [Memory; 2], tr: f64, k: usize) -> anyhow::Result<f64>
+fn past_crossing<'a, Eqn, S>(
+    solver: &S,
+    s: &SceneParams,
+    ode: &RefCell<FingerOde>,
+    mem: [Memory; 2],
+    tr: f64,
+    k: usize,
+) -> anyhow::Result<f64>
 where
     Eqn: diffsol::OdeEquations<T = f64, V = <M as diffsol::MatrixCommon>::V> + 'a,
     S: OdeSolverMethod<'a, Eqn>,
@@ -314,7 +336,9 @@ where
         let yv = solver.interpolate(t).map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut o = ode.borrow_mut();
         o.mem = mem;
-        let ev = o.evaluate(&State::from_fn(|i, _| yv.get_index(i))).ok_or_else(|| anyhow::anyhow!("DGM failed at an event"))?;
+        let ev = o
+            .evaluate(&State::from_fn(|i, _| yv.get_index(i)))
+            .ok_or_else(|| anyhow::anyhow!("DGM failed at an event"))?;
         let g = mem[k].event_value(ev.contacts[k].geom.delta, s.contact.eps_sep);
         Ok(if mem[k].active { g < 0.0 } else { g > 0.0 })
     };

@@ -1,6 +1,6 @@
 //! Dormand–Prince 5(4): explicit, for comparison and non-stiff references.
 
-use super::{Accepted, Rhs, StepError, Stats, Stepper, Tol, HMIN};
+use super::{Accepted, Rhs, Stats, StepError, Stepper, Tol, HMIN};
 use nalgebra::SVector;
 
 /// Explicit Dormand–Prince 5(4) with FSAL and a standard step-size controller.
@@ -36,7 +36,8 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
             let r = (|| {
                 let k2 = sys.eval(t + h / 5.0, &(y + k1 * (h / 5.0)))?;
                 let k3 = sys.eval(t + 0.3 * h, &(y + (k1 * (3.0 / 40.0) + k2 * (9.0 / 40.0)) * h))?;
-                let k4 = sys.eval(t + 0.8 * h, &(y + (k1 * (44.0 / 45.0) - k2 * (56.0 / 15.0) + k3 * (32.0 / 9.0)) * h))?;
+                let k4 =
+                    sys.eval(t + 0.8 * h, &(y + (k1 * (44.0 / 45.0) - k2 * (56.0 / 15.0) + k3 * (32.0 / 9.0)) * h))?;
                 let k5 = sys.eval(
                     t + 8.0 / 9.0 * h,
                     &(y + (k1 * (19372.0 / 6561.0) - k2 * (25360.0 / 2187.0) + k3 * (64448.0 / 6561.0)
@@ -51,10 +52,10 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
                         - k5 * (5103.0 / 18656.0))
                         * h),
                 )?;
-                let y1 = y + (k1 * (35.0 / 384.0) + k3 * (500.0 / 1113.0) + k4 * (125.0 / 192.0)
-                    - k5 * (2187.0 / 6784.0)
-                    + k6 * (11.0 / 84.0))
-                    * h;
+                let y1 = y
+                    + (k1 * (35.0 / 384.0) + k3 * (500.0 / 1113.0) + k4 * (125.0 / 192.0) - k5 * (2187.0 / 6784.0)
+                        + k6 * (11.0 / 84.0))
+                        * h;
                 let k7 = sys.eval(t + h, &y1)?;
                 let e = (k1 * (71.0 / 57600.0) - k3 * (71.0 / 16695.0) + k4 * (71.0 / 1920.0)
                     - k5 * (17253.0 / 339200.0)

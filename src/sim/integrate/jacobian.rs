@@ -25,7 +25,14 @@ pub(super) struct JacobianCache<const N: usize> {
 impl<const N: usize> JacobianCache<N> {
     /// No Jacobian yet.
     pub(super) fn new() -> Self {
-        JacobianCache { jac: SMatrix::zeros(), valid: false, fresh: false, piece: Piece::SMOOTH, slow: false, known: None }
+        JacobianCache {
+            jac: SMatrix::zeros(),
+            valid: false,
+            fresh: false,
+            piece: Piece::SMOOTH,
+            slow: false,
+            known: None,
+        }
     }
 
     /// The piece of `y` (from the last accepted evaluation when `y` is that state).
@@ -58,7 +65,14 @@ impl<const N: usize> JacobianCache<N> {
 
     /// Compute J at (t, y) with the system's [`Rhs::jacobian`]; false if f is undefined at
     /// a perturbed state.
-    pub(super) fn compute<S: Rhs<N>>(&mut self, sys: &mut S, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, stats: &mut Stats) -> bool {
+    pub(super) fn compute<S: Rhs<N>>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        stats: &mut Stats,
+    ) -> bool {
         self.piece = self.piece_of(sys, y);
         if !sys.jacobian(t, y, f, self.piece, &mut self.jac, stats) {
             return false;

@@ -83,7 +83,9 @@ mod tests {
     /// The complex LU solves a complex system (checked by multiplying back).
     #[test]
     fn complex_lu_solves() {
-        let a = SMatrix::<Complex<f64>, 3, 3>::from_fn(|i, j| Complex::new((i * 3 + j) as f64 + if i == j { 5.0 } else { 0.0 }, (i as f64) - (j as f64) * 0.5));
+        let a = SMatrix::<Complex<f64>, 3, 3>::from_fn(|i, j| {
+            Complex::new((i * 3 + j) as f64 + if i == j { 5.0 } else { 0.0 }, (i as f64) - (j as f64) * 0.5)
+        });
         let b = SVector::<Complex<f64>, 3>::from_fn(|i, _| Complex::new(1.0 + i as f64, -(i as f64)));
         let x = Lu::factor(a).unwrap().solve(&b);
         assert!((a * x - b).norm() < 1e-13);

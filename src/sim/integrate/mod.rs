@@ -17,8 +17,8 @@ mod reduced;
 mod trbdf2;
 
 pub use dense::hermite;
-pub use jacobian::fd_jacobian;
 pub use dopri5::Dopri5;
+pub use jacobian::fd_jacobian;
 pub use lu::{Lu, Scalar};
 pub use radau5::Radau5;
 pub use reduced::Partition;
@@ -79,7 +79,15 @@ pub trait Rhs<const N: usize> {
     /// y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined at a
     /// state it needs. Default: [`fd_jacobian`], dense forward differences, N evaluations;
     /// a system whose parts couple sparsely may exploit that.
-    fn jacobian(&mut self, t: f64, y: &SVector<f64, N>, f: &SVector<f64, N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &SVector<f64, N>,
+        f: &SVector<f64, N>,
+        piece: Piece,
+        jac: &mut SMatrix<f64, N, N>,
+        stats: &mut Stats,
+    ) -> bool {
         fd_jacobian(self, t, y, f, piece, jac, stats)
     }
     /// States the Newton solves may eliminate by blocks (see [`Partition`]): a second-order

@@ -3,7 +3,7 @@
 use super::jacobian::JacobianCache;
 use super::lu::Lu;
 use super::reduced::ReducedLu;
-use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, StepError, Stats, Stepper, Tol};
+use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
 
 /// The real and the complex reduced factorisations.
@@ -476,4 +476,3 @@ mod tests {
         assert!(st.stats().steps < 500, "{:?}", st.stats());
     }
 }
-

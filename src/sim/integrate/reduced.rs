@@ -106,7 +106,14 @@ impl<T: Scalar, const N: usize> ReducedLu<T, N> {
 
     /// Storage for the factorisations over `part`.
     pub fn new(part: Partition<N>) -> Self {
-        ReducedLu { part, dinv: SMatrix::zeros(), x: SMatrix::zeros(), jvp: SMatrix::zeros(), s: SMatrix::zeros(), piv: [0; N] }
+        ReducedLu {
+            part,
+            dinv: SMatrix::zeros(),
+            x: SMatrix::zeros(),
+            jvp: SMatrix::zeros(),
+            s: SMatrix::zeros(),
+            piv: [0; N],
+        }
     }
 
     /// Factor c·I − `j`; false if D or S is singular.

@@ -3,7 +3,7 @@
 
 use super::jacobian::JacobianCache;
 use super::lu::Lu;
-use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, StepError, Stats, Stepper, Tol};
+use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
 use nalgebra::{SMatrix, SVector};
 
 /// TR-BDF2 (γ = 2 − √2) as an ESDIRK with a simplified Newton iteration, finite-difference

@@ -69,7 +69,14 @@ impl<'a> FingerOde<'a> {
     /// The model at `y` (`full = false`: the lean path of [`FingerModel::evaluate`]).
     #[inline(always)]
     fn evaluate_with(&self, y: &State, full: bool) -> Option<FingerEval> {
-        self.model.evaluate(Vector2::new(y[0], y[1]), Vector2::new(y[2], y[3]), self.centre, &self.mem, self.contacts_enabled, full)
+        self.model.evaluate(
+            Vector2::new(y[0], y[1]),
+            Vector2::new(y[2], y[3]),
+            self.centre,
+            &self.mem,
+            self.contacts_enabled,
+            full,
+        )
     }
 
     /// The full evaluation the integrator made at the end of its last accepted step, if
@@ -137,8 +144,14 @@ pub fn compliant_equilibrium(ode: &FingerOde, s: &SceneParams, f0: [f64; 2]) -> 
 }
 
 /// The event functions of the centred scene, in the order of their values.
-pub const EVENTS: [EventKind; 6] =
-    [EventKind::Contact(0), EventKind::Contact(1), EventKind::Stability, EventKind::Force, EventKind::Singular(0), EventKind::Stop(0)];
+pub const EVENTS: [EventKind; 6] = [
+    EventKind::Contact(0),
+    EventKind::Contact(1),
+    EventKind::Stability,
+    EventKind::Force,
+    EventKind::Singular(0),
+    EventKind::Stop(0),
+];
 /// Index of the force event in [`EVENTS`].
 const FORCE: usize = 3;
 
@@ -156,7 +169,13 @@ pub struct CentredScene<'a, 't> {
 
 impl<'a, 't> CentredScene<'a, 't> {
     /// The scene of finger `f` with its statics `st` (before [`CentredScene::prepare`]).
-    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&'t mut Trajectory>) -> Self {
+    pub fn new(
+        f: &'a Finger,
+        s: &'a SceneParams,
+        st: &StaticsResult,
+        opts: &SimOptions,
+        traj: Option<&'t mut Trajectory>,
+    ) -> Self {
         let ode = FingerOde::new(f, s, st.tau_s0, 0.0);
         let ra = r_area(s);
         let static_margin = force_margin(s, ra, V2::new(st.hand0[0], st.hand0[1]));
@@ -270,9 +289,14 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
         let mut contact = [0.0; 2];
         for i in 0..2 {
             // without contacts (a diagnostic scene) the phalanges pass through the object
-            contact[i] = if !self.ode.contacts_enabled { -1.0 } else { self.ode.mem[i].event_value(ev.contacts[i].geom.delta, s.contact.eps_sep) };
+            contact[i] = if !self.ode.contacts_enabled {
+                -1.0
+            } else {
+                self.ode.mem[i].event_value(ev.contacts[i].geom.delta, s.contact.eps_sep)
+            };
         }
-        let stab = if self.tracker.first.is_some() { ev.energy - self.eq.v_star - self.threshold } else { f64::INFINITY };
+        let stab =
+            if self.tracker.first.is_some() { ev.energy - self.eq.v_star - self.threshold } else { f64::INFINITY };
         let force = force_margin(s, self.r_area, V2::new(0.0, y[4]));
         let sing = ev.sin_q13.abs() - 1e-3;
         EventValues {
@@ -306,7 +330,9 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
                 for c in 0..2 {
                     let cs = &ev.contacts[c];
                     let located = EVENTS[i] == EventKind::Contact(c as u8);
-                    if self.ode.mem[c].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min) == MemoryChange::Onset {
+                    if self.ode.mem[c].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min)
+                        == MemoryChange::Onset
+                    {
                         self.tracker.onset(c, t);
                         if self.tracker.first.is_none() {
                             let minv = ev.m.try_inverse().unwrap_or(Matrix2::zeros());
@@ -380,13 +406,24 @@ pub fn simulate_grasp(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &Si
 
 /// Simulate, recording the trajectory into `traj` when given (the result does not depend
 /// on recording).
-pub fn simulate_grasp_into(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+pub fn simulate_grasp_into(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    opts: &SimOptions,
+    traj: Option<&mut Trajectory>,
+) -> DynamicsResult {
     let o = SimOptions { record: traj.is_some(), ..*opts };
     simulate(f, s, st, &o, traj)
 }
 
 /// Simulate and also return the recorded trajectory (forces `record`).
-pub fn simulate_grasp_traj(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> (DynamicsResult, Trajectory) {
+pub fn simulate_grasp_traj(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    opts: &SimOptions,
+) -> (DynamicsResult, Trajectory) {
     let mut tr = Trajectory::default();
     let r = simulate(f, s, st, &SimOptions { record: true, ..*opts }, Some(&mut tr));
     (r, tr)
@@ -398,10 +435,20 @@ fn tolerances(opts: &SimOptions) -> Tol<NS> {
     Tol { rtol: opts.rtol, atol: State::from([opts.atol, opts.atol, opts.atol, opts.atol, opts.atol * 1e4]) }
 }
 
-fn simulate(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions, traj: Option<&mut Trajectory>) -> DynamicsResult {
+fn simulate(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    opts: &SimOptions,
+    traj: Option<&mut Trajectory>,
+) -> DynamicsResult {
     let clock = Instant::now();
     let mut scene = CentredScene::new(f, s, st, opts, traj);
-    let mut res = if scene.prepare(st.f0, opts) { driver::simulate(scene, opts, tolerances(opts), s.criteria.t_max) } else { scene.result() };
+    let mut res = if scene.prepare(st.f0, opts) {
+        driver::simulate(scene, opts, tolerances(opts), s.criteria.t_max)
+    } else {
+        scene.result()
+    };
     res.cpu_s = clock.elapsed().as_secs_f64();
     res
 }

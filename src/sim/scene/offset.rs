@@ -86,7 +86,13 @@ pub struct OffsetScene<'a> {
 impl<'a> OffsetScene<'a> {
     /// The scene of finger `f` (statics `st` of the centred grasp for the spring preload)
     /// on the object at world offset `x_off`; `Err` names why it cannot start.
-    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, x_off: f64, opts: &SimOptions) -> Result<Self, DynOutcome> {
+    pub fn new(
+        f: &'a Finger,
+        s: &'a SceneParams,
+        st: &StaticsResult,
+        x_off: f64,
+        opts: &SimOptions,
+    ) -> Result<Self, DynOutcome> {
         let model = FingerModel::new(f, s, st.tau_s0);
         let r = s.object.radius;
         let centre = [V2::new(x_off, r), V2::new(-x_off, r)];
@@ -132,7 +138,14 @@ impl<'a> OffsetScene<'a> {
         for (i, slot) in f.iter_mut().enumerate() {
             let o = 4 * i;
             let mem = [self.mem[2 * i], self.mem[2 * i + 1]];
-            *slot = Some(self.model.evaluate(Vector2::new(y[o], y[o + 1]), Vector2::new(y[o + 2], y[o + 3]), self.centre[i], &mem, true, full)?);
+            *slot = Some(self.model.evaluate(
+                Vector2::new(y[o], y[o + 1]),
+                Vector2::new(y[o + 2], y[o + 3]),
+                self.centre[i],
+                &mem,
+                true,
+                full,
+            )?);
         }
         let f = [f[0]?, f[1]?];
         let hand = V2::new(f[0].object_force.x - f[1].object_force.x, f[0].object_force.y + f[1].object_force.y);
@@ -152,7 +165,18 @@ impl<'a> OffsetScene<'a> {
     fn deriv(&self, y: &St, ev: &PairEval) -> St {
         let tf = self.s.criteria.t_filter;
         let (a, b) = (&ev.f[0], &ev.f[1]);
-        St::from([y[2], y[3], a.qdd[0], a.qdd[1], y[6], y[7], b.qdd[0], b.qdd[1], (ev.hand.x - y[8]) / tf, (ev.hand.y - y[9]) / tf])
+        St::from([
+            y[2],
+            y[3],
+            a.qdd[0],
+            a.qdd[1],
+            y[6],
+            y[7],
+            b.qdd[0],
+            b.qdd[1],
+            (ev.hand.x - y[8]) / tf,
+            (ev.hand.y - y[9]) / tf,
+        ])
     }
 }
 
@@ -209,8 +233,30 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         let stab = if self.tracker.first.is_some() { ev.energy - self.v_star - self.threshold } else { f64::INFINITY };
         let force = force_margin(self.s, self.r_area, V2::new(y[8], y[9]));
         EventValues {
-            g: [g_c(0), g_c(1), g_c(2), g_c(3), stab, force, ev.f[0].sin_q13.abs() - 1e-3, ev.f[1].sin_q13.abs() - 1e-3, ev.f[0].theta2, ev.f[1].theta2],
-            rate: [c(0).delta_dot, c(1).delta_dot, c(2).delta_dot, c(3).delta_dot, 0.0, 0.0, 0.0, 0.0, ev.f[0].theta2_dot, ev.f[1].theta2_dot],
+            g: [
+                g_c(0),
+                g_c(1),
+                g_c(2),
+                g_c(3),
+                stab,
+                force,
+                ev.f[0].sin_q13.abs() - 1e-3,
+                ev.f[1].sin_q13.abs() - 1e-3,
+                ev.f[0].theta2,
+                ev.f[1].theta2,
+            ],
+            rate: [
+                c(0).delta_dot,
+                c(1).delta_dot,
+                c(2).delta_dot,
+                c(3).delta_dot,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                ev.f[0].theta2_dot,
+                ev.f[1].theta2_dot,
+            ],
         }
     }
     fn crossing(&self, i: usize) -> Option<Crossing> {
@@ -241,7 +287,9 @@ impl Scene<NO, EO> for OffsetScene<'_> {
                     let fe = &ev.f[k / 2];
                     let cs = &fe.contacts[k % 2];
                     let located = OFFSET_EVENTS[i] == EventKind::Contact(k as u8);
-                    if self.mem[k].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min) == MemoryChange::Onset {
+                    if self.mem[k].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min)
+                        == MemoryChange::Onset
+                    {
                         self.tracker.onset(k, t);
                         if self.tracker.first.is_none() {
                             let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
@@ -357,4 +405,3 @@ pub fn simulate_offset(f: &Finger, s: &SceneParams, st: &StaticsResult, x_off: f
     res.dynamics.cpu_s = clock.elapsed().as_secs_f64();
     res
 }
-

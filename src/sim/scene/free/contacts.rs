@@ -176,7 +176,8 @@ impl FreeScene<'_> {
     pub(super) fn ground_load(&self, ci: usize, h: &GroundHit) -> (f64, V3, bool) {
         let kg = self.s.setup.ground_k;
         let dd = -h.vp.z;
-        let (fnm, ft) = point_force(kg, self.chi, &self.law_ground, h.delta, dd, self.mem[ci].vminus, V3::new(h.vp.x, h.vp.y, 0.0));
+        let (fnm, ft) =
+            point_force(kg, self.chi, &self.law_ground, h.delta, dd, self.mem[ci].vminus, V3::new(h.vp.x, h.vp.y, 0.0));
         let clipped = 1.0 + self.chi * dd / self.mem[ci].vminus <= 0.0;
         (fnm, ft + V3::new(0.0, 0.0, fnm), clipped)
     }
@@ -204,7 +205,6 @@ impl FreeScene<'_> {
     pub(super) fn inertia_inverse(&self, b: &Body) -> Matrix3<f64> {
         b.rot * Matrix3::from_diagonal(&self.j_body.map(|j| 1.0 / j)) * b.rot.transpose()
     }
-
 }
 
 impl CapsuleHit {

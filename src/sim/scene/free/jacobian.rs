@@ -75,7 +75,9 @@ fn on_piece<T>(dy: f64, eval: impl Fn(f64) -> T, left: impl Fn(&T) -> bool, eval
 
 fn left_piece(piece: Piece, load: &[Load; NC], ks: std::ops::Range<usize>, finger: Option<(usize, Piece)>) -> bool {
     for k in ks {
-        if load[k].loaded != piece.has(12 + 2 * k as u32) || (load[k].loaded && load[k].clipped) != piece.has(13 + 2 * k as u32) {
+        if load[k].loaded != piece.has(12 + 2 * k as u32)
+            || (load[k].loaded && load[k].clipped) != piece.has(13 + 2 * k as u32)
+        {
             return true;
         }
     }
@@ -277,7 +279,11 @@ impl FreeScene<'_> {
             let (dy, (load, bp)) = on_piece(step(j), eval, |r| left_piece(piece, &r.0, 0..NC, None), &mut evals);
             let (f1, t1, g1) = sum(&load, 0..NC);
             self.finger_rows(jac, j, &m_inv, &g1, &g0, dy);
-            let wdot = if j < Q0 { self.omega_dot(&bp, &i_inv, t1) } else { self.omega_dot(&bp, &self.inertia_inverse(&bp), t1) };
+            let wdot = if j < Q0 {
+                self.omega_dot(&bp, &i_inv, t1)
+            } else {
+                self.omega_dot(&bp, &self.inertia_inverse(&bp), t1)
+            };
             let push_f = |b: &Body| self.push(b).map_or(V3::zeros(), |p| p.0);
             let df = (f1 + push_f(&bp)) - (f0 + push_f(&b));
             for r in 0..3 {
@@ -323,7 +329,15 @@ impl FreeScene<'_> {
 
     /// Column `c` of the fingers' dynamic rows from the generalised contact forces `g1`
     /// (perturbed) and `g0` (base), the fingers' mass matrices unchanged.
-    fn finger_rows(&self, jac: &mut FreeJacobian, c: usize, m_inv: &[Matrix2<f64>; 2], g1: &[Vector2<f64>; 2], g0: &[Vector2<f64>; 2], dy: f64) {
+    fn finger_rows(
+        &self,
+        jac: &mut FreeJacobian,
+        c: usize,
+        m_inv: &[Matrix2<f64>; 2],
+        g1: &[Vector2<f64>; 2],
+        g0: &[Vector2<f64>; 2],
+        dy: f64,
+    ) {
         if !self.setup.fingers {
             return;
         }

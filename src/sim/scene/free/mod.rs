@@ -272,7 +272,12 @@ impl<'a> FreeScene<'a> {
             j_body: V3::new(s.object.inertia(), s.object.inertia(), m * s.object.radius.powi(2) / 2.0),
             chi: k.chi(),
             law_palm: FrictionLaw { mu_s: s.env.mu_p, mu_d: s.env.mu_p, v_s: k.v_s, v_d: k.v_d },
-            law_ground: FrictionLaw { mu_s: s.env.mu_g, mu_d: s.env.mu_g, v_s: s.setup.ground_v_s, v_d: s.setup.ground_v_d },
+            law_ground: FrictionLaw {
+                mu_s: s.env.mu_g,
+                mu_d: s.env.mu_g,
+                v_s: s.setup.ground_v_s,
+                v_d: s.setup.ground_v_d,
+            },
             x_off,
             evals: 0,
             jac_evals: 0,
@@ -344,7 +349,11 @@ impl Rhs<NF> for FreeScene<'_> {
     fn newton_partition(&self) -> Option<Partition<NF>> {
         // the positions: both fingers' angles, G, and the quaternion (its rate depends on
         // itself and ω only)
-        (!self.setup.dense_jacobian).then(|| Partition::new(&[&[0], &[1], &[4], &[5], &[G0], &[G0 + 1], &[G0 + 2], &[Q0, Q0 + 1, Q0 + 2, Q0 + 3]])).flatten()
+        (!self.setup.dense_jacobian)
+            .then(|| {
+                Partition::new(&[&[0], &[1], &[4], &[5], &[G0], &[G0 + 1], &[G0 + 2], &[Q0, Q0 + 1, Q0 + 2, Q0 + 3]])
+            })
+            .flatten()
     }
     fn jacobian(&mut self, t: f64, y: &St, f: &St, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
         if self.setup.dense_jacobian {
@@ -478,7 +487,9 @@ impl Scene<NF, EF> for FreeScene<'_> {
                         let p = fe.pose;
                         let f = self.model.finger;
                         // contact row in the plane: δ̇ = a q̇ with a = J_Pᵀ n (n: in-plane normal)
-                        let geo = self.model.geometry(&p, V2::new(if k / 2 == 0 { self.x_off } else { -self.x_off }, s.object.radius));
+                        let geo = self
+                            .model
+                            .geometry(&p, V2::new(if k / 2 == 0 { self.x_off } else { -self.x_off }, s.object.radius));
                         let g = geo[k % 2];
                         let jp = fe.kin.point_jacobian(f, &p, g.point, k % 2 == 1);
                         let row = jp.transpose() * g.normal;
@@ -508,7 +519,14 @@ impl Scene<NF, EF> for FreeScene<'_> {
         if !self.record || at == Point::Grid {
             return;
         }
-        let pose = PoseSample { t, g: [y[G0], y[G0 + 1], y[G0 + 2]], q: ev.quat, tilt: ev.tilt, fingers: [y[0], y[1], y[4], y[5]], energy: ev.energy };
+        let pose = PoseSample {
+            t,
+            g: [y[G0], y[G0 + 1], y[G0 + 2]],
+            q: ev.quat,
+            tilt: ev.tilt,
+            fingers: [y[0], y[1], y[4], y[5]],
+            energy: ev.energy,
+        };
         self.out.poses.push(pose);
         self.last_sampled = Some((t, *y));
     }
@@ -556,7 +574,15 @@ pub fn free_tolerances(opts: &SimOptions) -> Tol<NF> {
 
 /// Simulate the free scene of finger `f` (spring preload `tau_s0`) with the object at
 /// `x_off`, from t = 0 to min(t_max, t_obs) (`t_end` overrides it when given).
-pub fn simulate_free(f: &Finger, s: &SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup, opts: &SimOptions, t_end: Option<f64>) -> FreeResult {
+pub fn simulate_free(
+    f: &Finger,
+    s: &SceneParams,
+    tau_s0: f64,
+    x_off: f64,
+    setup: FreeSetup,
+    opts: &SimOptions,
+    t_end: Option<f64>,
+) -> FreeResult {
     let clock = Instant::now();
     let scene = FreeScene::new(f, s, tau_s0, x_off, setup, opts.record);
     let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));

@@ -127,8 +127,30 @@ impl FreeScene<'_> {
         let (v, om, a) = (b.v, b.om, b.a);
         let e_t = 0.5 * self.m * v.norm_squared();
         let e_r = 0.5 * om.dot(&l);
-        let energy = if full { fe[0].energy(self.finger_rates(y, 0)) + fe[1].energy(self.finger_rates(y, 1)) + e_t + e_r + self.m * self.s.env.g * b.g.z + v_el } else { f64::NAN };
-        Some(FreeEval { f: fe, c, qdd, acc, tilt: a.z.clamp(-1.0, 1.0).acos(), e_obj: (e_t, e_r), energy, piece, pos: b.g, quat: b.q, omega: om, axis: a })
+        let energy = if full {
+            fe[0].energy(self.finger_rates(y, 0))
+                + fe[1].energy(self.finger_rates(y, 1))
+                + e_t
+                + e_r
+                + self.m * self.s.env.g * b.g.z
+                + v_el
+        } else {
+            f64::NAN
+        };
+        Some(FreeEval {
+            f: fe,
+            c,
+            qdd,
+            acc,
+            tilt: a.z.clamp(-1.0, 1.0).acos(),
+            e_obj: (e_t, e_r),
+            energy,
+            piece,
+            pos: b.g,
+            quat: b.q,
+            omega: om,
+            axis: a,
+        })
     }
 
     /// The right-hand side at `y` and its piece (the loaded contacts only).
