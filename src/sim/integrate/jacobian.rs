@@ -20,6 +20,8 @@ pub(super) struct JacobianCache<const N: usize> {
     pub(super) slow: bool,
     /// The piece of the last accepted state, known from its evaluation.
     pub(super) known: Option<(SVector<f64, N>, Piece)>,
+    /// Counts the Jacobians computed (what a factorisation was prepared from).
+    pub(super) version: u64,
 }
 
 impl<const N: usize> JacobianCache<N> {
@@ -32,6 +34,7 @@ impl<const N: usize> JacobianCache<N> {
             piece: Piece::SMOOTH,
             slow: false,
             known: None,
+            version: 0,
         }
     }
 
@@ -78,6 +81,7 @@ impl<const N: usize> JacobianCache<N> {
             return false;
         }
         stats.jac += 1;
+        self.version += 1;
         self.valid = true;
         self.fresh = true;
         true

@@ -127,6 +127,25 @@ pub struct Tol<const N: usize> {
 }
 
 impl<const N: usize> Tol<N> {
+    /// The weights 1/(atol_i + rtol·max(|y0_i|, |y1_i|)) of the scaled norm (see
+    /// [`Tol::sum_sq`]).
+    #[inline]
+    pub fn weights(&self, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> SVector<f64, N> {
+        SVector::<f64, N>::from_fn(|i, _| 1.0 / (self.atol[i] + self.rtol * y0[i].abs().max(y1[i].abs())))
+    }
+
+    /// Σ (e_i w_i)² with weights `w` from [`Tol::weights`] (the scaled RMS norm is
+    /// √(sum / N)).
+    #[inline]
+    pub fn sum_sq(e: &SVector<f64, N>, w: &SVector<f64, N>) -> f64 {
+        let mut s = 0.0;
+        for i in 0..N {
+            let r = e[i] * w[i];
+            s += r * r;
+        }
+        s
+    }
+
     /// Scaled RMS norm of `e` with weights from `y0`, `y1`.
     #[inline]
     pub fn norm(&self, e: &SVector<f64, N>, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> f64 {

@@ -6,9 +6,6 @@ use super::reduced::ReducedLu;
 use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
 
-/// The real and the complex reduced factorisations.
-type ReducedPair<const N: usize> = (ReducedLu<f64, N>, ReducedLu<Complex<f64>, N>);
-
 /// Radau IIA of order 5 after Hairer & Wanner's RADAU5: stiffly accurate, L-stable. The
 /// simplified Newton iteration uses their transformation A⁻¹ = T Λ T⁻¹, so each Jacobian
 /// costs one real N×N LU of γ/h − J and one complex N×N LU of (α + iβ)/h − J instead of a
@@ -27,7 +24,10 @@ pub struct Radau5<const N: usize> {
     lu_c: Option<Lu<Complex<f64>, N>>,
     /// The system's partition for the Newton solves (asked at the first step), with the
     /// storage of both reduced factorisations.
-    part: Option<Option<ReducedPair<N>>>,
+    part: Option<Option<ReducedLu<N>>>,
+    /// The Jacobian (its [`JacobianCache`] version) the reduced parts were prepared from,
+    /// and whether it fitted the partition.
+    prepared: Option<(u64, bool)>,
     /// The reduced factorisations are the current ones (else `lu_r`, `lu_c`).
     reduced: bool,
     lu_h: f64,
@@ -108,6 +108,7 @@ impl<const N: usize> Radau5<N> {
             lu_r: None,
             lu_c: None,
             part: None,
+            prepared: None,
             reduced: false,
             lu_h: 0.0,
             stats: Stats::default(),
@@ -130,10 +131,18 @@ impl<const N: usize> Radau5<N> {
         let j = &self.jc.jac;
         self.reduced = false;
         if let Some(Some(red)) = self.part.as_mut() {
-            if red.0.partition().fits(j) {
+            let fits = match self.prepared {
+                Some((v, fits)) if v == self.jc.version => fits,
+                _ => {
+                    let fits = red.prepare(j);
+                    self.prepared = Some((self.jc.version, fits));
+                    fits
+                }
+            };
+            if fits {
                 self.stats.lu += 1;
                 let ac = Complex::new(self.eig.alpha / h, self.eig.beta / h);
-                if red.0.factor(j, self.eig.gamma / h) && red.1.factor(j, ac) {
+                if red.factor(self.eig.gamma / h, ac) {
                     self.reduced = true;
                     self.lu_h = h;
                     return true;
@@ -169,17 +178,21 @@ impl<const N: usize> Radau5<N> {
     #[inline]
     fn solve_r(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         match (&self.part, self.reduced) {
-            (Some(Some(red)), true) => red.0.solve(b),
+            (Some(Some(red)), true) => red.solve_real(b),
             _ => self.lu_r.as_ref().expect("factored").solve(b),
         }
     }
 
-    /// Solve ((α + iβ)/h − J) x = b with the current factorisation.
+    /// Solve ((α + iβ)/h − J) x = re + i·im with the current factorisation: (Re x, Im x).
     #[inline]
-    fn solve_c(&self, b: &SVector<Complex<f64>, N>) -> SVector<Complex<f64>, N> {
+    fn solve_c(&self, re: &SVector<f64, N>, im: &SVector<f64, N>) -> (SVector<f64, N>, SVector<f64, N>) {
         match (&self.part, self.reduced) {
-            (Some(Some(red)), true) => red.1.solve(b),
-            _ => self.lu_c.as_ref().expect("factored").solve(b),
+            (Some(Some(red)), true) => red.solve_complex(re, im),
+            _ => {
+                let b = SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(re[k], im[k]));
+                let x = self.lu_c.as_ref().expect("factored").solve(&b);
+                (x.map(|c| c.re), x.map(|c| c.im))
+            }
         }
     }
 
@@ -228,6 +241,7 @@ impl<const N: usize> Radau5<N> {
         h: f64,
     ) -> Result<([SVector<f64, N>; 3], f64, usize), NewtonFail> {
         let (gh, ah, bh) = (self.eig.gamma / h, self.eig.alpha / h, self.eig.beta / h);
+        let wts = self.tol.weights(y, y);
         let mut z = self.predict(h);
         let mut w = mix3(&RTI, &z);
         let mut eta = self.eta.max(f64::EPSILON).powf(0.8);
@@ -245,13 +259,9 @@ impl<const N: usize> Radau5<N> {
             let r2 = r[1] - (w[1] * ah - w[2] * bh);
             let r3 = r[2] - (w[1] * bh + w[2] * ah);
             let d1 = self.solve_r(&r1);
-            let dc = self.solve_c(&SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(r2[k], r3[k])));
-            let d2 = dc.map(|c| c.re);
-            let d3 = dc.map(|c| c.im);
-            let n1 = self.tol.norm(&d1, y, y);
-            let n2 = self.tol.norm(&d2, y, y);
-            let n3 = self.tol.norm(&d3, y, y);
-            let n = ((n1 * n1 + n2 * n2 + n3 * n3) / 3.0).sqrt();
+            let (d2, d3) = self.solve_c(&r2, &r3);
+            let n =
+                ((Tol::sum_sq(&d1, &wts) + Tol::sum_sq(&d2, &wts) + Tol::sum_sq(&d3, &wts)) / (3 * N) as f64).sqrt();
             if !n.is_finite() {
                 return Err(NewtonFail::Diverged);
             }
@@ -309,7 +319,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
         h_max: f64,
     ) -> Result<Accepted<N>, StepError> {
         if self.part.is_none() {
-            self.part = Some(sys.newton_partition().map(|p| (ReducedLu::new(p), ReducedLu::new(p))));
+            self.part = Some(sys.newton_partition().map(ReducedLu::new));
         }
         self.jc.start_step(sys, y);
         loop {

@@ -1,20 +1,30 @@
-//! The Newton matrix c·I − J of a second-order system solved by block elimination: a
-//! system names the states whose rates depend on the other states only through few of
-//! them ("positions" P, whose rates are velocities: J_PP block-diagonal in small groups)
-//! in a [`Partition`]; (c·I − J) Δ = r then reduces to the Schur complement
-//! S = c·I − J_VV − J_VP D⁻¹ J_PV on the remaining states V (D = c·I − J_PP), an LU of
-//! |V|×|V| instead of N×N. The elimination is exact (no approximation of J); it is used
-//! only where J_PP really is block-diagonal in the partition's groups.
+//! The Newton matrix c·I − J of a second-order system solved by block elimination. A
+//! system names in a [`Partition`] the states whose rates depend on the other states only
+//! through few of them ("positions" P, whose rates are velocities: J_PP block-diagonal in
+//! small groups) and the "trailing" states F on which no other rate depends (a low-pass
+//! filter of an output: column F of J is zero but for its own entry). (c·I − J) Δ = r then
+//! reduces to the Schur complement S = c·I − J_VV − J_VP D⁻¹ J_PV on the remaining states V
+//! (D = c·I − J_PP), an LU of |V|×|V| instead of N×N; the positions follow from Δ_V and the
+//! trailing states last, one division each. The elimination is exact (no approximation of
+//! J); it is used only where J really has this structure ([`Partition::fits`]).
+//!
+//! The parts of J the elimination needs are gathered once per Jacobian
+//! ([`ReducedLu::prepare`]), with the c-independent product J_VP J_PV of the one-state
+//! groups whose own rate does not depend on themselves (a position whose rate is a
+//! velocity: D⁻¹ = 1/c); each factorisation ([`ReducedLu::factor`], the real and the
+//! complex shift of Radau IIA together) then only adds c·I, that product over c and the
+//! other groups' terms, and factors S.
 
 use super::lu::{Lu, Scalar};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Complex, SMatrix, SVector};
 
 /// The largest group of eliminated states.
 pub const MAX_GROUP: usize = 4;
 
 /// A partition of the state for the Newton solves: eliminated states in groups (J of
-/// one group's rates with respect to another group's states must be zero) and the kept
-/// states (see [`super::Rhs::newton_partition`]).
+/// one group's rates with respect to another group's states must be zero), trailing states
+/// (no other state's rate depends on them) and the kept states (see
+/// [`super::Rhs::newton_partition`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Partition<const N: usize> {
     /// Eliminated state indices, group after group.
@@ -26,6 +36,9 @@ pub struct Partition<const N: usize> {
     /// Kept state indices.
     keep: [usize; N],
     n_keep: usize,
+    /// Trailing state indices.
+    trail: [usize; N],
+    n_trail: usize,
 }
 
 impl<const N: usize> Partition<N> {
@@ -33,7 +46,16 @@ impl<const N: usize> Partition<N> {
     /// indices below N) and keeping the other states; `None` if the groups are not so, or
     /// if they leave nothing to keep.
     pub fn new(groups: &[&[usize]]) -> Option<Self> {
-        let mut p = Partition { elim: [0; N], n_elim: 0, groups: [(0, 0); N], n_groups: 0, keep: [0; N], n_keep: 0 };
+        let mut p = Partition {
+            elim: [0; N],
+            n_elim: 0,
+            groups: [(0, 0); N],
+            n_groups: 0,
+            keep: [0; N],
+            n_keep: 0,
+            trail: [0; N],
+            n_trail: 0,
+        };
         let mut used = [false; N];
         for g in groups {
             if g.is_empty() || g.len() > MAX_GROUP {
@@ -59,6 +81,20 @@ impl<const N: usize> Partition<N> {
         (p.n_keep > 0).then_some(p)
     }
 
+    /// This partition with the kept states `trailing` solved last instead (states no other
+    /// rate depends on, e.g. a filter of an output); `None` if one is not a kept state or
+    /// if nothing would be kept.
+    pub fn with_trailing(mut self, trailing: &[usize]) -> Option<Self> {
+        for &t in trailing {
+            let at = self.keep[..self.n_keep].iter().position(|&k| k == t)?;
+            self.keep.copy_within(at + 1..self.n_keep, at);
+            self.n_keep -= 1;
+            self.trail[self.n_trail] = t;
+            self.n_trail += 1;
+        }
+        (self.n_keep > 0).then_some(self)
+    }
+
     /// The group (0..n_groups) of each eliminated position.
     fn group_of(&self) -> [usize; N] {
         let mut g = [0; N];
@@ -68,7 +104,8 @@ impl<const N: usize> Partition<N> {
         g
     }
 
-    /// Is J's rates-of-P block zero between different groups?
+    /// Does `j` have the structure: J's rates-of-P block zero between different groups, and
+    /// every trailing state's column zero but for its own entry?
     pub fn fits(&self, j: &SMatrix<f64, N, N>) -> bool {
         let g = self.group_of();
         for a in 0..self.n_elim {
@@ -78,248 +115,806 @@ impl<const N: usize> Partition<N> {
                 }
             }
         }
+        for &t in &self.trail[..self.n_trail] {
+            if (0..N).any(|r| r != t && j[(r, t)] != 0.0) {
+                return false;
+            }
+        }
         true
     }
 }
 
-/// c·I − J factored by block elimination over a [`Partition`], in place (its storage is
-/// reused from one factorisation to the next: no large copies).
+/// A scalar of the reduced factorisations (`f64` or `Complex<f64>`) with its dense
+/// storage for the Schur complement's LU.
+pub trait ReducedScalar: Scalar {
+    /// Dense storage of an m×m LU (m ≤ N).
+    type Mat<const N: usize>: SchurLu<Self, N>;
+}
+
+impl ReducedScalar for f64 {
+    type Mat<const N: usize> = RealLu<N>;
+}
+
+impl ReducedScalar for Complex<f64> {
+    type Mat<const N: usize> = ComplexLu<N>;
+}
+
+/// An m×m LU with partial pivoting in N×N storage (the Schur complement S).
+pub trait SchurLu<T, const N: usize>: Clone + std::fmt::Debug {
+    /// Zeroed storage.
+    fn zeros() -> Self;
+    /// S = c·I − A − B/c on the leading m×m block (A, B real; `inv_c` = 1/c).
+    fn build(&mut self, c: T, inv_c: T, a: &[[f64; N]; N], b: &[[f64; N]; N], m: usize);
+    /// S_rk = v (tests).
+    #[cfg(test)]
+    fn set(&mut self, r: usize, k: usize, v: T);
+    /// S_rk −= x·a for a real a.
+    fn sub_scaled(&mut self, r: usize, k: usize, x: T, a: f64);
+    /// Factor the leading m×m block in place; false if singular.
+    fn factor(&mut self, m: usize) -> bool;
+    /// Solve S x = b in place (b in `x`).
+    fn solve(&self, x: &mut [T; N], m: usize);
+}
+
+/// A real [`SchurLu`].
 #[derive(Debug, Clone)]
-pub struct ReducedLu<T: Scalar, const N: usize> {
-    part: Partition<N>,
-    /// Row a of D⁻¹ restricted to a's group (columns 0..group length).
-    dinv: SMatrix<T, N, MAX_GROUP>,
-    /// X = D⁻¹ J_PV (eliminated × kept positions).
-    x: SMatrix<T, N, N>,
-    /// J_VP (kept × eliminated positions).
-    jvp: SMatrix<f64, N, N>,
-    /// LU (partial pivoting) of S in its leading n_keep × n_keep block.
-    s: SMatrix<T, N, N>,
+pub struct RealLu<const N: usize> {
+    a: [[f64; N]; N],
+    inv_diag: [f64; N],
     piv: [usize; N],
 }
 
-impl<T: Scalar, const N: usize> ReducedLu<T, N> {
-    /// The partition.
-    pub fn partition(&self) -> &Partition<N> {
-        &self.part
+impl<const N: usize> SchurLu<f64, N> for RealLu<N> {
+    fn zeros() -> Self {
+        RealLu { a: [[0.0; N]; N], inv_diag: [0.0; N], piv: [0; N] }
     }
-
-    /// Storage for the factorisations over `part`.
-    pub fn new(part: Partition<N>) -> Self {
-        ReducedLu {
-            part,
-            dinv: SMatrix::zeros(),
-            x: SMatrix::zeros(),
-            jvp: SMatrix::zeros(),
-            s: SMatrix::zeros(),
-            piv: [0; N],
+    fn build(&mut self, c: f64, inv_c: f64, a: &[[f64; N]; N], b: &[[f64; N]; N], m: usize) {
+        for r in 0..m {
+            let (row, ar, br) = (&mut self.a[r][..m], &a[r][..m], &b[r][..m]);
+            for k in 0..m {
+                row[k] = -ar[k] - inv_c * br[k];
+            }
+            row[r] += c;
         }
     }
-
-    /// Factor c·I − `j`; false if D or S is singular.
-    pub fn factor(&mut self, j: &SMatrix<f64, N, N>, c: T) -> bool {
-        let p = self.part;
-        let (ne, nk) = (p.n_elim, p.n_keep);
-        for &(s, l) in &p.groups[..p.n_groups] {
-            if l == 1 {
-                let d = c - T::from_real(j[(p.elim[s], p.elim[s])]);
-                self.dinv[(s, 0)] = T::one() / d;
-                continue;
-            }
-            // the group's block, padded with the identity to 4×4
-            let mut d = SMatrix::<T, MAX_GROUP, MAX_GROUP>::identity();
-            for a in 0..l {
-                for b in 0..l {
-                    let diag = if a == b { c } else { T::zero() };
-                    d[(a, b)] = diag - T::from_real(j[(p.elim[s + a], p.elim[s + b])]);
-                }
-            }
-            let Some(lu) = Lu::factor(d) else { return false };
-            for b in 0..l {
-                let col = lu.solve(&SVector::<T, MAX_GROUP>::from_fn(|i, _| if i == b { T::one() } else { T::zero() }));
-                for a in 0..l {
-                    self.dinv[(s + a, b)] = col[a];
-                }
-            }
-        }
-        for &(s, l) in &p.groups[..p.n_groups] {
-            for k in 0..nk {
-                let col = p.keep[k];
-                let zero = (0..l).all(|b| j[(p.elim[s + b], col)] == 0.0);
-                for a in 0..l {
-                    let mut v = T::zero();
-                    if !zero {
-                        for b in 0..l {
-                            v += self.dinv[(s + a, b)] * T::from_real(j[(p.elim[s + b], col)]);
-                        }
-                    }
-                    self.x[(s + a, k)] = v;
-                }
-            }
-        }
-        for r in 0..nk {
-            for e in 0..ne {
-                self.jvp[(r, e)] = j[(p.keep[r], p.elim[e])];
-            }
-            for k in 0..nk {
-                let diag = if r == k { c } else { T::zero() };
-                self.s[(r, k)] = diag - T::from_real(j[(p.keep[r], p.keep[k])]);
-            }
-        }
-        // S −= J_VP X, skipping the zeros of X
-        for e in 0..ne {
-            for k in 0..nk {
-                let xe = self.x[(e, k)];
-                if xe == T::zero() {
-                    continue;
-                }
-                for r in 0..nk {
-                    self.s[(r, k)] -= T::from_real(self.jvp[(r, e)]) * xe;
-                }
-            }
-        }
-        self.factor_s(nk)
+    #[cfg(test)]
+    fn set(&mut self, r: usize, k: usize, v: f64) {
+        self.a[r][k] = v;
     }
-
-    /// LU with partial pivoting of the leading m×m block of `s`, in place.
-    fn factor_s(&mut self, m: usize) -> bool {
-        let a = &mut self.s;
+    #[inline(always)]
+    fn sub_scaled(&mut self, r: usize, k: usize, x: f64, a: f64) {
+        self.a[r][k] -= x * a;
+    }
+    #[inline(never)]
+    fn factor(&mut self, m: usize) -> bool {
+        let a = &mut self.a;
         for k in 0..m {
             let mut p = k;
-            let mut mx = a[(k, k)].norm1();
+            let mut mx = a[k][k].abs();
             for i in k + 1..m {
-                let v = a[(i, k)].norm1();
+                let v = a[i][k].abs();
                 if v > mx {
                     mx = v;
                     p = i;
                 }
             }
-            if !(mx > 0.0) || !mx.is_finite() {
+            if !(mx > 0.0 && mx.is_finite()) {
                 return false;
             }
             self.piv[k] = p;
             if p != k {
-                a.swap_rows(p, k);
+                a.swap(p, k);
             }
-            let d = T::one() / a[(k, k)];
-            for i in k + 1..m {
-                let l = a[(i, k)] * d;
-                a[(i, k)] = l;
-                if l == T::zero() {
-                    continue;
-                }
-                for jj in k + 1..m {
-                    let akj = a[(k, jj)];
-                    a[(i, jj)] -= l * akj;
+            let d = 1.0 / a[k][k];
+            self.inv_diag[k] = d;
+            let n = m - k - 1;
+            let (top, rest) = a.split_at_mut(k + 1);
+            let pivot = &top[k][k + 1..m];
+            for row in rest[..n].iter_mut() {
+                let l = row[k] * d;
+                row[k] = l;
+                if l != 0.0 {
+                    let x = &mut row[k + 1..m];
+                    for j in 0..n {
+                        x[j] -= l * pivot[j];
+                    }
                 }
             }
         }
         true
     }
+    fn solve(&self, x: &mut [f64; N], m: usize) {
+        for k in 0..m {
+            x.swap(k, self.piv[k]);
+        }
+        for i in 1..m {
+            x[i] -= dot(&self.a[i][..i], &x[..i]);
+        }
+        for i in (0..m).rev() {
+            x[i] = (x[i] - dot(&self.a[i][i + 1..m], &x[i + 1..m])) * self.inv_diag[i];
+        }
+    }
+}
 
-    /// Solve (c·I − J) Δ = r.
-    pub fn solve(&self, r: &SVector<T, N>) -> SVector<T, N> {
-        let p = &self.part;
-        let (ne, nk) = (p.n_elim, p.n_keep);
-        // r_P' = D⁻¹ r_P
-        let mut rp = SVector::<T, N>::zeros();
-        for &(s, l) in &p.groups[..p.n_groups] {
-            for a in 0..l {
-                let mut v = T::zero();
-                for b in 0..l {
-                    v += self.dinv[(s + a, b)] * r[p.elim[s + b]];
+/// Σ a_i b_i over two slices of one length.
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len();
+    let b = &b[..n];
+    let mut s = 0.0;
+    for i in 0..n {
+        s += a[i] * b[i];
+    }
+    s
+}
+
+/// Σ a_i b_i over complex slices given by their parts (ar + i·ai, br + i·bi): (Re, Im).
+#[inline(always)]
+fn cdot(ar: &[f64], ai: &[f64], br: &[f64], bi: &[f64]) -> (f64, f64) {
+    let n = ar.len();
+    let (ai, br, bi) = (&ai[..n], &br[..n], &bi[..n]);
+    let (mut sr, mut si) = (0.0, 0.0);
+    for i in 0..n {
+        sr += ar[i] * br[i] - ai[i] * bi[i];
+        si += ar[i] * bi[i] + ai[i] * br[i];
+    }
+    (sr, si)
+}
+
+/// A complex [`SchurLu`], real and imaginary parts stored apart (the inner loops are then
+/// plain real arithmetic).
+#[derive(Debug, Clone)]
+pub struct ComplexLu<const N: usize> {
+    re: [[f64; N]; N],
+    im: [[f64; N]; N],
+    inv_diag: [Complex<f64>; N],
+    piv: [usize; N],
+}
+
+impl<const N: usize> SchurLu<Complex<f64>, N> for ComplexLu<N> {
+    fn zeros() -> Self {
+        ComplexLu { re: [[0.0; N]; N], im: [[0.0; N]; N], inv_diag: [Complex::new(0.0, 0.0); N], piv: [0; N] }
+    }
+    fn build(&mut self, c: Complex<f64>, inv_c: Complex<f64>, a: &[[f64; N]; N], b: &[[f64; N]; N], m: usize) {
+        for r in 0..m {
+            let (re, im, ar, br) = (&mut self.re[r][..m], &mut self.im[r][..m], &a[r][..m], &b[r][..m]);
+            for k in 0..m {
+                re[k] = -ar[k] - inv_c.re * br[k];
+                im[k] = -inv_c.im * br[k];
+            }
+            re[r] += c.re;
+            im[r] += c.im;
+        }
+    }
+    #[cfg(test)]
+    fn set(&mut self, r: usize, k: usize, v: Complex<f64>) {
+        self.re[r][k] = v.re;
+        self.im[r][k] = v.im;
+    }
+    #[inline(always)]
+    fn sub_scaled(&mut self, r: usize, k: usize, x: Complex<f64>, a: f64) {
+        self.re[r][k] -= x.re * a;
+        self.im[r][k] -= x.im * a;
+    }
+    #[inline(never)]
+    fn factor(&mut self, m: usize) -> bool {
+        let (re, im) = (&mut self.re, &mut self.im);
+        for k in 0..m {
+            let mut p = k;
+            let mut mx = re[k][k].abs() + im[k][k].abs();
+            for i in k + 1..m {
+                let v = re[i][k].abs() + im[i][k].abs();
+                if v > mx {
+                    mx = v;
+                    p = i;
                 }
-                rp[s + a] = v;
+            }
+            if !(mx > 0.0 && mx.is_finite()) {
+                return false;
+            }
+            self.piv[k] = p;
+            if p != k {
+                re.swap(p, k);
+                im.swap(p, k);
+            }
+            let d = Complex::new(1.0, 0.0) / Complex::new(re[k][k], im[k][k]);
+            self.inv_diag[k] = d;
+            let n = m - k - 1;
+            let (rtop, rrest) = re.split_at_mut(k + 1);
+            let (itop, irest) = im.split_at_mut(k + 1);
+            let (pr, pi) = (&rtop[k][k + 1..m], &itop[k][k + 1..m]);
+            for (rrow, irow) in rrest[..n].iter_mut().zip(irest[..n].iter_mut()) {
+                let (xr, xi) = (rrow[k], irow[k]);
+                let (lr, li) = (xr * d.re - xi * d.im, xr * d.im + xi * d.re);
+                rrow[k] = lr;
+                irow[k] = li;
+                if lr == 0.0 && li == 0.0 {
+                    continue;
+                }
+                let (r, i) = (&mut rrow[k + 1..m], &mut irow[k + 1..m]);
+                for j in 0..n {
+                    r[j] -= lr * pr[j] - li * pi[j];
+                    i[j] -= lr * pi[j] + li * pr[j];
+                }
             }
         }
-        // S Δ_V = r_V + J_VP r_P'
-        let mut x = SVector::<T, N>::zeros();
-        for k in 0..nk {
-            let mut v = r[p.keep[k]];
+        true
+    }
+    fn solve(&self, x: &mut [Complex<f64>; N], m: usize) {
+        for k in 0..m {
+            x.swap(k, self.piv[k]);
+        }
+        let mut xr = [0.0; N];
+        let mut xi = [0.0; N];
+        for k in 0..m {
+            xr[k] = x[k].re;
+            xi[k] = x[k].im;
+        }
+        for i in 1..m {
+            let (sr, si) = cdot(&self.re[i][..i], &self.im[i][..i], &xr[..i], &xi[..i]);
+            xr[i] -= sr;
+            xi[i] -= si;
+        }
+        for i in (0..m).rev() {
+            let (sr, si) = cdot(&self.re[i][i + 1..m], &self.im[i][i + 1..m], &xr[i + 1..m], &xi[i + 1..m]);
+            let v = Complex::new(xr[i] - sr, xi[i] - si) * self.inv_diag[i];
+            xr[i] = v.re;
+            xi[i] = v.im;
+        }
+        for k in 0..m {
+            x[k] = Complex::new(xr[k], xi[k]);
+        }
+    }
+}
+
+/// The factorisation of c·I − J for one shift c (real or complex).
+#[derive(Debug, Clone)]
+struct Factor<T: ReducedScalar, const N: usize> {
+    /// 1/c.
+    inv_c: T,
+    /// Row a of D⁻¹ restricted to a's group, for the general groups.
+    dinv: [[T; MAX_GROUP]; N],
+    /// X = D⁻¹ J_PV for the rows of the general groups (eliminated × kept).
+    x: [[T; N]; N],
+    /// LU of S.
+    s: T::Mat<N>,
+    /// 1 / (c − J_FF) of each trailing state.
+    trail_div: [T; N],
+    /// The general groups' own blocks J_GG are negligible against c (see
+    /// [`NEGLIGIBLE`]): they are eliminated as the simple ones, D⁻¹ = I/c.
+    groups_as_simple: bool,
+}
+
+/// A general group's own block J_GG is neglected in the Newton matrix where its entries
+/// are at most this fraction of |c| (c = γ/h or (α + iβ)/h): D = c·I − J_GG is then I·c to
+/// this relative accuracy, an approximation of the Newton matrix far smaller than that of
+/// a Jacobian reused over steps (the free scene's quaternion rates: |J_GG| ≈ |ω|/2).
+pub const NEGLIGIBLE: f64 = 1e-3;
+
+impl<T: ReducedScalar, const N: usize> Factor<T, N> {
+    fn new() -> Self {
+        Factor {
+            groups_as_simple: false,
+            inv_c: T::zero(),
+            dinv: [[T::zero(); MAX_GROUP]; N],
+            x: [[T::zero(); N]; N],
+            s: T::Mat::<N>::zeros(),
+            trail_div: [T::zero(); N],
+        }
+    }
+}
+
+/// The parts of J the elimination needs, in the partition's compact order.
+#[derive(Debug, Clone)]
+struct Prepared<const N: usize> {
+    /// J_VV (kept × kept).
+    jvv: [[f64; N]; N],
+    /// J_VP (kept × eliminated).
+    jvp: [[f64; N]; N],
+    /// The nonzeros of each row of J_PV (eliminated × kept): (kept index, value).
+    jpv: [[(usize, f64); N]; N],
+    jpv_len: [usize; N],
+    /// Σ over the simple groups of J_VP[:, p] J_PV[p, :] (kept × kept).
+    b: [[f64; N]; N],
+    /// The compact indices of the simple groups' positions (one-state groups whose rate
+    /// does not depend on themselves: D⁻¹ = 1/c).
+    simple_at: [usize; N],
+    n_simple: usize,
+    /// The other groups: (start, length), their J_GG blocks, and the kept columns where
+    /// their J_GV rows have nonzeros.
+    general: [(usize, usize); N],
+    n_general: usize,
+    jgg: [[[f64; MAX_GROUP]; MAX_GROUP]; N],
+    gcols: [[usize; N]; N],
+    gcols_len: [usize; N],
+    /// B plus the general groups' J_VG J_GV, and the largest |entry| of their J_GG.
+    b_all: [[f64; N]; N],
+    jgg_max: f64,
+    /// The nonzeros of each trailing state's row off its diagonal (state index, value),
+    /// and its diagonal entry.
+    jf: [[(usize, f64); N]; N],
+    jf_len: [usize; N],
+    jff: [f64; N],
+}
+
+/// c·I − J factored by block elimination over a [`Partition`], for a real and a complex
+/// shift at once (Radau IIA's γ/h and (α + iβ)/h), in place: the parts of J are gathered
+/// once per Jacobian ([`ReducedLu::prepare`]) and reused by every factorisation.
+#[derive(Debug, Clone)]
+pub struct ReducedLu<const N: usize> {
+    part: Partition<N>,
+    prep: Box<Prepared<N>>,
+    real: Box<Factor<f64, N>>,
+    cplx: Box<Factor<Complex<f64>, N>>,
+}
+
+impl<const N: usize> ReducedLu<N> {
+    /// Storage for the factorisations over `part`.
+    pub fn new(part: Partition<N>) -> Self {
+        ReducedLu {
+            part,
+            prep: Box::new(Prepared {
+                jvv: [[0.0; N]; N],
+                jvp: [[0.0; N]; N],
+                jpv: [[(0, 0.0); N]; N],
+                jpv_len: [0; N],
+                b: [[0.0; N]; N],
+                simple_at: [0; N],
+                n_simple: 0,
+                general: [(0, 0); N],
+                n_general: 0,
+                jgg: [[[0.0; MAX_GROUP]; MAX_GROUP]; N],
+                gcols: [[0; N]; N],
+                gcols_len: [0; N],
+                b_all: [[0.0; N]; N],
+                jgg_max: 0.0,
+                jf: [[(0, 0.0); N]; N],
+                jf_len: [0; N],
+                jff: [0.0; N],
+            }),
+            real: Box::new(Factor::new()),
+            cplx: Box::new(Factor::new()),
+        }
+    }
+
+    /// Gather the parts of `j` (false: `j` does not fit the partition, see
+    /// [`Partition::fits`]).
+    #[inline(never)]
+    pub fn prepare(&mut self, j: &SMatrix<f64, N, N>) -> bool {
+        let p = &self.part;
+        if !p.fits(j) {
+            return false;
+        }
+        let (ne, nk) = (p.n_elim, p.n_keep);
+        let pr = &mut *self.prep;
+        for r in 0..nk {
+            let jr = p.keep[r];
+            for k in 0..nk {
+                pr.jvv[r][k] = j[(jr, p.keep[k])];
+            }
             for e in 0..ne {
-                v += T::from_real(self.jvp[(k, e)]) * rp[e];
+                pr.jvp[r][e] = j[(jr, p.elim[e])];
             }
-            x[k] = v;
-        }
-        for k in 0..nk {
-            x.swap_rows(k, self.piv[k]);
-        }
-        for i in 0..nk {
-            let mut s = x[i];
-            for jj in 0..i {
-                s -= self.s[(i, jj)] * x[jj];
-            }
-            x[i] = s;
-        }
-        for i in (0..nk).rev() {
-            let mut s = x[i];
-            for jj in i + 1..nk {
-                s -= self.s[(i, jj)] * x[jj];
-            }
-            x[i] = s / self.s[(i, i)];
-        }
-        // Δ_P = r_P' + X Δ_V
-        let mut out = SVector::<T, N>::zeros();
-        for k in 0..nk {
-            out[p.keep[k]] = x[k];
         }
         for e in 0..ne {
-            let mut v = rp[e];
+            let mut n = 0;
             for k in 0..nk {
-                v += self.x[(e, k)] * x[k];
+                let v = j[(p.elim[e], p.keep[k])];
+                if v != 0.0 {
+                    pr.jpv[e][n] = (k, v);
+                    n += 1;
+                }
             }
-            out[p.elim[e]] = v;
+            pr.jpv_len[e] = n;
         }
-        out
+        for row in pr.b[..nk].iter_mut() {
+            row[..nk].fill(0.0);
+        }
+        pr.n_simple = 0;
+        pr.n_general = 0;
+        pr.jgg_max = 0.0;
+        for &(s, l) in &p.groups[..p.n_groups] {
+            if l == 1 && j[(p.elim[s], p.elim[s])] == 0.0 {
+                pr.simple_at[pr.n_simple] = s;
+                pr.n_simple += 1;
+                for &(k, v) in &pr.jpv[s][..pr.jpv_len[s]] {
+                    for r in 0..nk {
+                        pr.b[r][k] += pr.jvp[r][s] * v;
+                    }
+                }
+                continue;
+            }
+            let g = pr.n_general;
+            pr.general[g] = (s, l);
+            pr.n_general += 1;
+            let mut used = [false; N];
+            for a in 0..l {
+                for c in 0..l {
+                    pr.jgg[g][a][c] = j[(p.elim[s + a], p.elim[s + c])];
+                    pr.jgg_max = pr.jgg_max.max(pr.jgg[g][a][c].abs());
+                }
+                for &(k, _) in &pr.jpv[s + a][..pr.jpv_len[s + a]] {
+                    used[k] = true;
+                }
+            }
+            let mut n = 0;
+            for (k, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+                pr.gcols[g][n] = k;
+                n += 1;
+            }
+            pr.gcols_len[g] = n;
+        }
+        pr.b_all[..nk].copy_from_slice(&pr.b[..nk]);
+        for &(s, l) in &pr.general[..pr.n_general] {
+            for e in s..s + l {
+                for &(k, v) in &pr.jpv[e][..pr.jpv_len[e]] {
+                    for r in 0..nk {
+                        pr.b_all[r][k] += pr.jvp[r][e] * v;
+                    }
+                }
+            }
+        }
+        for (t, &ft) in p.trail[..p.n_trail].iter().enumerate() {
+            let mut n = 0;
+            for i in (0..N).filter(|&i| i != ft) {
+                let v = j[(ft, i)];
+                if v != 0.0 {
+                    pr.jf[t][n] = (i, v);
+                    n += 1;
+                }
+            }
+            pr.jf_len[t] = n;
+            pr.jff[t] = j[(ft, ft)];
+        }
+        true
     }
+
+    /// Factor c·I − J (J as last prepared) for the real shift `c` and the complex shift
+    /// `cc`; false if D or S is singular for either.
+    pub fn factor(&mut self, c: f64, cc: Complex<f64>) -> bool {
+        factor_one(&self.part, &self.prep, &mut self.real, c) && factor_one(&self.part, &self.prep, &mut self.cplx, cc)
+    }
+
+    /// Solve (c·I − J) Δ = r for the real shift.
+    pub fn solve_real(&self, r: &SVector<f64, N>) -> SVector<f64, N> {
+        let x = solve_one(&self.part, &self.prep, &self.real, |i| r[i]);
+        SVector::<f64, N>::from_fn(|i, _| x[i])
+    }
+
+    /// Solve (c·I − J) Δ = re + i·im for the complex shift: (Re Δ, Im Δ).
+    pub fn solve_complex(&self, re: &SVector<f64, N>, im: &SVector<f64, N>) -> (SVector<f64, N>, SVector<f64, N>) {
+        let x = solve_one(&self.part, &self.prep, &self.cplx, |i| Complex::new(re[i], im[i]));
+        (SVector::<f64, N>::from_fn(|i, _| x[i].re), SVector::<f64, N>::from_fn(|i, _| x[i].im))
+    }
+}
+
+/// Factor c·I − J over `p` with the prepared parts `pr` into `f`.
+#[inline(never)]
+fn factor_one<T: ReducedScalar, const N: usize>(
+    p: &Partition<N>,
+    pr: &Prepared<N>,
+    f: &mut Factor<T, N>,
+    c: T,
+) -> bool {
+    let nk = p.n_keep;
+    f.inv_c = T::one() / c;
+    let inv_c = f.inv_c;
+    f.groups_as_simple = pr.n_general > 0 && pr.jgg_max <= NEGLIGIBLE * c.modulus();
+    if f.groups_as_simple {
+        // S = c·I − J_VV − (B + J_VG J_GV)/c
+        f.s.build(c, inv_c, &pr.jvv, &pr.b_all, nk);
+    } else {
+        // S = c·I − J_VV − B/c − Σ_G J_VG D_G⁻¹ J_GV
+        f.s.build(c, inv_c, &pr.jvv, &pr.b, nk);
+        for g in 0..pr.n_general {
+            if !eliminate_group(pr, f, g, c, nk) {
+                return false;
+            }
+        }
+    }
+    for t in 0..p.n_trail {
+        let d = c - T::from_real(pr.jff[t]);
+        if !(d.norm1() > 0.0) {
+            return false;
+        }
+        f.trail_div[t] = T::one() / d;
+    }
+    f.s.factor(nk)
+}
+
+/// The exact elimination of general group `g` into `f` for the shift `c`: D⁻¹, X = D⁻¹
+/// J_GV and S −= J_VG X; false if D is singular.
+fn eliminate_group<T: ReducedScalar, const N: usize>(
+    pr: &Prepared<N>,
+    f: &mut Factor<T, N>,
+    g: usize,
+    c: T,
+    nk: usize,
+) -> bool {
+    let (s, l) = pr.general[g];
+    // the group's block c·I − J_GG, padded with the identity to 4×4
+    let mut d = SMatrix::<T, MAX_GROUP, MAX_GROUP>::identity();
+    for a in 0..l {
+        for b in 0..l {
+            let diag = if a == b { c } else { T::zero() };
+            d[(a, b)] = diag - T::from_real(pr.jgg[g][a][b]);
+        }
+    }
+    let Some(lu) = Lu::factor(d) else { return false };
+    for b in 0..l {
+        let col = lu.solve(&SVector::<T, MAX_GROUP>::from_fn(|i, _| if i == b { T::one() } else { T::zero() }));
+        for a in 0..l {
+            f.dinv[s + a][b] = col[a];
+        }
+    }
+    // X = D⁻¹ J_GV for the group's rows (nonzero in the group's columns only), and
+    // S −= J_VG X in those columns
+    let cols = &pr.gcols[g][..pr.gcols_len[g]];
+    for a in 0..l {
+        for &k in cols {
+            f.x[s + a][k] = T::zero();
+        }
+        for b in 0..l {
+            let dab = f.dinv[s + a][b];
+            for &(k, v) in &pr.jpv[s + b][..pr.jpv_len[s + b]] {
+                f.x[s + a][k] += dab.mul_real(v);
+            }
+        }
+    }
+    for r in 0..nk {
+        for a in 0..l {
+            let jra = pr.jvp[r][s + a];
+            if jra != 0.0 {
+                for &k in cols {
+                    f.s.sub_scaled(r, k, f.x[s + a][k], jra);
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solve (c·I − J) Δ = r with the factorisation `f`; `r(i)` reads r_i. Returns Δ.
+#[inline]
+fn solve_one<T: ReducedScalar, const N: usize>(
+    p: &Partition<N>,
+    pr: &Prepared<N>,
+    f: &Factor<T, N>,
+    r: impl Fn(usize) -> T,
+) -> [T; N] {
+    let (ne, nk) = (p.n_elim, p.n_keep);
+    // r_P' = D⁻¹ r_P
+    let mut rp = [T::zero(); N];
+    for &e in &pr.simple_at[..pr.n_simple] {
+        rp[e] = r(p.elim[e]) * f.inv_c;
+    }
+    for &(s, l) in &pr.general[..pr.n_general] {
+        if f.groups_as_simple {
+            for e in s..s + l {
+                rp[e] = r(p.elim[e]) * f.inv_c;
+            }
+            continue;
+        }
+        for a in 0..l {
+            let mut v = T::zero();
+            for b in 0..l {
+                v += f.dinv[s + a][b] * r(p.elim[s + b]);
+            }
+            rp[s + a] = v;
+        }
+    }
+    // S Δ_V = r_V + J_VP r_P'
+    let mut x = [T::zero(); N];
+    let rp_e = &rp[..ne];
+    for (k, xk) in x[..nk].iter_mut().enumerate() {
+        let mut v = r(p.keep[k]);
+        let jk = &pr.jvp[k][..ne];
+        for e in 0..ne {
+            v += rp_e[e].mul_real(jk[e]);
+        }
+        *xk = v;
+    }
+    f.s.solve(&mut x, nk);
+    // Δ_P = r_P' + X Δ_V
+    let mut all = [T::zero(); N];
+    for k in 0..nk {
+        all[p.keep[k]] = x[k];
+    }
+    let as_simple = |e: usize| {
+        let mut acc = T::zero();
+        for &(k, jv) in &pr.jpv[e][..pr.jpv_len[e]] {
+            acc += x[k].mul_real(jv);
+        }
+        rp[e] + acc * f.inv_c
+    };
+    for &e in &pr.simple_at[..pr.n_simple] {
+        all[p.elim[e]] = as_simple(e);
+    }
+    for (g, &(s, l)) in pr.general[..pr.n_general].iter().enumerate() {
+        if f.groups_as_simple {
+            for e in s..s + l {
+                all[p.elim[e]] = as_simple(e);
+            }
+            continue;
+        }
+        for a in s..s + l {
+            let mut v = rp[a];
+            for &k in &pr.gcols[g][..pr.gcols_len[g]] {
+                v += f.x[a][k] * x[k];
+            }
+            all[p.elim[a]] = v;
+        }
+    }
+    // the trailing states: (c − J_FF) Δ_F = r_F + J_F,rest Δ_rest
+    for t in 0..p.n_trail {
+        let mut v = r(p.trail[t]);
+        for &(i, jv) in &pr.jf[t][..pr.jf_len[t]] {
+            v += all[i].mul_real(jv);
+        }
+        all[p.trail[t]] = v * f.trail_div[t];
+    }
+    all
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Complex;
     use rand::{Rng, SeedableRng};
 
-    /// On a random Jacobian of a second-order shape (positions' rates: velocities, one
-    /// 3-group with its own block), the reduced solve equals the dense LU solve, real and
-    /// complex; a Jacobian that couples two groups does not fit.
+    /// A random Jacobian of a second-order shape for `part`-like layouts: positions 0, 1
+    /// (rates: velocities 2, 3 plus noise), a 3-group 5..8 with its own block, a trailing
+    /// state 8 (depends on everything, nothing depends on it).
+    fn random_jacobian(rng: &mut impl Rng) -> SMatrix<f64, 9, 9> {
+        let mut j = SMatrix::<f64, 9, 9>::from_fn(|_, _| rng.random_range(-1e3..1e3));
+        for p in [0, 1, 5, 6, 7] {
+            for c in [0, 1, 5, 6, 7] {
+                let same = (p >= 5 && c >= 5) || (p == c && rng.random_bool(0.5));
+                if !same {
+                    j[(p, c)] = 0.0;
+                }
+            }
+        }
+        // position 0's rate is a velocity exactly, position 1's a combination
+        for c in 0..9 {
+            j[(0, c)] = 0.0;
+        }
+        j[(0, 2)] = 1.0;
+        for r in 0..8 {
+            j[(r, 8)] = 0.0;
+        }
+        j
+    }
+
+    /// On random Jacobians of a second-order shape, the reduced solve equals the dense LU
+    /// solve (nalgebra's), real and complex, to rounding; a Jacobian that couples two
+    /// groups, or a state to a trailing one, does not fit.
     #[test]
     fn reduced_solve_equals_dense() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         const N: usize = 9;
-        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap();
-        for _ in 0..20 {
-            let mut j = SMatrix::<f64, N, N>::from_fn(|_, _| rng.random_range(-1e3..1e3));
-            for p in [0, 1, 5, 6, 7] {
-                for c in [0, 1, 5, 6, 7] {
-                    let same = (p < 2 && p == c) || (p >= 5 && c >= 5);
-                    if !same {
-                        j[(p, c)] = 0.0;
-                    }
-                }
-            }
-            j[(0, 3)] = 1.0;
+        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap().with_trailing(&[8]).unwrap();
+        let mut lu = ReducedLu::new(part);
+        for _ in 0..50 {
+            let mut j = random_jacobian(&mut rng);
             assert!(part.fits(&j));
-            let b = SVector::<f64, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            assert!(lu.prepare(&j));
             let c = rng.random_range(10.0..1e4);
-            let dense = Lu::factor(SMatrix::<f64, N, N>::from_diagonal_element(c) - j).unwrap().solve(&b);
-            let mut lu = ReducedLu::new(part);
-            assert!(lu.factor(&j, c));
-            let red = lu.solve(&b);
+            let cc = Complex::new(c, rng.random_range(-1.0..1.0) * c);
+            assert!(lu.factor(c, cc));
+            let b = SVector::<f64, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let dense = (SMatrix::<f64, N, N>::from_diagonal_element(c) - j).lu().solve(&b).unwrap();
+            let red = lu.solve_real(&b);
             assert!((dense - red).norm() <= 1e-12 * dense.norm(), "{dense} {red}");
-            let cc = Complex::new(c, 0.7 * c);
+            let bi = SVector::<f64, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let bc = b.zip_map(&bi, Complex::new);
             let jc = j.map(|v| Complex::new(v, 0.0));
-            let bc = b.map(|v| Complex::new(v, -v));
-            let dense = Lu::factor(SMatrix::<Complex<f64>, N, N>::from_diagonal_element(cc) - jc).unwrap().solve(&bc);
-            let mut luc = ReducedLu::new(part);
-            assert!(luc.factor(&j, cc));
-            let red = luc.solve(&bc);
+            let dense = (SMatrix::<Complex<f64>, N, N>::from_diagonal_element(cc) - jc).lu().solve(&bc).unwrap();
+            let (re, im) = lu.solve_complex(&b, &bi);
+            let red = re.zip_map(&im, Complex::new);
             assert!((dense - red).norm() <= 1e-12 * dense.norm());
-            j[(1, 5)] = 1.0;
+            let mut j2 = j;
+            j2[(1, 5)] = 1.0;
+            assert!(!part.fits(&j2) && !lu.prepare(&j2));
+            j[(3, 8)] = 1.0;
             assert!(!part.fits(&j));
         }
         assert!(Partition::<N>::new(&[&[0], &[0]]).is_none());
         assert!(Partition::<N>::new(&[&[0, 1, 2, 3, 4]]).is_none());
         assert!(Partition::<3>::new(&[&[0, 1, 2]]).is_none());
+        assert!(Partition::<3>::new(&[&[0]]).unwrap().with_trailing(&[0]).is_none());
+        assert!(Partition::<3>::new(&[&[0]]).unwrap().with_trailing(&[1, 2]).is_none());
+    }
+
+    /// A general group whose own block is below NEGLIGIBLE·|c| is eliminated as if the
+    /// block were zero: the reduced solve equals the dense solve of c·I − J with J_GG = 0
+    /// (to rounding), and differs from the exact one by O(|J_GG|/|c|).
+    #[test]
+    fn negligible_group_block_is_dropped() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        const N: usize = 9;
+        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap().with_trailing(&[8]).unwrap();
+        let mut lu = ReducedLu::new(part);
+        for _ in 0..20 {
+            let mut j = random_jacobian(&mut rng);
+            j[(1, 1)] = 0.0;
+            let c = rng.random_range(1e3..1e4);
+            for a in 5..8 {
+                for b in 5..8 {
+                    j[(a, b)] = rng.random_range(-1.0..1.0) * 0.5 * NEGLIGIBLE * c;
+                }
+            }
+            assert!(lu.prepare(&j));
+            let cc = Complex::new(c, 0.5 * c);
+            assert!(lu.factor(c, cc));
+            let b = SVector::<f64, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let mut j0 = j;
+            for a in 5..8 {
+                for b in 5..8 {
+                    j0[(a, b)] = 0.0;
+                }
+            }
+            let dropped = (SMatrix::<f64, N, N>::from_diagonal_element(c) - j0).lu().solve(&b).unwrap();
+            let exact = (SMatrix::<f64, N, N>::from_diagonal_element(c) - j).lu().solve(&b).unwrap();
+            let red = lu.solve_real(&b);
+            assert!((dropped - red).norm() <= 1e-12 * dropped.norm());
+            assert!((exact - red).norm() <= 1e-2 * exact.norm());
+            let jc = j0.map(|v| Complex::new(v, 0.0));
+            let bc = b.map(|v| Complex::new(v, 0.0));
+            let dense = (SMatrix::<Complex<f64>, N, N>::from_diagonal_element(cc) - jc).lu().solve(&bc).unwrap();
+            let (re, im) = lu.solve_complex(&b, &SVector::zeros());
+            assert!((dense - re.zip_map(&im, Complex::new)).norm() <= 1e-12 * dense.norm());
+        }
+    }
+
+    /// The hand-written LUs of the Schur complement (real, and complex with its parts
+    /// stored apart) solve random m×m systems in N×N storage as nalgebra's LU does.
+    #[test]
+    fn schur_lus_match_nalgebra() {
+        const N: usize = 8;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for m in 1..=N {
+            for _ in 0..20 {
+                let a = nalgebra::DMatrix::<f64>::from_fn(m, m, |_, _| rng.random_range(-1.0..1.0));
+                let ai = nalgebra::DMatrix::<f64>::from_fn(m, m, |_, _| rng.random_range(-1.0..1.0));
+                let b = nalgebra::DVector::<f64>::from_fn(m, |_, _| rng.random_range(-1.0..1.0));
+                let bi = nalgebra::DVector::<f64>::from_fn(m, |_, _| rng.random_range(-1.0..1.0));
+                let mut lu = RealLu::<N>::zeros();
+                for r in 0..m {
+                    for k in 0..m {
+                        lu.set(r, k, a[(r, k)]);
+                    }
+                }
+                assert!(lu.factor(m));
+                let mut x = [0.0; N];
+                x[..m].copy_from_slice(b.as_slice());
+                lu.solve(&mut x, m);
+                let dense = a.clone().lu().solve(&b).unwrap();
+                let err = (0..m).map(|i| (x[i] - dense[i]).abs()).fold(0.0, f64::max);
+                assert!(err <= 1e-10 * dense.amax().max(1.0), "real m {m}: {err:e}");
+                let ac = a.zip_map(&ai, Complex::new);
+                let bc = b.zip_map(&bi, Complex::new);
+                let mut lu = ComplexLu::<N>::zeros();
+                for r in 0..m {
+                    for k in 0..m {
+                        lu.set(r, k, ac[(r, k)]);
+                    }
+                }
+                assert!(lu.factor(m));
+                let mut x = [Complex::new(0.0, 0.0); N];
+                x[..m].copy_from_slice(bc.as_slice());
+                lu.solve(&mut x, m);
+                let dense = ac.clone().lu().solve(&bc).unwrap();
+                let err = (0..m).map(|i| (x[i] - dense[i]).norm()).fold(0.0, f64::max);
+                let scale = dense.iter().map(|v| v.norm()).fold(1.0, f64::max);
+                assert!(err <= 1e-10 * scale, "complex m {m}: {err:e}");
+            }
+        }
+        // a singular matrix is refused
+        let mut lu = RealLu::<N>::zeros();
+        lu.set(0, 0, 1.0);
+        lu.set(0, 1, 2.0);
+        lu.set(1, 0, 2.0);
+        lu.set(1, 1, 4.0);
+        assert!(!lu.factor(2));
     }
 }

@@ -14,7 +14,7 @@ use crate::sim::driver::{self, Run};
 use crate::sim::equilibrium::{finger_equilibrium, Equilibrium};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel};
-use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
+use crate::sim::integrate::{Partition, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::{DynOutcome, DynamicsResult, Mode, Sample, SimOptions, Trajectory};
 use crate::sim::tracking::Tracker;
@@ -136,6 +136,11 @@ impl Rhs<NS> for FingerOde<'_> {
         self.accepted = Some((*y, ev));
         Some(out)
     }
+
+    /// The angles (rates: the velocities) eliminated, the filter state solved last.
+    fn newton_partition(&self) -> Option<Partition<NS>> {
+        Partition::new(&[&[0], &[1]])?.with_trailing(&[4])
+    }
 }
 
 /// Compliant static equilibrium (§8.9) of the scene's finger on its object.
@@ -253,6 +258,9 @@ impl Rhs<NS> for CentredScene<'_, '_> {
     #[inline]
     fn eval_accepted(&mut self, t: f64, y: &State) -> Option<(State, Piece)> {
         self.ode.eval_accepted(t, y)
+    }
+    fn newton_partition(&self) -> Option<Partition<NS>> {
+        self.ode.newton_partition()
     }
 }
 
