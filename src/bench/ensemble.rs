@@ -4,7 +4,7 @@ use super::say;
 use super::work_precision::{check_atol, rel};
 use super::{progress, time_it};
 use crate::eval::{stage_kinematics, stage_statics};
-use crate::params::Problem;
+use crate::params::{Design, Problem, DESIGN_NAMES};
 use crate::sim::{simulate_grasp, Method, SimOptions};
 use crate::{Error, Result};
 use rand::SeedableRng;
@@ -59,7 +59,7 @@ pub fn work_precision_ensemble(
         if reference.t_stab.is_none() {
             continue;
         }
-        cases.push((k.finger, st, reference));
+        cases.push((k.finger, st, reference, d));
         pb.inc(1);
     }
     pb.finish_and_clear();
@@ -71,6 +71,7 @@ pub fn work_precision_ensemble(
     }
     say!(out, "ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
+    write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.3), out)?;
     let csv = out_dir.join("work_precision_ensemble.csv");
     let io = |e| Error::io(&csv, "cannot write", e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
@@ -97,7 +98,7 @@ pub fn work_precision_ensemble(
             let o = diag(m, rtol);
             let (mut cpu, mut steps, mut rhs, mut ets, mut ee) = (vec![], vec![], vec![], vec![], vec![]);
             let mut differ = 0;
-            for (f, st, reference) in &cases {
+            for (f, st, reference, _) in &cases {
                 let (r, _, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 0.05, 7);
                 cpu.push(tmed);
                 steps.push(r.stats.steps as f64);
@@ -153,4 +154,20 @@ pub fn work_precision_ensemble(
     Ok(
         serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
     )
+}
+
+/// The ensemble's designs, one `--design` argument per line (for `tools/compare_baseline.py`,
+/// which runs two binaries on them).
+fn write_designs<'a>(csv: &Path, designs: impl Iterator<Item = &'a Design>, out: super::Out) -> Result<()> {
+    let io = |e| Error::io(csv, "cannot write", e);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(csv).map_err(|e| Error::io(csv, "cannot create", e))?);
+    writeln!(w, "design").map_err(io)?;
+    for d in designs {
+        let x = d.to_array();
+        let arg: Vec<String> = DESIGN_NAMES.iter().zip(x).map(|(n, v)| format!("{n}={v}")).collect();
+        writeln!(w, "\"{}\"", arg.join(",")).map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    say!(out, "wrote {}", csv.display());
+    Ok(())
 }

@@ -94,8 +94,14 @@ impl RadauEig {
 
 #[inline(always)]
 fn mix3<const N: usize>(m: &[[f64; 3]; 3], v: &[SVector<f64, N>; 3]) -> [SVector<f64, N>; 3] {
-    let row = |i: usize| v[0] * m[i][0] + v[1] * m[i][1] + v[2] * m[i][2];
-    [row(0), row(1), row(2)]
+    let mut out = [SVector::<f64, N>::zeros(); 3];
+    for j in 0..N {
+        let (a, b, c) = (v[0][j], v[1][j], v[2][j]);
+        for (i, o) in out.iter_mut().enumerate() {
+            o[j] = a * m[i][0] + b * m[i][1] + c * m[i][2];
+        }
+    }
+    out
 }
 
 impl<const N: usize> Radau5<N> {
@@ -203,25 +209,30 @@ impl<const N: usize> Radau5<N> {
         if let Some((hp, zp)) = self.prev_z.filter(|_| !self.first && !self.last_rejected) {
             // The polynomial through (0, 0), (c_i, zp_i) in s = (t − t_{n−1}) / hp; the new
             // stages sit at s = 1 + c_i h / hp, and the origin moves to y_n = y_{n−1} + zp_3.
+            // Its Lagrange weights at s, L_k(s) = Π_{m≠k} (s − n_m)/(n_k − n_m) over the nodes
+            // (0, c1, c2, 1), minus 1 for the third (the origin's move).
             let nodes = [0.0, RC[0], RC[1], RC[2]];
-            for i in 0..3 {
+            for (i, zi) in z.iter_mut().enumerate() {
                 let sv = 1.0 + RC[i] * h / hp;
-                let mut val = SVector::<f64, N>::zeros();
-                for k in 1..4 {
-                    let mut l = 1.0;
-                    for m in 0..4 {
-                        if m != k {
-                            l *= (sv - nodes[m]) / (nodes[k] - nodes[m]);
-                        }
-                    }
-                    val += zp[k - 1] * l;
+                let d = [sv - nodes[0], sv - nodes[1], sv - nodes[2], sv - nodes[3]];
+                let l1 = d[0] * d[2] * d[3] * LAGRANGE_DEN[0];
+                let l2 = d[0] * d[1] * d[3] * LAGRANGE_DEN[1];
+                let l3 = d[0] * d[1] * d[2] * LAGRANGE_DEN[2] - 1.0;
+                for j in 0..N {
+                    zi[j] = zp[0][j] * l1 + zp[1][j] * l2 + zp[2][j] * l3;
                 }
-                z[i] = val - zp[2];
             }
         }
         z
     }
 }
+
+/// 1/Π_{m≠k} (n_k − n_m) for the nodes (0, c1, c2, 1) and k = 1, 2, 3.
+const LAGRANGE_DEN: [f64; 3] = [
+    1.0 / (RC[0] * (RC[0] - RC[1]) * (RC[0] - RC[2])),
+    1.0 / (RC[1] * (RC[1] - RC[0]) * (RC[1] - RC[2])),
+    1.0 / (RC[2] * (RC[2] - RC[0]) * (RC[2] - RC[1])),
+];
 
 /// Why a Newton iteration stopped without converging.
 enum NewtonFail {

@@ -25,7 +25,7 @@ pub const MAX_GROUP: usize = 4;
 /// one group's rates with respect to another group's states must be zero), trailing states
 /// (no other state's rate depends on them) and the kept states (see
 /// [`super::Rhs::newton_partition`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Partition<const N: usize> {
     /// Eliminated state indices, group after group.
     elim: [usize; N],
@@ -39,6 +39,9 @@ pub struct Partition<const N: usize> {
     /// Trailing state indices.
     trail: [usize; N],
     n_trail: usize,
+    /// ∂f_i/∂y_i of a trailing state whose rate is linear in itself with a known
+    /// coefficient (its Jacobian column needs no evaluation).
+    linear: [Option<f64>; N],
 }
 
 impl<const N: usize> Partition<N> {
@@ -55,6 +58,7 @@ impl<const N: usize> Partition<N> {
             n_keep: 0,
             trail: [0; N],
             n_trail: 0,
+            linear: [None; N],
         };
         let mut used = [false; N];
         for g in groups {
@@ -93,6 +97,25 @@ impl<const N: usize> Partition<N> {
             self.n_trail += 1;
         }
         (self.n_keep > 0).then_some(self)
+    }
+
+    /// This partition with trailing states (see [`Partition::with_trailing`]) whose rate
+    /// depends on themselves linearly with the known coefficient ∂f_i/∂y_i (a first-order
+    /// filter of an output, y_i' = (u − y_i)/T: −1/T); their Jacobian columns are then known
+    /// ([`Partition::known_column`]).
+    pub fn with_trailing_linear(self, trailing: &[(usize, f64)]) -> Option<Self> {
+        let idx: Vec<usize> = trailing.iter().map(|t| t.0).collect();
+        let mut p = self.with_trailing(&idx)?;
+        for &(i, rate) in trailing {
+            p.linear[i] = Some(rate);
+        }
+        Some(p)
+    }
+
+    /// The Jacobian column of state `j` where the partition knows it: a linear trailing
+    /// state's column is zero but for its diagonal entry.
+    pub fn known_column(&self, j: usize) -> Option<f64> {
+        self.linear.get(j).copied().flatten()
     }
 
     /// The group (0..n_groups) of each eliminated position.

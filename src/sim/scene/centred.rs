@@ -137,9 +137,10 @@ impl Rhs<NS> for FingerOde<'_> {
         Some(out)
     }
 
-    /// The angles (rates: the velocities) eliminated, the filter state solved last.
+    /// The angles (rates: the velocities) eliminated, the filter state solved last (its
+    /// rate is linear in itself: −1/T_f).
     fn newton_partition(&self) -> Option<Partition<NS>> {
-        Partition::new(&[&[0], &[1]])?.with_trailing(&[4])
+        Partition::new(&[&[0], &[1]])?.with_trailing_linear(&[(4, -1.0 / self.t_filter)])
     }
 }
 
