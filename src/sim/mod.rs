@@ -30,8 +30,8 @@ pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventValues};
 pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
 pub use integrate::{
-    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol,
-    TrBdf2,
+    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, RadauCoefficients, RadauIIA, Rhs, Scalar,
+    Stats, StepError, Stepper, Tol, TrBdf2,
 };
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample, SimOptions, Trajectory, MAX_EVENTS};

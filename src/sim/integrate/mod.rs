@@ -12,7 +12,9 @@ mod dense;
 mod dopri5;
 mod jacobian;
 mod lu;
+mod radau;
 mod radau5;
+mod radau_coefficients;
 mod reduced;
 mod trbdf2;
 
@@ -20,7 +22,9 @@ pub use dense::hermite;
 pub use dopri5::Dopri5;
 pub use jacobian::fd_jacobian;
 pub use lu::{Lu, Scalar};
+pub use radau::RadauIIA;
 pub use radau5::Radau5;
+pub use radau_coefficients::RadauCoefficients;
 pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
@@ -192,6 +196,11 @@ pub trait Stepper<const N: usize> {
     ) -> Result<Accepted<N>, StepError>;
     /// Forget step-size history and Jacobians (after a discontinuity of f).
     fn restart(&mut self, h: f64);
+    /// The method's own continuous output on the last accepted step at `t` (inside it), where
+    /// it has one (a collocation method's polynomial); `None`: use [`hermite`].
+    fn dense(&self, _t: f64) -> Option<SVector<f64, N>> {
+        None
+    }
     /// Counters.
     fn stats(&self) -> Stats;
     /// Current step size proposal.

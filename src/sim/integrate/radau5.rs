@@ -35,6 +35,8 @@ pub struct Radau5<const N: usize> {
     first: bool,
     last_rejected: bool,
     prev_z: Option<(f64, [SVector<f64, N>; 3])>,
+    /// (t, y) at the start of the last accepted step (for [`Stepper::dense`]).
+    prev_start: Option<(f64, SVector<f64, N>)>,
     /// Newton's η = θ/(1 − θ) of the last step (the first iteration's estimate).
     eta: f64,
     /// (h, err) of the last accepted step, for the predictive controller.
@@ -121,6 +123,7 @@ impl<const N: usize> Radau5<N> {
             first: true,
             last_rejected: false,
             prev_z: None,
+            prev_start: None,
             eta: 1.0,
             acc: None,
             eig: RadauEig::new(),
@@ -386,6 +389,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
                 self.first = false;
                 self.last_rejected = false;
                 self.prev_z = Some((h, z));
+                self.prev_start = Some((t, *y));
                 self.jc.fresh = false;
                 self.jc.known = Some((y1, piece));
                 if theta > self.theta_jac {
@@ -402,6 +406,19 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
                 self.jc.valid = false;
             }
         }
+    }
+
+    fn dense(&self, tt: f64) -> Option<SVector<f64, N>> {
+        let ((h, z), (t0, y0)) = (self.prev_z.as_ref()?, self.prev_start.as_ref()?);
+        // the collocation polynomial through (0, 0), (c_k, Z_k) at θ = (t − t0)/h
+        let th = (tt - t0) / h;
+        let d = [th - RC[0], th - RC[1], th - RC[2]];
+        let l = [
+            th * d[1] * d[2] * LAGRANGE_DEN[0],
+            th * d[0] * d[2] * LAGRANGE_DEN[1],
+            th * d[0] * d[1] * LAGRANGE_DEN[2],
+        ];
+        Some(y0 + z[0] * l[0] + z[1] * l[1] + z[2] * l[2])
     }
 
     fn restart(&mut self, h: f64) {

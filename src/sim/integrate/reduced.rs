@@ -598,6 +598,12 @@ impl<const N: usize> ReducedLu<N> {
         factor_one(&self.part, &self.prep, &mut self.real, c) && factor_one(&self.part, &self.prep, &mut self.cplx, cc)
     }
 
+    /// Factor c·I − J (J as last prepared) for the complex shift `cc` only (a method with
+    /// several complex shifts keeps one `ReducedLu` per shift).
+    pub fn factor_complex(&mut self, cc: Complex<f64>) -> bool {
+        factor_one(&self.part, &self.prep, &mut self.cplx, cc)
+    }
+
     /// Solve (c·I − J) Δ = r for the real shift.
     pub fn solve_real(&self, r: &SVector<f64, N>) -> SVector<f64, N> {
         let x = solve_one(&self.part, &self.prep, &self.real, |i| r[i]);
