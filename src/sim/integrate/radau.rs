@@ -14,6 +14,9 @@ use super::reduced::ReducedLu;
 use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
 
+/// Dense LUs of the Newton matrices: γ/h − J and one (α_p + iβ_p)/h − J per pair.
+type DenseLus<const N: usize> = (Lu<f64, N>, Vec<Lu<Complex<f64>, N>>);
+
 /// Radau IIA with S stages (S odd): see the module documentation.
 #[derive(Debug, Clone)]
 pub struct RadauIIA<const N: usize, const S: usize> {
@@ -23,8 +26,8 @@ pub struct RadauIIA<const N: usize, const S: usize> {
     tol: Tol<N>,
     h: f64,
     jc: JacobianCache<N>,
-    /// Dense LUs: γ/h − J and one (α_p + iβ_p)/h − J per pair.
-    dense: Option<(Lu<f64, N>, Vec<Lu<Complex<f64>, N>>)>,
+    /// Dense LUs, where the system has no partition or J does not fit it.
+    dense: Option<DenseLus<N>>,
     /// The block eliminations, one per pair (the first also holds the real shift), when the
     /// system has a partition (asked at the first step).
     part: Option<Option<Vec<ReducedLu<N>>>>,
