@@ -24,13 +24,14 @@ for tool in valgrind callgrind_annotate; do
 done
 mkdir -p "$OUT"
 
-# the inclusive count of function $2 in callgrind file $1 (its symbol line, not the inlined copies)
+# the inclusive count of function $2 in callgrind file $1 (its symbol line, not the inlined
+# copies); awk reads to the end (an early exit would fail the pipe under pipefail)
 inclusive() {
     callgrind_annotate --inclusive=yes "$1" 2> /dev/null | awk -v fn="$2" '
-        index($0, ":" fn " [") { gsub(",", "", $1); print $1; exit }'
+        !found && index($0, ":" fn " [") { gsub(",", "", $1); print $1; found = 1 }'
 }
 total() {
-    callgrind_annotate "$1" 2> /dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }'
+    callgrind_annotate "$1" 2> /dev/null | awk '!found && /PROGRAM TOTALS/ { gsub(",", "", $1); print $1; found = 1 }'
 }
 mega() { awk -v n="$1" 'BEGIN { if (n == "") print "?"; else printf "%.2f M", n / 1e6 }'; }
 
