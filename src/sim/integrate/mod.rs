@@ -16,6 +16,7 @@ mod radau;
 mod radau5;
 mod radau_coefficients;
 mod reduced;
+mod schur_lu;
 mod trbdf2;
 
 pub use dense::hermite;
