@@ -42,7 +42,7 @@ pub struct MujocoSettings {
 pub const MUJOCO: MujocoSettings = MujocoSettings {
     timestep: 1e-5,
     integrator: "RK4",
-    contact_solref: [1e-4, 0.5],
+    contact_solref: [1e-4, 0.48],
     contact_solimp: [0.99, 0.99, 1e-3, 0.5, 2.0],
     impratio: 1.0,
     loop_solref: [2e-5, 1.0],
