@@ -26,8 +26,9 @@ Exports the problem's nominal design (centred and free scenes, build sheet) with
    rebounds with e within 0.05 of MODEL.md's e (the file's `gripopt_restitution`);
 6. the build sheet (JSON and CSV) holds gripopt's lengths and MuJoCo's joint positions (mm);
 7. a run's front design (CHECK_DIR/run, written by tests/export.rs, its first pareto.csv
-   id) exported as `RUN_DIR --design ID` in both scenes, and the nominal free scene,
-   simulate 0.2 s with the file as it is: no MuJoCo warning, finite state, loop closed.
+   id) exported as `RUN_DIR --design ID`: its first contact as in 4, against `gripopt
+   evaluate` of its parameters; in both scenes, and the nominal free scene, it simulates
+   0.2 s with the file as it is: no MuJoCo warning, finite state, loop closed.
 
 --report prints the side-by-side table of docs/export.md (gripopt and MuJoCo on the design).
 Prints one line per check and 'mjcf: N passed, N failed'; exits non-zero on any failure.
@@ -420,12 +421,29 @@ def check_runs(chk, files, seconds=0.2):
             f"{seconds} s from the keyframe: warnings {warn or 'none'}, finite state {finite}, loop gap {gap:.1e} m{extra}")
 
 
-def front_id(run_dir):
+def front_design(run_dir):
+    """The first design of a run's pareto.csv: its id and `--design` assignments."""
     with open(pathlib.Path(run_dir) / "pareto.csv", newline="") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     if not rows:
         raise ValueError(f"{run_dir}/pareto.csv: no feasible design")
-    return rows[0]["id"]
+    r = rows[0]
+    return r["id"], ",".join(f"{k}={r[k]}" for k in ("l21", "b", "t22", "r", "p", "psi_deg"))
+
+
+def check_front(chk, binary, run_dir, out):
+    """The run's front design exported by id: its first contact against gripopt's
+    evaluation of the same parameters with the run's problem; returns the exported files."""
+    ident, assign = front_design(run_dir)
+    files = [export(binary, run_dir, out / f"front-{ident}-{sc}.xml", "--design", ident, "--scene", sc) for sc in ("centred", "free")]
+    ev = json.loads(gripopt(binary, "evaluate", pathlib.Path(run_dir) / "problem.toml", "--design", assign, "--json"))
+    m, d = load(files[0])
+    with ExactStop(m):
+        t, phalanx = first_contact(m, d)
+    rel = abs(t - ev["t_first_contact"]) / ev["t_first_contact"]
+    chk(f"first contact, front design {ident}", rel <= 1e-5 and phalanx == ev["first_contact_phalanx"],
+        f"MuJoCo {t:.10e} s on the {phalanx} vs gripopt {ev['t_first_contact']:.10e} s on the {ev['first_contact_phalanx']}: relative {rel:.1e}")
+    return files
 
 
 # ------------------------------------------------------------------- docs/export.md table
@@ -441,11 +459,15 @@ def phalanx_forces(m, d):
     return out
 
 
-def free_run(path, seconds):
+def free_run(path, seconds, phalanx_friction=True):
     """The free scene with the exact stop: largest horizontal displacement and tilt of the
     object, friction work on the phalanx contacts in the first 0.5 ms of contact, the
     object's peak translational kinetic energy then."""
     m, d = load(path)
+    if not phalanx_friction:
+        for i in (1, 2):
+            for p in ("proximal", "distal"):
+                m.pair_friction[m.pair(f"f{i}_{p}_object").id][:2] = 0.0
     ph = {m.geom(f"f{i}_{p}").id for i in (1, 2) for p in ("proximal", "distal")}
     ob = m.body("object").id
     out = {"disp": 0.0, "tilt": 0.0, "work": 0.0, "e_trans": 0.0}
@@ -514,6 +536,8 @@ def report(binary, problem, out, centred, free, ev):
     print(f"| free object: max tilt in 0.1 s | {gfree['object_max_tilt_deg']:.4f}° | {fr['tilt']:.4f}° |")
     print(f"| free object: peak translational energy, first contact | {gfree['object_peak_e_trans'] * 1e3:.4f} mJ | {fr['e_trans'] * 1e3:.4f} mJ |")
     print(f"| friction work on the phalanx contacts, first 0.5 ms of contact | ≤ 0 (MODEL.md §8.6: F_t u ≤ 0) | {fr['work'] * 1e3:+.4f} mJ |")
+    nf = free_run(free, 0.1, phalanx_friction=False)
+    print(f"| free object, phalanx friction off in MuJoCo: max displacement, peak energy | — | {nf['disp'] * 1e3:.4f} mm, {nf['e_trans'] * 1e3:.4f} mJ |")
 
 
 def main(argv):
@@ -549,10 +573,9 @@ def main(argv):
     runs = [free]
     run_dir = out / "run"
     try:
-        ident = front_id(run_dir)
-        runs += [export(binary, run_dir, out / f"front-{ident}-{sc}.xml", "--design", ident, "--scene", sc) for sc in ("centred", "free")]
+        runs += check_front(chk, binary, run_dir, out)
     except Exception as e:  # noqa: BLE001
-        chk("front design", False, f"{run_dir} (written by tests/export.rs): {e}")
+        chk("front design", False, f"{run_dir} (written by tests/export.rs): {type(e).__name__}: {e}")
     chk.run("simulate", lambda: check_runs(chk, runs))
     if "--report" in flags:
         report(binary, problem, out, centred, free, ev)
