@@ -201,9 +201,9 @@ fn finger(xml: &mut XmlWriter, x: &ExportedDesign, set: &MujocoSettings, pre: &s
         "body",
         &[a("name", format!("{pre}_body22")), a("pos", list(&[f.l21, 0.0, 0.0])), a("axisangle", rot(o.q22))],
     );
-    xml.comment(&format!(
-        "q22: angle from x21 to x22, θ2 = q22 + ψ; open pose q22_0 = −ψ (θ2 = 0, the finger straight on its stop)"
-    ));
+    xml.comment(
+        "q22: angle from x21 to x22, θ2 = q22 + ψ; open pose q22_0 = −ψ (θ2 = 0, the finger straight on its stop)",
+    );
     xml.comment(&format!(
         "distal stop θ2 ≥ 0 (§8.4) as the joint's lower limit q22 = −ψ: MuJoCo's soft limit (solreflimit {}) \
          approximates the Hunt–Crossley law τ_stop = K_stop φ (1 + c_stop φ̇), φ = −θ2, K_stop = {} N·m/rad, \

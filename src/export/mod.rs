@@ -47,7 +47,7 @@ impl ExportScene {
     /// `centred`, `offset:X` or `free:X`, as `--scene` spells scenes.
     pub fn name(&self) -> String {
         match (self.object, self.x_off) {
-            (ObjectMode::Fixed, x) if x == 0.0 => "centred".into(),
+            (ObjectMode::Fixed, 0.0) => "centred".into(),
             (ObjectMode::Fixed, x) => format!("offset:{x}"),
             (ObjectMode::Free, x) => format!("free:{x}"),
         }
