@@ -17,13 +17,14 @@ PYTHON  ?= python3
 
 # The independent checks in a local venv: PyPI mcap (reference reader),
 # mcap-protobuf-support (protobuf decoding), foxglove-schemas-protobuf (the official
-# Foxglove descriptors to compare with), jsonschema, and pandas (docs/python.md).
-$(VENV)/.installed-3:
+# Foxglove descriptors to compare with), jsonschema, pandas (docs/python.md), and mujoco
+# (the exported MJCF, docs/export.md: 3.17.0 is one self-contained wheel per platform).
+$(VENV)/.installed-4:
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas mujoco==3.17.0
 	touch $@
 
-venv: $(VENV)/.installed-3
+venv: $(VENV)/.installed-4
 
 # The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
 .PHONY: lint
@@ -33,12 +34,13 @@ lint:
 
 # Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
 # then the independent reader over every MCAP file the tests wrote, then the pandas example of
-# docs/python.md on a run the tests wrote.
-test: $(VENV)/.installed-3 lint
+# docs/python.md on a run the tests wrote, then MuJoCo on the exported models (docs/export.md).
+test: $(VENV)/.installed-4 lint
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 	$(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
+	$(VENV)/bin/python tools/check_mjcf.py $${CARGO_TARGET_DIR:-target}/debug/gripopt problems/bottle-1l.toml target/mjcf-check --nominal
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
 # generations, 1 500 designs through all four stages, every design and grasp recorded to

@@ -18,6 +18,7 @@
 // (`gripopt::sim::Radau5`, `gripopt::model::closed_pose`).
 pub mod bench;
 pub mod eval;
+pub mod export;
 pub mod model;
 pub mod optim;
 pub mod params;

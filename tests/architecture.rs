@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first. `math`, `error` and `fsutil` are shared utilities below all.
-const LAYERS: &[&str] = &["params", "model", "sim", "eval", "optim", "record", "run", "sweep", "bench", "cli"];
+const LAYERS: &[&str] =
+    &["params", "model", "sim", "eval", "export", "optim", "record", "run", "sweep", "bench", "cli"];
 /// Layers that sit side by side and must not import each other (same rank).
 const PEERS: &[(&str, &str)] =
     &[("sweep", "run"), ("sweep", "record"), ("sweep", "optim"), ("sweep", "bench"), ("bench", "sweep")];

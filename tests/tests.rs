@@ -9,6 +9,7 @@ mod common;
 mod architecture;
 mod constraints;
 mod dynamics;
+mod export;
 mod force_model;
 mod free_jacobian;
 mod free_stage;

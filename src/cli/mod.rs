@@ -6,6 +6,7 @@ use gripopt::params::{Design, Problem};
 use std::path::PathBuf;
 
 mod bench;
+mod export;
 mod optcmd;
 mod report;
 mod scenes;
@@ -180,6 +181,8 @@ enum Cmd {
     Sweep(sweep::SweepArgs),
     /// Re-simulate a run's designs in the free scene and compare with the criteria's prediction (RUN_DIR/verify.csv).
     Verify(verify::VerifyArgs),
+    /// A design to MuJoCo (MJCF) or to a build sheet (JSON/CSV) for CAD (docs/export.md).
+    Export(export::ExportArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
         /// Print the figures as one JSON object on stdout (the text report goes to stderr).
@@ -407,6 +410,7 @@ pub fn run() -> Result<i32> {
         }
         Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),
         Cmd::Sweep(a) => sweep::run(a).map(|_| 0),
+        Cmd::Export(a) => export::run(a).map(|_| 0),
         Cmd::Verify(a) => {
             check_threads(a.threads)?;
             verify::run(a).map(|_| 0)
