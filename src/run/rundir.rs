@@ -394,6 +394,10 @@ fn drive(
     info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
     let archive = archive.lock().expect("archive").clone();
     write_outputs(out, &gp, &st, &archive)?;
+    let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
+    let status =
+        std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
+    crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     write_json(&out.join("run.json"), &info)?;
     Ok(RunSummary {
         out: out.to_path_buf(),
