@@ -32,11 +32,13 @@ lint:
 	$(CARGO) clippy --all-targets --locked -- -D warnings
 
 # Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
-# then the independent reader over every MCAP file the tests wrote, then the pandas example of
-# docs/python.md on a run the tests wrote.
+# then the independent reader over every MCAP file and shipped layout the tests wrote (after
+# its self-test: it must reject the scene and layout defects it checks for), then the pandas
+# example of docs/python.md on a run the tests wrote.
 test: $(VENV)/.installed-3 lint
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
+	$(VENV)/bin/python tools/test_check_mcap.py
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 	$(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
 
