@@ -182,6 +182,7 @@ class FileInfo:
         self.scene = None
         self.start = self.end = None
         self.front = {}  # /front: id -> on_final_front
+        self.designs = {}  # /designs: id -> (feasible, objectives)
         self.ids = set()
 
 
@@ -239,6 +240,8 @@ def check(path):
                 info.scene.add(channel.topic, t, decoded)
             if channel.topic == "/front":
                 info.front[decoded["id"]] = decoded["on_final_front"]
+            if channel.topic == "/designs":
+                info.designs[decoded["id"]] = (decoded["feasible"], decoded["objectives"])
         if n != summary.statistics.message_count:
             raise ValueError(f"read {n} messages, statistics say {summary.statistics.message_count}")
         ids = sorted(by_design)
@@ -427,12 +430,17 @@ def check_run_folder(run, r):
         if set(r["front"].front) != shard_ids:
             raise ValueError("front.mcap does not cover exactly the shards' designs")
         members = {i for i, on in r["front"].front.items() if on}
-        if (run / "pareto.csv").is_file():
-            rows = [l for l in (run / "pareto.csv").read_text().splitlines() if l and not l.startswith("#")]
+        designs = {k: v for i in r["shards"] for k, v in i.designs.items()}
+        check_front_members(members, designs)
+        pareto_csv = run / "pareto.csv"
+        if pareto_csv.is_file() and pareto_csv.stat().st_mtime_ns <= r["front"].path.stat().st_mtime_ns:
+            rows = [l for l in pareto_csv.read_text().splitlines() if l and not l.startswith("#")]
             pareto = {int(l.split(",")[0]) for l in rows[1:]}
             if members != pareto:
                 raise ValueError(f"front.mcap marks {sorted(members)} on the final front, pareto.csv holds {sorted(pareto)}")
-        done.append(f"front of {len(members)} designs")
+            done.append(f"front of {len(members)} designs = pareto.csv")
+        else:
+            done.append(f"front of {len(members)} designs (pareto.csv edited after it: not compared)")
     layout = run / "foxglove-layout.json"
     if layout.is_file() and r["shards"]:
         rec = merged([*r["shards"], *([r["front"]] if r["front"] else [])])
@@ -445,6 +453,23 @@ def check_run_folder(run, r):
             raise ValueError(f"{v.path.name} is shipped without {vlayout.name}")
         done.append(f"{check_layout(vlayout, v.recording)} layout paths of {vlayout.name} in {v.path.name}")
     return done
+
+
+def check_front_members(members, designs):
+    """The designs front.mcap marks must be feasible and mutually non-dominated in the four
+    objectives of their /designs records (max_offset and mean_force maximised, alpha and
+    t_stab minimised; a design not form closed has no max_offset: the worst)."""
+    sense = {"max_offset": 1, "alpha": -1, "mean_force": 1, "t_stab": -1}
+    vec = {}
+    for i in members:
+        feasible, objectives = designs[i]
+        if not feasible:
+            raise ValueError(f"front.mcap marks design {i} on the front, its /designs record says infeasible")
+        vec[i] = [s * objectives.get(k, -math.inf if s > 0 else math.inf) for k, s in sense.items()]
+    for a in members:
+        for b in members:
+            if all(x >= y for x, y in zip(vec[b], vec[a])) and any(x > y for x, y in zip(vec[b], vec[a])):
+                raise ValueError(f"front.mcap marks designs {a} and {b} on the front, but {b} dominates {a}")
 
 
 def merged(infos):

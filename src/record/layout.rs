@@ -122,11 +122,11 @@ fn document(config_by_id: Value, tree: Value) -> Value {
     })
 }
 
-/// The layout of a run folder: the oblique and the top 3-D views (left); on the right
-/// whether the design is on the final front (`/front` of `recording/front.mcap`), the
-/// contact forces at the scale of the holding force, the hand force, the joint angles and
-/// the `/designs` record.
-pub fn layout() -> Value {
+/// The layout of a run folder: the oblique and the top 3-D views (left; left out when the
+/// recording has no scene channels, `scene` false); on the right whether the design is on
+/// the final front (`/front` of `recording/front.mcap`), the contact forces at the scale of
+/// the holding force, the hand force, the joint angles and the `/designs` record.
+pub fn layout(scene: bool) -> Value {
     let s = "/grasp/series";
     let contact = plot(
         s,
@@ -168,30 +168,35 @@ pub fn layout() -> Value {
         }),
         "Final front",
     );
+    let mut configs = json!({
+        "Indicator!front": front,
+        "Plot!contact": contact,
+        "Plot!hand": hand,
+        "Plot!joints": joints,
+        "RawMessages!designs": raw_messages("/designs", "Design record (/designs)")
+    });
+    let right = json!({
+        "direction": "column", "splitPercentage": 8, "first": "Indicator!front",
+        "second": {
+            "direction": "column", "splitPercentage": 30, "first": "Plot!contact",
+            "second": {
+                "direction": "column", "splitPercentage": 43, "first": "Plot!hand",
+                "second": {"direction": "column", "splitPercentage": 57, "first": "Plot!joints", "second": "RawMessages!designs"}
+            }
+        }
+    });
+    if !scene {
+        return document(configs, right);
+    }
+    configs["3D!oblique"] = three_d(false, &["hand"], "Grasp: oblique view from behind the palm (world, z up)");
+    configs["3D!top"] = three_d(true, &["hand"], "Grasp: top view of the hand plane (x right, object up)");
     document(
-        json!({
-            "3D!oblique": three_d(false, &["hand"], "Grasp: oblique view from behind the palm (world, z up)"),
-            "3D!top": three_d(true, &["hand"], "Grasp: top view of the hand plane (x right, object up)"),
-            "Indicator!front": front,
-            "Plot!contact": contact,
-            "Plot!hand": hand,
-            "Plot!joints": joints,
-            "RawMessages!designs": raw_messages("/designs", "Design record (/designs)")
-        }),
+        configs,
         json!({
             "direction": "row",
             "splitPercentage": 50,
             "first": {"direction": "column", "splitPercentage": 58, "first": "3D!oblique", "second": "3D!top"},
-            "second": {
-                "direction": "column", "splitPercentage": 8, "first": "Indicator!front",
-                "second": {
-                    "direction": "column", "splitPercentage": 30, "first": "Plot!contact",
-                    "second": {
-                        "direction": "column", "splitPercentage": 43, "first": "Plot!hand",
-                        "second": {"direction": "column", "splitPercentage": 57, "first": "Plot!joints", "second": "RawMessages!designs"}
-                    }
-                }
-            }
+            "second": right
         }),
     )
 }
@@ -230,10 +235,11 @@ pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
     )
 }
 
-/// Write [`layout`] to `RUN_DIR/foxglove-layout.json`; returns its path.
-pub fn write_layout(run_dir: &Path) -> Result<PathBuf> {
+/// Write [`layout`] for a run recorded with `opts` to `RUN_DIR/foxglove-layout.json`;
+/// returns its path.
+pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions) -> Result<PathBuf> {
     let path = run_dir.join(LAYOUT_FILE);
-    let text = serde_json::to_string_pretty(&layout()).expect("the layout serialises");
+    let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0)).expect("the layout serialises");
     write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }

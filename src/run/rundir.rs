@@ -176,7 +176,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     let _lock = RunLock::acquire(&spec.out)?;
     holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
-    crate::record::write_layout(&spec.out)?;
+    crate::record::write_layout(&spec.out, &spec.record)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
