@@ -405,7 +405,7 @@ def check_run_folder(run, r):
     """The folder-level checks of one run folder; a description of what was checked."""
     done = []
     scenes = [i for i in r["shards"] + r["verify"] if i.scene is not None and i.scene.world_hand is not None]
-    frames = {(i.scene.world_hand, round(i.scene.ground_top, 12)) for i in scenes}
+    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in scenes}
     if len(frames) > 1:
         raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in scenes]})")
     if scenes:

@@ -6,7 +6,9 @@ readers), keeps the latest transform of every frame the way a viewer does after 
 latest /tf message at or before the playback time), composes the transforms itself up to the
 fixed frame `world`, and checks the drawn geometry there:
 
-* every /tf message carries `world -> hand`, the same transform throughout the file;
+* every /tf message carries `world -> hand`, the hand level (its z axis along world z), the
+  same transform throughout each design's window (a file of several objects may hold a hand
+  height per object: `world_hands` is the set);
 * the ground is a cube in `world` whose top face is the ground plane;
 * no point of a finger rod (line strip points, less half the line thickness) is below the
   ground plane at any instant a finger pose is drawn;
@@ -72,12 +74,14 @@ class Scene:
     geometry in `world`. Feed every message with `add`, call `finish` at the end; `world_hand`
     and `ground_top` are what other files of the same run must share."""
 
-    def __init__(self, window_start):
+    def __init__(self, window_start, level_hand=True):
         self.window_start = window_start  # log time -> True when it starts a design's window
+        self.level_hand = level_hand  # require the hand level (off only to test the other checks)
         self.frames = {}  # child -> (parent, Rigid)
         self.pending = []  # (topic, message) at the current log time, drawn after its /tf
         self.now = None
-        self.world_hand = None
+        self.world_hand = None  # in the current window
+        self.world_hands = set()
         self.ground_top = None
         self.stats = {"finger_points": 0, "lowest_finger_z": math.inf, "objects": 0, "object_poses": 0}
 
@@ -110,10 +114,13 @@ class Scene:
             self.frames[x.child_frame_id] = (x.parent_frame_id, Rigid.of_pose(x.translation, x.rotation))
             if (x.parent_frame_id, x.child_frame_id) == ("world", "hand"):
                 key = transform_key(x)
-                if self.world_hand is None:
+                if self.level_hand and abs(self.frames["hand"][1].r[2][2] - 1.0) > UPRIGHT_TOL:
+                    raise ValueError(f"/tf at {t}: the hand is not level (its z axis is not world z)")
+                if self.world_hand is None or self.window_start(t):
                     self.world_hand = key
                 elif key != self.world_hand:
-                    raise ValueError(f"/tf at {t}: world -> hand changed within the file ({key} vs {self.world_hand})")
+                    raise ValueError(f"/tf at {t}: world -> hand changed within a design's window ({key} vs {self.world_hand})")
+                self.world_hands.add(key)
         if "object" in self.frames and any(p[1] == "object" for p in pairs):
             self._object_frame_above_ground(t)
 

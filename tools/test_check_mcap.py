@@ -3,8 +3,9 @@
 checks must reject the defects they exist for (the checks must be able to fail), on scenes
 built here from the official Foxglove message classes (foxglove-schemas-protobuf):
 
-* the optimisation recording before issue 27 (world -> hand = Rx(-90 deg) at z = 2R, the
-  bottle lying, finger rods below the ground), a /tf message without world -> hand, an entity
+* the optimisation recording before issue 27 (world -> hand = Rx(-90 deg) at z = 2R: the hand
+  not level, the bottle lying, finger rods below the ground, each check on its own), a /tf
+  message without world -> hand, an entity
   that is not frame_locked, an object lifted off the ground;
 * a layout naming a topic or a field the recording lacks, a panel titled for one viewer only,
   an unknown panel type;
@@ -60,8 +61,8 @@ def fingers(points):
     return m
 
 
-def run_scene(messages):
-    s = Scene(lambda t: t % 1_000_000_000 == 0)
+def run_scene(messages, level_hand=False):
+    s = Scene(lambda t: t % 1_000_000_000 == 0, level_hand)
     for topic, t, m in messages:
         s.add(topic, t, m)
     return s.finish()
@@ -84,7 +85,7 @@ def main():
     now = (0, 0, 0, 1), H, (0.0, R, L / 2 - H)
     old = (-s, 0, 0, s), 2 * R, (0.0, R, 0.0)  # before issue 27: hand y -> world -z, the bottle lying
     # the scene as gripopt writes it now
-    stats = run_scene([("/tf", 0, tf(0, now[0], now[1])), ("/scene/static", 0, static(0, now[2])), ("/scene", 0, fingers(finger))])
+    stats = run_scene([("/tf", 0, tf(0, now[0], now[1])), ("/scene/static", 0, static(0, now[2])), ("/scene", 0, fingers(finger))], True)
     assert stats["objects"] == 1 and stats["finger_points"] == 6, stats
     print("ok   accepts the scene as recorded (hand horizontal at h_c, object standing, fingers in the hand plane)")
     # the old frames: fingers below the ground (scene without the object), then the lying bottle
@@ -93,6 +94,8 @@ def main():
     expect_failure("finger rods below the ground (Rx(-90) at 2R)",
                    lambda: run_scene([("/tf", 0, tf(0, old[0], old[1])), ("/scene/static", 0, ground_only), ("/scene", 0, fingers(finger))]),
                    "below the ground plane")
+    expect_failure("a hand that is not level (Rx(-90) at 2R)",
+                   lambda: run_scene([("/tf", 0, tf(0, old[0], old[1]))], level_hand=True), "not level")
     expect_failure("the bottle lying (Rx(-90) at 2R)",
                    lambda: run_scene([("/tf", 0, tf(0, old[0], old[1])), ("/scene/static", 0, static(0, old[2]))]), "not upright")
     expect_failure("an object floating 1 mm above the ground",
