@@ -54,7 +54,7 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
-	@echo "Recording (open in Foxglove with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap"
+	@echo "Recording (open the shards and front.mcap in Foxglove or Lichtblick with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap, $(OUT)/recording/front.mcap"
 	@id=$$(grep -v "^#" $(OUT)/pareto.csv | sed -n 2p | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.

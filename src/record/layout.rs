@@ -251,3 +251,54 @@ pub fn write_verify_layout(run_dir: &Path, dx_max_mm: f64, theta_max_deg: f64) -
     write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What both viewers need of every shipped layout (docs/recording.md, "What the viewers
+    /// read"): a title under each viewer's key, a playback speed, 3-D panels following the
+    /// z-up `world` with the oblique camera above the hand plane on the palm's side, plots with
+    /// axis labels and a legend beside the chart, and a mosaic naming exactly the panels.
+    #[test]
+    fn layouts_are_written_for_both_viewers() {
+        for (name, l) in
+            [("run", layout(true)), ("run without scene", layout(false)), ("verify", verify_layout(1.0, 1.0))]
+        {
+            let configs = l["configById"].as_object().unwrap();
+            assert!(l["playbackConfig"]["speed"].as_f64().unwrap() <= 0.05, "{name}: a grasp must be watchable");
+            let mut leaves = vec![];
+            let mut stack = vec![&l["layout"]];
+            while let Some(n) = stack.pop() {
+                match n {
+                    Value::String(s) => leaves.push(s.clone()),
+                    _ => stack.extend([&n["first"], &n["second"]]),
+                }
+            }
+            leaves.sort();
+            assert_eq!(leaves, configs.keys().cloned().collect::<Vec<_>>(), "{name}: mosaic and configById");
+            for (id, c) in configs {
+                assert!(
+                    c["foxglovePanelTitle"].is_string() && c["lichtblickPanelTitle"] == c["foxglovePanelTitle"],
+                    "{id}"
+                );
+                if id.starts_with("3D!") {
+                    assert_eq!(c["followTf"], "world", "{id}: the viewers orbit in the followed frame's axes");
+                    let cam = &c["cameraState"];
+                    if cam["perspective"] == true {
+                        let phi = cam["phi"].as_f64().unwrap();
+                        assert!(phi > 30.0 && phi < 80.0 && cam["thetaOffset"] == 0.0, "{id}: oblique, from −y");
+                    }
+                }
+                if id.starts_with("Plot!") {
+                    assert!(
+                        c["xAxisLabel"].as_str().unwrap().contains("(s)")
+                            && c["yAxisLabel"].as_str().unwrap().contains('(')
+                    );
+                    assert_ne!(c["legendDisplay"], "floating", "{id}: a floating legend covers the curves");
+                }
+            }
+        }
+        assert!(layout(false)["configById"].get("3D!oblique").is_none(), "no 3-D panel without scene channels");
+    }
+}
