@@ -7,7 +7,7 @@
 //!
 //! * 3-D panels follow `world` (z up): both viewers orbit the camera in the followed frame's
 //!   axes (`phi` from its +z, `thetaOffset` about it; 0 puts the camera on −y), so the oblique
-//!   view looks at the grasp from behind the palm, 35° above the hand plane, and the top view
+//!   view looks at the grasp from behind the palm, 40° above the hand plane, and the top view
 //!   (orthographic, "2D") looks down on the hand plane with the object's side up;
 //! * panel titles under both viewers' keys (`foxglovePanelTitle`, `lichtblickPanelTitle`);
 //! * plots with axis labels (`xAxisLabel`, `yAxisLabel`), the legend on the left (it never
@@ -36,7 +36,7 @@ fn titled(mut config: Value, title: &str) -> Value {
     config
 }
 
-/// A 3-D panel following `world`: the oblique view (perspective, from behind the palm, 35°
+/// A 3-D panel following `world`: the oblique view (perspective, from behind the palm, 40°
 /// above the hand plane) or the top view (orthographic, looking down the z axis, +y up).
 fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
     let camera = if top {
@@ -47,8 +47,8 @@ fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
         })
     } else {
         json!({
-            "perspective": true, "distance": 0.55, "phi": 55.0, "thetaOffset": 0.0,
-            "targetOffset": [0.0, 0.04, 0.05], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
+            "perspective": true, "distance": 0.38, "phi": 50.0, "thetaOffset": 0.0,
+            "targetOffset": [0.0, 0.04, 0.06], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
             "fovy": 45.0, "near": 0.005, "far": 50.0
         })
     };
@@ -62,7 +62,7 @@ fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
             "followTf": "world",
             "followMode": "follow-pose",
             "cameraState": camera,
-            "scene": {"enableStats": false, "transforms": {"showLabel": false, "axisScale": 0.3}},
+            "scene": {"enableStats": false, "transforms": {"showLabel": false, "axisScale": 0.3, "enablePreloading": true}},
             "transforms": transforms,
             "topics": {"/scene": {"visible": true}, "/scene/static": {"visible": true}},
             "layers": {"grid": {"layerId": "foxglove.Grid", "visible": true, "frameId": "world", "size": 0.6, "divisions": 12, "lineWidth": 1, "color": "#248eff", "position": [0, 0, 0.0005], "rotation": [0, 0, 0]}}
@@ -137,7 +137,7 @@ pub fn layout(scene: bool) -> Value {
             ("distal_normal_force", "distal normal"),
             ("proximal_friction_force", "proximal friction"),
             ("distal_friction_force", "distal friction"),
-            ("mean_force_objective", "F~ objective (static mean)"),
+            ("mean_force_objective", "F~ (objective)"),
         ],
         Some((-5.0, 25.0)),
     );
@@ -145,7 +145,7 @@ pub fn layout(scene: bool) -> Value {
         s,
         "Hand force on the object along y (y clipped to -25..25 N)",
         "F_hand,y (N)",
-        &[("hand_force", "raw"), ("filtered_hand_force", "low-pass T_f (force criterion)")],
+        &[("hand_force", "raw"), ("filtered_hand_force", "low-pass T_f")],
         Some((-25.0, 25.0)),
     );
     let joints = plot(
@@ -206,14 +206,14 @@ pub fn layout(scene: bool) -> Value {
 /// the verdict's limits `dx_max_mm` and `theta_max_deg` as lines, and the `/verify` record.
 pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
     let (dx, th) = (format!("{dx_max_mm}"), format!("{theta_max_deg}"));
-    let (dx_label, th_label) = (format!("limit dx_max = {dx} mm"), format!("limit theta_max = {th} deg"));
+    let (dx_label, th_label) = (format!("limit {dx} mm"), format!("limit {th} deg"));
     let motion = plot(
         "/verify/series",
         "Free object: horizontal displacement of G and tilt",
         "displacement (mm) / tilt (deg)",
         &[
-            ("displacement_mm", "displacement (mm)"),
-            ("tilt_deg", "tilt (deg)"),
+            ("displacement_mm", "displacement mm"),
+            ("tilt_deg", "tilt deg"),
             (dx.as_str(), dx_label.as_str()),
             (th.as_str(), th_label.as_str()),
         ],

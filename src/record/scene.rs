@@ -106,25 +106,24 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
         deletions: delete_all(t_ns),
         entities: vec![
             ground_entity(t_ns, d.id),
-            palm_entity(t_ns, d.id, &design),
+            palm_entity(t_ns, d.id, &design, sc.hand.w),
             object,
             label_entity(t_ns, d.id, &verdict(d)),
         ],
     }
 }
 
-/// One line saying what became of a design: feasible with its objectives, or where and why
-/// it was discarded.
+/// One short line saying what became of a design: feasible with its objectives, or where
+/// and why it was discarded (it must fit a 3-D panel of half a screen's width).
 pub fn verdict(d: &DesignEntry<'_>) -> String {
-    let head = format!("design {} (generation {})", d.id, d.generation);
+    let head = format!("{} (gen {})", d.id, d.generation);
     match d.failed_stage {
-        Some(s) => format!("{head}: discarded at stage {s}: {}", d.reason.unwrap_or("no reason recorded")),
+        Some(s) => format!("{head} stage {s}: {}", d.reason.unwrap_or("no reason recorded")),
         None => {
             let o = d.objectives;
-            let f =
-                |v: Option<f64>, scale: f64, unit: &str| v.map_or("-".into(), |v| format!("{:.3} {unit}", v * scale));
+            let f = |v: Option<f64>, scale: f64, unit: &str| v.map_or("-".into(), |v| format!("{:.1} {unit}", v * scale));
             format!(
-                "{head}: feasible; F = {}, alpha = {}, t_stab = {}, max_offset = {}",
+                "{head} feasible: F {}, alpha {}, t_stab {}, offset {}",
                 f(o[2], 1.0, "N"),
                 o[1].map_or("-".into(), |v| format!("{v:.3}")),
                 f(o[3], 1e3, "ms"),
@@ -145,13 +144,15 @@ fn ground_entity(t_ns: u64, id: u64) -> SceneEntity {
     ground
 }
 
-/// The palm (frame `hand`: width b + 2 cm, its face the line y = 0, 4 cm across the plane).
-fn palm_entity(t_ns: u64, id: u64, design: &Design) -> SceneEntity {
+/// The palm (frame `hand`): the model's palm, a rod of radius w along x whose surface is the
+/// line y = 0 (MODEL.md §6, the free scene's capsule of §14.2), drawn as a bar b + 2w long and
+/// 2w thick centred at (0, −w, 0).
+fn palm_entity(t_ns: u64, id: u64, design: &Design, w: f64) -> SceneEntity {
     let mut palm = entity(t_ns, HAND, "palm", id);
     palm.cubes.push(CubePrimitive {
-        pose: at(0.0, -0.005, 0.0),
-        size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }),
-        color: rgba(0.5, 0.5, 0.5, 1.0),
+        pose: at(0.0, -w, 0.0),
+        size: Some(Vector3 { x: design.b + 2.0 * w, y: 2.0 * w, z: 2.0 * w }),
+        color: rgba(0.45, 0.45, 0.45, 1.0),
     });
     palm
 }
@@ -177,7 +178,7 @@ fn label_entity(t_ns: u64, id: u64, text: &str) -> SceneEntity {
     label.texts.push(TextPrimitive {
         pose: at(0.0, -0.08, 0.002),
         billboard: true,
-        font_size: 14.0,
+        font_size: 11.0,
         scale_invariant: true,
         color: rgba(1.0, 1.0, 1.0, 1.0),
         text: text.into(),
@@ -297,7 +298,7 @@ pub fn free_static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams, 
     let object = object_entity(t_ns, OBJECT, id, sc, at(0.0, 0.0, 0.0));
     SceneUpdate {
         deletions: delete_all(t_ns),
-        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object, label_entity(t_ns, id, label)],
+        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design, sc.hand.w), object, label_entity(t_ns, id, label)],
     }
 }
 

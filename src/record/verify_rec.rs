@@ -274,7 +274,7 @@ fn verdict(r: &VerifyRecord) -> String {
     };
     let predicted = if r.predicted_moves { "moves" } else { "stays" };
     format!(
-        "design {} (row {}): predicted {predicted}; the free object {outcome}: {:.3} mm, {:.3} deg",
+        "{} (row {}): predicted {predicted}; {outcome}: {:.3} mm, {:.3} deg",
         r.id,
         r.window,
         r.object_max_displacement * 1e3,
