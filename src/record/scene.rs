@@ -121,7 +121,8 @@ pub fn verdict(d: &DesignEntry<'_>) -> String {
         Some(s) => format!("{head} stage {s}: {}", d.reason.unwrap_or("no reason recorded")),
         None => {
             let o = d.objectives;
-            let f = |v: Option<f64>, scale: f64, unit: &str| v.map_or("-".into(), |v| format!("{:.1} {unit}", v * scale));
+            let f =
+                |v: Option<f64>, scale: f64, unit: &str| v.map_or("-".into(), |v| format!("{:.1} {unit}", v * scale));
             format!(
                 "{head} feasible: F {}, alpha {}, t_stab {}, offset {}",
                 f(o[2], 1.0, "N"),
@@ -298,7 +299,12 @@ pub fn free_static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams, 
     let object = object_entity(t_ns, OBJECT, id, sc, at(0.0, 0.0, 0.0));
     SceneUpdate {
         deletions: delete_all(t_ns),
-        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design, sc.hand.w), object, label_entity(t_ns, id, label)],
+        entities: vec![
+            ground_entity(t_ns, id),
+            palm_entity(t_ns, id, design, sc.hand.w),
+            object,
+            label_entity(t_ns, id, label),
+        ],
     }
 }
 
