@@ -102,7 +102,7 @@ fn shards_draw_the_simulated_scene_in_world_coordinates() {
         assert_eq!(ground.frame_id, "world");
         assert!((g.pose.unwrap().position.unwrap().z + g.size.unwrap().z / 2.0).abs() < 1e-15);
         let label = &ent("label").texts[0].text;
-        assert!(label.starts_with(&format!("design {id} ")), "{label}");
+        assert!(label.starts_with(&format!("{id} (gen ")), "{label}");
         // the series: never empty (an empty one would leave the previous curves on screen)
         let s = <GraspSeries as prost::Message>::decode(&of("/grasp/series").next().unwrap().2[..]).unwrap();
         assert!(!s.t.is_empty());
@@ -111,7 +111,7 @@ fn shards_draw_the_simulated_scene_in_world_coordinates() {
             // no grasp: one NaN sample at t = 0, and the open linkage (and the failing pose)
             assert!(s.t == [0.0] && s.q11[0].is_nan() && s.proximal_normal_force[0].is_nan(), "design {id}");
             assert_eq!(scenes.len(), 1);
-            assert!(label.contains("discarded at stage"), "{label}");
+            assert!(label.contains(" stage "), "{label}");
             open_only += scenes[0].entities.iter().any(|e| e.id == "fingers") as usize;
             failing += scenes[0].entities.iter().any(|e| e.id == "failing_pose") as usize;
         } else {
