@@ -244,8 +244,8 @@ fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
         assert!(r.verified && r.max_difference == 0.0, "{}: {} {}", d.display(), r.verified, r.max_difference);
         let layout: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(d.join(gripopt::record::LAYOUT_FILE)).unwrap()).unwrap();
-        assert_eq!(layout["configById"]["3D!grasp"]["followTf"], "hand");
-        assert_eq!(layout["configById"]["Plot!forces"]["xAxisPath"]["value"], "/grasp/series.t[:]");
+        assert_eq!(layout["configById"]["3D!oblique"]["followTf"], "world");
+        assert_eq!(layout["configById"]["Plot!contact"]["xAxisPath"]["value"], "/grasp/series.t[:]");
         assert_eq!(layout["configById"]["RawMessages!designs"]["topicPath"], "/designs");
     }
 }

@@ -20,6 +20,7 @@ mod persist;
 mod problem_files;
 mod properties;
 mod recording;
+mod recording_scene;
 mod replay_scene;
 mod robustness;
 mod robustness_cli;

@@ -23,8 +23,11 @@ HEADER = 1 + 8 + 2 + 4 + 8 + 8  # opcode, length, channel, sequence, log and pub
 
 
 def grasp_series_len(data):
-    """Number of t values in a gripopt.GraspSeries (field 4, packed doubles)."""
+    """Number of t values in a gripopt.GraspSeries (field 4, packed doubles); 0 for the
+    placeholder sample of a design without a grasp (simulated_samples, field 3, is 0 and so
+    not encoded; fields come in tag order)."""
     i = 0
+    simulated = False
     while i < len(data):
         key = 0
         shift = 0
@@ -37,6 +40,7 @@ def grasp_series_len(data):
                 break
         field, wire = key >> 3, key & 7
         if wire == 0:
+            simulated = simulated or (field == 3 and data[i] != 0)
             while data[i] >= 0x80:
                 i += 1
             i += 1
@@ -51,7 +55,7 @@ def grasp_series_len(data):
                 if b < 0x80:
                     break
             if field == 4:
-                return n // 8
+                return n // 8 if simulated else 0
             i += n
         elif wire == 1:
             i += 8
@@ -66,7 +70,8 @@ def main(dirs):
     designs = 0
     all_designs = 0
     all_bytes = 0
-    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("*.mcap")):
+    # the optimisation shards only (not front.mcap or verify recordings)
+    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("gen-*.mcap")):
         all_bytes += p.stat().st_size
         with open(p, "rb") as f:
             reader = make_reader(f)

@@ -209,6 +209,54 @@ fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Resul
     Ok(())
 }
 
+/// The messages (channel id, log time, bytes) of the chunk `ci` points to, read with a record
+/// length limit of the chunk's uncompressed size: the mcap crate's own chunk reader
+/// (`Summary::stream_chunk`) has none, so a damaged record length inside a decompressed chunk
+/// made it allocate that length (an abort, not an error).
+fn chunk_messages<'a>(
+    buf: &'a [u8],
+    ci: &mcap::records::ChunkIndex,
+) -> std::result::Result<Vec<(u16, u64, Vec<u8>)>, String> {
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let (start, end) = (ci.chunk_start_offset as usize, (ci.chunk_start_offset + ci.chunk_length) as usize);
+    let mut input: &'a [u8] = &buf[start..end];
+    // no record, the chunk record included, is longer than the chunk or its content
+    let limit =
+        usize::try_from(ci.uncompressed_size.max(ci.chunk_length)).map_err(|_| "size beyond memory".to_string())?;
+    let mut r = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_start_magic(true)
+            .with_skip_end_magic(true)
+            .with_validate_chunk_crcs(true)
+            .with_record_length_limit(limit),
+    );
+    let mut out = vec![];
+    while let Some(event) = r.next_event() {
+        match event.map_err(|e| e.to_string())? {
+            LinearReadEvent::ReadRequest(n) => {
+                let n = n.min(input.len());
+                r.insert(n).copy_from_slice(&input[..n]);
+                r.notify_read(n);
+                input = &input[n..];
+            }
+            LinearReadEvent::Record { data, opcode } => {
+                if let mcap::records::Record::Message { header, data } =
+                    mcap::parse_record(opcode, data).map_err(|e| e.to_string())?
+                {
+                    out.push((header.channel_id, header.log_time, data.into_owned()));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// One message of a chunk.
+struct Msg {
+    log_time: u64,
+    data: Vec<u8>,
+}
+
 /// Find design `id` in the recording of `run_dir`.
 pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
@@ -256,16 +304,15 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
         check_chunk(&buf, ci)
             .map_err(|m| bad(format!("the file is damaged: chunk at offset {}: {m}", ci.chunk_start_offset)))?;
         let at = ci.chunk_start_offset;
-        for m in summary
-            .stream_chunk(&buf, ci)
-            .map_err(mc(format!("cannot read the chunk at offset {at} (the file is damaged)")))?
-        {
-            let m =
-                m.map_err(mc(format!("cannot read a message of the chunk at offset {at} (the file is damaged)")))?;
+        let messages = chunk_messages(&buf, ci)
+            .map_err(|e| bad(format!("cannot read the chunk at offset {at} (the file is damaged): {e}")))?;
+        for (channel, log_time, data) in messages {
+            let m = Msg { log_time, data };
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }
-            match m.channel.topic.as_str() {
+            let topic = summary.channels.get(&channel).map_or("", |c| c.topic.as_str());
+            match topic {
                 "/designs" => {
                     design = Some(
                         serde_json::from_slice::<Value>(&m.data)

@@ -162,8 +162,9 @@ pub fn write_shard<R: Recordable>(
 
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
 /// start the record, the series, the frames, the static scene and the first finger pose
-/// (or a deletion); then the fingers every `scene_dt` of simulated time and at the last
-/// sample (t_stab or the discard time).
+/// (without a trajectory: the open and failing poses); then the fingers every `scene_dt` of
+/// simulated time and at the last sample (t_stab or the discard time); at the window's last
+/// nanosecond the frames again (the drawing is `scene`'s, see docs/recording.md).
 fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -> Vec<(Ch, u64, Vec<u8>)> {
     let t0 = messages::window_start_ns(opts.epoch_ns(), d.id);
     let sc = &problem.scene;
@@ -171,18 +172,18 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let kept = opts.kept_samples(samples);
     let record = serde_json::to_vec(&messages::design(d, &problem.name, t0, opts.epoch_s)).expect("records serialise");
     let mut out =
-        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
+        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d, samples, &kept, opts).encode_to_vec())];
     if opts.scene_dt <= 0.0 {
         return out;
     }
     let design = Design::from_array(&d.parameters);
     let finger = d.lengths.and_then(|_| Finger::new(&design, sc).ok());
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
-    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d.id, &design, sc))));
+    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, sc))));
+    let end = messages::window_end_ns(t0);
     let Some(last) = samples.len().checked_sub(1) else {
-        if let Some(m) = messages::scene(d.id, t0, None, None, true) {
-            out.push((Ch::Scene, t0, fx(&m)));
-        }
+        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, d.failed_stage, sc))));
+        out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
         return out;
     };
     let mut next = 0.0;
@@ -198,6 +199,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
         first = false;
         next = s.t + opts.scene_dt;
     }
+    out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
     out
 }
 

@@ -176,7 +176,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     let _lock = RunLock::acquire(&spec.out)?;
     holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
-    crate::record::write_layout(&spec.out)?;
+    crate::record::write_layout(&spec.out, &spec.record)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
@@ -394,6 +394,10 @@ fn drive(
     info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
     let archive = archive.lock().expect("archive").clone();
     write_outputs(out, &gp, &st, &archive)?;
+    let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
+    let status =
+        std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
+    crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     write_json(&out.join("run.json"), &info)?;
     Ok(RunSummary {
         out: out.to_path_buf(),
