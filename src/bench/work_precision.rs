@@ -8,7 +8,7 @@ use super::{say, Out};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
-use crate::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -156,7 +156,7 @@ impl Reference {
         let s = &problem.scene;
         let k = stage_kinematics(design, s).map_err(discarded)?;
         let st = stage_statics(&k.finger, s).map_err(discarded)?;
-        let run = simulate_grasp(&k.finger, s, &st, &Self::options(Method::Radau5));
+        let run = diagnostic_grasp(&k.finger, s, &st, &Self::options(Method::Radau5));
         if run.t_stab.is_none() {
             return Err(Error::bench("the reference run did not reach stability"));
         }
@@ -164,8 +164,8 @@ impl Reference {
     }
 
     /// The reference's tight settings, for `method`.
-    pub fn options(method: Method) -> SimOptions {
-        SimOptions { method, ..SimOptions::diagnostic(1e-12, 1e-15, 5_000_000) }
+    pub fn options(method: Method) -> Integration {
+        Integration::new(1e-12, 1e-15, 5_000_000).with_method(method)
     }
 
     /// Writes the atol used and the reference's values to `out`.
@@ -212,8 +212,8 @@ impl Reference {
         for m in methods {
             for &rtol in &wp.rtols {
                 pb.set_message(format!("{m:?} rtol {rtol:e}"));
-                let o = SimOptions { method: m, ..SimOptions::diagnostic(rtol, wp.atol_at(rtol), 5_000_000) };
-                let (r, tmin, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 1.0, wp.reps);
+                let o = Integration::new(rtol, wp.atol_at(rtol), 5_000_000).with_method(m);
+                let (r, tmin, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 1.0, wp.reps);
                 rows.push(self.row(label(m), rtol, tmin, tmed, &Measured::of(&r, &self.run)));
                 pb.inc(1);
             }
@@ -242,7 +242,7 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     check_rtols(&wp.rtols)?;
     let reference = Reference::new(problem, design)?;
     let check =
-        simulate_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
+        diagnostic_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
     reference.print(wp.atol, out)?;
     say!(
         out,

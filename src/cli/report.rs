@@ -4,7 +4,7 @@ use anyhow::{bail, Context, Result};
 use gripopt::eval::DynamicsRecord;
 use gripopt::eval::{evaluate as eval_design, EvalOptions, Record};
 use gripopt::params::{Design, Problem};
-use gripopt::sim::{simulate_grasp_traj, Method, SimOptions};
+use gripopt::sim::{simulate as sim_run, Controls, Integration, Method, SceneSpec, Trajectory};
 use std::io::Write;
 use std::path::Path;
 
@@ -165,7 +165,7 @@ fn print_dyn(r: &DynamicsRecord) {
 /// The free scene's measurement of a free-kind stage 3 (MODEL.md §14.4).
 fn print_free(f: &gripopt::eval::FreeRecord) {
     println!("stage 3    free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides", opt(f.object_x_off, 1e3, 3));
-    let Some(end) = f.free_end else {
+    let Some(end) = f.free_end.as_deref() else {
         println!("  not run (the centred grasp was discarded first)");
         return;
     };
@@ -214,11 +214,11 @@ pub fn simulate(
         let d = ev.discard.expect("a design without statics was discarded");
         bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
     };
-    let mut o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
-    o.method = method;
-    o.contacts = contacts;
-    o.trace = trace;
-    let (res, traj) = simulate_grasp_traj(&k.finger, &p.scene, &st, &o);
+    let o = Integration::new(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
+    let ctl = Controls { contacts, ..Controls::DIAGNOSTIC };
+    let _ = trace;
+    let mut traj = Trajectory::default();
+    let res = *sim_run(&k.finger, &p.scene, &st, &SceneSpec::Centred, &o, &ctl, &mut traj).grasp().unwrap();
     let rec = DynamicsRecord::from_result(Some(&res));
     let fstar = res.fstar;
     if let Some(path) = csv {

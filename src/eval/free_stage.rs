@@ -10,19 +10,9 @@
 use super::stages::{Discard, Reason, StaticsResult};
 use crate::model::Finger;
 use crate::params::SceneParams;
-use crate::sim::{
-    simulate_free, simulate_grasp_into, DynOutcome, DynamicsResult, FreeResult, FreeSetup, Mode, SimOptions, Trajectory,
-};
+pub use crate::sim::FreeEnd;
+use crate::sim::{simulate, Controls, DynOutcome, DynamicsResult, FreeResult, Integration, SceneSpec, Sink};
 use std::fmt;
-
-/// How the free scene's run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FreeEnd {
-    /// It reached t_end = min(t_max, t_obs): the motion was observed.
-    Observed,
-    /// It ended early (singular fingers, step budget, …): the text says why.
-    Early(&'static str),
-}
 
 /// What the free scene measured in stage 3 (the §14.4 outputs; allocation-free).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,20 +53,6 @@ pub struct FreeMeasure {
     pub cpu_s: f64,
 }
 
-/// The free scene's text for how it ended, as a static string (`FreeResult::end`).
-fn end_of(end: &str) -> FreeEnd {
-    match end {
-        "t_obs" => FreeEnd::Observed,
-        "singular" => FreeEnd::Early("singular configuration during the grasp (|sin q13| <= 1e-3)"),
-        "initial penetration" => FreeEnd::Early("open finger penetrates the object at t = 0"),
-        "step budget" => FreeEnd::Early("aborted: step budget exhausted"),
-        "step size underflow" => FreeEnd::Early("aborted: step size underflow"),
-        "linkage not mountable" => FreeEnd::Early("linkage not mountable during the grasp"),
-        "aborted: more than 20000 events" => FreeEnd::Early("aborted: more than 20000 events"),
-        _ => FreeEnd::Early("the simulation ended before t_obs"),
-    }
-}
-
 impl FreeMeasure {
     /// From the free scene's result at offset `x_off`.
     pub fn from_result(r: &FreeResult, x_off: f64) -> Self {
@@ -94,7 +70,7 @@ impl FreeMeasure {
             toppled: r.toppled,
             escaped: r.escaped,
             rim_contact: r.rim_contact,
-            end: end_of(&r.end),
+            end: r.end,
             steps: r.stats.steps,
             rhs_evals: r.rhs_evals,
             cpu_s: r.cpu_s,
@@ -110,8 +86,8 @@ impl FreeMeasure {
     /// max(displacement/Δx_max, tilt/θ_max) − 1, plus 1 when the object escaped; 1e3 when
     /// the run ended early, as for an aborted grasp).
     pub fn discard(&self, s: &SceneParams) -> Option<Discard> {
-        if let FreeEnd::Early(why) = self.end {
-            return Some(Discard { stage: 3, reason: Reason::FreeSceneEnded(why), violation: 1e3 });
+        if !self.end.observed() {
+            return Some(Discard { stage: 3, reason: Reason::FreeSceneEnded(self.end), violation: 1e3 });
         }
         if self.barely_moves() {
             return None;
@@ -193,19 +169,20 @@ fn finger_discard(c: &DynamicsResult) -> Option<Discard> {
 /// trajectory into `traj`), then, unless the finger's own criteria discard the design, the
 /// free scene at the problem's x_off. Returns the centred result, the measurement (None
 /// when the free scene did not run) and the discard.
-pub(crate) fn stage3_free(
+pub(crate) fn stage3_free<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,
     st: &StaticsResult,
-    o: &SimOptions,
-    traj: Option<&mut Trajectory>,
+    integ: &Integration,
+    sink: &mut K,
 ) -> (DynamicsResult, Option<FreeMeasure>, Option<Discard>) {
-    let c = simulate_grasp_into(f, s, st, &SimOptions { mode: Mode::Diagnostic, ..*o }, traj);
+    let c = *simulate(f, s, st, &SceneSpec::Centred, integ, &Controls::DIAGNOSTIC, sink).grasp().expect("a grasp");
     if let Some(d) = finger_discard(&c) {
         return (c, None, Some(d));
     }
     let x_off = s.setup.x_off;
-    let r = simulate_free(f, s, st.tau_s0, x_off, FreeSetup::default(), &SimOptions { record: false, ..*o }, None);
+    let spec = SceneSpec::free(x_off);
+    let r = *simulate(f, s, st, &spec, integ, &Controls::DIAGNOSTIC, &mut ()).free().expect("the free scene");
     let m = FreeMeasure::from_result(&r, x_off);
     (c, Some(m), m.discard(s))
 }

@@ -10,7 +10,7 @@ mod stages;
 pub use free_stage::{FreeEnd, FreeMeasure, ObjectMotion};
 pub use record::{DynamicsRecord, FreeRecord, Record};
 pub use stages::{
-    evaluate, evaluate_dynamics, evaluate_full, evaluate_statics, evaluate_with_trajectory, stage3_ends_at_once,
-    stage_kinematics, stage_statics, Discard, EvalOptions, Evaluation, KinematicsResult, Partial, PartialGrasp, Reason,
-    StaticsResult, MISSING_POSE_VIOLATION,
+    evaluate, evaluate_dynamics, evaluate_full, evaluate_into, evaluate_statics, stage3_ends_at_once, stage_kinematics,
+    stage_statics, Discard, EvalOptions, Evaluation, KinematicsResult, Partial, PartialGrasp, Reason, StaticsResult,
+    MISSING_POSE_VIOLATION,
 };

@@ -320,7 +320,7 @@ pub struct FreeRecord {
     pub object_x_off: Option<f64>,
     /// How the free scene ended: "t_obs" (observed to min(t_max, t_obs)) or why it stopped
     /// early (then the maxima cover the part simulated and the verdict flags are null).
-    pub free_end: Option<&'static str>,
+    pub free_end: Option<String>,
     /// Accepted steps of the free scene.
     pub free_steps: Option<u64>,
     /// Right-hand-side evaluations of the free scene.
@@ -346,10 +346,7 @@ impl FreeRecord {
             escaped: observed.then_some(m.escaped),
             rim_contact: Some(m.rim_contact),
             object_x_off: Some(m.x_off),
-            free_end: Some(match m.end {
-                FreeEnd::Observed => "t_obs",
-                FreeEnd::Early(why) => why,
-            }),
+            free_end: Some(m.end.to_string()),
             free_steps: Some(m.steps),
             free_rhs_evals: Some(m.rhs_evals),
         }

@@ -10,7 +10,7 @@ use crate::model::{closure_matrix, form_closure_test, grasp_at, max_offset, Offs
 use crate::model::{singularity_sweep, Sweep, SweepFailure};
 use crate::model::{Finger, GeomError};
 use crate::params::{Design, Problem, SceneKind, SceneParams};
-use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
+use crate::sim::{Controls, DynOutcome, DynamicsResult, Integration, SceneSpec, Sink};
 use std::fmt;
 use std::time::Instant;
 
@@ -32,7 +32,7 @@ pub enum Reason {
     /// Stage 3 of a free-kind problem: the free object did not barely move (§14.4).
     ObjectMoved(ObjectMotion),
     /// Stage 3 of a free-kind problem: the free scene ended before t_obs (why).
-    FreeSceneEnded(&'static str),
+    FreeSceneEnded(crate::sim::FreeEnd),
 }
 
 impl fmt::Display for Reason {
@@ -166,18 +166,24 @@ impl Evaluation {
 pub struct EvalOptions {
     /// Run stage 3 (dynamics). Off gives the static pipeline (stages 0–2).
     pub dynamics: bool,
-    /// Simulation options for stage 3.
-    pub sim: SimOptions,
+    /// The numerics of stage 3.
+    pub integration: Integration,
+    /// The run controls of stage 3 (pipeline mode).
+    pub controls: Controls,
 }
 
 impl EvalOptions {
     /// Stages 0–2 only.
     pub fn statics_only() -> Self {
-        EvalOptions { dynamics: false, sim: SimOptions::pipeline(1e-6, 1e-9, 200_000) }
+        EvalOptions {
+            dynamics: false,
+            integration: Integration::new(1e-6, 1e-9, 200_000),
+            controls: Controls::PIPELINE,
+        }
     }
     /// All four stages with the problem's solver settings, stopping at the first violated criterion.
     pub fn full(p: &Problem) -> Self {
-        EvalOptions { dynamics: true, sim: SimOptions::pipeline(p.solver.rtol, p.solver.atol, p.solver.max_steps) }
+        EvalOptions { dynamics: true, integration: Integration::from_solver(&p.solver), controls: Controls::PIPELINE }
     }
 }
 
@@ -272,24 +278,21 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
 
 /// Evaluate a design through the staged pipeline.
 pub fn evaluate(x: &Design, s: &SceneParams, opts: &EvalOptions) -> Evaluation {
-    evaluate_inner(x, s, opts, None)
+    evaluate_inner(x, s, opts)
 }
 
-/// Evaluate and return the stage-3 trajectory (if stage 3 ran), recorded by the same
-/// simulation that decided the verdict.
-pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions) -> (Evaluation, Option<Trajectory>) {
-    let mut tr = Trajectory::default();
-    let ev = evaluate_inner(x, s, opts, Some(&mut tr));
-    let has = ev.dynamics.is_some();
-    (ev, has.then_some(tr))
-}
-
-fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
+/// Evaluate, reporting stage 3's samples to `sink` (the simulation that decides the
+/// verdict; results do not depend on the sink).
+pub fn evaluate_into<K: Sink + ?Sized>(x: &Design, s: &SceneParams, opts: &EvalOptions, sink: &mut K) -> Evaluation {
     let ev = evaluate_statics(x, s);
     if !opts.dynamics {
         return ev;
     }
-    evaluate_dynamics(ev, s, opts, traj)
+    evaluate_dynamics(ev, s, opts, sink)
+}
+
+fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions) -> Evaluation {
+    evaluate_into(x, s, opts, &mut ())
 }
 
 /// Stages 0–2 of a design (tens of µs): the evaluation so far, with `statics` set when the
@@ -322,25 +325,26 @@ pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
     ev
 }
 
-/// Stage 3 of an evaluation from [`evaluate_statics`] in the problem's scene, recording the
-/// trajectory into `traj` when given; an evaluation that did not pass stages 0–2 comes
-/// back unchanged.
-pub fn evaluate_dynamics(
+/// Stage 3 of an evaluation from [`evaluate_statics`] in the problem's scene, reporting
+/// its samples to `sink`; an evaluation that did not pass stages 0–2 comes back unchanged.
+pub fn evaluate_dynamics<K: Sink + ?Sized>(
     mut ev: Evaluation,
     s: &SceneParams,
     opts: &EvalOptions,
-    traj: Option<&mut Trajectory>,
+    sink: &mut K,
 ) -> Evaluation {
     let (Some(kin), Some(st), None) = (ev.kin, ev.statics, ev.discard) else { return ev };
     let t2 = Instant::now();
     ev.scene = s.setup.kind;
     if s.setup.kind == SceneKind::Free {
-        let (dynr, free, discard) = stage3_free(&kin.finger, s, &st, &opts.sim, traj);
+        let (dynr, free, discard) = stage3_free(&kin.finger, s, &st, &opts.integration, sink);
         ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
         (ev.dynamics, ev.free, ev.discard) = (Some(dynr), free, discard);
         return ev;
     }
-    let dynr = stage3_scene(&kin.finger, s, &st, &opts.sim, traj);
+    let spec = SceneSpec::of(&s.setup);
+    let run = crate::sim::simulate(&kin.finger, s, &st, &spec, &opts.integration, &opts.controls, sink);
+    let dynr = *run.grasp().expect("a grasp scene");
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
     if let Some(v) = dynr.discard_violation() {
         ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });
@@ -354,25 +358,9 @@ pub fn evaluate_dynamics(
 /// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
 pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
     use crate::sim::{force_margin, r_area, Mode};
-    opts.sim.mode == Mode::Pipeline
+    opts.controls.mode == Mode::Pipeline
         && s.setup.kind == SceneKind::Centred
         && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
-}
-
-/// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
-/// on the object at x_off. (The free kind is `free_stage::stage3_free`: the centred scene
-/// plus the free object's measured motion.)
-fn stage3_scene(
-    f: &Finger,
-    s: &SceneParams,
-    st: &StaticsResult,
-    o: &SimOptions,
-    traj: Option<&mut Trajectory>,
-) -> DynamicsResult {
-    match s.setup.kind {
-        SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
-        _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
-    }
 }
 
 /// Evaluate the problem's design `x` with all stages.

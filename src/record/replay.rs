@@ -6,9 +6,9 @@ use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
 use super::writer::{read_index, ShardEntry};
 use super::{RecordOptions, Resolution};
-use crate::eval::{evaluate_with_trajectory, EvalOptions};
+use crate::eval::{evaluate_into, EvalOptions};
 use crate::params::{Design, Problem};
-use crate::sim::Sample;
+use crate::sim::{Sample, Trajectory};
 use crate::{Error, Result};
 use prost::Message;
 use serde_json::Value;
@@ -318,7 +318,9 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         source,
     })?;
     let design = recorded.design()?;
-    let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
+    let mut traj = Trajectory::default();
+    let ev = evaluate_into(&design, &problem.scene, &EvalOptions::full(&problem), &mut traj);
+    let tr = ev.dynamics.is_some().then_some(traj);
     let fresh: Vec<Sample> = match tr {
         Some(t) => {
             let p = |x: f64| at_precision(x, recorded.resolution);

@@ -171,10 +171,10 @@ impl MooProblem for GripperProblem {
         let (scene, opts) = (&self.problem.scene, &self.options);
         let (ev, traj) = match self.keep_trajectories {
             _ if !opts.dynamics => (started, None),
-            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, None), None),
+            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, &mut ()), None),
             keep => {
                 let mut tr = crate::sim::Trajectory::default();
-                let ev = evaluate_dynamics(started, scene, opts, Some(&mut tr));
+                let ev = evaluate_dynamics(started, scene, opts, &mut tr);
                 let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) {
                     None
                 } else {

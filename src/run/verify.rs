@@ -11,7 +11,7 @@ use crate::eval::{evaluate, EvalOptions, FreeEnd, FreeMeasure};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
 use crate::record::keep_poses;
-use crate::sim::{simulate_free, simulate_grasp, FreeSetup, PoseSample, SimOptions};
+use crate::sim::{simulate, Controls, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
@@ -93,11 +93,8 @@ impl VerifyRow {
         (e.map(|e| self.peak_e.0 / e.0), e.map(|e| self.peak_e.1 / e.1))
     }
     /// `free_end` as verify.csv writes it: "t_obs", or why the free scene stopped early.
-    pub fn free_end(&self) -> &'static str {
-        match self.end {
-            FreeEnd::Observed => "t_obs",
-            FreeEnd::Early(why) => why,
-        }
+    pub fn free_end(&self) -> String {
+        self.end.to_string()
     }
 }
 
@@ -175,18 +172,16 @@ pub fn verify_design_poses(
     let s = &p.scene;
     let ev = evaluate(x, s, &EvalOptions::statics_only());
     let (k, st) = (ev.kin?, ev.statics?);
-    let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
-    let c = simulate_grasp(&k.finger, s, &st, &o);
-    let f = simulate_free(
-        &k.finger,
-        s,
-        st.tau_s0,
-        s.setup.x_off,
-        FreeSetup::default(),
-        &SimOptions { record: scene_dt.is_some(), ..o },
-        None,
-    );
-    let poses = scene_dt.map(|dt| keep_poses(&f.poses, dt)).unwrap_or_default();
+    let o = Integration::from_solver(&p.solver);
+    let c = *simulate(&k.finger, s, &st, &SceneSpec::Centred, &o, &Controls::DIAGNOSTIC, &mut ()).grasp()?;
+    let mut all_poses: Vec<PoseSample> = vec![];
+    let spec = SceneSpec::free(s.setup.x_off);
+    let f = if scene_dt.is_some() {
+        *simulate(&k.finger, s, &st, &spec, &o, &Controls::DIAGNOSTIC, &mut all_poses).free()?
+    } else {
+        *simulate(&k.finger, s, &st, &spec, &o, &Controls::DIAGNOSTIC, &mut ()).free()?
+    };
+    let poses = scene_dt.map(|dt| keep_poses(&all_poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
     let end = FreeMeasure::from_result(&f, s.setup.x_off).end;
@@ -410,7 +405,7 @@ pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
             r.max_tilt_deg,
             r.peak_e.0,
             r.peak_e.1,
-            field(r.free_end()),
+            field(&r.free_end()),
             opt(r.moved),
             opt(r.toppled),
             opt(r.escaped),

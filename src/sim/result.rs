@@ -1,81 +1,18 @@
-//! What a grasp simulation takes and gives: options, the outcome, the stage-3 results of
-//! the centred scene, trajectory samples.
+//! What a simulation gives: how a grasp ended ([`DynOutcome`]) and its stage-3 results
+//! ([`DynamicsResult`]), how the free scene ended ([`FreeEnd`]), and the samples a
+//! [`Sink`](super::Sink) receives ([`Sample`], [`PoseSample`]; [`Trajectory`] keeps them).
 
 use super::criteria::Impact;
 use super::integrate::Stats;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
-
-/// Integration method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Method {
-    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
-    Radau5,
-    /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
-    TrBdf2,
-    /// Dormand–Prince 5(4) (explicit; for comparison only).
-    Dopri5,
-}
-
-/// Pipeline mode stops at the first violated criterion; diagnostic mode runs to t_stab or t_max.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Mode {
-    /// Stop at the first violated criterion.
-    Pipeline,
-    /// Always run to t_stab (or t_max), reporting every criterion.
-    Diagnostic,
-}
-
-/// Simulation options.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SimOptions {
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Absolute tolerance on angles (rad) and rates (rad/s).
-    pub atol: f64,
-    /// Budget of accepted + rejected steps.
-    pub max_steps: u64,
-    /// Pipeline or diagnostic.
-    pub mode: Mode,
-    /// Method.
-    pub method: Method,
-    /// Record a trajectory at accepted steps.
-    pub record: bool,
-    /// Also sample a uniform grid with this step (s) when recording.
-    pub grid_dt: Option<f64>,
-    /// Contacts with the object (false: the fingers close on nothing — a diagnostic scene
-    /// for the linkage alone; no compliant equilibrium, no stability).
-    pub contacts: bool,
-    /// Print every located event to stderr (a debugging aid).
-    pub trace: bool,
-}
-
-impl SimOptions {
-    /// Pipeline-mode options with Radau IIA.
-    pub fn pipeline(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions {
-            rtol,
-            atol,
-            max_steps,
-            mode: Mode::Pipeline,
-            method: Method::Radau5,
-            record: false,
-            grid_dt: None,
-            contacts: true,
-            trace: false,
-        }
-    }
-    /// Diagnostic-mode options with Radau IIA.
-    pub fn diagnostic(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions { mode: Mode::Diagnostic, ..Self::pipeline(rtol, atol, max_steps) }
-    }
-}
 
 /// Maximum number of events before the simulation is aborted (§8.7).
 pub const MAX_EVENTS: u32 = 20_000;
 
-/// How a grasp simulation ended, or the first criterion it violated.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How a grasp simulation ended, or the first criterion it violated (in JSON: its text,
+/// one of a fixed set).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DynOutcome {
     /// All criteria hold and stability was reached.
     Stable,
@@ -93,7 +30,7 @@ pub enum DynOutcome {
     Singular,
     /// The linkage could not be assembled along the trajectory.
     DgmFailure,
-    /// More than 20 000 events.
+    /// More than [`MAX_EVENTS`] events.
     Aborted,
     /// More than max_steps steps.
     StepBudget,
@@ -103,6 +40,25 @@ pub enum DynOutcome {
     InitialPenetration,
     /// The compliant equilibrium of §8.9 was not found.
     NoEquilibrium,
+}
+
+impl DynOutcome {
+    /// Every outcome.
+    pub const ALL: [DynOutcome; 13] = [
+        DynOutcome::Stable,
+        DynOutcome::ImpactEnergy,
+        DynOutcome::Fold,
+        DynOutcome::ForceCriterion,
+        DynOutcome::StaticForceLimit,
+        DynOutcome::NoStability,
+        DynOutcome::Singular,
+        DynOutcome::DgmFailure,
+        DynOutcome::Aborted,
+        DynOutcome::StepBudget,
+        DynOutcome::StepTooSmall,
+        DynOutcome::InitialPenetration,
+        DynOutcome::NoEquilibrium,
+    ];
 }
 
 impl fmt::Display for DynOutcome {
@@ -116,13 +72,106 @@ impl fmt::Display for DynOutcome {
             DynOutcome::NoStability => "no stability by t_max",
             DynOutcome::Singular => "singular configuration during the grasp (|sin q13| <= 1e-3)",
             DynOutcome::DgmFailure => "linkage not mountable during the grasp",
-            DynOutcome::Aborted => "aborted: more than 20000 events",
+            DynOutcome::Aborted => return write!(f, "aborted: more than {MAX_EVENTS} events"),
             DynOutcome::StepBudget => "aborted: step budget exhausted",
             DynOutcome::StepTooSmall => "aborted: step size underflow",
             DynOutcome::InitialPenetration => "open finger penetrates the object at t = 0",
             DynOutcome::NoEquilibrium => "compliant static equilibrium not found",
         };
         f.write_str(s)
+    }
+}
+
+/// Serialise an enum of a fixed set of texts as its text.
+fn as_text<T: fmt::Display, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(v)
+}
+
+/// Deserialise one of `all` from its text.
+fn from_text<'de, T: fmt::Display + Copy, D: Deserializer<'de>>(all: &[T], d: D) -> Result<T, D::Error> {
+    let text = String::deserialize(d)?;
+    all.iter()
+        .copied()
+        .find(|v| v.to_string() == text)
+        .ok_or_else(|| serde::de::Error::custom(format!("unknown value {text:?}")))
+}
+
+impl Serialize for DynOutcome {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        as_text(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for DynOutcome {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        from_text(&Self::ALL, d)
+    }
+}
+
+/// How the free scene's run ended (in JSON: `t_obs`, or the text of why it ended early).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FreeEnd {
+    /// It reached t_end = min(t_max, t_obs): the motion was observed.
+    Observed,
+    /// A finger reached |sin q13| = 1e-3.
+    Singular,
+    /// An open finger penetrates the object at t = 0.
+    InitialPenetration,
+    /// The step budget was spent.
+    StepBudget,
+    /// The step size underflowed.
+    StepTooSmall,
+    /// A linkage could not be assembled along the trajectory.
+    NotMountable,
+    /// More than [`MAX_EVENTS`] events.
+    TooManyEvents,
+    /// The run stopped before t_obs otherwise.
+    Stopped,
+}
+
+impl FreeEnd {
+    /// Every end.
+    pub const ALL: [FreeEnd; 8] = [
+        FreeEnd::Observed,
+        FreeEnd::Singular,
+        FreeEnd::InitialPenetration,
+        FreeEnd::StepBudget,
+        FreeEnd::StepTooSmall,
+        FreeEnd::NotMountable,
+        FreeEnd::TooManyEvents,
+        FreeEnd::Stopped,
+    ];
+    /// The run observed the object to t_end.
+    pub fn observed(self) -> bool {
+        self == FreeEnd::Observed
+    }
+}
+
+impl fmt::Display for FreeEnd {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = match self {
+            FreeEnd::Observed => "t_obs",
+            FreeEnd::Singular => "singular configuration during the grasp (|sin q13| <= 1e-3)",
+            FreeEnd::InitialPenetration => "open finger penetrates the object at t = 0",
+            FreeEnd::StepBudget => "aborted: step budget exhausted",
+            FreeEnd::StepTooSmall => "aborted: step size underflow",
+            FreeEnd::NotMountable => "linkage not mountable during the grasp",
+            FreeEnd::TooManyEvents => return write!(f, "aborted: more than {MAX_EVENTS} events"),
+            FreeEnd::Stopped => "the simulation ended before t_obs",
+        };
+        f.write_str(s)
+    }
+}
+
+impl Serialize for FreeEnd {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        as_text(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for FreeEnd {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        from_text(&Self::ALL, d)
     }
 }
 
@@ -230,6 +279,23 @@ pub struct Sample {
     pub energy: f64,
     /// E_ex = E − V* (J).
     pub energy_excess: f64,
+}
+
+/// A sample of the free scene's object pose and fingers (for `--csv` and recordings).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseSample {
+    /// Time (s).
+    pub t: f64,
+    /// Position of G (m).
+    pub g: [f64; 3],
+    /// Orientation (w, x, y, z).
+    pub q: [f64; 4],
+    /// Tilt (rad).
+    pub tilt: f64,
+    /// Active angles (q11, q21) of finger 1 and finger 2.
+    pub fingers: [f64; 4],
+    /// Total energy (J).
+    pub energy: f64,
 }
 
 /// A recorded trajectory.
