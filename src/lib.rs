@@ -27,6 +27,7 @@ pub mod sim;
 pub mod sweep;
 
 // Shared below every layer.
+mod cells;
 mod error;
 mod fsutil;
 pub mod math;

@@ -271,31 +271,19 @@ fn check_threads(t: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-/// A free-kind problem needs the hand horizontal (MODEL.md §14.1): g_eq = 0.
-fn check_free_scene(p: &gripopt::params::Problem) -> Result<()> {
-    if p.scene.setup.kind == gripopt::params::SceneKind::Free && p.scene.env.g_eq != 0.0 {
-        anyhow::bail!(
-            "[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}",
-            p.scene.env.g_eq
-        );
-    }
-    Ok(())
-}
-
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
 pub fn run() -> Result<i32> {
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Evaluate { problem, design, json, static_only } => {
             let p = load_problem(&problem)?;
-            check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
         Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace, plot } => {
             let mut p = load_problem(&problem)?;
             if let Some(sc) = &scene {
-                scenes::apply_scene(&mut p, sc)?;
+                p = scenes::apply_scene(&p, sc)?;
             }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
@@ -307,7 +295,7 @@ pub fn run() -> Result<i32> {
                 json,
                 csv: csv.as_deref(),
                 plot: plot.as_deref(),
-                extra: Default::default(),
+                replay: None,
             };
             scenes::simulate_in_scene(&p, &x, &o)
                 .with_context(|| format!("simulating {}", problem.display()))
@@ -329,9 +317,6 @@ pub fn run() -> Result<i32> {
             json,
         } => {
             check_threads(threads)?;
-            if let Ok(p) = gripopt::params::Problem::load(&problem) {
-                check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
-            }
             if record_every == 0 {
                 anyhow::bail!("--record-every 0: must be at least 1");
             }

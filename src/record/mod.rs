@@ -12,7 +12,7 @@
 //!
 //! This layer sits above the pipeline and the simulator and below the run layer: it never
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
-//! [`Recordable`] for their own types and call [`Recorder::record_generation`].
+//! [`Recordable`] for their own types and hand the recorder's shard tasks their designs.
 //!
 //! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
 //! scene's object pose as a moving frame (see `verify_rec`).
@@ -38,6 +38,7 @@ pub use options::{
 pub use proto::{GraspSeries, SERIES_NAME};
 pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use replay::{read_design, replay, Recorded, Replay};
+pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
     keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout,
     Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA,

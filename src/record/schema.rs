@@ -1,9 +1,156 @@
-//! JSON schema of `/designs` (`gripopt.Design`), written so that Foxglove's JSON-schema
-//! parser accepts it: one type per field (no union types; values not computed are left
-//! out of a message instead of being null), every object with its properties. The other
-//! channels are protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
+//! `/designs` (`gripopt.Design`, JSON): the typed message ([`DesignMessage`], derived from
+//! a design's evaluation record; read back as the same type by replay and the run-folder
+//! reader) and its JSON schema, written so that Foxglove's JSON-schema parser accepts it:
+//! one type per field (no union types; values not computed are left out of a message
+//! instead of being null), every object with its properties. The other channels are
+//! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
+use crate::eval::FreeSceneRecord;
+use serde::{Deserialize, Serialize, Serializer};
 use serde_json::{json, Value};
+
+/// A window start as seconds and nanoseconds since 1970.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Window {
+    /// Seconds.
+    pub sec: u64,
+    /// Nanoseconds.
+    pub nsec: u64,
+}
+
+/// The design as the optimiser evaluated it (ψ in degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DesignParameters {
+    /// l21 (m).
+    pub l21: f64,
+    /// b (m).
+    pub b: f64,
+    /// t22 (m).
+    pub t22: f64,
+    /// r.
+    pub r: f64,
+    /// p.
+    pub p: f64,
+    /// ψ (°).
+    pub psi_deg: f64,
+}
+
+impl DesignParameters {
+    /// From the optimiser's vector (l21, b, t22, r, p, ψ°).
+    pub fn from_array(x: &[f64; 6]) -> Self {
+        DesignParameters { l21: x[0], b: x[1], t22: x[2], r: x[3], p: x[4], psi_deg: x[5] }
+    }
+    /// The optimiser's vector.
+    pub fn to_array(&self) -> [f64; 6] {
+        [self.l21, self.b, self.t22, self.r, self.p, self.psi_deg]
+    }
+}
+
+/// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Derived {
+    /// l11.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub l11: Option<f64>,
+    /// l12.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub l12: Option<f64>,
+    /// l22.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub l22: Option<f64>,
+    /// l_hand.
+    pub l_hand: f64,
+}
+
+/// Objectives in their natural sense (max_offset only when form closed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Objectives {
+    /// m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_offset: Option<f64>,
+    /// Force isotropy.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<f64>,
+    /// N.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_force: Option<f64>,
+    /// s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_stab: Option<f64>,
+}
+
+/// Wall seconds per stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StageSeconds {
+    /// Stages 0–1.
+    pub stages_0_1: f64,
+    /// Stage 2.
+    pub stage_2: f64,
+    /// Stage 3.
+    pub stage_3: f64,
+}
+
+/// The `/designs` message of one design.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignMessage {
+    /// Design id.
+    pub id: u64,
+    /// Generation that created it.
+    pub generation: u64,
+    /// Problem name.
+    pub problem: String,
+    /// Start of its time window.
+    pub window_start: Window,
+    /// Its window start in seconds since the epoch (= id).
+    pub window_start_s: f64,
+    /// The recording's epoch (s since 1970).
+    pub epoch_s: u64,
+    /// The design.
+    pub parameters: DesignParameters,
+    /// Derived lengths.
+    pub derived: Derived,
+    /// Stages passed (4: all).
+    pub stages_passed: u8,
+    /// No stage discarded it.
+    pub feasible: bool,
+    /// Form closed at the centred object.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form_closed: Option<bool>,
+    /// The stage that discarded it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failed_stage: Option<u8>,
+    /// Why.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// By how much.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub violation: Option<f64>,
+    /// Objectives.
+    pub objectives: Objectives,
+    /// Timings.
+    pub stage_seconds: StageSeconds,
+    /// Accepted steps of the grasp simulation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sim_steps: Option<u64>,
+    /// Right-hand-side evaluations of the grasp simulation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sim_rhs_evals: Option<u64>,
+    /// The free scene's measurement (free kind; keys not computed left out).
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "without_nulls")]
+    pub free_scene: Option<FreeSceneRecord>,
+    /// Trajectory samples simulated (the recorded ones may be a subset).
+    pub trajectory_samples: u64,
+}
+
+/// A record's JSON object without its null values (Foxglove's schema parser wants one
+/// type per field).
+fn without_nulls<T: Serialize, S: Serializer>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
+    let mut v = serde_json::to_value(v).map_err(serde::ser::Error::custom)?;
+    if let Value::Object(m) = &mut v {
+        m.retain(|_, x| !x.is_null());
+    }
+    v.serialize(s)
+}
 
 fn num() -> Value {
     json!({"type": "number"})
@@ -13,6 +160,28 @@ fn int() -> Value {
 }
 fn obj(props: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": props, "required": required})
+}
+
+/// The JSON type of every key of the free scene's record.
+fn free_scene_properties() -> Value {
+    // a record with every value set gives every key with its JSON type
+    let full = FreeSceneRecord::full_example();
+    let v = serde_json::to_value(full).expect("records serialise");
+    let props: serde_json::Map<String, Value> = v
+        .as_object()
+        .expect("an object")
+        .iter()
+        .map(|(k, x)| {
+            let t = match x {
+                Value::Bool(_) => json!({"type": "boolean"}),
+                Value::String(_) => json!({"type": "string"}),
+                Value::Number(n) if n.is_u64() => int(),
+                _ => num(),
+            };
+            (k.clone(), t)
+        })
+        .collect();
+    Value::Object(props)
 }
 
 /// `gripopt.Design` on `/designs`.
@@ -39,13 +208,8 @@ pub fn design() -> Value {
             "sim_rhs_evals": int(),
             "free_scene": {
                 "type": "object",
-                "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `simulate --scene free --json` (keys not computed, where the free scene did not run to t_obs, are left out)",
-                "properties": {
-                    "object_max_displacement": num(), "object_max_dx": num(), "object_max_dy": num(), "object_max_tilt_deg": num(),
-                    "object_final_displacement": num(), "object_final_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(),
-                    "moved": {"type": "boolean"}, "toppled": {"type": "boolean"}, "escaped": {"type": "boolean"}, "rim_contact": {"type": "boolean"},
-                    "object_x_off": num(), "free_end": {"type": "string"}, "free_steps": int(), "free_rhs_evals": int()
-                }
+                "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `evaluate --json` for the free scene (keys not computed, e.g. the verdict flags where the free scene did not run to t_obs, are left out)",
+                "properties": free_scene_properties()
             },
             "trajectory_samples": int()
         }),

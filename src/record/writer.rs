@@ -176,7 +176,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
         return out;
     }
     let design = Design::from_array(&d.parameters);
-    let finger = d.lengths.and_then(|_| Finger::new(&design, sc).ok());
+    let finger = d.record.lengths().and_then(|_| Finger::new(&design, sc).ok());
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
     out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d.id, &design, sc))));
     let Some(last) = samples.len().checked_sub(1) else {

@@ -138,7 +138,7 @@ impl OutputsObserver {
     /// the files in parallel in the current rayon pool; the seconds each file took.
     pub fn write_views(&self, st: &Nsga2State<GripperInfo>) -> crate::Result<[f64; 5]> {
         let a = self.archive.lock().expect("archive lock");
-        super::outputs::write_tables_timed(&self.out, self.force_model, st, &a)
+        super::outputs::write_tables_timed(&self.out, st, &a)
     }
 }
 

@@ -1,20 +1,22 @@
 //! `verify`: does the thesis's prediction hold? Every design of a run's front (or every
-//! feasible design, or a seeded sample of the problem's box) is simulated twice: in the
-//! centred scene, whose impact (§9.1) and force (§9.3) criteria *predict* whether the object
-//! moves, and in the free scene (MODEL.md §14), which *measures* it (§14.4's verdict). The
-//! rows go to `RUN_DIR/verify.csv` (or `verify_sample.csv`), written atomically under the
-//! run folder's lock; [`Confusion`] counts prediction against measurement.
+//! feasible design, or a seeded sample of the problem's box) is simulated in the free scene
+//! (MODEL.md §14) by the one simulation call: the centred scene's impact (§9.1) and force
+//! (§9.3) criteria *predict* whether the object moves, the free scene *measures* it
+//! (§14.4's verdict). The rows ([`VerifyRow`], written as verify.csv's [`VerifyCsvRow`]);
+//! [`Confusion`] counts prediction against measurement. The command itself (folder, lock,
+//! files) is `verify_run`.
 
-use super::lock::RunLock;
-use super::verify_rec::VerifyRecording;
-use crate::eval::{evaluate, EvalOptions, FreeEnd, FreeMeasure};
-use crate::fsutil::write_atomic;
-use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
+use super::folder::read_table;
+use super::outputs::DesignRow;
+use crate::cells::{line, Floats};
+use crate::eval::{evaluate, simulate, EvalOptions};
+use crate::params::{Design, Problem};
 use crate::record::keep_poses;
-use crate::sim::{simulate, Controls, Integration, PoseSample, SceneSpec};
+use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -170,22 +172,20 @@ pub fn verify_design_poses(
     scene_dt: Option<f64>,
 ) -> Option<(VerifyRow, Vec<PoseSample>)> {
     let s = &p.scene;
-    let ev = evaluate(x, s, &EvalOptions::statics_only());
-    let (k, st) = (ev.kin?, ev.statics?);
-    let o = Integration::from_solver(&p.solver);
-    let c = *simulate(&k.finger, s, &st, &SceneSpec::Centred, &o, &Controls::DIAGNOSTIC, &mut ()).grasp()?;
-    let mut all_poses: Vec<PoseSample> = vec![];
+    let integ = Integration::from_solver(&p.solver);
     let spec = SceneSpec::free(s.setup.x_off);
-    let f = if scene_dt.is_some() {
-        *simulate(&k.finger, s, &st, &spec, &o, &Controls::DIAGNOSTIC, &mut all_poses).free()?
+    let ctl = Controls::DIAGNOSTIC;
+    let mut all_poses: Vec<PoseSample> = vec![];
+    let ev = if scene_dt.is_some() {
+        simulate(x, s, &spec, &integ, &ctl, &mut all_poses)
     } else {
-        *simulate(&k.finger, s, &st, &spec, &o, &Controls::DIAGNOSTIC, &mut ()).free()?
+        simulate(x, s, &spec, &integ, &ctl, &mut ())
     };
+    let (c, f) = (ev.dynamics?, ev.free?);
     let poses = scene_dt.map(|dt| keep_poses(&all_poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
-    let end = FreeMeasure::from_result(&f, s.setup.x_off).end;
-    let seen = |v: bool| (end == FreeEnd::Observed).then_some(v);
+    let seen = |v: bool| f.end.observed().then_some(v);
     let row = VerifyRow {
         id,
         design: *x,
@@ -201,68 +201,32 @@ pub fn verify_design_poses(
         toppled: seen(f.toppled),
         escaped: seen(f.escaped),
         rim_contact: f.rim_contact,
-        end,
+        end: f.end,
         t_end: f.t_end,
     };
     Some((row, poses))
 }
 
-/// Split one CSV line into fields (double-quoted fields with `""` escapes).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(ch) = chars.next() {
-        match (ch, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(ch),
-        }
-    }
-    out.push(cur);
-    out
+/// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`
+/// lines skipped), feasible ones only; read with the csv crate into [`DesignRow`]s.
+pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
+    Ok(read_design_rows(path)?
+        .into_iter()
+        .filter(|r| r.feasible)
+        .map(|r| (r.id, Design::from_array(&r.parameters())))
+        .collect())
 }
 
-/// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`
-/// lines skipped), feasible ones only.
-pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "cannot read the run's design table", e))?;
-    let bad = |line: usize, m: String| Error::RunDir { path: path.to_path_buf(), message: format!("line {line}: {m}") };
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
-    let Some((hl, header)) = lines.next() else { return Err(bad(1, "no header row".into())) };
-    let cols = split_csv(header);
-    let col =
-        |name: &str| cols.iter().position(|c| c == name).ok_or_else(|| bad(hl + 1, format!("no column `{name}`")));
-    let id_c = col("id")?;
-    let feas_c = col("feasible")?;
-    let xs: Vec<usize> = DESIGN_NAMES.iter().map(|n| col(n)).collect::<Result<_>>()?;
-    let mut out = Vec::new();
-    for (i, l) in lines {
-        let f = split_csv(l);
-        let get = |c: usize| f.get(c).map(String::as_str).ok_or_else(|| bad(i + 1, format!("only {} fields", f.len())));
-        if get(feas_c)? != "true" {
-            continue;
+/// Every row of a design CSV (errors name the file and line; see [`read_table`]).
+pub fn read_design_rows(path: &Path) -> Result<Vec<DesignRow>> {
+    let rows: Vec<DesignRow> = read_table(path)?;
+    for row in &rows {
+        if let Some(k) = row.parameters().iter().position(|v| !v.is_finite()) {
+            let message = format!("design {}: {} is not a finite number", row.id, crate::params::DESIGN_NAMES[k]);
+            return Err(Error::RunDir { path: path.to_path_buf(), message });
         }
-        let id: u64 = get(id_c)?
-            .parse()
-            .map_err(|_| bad(i + 1, format!("id `{}` is not an integer", get(id_c).unwrap_or(""))))?;
-        let mut a = [0.0; 6];
-        for (k, &c) in xs.iter().enumerate() {
-            let v = get(c)?;
-            a[k] = v
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| bad(i + 1, format!("{} = `{v}` is not a number", DESIGN_NAMES[k])))?;
-        }
-        out.push((id, Design::from_array(&a)));
     }
-    Ok(out)
+    Ok(rows)
 }
 
 /// The run's designs to verify, in id order.
@@ -332,185 +296,108 @@ pub fn verify_designs_poses(
         .collect()
 }
 
-fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
+/// One row of verify.csv.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VerifyCsvRow {
+    /// Design id.
+    pub id: u64,
+    /// l21 (m).
+    pub l21: f64,
+    /// b (m).
+    pub b: f64,
+    /// t22 (m).
+    pub t22: f64,
+    /// r.
+    pub r: f64,
+    /// p.
+    pub p: f64,
+    /// ψ (deg).
+    pub psi_deg: f64,
+    /// E_cyl/E_lim at the centred first contact.
+    pub impact_ratio: Option<f64>,
+    /// §9.1's E_trans (J).
+    pub e_trans: Option<f64>,
+    /// §9.1's E_rot (J).
+    pub e_rot: Option<f64>,
+    /// The smaller of the filtered and static force margins (N).
+    pub force_margin: f64,
+    /// The centred grasp reached stability.
+    pub stable: bool,
+    /// The centred criteria predict motion.
+    pub predicted_moves: bool,
+    /// Largest horizontal displacement of G (m).
+    pub object_max_displacement: f64,
+    /// Largest tilt (°).
+    pub object_max_tilt_deg: f64,
+    /// Peak translational kinetic energy during the first contact (J).
+    pub object_peak_e_trans: f64,
+    /// Peak rotational kinetic energy during the first contact (J).
+    pub object_peak_e_rot: f64,
+    /// How the free scene ended.
+    pub free_end: FreeEnd,
+    /// §14.4's verdict (empty: not observed).
+    pub moved: Option<bool>,
+    /// Tilt above 45°.
+    pub toppled: Option<bool>,
+    /// No phalanx in contact at t_end.
+    pub escaped: Option<bool>,
+    /// A phalanx met the rim or a face.
+    pub rim_contact: bool,
+    /// Prediction and measurement agree.
+    pub agrees: Option<bool>,
+    /// Object peak E_trans / §9.1's E_trans.
+    pub peak_e_trans_ratio: Option<f64>,
+    /// Object peak E_rot / §9.1's E_rot.
+    pub peak_e_rot_ratio: Option<f64>,
 }
 
-/// A CSV field: quoted when it holds a comma or a quote.
-fn field(v: &str) -> String {
-    if v.contains([',', '"']) {
-        format!("\"{}\"", v.replace('"', "\"\""))
-    } else {
-        v.to_string()
+impl VerifyCsvRow {
+    /// The CSV row of a verified design.
+    pub fn of(r: &VerifyRow) -> Self {
+        let a = r.design.to_array();
+        let (et, er) = r.energy_ratios();
+        VerifyCsvRow {
+            id: r.id,
+            l21: a[0],
+            b: a[1],
+            t22: a[2],
+            r: a[3],
+            p: a[4],
+            psi_deg: a[5],
+            impact_ratio: r.impact_ratio,
+            e_trans: r.e_trans_rot.map(|e| e.0),
+            e_rot: r.e_trans_rot.map(|e| e.1),
+            force_margin: r.force_margin,
+            stable: r.stable,
+            predicted_moves: r.predicted_moves,
+            object_max_displacement: r.max_displacement,
+            object_max_tilt_deg: r.max_tilt_deg,
+            object_peak_e_trans: r.peak_e.0,
+            object_peak_e_rot: r.peak_e.1,
+            free_end: r.end,
+            moved: r.moved,
+            toppled: r.toppled,
+            escaped: r.escaped,
+            rim_contact: r.rim_contact,
+            agrees: r.agrees(),
+            peak_e_trans_ratio: et,
+            peak_e_rot_ratio: er,
+        }
     }
 }
-
-/// Columns of verify.csv.
-pub const VERIFY_COLUMNS: [&str; 25] = [
-    "id",
-    "l21",
-    "b",
-    "t22",
-    "r",
-    "p",
-    "psi_deg",
-    "impact_ratio",
-    "e_trans",
-    "e_rot",
-    "force_margin",
-    "stable",
-    "predicted_moves",
-    "object_max_displacement",
-    "object_max_tilt_deg",
-    "object_peak_e_trans",
-    "object_peak_e_rot",
-    "free_end",
-    "moved",
-    "toppled",
-    "escaped",
-    "rim_contact",
-    "agrees",
-    "peak_e_trans_ratio",
-    "peak_e_rot_ratio",
-];
 
 /// verify.csv's text (`#` header lines, then one row per design).
 pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
     let mut s = String::from("# gripopt verify.csv: the centred criteria's prediction (impact ratio E_cyl/E_lim > 1 or force margin < 0 → predicted_moves) against the free scene's measured motion (MODEL.md §14.4)\n");
     let _ = writeln!(s, "# scene free, x_off {x_off} m; units: lengths m, psi_deg and object_max_tilt_deg deg, energies J, force_margin N; *_ratio = object peak / §9.1 value");
     s.push_str("# free_end: t_obs, or why the free scene stopped early (then moved, toppled, escaped, agrees and the ratios are empty: nothing observed)\n");
-    s.push_str(&VERIFY_COLUMNS.join(","));
-    s.push('\n');
-    for r in rows {
-        let a = r.design.to_array();
-        let (et, er) = r.energy_ratios();
-        let (pt, pr) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.id,
-            a[0],
-            a[1],
-            a[2],
-            a[3],
-            a[4],
-            a[5],
-            opt(r.impact_ratio),
-            opt(pt),
-            opt(pr),
-            r.force_margin,
-            r.stable,
-            r.predicted_moves,
-            r.max_displacement,
-            r.max_tilt_deg,
-            r.peak_e.0,
-            r.peak_e.1,
-            field(&r.free_end()),
-            opt(r.moved),
-            opt(r.toppled),
-            opt(r.escaped),
-            r.rim_contact,
-            opt(r.agrees()),
-            opt(et),
-            opt(er),
-        );
+    let rows: Vec<VerifyCsvRow> = rows.iter().map(VerifyCsvRow::of).collect();
+    if let Some(first) = rows.first() {
+        s.push_str(&crate::cells::header(first).join(","));
+        s.push('\n');
+    }
+    for r in &rows {
+        s.push_str(&line(r, Floats::Display));
     }
     s
-}
-
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
-}
-
-/// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
-/// loads the run's problem, switches it to the free scene (at `x_off`, default the
-/// problem's), simulates the designs of `source` and writes the CSV atomically; with
-/// `record`, also the MCAP recording of the free scene (verify.mcap or verify_sample.mcap,
-/// with the Foxglove layout `foxglove-verify-layout.json`).
-pub fn verify(
-    dir: &Path,
-    source: VerifySource,
-    x_off: Option<f64>,
-    record: bool,
-    tick_len: &dyn Fn(usize),
-    tick: &(dyn Fn() + Sync),
-) -> Result<VerifySummary> {
-    if !dir.is_dir() {
-        return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
-    }
-    for f in ["run.json", "problem.toml"] {
-        if !dir.join(f).is_file() {
-            return Err(Error::RunDir {
-                path: dir.to_path_buf(),
-                message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
-            });
-        }
-    }
-    let _lock = RunLock::acquire(dir)?;
-    let mut p = Problem::load(dir.join("problem.toml"))?;
-    if p.scene.env.g_eq != 0.0 {
-        return Err(Error::RunDir {
-            path: dir.join("problem.toml"),
-            message: "environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into(),
-        });
-    }
-    p.scene.setup.kind = SceneKind::Free;
-    if let Some(x) = x_off {
-        p.scene.setup.x_off = x;
-    }
-    let (designs, file) = match source {
-        VerifySource::Pareto => (run_designs(dir, false)?, VERIFY_FILE),
-        VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
-        VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
-    };
-    if designs.is_empty() {
-        let message = match source {
-            VerifySource::Sample { n, seed } => format!("--sample {n} --seed {seed}: no drawn design passes stages 0–2 of problem.toml; nothing to verify, nothing written"),
-            _ => "no feasible design to verify; nothing written".into(),
-        };
-        let path = match source {
-            VerifySource::Pareto => dir.join("pareto.csv"),
-            VerifySource::All => dir.join("population.csv"),
-            VerifySource::Sample { .. } => dir.join("problem.toml"),
-        };
-        return Err(Error::RunDir { path, message });
-    }
-    tick_len(designs.len());
-    let rec = if record { Some(VerifyRecording::new(dir, &source)?) } else { None };
-    let with_poses = verify_designs_poses(&p, &designs, rec.as_ref().map(|r| r.opts.scene_dt), tick);
-    let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
-    let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
-    if rows.is_empty() {
-        return Err(Error::RunDir {
-            path: dir.to_path_buf(),
-            message: format!(
-                "all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written",
-                designs.len()
-            ),
-        });
-    }
-    let file = dir.join(file);
-    write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
-    let recording = match rec {
-        Some(r) => Some(r.write(&p, with_poses)?),
-        None => None,
-    };
-    let et: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().0).collect();
-    let er: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().1).collect();
-    let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary {
-        file,
-        skipped,
-        confusion: Confusion::of(&rows),
-        rows,
-        median_energy_ratio,
-        recording,
-        designs: designs.len(),
-    })
 }

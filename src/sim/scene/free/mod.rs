@@ -112,6 +112,8 @@ pub struct FreeEval {
 /// The outputs of MODEL.md §14.4.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FreeResult {
+    /// Object offset x_off (m).
+    pub x_off: f64,
     /// Largest horizontal displacement of G (m).
     pub object_max_displacement: f64,
     /// Largest |Δx| of G (m).
@@ -213,6 +215,7 @@ impl<'a> FreeScene<'a> {
         let m = s.object.mass();
         let k = &s.contact;
         let out = FreeResult {
+            x_off,
             object_max_displacement: 0.0,
             object_max_dx: 0.0,
             object_max_dy: 0.0,
