@@ -20,8 +20,6 @@ fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
         generations,
         seed: 5,
         threads: Some(threads),
-        progress: false,
-        crash_after: None,
         record: RecordOptions::default(),
     }
 }

@@ -18,7 +18,7 @@ fn json(o: &Output) -> serde_json::Value {
 
 /// Drop the keys that are wall-clock timings.
 fn untimed(mut v: serde_json::Value) -> serde_json::Value {
-    for k in ["cpu_s", "replay_s"] {
+    for k in ["cpu_s", "free_cpu_s", "replay_s"] {
         v.as_object_mut().unwrap().remove(k);
     }
     v

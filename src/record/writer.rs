@@ -317,15 +317,4 @@ impl Recorder {
         self.index.insert(at, entry);
         write_index(&self.dir, &self.index)
     }
-
-    /// Write generation `generation`'s evaluated designs (any order; written by id) as one
-    /// shard, replacing a shard of the same generation, and update the index. Does nothing
-    /// when recording is off or `designs` is empty.
-    pub fn record_generation<R: Recordable>(&mut self, generation: u64, designs: &[&R]) -> Result<()> {
-        let Some(task) = self.task(generation) else { return Ok(()) };
-        match task.write(designs)? {
-            Some((e, s)) => self.commit(e, s),
-            None => Ok(()),
-        }
-    }
 }
