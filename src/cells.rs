@@ -1,6 +1,6 @@
 //! A flat record as CSV cells, by serde: one cell per field of a struct (fields of
-//! flattened or nested structs by their own names, arrays as `name_0`, `name_1`, …, `None`
-//! as an empty cell). The run's tables, verify.csv and sweep.csv are written from their
+//! flattened structs by their own names, of nested ones as `outer.inner`, arrays as
+//! `name_0`, `name_1`, …, `None` as an empty cell). The run's tables, verify.csv and sweep.csv are written from their
 //! typed rows through it, so a row's type is the one list of its columns.
 
 use serde::ser::{self, Impossible, Serialize, SerializeMap, SerializeSeq, SerializeStruct, SerializeTuple};
@@ -48,7 +48,7 @@ impl ser::Error for CellError {
 pub(crate) fn cells<T: Serialize + ?Sized>(row: &T, floats: Floats) -> Vec<(String, String)> {
     let mut out = Vec::new();
     // a row of plain fields cannot fail; a type that does is a bug in its Serialize
-    row.serialize(Fields { out: &mut out, floats }).expect("a row of plain fields serialises to cells");
+    row.serialize(Fields { out: &mut out, floats, prefix: None }).expect("a row of plain fields serialises to cells");
     out
 }
 
@@ -72,10 +72,21 @@ fn quoted(s: &str) -> String {
     }
 }
 
-/// The serializer of a struct or map: each field becomes cells.
+/// The serializer of a struct or map: each field becomes cells (named `prefix.field` in a
+/// nested struct).
 struct Fields<'a> {
     out: &'a mut Vec<(String, String)>,
     floats: Floats,
+    prefix: Option<String>,
+}
+
+impl Fields<'_> {
+    fn name(&self, key: &str) -> String {
+        match &self.prefix {
+            Some(p) => format!("{p}.{key}"),
+            None => key.to_string(),
+        }
+    }
 }
 
 /// The serializer of one field's value.
@@ -178,10 +189,10 @@ impl<'a> ser::Serializer for Cell<'a> {
         Err(CellError("an enum with data is not a cell".into()))
     }
     fn serialize_map(self, _: Option<usize>) -> Result<Fields<'a>, CellError> {
-        Ok(Fields { out: self.out, floats: self.floats })
+        Ok(Fields { out: self.out, floats: self.floats, prefix: Some(self.key) })
     }
     fn serialize_struct(self, _: &'static str, _: usize) -> Result<Fields<'a>, CellError> {
-        Ok(Fields { out: self.out, floats: self.floats })
+        Ok(Fields { out: self.out, floats: self.floats, prefix: Some(self.key) })
     }
     fn serialize_struct_variant(
         self,
@@ -230,7 +241,8 @@ impl SerializeStruct for Fields<'_> {
     type Ok = ();
     type Error = CellError;
     fn serialize_field<T: Serialize + ?Sized>(&mut self, key: &'static str, v: &T) -> Result<(), CellError> {
-        v.serialize(Cell { key: key.to_string(), out: self.out, floats: self.floats, raw: false })
+        let key = self.name(key);
+        v.serialize(Cell { key, out: self.out, floats: self.floats, raw: false })
     }
     fn end(self) -> Result<(), CellError> {
         Ok(())
@@ -250,6 +262,7 @@ impl SerializeMap for Fields<'_> {
         let mut key = Vec::new();
         k.serialize(Cell { key: String::new(), out: &mut key, floats: self.floats, raw: true })?;
         let key = key.pop().map(|(_, k)| k).ok_or_else(|| CellError("a map key that is not a string".into()))?;
+        let key = self.name(&key);
         v.serialize(Cell { key, out: self.out, floats: self.floats, raw: false })
     }
     fn end(self) -> Result<(), CellError> {

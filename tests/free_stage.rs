@@ -66,15 +66,12 @@ fn nominal_feasible_in_free_kind_discarded_in_centred_kind() {
 
     // the record: the §14.4 keys beside the (informative) impact values, only in the free kind
     let r = serde_json::to_value(Record::from_eval(&ev)).unwrap();
-    assert_eq!(r["object_max_displacement"].as_f64(), Some(f.object_max_displacement));
-    assert_eq!(r["moved"], serde_json::json!(false));
+    assert_eq!(r["free_scene"]["object_max_displacement"].as_f64(), Some(f.object_max_displacement));
+    assert_eq!(r["free_scene"]["moved"], serde_json::json!(false));
     assert_eq!(r["e_cyl"].as_f64(), Some(fc.impact.e_cyl));
     assert_eq!(r["feasible"], serde_json::json!(true));
     let rc = serde_json::to_value(Record::from_eval(&centred)).unwrap();
-    assert!(
-        rc.get("object_max_displacement").is_none() && rc.get("moved").is_none(),
-        "no free keys in the centred kind"
-    );
+    assert!(rc.get("free_scene").is_none() && rc.get("moved").is_none(), "no free keys in the centred kind");
 }
 
 /// With the object 4 mm off centre the hand pushes it back toward the centre (the static

@@ -40,8 +40,9 @@ fn population_json(dir: &Path) -> serde_json::Value {
     for ind in pop.as_array_mut().unwrap() {
         let info = &mut ind["eval"]["info"];
         info["stage_seconds"] = serde_json::Value::Null;
-        for k in ["cpu_s", "free_cpu_s"] {
-            info["record"][k] = serde_json::Value::Null;
+        info["record"]["cpu_s"] = serde_json::Value::Null;
+        if let Some(f) = info["record"].get_mut("free_scene").and_then(|f| f.as_object_mut()) {
+            f.remove("cpu_s");
         }
     }
     pop
@@ -230,7 +231,7 @@ fn work_is_ordered_by_the_learnt_cost_model() {
             st: &Nsga2State<GripperInfo>,
             _: &argmin::core::KV,
         ) -> Result<(), argmin::core::Error> {
-            let work = st.last_evaluated.iter().map(|i| i.eval.info.record.grasp.rhs_evals).collect();
+            let work = st.last_evaluated.iter().map(|i| i.eval.info.record.grasp.work.rhs_evals).collect();
             self.0.lock().unwrap().push((st.timing.order.clone(), st.timing.costly, work));
             Ok(())
         }

@@ -29,10 +29,11 @@ fn simulate_free_early_end_has_no_verdict() {
     let o = run(&["simulate", BOTTLE, "--scene", "free:0.02", "--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_ne!(j["free_end"], "t_obs", "{j}");
-    assert!(j["free_t_end"].as_f64().unwrap() < 0.1, "{j}");
+    let f = &j["free_scene"];
+    assert_ne!(f["end"], "t_obs", "{j}");
+    assert!(f["t_end"].as_f64().unwrap() < 0.1, "{j}");
     for k in ["moved", "toppled", "escaped"] {
-        assert!(j[k].is_null(), "{k} must be null when nothing was observed: {j}");
+        assert!(f[k].is_null(), "{k} must be null when nothing was observed: {j}");
     }
     let o = run(&["simulate", BOTTLE, "--scene", "free:0.02"]);
     let t = text(&o);

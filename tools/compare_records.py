@@ -14,38 +14,48 @@ from pathlib import Path
 
 # old key (dotted path) -> (new key, value conversion), for the files whose name starts so
 PHALANX = {1: "proximal", 2: "distal"}
+FREE_RESULT = {  # simulate --scene free: the free scene's own keys, now under free_scene
+    "first_contact_t": ("free_scene.t_first_contact", None),
+    "first_contact_phalanx": ("free_scene.first_contact_phalanx", PHALANX.get),
+    "end": ("free_scene.end", None),
+    "t_end": ("free_scene.t_end", None),
+    "events": ("free_scene.events", None),
+    "rhs_evals": ("free_scene.rhs_evals", None),
+    "jac_block_evals": ("free_scene.jac_block_evals", None),
+    "stats.steps": ("free_scene.steps", None),
+    "stats.rejected": ("free_scene.rejected_steps", None),
+    "stats.jac": ("free_scene.jac_evals", None),
+    "stats.lu": ("free_scene.lu_count", None),
+    "stats.newton": ("free_scene.newton_iters", None),
+    "stats.newton_fail": ("free_scene.newton_failures", None),
+    "cpu_s": ("free_scene.cpu_s", None),
+    "free_end": ("free_scene.end", None),
+}
+FREE_RESULT.update({f"first_impact.{k}": (f"free_scene.{k}", None)
+                    for k in ["e_cyl", "e_lim", "e_rot", "e_trans", "m_finger", "v_impact"]})
+FREE_RESULT.update({k: (f"free_scene.{k}", None) for k in [
+    "energy.0", "energy.1", "max_energy_rise", "object_max_displacement", "object_max_dx",
+    "object_max_dy", "object_max_tilt_deg", "object_max_tilt_y", "object_max_spin",
+    "object_final_displacement", "object_final_tilt_deg", "object_peak_e_trans",
+    "object_peak_e_rot", "moved", "toppled", "escaped", "rim_contact"]})
+FREE_RECORD = {k: (f"free_scene.{k}", None) for k in [
+    "object_max_displacement", "object_max_dx", "object_max_dy", "object_max_tilt_deg",
+    "object_final_displacement", "object_final_tilt_deg", "object_peak_e_trans",
+    "object_peak_e_rot", "moved", "toppled", "escaped", "rim_contact"]}
+FREE_RECORD.update({"object_x_off": ("x_off", None), "free_end": ("free_scene.end", None),
+                    "free_steps": ("free_scene.steps", None),
+                    "free_rhs_evals": ("free_scene.rhs_evals", None)})
 RENAMED = {
-    "sim-free": {
-        "first_contact_t": ("free_t_first_contact", None),
-        "first_contact_phalanx": ("free_first_contact_phalanx", PHALANX.get),
-        "first_impact.e_cyl": ("free_e_cyl", None),
-        "first_impact.e_lim": ("free_e_lim", None),
-        "first_impact.e_rot": ("free_e_rot", None),
-        "first_impact.e_trans": ("free_e_trans", None),
-        "first_impact.m_finger": ("free_m_finger", None),
-        "first_impact.v_impact": ("free_v_impact", None),
-        "end": ("free_end", None),
-        "t_end": ("free_t_end", None),
-        "events": ("free_events", None),
-        "rhs_evals": ("free_rhs_evals", None),
-        "jac_block_evals": ("free_jac_block_evals", None),
-        "stats.steps": ("free_steps", None),
-        "stats.rejected": ("free_rejected_steps", None),
-        "stats.jac": ("free_jac_evals", None),
-        "stats.lu": ("free_lu_count", None),
-        "stats.newton": ("free_newton_iters", None),
-        "stats.newton_fail": ("free_newton_failures", None),
-        "energy.0": ("free_energy_start", None),
-        "energy.1": ("free_energy_end", None),
-        "max_energy_rise": ("free_max_energy_rise", None),
-        "cpu_s": ("free_cpu_s", None),
+    "sim-free": FREE_RESULT,
+    "sim-offset": {
+        "first_phalanx": ("first_contact_phalanx", PHALANX.get),
+        **{k: (f"offset_scene.{k}", None) for k in ["hand_x_end", "hand_y_end", "hand0_x", "hand0_y", "recentres"]},
     },
-    "sim-offset": {"first_phalanx": ("first_contact_phalanx", PHALANX.get)},
-    "eval-free": {"object_x_off": ("x_off", None)},
+    "eval-free": FREE_RECORD,
 }
 # old keys dropped on purpose: the stepper's own RHS count duplicated the total
 REMOVED = {"sim-free": {"stats.rhs"}}
-TIMINGS = {"cpu_s", "free_cpu_s", "replay_s"}
+TIMINGS = {"cpu_s", "free_scene.cpu_s", "replay_s"}
 
 
 def flat(v, prefix=""):
@@ -84,7 +94,7 @@ def main(old_dir, new_dir):
                 bad += 1
                 continue
             want = conv(v) if conv else v
-            if k.split(".")[-1] in TIMINGS or nk in TIMINGS:
+            if k in TIMINGS or nk in TIMINGS:
                 continue
             if b[nk] != want:
                 print(f"{old.name}: {k} = {v!r}, now {nk} = {b[nk]!r}")

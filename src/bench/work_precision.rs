@@ -2,7 +2,7 @@
 //! against a tight reference run. The reference, the error measures and the table are also
 //! what the diffsol comparison (`benches/diffsol.rs`) uses.
 
-use super::table::{plot, print_table, print_targets, write_csv};
+use super::table::{plot, print_table, print_targets, write_csv, Row};
 use super::{progress, time_it};
 use super::{say, Out};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
@@ -105,33 +105,6 @@ impl Measured {
             same_verdict: r.outcome == reference.outcome,
         }
     }
-}
-
-/// One row of the work-precision table.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Row {
-    /// Method label.
-    pub method: &'static str,
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Minimum CPU time per simulation, s.
-    pub cpu_min: f64,
-    /// Median CPU time per simulation, s.
-    pub cpu_med: f64,
-    /// Accepted steps.
-    pub steps: u64,
-    /// Right-hand-side evaluations.
-    pub rhs: u64,
-    /// Relative error of the time of first contact.
-    pub err_t_first: f64,
-    /// Relative error of E_cyl.
-    pub err_e_cyl: f64,
-    /// Relative error of t_stab.
-    pub err_t_stab: f64,
-    /// Largest relative error of the two forces at t_stab (NaN without t_stab).
-    pub err_force: f64,
-    /// Same verdict as the reference.
-    pub verdict_same: bool,
 }
 
 /// The grasp a work-precision table is about: one design that passes stage 2, and its

@@ -2,7 +2,7 @@
 //! (shared with `simulate`).
 
 use anyhow::Result;
-use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, Record};
+use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, Record, WorkRecord};
 use gripopt::params::{Design, Problem};
 
 /// A value scaled, to `prec` decimals, or "—".
@@ -95,7 +95,7 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     );
     if !static_only {
         print_dyn(&rec.grasp);
-        if let Some(f) = &rec.free {
+        if let Some(f) = &rec.free_scene {
             print_free(f, rec.x_off);
         }
     }
@@ -121,25 +121,11 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
 /// The grasp's lines.
 pub fn print_dyn(r: &GraspRecord) {
     println!("stage 3    dynamics");
-    if r.steps.is_none() {
+    if r.work.steps.is_none() {
         println!("  not run");
         return;
     }
-    println!(
-        "  first contact t {} ms on {}  v_impact {} m/s  m_finger {} g  theta2 {} deg",
-        opt(r.t_first_contact, 1e3, 4),
-        r.first_contact_phalanx.map_or("—".into(), |p| format!("{p:?}").to_lowercase()),
-        opt(r.v_impact, 1.0, 4),
-        opt(r.m_finger, 1e3, 4),
-        opt(r.theta2_first_contact, 180.0 / std::f64::consts::PI, 4)
-    );
-    println!(
-        "  impact energy E_cyl {} mJ (limit {} mJ)  E_trans {} mJ  E_rot {} mJ",
-        opt(r.e_cyl, 1e3, 5),
-        opt(r.e_lim, 1e3, 5),
-        opt(r.e_trans, 1e3, 5),
-        opt(r.e_rot, 1e3, 5)
-    );
+    print_impact(&r.impact, r.theta2_first_contact);
     println!(
         "  force margin min {} N (static {} N)",
         opt(r.min_force_margin, 1.0, 4),
@@ -154,25 +140,52 @@ pub fn print_dyn(r: &GraspRecord) {
         opt(r.fstar_2, 1.0, 4),
         opt(r.max_qdd_end, 1.0, 3)
     );
+    print_work(&r.work);
+}
+
+/// The first contact's lines (θ2 at the contact, when known).
+fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
     println!(
-        "  steps {} rejected {} rhs {} events {} cpu {} ms",
-        r.steps.unwrap_or(0),
-        r.rejected_steps.unwrap_or(0),
-        r.rhs_evals.unwrap_or(0),
-        r.events.unwrap_or(0),
-        opt(r.cpu_s, 1e3, 3)
+        "  first contact t {} ms on {}  v_impact {} m/s  m_finger {} g  theta2 {} deg",
+        opt(i.t_first_contact, 1e3, 4),
+        i.first_contact_phalanx.map_or("—".into(), |p| format!("{p:?}").to_lowercase()),
+        opt(i.v_impact, 1.0, 4),
+        opt(i.m_finger, 1e3, 4),
+        opt(theta2, 180.0 / std::f64::consts::PI, 4)
+    );
+    println!(
+        "  impact energy E_cyl {} mJ (limit {} mJ)  E_trans {} mJ  E_rot {} mJ",
+        opt(i.e_cyl, 1e3, 5),
+        opt(i.e_lim, 1e3, 5),
+        opt(i.e_trans, 1e3, 5),
+        opt(i.e_rot, 1e3, 5)
     );
 }
 
-/// The free scene's measurement of a free-kind stage 3 (MODEL.md §14.4).
-fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
-    println!("stage 3    free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides", opt(x_off, 1e3, 3));
-    let Some(end) = f.free_end else {
+/// A simulation's work on one line.
+fn print_work(w: &WorkRecord) {
+    println!(
+        "  steps {} rejected {} rhs {} events {} cpu {} ms",
+        w.steps.unwrap_or(0),
+        w.rejected_steps.unwrap_or(0),
+        w.rhs_evals.unwrap_or(0),
+        w.events.unwrap_or(0),
+        opt(w.cpu_s, 1e3, 3)
+    );
+}
+
+/// The free scene's measurement (MODEL.md §14.4), in a free-kind evaluation or simulation.
+pub fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
+    println!(
+        "free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides",
+        opt(x_off, 1e3, 3)
+    );
+    let Some(end) = f.end else {
         println!("  not run (the centred grasp was discarded first)");
         return;
     };
     if !end.observed() {
-        println!("  ended early: {end}");
+        println!("  ended early at t {} ms: {end} (nothing observed: no verdict)", opt(f.t_end, 1e3, 4));
     }
     println!(
         "  object max displacement {} mm (dx {} mm, dy {} mm)  max tilt {} deg  final {} mm / {} deg",
@@ -195,4 +208,6 @@ fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
         yes_no(f.escaped),
         yes_no(f.rim_contact)
     );
+    print_impact(&f.impact, None);
+    print_work(&f.work);
 }

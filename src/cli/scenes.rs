@@ -2,7 +2,7 @@
 //! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
 //! plot), in the same way for every scene.
 
-use crate::cli::report::{opt, print_dyn, yes_no};
+use crate::cli::report::{opt, print_dyn, print_free, yes_no};
 use anyhow::{bail, Context, Result};
 use gripopt::eval::{Record, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
@@ -129,7 +129,7 @@ fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
         None => "not reached",
     };
     println!("  criteria: impact {}  fold {}  force {}", ok(g.impact_ok), ok(g.fold_ok), ok(g.force_ok));
-    if let Some(h) = &r.offset {
+    if let Some(h) = &r.offset_scene {
         println!(
             "  hand force at the end ({}, {}) N (static ({}, {}) N); recentres {}",
             opt(h.hand_x_end, 1.0, 4),
@@ -139,38 +139,8 @@ fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
             yes_no(h.recentres)
         );
     }
-    if let Some(f) = &r.free {
-        println!(
-            "free scene: object max displacement {} mm (dx {}, dy {})  max tilt {}°  final {} mm / {}°",
-            opt(f.object_max_displacement, 1e3, 4),
-            opt(f.object_max_dx, 1e3, 4),
-            opt(f.object_max_dy, 1e3, 4),
-            opt(f.object_max_tilt_deg, 1.0, 4),
-            opt(f.object_final_displacement, 1e3, 4),
-            opt(f.object_final_tilt_deg, 1.0, 4)
-        );
-        println!(
-            "  peak E_trans {} mJ  E_rot {} mJ during the first contact",
-            opt(f.object_peak_e_trans, 1e3, 4),
-            opt(f.object_peak_e_rot, 1e3, 4)
-        );
-        if let Some(end) = f.free_end.filter(|e| !e.observed()) {
-            println!("  ended early at t {} ms: {end} (nothing observed: no verdict)", opt(f.free_t_end, 1e3, 4));
-        }
-        println!(
-            "  moved {}  toppled {}  escaped {}  rim_contact {}",
-            yes_no(f.moved),
-            yes_no(f.toppled),
-            yes_no(f.escaped),
-            yes_no(f.rim_contact)
-        );
-        println!(
-            "  steps {} rhs {} events {} cpu {} ms",
-            f.free_steps.unwrap_or(0),
-            f.free_rhs_evals.unwrap_or(0),
-            f.free_events.unwrap_or(0),
-            opt(f.free_cpu_s, 1e3, 2)
-        );
+    if let Some(f) = &r.free_scene {
+        print_free(f, r.x_off);
     }
     match &r.verdict.reason {
         None => println!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),

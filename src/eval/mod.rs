@@ -11,8 +11,8 @@ mod scene_record;
 mod stage3;
 mod stages;
 
-pub use record::{DesignValues, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
-pub use scene_record::{FreeSceneRecord, GraspRecord, OffsetSceneRecord, Phalanx};
+pub use record::{KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
 pub use stage3::{
     barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,
 };

@@ -6,17 +6,16 @@
 
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
 use super::stages::{Cause, Evaluation, PartialGrasp, StaticsResult};
-use crate::params::{ForceModel, SceneKind};
+use crate::params::{DesignParameters, ForceModel, SceneKind};
 use crate::sim::Method;
 use serde::{Deserialize, Serialize};
 
 /// The evaluation record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(from = "RecordFields")]
 pub struct Record {
-    /// The design (always known).
+    /// The design (always known; ψ in degrees).
     #[serde(flatten)]
-    pub design: DesignValues,
+    pub design: DesignParameters,
     /// Stages 0–1: the finger.
     #[serde(flatten)]
     pub kinematics: KinematicsRecord,
@@ -27,43 +26,28 @@ pub struct Record {
     #[serde(flatten)]
     pub grasp: GraspRecord,
     /// Stage 3 in the offset scene: the hand forces (absent in the other scenes).
-    #[serde(flatten, skip_serializing_if = "Option::is_none")]
-    pub offset: Option<OffsetSceneRecord>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset_scene: Option<OffsetSceneRecord>,
     /// Stage 3 in the free scene: the measurement (absent in the other scenes).
-    #[serde(flatten, skip_serializing_if = "Option::is_none")]
-    pub free: Option<FreeSceneRecord>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_scene: Option<FreeSceneRecord>,
     /// The verdict.
     #[serde(flatten)]
     pub verdict: Verdict,
     /// The scene stage 3 ran in (null: it did not run).
+    #[serde(default)]
     pub scene: Option<SceneKind>,
     /// The object offset of that scene (m).
+    #[serde(default)]
     pub x_off: Option<f64>,
-}
-
-/// The design values.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct DesignValues {
-    /// l21 (m).
-    pub l21: f64,
-    /// b (m).
-    pub b: f64,
-    /// t22 (m).
-    pub t22: f64,
-    /// r.
-    pub r: f64,
-    /// p.
-    pub p: f64,
-    /// ψ (deg).
-    pub psi_deg: f64,
-    /// l_hand = b + 2 t22 + 2 l21 (m).
-    pub l_hand: f64,
 }
 
 /// Stages 0–1: the finger built from the design (every value computed before a discard).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct KinematicsRecord {
+    /// l_hand = b + 2 t22 + 2 l21 (m; always known).
+    pub l_hand: f64,
     /// l11 (m).
     pub l11: Option<f64>,
     /// l12 (m).
@@ -171,68 +155,20 @@ pub struct SimulationRecord {
     pub method: Method,
 }
 
-/// How a record is read: the scene's sub-records as sets of keys that may all be null,
-/// kept only where the scene says they apply.
-#[derive(Deserialize)]
-struct RecordFields {
-    #[serde(flatten)]
-    design: DesignValues,
-    #[serde(flatten)]
-    kinematics: KinematicsRecord,
-    #[serde(flatten)]
-    statics: StaticsRecord,
-    #[serde(flatten)]
-    grasp: GraspRecord,
-    #[serde(flatten)]
-    offset: OffsetSceneRecord,
-    #[serde(flatten)]
-    free: FreeSceneRecord,
-    #[serde(flatten)]
-    verdict: Verdict,
-    #[serde(default)]
-    scene: Option<SceneKind>,
-    #[serde(default)]
-    x_off: Option<f64>,
-}
-
-impl From<RecordFields> for Record {
-    fn from(f: RecordFields) -> Self {
-        Record {
-            design: f.design,
-            kinematics: f.kinematics,
-            statics: f.statics,
-            grasp: f.grasp,
-            offset: (f.scene == Some(SceneKind::Offset)).then_some(f.offset),
-            free: (f.scene == Some(SceneKind::Free)).then_some(f.free),
-            verdict: f.verdict,
-            scene: f.scene,
-            x_off: f.x_off,
-        }
-    }
-}
-
 impl Record {
     /// The record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
         let x = &ev.design;
         let applies = |kind: SceneKind| ev.scene == Some(kind);
         Record {
-            design: DesignValues {
-                l21: x.l21,
-                b: x.b,
-                t22: x.t22,
-                r: x.r,
-                p: x.p,
-                psi_deg: x.psi.to_degrees(),
-                l_hand: x.l_hand(),
-            },
+            design: DesignParameters { l21: x.l21, b: x.b, t22: x.t22, r: x.r, p: x.p, psi_deg: x.psi.to_degrees() },
             kinematics: KinematicsRecord::from_eval(ev),
             statics: StaticsRecord::from_eval(ev),
             grasp: GraspRecord::from_result(ev.dynamics.as_ref()),
-            offset: applies(SceneKind::Offset)
+            offset_scene: applies(SceneKind::Offset)
                 .then(|| ev.offset.as_ref().map(OffsetSceneRecord::from_result))
                 .map(Option::unwrap_or_default),
-            free: applies(SceneKind::Free).then(|| FreeSceneRecord::from_result(ev.free.as_ref())),
+            free_scene: applies(SceneKind::Free).then(|| FreeSceneRecord::from_result(ev.free.as_ref())),
             verdict: Verdict {
                 feasible: ev.feasible(),
                 failed_stage: ev.discard.map(|d| d.stage),
@@ -252,6 +188,7 @@ impl KinematicsRecord {
         // MODEL.md §10: every value computed before a discard is reported, the rest null
         let f = ev.kin.map(|k| k.finger).or(ev.partial.finger);
         KinematicsRecord {
+            l_hand: x.l_hand(),
             // l11 and l22 follow from the design (stage 0 computes them before any check)
             l11: f.map(|f| f.l11).or_else(|| fin(x.p * x.l21)),
             l12: f.map(|f| f.l12),
@@ -328,7 +265,7 @@ impl Record {
     }
     /// Stage 3's grasp work: accepted steps and right-hand-side evaluations.
     pub fn sim_work(&self) -> Option<[u64; 2]> {
-        Some([self.grasp.steps?, self.grasp.rhs_evals?])
+        Some([self.grasp.work.steps?, self.grasp.work.rhs_evals?])
     }
     /// Form closed at the centred object (by the sign of max_offset, MODEL.md §6.7).
     pub fn form_closed(&self) -> Option<bool> {

@@ -1,9 +1,11 @@
 //! The stage-3 parts of the evaluation [`Record`](super::Record): the grasp
-//! ([`GraspRecord`], the centred or offset scene), the offset scene's hand forces
-//! ([`OffsetSceneRecord`]) and the free scene's measurement ([`FreeSceneRecord`]). Keys
-//! are flat, one per quantity, the free scene's carrying its name; `null` = not computed.
+//! ([`GraspRecord`], the centred or offset scene; in the free kind the centred prediction),
+//! the offset scene's hand forces ([`OffsetSceneRecord`], as `offset_scene`) and the free
+//! scene's measurement ([`FreeSceneRecord`], as `free_scene`). What every simulation gives
+//! (a first impact, the integrator's work) is one sub-record each, the same in every scene.
+//! `null` = not computed.
 
-use crate::sim::{DynOutcome, DynamicsResult, FreeEnd, FreeResult, OffsetResult};
+use crate::sim::{DynOutcome, DynamicsResult, FirstContact, FreeEnd, FreeResult, Impact, OffsetResult, Stats};
 use serde::{Deserialize, Serialize};
 
 /// A finite value, or None (NaN, ±∞: not a value).
@@ -21,22 +23,10 @@ pub enum Phalanx {
     Distal,
 }
 
-impl Phalanx {
-    /// Phalanx 1 or 2.
-    pub fn of(index: u8) -> Self {
-        if index == 1 {
-            Phalanx::Proximal
-        } else {
-            Phalanx::Distal
-        }
-    }
-}
-
-/// Stage 3's grasp (MODEL.md §8–9): the problem's scene (centred or offset), or in the
-/// free kind the centred scene's prediction; all `null` when it did not run.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+/// The first contact of a simulation and §9.1's impact energies there.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct GraspRecord {
+pub struct ImpactRecord {
     /// Time of first contact (s).
     pub t_first_contact: Option<f64>,
     /// The phalanx of the first contact.
@@ -53,24 +43,28 @@ pub struct GraspRecord {
     pub e_rot: Option<f64>,
     /// min(E_lim,trans, E_lim,rot) (J).
     pub e_lim: Option<f64>,
-    /// θ2 at first contact (rad).
-    pub theta2_first_contact: Option<f64>,
-    /// Min filtered-force margin (N).
-    pub min_force_margin: Option<f64>,
-    /// Static hand-force margin (N).
-    pub static_force_margin: Option<f64>,
-    /// Time to stability (s).
-    pub t_stab: Option<f64>,
-    /// Proximal normal force at t_stab (N).
-    pub f_stab_1: Option<f64>,
-    /// Distal normal force at t_stab (N).
-    pub f_stab_2: Option<f64>,
-    /// f*_1 (N).
-    pub fstar_1: Option<f64>,
-    /// f*_2 (N).
-    pub fstar_2: Option<f64>,
-    /// max |q̈| at the end (rad/s²).
-    pub max_qdd_end: Option<f64>,
+}
+
+impl ImpactRecord {
+    /// The first contact at `t` on phalanx 1 or 2 with its impact energies.
+    fn of(t: f64, phalanx: u8, i: &Impact) -> Self {
+        ImpactRecord {
+            t_first_contact: Some(t),
+            first_contact_phalanx: Some(if phalanx == 1 { Phalanx::Proximal } else { Phalanx::Distal }),
+            v_impact: Some(i.v_impact),
+            m_finger: Some(i.m_finger),
+            e_cyl: Some(i.e_cyl),
+            e_trans: Some(i.e_trans),
+            e_rot: Some(i.e_rot),
+            e_lim: Some(i.e_lim),
+        }
+    }
+}
+
+/// What a simulation cost: the integrator's counters and the wall time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct WorkRecord {
     /// Accepted steps.
     pub steps: Option<u64>,
     /// Rejected steps.
@@ -89,6 +83,53 @@ pub struct GraspRecord {
     pub events: Option<u32>,
     /// Wall seconds of the simulation.
     pub cpu_s: Option<f64>,
+}
+
+impl WorkRecord {
+    fn of(st: &Stats, rhs_evals: u64, events: u32, cpu_s: f64) -> Self {
+        WorkRecord {
+            steps: Some(st.steps),
+            rejected_steps: Some(st.rejected),
+            rhs_evals: Some(rhs_evals),
+            jac_evals: Some(st.jac),
+            lu_count: Some(st.lu),
+            newton_iters: Some(st.newton),
+            newton_failures: Some(st.newton_fail),
+            events: Some(events),
+            cpu_s: Some(cpu_s),
+        }
+    }
+}
+
+/// Stage 3's grasp (MODEL.md §8–9): the problem's scene (centred or offset), or in the
+/// free kind the centred scene's prediction; all `null` when it did not run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GraspRecord {
+    /// The first contact.
+    #[serde(flatten)]
+    pub impact: ImpactRecord,
+    /// θ2 at first contact (rad).
+    pub theta2_first_contact: Option<f64>,
+    /// Min filtered-force margin (N).
+    pub min_force_margin: Option<f64>,
+    /// Static hand-force margin (N).
+    pub static_force_margin: Option<f64>,
+    /// Time to stability (s).
+    pub t_stab: Option<f64>,
+    /// Proximal normal force at t_stab (N).
+    pub f_stab_1: Option<f64>,
+    /// Distal normal force at t_stab (N).
+    pub f_stab_2: Option<f64>,
+    /// f*_1 (N).
+    pub fstar_1: Option<f64>,
+    /// f*_2 (N).
+    pub fstar_2: Option<f64>,
+    /// max |q̈| at the end (rad/s²).
+    pub max_qdd_end: Option<f64>,
+    /// The simulation's work.
+    #[serde(flatten)]
+    pub work: WorkRecord,
     /// A knuckle contact was seen.
     pub knuckle_contact: Option<bool>,
     /// How the grasp ended, or the first criterion it violated.
@@ -107,18 +148,9 @@ impl GraspRecord {
     /// Flatten a result (None → all null).
     pub fn from_result(d: Option<&DynamicsResult>) -> Self {
         let Some(d) = d else { return Self::default() };
-        let fc = d.first;
-        let imp = |f: fn(&crate::sim::Impact) -> f64| fc.map(|c| f(&c.impact));
-        let st = &d.stats;
+        let fc: Option<FirstContact> = d.first;
         GraspRecord {
-            t_first_contact: fc.map(|f| f.t),
-            first_contact_phalanx: fc.map(|f| Phalanx::of(f.phalanx)),
-            v_impact: imp(|i| i.v_impact),
-            m_finger: imp(|i| i.m_finger),
-            e_cyl: imp(|i| i.e_cyl),
-            e_trans: imp(|i| i.e_trans),
-            e_rot: imp(|i| i.e_rot),
-            e_lim: imp(|i| i.e_lim),
+            impact: fc.map_or_else(ImpactRecord::default, |f| ImpactRecord::of(f.t, f.phalanx, &f.impact)),
             theta2_first_contact: fc.map(|f| f.theta2),
             min_force_margin: fin(d.min_force_margin),
             static_force_margin: fin(d.static_force_margin),
@@ -128,15 +160,7 @@ impl GraspRecord {
             fstar_1: fin(d.fstar[0]),
             fstar_2: fin(d.fstar[1]),
             max_qdd_end: fin(d.max_qdd_end),
-            steps: Some(st.steps),
-            rejected_steps: Some(st.rejected),
-            rhs_evals: Some(d.rhs_evals),
-            jac_evals: Some(st.jac),
-            lu_count: Some(st.lu),
-            newton_iters: Some(st.newton),
-            newton_failures: Some(st.newton_fail),
-            events: Some(d.events),
-            cpu_s: Some(d.cpu_s),
+            work: WorkRecord::of(&d.stats, d.rhs_evals, d.events, d.cpu_s),
             knuckle_contact: Some(d.knuckle_flag),
             outcome: Some(d.outcome),
             impact_ok: d.impact_ok,
@@ -147,7 +171,8 @@ impl GraspRecord {
     }
 }
 
-/// The offset scene's hand forces (present only when stage 3 ran in the offset scene).
+/// The offset scene's hand forces (`offset_scene`, present only when stage 3 ran in the
+/// offset scene).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OffsetSceneRecord {
@@ -176,9 +201,9 @@ impl OffsetSceneRecord {
     }
 }
 
-/// The free scene's measurement (MODEL.md §14.4; present only when stage 3 ran in the
-/// free scene; all `null` when the free scene itself did not run). The verdict flags are
-/// `null` when the run ended before t_obs (nothing observed).
+/// The free scene's measurement (`free_scene`, MODEL.md §14.4; present only when stage 3
+/// ran in the free scene, its values all `null` when the free scene itself did not run).
+/// The verdict flags are `null` when the run ended before t_obs (nothing observed).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct FreeSceneRecord {
@@ -190,6 +215,10 @@ pub struct FreeSceneRecord {
     pub object_max_dy: Option<f64>,
     /// Largest tilt (°).
     pub object_max_tilt_deg: Option<f64>,
+    /// Largest |a_x|: the axis leaning along the palm (sine of the tilt about y).
+    pub object_max_tilt_y: Option<f64>,
+    /// Largest spin about the vertical, 2|q_z| (rad, small-angle).
+    pub object_max_spin: Option<f64>,
     /// Horizontal displacement at the end (m).
     pub object_final_displacement: Option<f64>,
     /// Tilt at the end (°).
@@ -208,55 +237,21 @@ pub struct FreeSceneRecord {
     pub rim_contact: Option<bool>,
     /// How the free scene ended: `t_obs` (observed to min(t_max, t_obs)) or why it stopped
     /// early (then the maxima cover the part simulated).
-    pub free_end: Option<FreeEnd>,
-    /// Largest |a_x|: the axis leaning along the palm (sine of the tilt about y).
-    pub object_max_tilt_y: Option<f64>,
-    /// Largest spin about the vertical, 2|q_z| (rad, small-angle).
-    pub object_max_spin: Option<f64>,
+    pub end: Option<FreeEnd>,
     /// Time the free scene reached (s).
-    pub free_t_end: Option<f64>,
-    /// First phalanx contact of the free scene (s).
-    pub free_t_first_contact: Option<f64>,
-    /// Its phalanx (of finger 1 or 2).
-    pub free_first_contact_phalanx: Option<Phalanx>,
-    /// §9.1's onset velocity at that contact (m/s).
-    pub free_v_impact: Option<f64>,
-    /// §9.1's effective finger mass at that contact (kg).
-    pub free_m_finger: Option<f64>,
-    /// §9.1's E_cyl at that contact (J).
-    pub free_e_cyl: Option<f64>,
-    /// §9.1's E_trans at that contact (J).
-    pub free_e_trans: Option<f64>,
-    /// §9.1's E_rot at that contact (J).
-    pub free_e_rot: Option<f64>,
-    /// §9.1's E_lim (J).
-    pub free_e_lim: Option<f64>,
-    /// Accepted steps of the free scene.
-    pub free_steps: Option<u64>,
-    /// Rejected steps.
-    pub free_rejected_steps: Option<u64>,
-    /// Right-hand-side evaluations of the free scene (including event location).
-    pub free_rhs_evals: Option<u64>,
-    /// Jacobian evaluations.
-    pub free_jac_evals: Option<u64>,
+    pub t_end: Option<f64>,
+    /// The first phalanx contact of the fingers as this scene's object is hit.
+    #[serde(flatten)]
+    pub impact: ImpactRecord,
+    /// The simulation's work.
+    #[serde(flatten)]
+    pub work: WorkRecord,
     /// Partial evaluations of the block Jacobian.
-    pub free_jac_block_evals: Option<u64>,
-    /// LU factorisations.
-    pub free_lu_count: Option<u64>,
-    /// Newton iterations.
-    pub free_newton_iters: Option<u64>,
-    /// Step attempts rejected for Newton failure.
-    pub free_newton_failures: Option<u64>,
-    /// Events.
-    pub free_events: Option<u32>,
-    /// Wall seconds of the free scene.
-    pub free_cpu_s: Option<f64>,
-    /// Total energy at the start (J).
-    pub free_energy_start: Option<f64>,
-    /// Total energy at the end (J).
-    pub free_energy_end: Option<f64>,
+    pub jac_block_evals: Option<u64>,
+    /// Total energy at the start and at the end (J).
+    pub energy: Option<[f64; 2]>,
     /// Largest energy increase between two consecutive accepted states (J; ≈ 0).
-    pub free_max_energy_rise: Option<f64>,
+    pub max_energy_rise: Option<f64>,
 }
 
 impl FreeSceneRecord {
@@ -264,13 +259,17 @@ impl FreeSceneRecord {
     pub fn from_result(r: Option<&FreeResult>) -> Self {
         let Some(r) = r else { return Self::default() };
         let seen = |v: bool| r.end.observed().then_some(v);
-        let imp = |f: fn(&crate::sim::Impact) -> f64| r.first_impact.as_ref().map(f);
-        let st = &r.stats;
+        let impact = match (r.first_contact_t, r.first_contact_phalanx, &r.first_impact) {
+            (Some(t), Some(ph), Some(i)) => ImpactRecord::of(t, ph, i),
+            _ => ImpactRecord::default(),
+        };
         FreeSceneRecord {
             object_max_displacement: Some(r.object_max_displacement),
             object_max_dx: Some(r.object_max_dx),
             object_max_dy: Some(r.object_max_dy),
             object_max_tilt_deg: Some(r.object_max_tilt_deg),
+            object_max_tilt_y: Some(r.object_max_tilt_y),
+            object_max_spin: Some(r.object_max_spin),
             object_final_displacement: Some(r.object_final_displacement),
             object_final_tilt_deg: Some(r.object_final_tilt_deg),
             object_peak_e_trans: Some(r.object_peak_e_trans),
@@ -279,45 +278,30 @@ impl FreeSceneRecord {
             toppled: seen(r.toppled),
             escaped: seen(r.escaped),
             rim_contact: Some(r.rim_contact),
-            free_end: Some(r.end),
-            object_max_tilt_y: Some(r.object_max_tilt_y),
-            object_max_spin: Some(r.object_max_spin),
-            free_t_end: Some(r.t_end),
-            free_t_first_contact: r.first_contact_t,
-            free_first_contact_phalanx: r.first_contact_phalanx.map(Phalanx::of),
-            free_v_impact: imp(|i| i.v_impact),
-            free_m_finger: imp(|i| i.m_finger),
-            free_e_cyl: imp(|i| i.e_cyl),
-            free_e_trans: imp(|i| i.e_trans),
-            free_e_rot: imp(|i| i.e_rot),
-            free_e_lim: imp(|i| i.e_lim),
-            free_steps: Some(st.steps),
-            free_rejected_steps: Some(st.rejected),
-            free_rhs_evals: Some(r.rhs_evals),
-            free_jac_evals: Some(st.jac),
-            free_jac_block_evals: Some(r.jac_block_evals),
-            free_lu_count: Some(st.lu),
-            free_newton_iters: Some(st.newton),
-            free_newton_failures: Some(st.newton_fail),
-            free_events: Some(r.events),
-            free_cpu_s: Some(r.cpu_s),
-            free_energy_start: fin(r.energy[0]),
-            free_energy_end: fin(r.energy[1]),
-            free_max_energy_rise: Some(r.max_energy_rise),
+            end: Some(r.end),
+            t_end: Some(r.t_end),
+            impact,
+            work: WorkRecord::of(&r.stats, r.rhs_evals, r.events, r.cpu_s),
+            jac_block_evals: Some(r.jac_block_evals),
+            energy: r.energy.iter().all(|e| e.is_finite()).then_some(r.energy),
+            max_energy_rise: Some(r.max_energy_rise),
         }
     }
 }
 
 impl FreeSceneRecord {
-    /// A record with every value set (a placeholder of each type, not a result): gives
+    /// A record with every value set (placeholders of each type, not a result): gives
     /// every key with its JSON type, e.g. for the recording's schema.
     pub fn full_example() -> Self {
-        let (x, n, b) = (Some(0.5), Some(1), Some(true));
+        let (x, b) = (Some(0.5), Some(true));
+        let i = Impact { m_finger: 0.5, v_impact: 0.5, e_cyl: 0.5, e_trans: 0.5, e_rot: 0.5, e_lim: 0.5 };
         FreeSceneRecord {
             object_max_displacement: x,
             object_max_dx: x,
             object_max_dy: x,
             object_max_tilt_deg: x,
+            object_max_tilt_y: x,
+            object_max_spin: x,
             object_final_displacement: x,
             object_final_tilt_deg: x,
             object_peak_e_trans: x,
@@ -326,31 +310,13 @@ impl FreeSceneRecord {
             toppled: b,
             escaped: b,
             rim_contact: b,
-            free_end: Some(FreeEnd::Observed),
-            object_max_tilt_y: x,
-            object_max_spin: x,
-            free_t_end: x,
-            free_t_first_contact: x,
-            free_first_contact_phalanx: Some(Phalanx::Proximal),
-            free_v_impact: x,
-            free_m_finger: x,
-            free_e_cyl: x,
-            free_e_trans: x,
-            free_e_rot: x,
-            free_e_lim: x,
-            free_steps: n,
-            free_rejected_steps: n,
-            free_rhs_evals: n,
-            free_jac_evals: n,
-            free_jac_block_evals: n,
-            free_lu_count: n,
-            free_newton_iters: n,
-            free_newton_failures: n,
-            free_events: Some(1),
-            free_cpu_s: x,
-            free_energy_start: x,
-            free_energy_end: x,
-            free_max_energy_rise: x,
+            end: Some(FreeEnd::Observed),
+            t_end: x,
+            impact: ImpactRecord::of(0.5, 1, &i),
+            work: WorkRecord::of(&Stats::default(), 1, 1, 0.5),
+            jac_block_evals: Some(1),
+            energy: Some([0.5; 2]),
+            max_energy_rise: x,
         }
     }
 }

@@ -5,7 +5,6 @@
 //! another evaluator may run them elsewhere (a cluster, a Python caller) or expand each
 //! design into several tasks (scenarios) and aggregate them — the optimiser does not know.
 
-use super::nsga2::GenTiming;
 use super::{Evaluated, MooProblem};
 
 /// One batch to evaluate: a generation's new decision vectors.
@@ -42,4 +41,25 @@ impl<P: MooProblem, E: Evaluator<P> + ?Sized> Evaluator<P> for Box<E> {
     fn evaluate(&mut self, p: &P, batch: &Batch<'_>) -> Evaluations<P::Info> {
         (**self).evaluate(p, batch)
     }
+}
+
+/// Wall-clock accounting of one generation inside the solver (not deterministic).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GenTiming {
+    /// Seconds evaluating (the parallel part, including waiting for its last design).
+    pub eval_s: f64,
+    /// Seconds of the first pass (every design's cheap start) and ordering; part of `eval_s`.
+    pub order_s: f64,
+    /// Seconds of the solver's own serial work (variation, survival, hypervolume).
+    pub serial_s: f64,
+    /// Of it, the exact hypervolume of the feasible front (history and progress).
+    pub hv_s: f64,
+    /// Wall seconds of each evaluation (start + finish), in the order of `last_evaluated`.
+    pub costs: Vec<f64>,
+    /// Of it, the cheap start (the first pass).
+    pub start_costs: Vec<f64>,
+    /// The order in which the designs were finished (indices into `last_evaluated`).
+    pub order: Vec<usize>,
+    /// How many designs their start called costly (the first ones of `order`).
+    pub costly: usize,
 }

@@ -148,9 +148,9 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
     strictly
 }
 
-pub use evaluator::{Batch, Evaluations, Evaluator};
+pub use evaluator::{Batch, Evaluations, Evaluator, GenTiming};
 pub use hv::{hypervolume, igd, nondominated_below};
-pub use nsga2::{execute, observe, GenTiming, Nsga2, Nsga2Settings, Nsga2State};
+pub use nsga2::{execute, observe, Nsga2, Nsga2Settings, Nsga2State};
 pub use operators::{polynomial_mutation, sbx, Operators};
 pub use schedule::{CostHint, CostModel, Scheduled};
 pub use serde_f64::{deserialize, serialize};

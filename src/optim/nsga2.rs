@@ -4,7 +4,7 @@
 //! generation and the mating index, so a run is fixed by its seed, independent of the
 //! thread count, and resumes exactly from a saved state without any RNG state.
 
-use super::evaluator::{Batch, Evaluator};
+use super::evaluator::{Batch, Evaluator, GenTiming};
 use super::operators::{polynomial_mutation, sbx, Operators};
 use super::schedule::Scheduled;
 use super::sort::{rank_and_crowding, survivors_with_attributes};
@@ -75,27 +75,6 @@ pub struct Nsga2State<I> {
     counts: HashMap<String, u64>,
     #[serde(skip)]
     time: Option<Duration>,
-}
-
-/// Wall-clock accounting of one generation inside the solver (not deterministic).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct GenTiming {
-    /// Seconds evaluating (the parallel part, including waiting for its last design).
-    pub eval_s: f64,
-    /// Seconds of the first pass (every design's cheap start) and ordering; part of `eval_s`.
-    pub order_s: f64,
-    /// Seconds of the solver's own serial work (variation, survival, hypervolume).
-    pub serial_s: f64,
-    /// Of it, the exact hypervolume of the feasible front (history and progress).
-    pub hv_s: f64,
-    /// Wall seconds of each evaluation (start + finish), in the order of `last_evaluated`.
-    pub costs: Vec<f64>,
-    /// Of it, the cheap start (the first pass).
-    pub start_costs: Vec<f64>,
-    /// The order in which the designs were finished (indices into `last_evaluated`).
-    pub order: Vec<usize>,
-    /// How many designs their start called costly (the first ones of `order`).
-    pub costly: usize,
 }
 
 impl<I> Nsga2State<I> {

@@ -7,8 +7,7 @@
 //! finished first and no thread is left with a long one at the end. The order never changes
 //! a result: evaluations are pure and go back in index order.
 
-use super::evaluator::{Batch, Evaluations, Evaluator};
-use super::nsga2::GenTiming;
+use super::evaluator::{Batch, Evaluations, Evaluator, GenTiming};
 use super::{Evaluated, MooProblem};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;

@@ -45,7 +45,12 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         window_start_s: i.id as f64,
         epoch_s,
         parameters: DesignParameters::from_array(&i.parameters),
-        derived: Derived { l11: l.map(|l| l[0]), l12: l.map(|l| l[1]), l22: l.map(|l| l[2]), l_hand: r.design.l_hand },
+        derived: Derived {
+            l11: l.map(|l| l[0]),
+            l12: l.map(|l| l[1]),
+            l22: l.map(|l| l[2]),
+            l_hand: r.kinematics.l_hand,
+        },
         stages_passed: v.failed_stage.unwrap_or(4),
         feasible: v.failed_stage.is_none(),
         form_closed: r.form_closed(),
@@ -62,7 +67,7 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         },
         sim_steps: r.sim_work().map(|w| w[0]),
         sim_rhs_evals: r.sim_work().map(|w| w[1]),
-        free_scene: r.free.clone(),
+        free_scene: r.free_scene.clone(),
         trajectory_samples: i.trajectory.map_or(0, |t| t.samples.len() as u64),
     }
 }

@@ -18,6 +18,7 @@
 //! scene's object pose as a moving frame (see `verify_rec`).
 
 mod entry;
+mod index;
 mod layout;
 mod mcapfile;
 mod messages;
@@ -30,6 +31,7 @@ mod verify_rec;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};
+pub use index::{read_index, ShardEntry};
 pub use layout::{layout, write_layout, LAYOUT_FILE};
 pub use messages::{samples_from, window_start_ns};
 pub use options::{
@@ -43,4 +45,4 @@ pub use verify_rec::{
     keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout,
     Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA,
 };
-pub use writer::{read_index, write_shard, Recorder, ShardEntry, ShardTask};
+pub use writer::{write_shard, Recorder, ShardTask};

@@ -2,10 +2,10 @@
 //! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
 //! verify that the new trajectory equals the recorded one.
 
+use super::index::{read_index, ShardEntry};
 use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
 use super::schema::DesignMessage;
-use super::writer::{read_index, ShardEntry};
 use super::{RecordOptions, Resolution};
 use crate::eval::{evaluate_into, EvalOptions, Record};
 use crate::params::{Design, Problem};

@@ -6,6 +6,7 @@
 //! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
 use crate::eval::FreeSceneRecord;
+pub use crate::params::DesignParameters;
 use serde::{Deserialize, Serialize, Serializer};
 use serde_json::{json, Value};
 
@@ -16,34 +17,6 @@ pub struct Window {
     pub sec: u64,
     /// Nanoseconds.
     pub nsec: u64,
-}
-
-/// The design as the optimiser evaluated it (ψ in degrees).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct DesignParameters {
-    /// l21 (m).
-    pub l21: f64,
-    /// b (m).
-    pub b: f64,
-    /// t22 (m).
-    pub t22: f64,
-    /// r.
-    pub r: f64,
-    /// p.
-    pub p: f64,
-    /// ψ (°).
-    pub psi_deg: f64,
-}
-
-impl DesignParameters {
-    /// From the optimiser's vector (l21, b, t22, r, p, ψ°).
-    pub fn from_array(x: &[f64; 6]) -> Self {
-        DesignParameters { l21: x[0], b: x[1], t22: x[2], r: x[3], p: x[4], psi_deg: x[5] }
-    }
-    /// The optimiser's vector.
-    pub fn to_array(&self) -> [f64; 6] {
-        [self.l21, self.b, self.t22, self.r, self.p, self.psi_deg]
-    }
 }
 
 /// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
@@ -176,6 +149,7 @@ fn free_scene_properties() -> Value {
                 Value::Bool(_) => json!({"type": "boolean"}),
                 Value::String(_) => json!({"type": "string"}),
                 Value::Number(n) if n.is_u64() => int(),
+                Value::Array(_) => json!({"type": "array", "items": num()}),
                 _ => num(),
             };
             (k.clone(), t)

@@ -150,8 +150,8 @@ impl MooProblem for GripperProblem {
     /// free scene's weighted by `FREE_RHS_WEIGHT`.
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
         let r = &e.info.record;
-        let centred = r.grasp.rhs_evals.map(|w| w as f64);
-        let free = r.free.as_ref().and_then(|f| f.free_rhs_evals).map(|w| FREE_RHS_WEIGHT * w as f64);
+        let centred = r.grasp.work.rhs_evals.map(|w| w as f64);
+        let free = r.free_scene.as_ref().and_then(|f| f.work.rhs_evals).map(|w| FREE_RHS_WEIGHT * w as f64);
         match (centred, free) {
             (None, None) => None,
             (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),

@@ -17,7 +17,7 @@ use crate::cells::{line, Floats, RawCell};
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
 use crate::optim::Nsga2State;
-use crate::params::ForceModel;
+use crate::params::{DesignParameters, ForceModel};
 use crate::Result;
 use serde::{Deserialize, Serialize, Serializer};
 use std::fmt::Write as _;
@@ -75,18 +75,9 @@ pub struct DesignRow {
     /// Why (written quoted, double quotes as single ones).
     #[serde(serialize_with = "quoted_text")]
     pub reason: Option<String>,
-    /// Design: l21 (m), as evaluated.
-    pub l21: f64,
-    /// b (m).
-    pub b: f64,
-    /// t22 (m).
-    pub t22: f64,
-    /// r.
-    pub r: f64,
-    /// p.
-    pub p: f64,
-    /// ψ (deg).
-    pub psi_deg: f64,
+    /// The design as evaluated.
+    #[serde(flatten)]
+    pub design: DesignParameters,
     /// l11 (m), when stages 0–1 built the finger.
     pub l11: Option<f64>,
     /// l12 (m).
@@ -132,7 +123,7 @@ impl DesignRow {
 
     /// The design as evaluated (l21, b, t22, r, p, ψ°).
     pub fn parameters(&self) -> [f64; 6] {
-        [self.l21, self.b, self.t22, self.r, self.p, self.psi_deg]
+        self.design.to_array()
     }
 
     /// The row of an individual (`rank`: None in archive.csv).
@@ -150,16 +141,11 @@ impl DesignRow {
             failed_stage: v.failed_stage,
             violation: v.violation,
             reason: v.reason.clone(),
-            l21: ind.x[0],
-            b: ind.x[1],
-            t22: ind.x[2],
-            r: ind.x[3],
-            p: ind.x[4],
-            psi_deg: ind.x[5],
+            design: DesignParameters::from_array(ind.x.as_slice().try_into().expect("six design variables")),
             l11: l.map(|l| l[0]),
             l12: l.map(|l| l[1]),
             l22: l.map(|l| l[2]),
-            l_hand: r.design.l_hand,
+            l_hand: r.kinematics.l_hand,
             // MODEL.md §6.7: a design not form closed at 0 has max_offset = −Δ_off internally
             // (the optimiser's finite placeholder); the file says form_closed = false and
             // leaves it empty

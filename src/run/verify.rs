@@ -10,7 +10,7 @@ use super::folder::read_table;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
-use crate::params::{Design, Problem};
+use crate::params::{Design, DesignParameters, Problem};
 use crate::record::keep_poses;
 use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
@@ -301,18 +301,9 @@ pub fn verify_designs_poses(
 pub struct VerifyCsvRow {
     /// Design id.
     pub id: u64,
-    /// l21 (m).
-    pub l21: f64,
-    /// b (m).
-    pub b: f64,
-    /// t22 (m).
-    pub t22: f64,
-    /// r.
-    pub r: f64,
-    /// p.
-    pub p: f64,
-    /// ψ (deg).
-    pub psi_deg: f64,
+    /// The design.
+    #[serde(flatten)]
+    pub design: DesignParameters,
     /// E_cyl/E_lim at the centred first contact.
     pub impact_ratio: Option<f64>,
     /// §9.1's E_trans (J).
@@ -354,16 +345,10 @@ pub struct VerifyCsvRow {
 impl VerifyCsvRow {
     /// The CSV row of a verified design.
     pub fn of(r: &VerifyRow) -> Self {
-        let a = r.design.to_array();
         let (et, er) = r.energy_ratios();
         VerifyCsvRow {
             id: r.id,
-            l21: a[0],
-            b: a[1],
-            t22: a[2],
-            r: a[3],
-            p: a[4],
-            psi_deg: a[5],
+            design: DesignParameters::from_array(&r.design.to_array()),
             impact_ratio: r.impact_ratio,
             e_trans: r.e_trans_rot.map(|e| e.0),
             e_rot: r.e_trans_rot.map(|e| e.1),

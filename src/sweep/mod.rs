@@ -410,7 +410,7 @@ impl Row {
 }
 
 /// Keys of the record that hold fixed-length arrays, with their lengths.
-const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4)];
+const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4), ("free_scene.energy", 2)];
 
 /// The evaluation record (the JSON of `gripopt evaluate --json`) as CSV cells, in record
 /// order, numbers as in the JSON; arrays become `key_0`, `key_1`, … (a null one keeps its
