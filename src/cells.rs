@@ -48,7 +48,9 @@ impl ser::Error for CellError {
 pub(crate) fn cells<T: Serialize + ?Sized>(row: &T, floats: Floats) -> Vec<(String, String)> {
     let mut out = Vec::new();
     // a row of plain fields cannot fail; a type that does is a bug in its Serialize
-    row.serialize(Fields { out: &mut out, floats, prefix: None }).expect("a row of plain fields serialises to cells");
+    // a row is a struct or map: a cell without a name, whose fields are the cells
+    let top = Cell { key: String::new(), out: &mut out, floats, raw: false };
+    row.serialize(top).expect("a row of plain fields serialises to cells");
     out
 }
 
@@ -97,7 +99,12 @@ struct Cell<'a> {
     raw: bool,
 }
 
-impl Cell<'_> {
+impl<'a> Cell<'a> {
+    /// The fields of a struct or map in this cell: `key.field` (the row's own: `field`).
+    fn fields(self) -> Fields<'a> {
+        let prefix = (!self.key.is_empty()).then_some(self.key);
+        Fields { out: self.out, floats: self.floats, prefix }
+    }
     fn put(self, text: String) -> Result<(), CellError> {
         let text = if self.raw { text } else { quoted(&text) };
         self.out.push((self.key, text));
@@ -189,10 +196,10 @@ impl<'a> ser::Serializer for Cell<'a> {
         Err(CellError("an enum with data is not a cell".into()))
     }
     fn serialize_map(self, _: Option<usize>) -> Result<Fields<'a>, CellError> {
-        Ok(Fields { out: self.out, floats: self.floats, prefix: Some(self.key) })
+        Ok(self.fields())
     }
     fn serialize_struct(self, _: &'static str, _: usize) -> Result<Fields<'a>, CellError> {
-        Ok(Fields { out: self.out, floats: self.floats, prefix: Some(self.key) })
+        Ok(self.fields())
     }
     fn serialize_struct_variant(
         self,
@@ -268,89 +275,4 @@ impl SerializeMap for Fields<'_> {
     fn end(self) -> Result<(), CellError> {
         Ok(())
     }
-}
-
-macro_rules! top_level_only {
-    ($($f:ident: $t:ty),*) => {
-        $(fn $f(self, _: $t) -> Result<(), CellError> { Err(not_a_row()) })*
-    };
-}
-
-/// A row is a struct or map at the top.
-impl<'a> ser::Serializer for Fields<'a> {
-    type Ok = ();
-    type Error = CellError;
-    type SerializeSeq = Impossible<(), CellError>;
-    type SerializeTuple = Impossible<(), CellError>;
-    type SerializeTupleStruct = Impossible<(), CellError>;
-    type SerializeTupleVariant = Impossible<(), CellError>;
-    type SerializeMap = Fields<'a>;
-    type SerializeStruct = Fields<'a>;
-    type SerializeStructVariant = Impossible<(), CellError>;
-
-    fn serialize_map(self, _: Option<usize>) -> Result<Fields<'a>, CellError> {
-        Ok(self)
-    }
-    fn serialize_struct(self, _: &'static str, _: usize) -> Result<Fields<'a>, CellError> {
-        Ok(self)
-    }
-    fn serialize_some<T: Serialize + ?Sized>(self, v: &T) -> Result<(), CellError> {
-        v.serialize(self)
-    }
-    fn serialize_newtype_struct<T: Serialize + ?Sized>(self, _: &'static str, v: &T) -> Result<(), CellError> {
-        v.serialize(self)
-    }
-    top_level_only!(serialize_bool: bool, serialize_i8: i8, serialize_i16: i16, serialize_i32: i32,
-        serialize_i64: i64, serialize_u8: u8, serialize_u16: u16, serialize_u32: u32, serialize_u64: u64,
-        serialize_f32: f32, serialize_f64: f64, serialize_char: char, serialize_str: &str, serialize_bytes: &[u8],
-        serialize_unit_struct: &'static str);
-    fn serialize_none(self) -> Result<(), CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_unit(self) -> Result<(), CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> Result<(), CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_newtype_variant<T: Serialize + ?Sized>(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: &T,
-    ) -> Result<(), CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_seq(self, _: Option<usize>) -> Result<Self::SerializeSeq, CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_tuple(self, _: usize) -> Result<Self::SerializeTuple, CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Self::SerializeTupleStruct, CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_tuple_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeTupleVariant, CellError> {
-        Err(not_a_row())
-    }
-    fn serialize_struct_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeStructVariant, CellError> {
-        Err(not_a_row())
-    }
-}
-
-fn not_a_row() -> CellError {
-    CellError("a row must be a struct or a map".into())
 }

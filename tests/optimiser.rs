@@ -7,25 +7,11 @@ use std::path::{Path, PathBuf};
 /// Run folders go under target/mcap-check/ so that `make test` checks their recordings
 /// with the independent reader.
 fn tmp(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("optimiser-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    d
+    crate::common::check_dir(&format!("optimiser-{name}"))
 }
 
 fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 7,
-        threads: Some(threads),
-        record: gripopt::record::RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 7, threads)
 }
 
 fn read(p: &Path) -> String {

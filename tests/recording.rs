@@ -17,15 +17,7 @@ fn dir(name: &str) -> PathBuf {
 }
 
 fn spec(out: &Path, generations: u64) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 11,
-        threads: Some(2),
-        record: RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 11, 2)
 }
 
 #[test]

@@ -11,25 +11,11 @@ pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
 pub(crate) const PROBLEM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
 
 pub(crate) fn tmp(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("robust-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    d
+    crate::common::check_dir(&format!("robust-{name}"))
 }
 
 pub(crate) fn spec(out: &Path, generations: u64) -> RunSpec {
-    RunSpec {
-        problem_path: PROBLEM.into(),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 7,
-        threads: Some(2),
-        record: RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 7, 2)
 }
 
 pub(crate) fn read(p: &Path) -> String {

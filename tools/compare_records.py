@@ -14,23 +14,15 @@ from pathlib import Path
 
 # old key (dotted path) -> (new key, value conversion), for the files whose name starts so
 PHALANX = {1: "proximal", 2: "distal"}
-FREE_RESULT = {  # simulate --scene free: the free scene's own keys, now under free_scene
-    "first_contact_t": ("free_scene.t_first_contact", None),
-    "first_contact_phalanx": ("free_scene.first_contact_phalanx", PHALANX.get),
-    "end": ("free_scene.end", None),
-    "t_end": ("free_scene.t_end", None),
-    "events": ("free_scene.events", None),
-    "rhs_evals": ("free_scene.rhs_evals", None),
-    "jac_block_evals": ("free_scene.jac_block_evals", None),
-    "stats.steps": ("free_scene.steps", None),
-    "stats.rejected": ("free_scene.rejected_steps", None),
-    "stats.jac": ("free_scene.jac_evals", None),
-    "stats.lu": ("free_scene.lu_count", None),
-    "stats.newton": ("free_scene.newton_iters", None),
-    "stats.newton_fail": ("free_scene.newton_failures", None),
-    "cpu_s": ("free_scene.cpu_s", None),
-    "free_end": ("free_scene.end", None),
-}
+# simulate --scene free: the free scene's own keys, now under free_scene (old -> new name)
+FREE_OWN = ("first_contact_t t_first_contact, end, t_end, events, rhs_evals, jac_block_evals, "
+            "stats.steps steps, stats.rejected rejected_steps, stats.jac jac_evals, stats.lu lu_count, "
+            "stats.newton newton_iters, stats.newton_fail newton_failures, cpu_s, free_end end")
+FREE_RESULT = {}
+for pair in FREE_OWN.split(", "):
+    old, _, new = pair.partition(" ")
+    FREE_RESULT[old] = (f"free_scene.{new or old}", None)
+FREE_RESULT["first_contact_phalanx"] = ("free_scene.first_contact_phalanx", PHALANX.get)
 FREE_RESULT.update({f"first_impact.{k}": (f"free_scene.{k}", None)
                     for k in ["e_cyl", "e_lim", "e_rot", "e_trans", "m_finger", "v_impact"]})
 FREE_RESULT.update({k: (f"free_scene.{k}", None) for k in [

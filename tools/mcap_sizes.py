@@ -22,34 +22,28 @@ from mcap.stream_reader import StreamReader
 HEADER = 1 + 8 + 2 + 4 + 8 + 8  # opcode, length, channel, sequence, log and publish time
 
 
+def varint(data, i):
+    """The protobuf varint at data[i]: (value, index after it)."""
+    n = shift = 0
+    while True:
+        b = data[i]
+        i += 1
+        n |= (b & 0x7F) << shift
+        shift += 7
+        if b < 0x80:
+            return n, i
+
+
 def grasp_series_len(data):
     """Number of t values in a gripopt.GraspSeries (field 4, packed doubles)."""
     i = 0
     while i < len(data):
-        key = 0
-        shift = 0
-        while True:
-            b = data[i]
-            i += 1
-            key |= (b & 0x7F) << shift
-            shift += 7
-            if b < 0x80:
-                break
+        key, i = varint(data, i)
         field, wire = key >> 3, key & 7
         if wire == 0:
-            while data[i] >= 0x80:
-                i += 1
-            i += 1
+            _, i = varint(data, i)
         elif wire == 2:
-            n = 0
-            shift = 0
-            while True:
-                b = data[i]
-                i += 1
-                n |= (b & 0x7F) << shift
-                shift += 7
-                if b < 0x80:
-                    break
+            n, i = varint(data, i)
             if field == 4:
                 return n // 8
             i += n

@@ -303,6 +303,21 @@ pub struct PartialGrasp {
     pub hand_mu: [f64; 2],
 }
 
+impl PartialGrasp {
+    /// The values of finger 1's centred grasp `g`.
+    fn of(g: &crate::model::Grasp) -> Self {
+        let (cp, ff) = (&g.cp[0], &g.forces[0]);
+        PartialGrasp {
+            theta: [cp.theta1, cp.theta2],
+            k: [cp.k1, cp.k2],
+            f0: ff.f0,
+            fmu: ff.fmu,
+            hand0: [g.hand0.x, g.hand0.y],
+            hand_mu: [g.hand_mu.x, g.hand_mu.y],
+        }
+    }
+}
+
 impl Evaluation {
     /// A design not evaluated yet.
     pub fn new(design: Design) -> Self {
@@ -406,15 +421,7 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
             OffsetFailure::PalmForceNotPositive(g.hand_mu.y)
         };
         let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
-        let (cp, ff) = (&g.cp[0], &g.forces[0]);
-        let grasp = PartialGrasp {
-            theta: [cp.theta1, cp.theta2],
-            k: [cp.k1, cp.k2],
-            f0: ff.f0,
-            fmu: ff.fmu,
-            hand0: [g.hand0.x, g.hand0.y],
-            hand_mu: [g.hand_mu.x, g.hand_mu.y],
-        };
+        let grasp = PartialGrasp::of(&g);
         return Err((
             d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }),
             Partial { grasp: Some(grasp), ..spring },
@@ -430,16 +437,16 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
         crate::params::ForceModel::Mobilised => (alpha_mu, mean_force_mu),
         crate::params::ForceModel::Frictionless => (alpha_0, mean_force_0),
     };
-    let cp = &g.cp[0];
+    let pg = PartialGrasp::of(&g);
     Ok(StaticsResult {
         tau_s_min,
         tau_s0,
-        theta: [cp.theta1, cp.theta2],
-        k: [cp.k1, cp.k2],
-        f0: ff.f0,
-        fmu: ff.fmu,
-        hand0: [g.hand0.x, g.hand0.y],
-        hand_mu: [g.hand_mu.x, g.hand_mu.y],
+        theta: pg.theta,
+        k: pg.k,
+        f0: pg.f0,
+        fmu: pg.fmu,
+        hand0: pg.hand0,
+        hand_mu: pg.hand_mu,
         form_closed_0,
         max_offset: scan.max_offset,
         offset_ended_by: scan.ended_by,

@@ -10,168 +10,106 @@ use std::fmt;
 /// Maximum number of events before the simulation is aborted (§8.7).
 pub const MAX_EVENTS: u32 = 20_000;
 
-/// How a grasp simulation ended, or the first criterion it violated (in JSON: its text,
-/// one of a fixed set).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DynOutcome {
-    /// All criteria hold and stability was reached.
-    Stable,
-    /// Impact energy above the limit at the first contact.
-    ImpactEnergy,
-    /// Distal fold above fold_max at the first contact.
-    Fold,
-    /// Filtered hand force left the stability region.
-    ForceCriterion,
-    /// The static hand force F⁰_hand violates the force criterion.
-    StaticForceLimit,
-    /// E_ex did not fall below η U_min by t_max.
-    NoStability,
-    /// |sin q13| fell to 1e-3.
-    Singular,
-    /// The linkage could not be assembled along the trajectory.
-    DgmFailure,
-    /// More than [`MAX_EVENTS`] events.
-    Aborted,
-    /// More than max_steps steps.
-    StepBudget,
-    /// The step size underflowed.
-    StepTooSmall,
-    /// The open finger penetrates the object at t = 0.
-    InitialPenetration,
-    /// The compliant equilibrium of §8.9 was not found.
-    NoEquilibrium,
+/// An enum whose variants each stand for one fixed text: its `Display`, and its JSON form
+/// (serialised as the text, read back from it); `ALL` lists the variants.
+macro_rules! text_enum {
+    ($(#[$m:meta])* pub enum $name:ident { $($(#[$vm:meta])* $v:ident => $text:expr,)* }) => {
+        $(#[$m])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum $name {
+            $($(#[$vm])* $v,)*
+        }
+
+        impl $name {
+            /// Every variant.
+            pub const ALL: &'static [$name] = &[$($name::$v,)*];
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                match self {
+                    $($name::$v => f.write_fmt($text),)*
+                }
+            }
+        }
+
+        impl Serialize for $name {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.collect_str(self)
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let text = String::deserialize(d)?;
+                Self::ALL
+                    .iter()
+                    .copied()
+                    .find(|v| v.to_string() == text)
+                    .ok_or_else(|| serde::de::Error::custom(format!("unknown value {text:?}")))
+            }
+        }
+    };
 }
 
-impl DynOutcome {
-    /// Every outcome.
-    pub const ALL: [DynOutcome; 13] = [
-        DynOutcome::Stable,
-        DynOutcome::ImpactEnergy,
-        DynOutcome::Fold,
-        DynOutcome::ForceCriterion,
-        DynOutcome::StaticForceLimit,
-        DynOutcome::NoStability,
-        DynOutcome::Singular,
-        DynOutcome::DgmFailure,
-        DynOutcome::Aborted,
-        DynOutcome::StepBudget,
-        DynOutcome::StepTooSmall,
-        DynOutcome::InitialPenetration,
-        DynOutcome::NoEquilibrium,
-    ];
-}
-
-impl fmt::Display for DynOutcome {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = match self {
-            DynOutcome::Stable => "stable",
-            DynOutcome::ImpactEnergy => "impact criterion: first impact energy above the limit",
-            DynOutcome::Fold => "spring validity: distal fold at first contact above the limit",
-            DynOutcome::ForceCriterion => "force criterion: filtered hand force outside the stability region",
-            DynOutcome::StaticForceLimit => "force criterion: static hand force outside the stability region",
-            DynOutcome::NoStability => "no stability by t_max",
-            DynOutcome::Singular => "singular configuration during the grasp (|sin q13| <= 1e-3)",
-            DynOutcome::DgmFailure => "linkage not mountable during the grasp",
-            DynOutcome::Aborted => return write!(f, "aborted: more than {MAX_EVENTS} events"),
-            DynOutcome::StepBudget => "aborted: step budget exhausted",
-            DynOutcome::StepTooSmall => "aborted: step size underflow",
-            DynOutcome::InitialPenetration => "open finger penetrates the object at t = 0",
-            DynOutcome::NoEquilibrium => "compliant static equilibrium not found",
-        };
-        f.write_str(s)
+text_enum! {
+    /// How a grasp simulation ended, or the first criterion it violated (in JSON: its text).
+    pub enum DynOutcome {
+        /// All criteria hold and stability was reached.
+        Stable => format_args!("stable"),
+        /// Impact energy above the limit at the first contact.
+        ImpactEnergy => format_args!("impact criterion: first impact energy above the limit"),
+        /// Distal fold above fold_max at the first contact.
+        Fold => format_args!("spring validity: distal fold at first contact above the limit"),
+        /// Filtered hand force left the stability region.
+        ForceCriterion => format_args!("force criterion: filtered hand force outside the stability region"),
+        /// The static hand force F⁰_hand violates the force criterion.
+        StaticForceLimit => format_args!("force criterion: static hand force outside the stability region"),
+        /// E_ex did not fall below η U_min by t_max.
+        NoStability => format_args!("no stability by t_max"),
+        /// |sin q13| fell to 1e-3.
+        Singular => format_args!("singular configuration during the grasp (|sin q13| <= 1e-3)"),
+        /// The linkage could not be assembled along the trajectory.
+        DgmFailure => format_args!("linkage not mountable during the grasp"),
+        /// More than [`MAX_EVENTS`] events.
+        Aborted => format_args!("aborted: more than {MAX_EVENTS} events"),
+        /// More than max_steps steps.
+        StepBudget => format_args!("aborted: step budget exhausted"),
+        /// The step size underflowed.
+        StepTooSmall => format_args!("aborted: step size underflow"),
+        /// The open finger penetrates the object at t = 0.
+        InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
+        /// The compliant equilibrium of §8.9 was not found.
+        NoEquilibrium => format_args!("compliant static equilibrium not found"),
     }
 }
 
-/// Serialise an enum of a fixed set of texts as its text.
-fn as_text<T: fmt::Display, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
-    s.collect_str(v)
-}
-
-/// Deserialise one of `all` from its text.
-fn from_text<'de, T: fmt::Display + Copy, D: Deserializer<'de>>(all: &[T], d: D) -> Result<T, D::Error> {
-    let text = String::deserialize(d)?;
-    all.iter()
-        .copied()
-        .find(|v| v.to_string() == text)
-        .ok_or_else(|| serde::de::Error::custom(format!("unknown value {text:?}")))
-}
-
-impl Serialize for DynOutcome {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        as_text(self, s)
+text_enum! {
+    /// How the free scene's run ended (in JSON: `t_obs`, or the text of why it ended early).
+    pub enum FreeEnd {
+        /// It reached t_end = min(t_max, t_obs): the motion was observed.
+        Observed => format_args!("t_obs"),
+        /// A finger reached |sin q13| = 1e-3.
+        Singular => format_args!("singular configuration during the grasp (|sin q13| <= 1e-3)"),
+        /// An open finger penetrates the object at t = 0.
+        InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
+        /// The step budget was spent.
+        StepBudget => format_args!("aborted: step budget exhausted"),
+        /// The step size underflowed.
+        StepTooSmall => format_args!("aborted: step size underflow"),
+        /// A linkage could not be assembled along the trajectory.
+        NotMountable => format_args!("linkage not mountable during the grasp"),
+        /// More than [`MAX_EVENTS`] events.
+        TooManyEvents => format_args!("aborted: more than {MAX_EVENTS} events"),
+        /// The run stopped before t_obs otherwise.
+        Stopped => format_args!("the simulation ended before t_obs"),
     }
-}
-
-impl<'de> Deserialize<'de> for DynOutcome {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        from_text(&Self::ALL, d)
-    }
-}
-
-/// How the free scene's run ended (in JSON: `t_obs`, or the text of why it ended early).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FreeEnd {
-    /// It reached t_end = min(t_max, t_obs): the motion was observed.
-    Observed,
-    /// A finger reached |sin q13| = 1e-3.
-    Singular,
-    /// An open finger penetrates the object at t = 0.
-    InitialPenetration,
-    /// The step budget was spent.
-    StepBudget,
-    /// The step size underflowed.
-    StepTooSmall,
-    /// A linkage could not be assembled along the trajectory.
-    NotMountable,
-    /// More than [`MAX_EVENTS`] events.
-    TooManyEvents,
-    /// The run stopped before t_obs otherwise.
-    Stopped,
 }
 
 impl FreeEnd {
-    /// Every end.
-    pub const ALL: [FreeEnd; 8] = [
-        FreeEnd::Observed,
-        FreeEnd::Singular,
-        FreeEnd::InitialPenetration,
-        FreeEnd::StepBudget,
-        FreeEnd::StepTooSmall,
-        FreeEnd::NotMountable,
-        FreeEnd::TooManyEvents,
-        FreeEnd::Stopped,
-    ];
     /// The run observed the object to t_end.
     pub fn observed(self) -> bool {
         self == FreeEnd::Observed
-    }
-}
-
-impl fmt::Display for FreeEnd {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = match self {
-            FreeEnd::Observed => "t_obs",
-            FreeEnd::Singular => "singular configuration during the grasp (|sin q13| <= 1e-3)",
-            FreeEnd::InitialPenetration => "open finger penetrates the object at t = 0",
-            FreeEnd::StepBudget => "aborted: step budget exhausted",
-            FreeEnd::StepTooSmall => "aborted: step size underflow",
-            FreeEnd::NotMountable => "linkage not mountable during the grasp",
-            FreeEnd::TooManyEvents => return write!(f, "aborted: more than {MAX_EVENTS} events"),
-            FreeEnd::Stopped => "the simulation ended before t_obs",
-        };
-        f.write_str(s)
-    }
-}
-
-impl Serialize for FreeEnd {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        as_text(self, s)
-    }
-}
-
-impl<'de> Deserialize<'de> for FreeEnd {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        from_text(&Self::ALL, d)
     }
 }
 

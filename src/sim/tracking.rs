@@ -9,7 +9,7 @@ use super::events::EventKind;
 use super::finger::FingerEval;
 use super::integrate::Stats;
 use super::memory::{Memory, MemoryChange};
-use super::result::{DynOutcome, DynamicsResult, FirstContact};
+use super::result::{DynOutcome, DynamicsResult, FirstContact, Sample};
 use super::scene::{End, Response, Run};
 use crate::params::SceneParams;
 use nalgebra::Matrix2;
@@ -34,6 +34,26 @@ impl GraspLimits {
     pub fn unknown(r_area: f64) -> Self {
         let nan = f64::NAN;
         GraspLimits { static_force_margin: nan, r_area, fstar: [nan; 2], v_star: nan, threshold: nan }
+    }
+}
+
+/// A grasp scene's sample at `t`: finger 1's angles and rates `q` (q11, q21, q̇11, q̇21)
+/// and evaluation `f`, the hand force F_hand,y, its filtered value and the scene's total
+/// energy (its excess over the compliant equilibrium's `v_star`).
+pub fn grasp_sample(t: f64, q: [f64; 4], f: &FingerEval, hand: [f64; 2], energy: f64, v_star: f64) -> Sample {
+    let c = &f.contacts;
+    Sample {
+        t,
+        q: [q[0], q[1]],
+        qd: [q[2], q[3]],
+        theta2: f.theta2,
+        delta: [c[0].geom.delta, c[1].geom.delta],
+        normal: [c[0].normal_force, c[1].normal_force],
+        friction: [c[0].friction_force, c[1].friction_force],
+        hand_fy: hand[0],
+        filtered_fy: hand[1],
+        energy,
+        energy_excess: energy - v_star,
     }
 }
 

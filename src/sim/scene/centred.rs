@@ -4,7 +4,7 @@
 //! its four mechanical states plus the low-pass filtered hand force of the force criterion
 //! (§9.3) — and the hand force is twice finger 1's.
 
-use super::{Response, Run, Scene};
+use super::{KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::Finger;
 use crate::model::StaticsResult;
@@ -16,10 +16,10 @@ use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel};
 use crate::sim::integrate::{Piece, Rhs, Tol};
 use crate::sim::memory::Memory;
-use crate::sim::result::{DynOutcome, DynamicsResult, Sample};
+use crate::sim::result::{DynOutcome, DynamicsResult};
 use crate::sim::settings::{Controls, Integration, Mode};
 use crate::sim::sink::{Point, Sink};
-use crate::sim::tracking::{EndValues, GraspLimits, Tracker};
+use crate::sim::tracking::{grasp_sample, EndValues, GraspLimits, Tracker};
 use nalgebra::{SVector, Vector2};
 
 /// State dimension of the centred scene.
@@ -44,7 +44,7 @@ pub struct FingerOde<'a> {
     /// Right-hand-side evaluations.
     pub evals: u64,
     /// The full evaluation at the end of the last accepted step (see [`FingerOde::take_accepted`]).
-    accepted: Option<(State, FingerEval)>,
+    accepted: KeptEval<NS, FingerEval>,
 }
 
 impl<'a> FingerOde<'a> {
@@ -57,7 +57,7 @@ impl<'a> FingerOde<'a> {
             mem: [Memory::default(); 2],
             contacts_enabled: true,
             evals: 0,
-            accepted: None,
+            accepted: KeptEval::default(),
         }
     }
 
@@ -84,10 +84,7 @@ impl<'a> FingerOde<'a> {
     /// that step ended at `y` (saves the driver a second evaluation per step).
     #[inline]
     pub fn take_accepted(&mut self, y: &State) -> Option<FingerEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
 
     /// The hand force F_hand,y: twice finger 1's force on the object (the mirror image).
@@ -134,7 +131,7 @@ impl Rhs<NS> for FingerOde<'_> {
         self.evals += 1;
         let ev = self.evaluate_with(y, true)?;
         let out = (self.derivative(y, &ev), ev.piece);
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
 }
@@ -312,23 +309,8 @@ impl Scene<NS, 6> for CentredScene<'_> {
     }
 
     fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &State, ev: &FingerEval, sink: &mut K) {
-        let c = &ev.contacts;
-        sink.finger(
-            at,
-            &Sample {
-                t,
-                q: [y[0], y[1]],
-                qd: [y[2], y[3]],
-                theta2: ev.theta2,
-                delta: [c[0].geom.delta, c[1].geom.delta],
-                normal: [c[0].normal_force, c[1].normal_force],
-                friction: [c[0].friction_force, c[1].friction_force],
-                hand_fy: FingerOde::hand_fy(ev),
-                filtered_fy: y[4],
-                energy: ev.energy,
-                energy_excess: ev.energy - self.limits.v_star,
-            },
-        );
+        let hand = [FingerOde::hand_fy(ev), y[4]];
+        sink.finger(at, &grasp_sample(t, [y[0], y[1], y[2], y[3]], ev, hand, ev.energy, self.limits.v_star));
     }
 
     fn finish(mut self, run: &Run<NS, FingerEval>) -> DynamicsResult {

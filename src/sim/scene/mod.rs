@@ -18,6 +18,32 @@ use super::memory::Memory;
 use super::sink::{Point, Sink};
 use nalgebra::SVector;
 
+/// The full evaluation the integrator made at the end of its last accepted step
+/// ([`Rhs::eval_accepted`]), kept for the driver: the scene hands it back when the driver
+/// asks for the model at that state (one evaluation per step saved).
+#[derive(Debug, Clone, Copy)]
+pub struct KeptEval<const N: usize, Ev>(Option<(SVector<f64, N>, Ev)>);
+
+impl<const N: usize, Ev> Default for KeptEval<N, Ev> {
+    fn default() -> Self {
+        KeptEval(None)
+    }
+}
+
+impl<const N: usize, Ev> KeptEval<N, Ev> {
+    /// Keep `ev`, the evaluation at `y`.
+    pub fn keep(&mut self, y: &SVector<f64, N>, ev: Ev) {
+        self.0 = Some((*y, ev));
+    }
+    /// The kept evaluation if it was at `y` (it is handed out once).
+    pub fn take(&mut self, y: &SVector<f64, N>) -> Option<Ev> {
+        match self.0.take() {
+            Some((ya, ev)) if ya == *y => Some(ev),
+            _ => None,
+        }
+    }
+}
+
 /// What handling an event asks of the driver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Response {

@@ -3,7 +3,7 @@
 //! force is the sum of both fingers' forces in the world frame, and F_hand,x ≠ 0 in
 //! general. State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2: the same | F̄_x, F̄_y).
 
-use super::{Response, Run, Scene};
+use super::{KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::{grasp_at, Finger, StaticsResult};
 use crate::params::SceneParams;
@@ -14,10 +14,10 @@ use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel, Kink};
 use crate::sim::integrate::{Piece, Rhs, Tol};
 use crate::sim::memory::Memory;
-use crate::sim::result::{DynOutcome, DynamicsResult, Sample};
+use crate::sim::result::{DynOutcome, DynamicsResult};
 use crate::sim::settings::{Controls, Integration, Mode};
 use crate::sim::sink::{Point, Sink};
-use crate::sim::tracking::{EndValues, GraspLimits, Tracker};
+use crate::sim::tracking::{grasp_sample, EndValues, GraspLimits, Tracker};
 use nalgebra::{SVector, Vector2};
 
 /// State dimension of the offset scene.
@@ -76,7 +76,7 @@ pub struct OffsetScene<'a> {
     hand0: [f64; 2],
     tracker: Tracker<4>,
     evals: u64,
-    accepted: Option<(St, PairEval)>,
+    accepted: KeptEval<NO, PairEval>,
     x_off: f64,
 }
 
@@ -111,7 +111,7 @@ impl<'a> OffsetScene<'a> {
             hand0: [g.hand0.x, g.hand0.y],
             tracker: Tracker::new(ctl.mode == Mode::Pipeline),
             evals: 0,
-            accepted: None,
+            accepted: KeptEval::default(),
             x_off,
         };
         if limits.static_force_margin < 0.0 {
@@ -193,7 +193,7 @@ impl Rhs<NO> for OffsetScene<'_> {
         self.evals += 1;
         let ev = self.eval_with(y, true)?;
         let out = (self.deriv(y, &ev), Self::piece_of(&ev));
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
 }
@@ -213,10 +213,7 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         self.eval_with(y, true)
     }
     fn take_accepted(&mut self, y: &St) -> Option<PairEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
     fn derivative(&self, y: &St, ev: &PairEval) -> St {
         self.deriv(y, ev)
@@ -295,24 +292,8 @@ impl Scene<NO, EO> for OffsetScene<'_> {
     /// here), with the hand force (both fingers, y component), its filtered value and the
     /// energy of both fingers.
     fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &St, ev: &PairEval, sink: &mut K) {
-        let f = &ev.f[0];
-        let c = &f.contacts;
-        sink.finger(
-            at,
-            &Sample {
-                t,
-                q: [y[0], y[1]],
-                qd: [y[2], y[3]],
-                theta2: f.theta2,
-                delta: [c[0].geom.delta, c[1].geom.delta],
-                normal: [c[0].normal_force, c[1].normal_force],
-                friction: [c[0].friction_force, c[1].friction_force],
-                hand_fy: ev.hand.y,
-                filtered_fy: y[9],
-                energy: ev.energy,
-                energy_excess: ev.energy - self.limits.v_star,
-            },
-        );
+        let q = [y[0], y[1], y[2], y[3]];
+        sink.finger(at, &grasp_sample(t, q, &ev.f[0], [ev.hand.y, y[9]], ev.energy, self.limits.v_star));
     }
     fn finish(mut self, run: &Run<NO, PairEval>) -> OffsetResult {
         self.tracker.on_end(run.end);

@@ -13,7 +13,7 @@ mod rhs;
 
 pub use jacobian::FreeJacobian;
 
-use super::{End, Response, Run, Scene};
+use super::{KeptEval, End, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::{Finger, FrictionLaw};
 use crate::params::SceneParams;
@@ -185,7 +185,7 @@ pub struct FreeScene<'a> {
     x_off: f64,
     evals: u64,
     jac_evals: u64,
-    accepted: Option<(St, FreeEval)>,
+    accepted: KeptEval<NF, FreeEval>,
     // tracking
     g_start: V3,
     out: FreeResult,
@@ -263,7 +263,7 @@ impl<'a> FreeScene<'a> {
             x_off,
             evals: 0,
             jac_evals: 0,
-            accepted: None,
+            accepted: KeptEval::default(),
             g_start: V3::zeros(),
             out,
             first_k: None,
@@ -318,7 +318,7 @@ impl Rhs<NF> for FreeScene<'_> {
         self.evals += 1;
         let ev = self.eval_with(y, true)?;
         let out = (self.deriv(y, &ev), ev.piece);
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
     fn newton_partition(&self) -> Option<Partition<NF>> {
@@ -381,10 +381,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         self.eval_with(y, true)
     }
     fn take_accepted(&mut self, y: &St) -> Option<FreeEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
     fn derivative(&self, y: &St, ev: &FreeEval) -> St {
         self.deriv(y, ev)
