@@ -3,7 +3,7 @@
 //!
 //! # Using the library
 //!
-//! The crate root is the library's face ([`facade`](crate::evaluate)): load a [`Problem`]
+//! The crate root is the library's face: load a [`Problem`]
 //! (a file, or TOML text with [`Problem::from_toml_str`]; its `bounds` and `nominal`),
 //! [`evaluate`] a design or [`evaluate_batch`] many into typed [`Record`]s, [`simulate`] a
 //! design in a scene with its trajectory, run or resume an optimisation with the

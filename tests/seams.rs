@@ -299,3 +299,15 @@ fn progress_and_stop_flag() {
         b.history().unwrap().iter().map(|h| h.hypervolume).collect::<Vec<_>>()
     );
 }
+
+/// A checkpoint written before the typed record (format version 2, as the 5d2a08e binary
+/// wrote it) is refused with a message naming its version, not a serde error.
+#[test]
+fn an_older_checkpoint_is_refused_by_name() {
+    let dir = tmp("old-checkpoint");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = r#"{"format": "gripopt-checkpoint", "version": 2, "state": {}}"#;
+    std::fs::write(dir.join("checkpoint.json"), text).unwrap();
+    let e = gripopt::run::Checkpoint::<GripperInfo>::load(&dir.join("checkpoint.json")).unwrap_err().to_string();
+    assert!(e.contains("version") && e.contains("before the typed evaluation record"), "{e}");
+}

@@ -13,7 +13,7 @@ mod rhs;
 
 pub use jacobian::FreeJacobian;
 
-use super::{KeptEval, End, Response, Run, Scene};
+use super::{End, KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::{Finger, FrictionLaw};
 use crate::params::SceneParams;
