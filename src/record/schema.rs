@@ -7,7 +7,7 @@
 
 use crate::eval::FreeSceneRecord;
 pub use crate::params::DesignParameters;
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// A window start as seconds and nanoseconds since 1970.
@@ -20,16 +20,14 @@ pub struct Window {
 }
 
 /// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Derived {
     /// l11.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub l11: Option<f64>,
     /// l12.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub l12: Option<f64>,
     /// l22.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub l22: Option<f64>,
     /// l_hand.
     pub l_hand: f64,
@@ -37,18 +35,15 @@ pub struct Derived {
 
 /// Objectives in their natural sense (max_offset only when form closed).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Objectives {
     /// m.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_offset: Option<f64>,
     /// Force isotropy.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha: Option<f64>,
     /// N.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_force: Option<f64>,
     /// s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t_stab: Option<f64>,
 }
 
@@ -87,42 +82,46 @@ pub struct DesignMessage {
     /// No stage discarded it.
     pub feasible: bool,
     /// Form closed at the centred object.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub form_closed: Option<bool>,
     /// The stage that discarded it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failed_stage: Option<u8>,
     /// Why.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     /// By how much.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub violation: Option<f64>,
     /// Objectives.
     pub objectives: Objectives,
     /// Timings.
     pub stage_seconds: StageSeconds,
     /// Accepted steps of the grasp simulation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sim_steps: Option<u64>,
     /// Right-hand-side evaluations of the grasp simulation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sim_rhs_evals: Option<u64>,
     /// The free scene's measurement (free kind; keys not computed left out).
-    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "without_nulls")]
     pub free_scene: Option<FreeSceneRecord>,
     /// Trajectory samples simulated (the recorded ones may be a subset).
     pub trajectory_samples: u64,
 }
 
-/// A record's JSON object without its null values (Foxglove's schema parser wants one
-/// type per field).
-fn without_nulls<T: Serialize, S: Serializer>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
-    let mut v = serde_json::to_value(v).map_err(serde::ser::Error::custom)?;
-    if let Value::Object(m) = &mut v {
-        m.retain(|_, x| !x.is_null());
+impl DesignMessage {
+    /// The message as written: JSON without its null values (values not computed are left
+    /// out, so Foxglove's schema parser needs one type per field, no unions).
+    pub fn to_json(&self) -> Vec<u8> {
+        fn strip(v: &mut Value) {
+            match v {
+                Value::Object(m) => {
+                    m.retain(|_, x| !x.is_null());
+                    m.values_mut().for_each(strip);
+                }
+                Value::Array(a) => a.iter_mut().for_each(strip),
+                _ => {}
+            }
+        }
+        // a message of plain numbers, texts and options always serialises
+        let mut v = serde_json::to_value(self).expect("a design message serialises");
+        strip(&mut v);
+        serde_json::to_vec(&v).expect("a JSON value serialises")
     }
-    v.serialize(s)
 }
 
 fn num() -> Value {

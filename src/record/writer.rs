@@ -123,7 +123,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let sc = &problem.scene;
     let samples = d.trajectory.map_or(&[][..], |t| &t.samples[..]);
     let kept = opts.kept_samples(samples);
-    let record = serde_json::to_vec(&messages::design(d, &problem.name, t0, opts.epoch_s)).expect("records serialise");
+    let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
     let mut out =
         vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
     if opts.scene_dt <= 0.0 {

@@ -43,7 +43,7 @@ pub use rundir::{
 };
 pub use verify::{
     read_design_csv, read_design_rows, run_designs, sample_designs, verify_csv, verify_design, verify_design_poses,
-    verify_designs, verify_designs_poses, Confusion, VerifyCsvRow, VerifyRow, VerifySource, VerifySummary, VERIFY_FILE,
+    verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_FILE,
     VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};

@@ -2,7 +2,7 @@
 //! feasible design, or a seeded sample of the problem's box) is simulated in the free scene
 //! (MODEL.md §14) by the one simulation call: the centred scene's impact (§9.1) and force
 //! (§9.3) criteria *predict* whether the object moves, the free scene *measures* it
-//! (§14.4's verdict). The rows ([`VerifyRow`], written as verify.csv's [`VerifyCsvRow`]);
+//! (§14.4's verdict). The rows ([`VerifyRow`], serialised as verify.csv's columns);
 //! [`Confusion`] counts prediction against measurement. The command itself (folder, lock,
 //! files) is `verify_run`.
 
@@ -10,13 +10,14 @@ use super::folder::read_table;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
-use crate::params::{Design, DesignParameters, Problem};
+use crate::params::{Design, DesignParameters, Problem, DESIGN_NAMES};
 use crate::record::keep_poses;
 use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -296,78 +297,36 @@ pub fn verify_designs_poses(
         .collect()
 }
 
-/// One row of verify.csv.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct VerifyCsvRow {
-    /// Design id.
-    pub id: u64,
-    /// The design.
-    #[serde(flatten)]
-    pub design: DesignParameters,
-    /// E_cyl/E_lim at the centred first contact.
-    pub impact_ratio: Option<f64>,
-    /// §9.1's E_trans (J).
-    pub e_trans: Option<f64>,
-    /// §9.1's E_rot (J).
-    pub e_rot: Option<f64>,
-    /// The smaller of the filtered and static force margins (N).
-    pub force_margin: f64,
-    /// The centred grasp reached stability.
-    pub stable: bool,
-    /// The centred criteria predict motion.
-    pub predicted_moves: bool,
-    /// Largest horizontal displacement of G (m).
-    pub object_max_displacement: f64,
-    /// Largest tilt (°).
-    pub object_max_tilt_deg: f64,
-    /// Peak translational kinetic energy during the first contact (J).
-    pub object_peak_e_trans: f64,
-    /// Peak rotational kinetic energy during the first contact (J).
-    pub object_peak_e_rot: f64,
-    /// How the free scene ended.
-    pub free_end: FreeEnd,
-    /// §14.4's verdict (empty: not observed).
-    pub moved: Option<bool>,
-    /// Tilt above 45°.
-    pub toppled: Option<bool>,
-    /// No phalanx in contact at t_end.
-    pub escaped: Option<bool>,
-    /// A phalanx met the rim or a face.
-    pub rim_contact: bool,
-    /// Prediction and measurement agree.
-    pub agrees: Option<bool>,
-    /// Object peak E_trans / §9.1's E_trans.
-    pub peak_e_trans_ratio: Option<f64>,
-    /// Object peak E_rot / §9.1's E_rot.
-    pub peak_e_rot_ratio: Option<f64>,
-}
-
-impl VerifyCsvRow {
-    /// The CSV row of a verified design.
-    pub fn of(r: &VerifyRow) -> Self {
-        let (et, er) = r.energy_ratios();
-        VerifyCsvRow {
-            id: r.id,
-            design: DesignParameters::from_array(&r.design.to_array()),
-            impact_ratio: r.impact_ratio,
-            e_trans: r.e_trans_rot.map(|e| e.0),
-            e_rot: r.e_trans_rot.map(|e| e.1),
-            force_margin: r.force_margin,
-            stable: r.stable,
-            predicted_moves: r.predicted_moves,
-            object_max_displacement: r.max_displacement,
-            object_max_tilt_deg: r.max_tilt_deg,
-            object_peak_e_trans: r.peak_e.0,
-            object_peak_e_rot: r.peak_e.1,
-            free_end: r.end,
-            moved: r.moved,
-            toppled: r.toppled,
-            escaped: r.escaped,
-            rim_contact: r.rim_contact,
-            agrees: r.agrees(),
-            peak_e_trans_ratio: et,
-            peak_e_rot_ratio: er,
+/// A verified design as verify.csv writes it: its columns, in order (the design's, the
+/// centred prediction's, the free scene's measurement, and their comparison).
+impl Serialize for VerifyRow {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let d = DesignParameters::from_array(&self.design.to_array());
+        let (et, er) = self.energy_ratios();
+        let mut m = s.serialize_map(Some(25))?;
+        m.serialize_entry("id", &self.id)?;
+        for (k, v) in DESIGN_NAMES.iter().zip(d.to_array()) {
+            m.serialize_entry(k, &v)?;
         }
+        m.serialize_entry("impact_ratio", &self.impact_ratio)?;
+        m.serialize_entry("e_trans", &self.e_trans_rot.map(|e| e.0))?;
+        m.serialize_entry("e_rot", &self.e_trans_rot.map(|e| e.1))?;
+        m.serialize_entry("force_margin", &self.force_margin)?;
+        m.serialize_entry("stable", &self.stable)?;
+        m.serialize_entry("predicted_moves", &self.predicted_moves)?;
+        m.serialize_entry("object_max_displacement", &self.max_displacement)?;
+        m.serialize_entry("object_max_tilt_deg", &self.max_tilt_deg)?;
+        m.serialize_entry("object_peak_e_trans", &self.peak_e.0)?;
+        m.serialize_entry("object_peak_e_rot", &self.peak_e.1)?;
+        m.serialize_entry("free_end", &self.end)?;
+        m.serialize_entry("moved", &self.moved)?;
+        m.serialize_entry("toppled", &self.toppled)?;
+        m.serialize_entry("escaped", &self.escaped)?;
+        m.serialize_entry("rim_contact", &self.rim_contact)?;
+        m.serialize_entry("agrees", &self.agrees())?;
+        m.serialize_entry("peak_e_trans_ratio", &et)?;
+        m.serialize_entry("peak_e_rot_ratio", &er)?;
+        m.end()
     }
 }
 
@@ -376,12 +335,11 @@ pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
     let mut s = String::from("# gripopt verify.csv: the centred criteria's prediction (impact ratio E_cyl/E_lim > 1 or force margin < 0 → predicted_moves) against the free scene's measured motion (MODEL.md §14.4)\n");
     let _ = writeln!(s, "# scene free, x_off {x_off} m; units: lengths m, psi_deg and object_max_tilt_deg deg, energies J, force_margin N; *_ratio = object peak / §9.1 value");
     s.push_str("# free_end: t_obs, or why the free scene stopped early (then moved, toppled, escaped, agrees and the ratios are empty: nothing observed)\n");
-    let rows: Vec<VerifyCsvRow> = rows.iter().map(VerifyCsvRow::of).collect();
     if let Some(first) = rows.first() {
         s.push_str(&crate::cells::header(first).join(","));
         s.push('\n');
     }
-    for r in &rows {
+    for r in rows {
         s.push_str(&line(r, Floats::Display));
     }
     s
