@@ -312,3 +312,49 @@ pub fn write_outputs(out: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInf
     super::plots::hypervolume(&out.join("hypervolume.svg"), &st.hv_history, &archive.hv_history)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented columns (names, units, meanings) are the row types' fields, in order.
+    #[test]
+    fn the_column_tables_are_the_rows_fields() {
+        let row = DesignRow {
+            id: 1,
+            generation: 1,
+            rank: Some(0),
+            feasible: true,
+            failed_stage: None,
+            violation: None,
+            reason: None,
+            design: DesignParameters::from_array(&[0.05, 0.06, 0.035, 0.5, 0.4, 130.0]),
+            l11: None,
+            l12: None,
+            l22: None,
+            l_hand: 0.23,
+            form_closed: None,
+            max_offset: None,
+            alpha: None,
+            mean_force: None,
+            t_stab: None,
+            sim_steps: None,
+            sim_rhs_evals: None,
+            force_model: None,
+        };
+        let names: Vec<&str> = DESIGN_COLUMNS.iter().map(|c| c.0).collect();
+        assert_eq!(crate::cells::header(&row), names);
+        let h = HistoryRow { generation: 1, evaluations: 4, feasible: 0, hypervolume: 0.0, archive_hypervolume: None };
+        let names: Vec<&str> = HISTORY_COLUMNS.iter().map(|c| c.0).collect();
+        assert_eq!(crate::cells::header(&h), names);
+        // a row read back from its own line is the row
+        let text = format!("{}{}", header("test", &DESIGN_COLUMNS), line(&row, Floats::Display));
+        let back: Vec<DesignRow> = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes())
+            .deserialize()
+            .collect::<std::result::Result<_, _>>()
+            .unwrap();
+        assert_eq!(back, vec![row]);
+    }
+}
