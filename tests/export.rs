@@ -225,8 +225,6 @@ fn run_folder_designs_export() {
         generations: 2,
         seed: 16,
         threads: Some(1),
-        progress: false,
-        crash_after: None,
         record: gripopt::record::RecordOptions::default(),
     };
     gripopt::run::optimise(&spec).unwrap();

@@ -33,8 +33,6 @@ fn spec(out: &Path, generations: u64) -> RunSpec {
         generations,
         seed: 16,
         threads: Some(2),
-        progress: false,
-        crash_after: None,
         record: RecordOptions::default(),
     }
 }
@@ -142,11 +140,10 @@ fn shards_draw_the_simulated_scene_in_world_coordinates() {
 #[test]
 fn front_recording_marks_the_final_front_after_a_resume() {
     let run = dir("scene-front-resume");
-    let mut s = spec(&run, 4);
-    s.crash_after = Some(2);
-    assert!(optimise(&s).is_err());
+    let s = spec(&run, 4);
+    assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
     assert!(!run.join("recording/front.mcap").exists(), "no front before the run ends");
-    resume(&run, None, false, Some(1), false).unwrap();
+    resume(&run, None, false, Some(1)).unwrap();
     let buf = std::fs::read(run.join("recording/front.mcap")).unwrap();
     let mut on = vec![];
     let mut ids = vec![];

@@ -5,7 +5,7 @@ use super::work_precision::{check_atol, rel};
 use super::{progress, time_it};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::params::Problem;
-use crate::sim::{simulate_grasp, Method, SimOptions};
+use crate::sim::{diagnostic_grasp, Integration, Method};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use std::io::Write;
@@ -42,11 +42,8 @@ pub fn work_precision_ensemble(
     let p = problem;
     let s = &p.scene;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let diag = |m: Method, rtol: f64| SimOptions {
-        method: m,
-        ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000)
-    };
-    let tight = SimOptions::diagnostic(1e-11, 1e-14, 5_000_000);
+    let diag = |m: Method, rtol: f64| Integration::new(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000).with_method(m);
+    let tight = Integration::new(1e-11, 1e-14, 5_000_000);
     let mut cases = vec![];
     let mut drawn = 0usize;
     let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
@@ -55,7 +52,7 @@ pub fn work_precision_ensemble(
         let d = p.bounds.sample(&mut rng);
         let Ok(k) = stage_kinematics(&d, s) else { continue };
         let Ok(st) = stage_statics(&k.finger, s) else { continue };
-        let reference = simulate_grasp(&k.finger, s, &st, &tight);
+        let reference = diagnostic_grasp(&k.finger, s, &st, &tight);
         if reference.t_stab.is_none() {
             continue;
         }
@@ -98,7 +95,7 @@ pub fn work_precision_ensemble(
             let (mut cpu, mut steps, mut rhs, mut ets, mut ee) = (vec![], vec![], vec![], vec![], vec![]);
             let mut differ = 0;
             for (f, st, reference) in &cases {
-                let (r, _, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 0.05, 7);
+                let (r, _, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 0.05, 7);
                 cpu.push(tmed);
                 steps.push(r.stats.steps as f64);
                 rhs.push(r.rhs_evals as f64);

@@ -78,7 +78,7 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
     })?;
     let problem = Problem::load(dir.join("problem.toml"))?;
     let rec = gripopt::record::read_design(dir, id)?;
-    let x = rec.design()?;
+    let x = rec.design();
     Ok((problem, x, format!("run folder {}, design {id} (recorded in {})", dir.display(), rec.file.display())))
 }
 

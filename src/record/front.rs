@@ -9,8 +9,8 @@
 //! "Final front" indicator shows it). Metadata record `gripopt.front`: `designs`, `first_id`,
 //! `last_id`, `front_size`, `generations`, `epoch_s`, `status`.
 
+use super::index::read_index;
 use super::messages::window_start_ns;
-use super::writer::read_index;
 use super::RecordOptions;
 use crate::Result;
 use mcap::records::{MessageHeader, Metadata};

@@ -4,8 +4,8 @@
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
+use super::schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 use crate::sim::Sample;
-use serde_json::{json, Value};
 
 pub use super::scene::{
     discarded_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene, window_end_ns,
@@ -21,61 +21,47 @@ pub fn log_time(t0_ns: u64, t: f64) -> u64 {
     t0_ns + (t * 1e9).round().clamp(0.0, 999_999_999.0) as u64
 }
 
-/// `/designs` message (JSON). Values that were not computed are left out (no nulls, so the
-/// schema needs no union types).
-pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> Value {
-    let x = &i.parameters;
-    let mut derived = json!({"l_hand": i.l_hand});
-    if let Some(l) = i.lengths {
-        derived = json!({"l11": l[0], "l12": l[1], "l22": l[2], "l_hand": i.l_hand});
-    }
-    let mut objectives = serde_json::Map::new();
-    for (k, v) in ["max_offset", "alpha", "mean_force", "t_stab"].iter().zip(i.objectives) {
+/// `/designs` message of a design whose window starts at `t0_ns`, derived from its
+/// evaluation record. Values that were not computed are left out (no nulls, so the schema
+/// needs no union types).
+pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> DesignMessage {
+    let r = i.record;
+    let v = &r.verdict;
+    let o = r.objectives();
+    let l = r.lengths();
+    DesignMessage {
+        id: i.id,
+        generation: i.generation,
+        problem: problem.to_string(),
+        window_start: Window { sec: t0_ns / 1_000_000_000, nsec: t0_ns % 1_000_000_000 },
+        window_start_s: i.id as f64,
+        epoch_s,
+        parameters: DesignParameters::from_array(&i.parameters),
+        derived: Derived {
+            l11: l.map(|l| l[0]),
+            l12: l.map(|l| l[1]),
+            l22: l.map(|l| l[2]),
+            l_hand: r.kinematics.l_hand,
+        },
+        stages_passed: v.failed_stage.unwrap_or(4),
+        feasible: v.failed_stage.is_none(),
+        form_closed: r.form_closed(),
+        failed_stage: v.failed_stage,
+        reason: v.reason.clone(),
+        violation: v.violation,
         // MODEL.md §6.7: a design not form closed at 0 carries max_offset = −Δ_off inside the
         // optimiser; the record says form_closed = false and leaves max_offset out (as the CSVs)
-        if let Some(v) = v.filter(|v| *k != "max_offset" || *v >= 0.0) {
-            objectives.insert(k.to_string(), json!(v));
-        }
+        objectives: Objectives { max_offset: o[0].filter(|m| *m >= 0.0), alpha: o[1], mean_force: o[2], t_stab: o[3] },
+        stage_seconds: StageSeconds {
+            stages_0_1: i.stage_seconds[1],
+            stage_2: i.stage_seconds[2],
+            stage_3: i.stage_seconds[3],
+        },
+        sim_steps: r.sim_work().map(|w| w[0]),
+        sim_rhs_evals: r.sim_work().map(|w| w[1]),
+        free_scene: r.free_scene.clone(),
+        trajectory_samples: i.trajectory.map_or(0, |t| t.samples.len() as u64),
     }
-    let mut v = json!({
-        "id": i.id,
-        "generation": i.generation,
-        "problem": problem,
-        "window_start": {"sec": t0_ns / 1_000_000_000, "nsec": t0_ns % 1_000_000_000},
-        "window_start_s": i.id as f64,
-        "epoch_s": epoch_s,
-        "parameters": {"l21": x[0], "b": x[1], "t22": x[2], "r": x[3], "p": x[4], "psi_deg": x[5]},
-        "derived": derived,
-        "stages_passed": i.failed_stage.unwrap_or(4),
-        "feasible": i.failed_stage.is_none(),
-        "objectives": objectives,
-        "stage_seconds": {"stages_0_1": i.stage_seconds[1], "stage_2": i.stage_seconds[2], "stage_3": i.stage_seconds[3]},
-        "trajectory_samples": i.trajectory.map_or(0, |t| t.samples.len()),
-    });
-    let o = v.as_object_mut().expect("object");
-    if let Some(m) = i.objectives[0] {
-        o.insert("form_closed".into(), json!(m >= 0.0));
-    }
-    if let Some(s) = i.failed_stage {
-        o.insert("failed_stage".into(), json!(s));
-    }
-    if let Some(r) = i.reason {
-        o.insert("reason".into(), json!(r));
-    }
-    if let Some(x) = i.violation {
-        o.insert("violation".into(), json!(x));
-    }
-    if let Some(w) = i.sim_work {
-        o.insert("sim_steps".into(), json!(w[0]));
-        o.insert("sim_rhs_evals".into(), json!(w[1]));
-    }
-    if let Some(serde_json::Value::Object(f)) = i.free {
-        // like every other key, values not computed are left out (no nulls)
-        let f: serde_json::Map<String, Value> =
-            f.iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k.clone(), v.clone())).collect();
-        o.insert("free_scene".into(), Value::Object(f));
-    }
-    v
 }
 
 /// A value as recorded at `res` (f32 precision when compact).
@@ -107,7 +93,7 @@ pub fn series(d: &DesignEntry<'_>, samples: &[Sample], kept: &[usize], opts: &Re
         }
         return m;
     }
-    let f_tilde = d.objectives[2].map_or(f64::NAN, |f| at_precision(f, r));
+    let f_tilde = d.record.objectives()[2].map_or(f64::NAN, |f| at_precision(f, r));
     for &k in kept {
         let s = &samples[k];
         let p = |x: f64| at_precision(x, r);

@@ -12,7 +12,7 @@
 //!
 //! This layer sits above the pipeline and the simulator and below the run layer: it never
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
-//! [`Recordable`] for their own types and call [`Recorder::record_generation`].
+//! [`Recordable`] for their own types and hand the recorder's shard tasks their designs.
 //!
 //! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
 //! scene's object pose as a moving frame (see `verify_rec`), in a time band after the run's
@@ -22,6 +22,7 @@
 
 mod entry;
 mod front;
+mod index;
 mod layout;
 mod mcapfile;
 mod messages;
@@ -36,6 +37,7 @@ mod writer;
 
 pub use entry::{DesignEntry, Recordable};
 pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
+pub use index::{read_index, ShardEntry};
 pub use layout::{
     layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };
@@ -47,8 +49,9 @@ pub use proto::{GraspSeries, SERIES_NAME};
 pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use replay::{read_design, replay, Recorded, Replay};
 pub use scene::{HAND, OBJECT, WORLD};
+pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
     band_s, keep_poses, parameters as verify_parameters, verify_schema, verify_series_schema, write_verify, Parameters,
     VerifyEntry, VerifyRecord, VerifyRecordOptions, VerifySeries, WindowStart, VERIFY_METADATA,
 };
-pub use writer::{read_index, write_shard, Recorder, ShardEntry, ShardTask};
+pub use writer::{write_shard, Recorder, ShardTask};

@@ -117,10 +117,10 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
 /// and why it was discarded (it must fit a 3-D panel of half a screen's width).
 pub fn verdict(d: &DesignEntry<'_>) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
-    match d.failed_stage {
-        Some(s) => format!("{head} stage {s}: {}", d.reason.unwrap_or("no reason recorded")),
+    match d.record.verdict.failed_stage {
+        Some(s) => format!("{head} stage {s}: {}", d.record.verdict.reason.as_deref().unwrap_or("no reason recorded")),
         None => {
-            let o = d.objectives;
+            let o = d.record.objectives();
             let f =
                 |v: Option<f64>, scale: f64, unit: &str| v.map_or("-".into(), |v| format!("{:.1} {unit}", v * scale));
             format!(
