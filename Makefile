@@ -17,13 +17,14 @@ PYTHON  ?= python3
 
 # The independent checks in a local venv: PyPI mcap (reference reader),
 # mcap-protobuf-support (protobuf decoding), foxglove-schemas-protobuf (the official
-# Foxglove descriptors to compare with), jsonschema, and pandas (docs/python.md).
-$(VENV)/.installed-3:
+# Foxglove descriptors to compare with), jsonschema, pandas (docs/python.md), and mujoco
+# (the exported MJCF, docs/export.md: 3.17.0 is one self-contained wheel per platform).
+$(VENV)/.installed-4:
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas mujoco==3.17.0
 	touch $@
 
-venv: $(VENV)/.installed-3
+venv: $(VENV)/.installed-4
 
 # The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
 .PHONY: lint
@@ -32,13 +33,17 @@ lint:
 	$(CARGO) clippy --all-targets --locked -- -D warnings
 
 # Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
-# then the independent reader over every MCAP file the tests wrote, then the pandas example of
-# docs/python.md on a run the tests wrote.
-test: $(VENV)/.installed-3 lint
+# then the independent reader over every MCAP file and shipped layout the tests wrote (after
+# its self-test: it must reject the scene and layout defects it checks for), then the pandas
+# example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
+# (docs/export.md).
+test: $(VENV)/.installed-4 lint
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
+	$(VENV)/bin/python tools/test_check_mcap.py
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 	$(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
+	$(VENV)/bin/python tools/check_mjcf.py $${CARGO_TARGET_DIR:-target}/debug/gripopt problems/bottle-1l.toml target/mjcf-check --nominal
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
 # generations, 1 500 designs through all four stages, every design and grasp recorded to
@@ -52,7 +57,7 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
-	@echo "Recording (open in Foxglove with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap"
+	@echo "Recording (open the shards and front.mcap in Foxglove or Lichtblick with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap, $(OUT)/recording/front.mcap"
 	@id=$$(grep -v "^#" $(OUT)/pareto.csv | sed -n 2p | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # Speed figures (see docs/benchmarks.md). Not tests.

@@ -16,8 +16,8 @@ BIN=${BIN:-target/release/gripopt}
 PROBLEM=${PROBLEM:-problems/bottle-1l.toml}
 POP=${POP:-128}
 GENERATIONS=${GENERATIONS:-10}
-CENTRED_FN=${CENTRED_FN:-gripopt::sim::scene::centred::simulate}
-FREE_FN=${FREE_FN:-gripopt::sim::scene::free::simulate_free}
+CENTRED_FN=${CENTRED_FN:-gripopt::sim::scene::centred::run}
+FREE_FN=${FREE_FN:-gripopt::sim::scene::free::run}
 OUT=target/bench-instructions
 for tool in valgrind callgrind_annotate; do
     command -v "$tool" > /dev/null || { echo "bench-instructions: $tool not found (make bench-instructions installs valgrind)" >&2; exit 2; }

@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first. `math`, `error` and `fsutil` are shared utilities below all.
-const LAYERS: &[&str] = &["params", "model", "sim", "eval", "optim", "record", "run", "sweep", "bench", "cli"];
+const LAYERS: &[&str] =
+    &["params", "model", "sim", "eval", "export", "optim", "record", "run", "sweep", "bench", "cli"];
 /// Layers that sit side by side and must not import each other (same rank).
 const PEERS: &[(&str, &str)] =
     &[("sweep", "run"), ("sweep", "record"), ("sweep", "optim"), ("sweep", "bench"), ("bench", "sweep")];
@@ -89,4 +90,59 @@ fn the_library_reads_no_environment_and_uses_no_anyhow() {
         }
     }
     assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// The module path of a source file (`src/sim/scene/mod.rs` → sim::scene).
+fn module_of(p: &Path) -> Vec<String> {
+    let rel = p.strip_prefix(src()).unwrap().with_extension("");
+    let mut m: Vec<String> = rel.iter().map(|c| c.to_string_lossy().to_string()).collect();
+    if m.last().is_some_and(|l| l == "mod" || l == "lib") {
+        m.pop();
+    }
+    m
+}
+
+/// No two source files import each other (`use super::x` / `crate::a::b` both ways): a
+/// lower module owns what both need.
+#[test]
+fn no_two_files_import_each_other() {
+    let mut files = Vec::new();
+    rs_files(&src(), &mut files);
+    let modules: std::collections::HashMap<Vec<String>, &PathBuf> = files.iter().map(|f| (module_of(f), f)).collect();
+    let mut edges = std::collections::HashSet::new();
+    for f in &files {
+        let me = module_of(f);
+        let c = code(f);
+        let bytes: Vec<char> = c.chars().collect();
+        // every path `crate::…` or `super::…` (with `{a, b}` groups), as segments
+        let text: String = bytes.iter().collect();
+        for (start, _) in text.match_indices("crate::").chain(text.match_indices("super::")) {
+            let rest = &text[start..];
+            let path: String = rest.chars().take_while(|ch| ch.is_alphanumeric() || *ch == '_' || *ch == ':').collect();
+            let mut segs: Vec<&str> = path.split("::").filter(|s| !s.is_empty()).collect();
+            let mut base: Vec<String> =
+                if segs.first() == Some(&"crate") { vec![] } else { me[..me.len().saturating_sub(1)].to_vec() };
+            segs.remove(0);
+            while segs.first() == Some(&"super") {
+                base.pop();
+                segs.remove(0);
+            }
+            let mut target = modules.contains_key(&base).then(|| base.clone());
+            for s in segs {
+                base.push(s.to_string());
+                if modules.contains_key(&base) {
+                    target = Some(base.clone());
+                }
+            }
+            if let Some(t) = target.filter(|t| *t != me) {
+                edges.insert((me.clone(), t));
+            }
+        }
+    }
+    let circles: Vec<String> = edges
+        .iter()
+        .filter(|(a, b)| a < b && edges.contains(&(b.clone(), a.clone())))
+        .map(|(a, b)| format!("{} <-> {}", a.join("::"), b.join("::")))
+        .collect();
+    assert!(circles.is_empty(), "files that import each other:\n{}", circles.join("\n"));
 }

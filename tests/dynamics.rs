@@ -6,7 +6,7 @@ use gripopt::model::flores_normal;
 use gripopt::model::{gravity_potential, gravity_tree, reduce_tree_force};
 use gripopt::model::{Finger, Kin};
 use gripopt::params::{Design, SceneParams};
-use gripopt::sim::{simulate_grasp, simulate_grasp_traj, DynOutcome, DynamicsResult, Method, SimOptions};
+use gripopt::sim::{diagnostic_grasp as simulate_grasp, Controls, DynOutcome, DynamicsResult, Integration, Method};
 use gripopt::sim::{FingerOde, State};
 use gripopt::sim::{Radau5, Rhs, Stepper, Tol};
 use nalgebra::Vector2;
@@ -17,8 +17,8 @@ fn prepare(x: &Design, s: &SceneParams) -> (Finger, StaticsResult) {
     (k.finger, st)
 }
 
-fn diag(rtol: f64) -> SimOptions {
-    SimOptions::diagnostic(rtol, rtol * 1e-3, 2_000_000)
+fn diag(rtol: f64) -> Integration {
+    Integration::new(rtol, rtol * 1e-3, 2_000_000)
 }
 
 fn sim(x: &Design, s: &SceneParams, rtol: f64) -> DynamicsResult {
@@ -92,7 +92,7 @@ fn gravity_force_is_minus_gradient_of_potential() {
 
 fn energy_non_increasing(x: &Design, s: &SceneParams, rtol: f64) -> DynamicsResult {
     let (f, st) = prepare(x, s);
-    let (r, tr) = simulate_grasp_traj(&f, s, &st, &diag(rtol));
+    let (r, tr) = crate::common::grasp_traj(&f, s, &st, &diag(rtol), &Controls::DIAGNOSTIC);
     let e0 = tr.samples[0].energy;
     let scale = (e0 - r.v_star).abs();
     let mut emax = f64::NEG_INFINITY;
@@ -173,7 +173,7 @@ fn one_dof_flores_impact_restitution() {
 fn free_closing_matches_independent_rk4_at_first_contact() {
     let s = scene();
     let (f, st) = prepare(&nominal(), &s);
-    let (r, tr) = simulate_grasp_traj(&f, &s, &st, &diag(1e-10));
+    let (r, tr) = crate::common::grasp_traj(&f, &s, &st, &diag(1e-10), &Controls::DIAGNOSTIC);
     let fc = r.first.unwrap();
     let at = tr.samples.iter().find(|x| x.t == fc.t).expect("sample at the onset event");
     let mut ode = FingerOde::new(&f, &s, st.tau_s0, 0.0);
@@ -219,7 +219,7 @@ fn methods_agree() {
     let (f, st) = prepare(&nominal(), &s);
     let mut ts = vec![];
     for m in [Method::Radau5, Method::TrBdf2, Method::Dopri5] {
-        let o = SimOptions { method: m, ..diag(if m == Method::TrBdf2 { 1e-9 } else { 1e-8 }) };
+        let o = diag(if m == Method::TrBdf2 { 1e-9 } else { 1e-8 }).with_method(m);
         ts.push(simulate_grasp(&f, &s, &st, &o).t_stab.unwrap());
     }
     for t in &ts {
@@ -340,7 +340,7 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
     // a tiny step budget ends in a clean discard, never a hang
     let s = scene();
     let (f, st) = prepare(&nominal(), &s);
-    let r = simulate_grasp(&f, &s, &st, &SimOptions::diagnostic(1e-8, 1e-11, 50));
+    let r = simulate_grasp(&f, &s, &st, &Integration::new(1e-8, 1e-11, 50));
     assert_eq!(r.outcome, DynOutcome::StepBudget);
     assert!(r.discard_violation().unwrap() > 0.0);
     // designs near the singular boundary end with a verdict
@@ -378,8 +378,8 @@ fn free_closing_into_the_parallel_singularity_aborts_cleanly() {
     ]);
     let (f, st) = prepare(&x, &s);
     for rtol in [1e-6, 1e-9] {
-        let o = SimOptions { contacts: false, ..diag(rtol) };
-        let (r, tr) = simulate_grasp_traj(&f, &s, &st, &o);
+        let ctl = Controls { contacts: false, ..Controls::DIAGNOSTIC };
+        let (r, tr) = crate::common::grasp_traj(&f, &s, &st, &diag(rtol), &ctl);
         assert_eq!(r.outcome, DynOutcome::Singular, "rtol {rtol}");
         assert!(r.first.is_none() && r.t_end > 0.0 && r.t_end < s.criteria.t_max);
         assert!(r.stats.steps < 5_000, "bounded work: {} steps", r.stats.steps);
@@ -526,7 +526,7 @@ fn simultaneous_proximal_and_distal_onsets() {
     assert!(best.0 <= 1e-12, "no preload puts the onsets within 1e-12 s (best {:e} s)", best.0);
     let mut st2 = st;
     st2.tau_s0 = best.1;
-    let (r, tr) = simulate_grasp_traj(&f, &s, &st2, &diag(rtol));
+    let (r, tr) = crate::common::grasp_traj(&f, &s, &st2, &diag(rtol), &Controls::DIAGNOSTIC);
     assert_clean(&r, "simultaneous onsets");
     let [Some(a), Some(b)] = r.onsets else { panic!("both onsets: {:?}", r.onsets) };
     let fc = r.first.expect("first contact");
@@ -567,7 +567,7 @@ fn knuckle_contact_in_a_full_simulation() {
     st.tau_s0 = spring_preload(&f, &s).expect("preload").1;
     let mut verdicts = vec![];
     for rtol in [1e-6, 1e-8] {
-        let (r, tr) = simulate_grasp_traj(&f, &s, &st, &diag(rtol));
+        let (r, tr) = crate::common::grasp_traj(&f, &s, &st, &diag(rtol), &Controls::DIAGNOSTIC);
         assert_clean(&r, "knuckle");
         assert!(r.knuckle_flag, "rtol {rtol}: the knuckle contact is flagged");
         assert!(tr.samples.iter().all(|x| x.normal.iter().chain(x.friction.iter()).all(|v| v.is_finite())));

@@ -28,15 +28,15 @@ fn default_problem_is_mobilised_and_reports_both_pairs() {
     let p = bottle();
     assert_eq!(p.scene.criteria.force_model, ForceModel::Mobilised);
     let r = record(&p);
-    close_rel(r.alpha.unwrap(), ALPHA_MU, 1e-9, "alpha = alpha_mu");
-    close_rel(r.mean_force.unwrap(), FMEAN_MU, 1e-9, "mean_force = mean_force_mu");
-    close_rel(r.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu");
-    close_rel(r.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu");
-    close_rel(r.alpha_0.unwrap(), ALPHA_0, 1e-9, "alpha_0");
-    close_rel(r.mean_force_0.unwrap(), FMEAN_0, 1e-9, "mean_force_0");
-    assert_eq!(r.force_model, Some("mobilised"));
+    close_rel(r.statics.alpha.unwrap(), ALPHA_MU, 1e-9, "alpha = alpha_mu");
+    close_rel(r.statics.mean_force.unwrap(), FMEAN_MU, 1e-9, "mean_force = mean_force_mu");
+    close_rel(r.statics.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu");
+    close_rel(r.statics.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu");
+    close_rel(r.statics.alpha_0.unwrap(), ALPHA_0, 1e-9, "alpha_0");
+    close_rel(r.statics.mean_force_0.unwrap(), FMEAN_0, 1e-9, "mean_force_0");
+    assert_eq!(r.statics.force_model, Some(ForceModel::Mobilised));
     // eq. 3.12 by hand from the reported f^μ (an independent path to the same number)
-    let (f1, f2) = (r.fmu_1.unwrap(), r.fmu_2.unwrap());
+    let (f1, f2) = (r.statics.fmu_1.unwrap(), r.statics.fmu_2.unwrap());
     let m = 0.5 * (f1 + f2);
     close_rel(((m - f1).powi(2) + (m - f2).powi(2)) / (f1 * f2), ALPHA_MU, 1e-9, "alpha_mu from fmu");
     let ev = evaluate(&Design::nominal(), &p.scene, &EvalOptions::statics_only());
@@ -50,15 +50,15 @@ fn frictionless_model_switches_the_objectives_only() {
     let p = with_model("frictionless");
     assert_eq!(p.scene.criteria.force_model, ForceModel::Frictionless);
     let r = record(&p);
-    close_rel(r.alpha.unwrap(), ALPHA_0, 1e-9, "alpha = alpha_0");
-    close_rel(r.mean_force.unwrap(), FMEAN_0, 1e-9, "mean_force = mean_force_0");
-    close_rel(r.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu still reported");
-    close_rel(r.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu still reported");
-    assert_eq!(r.force_model, Some("frictionless"));
+    close_rel(r.statics.alpha.unwrap(), ALPHA_0, 1e-9, "alpha = alpha_0");
+    close_rel(r.statics.mean_force.unwrap(), FMEAN_0, 1e-9, "mean_force = mean_force_0");
+    close_rel(r.statics.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu still reported");
+    close_rel(r.statics.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu still reported");
+    assert_eq!(r.statics.force_model, Some(ForceModel::Frictionless));
     // the constraints do not depend on the model (D7): same max_offset, same forces
     let m = record(&bottle());
-    assert_eq!(r.max_offset, m.max_offset);
-    assert_eq!(r.f0_1, m.f0_1);
+    assert_eq!(r.statics.max_offset, m.statics.max_offset);
+    assert_eq!(r.statics.f0_1, m.statics.f0_1);
 }
 
 #[test]

@@ -5,7 +5,7 @@
 use crate::common::{bottle, nominal};
 use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::sim::{
-    drive, fd_jacobian, free_tolerances, FreeJacobian, FreeScene, FreeSetup, Radau5, Rhs, SimOptions, Stats,
+    drive, fd_jacobian, free_tolerances, Controls, FreeJacobian, FreeScene, FreeSetup, Integration, Radau5, Rhs, Stats,
 };
 
 /// State layout of the free scene (docs/scenes.md): fingers 0..8, G 8..11, q 11..15,
@@ -21,11 +21,12 @@ fn jacobians_at(t_mid: f64) -> (FreeJacobian, FreeJacobian, Stats, Stats, gripop
     let s = bottle().scene;
     let k = stage_kinematics(&nominal(), &s).unwrap();
     let st = stage_statics(&k.finger, &s).unwrap();
-    let opts = SimOptions { record: true, ..SimOptions::diagnostic(1e-7, 1e-10, 400_000) };
-    let mut scene = FreeScene::new(&k.finger, &s, st.tau_s0, 0.0, FreeSetup::default(), true);
-    let mut stepper = Radau5::new(free_tolerances(&opts), 1e-5);
-    drive(&mut scene, &mut stepper, &opts, t_mid);
-    let (t, y) = scene.last_sampled().expect("a sampled state");
+    let opts = Integration::new(1e-7, 1e-10, 400_000);
+    let mut scene = FreeScene::new(&k.finger, &s, st.tau_s0, 0.0, FreeSetup::default());
+    let mut stepper = Radau5::new(free_tolerances(&opts), opts.h0);
+    // the state reached at t_mid, with the contact memories of that moment
+    let run = drive(&mut scene, &mut stepper, &opts, &Controls::DIAGNOSTIC, t_mid, &mut ());
+    let (t, y) = (run.t, run.y);
     assert!((t - t_mid).abs() < 1e-12, "reached {t}");
     let f = scene.eval(t, &y).expect("defined");
     let piece = scene.piece(&y);

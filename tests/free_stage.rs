@@ -7,7 +7,9 @@
 use crate::common::{bottle, nominal};
 use gripopt::eval::{evaluate_full, stage_kinematics, stage_statics, Reason, Record};
 use gripopt::params::{Problem, SceneKind};
-use gripopt::sim::{simulate_free, simulate_grasp, DynOutcome, FreeSetup, SimOptions};
+use gripopt::sim::{
+    diagnostic_grasp as simulate_grasp, simulate, Controls, DynOutcome, FreeResult, Integration, SceneSpec,
+};
 use std::path::PathBuf;
 
 /// bottle-1l.toml with `[scene] kind = "free"` and the given x_off (written under target/).
@@ -44,7 +46,7 @@ fn nominal_feasible_in_free_kind_discarded_in_centred_kind() {
     let s = &p.scene;
     let k = stage_kinematics(&nominal(), s).unwrap();
     let st = stage_statics(&k.finger, s).unwrap();
-    let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
+    let o = Integration::from_solver(&p.solver);
     // the prediction: the centred grasp in diagnostic mode (impact criterion fails, stable)
     let c = simulate_grasp(&k.finger, s, &st, &o);
     let fc = c.first.unwrap();
@@ -55,24 +57,21 @@ fn nominal_feasible_in_free_kind_discarded_in_centred_kind() {
     );
     assert_eq!(ev.objectives()[3], c.t_stab.unwrap(), "t_stab is the centred grasp's");
     // the measurement: the free scene, and §14.4's limits
-    let f = simulate_free(&k.finger, s, st.tau_s0, 0.0, FreeSetup::default(), &o, None);
+    let f = free_scene(&k.finger, s, &st, 0.0, &o, &mut ());
     let m = ev.free.expect("the free scene ran");
-    assert_eq!(m.max_displacement, f.object_max_displacement);
-    assert_eq!(m.max_tilt_deg, f.object_max_tilt_deg);
-    assert!(m.max_displacement < s.criteria.dx_max && m.max_tilt_deg < s.criteria.theta_max.to_degrees());
+    assert_eq!(m.object_max_displacement, f.object_max_displacement);
+    assert_eq!(m.object_max_tilt_deg, f.object_max_tilt_deg);
+    assert!(m.object_max_displacement < s.criteria.dx_max && m.object_max_tilt_deg < s.criteria.theta_max.to_degrees());
     assert!(!m.moved && !m.toppled && !m.escaped);
 
     // the record: the §14.4 keys beside the (informative) impact values, only in the free kind
     let r = serde_json::to_value(Record::from_eval(&ev)).unwrap();
-    assert_eq!(r["object_max_displacement"].as_f64(), Some(f.object_max_displacement));
-    assert_eq!(r["moved"], serde_json::json!(false));
+    assert_eq!(r["free_scene"]["object_max_displacement"].as_f64(), Some(f.object_max_displacement));
+    assert_eq!(r["free_scene"]["moved"], serde_json::json!(false));
     assert_eq!(r["e_cyl"].as_f64(), Some(fc.impact.e_cyl));
     assert_eq!(r["feasible"], serde_json::json!(true));
     let rc = serde_json::to_value(Record::from_eval(&centred)).unwrap();
-    assert!(
-        rc.get("object_max_displacement").is_none() && rc.get("moved").is_none(),
-        "no free keys in the centred kind"
-    );
+    assert!(rc.get("free_scene").is_none() && rc.get("moved").is_none(), "no free keys in the centred kind");
 }
 
 /// With the object 4 mm off centre the hand pushes it back toward the centre (the static
@@ -92,15 +91,16 @@ fn offset_object_moves_and_is_discarded() {
     let s = &p.scene;
     let k = stage_kinematics(&nominal(), s).unwrap();
     let st = stage_statics(&k.finger, s).unwrap();
-    let o = SimOptions { record: true, ..SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps) };
-    let f = simulate_free(&k.finger, s, st.tau_s0, x_off, FreeSetup::default(), &o, None);
+    let o = Integration::from_solver(&p.solver);
+    let mut poses = vec![];
+    let f = free_scene(&k.finger, s, &st, x_off, &o, &mut poses);
     assert!(f.moved && f.object_max_displacement > 1.5 * s.criteria.dx_max, "{}", f.object_max_displacement);
     let v = (f.object_max_displacement / s.criteria.dx_max)
         .max(f.object_max_tilt_deg / s.criteria.theta_max.to_degrees())
         - 1.0;
     assert!((d.violation - v).abs() <= 1e-12 * v, "violation {} vs {v}", d.violation);
     // pushed back toward the centre: G's x moves from x_off toward 0
-    let (g0, g1) = (f.poses.first().unwrap().g[0], f.poses.last().unwrap().g[0]);
+    let (g0, g1) = (poses.first().unwrap().g[0], poses.last().unwrap().g[0]);
     assert_eq!(g0, x_off);
     assert!(g1 < x_off - s.criteria.dx_max && g1 > -x_off, "G_x {g0} → {g1}");
     // the prediction (the centred scene) does not depend on x_off
@@ -129,8 +129,6 @@ fn optimise_free_kind_end_to_end() {
         generations: 2,
         seed: 16,
         threads: Some(2),
-        progress: false,
-        crash_after: None,
         record: gripopt::record::RecordOptions::default(),
     };
     let s = gripopt::run::optimise(&spec).unwrap();
@@ -143,11 +141,23 @@ fn optimise_free_kind_end_to_end() {
         let ev = evaluate_full(&p, &x);
         assert!(ev.feasible(), "design {id}");
         let m = ev.free.unwrap_or_else(|| panic!("design {id}: no free measurement"));
-        assert!(m.max_displacement <= p.scene.criteria.dx_max && !m.moved, "design {id}");
+        assert!(m.object_max_displacement <= p.scene.criteria.dx_max && !m.moved, "design {id}");
         // the recording's /designs record carries the same measured motion
         let rec = gripopt::record::read_design(&out, id).unwrap();
-        let f = &rec.record["free_scene"];
-        assert_eq!(f["object_max_displacement"].as_f64(), Some(m.max_displacement), "design {id}: {f}");
-        assert_eq!(f["moved"].as_bool(), Some(false), "design {id}: {f}");
+        let f = rec.record.free_scene.as_ref().expect("a free-kind design's record has the free scene");
+        assert_eq!(f.object_max_displacement, Some(m.object_max_displacement), "design {id}: {f:?}");
+        assert_eq!(f.moved, Some(false), "design {id}: {f:?}");
     }
+}
+
+/// The free scene of finger `f` at `x_off` through the one simulation call, its poses to `sink`.
+fn free_scene(
+    f: &gripopt::model::Finger,
+    s: &gripopt::params::SceneParams,
+    st: &gripopt::eval::StaticsResult,
+    x_off: f64,
+    o: &Integration,
+    sink: &mut dyn gripopt::sim::Sink,
+) -> FreeResult {
+    *simulate(f, s, st, &SceneSpec::free(x_off), o, &Controls::DIAGNOSTIC, sink).free().expect("the free scene")
 }

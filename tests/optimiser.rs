@@ -7,39 +7,29 @@ use std::path::{Path, PathBuf};
 /// Run folders go under target/mcap-check/ so that `make test` checks their recordings
 /// with the independent reader.
 fn tmp(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("optimiser-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    d
+    crate::common::check_dir(&format!("optimiser-{name}"))
 }
 
 fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 7,
-        threads: Some(threads),
-        progress: false,
-        crash_after: None,
-        record: gripopt::record::RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 7, threads)
 }
 
 fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-/// The population without the wall-clock timings (the only non-deterministic field).
+/// The population without the wall-clock timings (the only non-deterministic fields:
+/// the stage seconds and the simulations' cpu seconds of each record).
 fn population_json(dir: &Path) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_str(&read(&dir.join("checkpoint.json"))).unwrap();
     let mut pop = v["state"]["population"].take();
     for ind in pop.as_array_mut().unwrap() {
-        ind["eval"]["info"]["stage_seconds"] = serde_json::Value::Null;
+        let info = &mut ind["eval"]["info"];
+        info["stage_seconds"] = serde_json::Value::Null;
+        info["record"]["cpu_s"] = serde_json::Value::Null;
+        if let Some(f) = info["record"].get_mut("free_scene").and_then(|f| f.as_object_mut()) {
+            f.remove("cpu_s");
+        }
     }
     pop
 }
@@ -58,9 +48,8 @@ fn results_do_not_depend_on_the_thread_count() {
 fn crash_and_resume_is_bit_identical() {
     let (full, cut) = (tmp("full"), tmp("cut"));
     optimise(&spec(&full, 6, 2)).unwrap();
-    let mut s = spec(&cut, 6, 2);
-    s.crash_after = Some(3);
-    let e = optimise(&s).unwrap_err().to_string();
+    let s = spec(&cut, 6, 2);
+    let e = crate::common::optimise_crashing_after(&s, 3).unwrap_err().to_string();
     assert!(e.contains("resume"), "{e}");
     let run: serde_json::Value = serde_json::from_str(&read(&cut.join("run.json"))).unwrap();
     assert_eq!(run["status"], "interrupted");
@@ -69,7 +58,7 @@ fn crash_and_resume_is_bit_identical() {
     assert_eq!(run["completed_generations"], 3);
     assert_eq!(run["completed_generations"], cp["state"]["generation"]);
     assert_eq!(run["evaluations"], cp["state"]["evaluations"]);
-    let r = resume(&cut, None, false, Some(1), false).unwrap();
+    let r = resume(&cut, None, false, Some(1)).unwrap();
     assert_eq!(r.generations, 6);
     assert_eq!(read(&full.join("pareto.csv")), read(&cut.join("pareto.csv")));
     assert_eq!(read(&full.join("population.csv")), read(&cut.join("population.csv")));
@@ -84,11 +73,11 @@ fn a_finished_run_can_be_extended() {
     let (long, short) = (tmp("long"), tmp("short"));
     optimise(&spec(&long, 7, 2)).unwrap();
     optimise(&spec(&short, 4, 2)).unwrap();
-    let r = resume(&short, Some(7), false, Some(2), false).unwrap();
+    let r = resume(&short, Some(7), false, Some(2)).unwrap();
     assert_eq!(r.generations, 7);
     assert_eq!(read(&long.join("pareto.csv")), read(&short.join("pareto.csv")));
     // shrinking below the completed generations is refused
-    let e = resume(&short, Some(3), false, None, false).unwrap_err().to_string();
+    let e = resume(&short, Some(3), false, None).unwrap_err().to_string();
     assert!(e.contains("already has 7 generations"), "{e}");
 }
 
@@ -149,9 +138,9 @@ fn changed_problem_file_is_refused_unless_forced() {
     s.problem_path = prob.clone();
     optimise(&s).unwrap();
     std::fs::write(&prob, text.replace("tau = 0.5 ", "tau = 0.45 ")).unwrap();
-    let e = resume(&dir, Some(4), false, None, false).unwrap_err().to_string();
+    let e = resume(&dir, Some(4), false, None).unwrap_err().to_string();
     assert!(e.contains("changed") && e.contains("--force") && e.contains(&prob.display().to_string()), "{e}");
-    resume(&dir, Some(4), true, None, false).unwrap();
+    resume(&dir, Some(4), true, None).unwrap();
     let run: serde_json::Value = serde_json::from_str(&read(&dir.join("run.json"))).unwrap();
     assert_eq!(run["resumes"][0]["forced"], true);
     // a second start into the same folder is refused
@@ -167,23 +156,23 @@ fn corrupt_checkpoints_give_clear_errors() {
     let good = std::fs::read(&cp).unwrap();
     // truncated
     std::fs::write(&cp, &good[..good.len() / 2]).unwrap();
-    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    let e = resume(&dir, None, false, None).unwrap_err().to_string();
     assert!(e.contains("checkpoint.json") && e.contains("truncated"), "{e}");
     // wrong format tag
     let mut v: serde_json::Value = serde_json::from_slice(&good).unwrap();
     v["format"] = "something-else".into();
     std::fs::write(&cp, serde_json::to_vec(&v).unwrap()).unwrap();
-    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    let e = resume(&dir, None, false, None).unwrap_err().to_string();
     assert!(e.contains("checkpoint.json") && e.contains("format"), "{e}");
     // inconsistent state
     let mut v: serde_json::Value = serde_json::from_slice(&good).unwrap();
     v["state"]["generation"] = 9.into();
     std::fs::write(&cp, serde_json::to_vec(&v).unwrap()).unwrap();
-    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    let e = resume(&dir, None, false, None).unwrap_err().to_string();
     assert!(e.contains("checkpoint.json") && e.contains("inconsistent"), "{e}");
     // missing
     std::fs::remove_file(&cp).unwrap();
-    let e = resume(&dir, None, false, None, false).unwrap_err().to_string();
+    let e = resume(&dir, None, false, None).unwrap_err().to_string();
     assert!(e.contains("checkpoint.json"), "{e}");
     // the results written before stay readable
     assert!(read(&dir.join("pareto.csv")).lines().find(|l| !l.starts_with('#')).unwrap().starts_with("id,"));
@@ -209,7 +198,7 @@ fn reference_hypervolume_bands() {
 fn work_is_ordered_by_the_learnt_cost_model() {
     use argmin::core::observers::Observe;
     use argmin::core::State;
-    use gripopt::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
+    use gripopt::optim::{execute, observe, Nsga2, Nsga2Settings, Nsga2State, Operators};
     use gripopt::run::{GripperInfo, GripperProblem};
     use std::sync::{Arc, Mutex};
     type Gens = Arc<Mutex<Vec<(Vec<usize>, usize, Vec<Option<u64>>)>>>;
@@ -228,7 +217,7 @@ fn work_is_ordered_by_the_learnt_cost_model() {
             st: &Nsga2State<GripperInfo>,
             _: &argmin::core::KV,
         ) -> Result<(), argmin::core::Error> {
-            let work = st.last_evaluated.iter().map(|i| i.eval.info.sim_work.map(|w| w[1])).collect();
+            let work = st.last_evaluated.iter().map(|i| i.eval.info.record.grasp.work.rhs_evals).collect();
             self.0.lock().unwrap().push((st.timing.order.clone(), st.timing.costly, work));
             Ok(())
         }
@@ -250,7 +239,7 @@ fn work_is_ordered_by_the_learnt_cost_model() {
         let obs = Obs(gens.clone());
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
-            execute(gp, settings, Nsga2State::new().with_max_generations(8), move |e| observe(e, obs), false)
+            execute(gp, Nsga2::new(settings), Nsga2State::new().with_max_generations(8), move |e| observe(e, obs))
         })
         .unwrap();
         Arc::try_unwrap(gens).unwrap().into_inner().unwrap()

@@ -2,7 +2,6 @@
 //! and nothing is persisted after it; the
 //! evaluation order (most expensive first) does not change results (see also
 //! optimiser::results_do_not_depend_on_the_thread_count).
-use gripopt::record::RecordOptions;
 use gripopt::run::{optimise, RunSpec};
 use std::path::{Path, PathBuf};
 
@@ -13,17 +12,7 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn spec(out: &Path, generations: u64, threads: usize) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 5,
-        threads: Some(threads),
-        progress: false,
-        crash_after: None,
-        record: RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 5, threads)
 }
 
 #[test]

@@ -95,8 +95,8 @@ proptest! {
             prop_assert!(o.iter().all(|v| v.is_finite()));
         }
         let r = Record::from_eval(&ev);
-        prop_assert_eq!(r.feasible, ev.discard.is_none());
-        prop_assert_eq!(r.failed_stage.is_some(), r.reason.is_some());
+        prop_assert_eq!(r.verdict.feasible, ev.discard.is_none());
+        prop_assert_eq!(r.verdict.failed_stage.is_some(), r.verdict.reason.is_some());
         let json = serde_json::to_string(&r).unwrap();
         prop_assert!(!json.contains("NaN") && !json.contains("inf"));
     }

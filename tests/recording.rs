@@ -17,17 +17,7 @@ fn dir(name: &str) -> PathBuf {
 }
 
 fn spec(out: &Path, generations: u64) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 11,
-        threads: Some(2),
-        progress: false,
-        crash_after: None,
-        record: RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 11, 2)
 }
 
 #[test]
@@ -45,31 +35,31 @@ fn every_design_is_recorded_and_replays_verified() {
     let (mut with_traj, mut discarded, mut feasible) = (0, 0, 0);
     for id in 0..s.evaluations {
         let r = read_design(&d, id).unwrap();
-        assert_eq!(r.record["id"].as_u64(), Some(id));
+        assert_eq!(r.record.id, id);
         // the recorded record agrees with its trajectory (compact: a subset of the samples)
-        let simulated = r.record["trajectory_samples"].as_u64().unwrap();
+        let simulated = r.record.trajectory_samples;
         assert!(r.samples.len() as u64 <= simulated && (simulated == 0) == r.samples.is_empty(), "design {id}");
         // the window starts at the run's start time + id s, and /designs says so
-        assert_eq!(r.record["window_start"]["sec"].as_u64(), Some(epoch + id), "design {id}");
-        assert_eq!(r.record["window_start"]["nsec"].as_u64(), Some(0));
+        assert_eq!(r.record.window_start.sec, epoch + id, "design {id}");
+        assert_eq!(r.record.window_start.nsec, 0);
         if !r.samples.is_empty() {
             with_traj += 1;
             assert!(r.samples.windows(2).all(|w| w[0].t <= w[1].t), "time runs forward");
             assert_eq!(r.samples[0].t, 0.0);
         }
         // never the optimiser's negative placeholder for max_offset (MODEL.md §6.7)
-        match r.record["form_closed"].as_bool() {
+        match r.record.form_closed {
             Some(true) => {
-                assert!(r.record["objectives"]["max_offset"].as_f64().is_some_and(|m| m >= 0.0), "design {id}")
+                assert!(r.record.objectives.max_offset.is_some_and(|m| m >= 0.0), "design {id}")
             }
-            Some(false) => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}: {}", r.record),
-            None => assert!(r.record["objectives"].get("max_offset").is_none(), "design {id}"),
+            Some(false) => assert!(r.record.objectives.max_offset.is_none(), "design {id}: {:?}", r.record),
+            None => assert!(r.record.objectives.max_offset.is_none(), "design {id}"),
         }
-        if r.record["feasible"].as_bool().unwrap() {
+        if r.record.feasible {
             feasible += 1;
         } else {
             discarded += 1;
-            assert!(r.record["reason"].as_str().is_some_and(|s| !s.is_empty()));
+            assert!(r.record.reason.as_ref().is_some_and(|s| !s.is_empty()));
         }
     }
     assert!(with_traj > 0 && feasible > 0 && discarded > 0, "{with_traj} {feasible} {discarded}");
@@ -87,7 +77,7 @@ fn every_design_is_recorded_and_replays_verified() {
     );
     for id in 0..s.evaluations {
         let rec = read_design(&d, id).unwrap().record;
-        if rec["failed_stage"].as_u64().is_some() {
+        if rec.failed_stage.is_some() {
             let r = replay(&d, id).unwrap();
             assert!(r.verified, "design {id}");
         }
@@ -129,12 +119,11 @@ fn corrupt_shards_give_clear_errors_and_the_rest_stays_readable() {
 fn crash_and_resume_records_each_design_once_and_identically() {
     let (full, cut) = (dir("resume-full"), dir("resume-cut"));
     optimise(&spec(&full, 5)).unwrap();
-    let mut s = spec(&cut, 5);
-    s.crash_after = Some(2);
-    assert!(optimise(&s).is_err());
+    let s = spec(&cut, 5);
+    assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
     // a partly written next generation would be left as a temporary file: simulate one
     std::fs::write(cut.join("recording/gen-00003.mcap.tmp"), b"partial").unwrap();
-    resume(&cut, None, false, Some(1), false).unwrap();
+    resume(&cut, None, false, Some(1)).unwrap();
     let idx = read_index(&cut.join("recording")).unwrap();
     let gens: Vec<u64> = idx.iter().map(|e| e.generation).collect();
     assert_eq!(gens, vec![1, 2, 3, 4, 5]);
@@ -142,8 +131,8 @@ fn crash_and_resume_records_each_design_once_and_identically() {
     for id in 0..60 {
         let a = read_design(&full, id).unwrap();
         let b = read_design(&cut, id).unwrap();
-        assert_eq!(a.record["parameters"], b.record["parameters"], "design {id}");
-        assert_eq!(a.record["reason"], b.record["reason"]);
+        assert_eq!(a.record.parameters, b.record.parameters, "design {id}");
+        assert_eq!(a.record.reason, b.record.reason);
         assert_eq!(a.samples, b.samples, "design {id}: trajectories differ");
     }
     assert!(read_design(&cut, 60).is_err());
@@ -193,7 +182,7 @@ fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
         let c = read_design(&compact, id).unwrap();
         assert_eq!(f.resolution, Resolution::Full);
         assert_eq!(c.resolution, Resolution::Compact);
-        assert_eq!(f.record["trajectory_samples"].as_u64(), Some(f.samples.len() as u64), "full keeps every sample");
+        assert_eq!(f.record.trajectory_samples, f.samples.len() as u64, "full keeps every sample");
         if f.samples.is_empty() {
             assert!(c.samples.is_empty());
             continue;
@@ -244,8 +233,8 @@ fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
         assert!(r.verified && r.max_difference == 0.0, "{}: {} {}", d.display(), r.verified, r.max_difference);
         let layout: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(d.join(gripopt::record::LAYOUT_FILE)).unwrap()).unwrap();
-        assert_eq!(layout["configById"]["3D!grasp"]["followTf"], "hand");
-        assert_eq!(layout["configById"]["Plot!forces"]["xAxisPath"]["value"], "/grasp/series.t[:]");
+        assert_eq!(layout["configById"]["3D!oblique"]["followTf"], "world");
+        assert_eq!(layout["configById"]["Plot!contact"]["xAxisPath"]["value"], "/grasp/series.t[:]");
         assert_eq!(layout["configById"]["RawMessages!designs"]["topicPath"], "/designs");
     }
 }

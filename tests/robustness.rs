@@ -11,27 +11,11 @@ pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
 pub(crate) const PROBLEM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
 
 pub(crate) fn tmp(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(format!("robust-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
-    d
+    crate::common::check_dir(&format!("robust-{name}"))
 }
 
 pub(crate) fn spec(out: &Path, generations: u64) -> RunSpec {
-    RunSpec {
-        problem_path: PROBLEM.into(),
-        out: out.to_path_buf(),
-        pop: 12,
-        generations,
-        seed: 7,
-        threads: Some(2),
-        progress: false,
-        crash_after: None,
-        record: RecordOptions::default(),
-    }
+    crate::common::bottle_spec(out, generations, 7, 2)
 }
 
 pub(crate) fn read(p: &Path) -> String {
@@ -90,13 +74,13 @@ fn two_processes_on_one_folder_the_second_is_refused_with_the_holders_pid() {
     let o = cli(&["optimise", PROBLEM, "--out", &d, "--pop", "8", "--generations", "2"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     // the library says the same in-process (flock locks are per open file)
-    let lib = resume(&dir, None, false, Some(1), false).unwrap_err();
+    let lib = resume(&dir, None, false, Some(1)).unwrap_err();
     assert!(matches!(lib, gripopt::Error::Locked { pid: Some(p), .. } if p == child.id()), "{lib}");
     // kill -9 releases the lock: a resume then works
     child.kill().unwrap();
     child.wait().unwrap();
     let g = checkpoint_generation(&dir);
-    let r = resume(&dir, Some(g + 1), false, Some(2), false).unwrap();
+    let r = resume(&dir, Some(g + 1), false, Some(2)).unwrap();
     assert_eq!(r.generations, g + 1);
 }
 
@@ -115,9 +99,8 @@ fn optimise_into_a_non_empty_folder_that_is_not_a_run_is_refused() {
 fn kill_9_during_resume_loses_nothing_and_ends_bit_identical() {
     let (full, cut) = (tmp("k9-full"), tmp("k9-cut"));
     optimise(&spec(&full, 7)).unwrap();
-    let mut s = spec(&cut, 7);
-    s.crash_after = Some(2);
-    optimise(&s).unwrap_err();
+    let s = spec(&cut, 7);
+    crate::common::optimise_crashing_after(&s, 2).unwrap_err();
     let c = cut.display().to_string();
     let mut child = Command::new(BIN)
         .args(["resume", &c, "--threads", "1"])
@@ -132,7 +115,7 @@ fn kill_9_during_resume_loses_nothing_and_ends_bit_identical() {
     // every shard the checkpoint covers is still there and indexed after recovery
     let rec = recover(&cut.join("recording"), covered).unwrap();
     assert_eq!(rec.index.iter().map(|e| e.generation).collect::<Vec<_>>(), (1..=covered).collect::<Vec<_>>());
-    resume(&cut, None, false, Some(2), false).unwrap();
+    resume(&cut, None, false, Some(2)).unwrap();
     for f in ["pareto.csv", "population.csv", "history.csv", "archive.csv"] {
         assert_eq!(read(&full.join(f)), read(&cut.join(f)), "{f}");
     }
@@ -183,12 +166,12 @@ fn an_emptied_truncated_or_missing_index_is_rebuilt_from_the_shards() {
     }
     // through a real resume (which used to delete every shard not listed)
     std::fs::write(rdir.join("index.jsonl"), "").unwrap();
-    resume(&dir, Some(5), false, Some(2), false).unwrap();
+    resume(&dir, Some(5), false, Some(2)).unwrap();
     let after = read_index(&rdir).unwrap();
     assert_eq!(&after[..4], &original[..]);
     assert_eq!(after.len(), 5);
     let r = gripopt::record::replay(&dir, original[1].first_id).unwrap();
-    assert_eq!(r.recorded.record["id"].as_u64(), Some(original[1].first_id));
+    assert_eq!(r.recorded.record.id, original[1].first_id);
 }
 
 #[test]
@@ -204,11 +187,11 @@ fn an_edited_checkpoint_is_refused_unless_forced() {
     let mut bytes = text.into_bytes();
     bytes[digit] = if old == b'9' { b'8' } else { old + 1 };
     std::fs::write(&cp, &bytes).unwrap();
-    let e = resume(&dir, Some(4), false, Some(2), false).unwrap_err();
+    let e = resume(&dir, Some(4), false, Some(2)).unwrap_err();
     assert!(e.to_string().contains("checksum") && e.to_string().contains("checkpoint.json"), "{e}");
     let o = cli(&["resume", &dir.display().to_string(), "--generations", "4"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
-    resume(&dir, Some(4), true, Some(2), false).unwrap();
+    resume(&dir, Some(4), true, Some(2)).unwrap();
     let run: serde_json::Value = serde_json::from_str(&read(&dir.join("run.json"))).unwrap();
     assert_eq!(run["resumes"][0]["forced"], true);
     assert!(run["resumes"][0]["note"].as_str().unwrap().contains("checksum"), "{}", run["resumes"][0]);
@@ -347,11 +330,11 @@ fn discarded_designs_report_every_value_computed_before_the_discard() {
                 let f = Finger::new(&x, s).unwrap();
                 let (_, tau0) = spring_preload(&f, s).unwrap();
                 let g = grasp_at(&f, s, tau0, 0.0).unwrap();
-                assert_eq!(r.f0_1, Some(g.forces[0].f0[0]));
-                assert_eq!(r.fmu_2, Some(g.forces[0].fmu[1]));
-                assert_eq!(r.theta1, Some(g.cp[0].theta1));
-                assert_eq!(r.tau_s0, Some(tau0));
-                assert_eq!(r.fhandmu_y, Some(g.hand_mu.y));
+                assert_eq!(r.statics.f0_1, Some(g.forces[0].f0[0]));
+                assert_eq!(r.statics.fmu_2, Some(g.forces[0].fmu[1]));
+                assert_eq!(r.statics.theta1, Some(g.cp[0].theta1));
+                assert_eq!(r.statics.tau_s0, Some(tau0));
+                assert_eq!(r.statics.fhandmu_y, Some(g.hand_mu.y));
                 assert!(g.min_force() <= 0.0);
                 // not computed: the objectives and form closure
                 for k in ["alpha", "mean_force", "max_offset", "form_closed_0", "t_stab"] {
@@ -361,10 +344,10 @@ fn discarded_designs_report_every_value_computed_before_the_discard() {
             }
             Reason::Sweep(_) if !sweep => {
                 let f = Finger::new(&x, s).unwrap();
-                assert_eq!(r.l12, Some(f.l12));
-                assert_eq!(r.q11_0, Some(f.open.q11));
-                assert_eq!(r.q12_0, Some(f.open.q12));
-                assert_eq!(r.gamma, Some(f.gamma));
+                assert_eq!(r.kinematics.l12, Some(f.l12));
+                assert_eq!(r.kinematics.q11_0, Some(f.open.q11));
+                assert_eq!(r.kinematics.q12_0, Some(f.open.q12));
+                assert_eq!(r.kinematics.gamma, Some(f.gamma));
                 assert!(json["min_margin_deg"].is_null() && json["tau_s0"].is_null());
                 sweep = true;
             }
@@ -384,9 +367,8 @@ fn discarded_designs_report_every_value_computed_before_the_discard() {
 #[test]
 fn outputs_are_written_every_generation_with_units_archive_and_totals() {
     let dir = tmp("outputs");
-    let mut s = spec(&dir, 5);
-    s.crash_after = Some(2);
-    optimise(&s).unwrap_err();
+    let s = spec(&dir, 5);
+    crate::common::optimise_crashing_after(&s, 2).unwrap_err();
     // a crashed (or running) run already has its tables, one history row per generation
     assert_eq!(rows(&dir.join("history.csv")).len(), 1 + 2);
     assert_eq!(rows(&dir.join("pareto.csv"))[0][0], "id");

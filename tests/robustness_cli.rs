@@ -399,7 +399,7 @@ fn a_missing_index_and_an_unreadable_shard_stop_a_resume_and_a_moved_shard_is_na
         "{:?}",
         r.warnings(&rdir)
     );
-    resume(&dir, Some(4), false, Some(2), false).unwrap();
+    resume(&dir, Some(4), false, Some(2)).unwrap();
     let gens: Vec<u64> = read_index(&rdir).unwrap().iter().map(|e| e.generation).collect();
     assert_eq!(gens, vec![1, 3, 4]);
     let e = gripopt::record::read_design(&dir, (g2.first_id + g2.last_id) / 2).unwrap_err().to_string();

@@ -29,10 +29,11 @@ fn simulate_free_early_end_has_no_verdict() {
     let o = run(&["simulate", BOTTLE, "--scene", "free:0.02", "--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_ne!(j["free_end"], "t_obs", "{j}");
-    assert!(j["t_end"].as_f64().unwrap() < 0.1, "{j}");
+    let f = &j["free_scene"];
+    assert_ne!(f["end"], "t_obs", "{j}");
+    assert!(f["t_end"].as_f64().unwrap() < 0.1, "{j}");
     for k in ["moved", "toppled", "escaped"] {
-        assert!(j[k].is_null(), "{k} must be null when nothing was observed: {j}");
+        assert!(f[k].is_null(), "{k} must be null when nothing was observed: {j}");
     }
     let o = run(&["simulate", BOTTLE, "--scene", "free:0.02"]);
     let t = text(&o);
@@ -44,10 +45,15 @@ fn simulate_free_early_end_has_no_verdict() {
 fn simulate_refuses_flags_it_cannot_honour() {
     let dir = std::env::temp_dir().join(format!("gripopt-scene-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    // the offset scene records its trajectory (finger 1's samples) like the centred scene
     let csv = dir.join("offset.csv");
     let o = run(&["simulate", BOTTLE, "--scene", "offset:0.002", "--csv", &csv.display().to_string()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+    assert!(rows > 100, "{rows} rows");
+    let o = run(&["simulate", BOTTLE, "--scene", "free", "--plot", &dir.join("free.svg").display().to_string()]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("--csv") && !csv.exists());
+    assert!(text(&o).contains("--plot") && !dir.join("free.svg").exists());
     for scene in ["free", "offset:0.002"] {
         let o = run(&["simulate", BOTTLE, "--scene", scene, "--no-contact"]);
         assert_eq!(o.status.code(), Some(2), "{scene}: {}", text(&o));

@@ -3,18 +3,44 @@
 //! independent value (an analytic limit, a symmetry, energy).
 
 use crate::common::{bottle, nominal};
+use gripopt::eval::StaticsResult;
 use gripopt::eval::{stage_kinematics, stage_statics};
+use gripopt::model::Finger;
 use gripopt::params::SceneParams;
-use gripopt::sim::{simulate_free, simulate_grasp, simulate_offset, FreeResult, FreeSetup, SimOptions};
+use gripopt::sim::{
+    diagnostic_grasp as simulate_grasp, simulate, Controls, FreeResult, FreeSetup, Integration as SimOptions,
+    OffsetResult, SceneResult, SceneSpec,
+};
 
 fn tight() -> SimOptions {
-    SimOptions::diagnostic(1e-10, 1e-13, 2_000_000)
+    SimOptions::new(1e-10, 1e-13, 2_000_000)
+}
+
+/// The offset scene through the one simulation call.
+fn simulate_offset(f: &Finger, s: &SceneParams, st: &StaticsResult, x_off: f64, o: &SimOptions) -> OffsetResult {
+    match simulate(f, s, st, &SceneSpec::Offset { x_off }, o, &Controls::DIAGNOSTIC, &mut ()) {
+        SceneResult::Offset(r) => r,
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The free scene through the one simulation call.
+fn simulate_free(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    setup: FreeSetup,
+    o: &SimOptions,
+    t_end: Option<f64>,
+) -> FreeResult {
+    let spec = SceneSpec::Free { x_off: 0.0, setup, t_end };
+    *simulate(f, s, st, &spec, o, &Controls::DIAGNOSTIC, &mut ()).free().expect("the free scene")
 }
 
 fn free(s: &SceneParams, setup: FreeSetup, opts: &SimOptions, t_end: Option<f64>) -> FreeResult {
     let k = stage_kinematics(&nominal(), s).unwrap();
     let st = stage_statics(&k.finger, s).unwrap();
-    simulate_free(&k.finger, s, st.tau_s0, 0.0, setup, opts, t_end)
+    simulate_free(&k.finger, s, &st, setup, opts, t_end)
 }
 
 fn alone() -> FreeSetup {
@@ -61,7 +87,7 @@ fn offset_hand_force_recentres() {
     let s = bottle().scene;
     let k = stage_kinematics(&nominal(), &s).unwrap();
     let st = stage_statics(&k.finger, &s).unwrap();
-    let o = SimOptions::diagnostic(1e-8, 1e-11, 2_000_000);
+    let o = SimOptions::new(1e-8, 1e-11, 2_000_000);
     for x_off in [1e-3, -1e-3, 2e-3] {
         let r = simulate_offset(&k.finger, &s, &st, x_off, &o);
         assert!(r.hand0[0] * x_off < 0.0, "static F_hand,x {} at x_off {x_off}: does not recentre", r.hand0[0]);
@@ -73,10 +99,10 @@ fn offset_hand_force_recentres() {
 #[test]
 fn free_object_alone_stays() {
     let s = bottle().scene;
-    let r = free(&s, alone(), &SimOptions::diagnostic(1e-6, 1e-9, 200_000), None);
+    let r = free(&s, alone(), &SimOptions::new(1e-6, 1e-9, 200_000), None);
     assert!(r.object_max_displacement < 1e-9, "{}", r.object_max_displacement);
     assert!(r.object_max_tilt_deg < 1e-6, "{}", r.object_max_tilt_deg);
-    assert_eq!(r.end, "t_obs");
+    assert_eq!(r.end, gripopt::sim::FreeEnd::Observed);
 }
 
 /// §14.5.4: sliding along the palm at 0.1 m/s stops after v²/(2 μ_g g) within 2 %.
@@ -90,7 +116,7 @@ fn free_sliding_distance() {
     assert!((s.env.mu_g * s.object.length / 2.0 - s.object.radius).abs() < 1e-12, "nominal: on the tipping limit");
     s.env.mu_g = 0.2;
     let setup = FreeSetup { v0: [0.1, 0.0, 0.0], ..alone() };
-    let r = free(&s, setup, &SimOptions::diagnostic(1e-6, 1e-9, 200_000), Some(0.1));
+    let r = free(&s, setup, &SimOptions::new(1e-6, 1e-9, 200_000), Some(0.1));
     let expect = 0.1f64.powi(2) / (2.0 * s.env.mu_g * s.env.g);
     assert!((expect - 2.548e-3).abs() < 1e-6);
     assert!(
@@ -109,7 +135,7 @@ fn free_tipping_force() {
     s.env.mu_g = 1.0;
     let f_tip = s.object.mass() * s.env.g * s.object.radius / s.object.grasp_height;
     assert!((f_tip - 7.89).abs() < 0.01, "{f_tip}");
-    let o = SimOptions::diagnostic(1e-6, 1e-9, 400_000);
+    let o = SimOptions::new(1e-6, 1e-9, 400_000);
     // the force is a step at t = 0: the stiff ground contacts overshoot and the object
     // rocks (0.16° at most) but does not tip; §14.5's 0.01° holds for a quasi-static load
     let below = free(&s, FreeSetup { push_x: 0.98 * f_tip, ..alone() }, &o, Some(0.6));
@@ -129,7 +155,7 @@ fn free_tilt_release() {
     let s = bottle().scene;
     let crit = (2.0 * s.object.radius / s.object.length).atan();
     assert!((crit.to_degrees() - 21.80).abs() < 0.01);
-    let o = SimOptions::diagnostic(1e-6, 1e-9, 400_000);
+    let o = SimOptions::new(1e-6, 1e-9, 400_000);
     // it rocks on its rim for ≈ 2 s before it settles (restitution 0.3 on the ground)
     let back = free(&s, FreeSetup { tilt: 0.9 * crit, ..alone() }, &o, Some(3.0));
     assert!(back.object_final_tilt_deg < 0.1, "0.9x: final tilt {}", back.object_final_tilt_deg);
@@ -147,15 +173,8 @@ fn free_heavy_object_limit() {
     let st = stage_statics(&k.finger, &s).unwrap();
     let o = tight();
     let c = simulate_grasp(&k.finger, &s, &st, &o);
-    let r = simulate_free(
-        &k.finger,
-        &s,
-        st.tau_s0,
-        0.0,
-        FreeSetup::default(),
-        &SimOptions::diagnostic(1e-8, 1e-11, 2_000_000),
-        Some(0.03),
-    );
+    let r =
+        simulate_free(&k.finger, &s, &st, FreeSetup::default(), &SimOptions::new(1e-8, 1e-11, 2_000_000), Some(0.03));
     let (fc, t) = (c.first.unwrap(), r.first_contact_t.unwrap());
     assert!((fc.t - t).abs() <= 1e-6 * fc.t, "first contact {} vs {t}", fc.t);
     let v = r.first_impact.unwrap().v_impact;
@@ -168,7 +187,7 @@ fn free_heavy_object_limit() {
 #[test]
 fn free_symmetry_and_energy() {
     let s = bottle().scene;
-    let r = free(&s, FreeSetup::default(), &SimOptions::diagnostic(1e-7, 1e-10, 400_000), None);
+    let r = free(&s, FreeSetup::default(), &SimOptions::new(1e-7, 1e-10, 400_000), None);
     assert!(r.first_contact_t.is_some(), "{r:?}");
     assert!(r.object_max_dx <= 1e-12, "x motion {}", r.object_max_dx);
     assert!(r.object_max_tilt_y <= 1e-12, "tilt about y {}", r.object_max_tilt_y);

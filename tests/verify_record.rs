@@ -59,8 +59,13 @@ fn verify_recording_holds_rows_and_object_pose() {
     let c = |name: &str| h.iter().position(|x| x == name).unwrap();
     assert!(!rows.is_empty());
     let msgs = messages(&file);
+    // the verify windows start after the run's designs, at the first whole thousand seconds
+    // (the run's 16 designs live in [epoch, epoch + 16 s)): no second holds two designs
+    assert_eq!(run["evaluations"].as_u64(), Some(16));
+    let base = epoch_ns + 1000 * 1_000_000_000;
+    assert!(msgs.iter().all(|m| m.1 >= base), "a verify message inside the run's time range");
     for (k, row) in rows.iter().enumerate() {
-        let (lo, hi) = (epoch_ns + k as u64 * 1_000_000_000, epoch_ns + (k as u64 + 1) * 1_000_000_000);
+        let (lo, hi) = (base + k as u64 * 1_000_000_000, base + (k as u64 + 1) * 1_000_000_000);
         let win: Vec<_> = msgs.iter().filter(|m| m.1 >= lo && m.1 < hi).collect();
         let recs: Vec<_> = win.iter().filter(|m| m.0 == "/verify").collect();
         assert_eq!(recs.len(), 1, "window {k}");
@@ -75,9 +80,20 @@ fn verify_recording_holds_rows_and_object_pose() {
         assert_eq!(v["moved"].as_bool().unwrap(), row[c("moved")] == "true");
         // the object's frame: one hand → object per pose, from G(0) to the end, never further
         // from G(0) horizontally than the measured maximum
-        let tfs: Vec<(u64, FrameTransforms)> =
+        let mut tfs: Vec<(u64, FrameTransforms)> =
             win.iter().filter(|m| m.0 == "/tf").map(|m| (m.1, FrameTransforms::decode(&m.2[..]).unwrap())).collect();
+        // one /tf per pose, and the final pose again at the window's last nanosecond (so a
+        // seek anywhere in the last window lands inside the recording)
+        let end = tfs.pop().unwrap();
+        assert_eq!(end.0, hi - 1);
         assert_eq!(tfs.len() as u64, v["poses"].as_u64().unwrap());
+        // world → hand in every message: a viewer seeking into the window finds the ground
+        for (_, t) in tfs.iter().chain([&end]) {
+            assert_eq!(
+                (t.transforms[0].parent_frame_id.as_str(), t.transforms[0].child_frame_id.as_str()),
+                ("world", "hand")
+            );
+        }
         // drawn at least 2 ms of simulated time apart (the last pose excepted), so at most
         // 0.1 s / 2 ms + 2 poses; the integrator's steps grow beyond 2 ms once settled
         assert!(tfs.len() >= 10 && tfs.len() <= 52, "{} poses", tfs.len());

@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
-"""Independent check of gripopt's MCAP files, as a Foxglove viewer would read them.
+"""Independent check of gripopt's MCAP files and shipped layouts, as a Foxglove viewer would read them.
 
 Knows nothing of gripopt's code: it uses the reference `mcap` reader, `mcap-protobuf-support`
 (decodes protobuf messages with the descriptor embedded in the file) and the official
-Foxglove schemas from `foxglove-schemas-protobuf`. For every *.mcap under the given folders:
+Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transforms itself
+(tools/mcap_scene.py). For every *.mcap under the given folders:
 
 1. the file opens, has a summary with statistics, chunk and message indexes, and a
-   `gripopt.run` metadata record with generation, first_id, last_id, designs, epoch_s;
+   `gripopt.run` (shard), `gripopt.verify` or `gripopt.front` metadata record with its keys;
 2. every channel is protobuf (schema encoding `protobuf`) or JSON (`jsonschema`);
    a `foxglove.*` schema must be protobuf and its descriptor (every message it reaches:
    field names, numbers, labels, types, type names; enum values) must equal the official
@@ -14,26 +15,44 @@ Foxglove schemas from `foxglove-schemas-protobuf`. For every *.mcap under the gi
    per field, no union types; every array with typed `items`; every object with properties);
 3. every message decodes (protobuf with the embedded descriptor; JSON, validated against
    its schema), and the count equals the statistics;
-4. the time convention and scene: each design's `/designs` message sits at the start of its
-   time window, epoch_s + id s; in that window `/grasp/series` has equal-length columns with
-   time running forward inside the window; where there is a scene, `/tf` (world → hand),
-   `/scene/static` (deleting all, then ground, palm, object) and `/scene` (deleting all first)
-   are at the window start, and the last `/scene` message is at the last recorded sample.
-5. a `gripopt verify` recording (metadata `gripopt.verify` instead of `gripopt.run`): window k
-   holds one `/verify` record (window k, at the window start); `/scene/static` at the window
-   start deletes all, then draws ground (frame world), palm (hand) and object (object); `/tf`
-   carries world → hand and hand → object at the window start, then hand → object only, one
-   per drawn pose (as many as the record says), time running forward, stamps equal to the log
-   times, unit quaternions, the last at the record's t_end; `/scene` deletes all first and
-   draws the two fingers only at pose times, the last at the last pose.
+4. a shard: each design's `/designs` message sits at the start of its time window,
+   epoch_s + id s; in that window `/grasp/series` has equal-length columns with time running
+   forward inside the window (a design without a grasp: one placeholder sample at t = 0 with
+   `simulated_samples` = 0, so a Plot panel redraws); where there is a scene, `/tf` at the window
+   start and at its last nanosecond, `/scene/static` (deleting all, then ground, palm, object,
+   label) and `/scene` (deleting all first) at the window start, and the last finger pose at
+   the last recorded sample;
+5. a verify recording: window k (at epoch_s + window_base_s + k s) holds one `/verify` record
+   and one `/verify/series` at the window start; `/scene/static` deletes all, then draws ground
+   (frame world), palm (hand), object (object) and a label; `/tf` carries world -> hand and
+   hand -> object at every pose (as many as the record says, time running forward, the last
+   at the record's t_end) and once more at the window's last nanosecond; `/scene` deletes all
+   first and draws the two fingers only at pose times, the last at the last pose;
+6. a front recording: one `/front` message per design at its window start;
+7. the geometry in world coordinates (tools/mcap_scene.py): world -> hand in every /tf
+   message and constant; every entity frame_locked; no finger point below the ground plane
+   at any instant; the object upright with its base on the ground at each window start; a
+   moving object never below the ground by more than a contact penetration.
 
-Prints one line per file and 'N passed, N failed'; exits non-zero on any failure or when
-no file was found.
+Then per run folder: the same world frame (world -> hand, ground plane) in its shards and
+verify files; verify files in time ranges disjoint from the shards' and from each other; the
+front recording present when the run finished, covering the shards' designs, its members
+those of pareto.csv; and every topic, message path and frame of each shipped layout
+(foxglove-layout.json: the shards and front.mcap; foxglove-verify-layout.json: each verify
+file) present in the recordings it is shipped with (tools/check_layout.py).
+
+Prints one line per file and folder and 'N passed, N failed'; exits non-zero on any failure
+or when no file was found.
 """
 import importlib
 import json
+import math
 import pathlib
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from check_layout import Recording, check_layout  # noqa: E402
+from mcap_scene import Scene  # noqa: E402
 
 import jsonschema
 from google.protobuf import descriptor_pb2
@@ -154,6 +173,19 @@ class JsonDecoderFactory(McapDecoderFactory):
         return json.loads if message_encoding == "json" else None
 
 
+class FileInfo:
+    """What the folder checks need from one file."""
+
+    def __init__(self, path, kind):
+        self.path, self.kind = path, kind
+        self.recording = Recording()
+        self.scene = None
+        self.start = self.end = None
+        self.front = {}  # /front: id -> on_final_front
+        self.designs = {}  # /designs: id -> (feasible, objectives)
+        self.ids = set()
+
+
 def check(path):
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory(), JsonDecoderFactory()])
@@ -167,40 +199,29 @@ def check(path):
         for ci in summary.chunk_indexes:
             if not ci.message_index_offsets:
                 raise ValueError(f"chunk at {ci.chunk_start_offset} has no message index")
-        validators = {}
-        problems = []  # every channel's problem, not only the first
-        for cid, ch in sorted(summary.channels.items()):
-            schema = summary.schemas[ch.schema_id]
-            try:
-                if schema.name.startswith("foxglove."):
-                    check_foxglove_schema(schema)
-                if schema.encoding == "protobuf" and ch.message_encoding == "protobuf":
-                    descriptor_pb2.FileDescriptorSet.FromString(schema.data)
-                elif schema.encoding == "jsonschema" and ch.message_encoding == "json":
-                    s = json.loads(schema.data)
-                    parse_like_viewer(s, f"{ch.topic} ({schema.name})")
-                    jsonschema.Draft7Validator.check_schema(s)
-                    validators[cid] = jsonschema.Draft7Validator(s)
-                else:
-                    raise ValueError(f"channel {ch.topic}: encodings {schema.encoding}/{ch.message_encoding}")
-            except Exception as e:  # noqa: BLE001 - collect them all
-                problems.append(f"channel {ch.topic}: {e}")
-        if problems:
-            raise ValueError("\n    " + "\n    ".join(problems))
+        validators = check_channels(summary)
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
         if "gripopt.run" in meta:
-            name, first, last, per_design = "gripopt.run", "first_id", "last_id", check_design
+            name, first, last, per_design, kind = "gripopt.run", "first_id", "last_id", check_design, "shard"
             keys = ("generation", "first_id", "last_id", "designs", "epoch_s")
         elif "gripopt.verify" in meta:
-            name, first, last, per_design = "gripopt.verify", "first_window", "last_window", check_verify_design
-            keys = ("first_window", "last_window", "designs", "epoch_s", "scene_dt")
+            name, first, last, per_design, kind = "gripopt.verify", "first_window", "last_window", check_verify_design, "verify"
+            keys = ("first_window", "last_window", "designs", "epoch_s", "window_base_s", "scene_dt")
+        elif "gripopt.front" in meta:
+            name, first, last, per_design, kind = "gripopt.front", "first_id", "last_id", check_front_design, "front"
+            keys = ("first_id", "last_id", "designs", "epoch_s", "front_size", "generations")
         else:
-            raise ValueError("no gripopt.run (or gripopt.verify) metadata record")
+            raise ValueError("no gripopt.run, gripopt.verify or gripopt.front metadata record")
         run = meta[name]
         for k in keys:
             if k not in run:
                 raise ValueError(f"{name} metadata lacks {k!r}")
-        epoch = int(run["epoch_s"]) * NS
+        info = FileInfo(path, kind)
+        base = int(run.get("window_base_s", 0))
+        epoch = (int(run["epoch_s"]) + base) * NS
+        window_start = lambda t: (t - epoch) % NS == 0  # noqa: E731
+        info.scene = Scene(window_start)
+        scene_topics = any(ch.topic == "/scene" for ch in summary.channels.values())
         n = 0
         by_design = {}
         for schema, channel, message, decoded in reader.iter_decoded_messages():
@@ -209,17 +230,63 @@ def check(path):
                 errors = sorted(validators[channel.id].iter_errors(decoded), key=lambda e: e.path)
                 if errors:
                     raise ValueError(f"{channel.topic} message at {message.log_time}: {errors[0].message}")
-            d = (message.log_time - epoch) // NS
-            by_design.setdefault(d, []).append((channel.topic, message.log_time, decoded))
+            t = message.log_time
+            info.start = t if info.start is None else min(info.start, t)
+            info.end = t if info.end is None else max(info.end, t)
+            d = (t - epoch) // NS
+            by_design.setdefault(d, []).append((channel.topic, t, decoded))
+            info.recording.add(channel.topic, decoded)
+            if scene_topics:
+                info.scene.add(channel.topic, t, decoded)
+            if channel.topic == "/front":
+                info.front[decoded["id"]] = decoded["on_final_front"]
+            if channel.topic == "/designs":
+                info.designs[decoded["id"]] = (decoded["feasible"], decoded["objectives"])
         if n != summary.statistics.message_count:
             raise ValueError(f"read {n} messages, statistics say {summary.statistics.message_count}")
         ids = sorted(by_design)
         if [ids[0], ids[-1], len(ids)] != [int(run[first]), int(run[last]), int(run["designs"])]:
             raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run[first]}..{run[last]} ({run['designs']})")
-        scene = any(ch.topic == "/scene" for ch in summary.channels.values())
         for d, msgs in by_design.items():
-            per_design(d, epoch + d * NS, msgs, scene)
-        return n, len(summary.chunk_indexes)
+            per_design(d, epoch + d * NS, msgs, scene_topics)
+        info.ids = set(ids)
+        if scene_topics:
+            info.geometry = info.scene.finish()
+        return n, len(summary.chunk_indexes), info
+
+
+def check_channels(summary):
+    validators = {}
+    problems = []  # every channel's problem, not only the first
+    for cid, ch in sorted(summary.channels.items()):
+        schema = summary.schemas[ch.schema_id]
+        try:
+            if schema.name.startswith("foxglove."):
+                check_foxglove_schema(schema)
+            if schema.encoding == "protobuf" and ch.message_encoding == "protobuf":
+                descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+            elif schema.encoding == "jsonschema" and ch.message_encoding == "json":
+                s = json.loads(schema.data)
+                parse_like_viewer(s, f"{ch.topic} ({schema.name})")
+                jsonschema.Draft7Validator.check_schema(s)
+                validators[cid] = jsonschema.Draft7Validator(s)
+            else:
+                raise ValueError(f"channel {ch.topic}: encodings {schema.encoding}/{ch.message_encoding}")
+        except Exception as e:  # noqa: BLE001 - collect them all
+            problems.append(f"channel {ch.topic}: {e}")
+    if problems:
+        raise ValueError("\n    " + "\n    ".join(problems))
+    return validators
+
+
+def repeated(f):
+    """A repeated field (protobuf >= 5 has `is_repeated`; older ones `label`)."""
+    rep = getattr(f, "is_repeated", None)
+    return rep if rep is not None else f.label == f.LABEL_REPEATED
+
+
+def window_end(t0):
+    return t0 + NS - 1
 
 
 def check_design(d, t0, msgs, scene):
@@ -233,26 +300,35 @@ def check_design(d, t0, msgs, scene):
     if len(series) != 1 or series[0][0] != t0 or series[0][1].design_id != d:
         raise ValueError(f"design {d}: /grasp/series must hold one message for this design at the window start")
     s = series[0][1]
-    cols = [s.t, s.q11, s.q21, s.theta2, s.proximal_normal_force, s.distal_normal_force, s.hand_force, s.energy]
+    cols = [s.t] + [getattr(s, f.name) for f in s.DESCRIPTOR.fields if repeated(f) and f.name != "t"]
     if len({len(c) for c in cols}) != 1:
         raise ValueError(f"design {d}: /grasp/series columns differ in length")
     t = list(s.t)
-    if t and (t[0] != 0.0 or any(b < a for a, b in zip(t, t[1:])) or t[-1] >= 1.0):
+    if not t:
+        raise ValueError(f"design {d}: /grasp/series is empty (a Plot panel would keep the previous design's curves)")
+    if t[0] != 0.0 or any(b < a for a, b in zip(t, t[1:])) or t[-1] >= 1.0:
         raise ValueError(f"design {d}: /grasp/series.t must start at 0 and run forward inside the window")
+    placeholder = s.simulated_samples == 0
+    if placeholder and (len(t) != 1 or not all(math.isnan(c[0]) for c in cols[1:])):
+        raise ValueError(f"design {d}: a design without a grasp must have one placeholder sample (t = 0, NaN values)")
     if not scene:
         return
     tf, static, fingers = at("/tf"), at("/scene/static"), at("/scene")
-    if not tf or tf[0][0] != t0 or [(x.parent_frame_id, x.child_frame_id) for x in tf[0][1].transforms] != [("world", "hand")]:
-        raise ValueError(f"design {d}: no world → hand transform at the window start")
+    if len(tf) != 2 or tf[0][0] != t0 or tf[1][0] != window_end(t0):
+        raise ValueError(f"design {d}: /tf must be at the window start and at its last nanosecond (so a seek anywhere in the last design's window works)")
     if not static or static[0][0] != t0:
         raise ValueError(f"design {d}: no /scene/static message at the window start")
     st = static[0][1]
-    if not st.deletions or st.deletions[0].type != 1 or {e.id for e in st.entities} != {"ground", "palm", "object"}:
-        raise ValueError(f"design {d}: /scene/static must delete all, then draw ground, palm and object")
+    if not st.deletions or st.deletions[0].type != 1 or {e.id for e in st.entities} != {"ground", "palm", "object", "label"}:
+        raise ValueError(f"design {d}: /scene/static must delete all, then draw ground, palm, object and label")
     if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
         raise ValueError(f"design {d}: the first /scene message must be at the window start and delete the previous fingers")
     drawn = [(tm, m) for tm, m in fingers if m.entities]
-    if t and drawn:
+    if placeholder:
+        if len(fingers) != 1:
+            raise ValueError(f"design {d}: without a grasp, /scene holds one message (the open and failing poses)")
+        return
+    if drawn:
         last = t0 + min(round(t[-1] * NS), NS - 1)
         if drawn[-1][0] != last:
             raise ValueError(f"design {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last sample at {last - t0} ns")
@@ -260,39 +336,39 @@ def check_design(d, t0, msgs, scene):
 
 def check_verify_design(d, t0, msgs, scene):
     at = lambda topic: [(t, m) for tp, t, m in msgs if tp == topic]  # noqa: E731
-    rec = at("/verify")
+    rec, series = at("/verify"), at("/verify/series")
     if len(rec) != 1 or rec[0][0] != t0 or rec[0][1]["window"] != d:
         raise ValueError(f"window {d}: /verify must hold one message, for window {d}, at the window start {t0}")
     r = rec[0][1]
     ws = r["window_start"]
     if ws["sec"] * NS + ws["nsec"] != t0:
         raise ValueError(f"window {d}: /verify.window_start {ws} is not the window start {t0}")
+    if len(series) != 1 or series[0][0] != t0 or series[0][1]["window"] != d:
+        raise ValueError(f"window {d}: /verify/series must hold one message for this window at its start")
+    sr = series[0][1]
+    if not sr["t"] or len({len(sr[k]) for k in ("t", "displacement_mm", "tilt_deg")}) != 1:
+        raise ValueError(f"window {d}: /verify/series columns must be non-empty and of equal length")
     tf, static, fingers = at("/tf"), at("/scene/static"), at("/scene")
     if len(static) != 1 or static[0][0] != t0:
         raise ValueError(f"window {d}: /scene/static must hold one message at the window start")
     st = static[0][1]
     frames = {e.id: e.frame_id for e in st.entities}
-    if not st.deletions or st.deletions[0].type != 1 or frames != {"ground": "world", "palm": "hand", "object": "object"}:
-        raise ValueError(f"window {d}: /scene/static must delete all, then draw ground (world), palm (hand) and object (object); got {frames}")
+    if not st.deletions or st.deletions[0].type != 1 or frames != {"ground": "world", "palm": "hand", "object": "object", "label": "world"}:
+        raise ValueError(f"window {d}: /scene/static must delete all, then draw ground (world), palm (hand), object (object) and label (world); got {frames}")
     if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
         raise ValueError(f"window {d}: the first /scene message must be at the window start and delete the previous fingers")
-    if len(tf) != r["poses"]:
-        raise ValueError(f"window {d}: {len(tf)} /tf messages, the record says {r['poses']} poses")
-    if not tf:
+    if r["poses"] == 0:
+        if tf:
+            raise ValueError(f"window {d}: /tf without poses")
         return
+    if len(tf) != r["poses"] + 1 or tf[-1][0] != window_end(t0):
+        raise ValueError(f"window {d}: {len(tf)} /tf messages, the record says {r['poses']} poses (and one more at the window's last nanosecond)")
     pairs = [[(x.parent_frame_id, x.child_frame_id) for x in m.transforms] for _, m in tf]
-    if tf[0][0] != t0 or pairs[0] != [("world", "hand"), ("hand", "object")] or any(p != [("hand", "object")] for p in pairs[1:]):
-        raise ValueError(f"window {d}: /tf must carry world → hand and hand → object at the window start, then hand → object only")
-    times = [t for t, _ in tf]
+    if tf[0][0] != t0 or any(p != [("world", "hand"), ("hand", "object")] for p in pairs):
+        raise ValueError(f"window {d}: every /tf message must carry world -> hand and hand -> object, the first at the window start")
+    times = [t for t, _ in tf[:-1]]
     if any(b <= a for a, b in zip(times, times[1:])) or times[-1] >= t0 + NS:
         raise ValueError(f"window {d}: /tf times must run forward inside the window")
-    for t, m in tf:
-        for x in m.transforms:
-            if x.timestamp.seconds * NS + x.timestamp.nanos != t:
-                raise ValueError(f"window {d}: a /tf stamp differs from its log time {t}")
-        q = m.transforms[-1].rotation
-        if abs(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w - 1.0) > 1e-9:
-            raise ValueError(f"window {d}: hand → object rotation at {t} is not a unit quaternion")
     last = t0 + min(round(r["t_end"] * NS), NS - 1)
     if times[-1] != last:
         raise ValueError(f"window {d}: the last object pose is at {times[-1] - t0} ns, the record's t_end at {last - t0} ns")
@@ -303,17 +379,133 @@ def check_verify_design(d, t0, msgs, scene):
         raise ValueError(f"window {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last object pose at {times[-1] - t0} ns")
 
 
+def check_front_design(d, t0, msgs, scene):
+    if len(msgs) != 1 or msgs[0][0] != "/front" or msgs[0][1] != t0 or msgs[0][2]["id"] != d:
+        raise ValueError(f"design {d}: /front must hold one message for this design at its window start")
+
+
+# ---------------------------------------------------------------- run folders
+def run_folders(infos):
+    """run folder -> {"shards": [...], "front": info or None, "verify": [...]}."""
+    runs = {}
+    for info in infos:
+        p = info.path
+        run = p.parent.parent if p.parent.name == "recording" else p.parent
+        r = runs.setdefault(run, {"shards": [], "front": None, "verify": []})
+        if info.kind == "shard":
+            r["shards"].append(info)
+        elif info.kind == "front":
+            r["front"] = info
+        else:
+            r["verify"].append(info)
+    return runs
+
+
+def check_run_folder(run, r):
+    """The folder-level checks of one run folder; a description of what was checked."""
+    done = []
+    scenes = [i for i in r["shards"] + r["verify"] if i.scene is not None and i.scene.world_hand is not None]
+    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in scenes}
+    if len(frames) > 1:
+        raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in scenes]})")
+    if scenes:
+        done.append(f"one world frame in {len(scenes)} files")
+    if r["shards"]:
+        lo, hi = min(i.start for i in r["shards"]), max(i.end for i in r["shards"])
+        ranges = [("the shards", lo, hi)] + [(i.path.name, i.start, i.end) for i in r["verify"]]
+        for a in range(len(ranges)):
+            for b in range(a + 1, len(ranges)):
+                (na, la, ha), (nb, lb, hb) = ranges[a], ranges[b]
+                if la <= hb and lb <= ha:
+                    raise ValueError(f"{na} and {nb} overlap in time ([{la}, {ha}] and [{lb}, {hb}]): opened together, two designs would share a second")
+        done.append("time ranges disjoint")
+    status = {}
+    if (run / "run.json").is_file():
+        status = json.loads((run / "run.json").read_text())
+    finished = status.get("status") == "finished" and status.get("completed_generations") == status.get("generations")
+    if r["shards"] and r["front"] is None and finished and status.get("recording", {}).get("enabled"):
+        raise ValueError("the run finished but recording/front.mcap is missing")
+    if r["front"] is not None:
+        shard_ids = set().union(*(i.ids for i in r["shards"])) if r["shards"] else set()
+        if set(r["front"].front) != shard_ids:
+            raise ValueError("front.mcap does not cover exactly the shards' designs")
+        members = {i for i, on in r["front"].front.items() if on}
+        designs = {k: v for i in r["shards"] for k, v in i.designs.items()}
+        check_front_members(members, designs)
+        pareto_csv = run / "pareto.csv"
+        if pareto_csv.is_file() and pareto_csv.stat().st_mtime_ns <= r["front"].path.stat().st_mtime_ns:
+            rows = [l for l in pareto_csv.read_text().splitlines() if l and not l.startswith("#")]
+            pareto = {int(l.split(",")[0]) for l in rows[1:]}
+            if members != pareto:
+                raise ValueError(f"front.mcap marks {sorted(members)} on the final front, pareto.csv holds {sorted(pareto)}")
+            done.append(f"front of {len(members)} designs = pareto.csv")
+        else:
+            done.append(f"front of {len(members)} designs (pareto.csv edited after it: not compared)")
+    layout = run / "foxglove-layout.json"
+    if layout.is_file() and r["shards"]:
+        rec = merged([*r["shards"], *([r["front"]] if r["front"] else [])])
+        if r["front"] is None:
+            rec.messages.setdefault("/front", [{"id": 0, "on_final_front": False}])  # not written yet: the run has not finished
+        done.append(f"{check_layout(layout, rec)} layout paths of {layout.name}")
+    vlayout = run / "foxglove-verify-layout.json"
+    for v in r["verify"]:
+        if not vlayout.is_file():
+            raise ValueError(f"{v.path.name} is shipped without {vlayout.name}")
+        done.append(f"{check_layout(vlayout, v.recording)} layout paths of {vlayout.name} in {v.path.name}")
+    return done
+
+
+def check_front_members(members, designs):
+    """The designs front.mcap marks must be feasible and mutually non-dominated in the four
+    objectives of their /designs records (max_offset and mean_force maximised, alpha and
+    t_stab minimised; a design not form closed has no max_offset: the worst)."""
+    sense = {"max_offset": 1, "alpha": -1, "mean_force": 1, "t_stab": -1}
+    vec = {}
+    for i in members:
+        feasible, objectives = designs[i]
+        if not feasible:
+            raise ValueError(f"front.mcap marks design {i} on the front, its /designs record says infeasible")
+        vec[i] = [s * objectives.get(k, -math.inf if s > 0 else math.inf) for k, s in sense.items()]
+    for a in members:
+        for b in members:
+            if all(x >= y for x, y in zip(vec[b], vec[a])) and any(x > y for x, y in zip(vec[b], vec[a])):
+                raise ValueError(f"front.mcap marks designs {a} and {b} on the front, but {b} dominates {a}")
+
+
+def merged(infos):
+    rec = Recording()
+    for i in infos:
+        for topic, msgs in i.recording.messages.items():
+            for m in msgs:
+                rec.add(topic, m)
+    return rec
+
+
 def main(folders):
     # folders are searched recursively; a file argument is checked as given
     files = sorted(p for d in folders for p in ([pathlib.Path(d)] if pathlib.Path(d).is_file() else pathlib.Path(d).rglob("*.mcap")))
     ok = bad = 0
+    infos = []
     for p in files:
         try:
-            n, chunks = check(p)
-            print(f"ok   {p}: {n} messages in {chunks} chunks decoded; schemas official / viewer-parsable; scene and time windows consistent")
+            n, chunks, info = check(p)
+            infos.append(info)
+            geo = getattr(info, "geometry", None)
+            extra = ""
+            if geo:
+                extra = f"; world geometry: {geo['finger_points']} finger points, lowest {geo['lowest_finger_z'] * 1e3:.1f} mm above the ground, {geo['objects']} objects standing"
+            print(f"ok   {p}: {n} messages in {chunks} chunks decoded; schemas official / viewer-parsable; time windows consistent{extra}")
             ok += 1
         except Exception as e:  # noqa: BLE001 - report every failure
             print(f"FAIL {p}: {e}")
+            bad += 1
+    for run, r in sorted(run_folders(infos).items()):
+        try:
+            done = check_run_folder(run, r)
+            print(f"ok   {run}/: {'; '.join(done)}")
+            ok += 1
+        except Exception as e:  # noqa: BLE001
+            print(f"FAIL {run}/: {e}")
             bad += 1
     print(f"mcap: {ok} passed, {bad} failed")
     if not files:

@@ -22,36 +22,34 @@ from mcap.stream_reader import StreamReader
 HEADER = 1 + 8 + 2 + 4 + 8 + 8  # opcode, length, channel, sequence, log and publish time
 
 
+def varint(data, i):
+    """The protobuf varint at data[i]: (value, index after it)."""
+    n = shift = 0
+    while True:
+        b = data[i]
+        i += 1
+        n |= (b & 0x7F) << shift
+        shift += 7
+        if b < 0x80:
+            return n, i
+
+
 def grasp_series_len(data):
-    """Number of t values in a gripopt.GraspSeries (field 4, packed doubles)."""
+    """Number of t values in a gripopt.GraspSeries (field 4, packed doubles); 0 for the
+    placeholder sample of a design without a grasp (simulated_samples, field 3, is 0 and so
+    not encoded; fields come in tag order)."""
     i = 0
+    simulated = False
     while i < len(data):
-        key = 0
-        shift = 0
-        while True:
-            b = data[i]
-            i += 1
-            key |= (b & 0x7F) << shift
-            shift += 7
-            if b < 0x80:
-                break
+        key, i = varint(data, i)
         field, wire = key >> 3, key & 7
         if wire == 0:
-            while data[i] >= 0x80:
-                i += 1
-            i += 1
+            v, i = varint(data, i)
+            simulated = simulated or (field == 3 and v != 0)
         elif wire == 2:
-            n = 0
-            shift = 0
-            while True:
-                b = data[i]
-                i += 1
-                n |= (b & 0x7F) << shift
-                shift += 7
-                if b < 0x80:
-                    break
+            n, i = varint(data, i)
             if field == 4:
-                return n // 8
+                return n // 8 if simulated else 0
             i += n
         elif wire == 1:
             i += 8
@@ -66,7 +64,8 @@ def main(dirs):
     designs = 0
     all_designs = 0
     all_bytes = 0
-    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("*.mcap")):
+    # the optimisation shards only (not front.mcap or verify recordings)
+    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("gen-*.mcap")):
         all_bytes += p.stat().st_size
         with open(p, "rb") as f:
             reader = make_reader(f)

@@ -3,11 +3,10 @@
 use super::say;
 use super::work_precision::{check_atol, rel};
 use super::{progress, time_it};
-use crate::eval::StaticsResult;
 use crate::eval::{stage_kinematics, stage_statics};
-use crate::model::Finger;
+use crate::model::{Finger, StaticsResult};
 use crate::params::{Design, Problem, DESIGN_NAMES};
-use crate::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use std::io::Write;
@@ -43,10 +42,7 @@ pub fn work_precision_ensemble(
     check_atol(atol)?;
     let p = problem;
     let s = &p.scene;
-    let diag = |m: Method, rtol: f64| SimOptions {
-        method: m,
-        ..SimOptions::diagnostic(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000)
-    };
+    let diag = |m: Method, rtol: f64| Integration::new(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000).with_method(m);
     let (cases, drawn) = draw_cases(p, n, seed)?;
     if cases.is_empty() {
         return Err(Error::bench(format!(
@@ -85,7 +81,7 @@ pub fn work_precision_ensemble(
             let mut differ = 0;
             for c in &cases {
                 let (f, st, reference) = (&c.finger, &c.statics, &c.reference);
-                let (r, _, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 0.05, 7);
+                let (r, _, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 0.05, 7);
                 cpu.push(tmed);
                 steps.push(r.stats.steps as f64);
                 rhs.push(r.rhs_evals as f64);
@@ -160,7 +156,7 @@ pub struct Case {
 /// stability, and how many were drawn (at most 1000·n).
 fn draw_cases(p: &Problem, n: usize, seed: u64) -> Result<(Vec<Case>, usize)> {
     let s = &p.scene;
-    let tight = SimOptions::diagnostic(1e-11, 1e-14, 5_000_000);
+    let tight = Integration::new(1e-11, 1e-14, 5_000_000);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut cases = vec![];
     let mut drawn = 0usize;
@@ -170,7 +166,7 @@ fn draw_cases(p: &Problem, n: usize, seed: u64) -> Result<(Vec<Case>, usize)> {
         let d = p.bounds.sample(&mut rng);
         let Ok(k) = stage_kinematics(&d, s) else { continue };
         let Ok(st) = stage_statics(&k.finger, s) else { continue };
-        let reference = simulate_grasp(&k.finger, s, &st, &tight);
+        let reference = diagnostic_grasp(&k.finger, s, &st, &tight);
         if reference.t_stab.is_none() {
             continue;
         }

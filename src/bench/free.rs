@@ -6,10 +6,11 @@
 
 use super::work_precision::{check_atol, rel};
 use super::{progress, say, time_it, Out};
+use crate::eval::StaticsResult;
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
-use crate::sim::{simulate_free, FreeResult, FreeSetup, SimOptions};
+use crate::sim::{simulate, Controls, FreeEnd, FreeResult, FreeSetup, Integration, SceneSpec};
 use crate::{Error, Result};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -111,18 +112,20 @@ fn same_verdict(a: &FreeResult, b: &FreeResult) -> bool {
 }
 
 /// The design's finger and spring preload (stages 1–2).
-fn finger_of(problem: &Problem, design: &Design) -> Result<(Finger, f64)> {
+fn finger_of(problem: &Problem, design: &Design) -> Result<(Finger, StaticsResult)> {
     let s = &problem.scene;
     let discarded =
         |d: crate::eval::Discard| Error::bench(format!("design discarded at stage {}: {}", d.stage, d.reason));
     let k = stage_kinematics(design, s).map_err(discarded)?;
     let st = stage_statics(&k.finger, s).map_err(discarded)?;
-    Ok((k.finger, st.tau_s0))
+    Ok((k.finger, st))
 }
 
 /// One free-scene simulation of `finger` at the problem's x_off.
-fn run(f: &Finger, s: &SceneParams, tau_s0: f64, dense: bool, o: &SimOptions) -> FreeResult {
-    simulate_free(f, s, tau_s0, s.setup.x_off, FreeSetup { dense_jacobian: dense, ..FreeSetup::default() }, o, None)
+fn run(f: &Finger, s: &SceneParams, st: &StaticsResult, dense: bool, o: &Integration) -> FreeResult {
+    let setup = FreeSetup { dense_jacobian: dense, ..FreeSetup::default() };
+    let spec = SceneSpec::Free { x_off: s.setup.x_off, setup, t_end: None };
+    *simulate(f, s, st, &spec, o, &Controls::DIAGNOSTIC, &mut ()).free().expect("the free scene")
 }
 
 /// The free-scene work-precision table of `design`: the reference (rtol 1e-10 with the
@@ -140,15 +143,15 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
             "bench free: environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into(),
         ));
     }
-    let (f, tau_s0) = finger_of(problem, design)?;
+    let (f, st) = finger_of(problem, design)?;
     let atol_at = |rtol: f64| b.atol.unwrap_or(rtol * 1e-3);
-    let opts = |rtol: f64| SimOptions::diagnostic(rtol, atol_at(rtol), 50_000_000);
+    let opts = |rtol: f64| Integration::new(rtol, atol_at(rtol), 50_000_000);
     let tight = opts(FREE_REFERENCE_RTOL);
-    let reference = run(&f, s, tau_s0, false, &tight);
-    if reference.end != "t_obs" {
+    let reference = run(&f, s, &st, false, &tight);
+    if reference.end != FreeEnd::Observed {
         return Err(Error::bench(format!("the reference run ended early: {}", reference.end)));
     }
-    let check = run(&f, s, tau_s0, true, &tight);
+    let check = run(&f, s, &st, true, &tight);
     let r = &reference;
     say!(
         out,
@@ -176,7 +179,7 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
             let (x, tmin, tmed) = time_it(
                 || {
                     reps += 1;
-                    run(&f, s, tau_s0, dense, &o)
+                    run(&f, s, &st, dense, &o)
                 },
                 1.0,
                 b.reps,

@@ -24,8 +24,9 @@ pub use order::{radau_order, simulate_order, Order};
 pub use replay::{replay, ReplayBench};
 pub use scaling::{scaling, ScalingBench};
 pub use static_eval::static_pipeline;
+pub use table::Row;
 pub use table::{plot, print_table, print_targets, write_csv};
-pub use work_precision::{check_atol, work_precision, Measured, Reference, Row, WorkPrecision, RTOLS};
+pub use work_precision::{check_atol, work_precision, Measured, Reference, WorkPrecision, RTOLS};
 
 /// Where a benchmark writes its text report.
 pub type Out<'a> = &'a mut dyn std::io::Write;

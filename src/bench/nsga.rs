@@ -58,7 +58,7 @@ pub fn nsga(reps: usize, out: Out) -> Result<serde_json::Value> {
             let st = crate::optim::Nsga2State::new().with_max_generations(gens);
             let mut s = reference_settings(which, rep as u64 + 1, 100);
             s.hv_ref.clear();
-            crate::optim::execute(which.instance(), s, st, |e| e, false)
+            crate::optim::execute(which.instance(), crate::optim::Nsga2::new(s), st, |e| e)
         })
         .map_err(|e| Error::Optimiser(e.to_string()))?;
         let total = t0.elapsed().as_secs_f64();

@@ -8,10 +8,13 @@
 use super::ensemble::ensemble_cases;
 use super::work_precision::rel;
 use super::{say, time_it, Out};
+use crate::model::{Finger, StaticsResult};
 use crate::params::{Problem, SceneParams};
-use crate::sim::{drive, CentredScene, DynamicsResult, Radau5, RadauIIA, Scene, SimOptions, Stepper, Tol, NS};
+use crate::sim::{
+    centred_tolerances, drive, CentredScene, Controls, DynamicsResult, Integration, Radau5, RadauIIA, Scene, Stepper,
+    NS,
+};
 use crate::Result;
-use crate::{eval::StaticsResult, model::Finger};
 
 /// The orders compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -22,39 +25,34 @@ pub enum Order {
     Nine,
 }
 
-/// The centred scene's tolerances (as `sim::scene::centred`): atol on angles and rates, 1e4·atol
-/// on the filtered force.
-fn tolerances(opts: &SimOptions) -> Tol<NS> {
-    let a = opts.atol;
-    Tol { rtol: opts.rtol, atol: nalgebra::SVector::<f64, NS>::from([a, a, a, a, a * 1e4]) }
-}
-
-/// The centred grasp of `f` with the stepper of `order` (as `simulate_grasp`, no recording).
+/// The centred grasp of `f` with the stepper of `order` (as `sim::diagnostic_grasp`, nothing
+/// sampled).
 pub fn simulate_order(
     f: &Finger,
     s: &SceneParams,
     st: &StaticsResult,
-    opts: &SimOptions,
+    integ: &Integration,
     order: Order,
 ) -> DynamicsResult {
     fn with<St: Stepper<NS>>(
         f: &Finger,
         s: &SceneParams,
         st: &StaticsResult,
-        opts: &SimOptions,
+        integ: &Integration,
         stepper: &mut St,
     ) -> DynamicsResult {
-        let mut scene = CentredScene::new(f, s, st, opts, None);
-        if !scene.prepare(st.f0, opts) {
+        let ctl = Controls::DIAGNOSTIC;
+        let mut scene = CentredScene::new(f, s, st, &ctl);
+        if !scene.prepare(st.f0, &ctl) {
             return scene.result();
         }
-        let run = drive(&mut scene, stepper, opts, s.criteria.t_max);
+        let run = drive(&mut scene, stepper, integ, &ctl, s.criteria.t_max, &mut ());
         scene.finish(&run)
     }
-    let tol = tolerances(opts);
+    let tol = centred_tolerances(integ);
     match order {
-        Order::Five => with(f, s, st, opts, &mut Radau5::new(tol, 1e-5)),
-        Order::Nine => with(f, s, st, opts, &mut RadauIIA::<NS, 5>::new(tol, 1e-5)),
+        Order::Five => with(f, s, st, integ, &mut Radau5::new(tol, 1e-5)),
+        Order::Nine => with(f, s, st, integ, &mut RadauIIA::<NS, 5>::new(tol, 1e-5)),
     }
 }
 
@@ -100,7 +98,7 @@ pub fn radau_order(
     let mut rows = vec![];
     for &rtol in rtols {
         for &order in orders {
-            let o = SimOptions::diagnostic(rtol, rtol * 1e-3, 5_000_000);
+            let o = Integration::new(rtol, rtol * 1e-3, 5_000_000);
             let (mut steps, mut rhs, mut newton, mut lu) = (0u64, 0u64, 0u64, 0u64);
             let (mut cpu, mut ets, mut ees) = (vec![], vec![], vec![]);
             let mut differ = 0;

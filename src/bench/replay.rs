@@ -102,7 +102,7 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
         let r = crate::record::read_design(out, id)
             .map_err(|e| Error::bench_from(format!("bench replay: reading design {id}"), e))?;
         t_read.push(a.elapsed().as_secs_f64());
-        if r.record["id"].as_u64() != Some(id) {
+        if r.record.id != id {
             return Err(Error::Recording {
                 path: r.file,
                 message: format!("asked for design {id}, wrong design returned"),

@@ -12,7 +12,7 @@
 //! divided by P, so the prediction is an upper bound on efficiency.
 
 use super::say;
-use crate::optim::{execute, observe, Nsga2Settings, Nsga2State, Operators};
+use crate::optim::{execute, observe, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder};
 use crate::run::{
@@ -130,15 +130,14 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let outputs = OutputsObserver {
         out: dir.to_path_buf(),
-        force_model: gp.problem.scene.criteria.force_model.as_str(),
         settings: settings.clone(),
         archive: Arc::new(Mutex::new(Archive::default())),
     };
-    let persister = Persister::start(Some(outputs), recorder, spec, threads, None)?;
+    let persister = Persister::start(Some(outputs), recorder, spec, threads)?;
     let timer = Arc::new(Mutex::new(Vec::new()));
     let (p2, t1) = (persister.clone(), Timer(timer.clone()));
     let state = Nsga2State::new().with_max_generations(b.generations);
-    let res = pool.install(|| execute(gp, settings, state, move |e| observe(observe(e, t1), p2), false));
+    let res = pool.install(|| execute(gp, Nsga2::new(settings), state, move |e| observe(observe(e, t1), p2)));
     let persist = persister.finish()?;
     res?;
     let wall_s = start.elapsed().as_secs_f64();

@@ -1,10 +1,36 @@
 //! The work-precision table as CSV, as a printed table, and as an SVG plot.
 
 use super::say;
-use super::work_precision::Row;
 use crate::{Error, Result};
 use std::io::Write as _;
 use std::path::Path;
+
+/// One row of the work-precision table.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Row {
+    /// Method label.
+    pub method: &'static str,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Minimum CPU time per simulation, s.
+    pub cpu_min: f64,
+    /// Median CPU time per simulation, s.
+    pub cpu_med: f64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Right-hand-side evaluations.
+    pub rhs: u64,
+    /// Relative error of the time of first contact.
+    pub err_t_first: f64,
+    /// Relative error of E_cyl.
+    pub err_e_cyl: f64,
+    /// Relative error of t_stab.
+    pub err_t_stab: f64,
+    /// Largest relative error of the two forces at t_stab (NaN without t_stab).
+    pub err_force: f64,
+    /// Same verdict as the reference.
+    pub verdict_same: bool,
+}
 
 /// Writes `rows` as CSV to `path` (its folder created if need be).
 pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {

@@ -2,13 +2,13 @@
 //! against a tight reference run. The reference, the error measures and the table are also
 //! what the diffsol comparison (`benches/diffsol.rs`) uses.
 
-use super::table::{plot, print_table, print_targets, write_csv};
+use super::table::{plot, print_table, print_targets, write_csv, Row};
 use super::{progress, time_it};
 use super::{say, Out};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
-use crate::sim::{simulate_grasp, DynamicsResult, Method, SimOptions};
+use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -107,33 +107,6 @@ impl Measured {
     }
 }
 
-/// One row of the work-precision table.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Row {
-    /// Method label.
-    pub method: &'static str,
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Minimum CPU time per simulation, s.
-    pub cpu_min: f64,
-    /// Median CPU time per simulation, s.
-    pub cpu_med: f64,
-    /// Accepted steps.
-    pub steps: u64,
-    /// Right-hand-side evaluations.
-    pub rhs: u64,
-    /// Relative error of the time of first contact.
-    pub err_t_first: f64,
-    /// Relative error of E_cyl.
-    pub err_e_cyl: f64,
-    /// Relative error of t_stab.
-    pub err_t_stab: f64,
-    /// Largest relative error of the two forces at t_stab (NaN without t_stab).
-    pub err_force: f64,
-    /// Same verdict as the reference.
-    pub verdict_same: bool,
-}
-
 /// The grasp a work-precision table is about: one design that passes stage 2, and its
 /// reference run (Radau IIA, rtol 1e-12, atol 1e-15, diagnostic mode, whatever atol the
 /// table uses).
@@ -156,7 +129,7 @@ impl Reference {
         let s = &problem.scene;
         let k = stage_kinematics(design, s).map_err(discarded)?;
         let st = stage_statics(&k.finger, s).map_err(discarded)?;
-        let run = simulate_grasp(&k.finger, s, &st, &Self::options(Method::Radau5));
+        let run = diagnostic_grasp(&k.finger, s, &st, &Self::options(Method::Radau5));
         if run.t_stab.is_none() {
             return Err(Error::bench("the reference run did not reach stability"));
         }
@@ -164,8 +137,8 @@ impl Reference {
     }
 
     /// The reference's tight settings, for `method`.
-    pub fn options(method: Method) -> SimOptions {
-        SimOptions { method, ..SimOptions::diagnostic(1e-12, 1e-15, 5_000_000) }
+    pub fn options(method: Method) -> Integration {
+        Integration::new(1e-12, 1e-15, 5_000_000).with_method(method)
     }
 
     /// Writes the atol used and the reference's values to `out`.
@@ -212,8 +185,8 @@ impl Reference {
         for m in methods {
             for &rtol in &wp.rtols {
                 pb.set_message(format!("{m:?} rtol {rtol:e}"));
-                let o = SimOptions { method: m, ..SimOptions::diagnostic(rtol, wp.atol_at(rtol), 5_000_000) };
-                let (r, tmin, tmed) = time_it(|| simulate_grasp(f, s, st, &o), 1.0, wp.reps);
+                let o = Integration::new(rtol, wp.atol_at(rtol), 5_000_000).with_method(m);
+                let (r, tmin, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 1.0, wp.reps);
                 rows.push(self.row(label(m), rtol, tmin, tmed, &Measured::of(&r, &self.run)));
                 pb.inc(1);
             }
@@ -242,7 +215,7 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     check_rtols(&wp.rtols)?;
     let reference = Reference::new(problem, design)?;
     let check =
-        simulate_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
+        diagnostic_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
     reference.print(wp.atol, out)?;
     say!(
         out,

@@ -146,7 +146,7 @@ fn check_scaling_flags(
     threads: &[usize],
     reps: usize,
 ) -> Result<()> {
-    let max = super::MAX_THREADS;
+    let max = gripopt::run::MAX_THREADS;
     if pop < 4 {
         anyhow::bail!("--pop {pop}: must be at least 4");
     }

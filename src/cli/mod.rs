@@ -6,7 +6,9 @@ use gripopt::params::{Design, Problem};
 use std::path::PathBuf;
 
 mod bench;
+mod export;
 mod optcmd;
+mod progress;
 mod report;
 mod scenes;
 mod show;
@@ -180,6 +182,8 @@ enum Cmd {
     Sweep(sweep::SweepArgs),
     /// Re-simulate a run's designs in the free scene and compare with the criteria's prediction (RUN_DIR/verify.csv).
     Verify(verify::VerifyArgs),
+    /// A design to MuJoCo (MJCF) or to a build sheet (JSON/CSV) for CAD (docs/export.md).
+    Export(export::ExportArgs),
     /// Benchmarks (speed figures for docs/benchmarks.md; not tests).
     Bench {
         /// Print the figures as one JSON object on stdout (the text report goes to stderr).
@@ -251,9 +255,6 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
     Ok(x)
 }
 
-/// Most worker threads a run may ask for.
-const MAX_THREADS: usize = 1024;
-
 fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
     if let Some(v) = r {
         // the same range as the problem file's solver.rtol
@@ -263,23 +264,16 @@ fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
 }
 
 fn check_threads(t: Option<usize>) -> Result<()> {
-    match t {
-        Some(0) => anyhow::bail!("--threads 0: must be at least 1"),
-        Some(n) if n > MAX_THREADS => anyhow::bail!("--threads {n}: at most {MAX_THREADS}"),
-        _ => {}
-    }
-    Ok(())
+    Ok(gripopt::run::check_threads(t)?)
 }
 
-/// A free-kind problem needs the hand horizontal (MODEL.md §14.1): g_eq = 0.
-fn check_free_scene(p: &gripopt::params::Problem) -> Result<()> {
-    if p.scene.setup.kind == gripopt::params::SceneKind::Free && p.scene.env.g_eq != 0.0 {
-        anyhow::bail!(
-            "[scene] kind = \"free\" needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}",
-            p.scene.env.g_eq
-        );
+/// What an optimise or resume run gets from the CLI: the progress bar and ctrl-c.
+fn hooks() -> gripopt::run::RunHooks {
+    gripopt::run::RunHooks {
+        progress: Some(Box::new(progress::Bar::new())),
+        stop: Some(progress::ctrl_c_flag()),
+        evaluator: None,
     }
-    Ok(())
 }
 
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
@@ -288,14 +282,13 @@ pub fn run() -> Result<i32> {
     match cli.cmd {
         Cmd::Evaluate { problem, design, json, static_only } => {
             let p = load_problem(&problem)?;
-            check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
         Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace, plot } => {
             let mut p = load_problem(&problem)?;
             if let Some(sc) = &scene {
-                scenes::apply_scene(&mut p, sc)?;
+                p = scenes::apply_scene(&p, sc)?;
             }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
@@ -307,7 +300,7 @@ pub fn run() -> Result<i32> {
                 json,
                 csv: csv.as_deref(),
                 plot: plot.as_deref(),
-                extra: Default::default(),
+                replay: None,
             };
             scenes::simulate_in_scene(&p, &x, &o)
                 .with_context(|| format!("simulating {}", problem.display()))
@@ -328,22 +321,6 @@ pub fn run() -> Result<i32> {
             record_full,
             json,
         } => {
-            check_threads(threads)?;
-            if let Ok(p) = gripopt::params::Problem::load(&problem) {
-                check_free_scene(&p).with_context(|| format!("problem file {}", problem.display()))?;
-            }
-            if record_every == 0 {
-                anyhow::bail!("--record-every 0: must be at least 1");
-            }
-            if !(scene_ms.is_finite() && scene_ms >= 0.0) {
-                anyhow::bail!("--scene-ms {scene_ms}: must be a number >= 0");
-            }
-            if !(1..=22).contains(&zstd_level) {
-                anyhow::bail!("--zstd-level {zstd_level}: zstd levels are 1 to 22");
-            }
-            if zstd_threads > 256 {
-                anyhow::bail!("--zstd-threads {zstd_threads}: at most 256");
-            }
             use gripopt::record::TrajectoryKeep;
             let (enabled, trajectories) = match record {
                 RecordArg::All => (true, TrajectoryKeep::All),
@@ -365,18 +342,9 @@ pub fn run() -> Result<i32> {
                 },
                 epoch_s: 0,
             };
-            let spec = gripopt::run::RunSpec {
-                problem_path: problem,
-                out,
-                pop,
-                generations,
-                seed,
-                threads,
-                progress: true,
-                crash_after: None,
-                record: rec,
-            };
-            let s = gripopt::run::optimise(&spec)?;
+            let spec =
+                gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, record: rec };
+            let s = gripopt::run::optimise_with(&spec, hooks())?;
             optcmd::summary(&s, json)
         }
         Cmd::Replay { run_dir, design, json, csv, plot, scene } => {
@@ -390,8 +358,7 @@ pub fn run() -> Result<i32> {
             optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref())
         }
         Cmd::Resume { run_dir, generations, force, threads, json } => {
-            check_threads(threads)?;
-            let s = gripopt::run::resume(&run_dir, generations, force, threads, true)?;
+            let s = gripopt::run::resume_with(&run_dir, generations, force, threads, hooks())?;
             optcmd::summary(&s, json)
         }
         Cmd::Show(a) => show::run(a).map(|_| 0),
@@ -407,6 +374,7 @@ pub fn run() -> Result<i32> {
         }
         Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),
         Cmd::Sweep(a) => sweep::run(a).map(|_| 0),
+        Cmd::Export(a) => export::run(a).map(|_| 0),
         Cmd::Verify(a) => {
             check_threads(a.threads)?;
             verify::run(a).map(|_| 0)

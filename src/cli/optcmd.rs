@@ -74,23 +74,37 @@ pub fn moo_test(
     Ok(())
 }
 
+/// `optimise --json` / `resume --json`: the run's summary.
+#[derive(serde::Serialize)]
+struct SummaryJson<'a> {
+    status: &'a str,
+    run_dir: String,
+    generations: u64,
+    evaluations: u64,
+    feasible: usize,
+    front_size: usize,
+    hypervolume: Option<f64>,
+    wall_s: f64,
+    exit_code: i32,
+}
+
 /// Print where the results are (text, or one JSON object with `--json`); the exit code:
 /// 130 when the run was interrupted (after the checkpoint of the current generation), else 0.
 pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
     let d = s.out.display();
     let code = if s.interrupted { 130 } else { 0 };
     if json {
-        let v = serde_json::json!({
-            "status": if s.interrupted { "interrupted" } else { "finished" },
-            "run_dir": d.to_string(),
-            "generations": s.generations,
-            "evaluations": s.evaluations,
-            "feasible": s.feasible,
-            "front_size": s.front_size,
-            "hypervolume": if s.hv.is_finite() { Some(s.hv) } else { None },
-            "wall_s": s.wall_s,
-            "exit_code": code,
-        });
+        let v = SummaryJson {
+            status: if s.interrupted { "interrupted" } else { "finished" },
+            run_dir: d.to_string(),
+            generations: s.generations,
+            evaluations: s.evaluations,
+            feasible: s.feasible,
+            front_size: s.front_size,
+            hypervolume: s.hv.is_finite().then_some(s.hv),
+            wall_s: s.wall_s,
+            exit_code: code,
+        };
         println!("{}", serde_json::to_string(&v)?);
         return Ok(code);
     }
@@ -106,6 +120,20 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
     Ok(code)
 }
 
+/// `replay --json`: the recorded `/designs` record and what the replay found.
+#[derive(serde::Serialize)]
+struct ReplayJson<'a> {
+    #[serde(flatten)]
+    recorded: &'a gripopt::record::DesignMessage,
+    verified: bool,
+    verdict_agrees: bool,
+    max_difference: Option<f64>,
+    compared_samples: usize,
+    compared_values: usize,
+    file: String,
+    replay_s: f64,
+}
+
 /// `gripopt replay`.
 /// Exit code 3 when the recording is not verified, which includes a design with no recorded
 /// trajectory (nothing was compared).
@@ -116,7 +144,6 @@ pub fn replay(
     csv: Option<&std::path::Path>,
     plot: Option<&std::path::Path>,
 ) -> Result<i32> {
-    use std::io::Write;
     let t0 = std::time::Instant::now();
     let r = gripopt::record::replay(dir, id)?;
     let secs = t0.elapsed().as_secs_f64();
@@ -126,61 +153,37 @@ pub fn replay(
     let verified = r.verified && (r.compared > 0 || r.values_compared > 0);
     let code = if verified { 0 } else { 3 };
     if let Some(path) = csv {
-        let mut w = std::io::BufWriter::new(
-            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-        );
-        writeln!(w, "t,q11,q21,q11_dot,q21_dot,theta2,delta_1,delta_2,fn_1,fn_2,ft_1,ft_2,hand_fy,filtered_fy,energy,energy_excess")?;
-        for s in samples {
-            writeln!(
-                w,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                s.t,
-                s.q[0],
-                s.q[1],
-                s.qd[0],
-                s.qd[1],
-                s.theta2,
-                s.delta[0],
-                s.delta[1],
-                s.normal[0],
-                s.normal[1],
-                s.friction[0],
-                s.friction[1],
-                s.hand_fy,
-                s.filtered_fy,
-                s.energy,
-                s.energy_excess
-            )?;
-        }
-        w.flush()?;
+        crate::cli::scenes::write_samples_csv(path, samples, |v| format!("{v}"))?;
     }
     if let Some(path) = plot {
         gripopt::run::grasp_plot(path, &format!("design {id}"), samples)?;
     }
+    let rec = &r.recorded.record;
     if json {
-        let mut v = r.recorded.record.clone();
-        v["verified"] = serde_json::json!(verified);
-        v["verdict_agrees"] = serde_json::json!(r.recomputed_feasible == v["feasible"].as_bool().unwrap_or(false));
-        v["max_difference"] =
-            serde_json::json!(if r.max_difference.is_finite() { Some(r.max_difference) } else { None });
-        v["compared_samples"] = serde_json::json!(r.compared);
-        v["compared_values"] = serde_json::json!(r.values_compared);
-        v["file"] = serde_json::json!(r.recorded.file.display().to_string());
-        v["replay_s"] = serde_json::json!(secs);
+        let v = ReplayJson {
+            recorded: rec,
+            verified,
+            verdict_agrees: r.recomputed_feasible == rec.feasible,
+            max_difference: r.max_difference.is_finite().then_some(r.max_difference),
+            compared_samples: r.compared,
+            compared_values: r.values_compared,
+            file: r.recorded.file.display().to_string(),
+            replay_s: secs,
+        };
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(code);
     }
-    let rec = &r.recorded.record;
-    println!("design {id} (generation {}) from {}", rec["generation"], r.recorded.file.display());
-    println!("  parameters {}", rec["parameters"]);
-    println!("  derived    {}", rec["derived"]);
-    match rec["failed_stage"].as_u64() {
+    let text = |v: serde_json::Result<String>| v.unwrap_or_default();
+    println!("design {id} (generation {}) from {}", rec.generation, r.recorded.file.display());
+    println!("  parameters {}", text(serde_json::to_string(&rec.parameters)));
+    println!("  derived    {}", text(serde_json::to_string(&rec.derived)));
+    match rec.failed_stage {
         Some(s) => println!(
             "  DISCARDED at stage {s}: {} (violation {})",
-            rec["reason"].as_str().unwrap_or(""),
-            rec["violation"]
+            rec.reason.as_deref().unwrap_or(""),
+            rec.violation.map_or("null".into(), |v| v.to_string())
         ),
-        None => println!("  feasible; objectives {}", rec["objectives"]),
+        None => println!("  feasible; objectives {}", text(serde_json::to_string(&rec.objectives))),
     }
     println!(
         "  trajectory: {} samples{}",

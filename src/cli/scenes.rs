@@ -1,242 +1,200 @@
-//! `--scene centred|offset:X|free[:X]` for `simulate` and `replay` (MODEL.md §14): parsing,
-//! the one dispatch of a diagnostic simulation to its scene's report (the centred scene's is
-//! `report::simulate`), the offset and free scenes' reports, and `replay --scene` in a scene
-//! other than the run's.
+//! `gripopt simulate` and `replay --scene`: `--scene centred|offset:X|free[:X]` parsing, the
+//! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
+//! plot), in the same way for every scene.
 
+use crate::cli::report::{opt, print_dyn, print_free, yes_no};
 use anyhow::{bail, Context, Result};
-use gripopt::eval::{evaluate as eval_design, EvalOptions, FreeMeasure, FreeRecord};
-use gripopt::params::{limit, Design, Problem, SceneKind};
-use gripopt::sim::{simulate_free, simulate_grasp, simulate_offset, FreeSetup, SimOptions};
+use gripopt::eval::{Record, SimulationRecord};
+use gripopt::params::{Design, Problem, SceneKind};
+use gripopt::sim::{Controls, EventNote, Integration, Method, PoseSample, SceneSpec, Sink, Trajectory};
+use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
 
-/// Parse `centred`, `offset:X` or `free[:X]` (metres) into the problem's `[scene]`.
-pub fn apply_scene(p: &mut Problem, arg: &str) -> Result<()> {
-    let setup = &mut p.scene.setup;
-    match arg.split_once(':') {
-        None if arg == "centred" => setup.kind = SceneKind::Centred,
-        None if arg == "free" => setup.kind = SceneKind::Free,
-        Some(("offset", x)) => {
-            let v: f64 = x.parse().with_context(|| format!("--scene offset:{x}: not a number"))?;
-            limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene offset:{x}: {r}"))?;
-            setup.kind = SceneKind::Offset;
-            setup.x_off = v;
-        }
-        Some(("free", x)) => {
-            let v: f64 = x.parse().with_context(|| format!("--scene free:{x}: not a number"))?;
-            limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene free:{x}: {r}"))?;
-            setup.kind = SceneKind::Free;
-            setup.x_off = v;
-        }
+/// `centred`, `offset:X` or `free[:X]` (metres) applied to the problem's `[scene]` (checked
+/// by the library as a problem file's would be: the free scene needs g_eq = 0).
+pub fn apply_scene(p: &Problem, arg: &str) -> Result<Problem> {
+    let num = |x: &str| x.parse::<f64>().with_context(|| format!("--scene {arg}: not a number"));
+    let (kind, x_off) = match arg.split_once(':') {
+        None if arg == "centred" => (SceneKind::Centred, None),
+        None if arg == "free" => (SceneKind::Free, None),
+        Some(("offset", x)) => (SceneKind::Offset, Some(num(x)?)),
+        Some(("free", x)) => (SceneKind::Free, Some(num(x)?)),
         _ => bail!("--scene {arg}: must be centred, offset:X or free[:X] (metres)"),
-    }
-    if setup.kind == SceneKind::Free && p.scene.env.g_eq != 0.0 {
-        bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1)");
-    }
-    Ok(())
+    };
+    Ok(p.in_scene(kind, x_off, Path::new(&format!("--scene {arg}")))?)
 }
 
-/// How `simulate` (and `replay --scene`) runs a design: the diagnostic simulation's options
-/// and outputs.
+/// How `simulate` (and `replay --scene`) runs a design and reports it.
 pub struct SimulateOpts<'a> {
     /// Relative tolerance (default: the problem's).
     pub rtol: Option<f64>,
-    /// Integration method (centred scene).
-    pub method: gripopt::sim::Method,
+    /// Integration method.
+    pub method: Method,
     /// Contacts with the object (centred scene; false: the linkage alone).
     pub contacts: bool,
-    /// Print every located event to stderr (centred scene).
+    /// Print every located event to stderr.
     pub trace: bool,
     /// One JSON object instead of the text report.
     pub json: bool,
     /// Write the trajectory to this CSV file.
     pub csv: Option<&'a Path>,
-    /// Plot the grasp to this SVG file (centred scene only).
+    /// Plot the grasp to this SVG file (centred and offset scenes).
     pub plot: Option<&'a Path>,
-    /// Keys added to the JSON object.
-    pub extra: serde_json::Map<String, serde_json::Value>,
+    /// What `replay --scene` adds to the JSON object.
+    pub replay: Option<ReplayInScene>,
+}
+
+/// Prints each located event to stderr (`--trace`).
+struct Trace;
+
+impl Sink for Trace {
+    fn event(&mut self, e: &EventNote<'_>) {
+        eprintln!(
+            "event {:?} at t {:.9e} (step {:.9e}..{:.9e}) mem {:?}",
+            e.kind, e.t, e.step[0], e.step[1], e.memories
+        );
+    }
 }
 
 /// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
 pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
-    if p.scene.setup.kind == SceneKind::Centred {
-        return crate::cli::report::simulate(
-            p, x, o.rtol, o.method, o.contacts, o.trace, o.json, o.csv, o.plot, &o.extra,
-        );
-    }
     let kind = p.scene.setup.kind;
-    if o.plot.is_some() {
-        bail!(
-            "--plot: only the centred scene is plotted so far{}",
-            if kind == SceneKind::Free { " (use --csv for the free scene)" } else { "" }
-        );
+    if o.plot.is_some() && kind == SceneKind::Free {
+        bail!("--plot: the free scene is not plotted (use --csv for its poses)");
     }
-    if !o.contacts {
+    if !o.contacts && kind != SceneKind::Centred {
         bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
     }
-    if kind == SceneKind::Offset && o.csv.is_some() {
-        bail!("--csv: the offset scene writes no trajectory yet (the centred and free scenes do)");
-    }
-    simulate(p, x, o)
-}
-
-/// "yes", "no", or "—" (not known).
-fn flag(v: Option<bool>) -> &'static str {
-    match v {
-        Some(true) => "yes",
-        Some(false) => "no",
-        None => "—",
-    }
-}
-
-/// The offset or free scene.
-fn simulate(p: &Problem, x: &Design, so: &SimulateOpts<'_>) -> Result<()> {
-    let (rtol, json, csv, extra) = (so.rtol, so.json, so.csv, &so.extra);
-    let ev = eval_design(x, &p.scene, &EvalOptions::statics_only());
-    let (Some(k), Some(st)) = (ev.kin, ev.statics) else {
+    let integ =
+        Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(o.method);
+    let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
+    let (mut traj, mut poses) = (Trajectory::default(), Vec::<PoseSample>::new());
+    let spec = SceneSpec::of(&p.scene.setup);
+    let ev = if o.trace {
+        gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut ((&mut traj, &mut poses), Trace))
+    } else {
+        gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut (&mut traj, &mut poses))
+    };
+    if ev.scene.is_none() {
         let d = ev.discard.expect("a design without statics was discarded");
         bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
-    };
-    let s = &p.scene;
-    let mut o = SimOptions::diagnostic(rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps);
-    o.method = so.method;
-    o.trace = so.trace;
-    let x_off = s.setup.x_off;
-    if s.setup.kind == SceneKind::Offset {
-        let r = simulate_offset(&k.finger, s, &st, x_off, &o);
-        let d = &r.dynamics;
-        let v = serde_json::json!({
-            "scene": "offset", "x_off": x_off, "outcome": d.outcome.to_string(),
-            "t_first_contact": d.first.map(|f| f.t), "first_phalanx": d.first.map(|f| f.phalanx),
-            "e_cyl": d.first.map(|f| f.impact.e_cyl), "e_lim": d.first.map(|f| f.impact.e_lim),
-            "t_stab": d.t_stab, "min_force_margin": d.min_force_margin, "static_force_margin": d.static_force_margin,
-            "hand_x_end": r.hand_end[0], "hand_y_end": r.hand_end[1], "hand0_x": r.hand0[0], "hand0_y": r.hand0[1],
-            "recentres": r.hand_end[0] * x_off < 0.0, "t_end": d.t_end, "steps": d.stats.steps, "cpu_s": d.cpu_s,
-        });
-        let mut v = v;
-        v.as_object_mut().expect("object").extend(extra.clone());
-        if json {
-            println!("{}", serde_json::to_string_pretty(&v)?);
-        } else {
-            let ms = |t: Option<f64>| t.map_or("—".to_string(), |t| format!("{:.4} ms", t * 1e3));
-            println!("problem {}  scene offset  x_off {x_off} m", p.name);
-            println!("  outcome {}", d.outcome);
-            println!(
-                "  first contact {} on phalanx {}  E_cyl {} mJ (limit {} mJ)",
-                ms(d.first.map(|f| f.t)),
-                d.first.map_or("—".into(), |f| f.phalanx.to_string()),
-                d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_cyl * 1e3)),
-                d.first.map_or("—".into(), |f| format!("{:.4}", f.impact.e_lim * 1e3))
-            );
-            println!(
-                "  t_stab {}  force margin min {:.4} N (static {:.4} N)",
-                ms(d.t_stab),
-                d.min_force_margin,
-                d.static_force_margin
-            );
-            println!(
-                "  hand force at the end ({:.4}, {:.4}) N (static ({:.4}, {:.4}) N); recentres {}",
-                r.hand_end[0],
-                r.hand_end[1],
-                r.hand0[0],
-                r.hand0[1],
-                if r.hand_end[0] * x_off < 0.0 { "yes" } else { "no" }
-            );
-            println!("  t_end {:.4} ms  steps {} cpu {:.2} ms", d.t_end * 1e3, d.stats.steps, d.cpu_s * 1e3);
+    }
+    let record = Record::from_eval(&ev);
+    if let Some(path) = o.csv {
+        match kind {
+            SceneKind::Free => write_poses_csv(path, &poses)?,
+            _ => write_samples_csv(path, &traj.samples, |v| format!("{v:e}"))?,
         }
+    }
+    if let Some(path) = o.plot {
+        gripopt::run::grasp_plot(path, &format!("{}: grasp", p.name), &traj.samples)?;
+    }
+    if o.json {
+        let v = SimulateJson { sim: SimulationRecord { record, method: o.method }, replay: o.replay.as_ref() };
+        println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let centred = simulate_grasp(&k.finger, s, &st, &SimOptions { mode: gripopt::sim::Mode::Diagnostic, ..o });
-    let rec_o = SimOptions { record: csv.is_some(), ..o };
-    let r = simulate_free(&k.finger, s, st.tau_s0, x_off, FreeSetup::default(), &rec_o, None);
-    if let Some(path) = csv {
-        let mut w = std::io::BufWriter::new(
-            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-        );
-        writeln!(w, "t,gx,gy,gz,qw,qx,qy,qz,tilt_deg,q11_1,q21_1,q11_2,q21_2,energy")?;
-        for p in &r.poses {
-            writeln!(
-                w,
-                "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-                p.t,
-                p.g[0],
-                p.g[1],
-                p.g[2],
-                p.q[0],
-                p.q[1],
-                p.q[2],
-                p.q[3],
-                p.tilt.to_degrees(),
-                p.fingers[0],
-                p.fingers[1],
-                p.fingers[2],
-                p.fingers[3],
-                p.energy
-            )?;
-        }
-        w.flush()?;
+    print_simulation(p, &record, o.method, integ.rtol);
+    if o.csv.is_some() {
+        let n = if kind == SceneKind::Free { poses.len() } else { traj.samples.len() };
+        println!("trajectory: {n} samples written to {}", o.csv.map(|c| c.display().to_string()).unwrap_or_default());
     }
-    let fr = FreeRecord::from_measure(Some(&FreeMeasure::from_result(&r, x_off)));
-    let mut v = serde_json::to_value(&r)?;
-    let m = v.as_object_mut().expect("object");
-    // the verdict only when the free scene ran to t_obs (as `evaluate` records it)
-    m.insert("moved".into(), serde_json::json!(fr.moved));
-    m.insert("toppled".into(), serde_json::json!(fr.toppled));
-    m.insert("escaped".into(), serde_json::json!(fr.escaped));
-    m.insert("free_end".into(), serde_json::json!(fr.free_end));
-    let fc = centred.first;
-    m.insert("scene".into(), serde_json::json!("free"));
-    m.insert("x_off".into(), serde_json::json!(x_off));
-    m.insert("outcome".into(), serde_json::json!(centred.outcome.to_string()));
-    m.insert("impact_ok".into(), serde_json::json!(centred.impact_ok));
-    m.insert("e_cyl".into(), serde_json::json!(fc.map(|f| f.impact.e_cyl)));
-    m.insert("e_trans".into(), serde_json::json!(fc.map(|f| f.impact.e_trans)));
-    m.insert("e_rot".into(), serde_json::json!(fc.map(|f| f.impact.e_rot)));
-    m.insert("e_lim".into(), serde_json::json!(fc.map(|f| f.impact.e_lim)));
-    m.insert("t_first_contact".into(), serde_json::json!(fc.map(|f| f.t)));
-    m.insert("min_force_margin".into(), serde_json::json!(centred.min_force_margin));
-    m.insert("static_force_margin".into(), serde_json::json!(centred.static_force_margin));
-    m.insert(
-        "force_ok".into(),
-        serde_json::json!(centred.t_force_violation.is_none() && centred.static_force_margin >= 0.0),
+    Ok(())
+}
+
+/// `simulate --json`: the simulation's record, and for `replay --scene` where it came from.
+#[derive(Serialize)]
+struct SimulateJson<'a> {
+    #[serde(flatten)]
+    sim: SimulationRecord,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    replay: Option<&'a ReplayInScene>,
+}
+
+/// The text report of a simulation.
+fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
+    let kind = r.scene.unwrap_or_default();
+    let x_off = r.x_off.unwrap_or(0.0);
+    println!("problem {}  scene {kind}  x_off {x_off} m  method {}  rtol {rtol:e}", p.name, method.as_str());
+    let g = &r.grasp;
+    if kind == SceneKind::Free {
+        println!("centred grasp (the criteria's prediction):");
+    }
+    print_dyn(g);
+    println!("  f0 (rigid statics) {} / {} N", opt(r.statics.f0_1, 1.0, 4), opt(r.statics.f0_2, 1.0, 4));
+    let ok = |v: Option<bool>| match v {
+        Some(true) => "ok",
+        Some(false) => "VIOLATED",
+        None => "not reached",
+    };
+    println!("  criteria: impact {}  fold {}  force {}", ok(g.impact_ok), ok(g.fold_ok), ok(g.force_ok));
+    if let Some(h) = &r.offset_scene {
+        println!(
+            "  hand force at the end ({}, {}) N (static ({}, {}) N); recentres {}",
+            opt(h.hand_x_end, 1.0, 4),
+            opt(h.hand_y_end, 1.0, 4),
+            opt(h.hand0_x, 1.0, 4),
+            opt(h.hand0_y, 1.0, 4),
+            yes_no(h.recentres)
+        );
+    }
+    if let Some(f) = &r.free_scene {
+        print_free(f, r.x_off);
+    }
+    match &r.verdict.reason {
+        None => println!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),
+        Some(why) => println!("verdict    DISCARDED at stage 3: {why}"),
+    }
+}
+
+/// The grasp samples as CSV (`fmt` formats each number).
+pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(f64) -> String) -> Result<()> {
+    let mut w = std::io::BufWriter::new(
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
     );
-    m.insert("t_stab".into(), serde_json::json!(centred.t_stab));
-    m.extend(extra.clone());
-    if json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        println!("problem {}  scene free  x_off {x_off} m", p.name);
-        println!(
-            "  object: max displacement {:.3e} m (dx {:.3e}, dy {:.3e})  max tilt {:.4}°  final {:.3e} m / {:.4}°",
-            r.object_max_displacement,
-            r.object_max_dx,
-            r.object_max_dy,
-            r.object_max_tilt_deg,
-            r.object_final_displacement,
-            r.object_final_tilt_deg
-        );
-        println!(
-            "  peak E_trans {:.4e} J  E_rot {:.4e} J during the first contact",
-            r.object_peak_e_trans, r.object_peak_e_rot
-        );
-        if let Some(why) = fr.free_end.filter(|e| *e != "t_obs") {
-            println!("  ended early at t {:.4} ms: {why} (nothing observed: no verdict)", r.t_end * 1e3);
-        }
-        println!(
-            "  moved {}  toppled {}  escaped {}  rim_contact {}",
-            flag(fr.moved),
-            flag(fr.toppled),
-            flag(fr.escaped),
-            flag(Some(r.rim_contact))
-        );
-        let impact = match centred.impact_ok {
-            Some(true) => "holds",
-            Some(false) => "fails",
-            None => "— (no contact)",
-        };
-        println!("  centred criteria: impact criterion {impact}  outcome {}", centred.outcome);
-        println!("  steps {} rhs {} events {} cpu {:.2} ms", r.stats.steps, r.rhs_evals, r.events, r.cpu_s * 1e3);
+    writeln!(
+        w,
+        "t,q11,q21,q11_dot,q21_dot,theta2,delta_1,delta_2,fn_1,fn_2,ft_1,ft_2,hand_fy,filtered_fy,energy,energy_excess"
+    )?;
+    for s in samples {
+        let v = [
+            s.t,
+            s.q[0],
+            s.q[1],
+            s.qd[0],
+            s.qd[1],
+            s.theta2,
+            s.delta[0],
+            s.delta[1],
+            s.normal[0],
+            s.normal[1],
+            s.friction[0],
+            s.friction[1],
+            s.hand_fy,
+            s.filtered_fy,
+            s.energy,
+            s.energy_excess,
+        ];
+        writeln!(w, "{}", v.map(fmt).join(","))?;
     }
+    w.flush()?;
+    Ok(())
+}
+
+/// The free scene's poses as CSV.
+fn write_poses_csv(path: &Path, poses: &[PoseSample]) -> Result<()> {
+    let mut w = std::io::BufWriter::new(
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+    );
+    writeln!(w, "t,gx,gy,gz,qw,qx,qy,qz,tilt_deg,q11_1,q21_1,q11_2,q21_2,energy")?;
+    for p in poses {
+        let [a, b, c, d] = p.fingers;
+        let v =
+            [p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), a, b, c, d, p.energy];
+        writeln!(w, "{}", v.map(|x| format!("{x:e}")).join(","))?;
+    }
+    w.flush()?;
     Ok(())
 }
 
@@ -246,6 +204,33 @@ fn scene_name(p: &Problem) -> String {
         SceneKind::Centred => "centred".into(),
         k => format!("{k}:{}", p.scene.setup.x_off),
     }
+}
+
+/// What `replay --scene` adds to `simulate --json`: where the design came from, and that a
+/// different scene cannot be verified.
+#[derive(Debug, Serialize)]
+pub struct ReplayInScene {
+    /// The run, design and shard.
+    pub replay: ReplaySource,
+    /// Always null: nothing was compared.
+    pub verified: Option<bool>,
+    /// Why.
+    pub note: String,
+}
+
+/// Where a replayed design came from.
+#[derive(Debug, Serialize)]
+pub struct ReplaySource {
+    /// The run folder.
+    pub run_dir: String,
+    /// The design id.
+    pub design: u64,
+    /// The shard it was read from.
+    pub file: String,
+    /// The run's scene.
+    pub recorded_scene: String,
+    /// The scene simulated.
+    pub scene: String,
 }
 
 /// `gripopt replay RUN_DIR --design ID --scene S`. When S is the run's own scene (its
@@ -261,37 +246,44 @@ pub fn replay_in_scene(
     csv: Option<&Path>,
     plot: Option<&Path>,
 ) -> Result<Option<i32>> {
-    let run_problem = Problem::load(dir.join("problem.toml"))?;
-    let mut p = run_problem.clone();
-    apply_scene(&mut p, scene)?;
+    let folder = gripopt::run::RunFolder::open(dir)?;
+    let run_problem = folder.problem()?;
+    let p = apply_scene(&run_problem, scene)?;
     let (ran, recorded) = (scene_name(&p), scene_name(&run_problem));
     let (a, b) = (&p.scene.setup, &run_problem.scene.setup);
     // numerically: free:-0 is the run's free:0
     if a.kind == b.kind && (a.kind == SceneKind::Centred || a.x_off == b.x_off) {
         return Ok(None);
     }
-    let rec = gripopt::record::read_design(dir, id)?;
-    let x = rec.design()?;
+    let rec = folder.design(id)?;
+    let x = rec.design();
     let note = format!(
         "design {id} of {} re-simulated in the {ran} scene; the run recorded the {recorded} scene, so a different scene cannot be verified against the recording (nothing compared)",
         dir.display()
     );
-    let mut extra = serde_json::Map::new();
-    extra.insert("replay".into(), serde_json::json!({"run_dir": dir.display().to_string(), "design": id, "file": rec.file.display().to_string(), "recorded_scene": recorded, "scene": ran}));
-    extra.insert("verified".into(), serde_json::Value::Null);
-    extra.insert("note".into(), serde_json::json!(note));
     if !json {
         println!("{note}");
     }
+    let replay = ReplayInScene {
+        replay: ReplaySource {
+            run_dir: dir.display().to_string(),
+            design: id,
+            file: rec.file.display().to_string(),
+            recorded_scene: recorded,
+            scene: ran.clone(),
+        },
+        verified: None,
+        note,
+    };
     let o = SimulateOpts {
         rtol: None,
-        method: gripopt::sim::Method::Radau5,
+        method: Method::Radau5,
         contacts: true,
         trace: false,
         json,
         csv,
         plot,
-        extra,
+        replay: Some(replay),
     };
     simulate_in_scene(&p, &x, &o)
         .with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;

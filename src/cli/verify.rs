@@ -119,7 +119,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     }
     print_table(&c);
     if c.not_observed > 0 {
-        let mut why = std::collections::BTreeMap::<&str, usize>::new();
+        let mut why = std::collections::BTreeMap::<String, usize>::new();
         for r in s.rows.iter().filter(|r| !r.observed()) {
             *why.entry(r.free_end()).or_default() += 1;
         }

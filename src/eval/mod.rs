@@ -1,16 +1,22 @@
 //! Evaluation (MODEL.md §10): a design through the staged pipeline — stage 0/1 kinematics
-//! and singularities, stage 2 statics and form closure, stage 3 the grasp simulation —
-//! with discards and violations, and the one flattening of an evaluation into its record.
-//! Above `sim`, below `optim`/`record`/`run`.
+//! and singularities, stage 2 statics and form closure, stage 3 the simulation in the
+//! problem's scene — with discards and violations; the one way to simulate a design in a
+//! scene; and the one typed record of an evaluation. Above `sim`, below `optim`/`record`/`run`.
+//!
+//! Files: `stages` (stages 0–2, [`Evaluation`], [`Reason`], [`Cause`]) ← `stage3` (stage
+//! 3, [`evaluate`], [`simulate`]); `record` ([`Record`]) ← `scene_record` (its stage-3 parts).
 
-mod free_stage;
 mod record;
+mod scene_record;
+mod stage3;
 mod stages;
 
-pub use free_stage::{FreeEnd, FreeMeasure, ObjectMotion};
-pub use record::{DynamicsRecord, FreeRecord, Record};
+pub use record::{KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
+pub use stage3::{
+    barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,
+};
 pub use stages::{
-    evaluate, evaluate_dynamics, evaluate_full, evaluate_statics, evaluate_with_trajectory, stage3_ends_at_once,
-    stage_kinematics, stage_statics, Discard, EvalOptions, Evaluation, KinematicsResult, Partial, PartialGrasp, Reason,
-    StaticsResult, MISSING_POSE_VIOLATION,
+    evaluate_statics, stage_kinematics, stage_statics, Cause, Discard, EvalOptions, Evaluation, KinematicsResult,
+    ObjectMotion, Partial, PartialGrasp, Reason, StaticsResult, MISSING_POSE_VIOLATION,
 };

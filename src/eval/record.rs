@@ -1,28 +1,52 @@
-//! The ONE place that flattens an evaluation into its record: the per-design JSON record
-//! of MODEL.md §10 (`gripopt evaluate --json`, CSV rows, recordings, sweeps).
+//! The ONE typed record of an evaluation (MODEL.md §10), from which every output is
+//! derived: `evaluate`/`simulate --json`, the run's CSV rows, the recording's `/designs`
+//! messages, checkpoints, replay's comparison and sweeps. A sub-record per stage and per
+//! scene (flat keys in JSON, snake_case; `null` = not computed), enums where a value is
+//! one of a set (the scene, how a simulation ended, what discarded the design).
 
-use super::free_stage::{FreeEnd, FreeMeasure};
-use super::stages::Evaluation;
-use crate::params::SceneKind;
-use crate::sim::DynamicsResult;
-use serde::Serialize;
+use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
+use super::stages::{Cause, Evaluation, PartialGrasp, StaticsResult};
+use crate::params::{DesignParameters, ForceModel, SceneKind};
+use crate::sim::Method;
+use serde::{Deserialize, Serialize};
 
-/// The per-design JSON record of MODEL.md §10 (snake_case keys; `null` = not computed).
-#[derive(Debug, Clone, Serialize)]
+/// The evaluation record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Record {
-    /// Design: l21 (m).
-    pub l21: f64,
-    /// Design: b (m).
-    pub b: f64,
-    /// Design: t22 (m).
-    pub t22: f64,
-    /// Design: r.
-    pub r: f64,
-    /// Design: p.
-    pub p: f64,
-    /// Design: ψ (deg).
-    pub psi_deg: f64,
-    /// l_hand (m).
+    /// The design (always known; ψ in degrees).
+    #[serde(flatten)]
+    pub design: DesignParameters,
+    /// Stages 0–1: the finger.
+    #[serde(flatten)]
+    pub kinematics: KinematicsRecord,
+    /// Stage 2: statics, form closure, the static objectives.
+    #[serde(flatten)]
+    pub statics: StaticsRecord,
+    /// Stage 3: the grasp.
+    #[serde(flatten)]
+    pub grasp: GraspRecord,
+    /// Stage 3 in the offset scene: the hand forces (absent in the other scenes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset_scene: Option<OffsetSceneRecord>,
+    /// Stage 3 in the free scene: the measurement (absent in the other scenes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_scene: Option<FreeSceneRecord>,
+    /// The verdict.
+    #[serde(flatten)]
+    pub verdict: Verdict,
+    /// The scene stage 3 ran in (null: it did not run).
+    #[serde(default)]
+    pub scene: Option<SceneKind>,
+    /// The object offset of that scene (m).
+    #[serde(default)]
+    pub x_off: Option<f64>,
+}
+
+/// Stages 0–1: the finger built from the design (every value computed before a discard).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct KinematicsRecord {
+    /// l_hand = b + 2 t22 + 2 l21 (m; always known).
     pub l_hand: f64,
     /// l11 (m).
     pub l11: Option<f64>,
@@ -46,8 +70,14 @@ pub struct Record {
     pub sigma: Option<f64>,
     /// Body masses m11, m12, m21, m22 (kg).
     pub masses: Option<[f64; 4]>,
-    /// Minimum singularity margin (deg).
+    /// Minimum singularity margin (deg); set iff stages 0–1 passed.
     pub min_margin_deg: Option<f64>,
+}
+
+/// Stage 2 (every value computed before a discard).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StaticsRecord {
     /// τ_s^min before clipping (N·m).
     pub tau_s_min: Option<f64>,
     /// Spring preload τ_s0 (N·m).
@@ -78,7 +108,7 @@ pub struct Record {
     pub fhandmu_y: Option<f64>,
     /// Form closed at x_off = 0.
     pub form_closed_0: Option<bool>,
-    /// Objective 1 (m).
+    /// Objective 1 (m); −Δ_off, the optimiser's placeholder, when not form closed at 0.
     pub max_offset: Option<f64>,
     /// What ended the offset scan (null if off_max was reached).
     pub max_offset_ended_by: Option<String>,
@@ -94,60 +124,75 @@ pub struct Record {
     pub alpha_0: Option<f64>,
     /// F̃ from f⁰ (N).
     pub mean_force_0: Option<f64>,
-    /// Force model of alpha and mean_force ("mobilised" or "frictionless").
-    pub force_model: Option<&'static str>,
-    /// Stage-3 keys (flattened; all null when stage 3 did not run).
-    #[serde(flatten)]
-    pub dynamics: DynamicsRecord,
-    /// The free scene's §14.4 keys (flattened), present only when the problem's scene is
-    /// free (null when the free scene did not run); absent for the centred and offset scenes.
-    #[serde(flatten)]
-    pub free: Option<FreeRecord>,
+    /// Force model of alpha and mean_force.
+    pub force_model: Option<ForceModel>,
+}
+
+/// The verdict (MODEL.md §10).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Verdict {
     /// No stage discarded the design.
     pub feasible: bool,
-    /// Stage that discarded it.
+    /// The stage that discarded it (0–3).
     pub failed_stage: Option<u8>,
-    /// Why.
+    /// Why, in words.
     pub reason: Option<String>,
-    /// Violation magnitude (§10 units).
+    /// Violation magnitude (§10 units; larger = worse).
     pub violation: Option<f64>,
+    /// What discarded it, as a class.
+    pub cause: Option<Cause>,
+}
+
+/// The record of a simulation (`gripopt simulate --json`): the evaluation record in the
+/// scene simulated, and the integration method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimulationRecord {
+    /// The evaluation record.
+    #[serde(flatten)]
+    pub record: Record,
+    /// The integration method.
+    pub method: Method,
 }
 
 impl Record {
-    /// Build the record of an evaluation.
+    /// The record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
         let x = &ev.design;
-        let fin = |v: f64| v.is_finite().then_some(v);
+        let applies = |kind: SceneKind| ev.scene == Some(kind);
+        Record {
+            design: DesignParameters { l21: x.l21, b: x.b, t22: x.t22, r: x.r, p: x.p, psi_deg: x.psi.to_degrees() },
+            kinematics: KinematicsRecord::from_eval(ev),
+            statics: StaticsRecord::from_eval(ev),
+            grasp: GraspRecord::from_result(ev.dynamics.as_ref()),
+            offset_scene: applies(SceneKind::Offset)
+                .then(|| ev.offset.as_ref().map(OffsetSceneRecord::from_result))
+                .map(Option::unwrap_or_default),
+            free_scene: applies(SceneKind::Free).then(|| FreeSceneRecord::from_result(ev.free.as_ref())),
+            verdict: Verdict {
+                feasible: ev.feasible(),
+                failed_stage: ev.discard.map(|d| d.stage),
+                reason: ev.discard.map(|d| d.reason.to_string()),
+                violation: ev.discard.map(|d| d.violation),
+                cause: ev.discard.and_then(|d| d.reason.cause()),
+            },
+            scene: ev.scene,
+            x_off: ev.scene.map(|_| ev.x_off),
+        }
+    }
+}
+
+impl KinematicsRecord {
+    fn from_eval(ev: &Evaluation) -> Self {
+        let x = &ev.design;
         // MODEL.md §10: every value computed before a discard is reported, the rest null
         let f = ev.kin.map(|k| k.finger).or(ev.partial.finger);
-        let st = ev.statics;
-        let spring = st.map(|s| [s.tau_s_min, s.tau_s0]).or(ev.partial.spring);
-        let pg = ev.partial.grasp;
-        let grasp = |a: fn(&super::stages::StaticsResult) -> [f64; 2],
-                     b: fn(&super::stages::PartialGrasp) -> [f64; 2]| {
-            st.as_ref().map(a).or(pg.as_ref().map(b))
-        };
-        let theta = grasp(|s| s.theta, |g| g.theta);
-        let k = grasp(|s| s.k, |g| g.k);
-        let f0 = grasp(|s| s.f0, |g| g.f0);
-        let fmu = grasp(|s| s.fmu, |g| g.fmu);
-        let hand0 = grasp(|s| s.hand0, |g| g.hand0);
-        let hand_mu = grasp(|s| s.hand_mu, |g| g.hand_mu);
-        // l11 and l22 follow from the design (stage 0 computes them before any check)
-        let l11 = f.map(|f| f.l11).or_else(|| fin(x.p * x.l21));
-        let l22 = f.map(|f| f.l22).or_else(|| fin(x.r * (x.p * x.l21)));
-        let fin = |v: f64| v.is_finite().then_some(v);
-        Record {
-            l21: x.l21,
-            b: x.b,
-            t22: x.t22,
-            r: x.r,
-            p: x.p,
-            psi_deg: x.psi.to_degrees(),
+        KinematicsRecord {
             l_hand: x.l_hand(),
-            l11,
+            // l11 and l22 follow from the design (stage 0 computes them before any check)
+            l11: f.map(|f| f.l11).or_else(|| fin(x.p * x.l21)),
             l12: f.map(|f| f.l12),
-            l22,
+            l22: f.map(|f| f.l22).or_else(|| fin(x.r * (x.p * x.l21))),
             q11_0: f.map(|f| f.open.q11),
             q21_0: f.map(|f| f.open.q21),
             q12_0: f.map(|f| f.open.q12),
@@ -157,6 +202,26 @@ impl Record {
             sigma: f.map(|f| f.sigma),
             masses: f.map(|f| f.mass.m),
             min_margin_deg: ev.kin.map(|k| k.sweep.min_margin.to_degrees()),
+        }
+    }
+}
+
+impl StaticsRecord {
+    fn from_eval(ev: &Evaluation) -> Self {
+        let st = ev.statics;
+        let spring = st.map(|s| [s.tau_s_min, s.tau_s0]).or(ev.partial.spring);
+        let pg = ev.partial.grasp;
+        // a value of the grasp: from stage 2's result, or from its partial values
+        let grasp = |a: fn(&StaticsResult) -> [f64; 2], b: fn(&PartialGrasp) -> [f64; 2]| {
+            st.as_ref().map(a).or(pg.as_ref().map(b))
+        };
+        let theta = grasp(|s| s.theta, |g| g.theta);
+        let k = grasp(|s| s.k, |g| g.k);
+        let f0 = grasp(|s| s.f0, |g| g.f0);
+        let fmu = grasp(|s| s.fmu, |g| g.fmu);
+        let hand0 = grasp(|s| s.hand0, |g| g.hand0);
+        let hand_mu = grasp(|s| s.hand_mu, |g| g.hand_mu);
+        StaticsRecord {
             tau_s_min: spring.map(|s| s[0]),
             tau_s0: spring.map(|s| s[1]),
             theta1: theta.map(|v| v[0]),
@@ -180,178 +245,30 @@ impl Record {
             mean_force_mu: st.map(|s| s.mean_force_mu),
             alpha_0: st.and_then(|s| fin(s.alpha_0)),
             mean_force_0: st.map(|s| s.mean_force_0),
-            force_model: st.map(|s| s.force_model.as_str()),
-            dynamics: DynamicsRecord::from_result(ev.dynamics.as_ref()),
-            free: (ev.scene == SceneKind::Free).then(|| FreeRecord::from_measure(ev.free.as_ref())),
-            feasible: ev.feasible(),
-            failed_stage: ev.discard.map(|d| d.stage),
-            reason: ev.discard.map(|d| d.reason.to_string()),
-            violation: ev.discard.map(|d| d.violation),
+            force_model: st.map(|s| s.force_model),
         }
     }
 }
 
-/// Stage-3 keys of the JSON record (MODEL.md §10); all `null` when stage 3 did not run.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct DynamicsRecord {
-    /// Time of first contact (s).
-    pub t_first_contact: Option<f64>,
-    /// "proximal" or "distal".
-    pub first_contact_phalanx: Option<&'static str>,
-    /// Onset velocity (m/s).
-    pub v_impact: Option<f64>,
-    /// Effective finger mass (kg).
-    pub m_finger: Option<f64>,
-    /// E_cyl (J).
-    pub e_cyl: Option<f64>,
-    /// E_trans (J).
-    pub e_trans: Option<f64>,
-    /// E_rot (J).
-    pub e_rot: Option<f64>,
-    /// min(E_lim,trans, E_lim,rot) (J).
-    pub e_lim: Option<f64>,
-    /// θ2 at first contact (rad).
-    pub theta2_first_contact: Option<f64>,
-    /// Min filtered-force margin (N).
-    pub min_force_margin: Option<f64>,
-    /// Static hand-force margin (N).
-    pub static_force_margin: Option<f64>,
-    /// Time to stability (s).
-    pub t_stab: Option<f64>,
-    /// Proximal normal force at t_stab (N).
-    pub f_stab_1: Option<f64>,
-    /// Distal normal force at t_stab (N).
-    pub f_stab_2: Option<f64>,
-    /// f*_1 (N).
-    pub fstar_1: Option<f64>,
-    /// f*_2 (N).
-    pub fstar_2: Option<f64>,
-    /// max |q̈| at the end (rad/s²).
-    pub max_qdd_end: Option<f64>,
-    /// Accepted steps.
-    pub steps: Option<u64>,
-    /// Rejected steps.
-    pub rejected_steps: Option<u64>,
-    /// RHS evaluations.
-    pub rhs_evals: Option<u64>,
-    /// Jacobian evaluations.
-    pub jac_evals: Option<u64>,
-    /// LU factorisations.
-    pub lu_count: Option<u64>,
-    /// Newton iterations.
-    pub newton_iters: Option<u64>,
-    /// Step attempts rejected for Newton failure (part of `rejected_steps`).
-    pub newton_failures: Option<u64>,
-    /// Events.
-    pub events: Option<u32>,
-    /// CPU seconds of stage 3.
-    pub cpu_s: Option<f64>,
-    /// A knuckle contact was seen.
-    pub knuckle_contact: Option<bool>,
-}
-
-impl DynamicsRecord {
-    /// Flatten a result (None → all null).
-    pub fn from_result(d: Option<&DynamicsResult>) -> Self {
-        let Some(d) = d else { return Self::default() };
-        let fin = |v: f64| v.is_finite().then_some(v);
-        let fc = d.first;
-        DynamicsRecord {
-            t_first_contact: fc.map(|f| f.t),
-            first_contact_phalanx: fc.map(|f| if f.phalanx == 1 { "proximal" } else { "distal" }),
-            v_impact: fc.map(|f| f.impact.v_impact),
-            m_finger: fc.map(|f| f.impact.m_finger),
-            e_cyl: fc.map(|f| f.impact.e_cyl),
-            e_trans: fc.map(|f| f.impact.e_trans),
-            e_rot: fc.map(|f| f.impact.e_rot),
-            e_lim: fc.map(|f| f.impact.e_lim),
-            theta2_first_contact: fc.map(|f| f.theta2),
-            min_force_margin: fin(d.min_force_margin),
-            static_force_margin: fin(d.static_force_margin),
-            t_stab: d.t_stab,
-            f_stab_1: d.t_stab.map(|_| d.f_end[0]),
-            f_stab_2: d.t_stab.map(|_| d.f_end[1]),
-            fstar_1: fin(d.fstar[0]),
-            fstar_2: fin(d.fstar[1]),
-            max_qdd_end: fin(d.max_qdd_end),
-            steps: Some(d.stats.steps),
-            rejected_steps: Some(d.stats.rejected),
-            rhs_evals: Some(d.rhs_evals),
-            jac_evals: Some(d.stats.jac),
-            lu_count: Some(d.stats.lu),
-            newton_iters: Some(d.stats.newton),
-            newton_failures: Some(d.stats.newton_fail),
-            events: Some(d.events),
-            cpu_s: Some(d.cpu_s),
-            knuckle_contact: Some(d.knuckle_flag),
-        }
+impl Record {
+    /// Objectives in their natural sense: max_offset (m; negative: the placeholder of a
+    /// design not form closed at 0), α, F̃ (N), t_stab (s); None where not computed.
+    pub fn objectives(&self) -> [Option<f64>; 4] {
+        let st = &self.statics;
+        [st.max_offset, st.alpha, st.mean_force, self.grasp.t_stab]
     }
-}
-
-/// The free scene's keys of the JSON record (MODEL.md §14.4, the names of
-/// `simulate --scene free --json`); all `null` when the free scene did not run.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct FreeRecord {
-    /// Largest horizontal displacement of G (m).
-    pub object_max_displacement: Option<f64>,
-    /// Largest |Δx| of G (m).
-    pub object_max_dx: Option<f64>,
-    /// Largest |Δy| of G (m).
-    pub object_max_dy: Option<f64>,
-    /// Largest tilt (°).
-    pub object_max_tilt_deg: Option<f64>,
-    /// Horizontal displacement at the end (m).
-    pub object_final_displacement: Option<f64>,
-    /// Tilt at the end (°).
-    pub object_final_tilt_deg: Option<f64>,
-    /// Peak translational kinetic energy of the object during the first contact (J).
-    pub object_peak_e_trans: Option<f64>,
-    /// Peak rotational kinetic energy of the object during the first contact (J).
-    pub object_peak_e_rot: Option<f64>,
-    /// Max displacement > Δx_max or max tilt > θ_max.
-    pub moved: Option<bool>,
-    /// Tilt above 45° at some time.
-    pub toppled: Option<bool>,
-    /// No phalanx in contact at the end.
-    pub escaped: Option<bool>,
-    /// A loaded phalanx met the object's rim or a face.
-    pub rim_contact: Option<bool>,
-    /// Object offset x_off of the free scene (m).
-    pub object_x_off: Option<f64>,
-    /// How the free scene ended: "t_obs" (observed to min(t_max, t_obs)) or why it stopped
-    /// early (then the maxima cover the part simulated and the verdict flags are null).
-    pub free_end: Option<&'static str>,
-    /// Accepted steps of the free scene.
-    pub free_steps: Option<u64>,
-    /// Right-hand-side evaluations of the free scene.
-    pub free_rhs_evals: Option<u64>,
-}
-
-impl FreeRecord {
-    /// Flatten a measurement (None → all null).
-    pub fn from_measure(m: Option<&FreeMeasure>) -> Self {
-        let Some(m) = m else { return Self::default() };
-        let observed = m.end == FreeEnd::Observed;
-        FreeRecord {
-            object_max_displacement: Some(m.max_displacement),
-            object_max_dx: Some(m.max_dx),
-            object_max_dy: Some(m.max_dy),
-            object_max_tilt_deg: Some(m.max_tilt_deg),
-            object_final_displacement: Some(m.final_displacement),
-            object_final_tilt_deg: Some(m.final_tilt_deg),
-            object_peak_e_trans: Some(m.peak_e_trans),
-            object_peak_e_rot: Some(m.peak_e_rot),
-            moved: observed.then_some(m.moved),
-            toppled: observed.then_some(m.toppled),
-            escaped: observed.then_some(m.escaped),
-            rim_contact: Some(m.rim_contact),
-            object_x_off: Some(m.x_off),
-            free_end: Some(match m.end {
-                FreeEnd::Observed => "t_obs",
-                FreeEnd::Early(why) => why,
-            }),
-            free_steps: Some(m.steps),
-            free_rhs_evals: Some(m.rhs_evals),
-        }
+    /// The derived lengths l11, l12, l22 when stages 0–1 built the finger.
+    pub fn lengths(&self) -> Option<[f64; 3]> {
+        let k = &self.kinematics;
+        let built = self.verdict.failed_stage.is_none_or(|s| s >= 2);
+        built.then_some([k.l11?, k.l12?, k.l22?])
+    }
+    /// Stage 3's grasp work: accepted steps and right-hand-side evaluations.
+    pub fn sim_work(&self) -> Option<[u64; 2]> {
+        Some([self.grasp.work.steps?, self.grasp.work.rhs_evals?])
+    }
+    /// Form closed at the centred object (by the sign of max_offset, MODEL.md §6.7).
+    pub fn form_closed(&self) -> Option<bool> {
+        self.statics.max_offset.map(|m| m >= 0.0)
     }
 }

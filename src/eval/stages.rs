@@ -1,8 +1,8 @@
-//! The stages of MODEL.md §10: each returns its values or a [`Discard`] with the stage, a
-//! reason and a non-negative violation (0 = satisfied), so an optimiser can rank infeasible
-//! designs. No heap allocation per evaluation.
+//! Stages 0–2 of MODEL.md §10 and what an evaluation is: each stage returns its values or
+//! a [`Discard`] with the stage, a typed [`Reason`] and a non-negative violation (0 =
+//! satisfied), so an optimiser can rank infeasible designs. No heap allocation per
+//! evaluation. Stage 3 (a scene's simulation) is `stage3`.
 
-use super::free_stage::{stage3_free, FreeMeasure, ObjectMotion};
 use crate::model::isotropy;
 use crate::model::spring_preload;
 pub use crate::model::StaticsResult;
@@ -10,7 +10,8 @@ use crate::model::{closure_matrix, form_closure_test, grasp_at, max_offset, Offs
 use crate::model::{singularity_sweep, Sweep, SweepFailure};
 use crate::model::{Finger, GeomError};
 use crate::params::{Design, Problem, SceneKind, SceneParams};
-use crate::sim::{DynOutcome, DynamicsResult, SimOptions, Trajectory};
+use crate::sim::{Controls, DynOutcome, DynamicsResult, FreeEnd, FreeResult, Integration, OffsetResult};
+use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::time::Instant;
 
@@ -32,7 +33,175 @@ pub enum Reason {
     /// Stage 3 of a free-kind problem: the free object did not barely move (§14.4).
     ObjectMoved(ObjectMotion),
     /// Stage 3 of a free-kind problem: the free scene ended before t_obs (why).
-    FreeSceneEnded(&'static str),
+    FreeSceneEnded(FreeEnd),
+}
+
+/// What discarded a design, as a short snake_case word (the record's `cause`, a sweep's
+/// verdict class).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cause {
+    /// A length ≤ 0 or NaN.
+    Invalid,
+    /// No open pose.
+    NoOpenPose,
+    /// The assembly mode changes (open pose or closing).
+    ModeChange,
+    /// The linkage cannot be mounted.
+    NotMountable,
+    /// No closed pose in the singularity sweep.
+    NoClosedPose,
+    /// Singular at the open pose.
+    SingularOpen,
+    /// Singular while closing.
+    SingularClosing,
+    /// Spring preload undefined.
+    Spring,
+    /// No closed pose of the centred grasp.
+    NoGraspPose,
+    /// Singular static force system.
+    SingularForces,
+    /// A contact force not positive.
+    ForcePositiveness,
+    /// The palm force not positive.
+    PalmForce,
+    /// Not form closed.
+    NoFormClosure,
+    /// Impact criterion.
+    Impact,
+    /// Distal fold at the first contact.
+    Fold,
+    /// Filtered force criterion.
+    Force,
+    /// Static force criterion.
+    StaticForce,
+    /// No stability by t_max.
+    NoStability,
+    /// Singular or not mountable during the grasp.
+    SingularDynamic,
+    /// The simulation was aborted (events, step budget, step size).
+    Aborted,
+    /// The open finger penetrates the object.
+    InitialPenetration,
+    /// No compliant equilibrium.
+    NoEquilibrium,
+    /// The free object did not barely move.
+    ObjectMoved,
+    /// The free scene ended before t_obs.
+    FreeSceneAborted,
+}
+
+impl Cause {
+    /// The snake_case word.
+    pub fn as_str(self) -> &'static str {
+        CAUSE_WORDS[self as usize]
+    }
+}
+
+/// [`Cause`]'s words in variant order (checked against serde's by a test).
+const CAUSE_WORDS: [&str; 24] = [
+    "invalid",
+    "no_open_pose",
+    "mode_change",
+    "not_mountable",
+    "no_closed_pose",
+    "singular_open",
+    "singular_closing",
+    "spring",
+    "no_grasp_pose",
+    "singular_forces",
+    "force_positiveness",
+    "palm_force",
+    "no_form_closure",
+    "impact",
+    "fold",
+    "force",
+    "static_force",
+    "no_stability",
+    "singular_dynamic",
+    "aborted",
+    "initial_penetration",
+    "no_equilibrium",
+    "object_moved",
+    "free_scene_aborted",
+];
+
+impl Reason {
+    /// The class of this reason; `None` for a stable grasp (not a discard).
+    pub fn cause(&self) -> Option<Cause> {
+        use crate::model::GeomError as G;
+        use crate::model::OffsetFailure as O;
+        use crate::model::SweepFailure as S;
+        use DynOutcome as D;
+        Some(match self {
+            Reason::InvalidDesign => Cause::Invalid,
+            Reason::Geometry(G::NoOpenPose) => Cause::NoOpenPose,
+            Reason::Geometry(G::AssemblyModeChange) | Reason::Sweep(S::Pose(_, G::AssemblyModeChange)) => {
+                Cause::ModeChange
+            }
+            Reason::Geometry(_) | Reason::Sweep(S::Pose(..)) => Cause::NotMountable,
+            Reason::Sweep(S::ClosedPose(..)) => Cause::NoClosedPose,
+            Reason::Sweep(S::Margin(s)) if s.at_theta2 == 0.0 => Cause::SingularOpen,
+            Reason::Sweep(S::Margin(_)) => Cause::SingularClosing,
+            Reason::SpringUndefined => Cause::Spring,
+            Reason::Grasp(O::NoClosedPose(..)) => Cause::NoGraspPose,
+            Reason::Grasp(O::SingularForces) => Cause::SingularForces,
+            Reason::Grasp(O::ForceNotPositive(_)) => Cause::ForcePositiveness,
+            Reason::Grasp(O::PalmForceNotPositive(_)) => Cause::PalmForce,
+            Reason::Grasp(O::NotFormClosed) => Cause::NoFormClosure,
+            Reason::Dynamics(o) => match o {
+                D::Stable => return None,
+                D::ImpactEnergy => Cause::Impact,
+                D::Fold => Cause::Fold,
+                D::ForceCriterion => Cause::Force,
+                D::StaticForceLimit => Cause::StaticForce,
+                D::NoStability => Cause::NoStability,
+                D::Singular | D::DgmFailure => Cause::SingularDynamic,
+                D::Aborted | D::StepBudget | D::StepTooSmall => Cause::Aborted,
+                D::InitialPenetration => Cause::InitialPenetration,
+                D::NoEquilibrium => Cause::NoEquilibrium,
+            },
+            Reason::ObjectMoved(_) => Cause::ObjectMoved,
+            Reason::FreeSceneEnded(_) => Cause::FreeSceneAborted,
+        })
+    }
+}
+
+/// Why the free scene discarded a design: the object did not barely move (§14.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectMotion {
+    /// Largest horizontal displacement of G (m).
+    pub displacement: f64,
+    /// Largest tilt (°).
+    pub tilt_deg: f64,
+    /// Δx_max (m).
+    pub dx_max: f64,
+    /// θ_max (°).
+    pub theta_max_deg: f64,
+    /// Tilt above 45°.
+    pub toppled: bool,
+    /// No phalanx in contact at t_obs.
+    pub escaped: bool,
+}
+
+impl fmt::Display for ObjectMotion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "free scene: the object does not barely move (max displacement {:.3} mm, limit {:.3} mm; max tilt {:.3}°, limit {:.3}°)",
+            self.displacement * 1e3,
+            self.dx_max * 1e3,
+            self.tilt_deg,
+            self.theta_max_deg
+        )?;
+        if self.toppled {
+            write!(f, "; toppled")?;
+        }
+        if self.escaped {
+            write!(f, "; escaped: no phalanx holds it at t_obs")?;
+        }
+        Ok(())
+    }
 }
 
 impl fmt::Display for Reason {
@@ -83,13 +252,19 @@ pub struct Evaluation {
     pub kin: Option<KinematicsResult>,
     /// Stage 2 values, if stage 2 passed.
     pub statics: Option<StaticsResult>,
-    /// Stage 3 values, if stage 3 ran (also when it discarded the design). For a
-    /// free-kind problem: the centred scene's (in diagnostic mode).
+    /// Stage 3's grasp, if it ran (also when it discarded the design): the problem's
+    /// scene's (centred or offset); for a free-kind problem the centred scene's (in
+    /// diagnostic mode), the prediction.
     pub dynamics: Option<DynamicsResult>,
+    /// The offset scene's hand forces, when stage 3 ran in it (its `dynamics` are
+    /// [`Evaluation::dynamics`]).
+    pub offset: Option<OffsetResult>,
     /// For a free-kind problem: the free scene's measurement, if it ran (MODEL.md §14.4).
-    pub free: Option<FreeMeasure>,
-    /// The scene stage 3 ran in (the problem's `[scene] kind`; centred when stage 3 did not run).
-    pub scene: SceneKind,
+    pub free: Option<FreeResult>,
+    /// The scene stage 3 ran in (None: it did not run).
+    pub scene: Option<SceneKind>,
+    /// The object offset of that scene (m; 0 in the centred scene).
+    pub x_off: f64,
     /// `None` = feasible.
     pub discard: Option<Discard>,
     /// Values a discarding stage computed before it discarded the design (MODEL.md §10:
@@ -128,6 +303,21 @@ pub struct PartialGrasp {
     pub hand_mu: [f64; 2],
 }
 
+impl PartialGrasp {
+    /// The values of finger 1's centred grasp `g`.
+    fn of(g: &crate::model::Grasp) -> Self {
+        let (cp, ff) = (&g.cp[0], &g.forces[0]);
+        PartialGrasp {
+            theta: [cp.theta1, cp.theta2],
+            k: [cp.k1, cp.k2],
+            f0: ff.f0,
+            fmu: ff.fmu,
+            hand0: [g.hand0.x, g.hand0.y],
+            hand_mu: [g.hand_mu.x, g.hand_mu.y],
+        }
+    }
+}
+
 impl Evaluation {
     /// A design not evaluated yet.
     pub fn new(design: Design) -> Self {
@@ -136,8 +326,10 @@ impl Evaluation {
             kin: None,
             statics: None,
             dynamics: None,
+            offset: None,
             free: None,
-            scene: SceneKind::Centred,
+            scene: None,
+            x_off: 0.0,
             discard: None,
             partial: Partial::default(),
             stage_seconds: [0.0; 4],
@@ -166,18 +358,24 @@ impl Evaluation {
 pub struct EvalOptions {
     /// Run stage 3 (dynamics). Off gives the static pipeline (stages 0–2).
     pub dynamics: bool,
-    /// Simulation options for stage 3.
-    pub sim: SimOptions,
+    /// The numerics of stage 3.
+    pub integration: Integration,
+    /// The run controls of stage 3 (pipeline mode).
+    pub controls: Controls,
 }
 
 impl EvalOptions {
     /// Stages 0–2 only.
     pub fn statics_only() -> Self {
-        EvalOptions { dynamics: false, sim: SimOptions::pipeline(1e-6, 1e-9, 200_000) }
+        EvalOptions {
+            dynamics: false,
+            integration: Integration::new(1e-6, 1e-9, 200_000),
+            controls: Controls::PIPELINE,
+        }
     }
     /// All four stages with the problem's solver settings, stopping at the first violated criterion.
     pub fn full(p: &Problem) -> Self {
-        EvalOptions { dynamics: true, sim: SimOptions::pipeline(p.solver.rtol, p.solver.atol, p.solver.max_steps) }
+        EvalOptions { dynamics: true, integration: Integration::from_solver(&p.solver), controls: Controls::PIPELINE }
     }
 }
 
@@ -223,15 +421,7 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
             OffsetFailure::PalmForceNotPositive(g.hand_mu.y)
         };
         let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
-        let (cp, ff) = (&g.cp[0], &g.forces[0]);
-        let grasp = PartialGrasp {
-            theta: [cp.theta1, cp.theta2],
-            k: [cp.k1, cp.k2],
-            f0: ff.f0,
-            fmu: ff.fmu,
-            hand0: [g.hand0.x, g.hand0.y],
-            hand_mu: [g.hand_mu.x, g.hand_mu.y],
-        };
+        let grasp = PartialGrasp::of(&g);
         return Err((
             d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }),
             Partial { grasp: Some(grasp), ..spring },
@@ -247,16 +437,16 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
         crate::params::ForceModel::Mobilised => (alpha_mu, mean_force_mu),
         crate::params::ForceModel::Frictionless => (alpha_0, mean_force_0),
     };
-    let cp = &g.cp[0];
+    let pg = PartialGrasp::of(&g);
     Ok(StaticsResult {
         tau_s_min,
         tau_s0,
-        theta: [cp.theta1, cp.theta2],
-        k: [cp.k1, cp.k2],
-        f0: ff.f0,
-        fmu: ff.fmu,
-        hand0: [g.hand0.x, g.hand0.y],
-        hand_mu: [g.hand_mu.x, g.hand_mu.y],
+        theta: pg.theta,
+        k: pg.k,
+        f0: pg.f0,
+        fmu: pg.fmu,
+        hand0: pg.hand0,
+        hand_mu: pg.hand_mu,
         form_closed_0,
         max_offset: scan.max_offset,
         offset_ended_by: scan.ended_by,
@@ -270,31 +460,9 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
     })
 }
 
-/// Evaluate a design through the staged pipeline.
-pub fn evaluate(x: &Design, s: &SceneParams, opts: &EvalOptions) -> Evaluation {
-    evaluate_inner(x, s, opts, None)
-}
-
-/// Evaluate and return the stage-3 trajectory (if stage 3 ran), recorded by the same
-/// simulation that decided the verdict.
-pub fn evaluate_with_trajectory(x: &Design, s: &SceneParams, opts: &EvalOptions) -> (Evaluation, Option<Trajectory>) {
-    let mut tr = Trajectory::default();
-    let ev = evaluate_inner(x, s, opts, Some(&mut tr));
-    let has = ev.dynamics.is_some();
-    (ev, has.then_some(tr))
-}
-
-fn evaluate_inner(x: &Design, s: &SceneParams, opts: &EvalOptions, traj: Option<&mut Trajectory>) -> Evaluation {
-    let ev = evaluate_statics(x, s);
-    if !opts.dynamics {
-        return ev;
-    }
-    evaluate_dynamics(ev, s, opts, traj)
-}
-
 /// Stages 0–2 of a design (tens of µs): the evaluation so far, with `statics` set when the
-/// design passed them. [`evaluate_dynamics`] finishes it; the two together are
-/// [`evaluate`], bit for bit.
+/// design passed them. `evaluate_dynamics` finishes it; the two together are `evaluate`,
+/// bit for bit.
 pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
     let mut ev = Evaluation::new(*x);
     let t0 = Instant::now();
@@ -322,60 +490,18 @@ pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
     ev
 }
 
-/// Stage 3 of an evaluation from [`evaluate_statics`] in the problem's scene, recording the
-/// trajectory into `traj` when given; an evaluation that did not pass stages 0–2 comes
-/// back unchanged.
-pub fn evaluate_dynamics(
-    mut ev: Evaluation,
-    s: &SceneParams,
-    opts: &EvalOptions,
-    traj: Option<&mut Trajectory>,
-) -> Evaluation {
-    let (Some(kin), Some(st), None) = (ev.kin, ev.statics, ev.discard) else { return ev };
-    let t2 = Instant::now();
-    ev.scene = s.setup.kind;
-    if s.setup.kind == SceneKind::Free {
-        let (dynr, free, discard) = stage3_free(&kin.finger, s, &st, &opts.sim, traj);
-        ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
-        (ev.dynamics, ev.free, ev.discard) = (Some(dynr), free, discard);
-        return ev;
-    }
-    let dynr = stage3_scene(&kin.finger, s, &st, &opts.sim, traj);
-    ev.stage_seconds[3] = t2.elapsed().as_secs_f64();
-    if let Some(v) = dynr.discard_violation() {
-        ev.discard = Some(Discard { stage: 3, reason: Reason::Dynamics(dynr.outcome), violation: v });
-    }
-    ev.dynamics = Some(dynr);
-    ev
-}
+#[cfg(test)]
+mod tests {
+    use super::{Cause, CAUSE_WORDS};
 
-/// True when stage 3 of a design that passed stages 0–2 is known to end before its
-/// simulation starts: the centred scene in pipeline mode with a violated static force
-/// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
-pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
-    use crate::sim::{force_margin, r_area, Mode};
-    opts.sim.mode == Mode::Pipeline
-        && s.setup.kind == SceneKind::Centred
-        && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
-}
-
-/// Stage 3 in the problem's scene (MODEL.md §14): the centred scene (§8), or both fingers
-/// on the object at x_off. (The free kind is `free_stage::stage3_free`: the centred scene
-/// plus the free object's measured motion.)
-fn stage3_scene(
-    f: &Finger,
-    s: &SceneParams,
-    st: &StaticsResult,
-    o: &SimOptions,
-    traj: Option<&mut Trajectory>,
-) -> DynamicsResult {
-    match s.setup.kind {
-        SceneKind::Offset => crate::sim::simulate_offset(f, s, st, s.setup.x_off, o).dynamics,
-        _ => crate::sim::simulate_grasp_into(f, s, st, o, traj),
+    /// The words of `Cause::as_str` are serde's, variant by variant.
+    #[test]
+    fn cause_words_are_serdes() {
+        let all: Vec<Cause> =
+            CAUSE_WORDS.iter().map(|w| serde_json::from_value(serde_json::json!(w)).unwrap()).collect();
+        for (k, c) in all.iter().enumerate() {
+            assert_eq!(*c as usize, k);
+            assert_eq!(serde_json::to_value(c).unwrap(), serde_json::json!(c.as_str()));
+        }
     }
-}
-
-/// Evaluate the problem's design `x` with all stages.
-pub fn evaluate_full(p: &Problem, x: &Design) -> Evaluation {
-    evaluate(x, &p.scene, &EvalOptions::full(p))
 }

@@ -7,6 +7,7 @@ mod contact;
 mod dynamics;
 mod geometry;
 mod kinematics;
+mod stage2;
 mod statics;
 
 pub use closure::{
@@ -20,7 +21,8 @@ pub use dynamics::{
 };
 pub use geometry::{Finger, GeomError, MassProps, Pose};
 pub use kinematics::Kin;
+pub use stage2::StaticsResult;
 pub use statics::{
     birglen_residual, closed_pose, external_force, finger_forces, isotropy, spring_preload, spring_torque,
-    tangent_angles, to_world, ClosedPose, ClosedPoseError, FingerForces, StaticsResult,
+    tangent_angles, to_world, ClosedPose, ClosedPoseError, FingerForces,
 };

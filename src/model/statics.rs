@@ -1,7 +1,6 @@
 //! Rigid statics with the object fixed (MODEL.md §6.1–6.5): closed pose on a cylinder,
 //! spring preload, frictionless and friction-mobilised contact forces, hand force.
 
-use super::closure::OffsetFailure;
 use super::dynamics::{gravity_tree, mass_matrix, reduce_tree_force};
 use super::geometry::{Finger, GeomError, Pose};
 use super::kinematics::Kin;
@@ -9,47 +8,6 @@ use crate::math::{angle, e, perp, V2};
 use crate::params::SceneParams;
 use nalgebra::{Matrix2, Vector2};
 use std::f64::consts::PI;
-
-/// Stage-2 values of a design (centred object): the statics a grasp simulation starts from.
-#[derive(Debug, Clone, Copy)]
-pub struct StaticsResult {
-    /// τ_s^min before clipping.
-    pub tau_s_min: f64,
-    /// Spring preload τ_s0.
-    pub tau_s0: f64,
-    /// θ1, θ2 of the closed pose.
-    pub theta: [f64; 2],
-    /// k1, k2.
-    pub k: [f64; 2],
-    /// f⁰ (finger 1).
-    pub f0: [f64; 2],
-    /// f^μ (finger 1).
-    pub fmu: [f64; 2],
-    /// F⁰_hand (world).
-    pub hand0: [f64; 2],
-    /// F^μ_hand (world).
-    pub hand_mu: [f64; 2],
-    /// Form closed at x_off = 0.
-    pub form_closed_0: bool,
-    /// Objective 1 (m).
-    pub max_offset: f64,
-    /// What ended the offset scan.
-    pub offset_ended_by: Option<OffsetFailure>,
-    /// Objective 2: α of the problem's force model (D22).
-    pub alpha: f64,
-    /// Objective 3 (N): F̃ of the problem's force model (D22).
-    pub mean_force: f64,
-    /// α from f^μ (always computed, §6.5).
-    pub alpha_mu: f64,
-    /// F̃ from f^μ (N).
-    pub mean_force_mu: f64,
-    /// α from f⁰.
-    pub alpha_0: f64,
-    /// F̃ from f⁰ (N).
-    pub mean_force_0: f64,
-    /// The force model that chose `alpha` and `mean_force`.
-    pub force_model: crate::params::ForceModel,
-}
 
 /// Why a closed pose on a cylinder does not exist.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

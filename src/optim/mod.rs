@@ -5,7 +5,8 @@
 //!   infeasibility, per-design info kept for reports);
 //! - `nsga2`: the algorithm (argmin `Solver`) and its state (argmin `State`);
 //! - `sort`: non-dominated sorting and crowding; `operators`: SBX, polynomial mutation;
-//! - `schedule`: the order of a generation's work (cost hints, a learnt cost model);
+//! - `evaluator`: batch evaluation, the problem side's ([`Evaluator`]); `schedule`: its
+//!   default ([`Scheduled`]: two passes ordered by cost hints and a learnt cost model);
 //! - `hv`: exact hypervolume and IGD; `testproblems`: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
 //! - `serde_f64`: exact (bit-preserving) serialisation of floats, so a state can be saved
 //!   and restored.
@@ -13,6 +14,7 @@
 //! This layer is pure: no files, no recording, no gripper. Runs with run folders,
 //! checkpoints, observers and the gripper problem live in the run layer above it.
 
+mod evaluator;
 mod hv;
 mod nsga2;
 mod operators;
@@ -146,10 +148,11 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
     strictly
 }
 
+pub use evaluator::{Batch, Evaluations, Evaluator, GenTiming};
 pub use hv::{hypervolume, igd, nondominated_below};
-pub use nsga2::{execute, observe, GenTiming, Nsga2, Nsga2Settings, Nsga2State};
+pub use nsga2::{execute, observe, Nsga2, Nsga2Settings, Nsga2State};
 pub use operators::{polynomial_mutation, sbx, Operators};
-pub use schedule::{CostHint, CostModel};
+pub use schedule::{CostHint, CostModel, Scheduled};
 pub use serde_f64::{deserialize, serialize};
 pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};
 pub use testproblems::{c2_constraint, reference_settings, run_test, Test, TestProblem, TestRun};

@@ -4,16 +4,19 @@
 //! generation and the mating index, so a run is fixed by its seed, independent of the
 //! thread count, and resumes exactly from a saved state without any RNG state.
 
+use super::evaluator::{Batch, Evaluator, GenTiming};
 use super::operators::{polynomial_mutation, sbx, Operators};
+use super::schedule::Scheduled;
 use super::sort::{rank_and_crowding, survivors_with_attributes};
-use super::{hv::hypervolume, CostHint, CostModel, Individual, MooProblem};
+use super::{hv::hypervolume, Individual, MooProblem};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::collections::{HashMap, HashSet};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Algorithm settings (everything that changes the result, except the generation count).
@@ -72,27 +75,6 @@ pub struct Nsga2State<I> {
     counts: HashMap<String, u64>,
     #[serde(skip)]
     time: Option<Duration>,
-}
-
-/// Wall-clock accounting of one generation inside the solver (not deterministic).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct GenTiming {
-    /// Seconds evaluating (the parallel part, including waiting for its last design).
-    pub eval_s: f64,
-    /// Seconds of the first pass (every design's cheap start) and ordering; part of `eval_s`.
-    pub order_s: f64,
-    /// Seconds of the solver's own serial work (variation, survival, hypervolume).
-    pub serial_s: f64,
-    /// Of it, the exact hypervolume of the feasible front (history and progress).
-    pub hv_s: f64,
-    /// Wall seconds of each evaluation (start + finish), in the order of `last_evaluated`.
-    pub costs: Vec<f64>,
-    /// Of it, the cheap start (the first pass).
-    pub start_costs: Vec<f64>,
-    /// The order in which the designs were finished (indices into `last_evaluated`).
-    pub order: Vec<usize>,
-    /// How many designs their start called costly (the first ones of `order`).
-    pub costly: usize,
 }
 
 impl<I> Nsga2State<I> {
@@ -195,14 +177,18 @@ impl<I> State for Nsga2State<I> {
     }
 }
 
-/// The NSGA-II solver.
+/// The NSGA-II solver, evaluating each generation's designs with `E` (by default
+/// [`Scheduled`]).
 #[derive(Debug, Clone)]
-pub struct Nsga2 {
+pub struct Nsga2<E = Scheduled> {
     /// Settings.
     pub settings: Nsga2Settings,
-    /// What this run has learnt of the designs' costs (orders the work only; not part of
-    /// the state: a resumed run learns again).
-    model: CostModel,
+    /// The batch evaluator (what it learns of the designs' costs orders the work only; it
+    /// is not part of the state: a resumed run learns again).
+    pub evaluator: E,
+    /// When set, the run stops after the current generation (its checkpoint is written)
+    /// with argmin's `TerminationReason::Interrupt` (ctrl-c, a caller's stop button).
+    pub stop: Option<Arc<AtomicBool>>,
 }
 
 fn stream(seed: u64, generation: u64, k: u64) -> ChaCha8Rng {
@@ -240,105 +226,44 @@ impl std::hash::Hasher for Fx {
 type FxSet<T> = HashSet<T, std::hash::BuildHasherDefault<Fx>>;
 
 impl Nsga2 {
-    /// New solver.
+    /// New solver with the default evaluator.
     pub fn new(settings: Nsga2Settings) -> Self {
-        Nsga2 { settings, model: CostModel::new() }
+        Self::with_evaluator(settings, Scheduled::default())
+    }
+}
+
+impl<E> Nsga2<E> {
+    /// New solver evaluating with `evaluator`.
+    pub fn with_evaluator(settings: Nsga2Settings, evaluator: E) -> Self {
+        Nsga2 { settings, evaluator, stop: None }
+    }
+    /// Stop after the current generation once `flag` is set.
+    pub fn stop_on(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.stop = Some(flag);
+        self
     }
 
-    /// Evaluate a generation in two passes. First every design's cheap start, in parallel
-    /// (fine-grained); then the rest by list scheduling in the cost model's order, the
-    /// designs predicted to take longest first: each worker takes the next design from a
-    /// shared counter, so no thread idles while another still has a queue. Each evaluation
-    /// is a pure function of its vector and the results are put back in index order, so
-    /// they do not depend on the thread count or the schedule. Afterwards the model learns
-    /// the generation's work.
+    /// Evaluate a generation's designs with the evaluator and make them individuals
+    /// (ids from `first_id`).
     fn evaluate_all<P: MooProblem>(
         &mut self,
         p: &P,
         xs: Vec<Vec<f64>>,
         first_id: u64,
         generation: u64,
-    ) -> (Vec<Individual<P::Info>>, GenTiming) {
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        use std::sync::Mutex;
-        let t0 = std::time::Instant::now();
-        let n = xs.len();
-        let started: Vec<(P::Started, CostHint, f64)> = xs
-            .par_iter()
-            .map(|x| {
-                let t = std::time::Instant::now();
-                let (s, h) = p.start(x);
-                (s, h, t.elapsed().as_secs_f64())
-            })
-            .collect();
-        let mut hints = Vec::with_capacity(n);
-        let mut start_costs = Vec::with_capacity(n);
-        let slots: Vec<Mutex<Option<P::Started>>> = started
+    ) -> (Vec<Individual<P::Info>>, GenTiming)
+    where
+        E: Evaluator<P>,
+    {
+        let out = self.evaluator.evaluate(p, &Batch { xs: &xs, first_id, generation });
+        assert_eq!(out.evaluated.len(), xs.len(), "an evaluator gives one evaluation per design");
+        let pop = xs
             .into_iter()
-            .map(|(s, h, c)| {
-                hints.push(h);
-                start_costs.push(c);
-                Mutex::new(Some(s))
-            })
-            .collect();
-        let order = self.model.order(&hints);
-        let costly = hints.iter().filter(|h| matches!(h, CostHint::Costly(_))).count();
-        let order_s = t0.elapsed().as_secs_f64();
-        let next = AtomicUsize::new(0);
-        let workers = rayon::current_num_threads().min(n).max(1);
-        let done: Vec<(usize, super::Evaluated<P::Info>, f64)> = (0..workers)
-            .into_par_iter()
-            .with_max_len(1)
-            .flat_map_iter(|_| {
-                let mut mine = vec![];
-                loop {
-                    let k = next.fetch_add(1, Ordering::Relaxed);
-                    if k >= n {
-                        break;
-                    }
-                    let i = order[k];
-                    let t = std::time::Instant::now();
-                    let st = slots[i].lock().map(|mut g| g.take()).ok().flatten().expect("each design finished once");
-                    let e = p.finish(&xs[i], st);
-                    mine.push((i, e, t.elapsed().as_secs_f64()));
-                }
-                mine
-            })
-            .collect();
-        let mut results: Vec<Option<(super::Evaluated<P::Info>, f64)>> = (0..n).map(|_| None).collect();
-        for (i, e, s) in done {
-            results[i] = Some((e, s));
-        }
-        let mut costs = Vec::with_capacity(n);
-        let pop: Vec<Individual<P::Info>> = xs
-            .into_iter()
-            .zip(results)
+            .zip(out.evaluated)
             .enumerate()
-            .map(|(k, (x, slot))| {
-                let (eval, s) = slot.expect("every design evaluated once");
-                costs.push(start_costs[k] + s);
-                Individual { id: first_id + k as u64, generation, x, eval }
-            })
+            .map(|(k, (x, eval))| Individual { id: first_id + k as u64, generation, x, eval })
             .collect();
-        for (h, ind) in hints.iter().zip(&pop) {
-            if let (CostHint::Costly(f), Some(w)) = (h, p.work(&ind.eval)) {
-                self.model.add(f, w);
-            }
-        }
-        self.model.refit();
-        (
-            pop,
-            GenTiming {
-                eval_s: t0.elapsed().as_secs_f64(),
-                order_s,
-                serial_s: 0.0,
-                hv_s: 0.0,
-                costs,
-                start_costs,
-                order,
-                costly,
-            },
-        )
+        (pop, out.timing)
     }
 
     fn normalised_hv<I>(&self, pop: &[Individual<I>], rank: &[usize]) -> f64 {
@@ -426,7 +351,7 @@ fn permutation_candidates(rng: &mut ChaCha8Rng, n: usize, count: usize) -> Vec<u
     out
 }
 
-impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
+impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E> {
     fn name(&self) -> &str {
         "NSGA-II"
     }
@@ -535,7 +460,9 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
     }
 
     fn terminate(&mut self, state: &Nsga2State<P::Info>) -> TerminationStatus {
-        if state.generation >= state.max_generations {
+        if self.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst)) {
+            TerminationStatus::Terminated(TerminationReason::Interrupt)
+        } else if state.generation >= state.max_generations {
             TerminationStatus::Terminated(TerminationReason::MaxItersReached)
         } else {
             TerminationStatus::NotTerminated
@@ -543,25 +470,25 @@ impl<P: MooProblem> Solver<P, Nsga2State<P::Info>> for Nsga2 {
     }
 }
 
-/// Run NSGA-II from `state` (a fresh `Nsga2State::new()` or a restored state) until
-/// `state.max_generations` in argmin's `Executor`, after `observers` added its observers.
-/// Returns the problem and the final state; with `ctrlc`, a ctrl-c stops after the current
-/// generation (observers see it). An observer's [`crate::Error`] comes back as it
-/// was; any other executor error becomes [`crate::Error::Optimiser`].
-pub fn execute<P, O>(
+/// Run NSGA-II (`solver`, with its evaluator and stop flag) from `state` (a fresh
+/// `Nsga2State::new()` or a restored state) until `state.max_generations` in argmin's
+/// `Executor`, after `observers` added its observers. Returns the problem and the final
+/// state. An observer's [`crate::Error`] comes back as it was; any other executor error
+/// becomes [`crate::Error::Optimiser`].
+pub fn execute<P, E, O>(
     problem: P,
-    settings: Nsga2Settings,
+    solver: Nsga2<E>,
     state: Nsga2State<P::Info>,
     observers: O,
-    ctrlc: bool,
 ) -> crate::Result<(P, Nsga2State<P::Info>)>
 where
     P: MooProblem + 'static,
     P::Info: 'static,
-    O: FnOnce(Executor<P, Nsga2, Nsga2State<P::Info>>) -> Executor<P, Nsga2, Nsga2State<P::Info>>,
+    E: Evaluator<P>,
+    O: FnOnce(Executor<P, Nsga2<E>, Nsga2State<P::Info>>) -> Executor<P, Nsga2<E>, Nsga2State<P::Info>>,
 {
     use crate::Error as LibError;
-    let exec = Executor::new(problem, Nsga2::new(settings)).configure(|_| state).ctrlc(ctrlc).timer(false);
+    let exec = Executor::new(problem, solver).configure(|_| state).timer(false);
     let exec = observers(exec);
     let mut res =
         exec.run().map_err(|e| e.downcast::<LibError>().unwrap_or_else(|e| LibError::Optimiser(e.to_string())))?;
@@ -570,12 +497,13 @@ where
 }
 
 /// Add an observer to an executor, called after the initial population and every generation.
-pub fn observe<P, OBS>(
-    exec: Executor<P, Nsga2, Nsga2State<P::Info>>,
+pub fn observe<P, E, OBS>(
+    exec: Executor<P, Nsga2<E>, Nsga2State<P::Info>>,
     obs: OBS,
-) -> Executor<P, Nsga2, Nsga2State<P::Info>>
+) -> Executor<P, Nsga2<E>, Nsga2State<P::Info>>
 where
     P: MooProblem,
+    E: Evaluator<P>,
     OBS: Observe<Nsga2State<P::Info>> + 'static,
 {
     exec.add_observer(obs, ObserverMode::Always)

@@ -7,7 +7,10 @@
 //! finished first and no thread is left with a long one at the end. The order never changes
 //! a result: evaluations are pure and go back in index order.
 
+use super::evaluator::{Batch, Evaluations, Evaluator, GenTiming};
+use super::{Evaluated, MooProblem};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use std::collections::VecDeque;
 
 /// What the cheap first part of an evaluation says of the rest's cost.
@@ -156,6 +159,109 @@ impl CostModel {
         let mut order: Vec<usize> = (0..hints.len()).collect();
         order.sort_by(|&a, &b| key[a].0.cmp(&key[b].0).then(key[a].1.total_cmp(&key[b].1)).then(a.cmp(&b)));
         order
+    }
+}
+
+/// The default [`Evaluator`]: a batch in two passes in the current rayon pool. First
+/// every design's cheap start ([`MooProblem::start`]), in parallel (fine-grained); then the
+/// rest ([`MooProblem::finish`]) by list scheduling in the [`CostModel`]'s order, the
+/// designs predicted to take longest first: each worker takes the next design from a shared
+/// counter, so no thread idles while another still has a queue. Each evaluation is a pure
+/// function of its vector and the results are put back in index order, so they do not
+/// depend on the thread count or the schedule. Afterwards the model learns the batch's
+/// work ([`MooProblem::work`]).
+#[derive(Debug, Clone, Default)]
+pub struct Scheduled {
+    model: CostModel,
+}
+
+impl Scheduled {
+    /// What the evaluator has learnt of the designs' costs.
+    pub fn model(&self) -> &CostModel {
+        &self.model
+    }
+}
+
+impl<P: MooProblem> Evaluator<P> for Scheduled {
+    fn evaluate(&mut self, p: &P, batch: &Batch<'_>) -> Evaluations<P::Info> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        use std::sync::Mutex;
+        let t0 = std::time::Instant::now();
+        let xs = batch.xs;
+        let n = xs.len();
+        let started: Vec<(P::Started, CostHint, f64)> = xs
+            .par_iter()
+            .map(|x| {
+                let t = std::time::Instant::now();
+                let (s, h) = p.start(x);
+                (s, h, t.elapsed().as_secs_f64())
+            })
+            .collect();
+        let mut hints = Vec::with_capacity(n);
+        let mut start_costs = Vec::with_capacity(n);
+        let slots: Vec<Mutex<Option<P::Started>>> = started
+            .into_iter()
+            .map(|(s, h, c)| {
+                hints.push(h);
+                start_costs.push(c);
+                Mutex::new(Some(s))
+            })
+            .collect();
+        let order = self.model.order(&hints);
+        let costly = hints.iter().filter(|h| matches!(h, CostHint::Costly(_))).count();
+        let order_s = t0.elapsed().as_secs_f64();
+        let next = AtomicUsize::new(0);
+        let workers = rayon::current_num_threads().min(n).max(1);
+        let done: Vec<(usize, Evaluated<P::Info>, f64)> = (0..workers)
+            .into_par_iter()
+            .with_max_len(1)
+            .flat_map_iter(|_| {
+                let mut mine = vec![];
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    if k >= n {
+                        break;
+                    }
+                    let i = order[k];
+                    let t = std::time::Instant::now();
+                    let st = slots[i].lock().map(|mut g| g.take()).ok().flatten().expect("each design finished once");
+                    let e = p.finish(&xs[i], st);
+                    mine.push((i, e, t.elapsed().as_secs_f64()));
+                }
+                mine
+            })
+            .collect();
+        let mut results: Vec<Option<(Evaluated<P::Info>, f64)>> = (0..n).map(|_| None).collect();
+        for (i, e, s) in done {
+            results[i] = Some((e, s));
+        }
+        let mut costs = Vec::with_capacity(n);
+        let evaluated: Vec<Evaluated<P::Info>> = results
+            .into_iter()
+            .enumerate()
+            .map(|(k, slot)| {
+                let (eval, s) = slot.expect("every design evaluated once");
+                costs.push(start_costs[k] + s);
+                eval
+            })
+            .collect();
+        for (h, e) in hints.iter().zip(&evaluated) {
+            if let (CostHint::Costly(f), Some(w)) = (h, p.work(e)) {
+                self.model.add(f, w);
+            }
+        }
+        self.model.refit();
+        let timing = GenTiming {
+            eval_s: t0.elapsed().as_secs_f64(),
+            order_s,
+            serial_s: 0.0,
+            hv_s: 0.0,
+            costs,
+            start_costs,
+            order,
+            costly,
+        };
+        Evaluations { evaluated, timing }
     }
 }
 

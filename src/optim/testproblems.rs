@@ -296,7 +296,8 @@ pub fn run_test(which: TestProblem, seed: u64, pop: usize, generations: Option<u
     let settings = reference_settings(which, seed, pop);
     use argmin::core::State;
     let state = super::nsga2::Nsga2State::new().with_max_generations(generations.unwrap_or(which.generations()));
-    let (_, st) = super::nsga2::execute(which.instance(), settings, state, |e| e, false).expect("test problem run");
+    let (_, st) =
+        super::nsga2::execute(which.instance(), super::Nsga2::new(settings), state, |e| e).expect("test problem run");
     let wall_s = t0.elapsed().as_secs_f64();
     let front: Vec<Vec<f64>> = st.feasible_front().iter().map(|p| p.eval.f.clone()).collect();
     TestRun {

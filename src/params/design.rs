@@ -21,6 +21,39 @@ pub struct Design {
     pub psi: f64,
 }
 
+/// A design as written in files and records: the optimiser's vector, ψ in degrees (the
+/// parameters of `/designs`, the design columns of every CSV and JSON record).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DesignParameters {
+    /// l21 (m).
+    pub l21: f64,
+    /// b (m).
+    pub b: f64,
+    /// t22 (m).
+    pub t22: f64,
+    /// r.
+    pub r: f64,
+    /// p.
+    pub p: f64,
+    /// ψ (deg).
+    pub psi_deg: f64,
+}
+
+impl DesignParameters {
+    /// From the optimiser's vector (l21, b, t22, r, p, ψ°).
+    pub fn from_array(x: &[f64; 6]) -> Self {
+        DesignParameters { l21: x[0], b: x[1], t22: x[2], r: x[3], p: x[4], psi_deg: x[5] }
+    }
+    /// The optimiser's vector.
+    pub fn to_array(&self) -> [f64; 6] {
+        [self.l21, self.b, self.t22, self.r, self.p, self.psi_deg]
+    }
+    /// The design (ψ converted to radians).
+    pub fn design(&self) -> Design {
+        Design::from_array(&self.to_array())
+    }
+}
+
 /// Names of the six design variables, in order (ψ given in degrees in files and on the CLI).
 pub const DESIGN_NAMES: [&str; 6] = ["l21", "b", "t22", "r", "p", "psi_deg"];
 

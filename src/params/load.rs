@@ -340,6 +340,7 @@ impl Problem {
                 return Err(c.fail(&name, format!("[{}, {}]", pr[0], pr[1]), "lower bound must be < upper bound"));
             }
         }
+        check_scene(&scene, path)?;
         Ok(Problem {
             name: raw.name,
             scene,
@@ -349,4 +350,29 @@ impl Problem {
             source_text: text.to_string(),
         })
     }
+
+    /// This problem with stage 3 in scene `kind` at object offset `x_off` (None: the
+    /// problem's), checked as a problem file's `[scene]` is (`path`: where the request came
+    /// from, for the error; e.g. the command line).
+    pub fn in_scene(&self, kind: SceneKind, x_off: Option<f64>, path: &Path) -> Result<Problem> {
+        let mut p = self.clone();
+        p.scene.setup.kind = kind;
+        if let Some(x) = x_off {
+            p.scene.setup.x_off = Checker { file: path }.check("scene.x_off", x)?;
+        }
+        check_scene(&p.scene, path)?;
+        Ok(p)
+    }
+}
+
+/// The rules between sections: the free scene needs the hand horizontal (MODEL.md §14.1).
+fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
+    if scene.setup.kind == SceneKind::Free && scene.env.g_eq != 0.0 {
+        return Err(Checker { file: path }.fail(
+            "environment.g_eq",
+            super::limits::num(scene.env.g_eq),
+            "must be 0 for the free scene ([scene] kind = \"free\": the hand horizontal, MODEL.md §14.1)",
+        ));
+    }
+    Ok(())
 }

@@ -9,7 +9,7 @@ mod load;
 mod scene;
 mod scene_kind;
 
-pub use design::{Bounds, Design, DESIGN_NAMES};
+pub use design::{Bounds, Design, DesignParameters, DESIGN_NAMES};
 pub(crate) use limits::num as fmt_num;
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};

@@ -1,7 +1,17 @@
-//! The Foxglove layout written into every run folder (`foxglove-layout.json`): a 3D panel
-//! following the hand, plots of the current design's contact forces and joint angles
-//! against its own simulated time, and the `/designs` record. Import it in Foxglove with
-//! Layouts → Import from file (see docs/recording.md).
+//! The Foxglove layouts written beside the recordings: `foxglove-layout.json` in every run
+//! folder (the optimisation shards and `recording/front.mcap`) and
+//! `foxglove-verify-layout.json` (`gripopt verify`'s file). Both are the layout JSON of the
+//! Foxglove family (`configById`, `layout`, `globalVariables`, `userNodes`,
+//! `playbackConfig`), read the same way by Foxglove and Lichtblick (Layouts → Import from
+//! file); docs/recording.md says what each panel shows and why its settings are what they are:
+//!
+//! * 3-D panels follow `world` (z up): both viewers orbit the camera in the followed frame's
+//!   axes (`phi` from its +z, `thetaOffset` about it; 0 puts the camera on −y), so the oblique
+//!   view looks at the grasp from behind the palm, 40° above the hand plane, and the top view
+//!   (orthographic, "2D") looks down on the hand plane with the object's side up;
+//! * panel titles under both viewers' keys (`foxglovePanelTitle`, `lichtblickPanelTitle`);
+//! * plots with axis labels (`xAxisLabel`, `yAxisLabel`), the legend on the left (it never
+//!   covers the curves), x-axis "Path (current)" against the design's own simulated time.
 
 use crate::fsutil::write_atomic;
 use crate::Result;
@@ -10,88 +20,285 @@ use std::path::{Path, PathBuf};
 
 /// File name of the layout inside a run folder.
 pub const LAYOUT_FILE: &str = "foxglove-layout.json";
+/// File name of the Foxglove layout for verify recordings inside a run folder.
+pub const VERIFY_LAYOUT_FILE: &str = "foxglove-verify-layout.json";
 
-/// A Plot panel of `/grasp/series` columns against `/grasp/series.t`, x-axis "Path
-/// (current)": the arrays of the latest message, i.e. the design under the playhead.
-fn plot(title: &str, columns: &[(&str, &str)]) -> Value {
+/// Playback speed of both layouts: a grasp of 20–50 ms of simulated time plays in 1–2.5 s
+/// (a design's window of 1 s in 50 s).
+pub const PLAYBACK_SPEED: f64 = 0.02;
+
+/// `config` with `title` under the key each viewer reads (Foxglove: `foxglovePanelTitle`,
+/// packages/studio-base/src/util/layout.ts; Lichtblick: `lichtblickPanelTitle`,
+/// packages/suite-base/src/util/layout.ts).
+fn titled(mut config: Value, title: &str) -> Value {
+    config["foxglovePanelTitle"] = title.into();
+    config["lichtblickPanelTitle"] = title.into();
+    config
+}
+
+/// A 3-D panel following `world`: the oblique view (perspective, from behind the palm, 40°
+/// above the hand plane) or the top view (orthographic, looking down the z axis, +y up).
+fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
+    let camera = if top {
+        json!({
+            "perspective": false, "distance": 0.26, "phi": 0.0, "thetaOffset": 0.0,
+            "targetOffset": [0.0, 0.035, 0.05], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
+            "fovy": 45.0, "near": 0.005, "far": 50.0
+        })
+    } else {
+        json!({
+            "perspective": true, "distance": 0.38, "phi": 50.0, "thetaOffset": 0.0,
+            "targetOffset": [0.0, 0.04, 0.06], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
+            "fovy": 45.0, "near": 0.005, "far": 50.0
+        })
+    };
+    let mut transforms = serde_json::Map::new();
+    transforms.insert("frame:world".into(), json!({"visible": false}));
+    for f in frames {
+        transforms.insert(format!("frame:{f}"), json!({"visible": true}));
+    }
+    titled(
+        json!({
+            "followTf": "world",
+            "followMode": "follow-pose",
+            "cameraState": camera,
+            "scene": {"enableStats": false, "transforms": {"showLabel": false, "axisScale": 0.3, "enablePreloading": true}},
+            "transforms": transforms,
+            "topics": {"/scene": {"visible": true}, "/scene/static": {"visible": true}},
+            "layers": {"grid": {"layerId": "foxglove.Grid", "visible": true, "frameId": "world", "size": 0.6, "divisions": 12, "lineWidth": 1, "color": "#248eff", "position": [0, 0, 0.0005], "rotation": [0, 0, 0]}}
+        }),
+        title,
+    )
+}
+
+/// A Plot panel of the arrays `columns` (path suffix, legend label) of topic `topic` against
+/// its array `t`, x-axis "Path (current)": the arrays of the latest message, i.e. the design
+/// under the playhead. A column that parses as a number is a horizontal reference line.
+/// `y_range`: fixed limits of the y axis (None: automatic).
+fn plot(topic: &str, title: &str, y_label: &str, columns: &[(&str, &str)], y_range: Option<(f64, f64)>) -> Value {
     let paths: Vec<Value> = columns
         .iter()
-        .map(|(c, label)| json!({"value": format!("/grasp/series.{c}[:]"), "enabled": true, "timestampMethod": "receiveTime", "label": label}))
+        .map(|(c, label)| {
+            let value = if c.parse::<f64>().is_ok() { c.to_string() } else { format!("{topic}.{c}[:]") };
+            json!({"value": value, "enabled": true, "timestampMethod": "receiveTime", "label": label})
+        })
         .collect();
-    json!({
-        "title": title,
+    let mut p = json!({
         "paths": paths,
         "xAxisVal": "currentCustom",
-        "xAxisPath": {"value": "/grasp/series.t[:]", "enabled": true},
+        "xAxisPath": {"value": format!("{topic}.t[:]"), "enabled": true},
+        "xAxisLabel": "simulated time t (s)",
+        "yAxisLabel": y_label,
         "showLegend": true,
-        "legendDisplay": "floating",
-        "showPlotValuesInLegend": true,
+        "legendDisplay": "left",
+        "sidebarDimension": 190,
+        "showPlotValuesInLegend": false,
         "showXAxisLabels": true,
         "showYAxisLabels": true,
         "isSynced": false
+    });
+    if let Some((lo, hi)) = y_range {
+        p["minYValue"] = lo.into();
+        p["maxYValue"] = hi.into();
+    }
+    titled(p, title)
+}
+
+fn raw_messages(topic: &str, title: &str) -> Value {
+    titled(
+        json!({"topicPath": topic, "diffEnabled": false, "diffMethod": "custom", "diffTopicPath": "", "showFullMessageForDiff": false, "expansion": "all"}),
+        title,
+    )
+}
+
+/// A layout document around `config_by_id` and the mosaic `tree`.
+fn document(config_by_id: Value, tree: Value) -> Value {
+    json!({
+        "configById": config_by_id,
+        "globalVariables": {},
+        "userNodes": {},
+        "playbackConfig": {"speed": PLAYBACK_SPEED},
+        "layout": tree
     })
 }
 
-/// The layout (Foxglove's layout JSON: `configById`, `layout`, `globalVariables`, …).
-pub fn layout() -> Value {
-    let three_d = json!({
-        // display frame `hand`, followed in position; the world stays z-up. The camera looks
-        // horizontally along the bottle's axis at the hand's plane (about 0.4 m away: the
-        // 0.2 m hand, the bottle and the ground fill the view).
-        "followTf": "hand",
-        "followMode": "follow-position",
-        "cameraState": {
-            "perspective": true, "distance": 0.4, "phi": 85.0, "thetaOffset": 0.0,
-            "targetOffset": [0.0, 0.0, -0.04], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
-            "fovy": 45.0, "near": 0.005, "far": 50.0
-        },
-        "scene": {"enableStats": false, "transforms": {"showLabel": false, "axisScale": 0.3}},
-        "transforms": {"frame:world": {"visible": false}, "frame:hand": {"visible": true}},
-        "topics": {"/scene": {"visible": true}, "/scene/static": {"visible": true}},
-        "layers": {"grid": {"layerId": "foxglove.Grid", "visible": true, "frameId": "world", "size": 0.6, "divisions": 12, "lineWidth": 1, "color": "#248eff", "position": [0, 0, 0], "rotation": [0, 0, 0]}}
-    });
-    let forces = plot(
-        "Contact forces (N) vs simulated time (s) of the current design",
+/// The layout of a run folder: the oblique and the top 3-D views (left; left out when the
+/// recording has no scene channels, `scene` false); on the right whether the design is on
+/// the final front (`/front` of `recording/front.mcap`), the contact forces at the scale of
+/// the holding force, the hand force, the joint angles and the `/designs` record.
+pub fn layout(scene: bool) -> Value {
+    let s = "/grasp/series";
+    let contact = plot(
+        s,
+        "Contact forces near the holding force (y clipped to -5..25 N; impacts run off the top)",
+        "contact force (N)",
         &[
             ("proximal_normal_force", "proximal normal"),
             ("distal_normal_force", "distal normal"),
             ("proximal_friction_force", "proximal friction"),
             ("distal_friction_force", "distal friction"),
-            ("filtered_hand_force", "hand (filtered)"),
+            ("mean_force_objective", "F~ (objective)"),
         ],
+        Some((-5.0, 25.0)),
+    );
+    let hand = plot(
+        s,
+        "Hand force on the object along y (y clipped to -25..25 N)",
+        "F_hand,y (N)",
+        &[("hand_force", "raw"), ("filtered_hand_force", "low-pass T_f")],
+        Some((-25.0, 25.0)),
     );
     let joints = plot(
-        "Joint angles (rad) vs simulated time (s) of the current design",
-        &[("q11", "q11"), ("q21", "q21 = θ1"), ("theta2", "θ2")],
+        s,
+        "Joint angles of finger 1",
+        "angle (rad)",
+        &[("q11", "q11 (actuated)"), ("q21", "q21 = theta1"), ("theta2", "theta2 (distal)")],
+        None,
     );
-    json!({
-        "configById": {
-            "3D!grasp": three_d,
-            "Plot!forces": forces,
-            "Plot!joints": joints,
-            "RawMessages!designs": {"topicPath": "/designs", "diffEnabled": false, "diffMethod": "custom", "diffTopicPath": "", "showFullMessageForDiff": false, "expansion": "all"}
-        },
-        "globalVariables": {},
-        "userNodes": {},
-        "playbackConfig": {"speed": 0.1},
-        "layout": {
-            "direction": "row",
-            "splitPercentage": 55,
-            "first": "3D!grasp",
+    let front = titled(
+        json!({
+            "path": "/front.on_final_front",
+            "style": "background",
+            "fallbackColor": "#707070",
+            "fallbackLabel": "final front unknown: open recording/front.mcap too (written when the run ends)",
+            "rules": [
+                {"operator": "=", "rawValue": "true", "color": "#2e9c3a", "label": "on the final Pareto front"},
+                {"operator": "=", "rawValue": "false", "color": "#505050", "label": "not on the final front"}
+            ]
+        }),
+        "Final front",
+    );
+    let mut configs = json!({
+        "Indicator!front": front,
+        "Plot!contact": contact,
+        "Plot!hand": hand,
+        "Plot!joints": joints,
+        "RawMessages!designs": raw_messages("/designs", "Design record (/designs)")
+    });
+    let right = json!({
+        "direction": "column", "splitPercentage": 8, "first": "Indicator!front",
+        "second": {
+            "direction": "column", "splitPercentage": 30, "first": "Plot!contact",
             "second": {
-                "direction": "column",
-                "splitPercentage": 70,
-                "first": {"direction": "column", "first": "Plot!forces", "second": "Plot!joints"},
-                "second": "RawMessages!designs"
+                "direction": "column", "splitPercentage": 43, "first": "Plot!hand",
+                "second": {"direction": "column", "splitPercentage": 57, "first": "Plot!joints", "second": "RawMessages!designs"}
             }
         }
-    })
+    });
+    if !scene {
+        return document(configs, right);
+    }
+    configs["3D!oblique"] = three_d(false, &["hand"], "Grasp: oblique view from behind the palm (world, z up)");
+    configs["3D!top"] = three_d(true, &["hand"], "Grasp: top view of the hand plane (x right, object up)");
+    document(
+        configs,
+        json!({
+            "direction": "row",
+            "splitPercentage": 50,
+            "first": {"direction": "column", "splitPercentage": 58, "first": "3D!oblique", "second": "3D!top"},
+            "second": right
+        }),
+    )
 }
 
-/// Write [`layout`] to `RUN_DIR/foxglove-layout.json`; returns its path.
-pub fn write_layout(run_dir: &Path) -> Result<PathBuf> {
+/// The layout of verify recordings: the oblique and top 3-D views of the free scene (the
+/// object's frame shown), the object's displacement and tilt against simulated time with
+/// the verdict's limits `dx_max_mm` and `theta_max_deg` as lines, and the `/verify` record.
+pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
+    let (dx, th) = (format!("{dx_max_mm}"), format!("{theta_max_deg}"));
+    let (dx_label, th_label) = (format!("limit {dx} mm"), format!("limit {th} deg"));
+    let motion = plot(
+        "/verify/series",
+        "Free object: horizontal displacement of G and tilt",
+        "displacement (mm) / tilt (deg)",
+        &[
+            ("displacement_mm", "displacement mm"),
+            ("tilt_deg", "tilt deg"),
+            (dx.as_str(), dx_label.as_str()),
+            (th.as_str(), th_label.as_str()),
+        ],
+        None,
+    );
+    document(
+        json!({
+            "3D!oblique": three_d(false, &["hand", "object"], "Free scene: oblique view from behind the palm (world, z up)"),
+            "3D!top": three_d(true, &["hand", "object"], "Free scene: top view of the hand plane"),
+            "Plot!motion": motion,
+            "RawMessages!verify": raw_messages("/verify", "Verify record (/verify)")
+        }),
+        json!({
+            "direction": "row",
+            "splitPercentage": 55,
+            "first": {"direction": "column", "splitPercentage": 58, "first": "3D!oblique", "second": "3D!top"},
+            "second": {"direction": "column", "splitPercentage": 45, "first": "Plot!motion", "second": "RawMessages!verify"}
+        }),
+    )
+}
+
+/// Write [`layout`] for a run recorded with `opts` to `RUN_DIR/foxglove-layout.json`;
+/// returns its path.
+pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions) -> Result<PathBuf> {
     let path = run_dir.join(LAYOUT_FILE);
-    let text = serde_json::to_string_pretty(&layout()).expect("the layout serialises");
+    let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0)).expect("the layout serialises");
     write_atomic(&path, text.as_bytes())?;
     Ok(path)
+}
+
+/// Write [`verify_layout`] to `RUN_DIR/foxglove-verify-layout.json`; returns its path.
+pub fn write_verify_layout(run_dir: &Path, dx_max_mm: f64, theta_max_deg: f64) -> Result<PathBuf> {
+    let path = run_dir.join(VERIFY_LAYOUT_FILE);
+    let text = serde_json::to_string_pretty(&verify_layout(dx_max_mm, theta_max_deg)).expect("the layout serialises");
+    write_atomic(&path, text.as_bytes())?;
+    Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What both viewers need of every shipped layout (docs/recording.md, "What the viewers
+    /// read"): a title under each viewer's key, a playback speed, 3-D panels following the
+    /// z-up `world` with the oblique camera above the hand plane on the palm's side, plots with
+    /// axis labels and a legend beside the chart, and a mosaic naming exactly the panels.
+    #[test]
+    fn layouts_are_written_for_both_viewers() {
+        for (name, l) in
+            [("run", layout(true)), ("run without scene", layout(false)), ("verify", verify_layout(1.0, 1.0))]
+        {
+            let configs = l["configById"].as_object().unwrap();
+            assert!(l["playbackConfig"]["speed"].as_f64().unwrap() <= 0.05, "{name}: a grasp must be watchable");
+            let mut leaves = vec![];
+            let mut stack = vec![&l["layout"]];
+            while let Some(n) = stack.pop() {
+                match n {
+                    Value::String(s) => leaves.push(s.clone()),
+                    _ => stack.extend([&n["first"], &n["second"]]),
+                }
+            }
+            leaves.sort();
+            assert_eq!(leaves, configs.keys().cloned().collect::<Vec<_>>(), "{name}: mosaic and configById");
+            for (id, c) in configs {
+                assert!(
+                    c["foxglovePanelTitle"].is_string() && c["lichtblickPanelTitle"] == c["foxglovePanelTitle"],
+                    "{id}"
+                );
+                if id.starts_with("3D!") {
+                    assert_eq!(c["followTf"], "world", "{id}: the viewers orbit in the followed frame's axes");
+                    let cam = &c["cameraState"];
+                    if cam["perspective"] == true {
+                        let phi = cam["phi"].as_f64().unwrap();
+                        assert!(phi > 30.0 && phi < 80.0 && cam["thetaOffset"] == 0.0, "{id}: oblique, from −y");
+                    }
+                }
+                if id.starts_with("Plot!") {
+                    assert!(
+                        c["xAxisLabel"].as_str().unwrap().contains("(s)")
+                            && c["yAxisLabel"].as_str().unwrap().contains('(')
+                    );
+                    assert_ne!(c["legendDisplay"], "floating", "{id}: a floating legend covers the curves");
+                }
+            }
+        }
+        assert!(layout(false)["configById"].get("3D!oblique").is_none(), "no 3-D panel without scene channels");
+    }
 }

@@ -1,19 +1,15 @@
-//! Building the messages of one design: the `/designs` JSON record, the
-//! `gripopt.GraspSeries` columns, and the Foxglove scene (official `foxglove` SDK types).
+//! Building the messages of one design: the `/designs` JSON record and the
+//! `gripopt.GraspSeries` columns; the Foxglove scene is drawn in `scene` (re-exported here).
 
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
-use crate::math::V2;
-use crate::model::Finger;
-use crate::params::{Design, SceneParams};
-use crate::sim::{PoseSample, Sample};
-use foxglove::messages::{
-    line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
-    FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity, SceneEntityDeletion,
-    SceneUpdate, Timestamp, Vector3,
+use super::schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
+use crate::sim::Sample;
+
+pub use super::scene::{
+    discarded_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene, window_end_ns,
 };
-use serde_json::{json, Value};
 
 /// Log time (ns since 1970) at which design `id`'s window starts: `epoch_ns + id` s.
 pub fn window_start_ns(epoch_ns: u64, id: u64) -> u64 {
@@ -25,65 +21,47 @@ pub fn log_time(t0_ns: u64, t: f64) -> u64 {
     t0_ns + (t * 1e9).round().clamp(0.0, 999_999_999.0) as u64
 }
 
-fn stamp(ns: u64) -> Timestamp {
-    Timestamp::new((ns / 1_000_000_000).min(u32::MAX as u64) as u32, (ns % 1_000_000_000) as u32)
-}
-
-/// `/designs` message (JSON). Values that were not computed are left out (no nulls, so the
-/// schema needs no union types).
-pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> Value {
-    let x = &i.parameters;
-    let mut derived = json!({"l_hand": i.l_hand});
-    if let Some(l) = i.lengths {
-        derived = json!({"l11": l[0], "l12": l[1], "l22": l[2], "l_hand": i.l_hand});
-    }
-    let mut objectives = serde_json::Map::new();
-    for (k, v) in ["max_offset", "alpha", "mean_force", "t_stab"].iter().zip(i.objectives) {
+/// `/designs` message of a design whose window starts at `t0_ns`, derived from its
+/// evaluation record. Values that were not computed are left out (no nulls, so the schema
+/// needs no union types).
+pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> DesignMessage {
+    let r = i.record;
+    let v = &r.verdict;
+    let o = r.objectives();
+    let l = r.lengths();
+    DesignMessage {
+        id: i.id,
+        generation: i.generation,
+        problem: problem.to_string(),
+        window_start: Window { sec: t0_ns / 1_000_000_000, nsec: t0_ns % 1_000_000_000 },
+        window_start_s: i.id as f64,
+        epoch_s,
+        parameters: DesignParameters::from_array(&i.parameters),
+        derived: Derived {
+            l11: l.map(|l| l[0]),
+            l12: l.map(|l| l[1]),
+            l22: l.map(|l| l[2]),
+            l_hand: r.kinematics.l_hand,
+        },
+        stages_passed: v.failed_stage.unwrap_or(4),
+        feasible: v.failed_stage.is_none(),
+        form_closed: r.form_closed(),
+        failed_stage: v.failed_stage,
+        reason: v.reason.clone(),
+        violation: v.violation,
         // MODEL.md §6.7: a design not form closed at 0 carries max_offset = −Δ_off inside the
         // optimiser; the record says form_closed = false and leaves max_offset out (as the CSVs)
-        if let Some(v) = v.filter(|v| *k != "max_offset" || *v >= 0.0) {
-            objectives.insert(k.to_string(), json!(v));
-        }
+        objectives: Objectives { max_offset: o[0].filter(|m| *m >= 0.0), alpha: o[1], mean_force: o[2], t_stab: o[3] },
+        stage_seconds: StageSeconds {
+            stages_0_1: i.stage_seconds[1],
+            stage_2: i.stage_seconds[2],
+            stage_3: i.stage_seconds[3],
+        },
+        sim_steps: r.sim_work().map(|w| w[0]),
+        sim_rhs_evals: r.sim_work().map(|w| w[1]),
+        free_scene: r.free_scene.clone(),
+        trajectory_samples: i.trajectory.map_or(0, |t| t.samples.len() as u64),
     }
-    let mut v = json!({
-        "id": i.id,
-        "generation": i.generation,
-        "problem": problem,
-        "window_start": {"sec": t0_ns / 1_000_000_000, "nsec": t0_ns % 1_000_000_000},
-        "window_start_s": i.id as f64,
-        "epoch_s": epoch_s,
-        "parameters": {"l21": x[0], "b": x[1], "t22": x[2], "r": x[3], "p": x[4], "psi_deg": x[5]},
-        "derived": derived,
-        "stages_passed": i.failed_stage.unwrap_or(4),
-        "feasible": i.failed_stage.is_none(),
-        "objectives": objectives,
-        "stage_seconds": {"stages_0_1": i.stage_seconds[1], "stage_2": i.stage_seconds[2], "stage_3": i.stage_seconds[3]},
-        "trajectory_samples": i.trajectory.map_or(0, |t| t.samples.len()),
-    });
-    let o = v.as_object_mut().expect("object");
-    if let Some(m) = i.objectives[0] {
-        o.insert("form_closed".into(), json!(m >= 0.0));
-    }
-    if let Some(s) = i.failed_stage {
-        o.insert("failed_stage".into(), json!(s));
-    }
-    if let Some(r) = i.reason {
-        o.insert("reason".into(), json!(r));
-    }
-    if let Some(x) = i.violation {
-        o.insert("violation".into(), json!(x));
-    }
-    if let Some(w) = i.sim_work {
-        o.insert("sim_steps".into(), json!(w[0]));
-        o.insert("sim_rhs_evals".into(), json!(w[1]));
-    }
-    if let Some(serde_json::Value::Object(f)) = i.free {
-        // like every other key, values not computed are left out (no nulls)
-        let f: serde_json::Map<String, Value> =
-            f.iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k.clone(), v.clone())).collect();
-        o.insert("free_scene".into(), Value::Object(f));
-    }
-    v
 }
 
 /// A value as recorded at `res` (f32 precision when compact).
@@ -94,16 +72,28 @@ pub fn at_precision(x: f64, res: Resolution) -> f64 {
     }
 }
 
-/// The `/grasp/series` message of design `id` from the selected samples (empty when the
-/// design has no trajectory).
-pub fn series(id: u64, samples: &[Sample], kept: &[usize], opts: &RecordOptions) -> GraspSeries {
+/// The `/grasp/series` message of design `d` from the selected samples. A design without a
+/// trajectory gets one placeholder sample (t = 0, every value NaN, `simulated_samples` = 0):
+/// a Plot panel redraws only when a path yields at least one value, so an empty message
+/// would leave the previous design's curves on screen after a seek (docs/recording.md).
+/// `mean_force_objective` repeats the design's F̃ (stage 2's static mean contact force, the
+/// objective) on every sample, so the Plot panel draws it as a line beside the simulated forces.
+pub fn series(d: &DesignEntry<'_>, samples: &[Sample], kept: &[usize], opts: &RecordOptions) -> GraspSeries {
     let r = opts.resolution;
     let mut m = GraspSeries {
-        design_id: id,
+        design_id: d.id,
         full_resolution: r == Resolution::Full,
         simulated_samples: samples.len() as u32,
         ..Default::default()
     };
+    if kept.is_empty() {
+        m.t.push(0.0);
+        for c in columns_mut(&mut m) {
+            c.push(f64::NAN);
+        }
+        return m;
+    }
+    let f_tilde = d.record.objectives()[2].map_or(f64::NAN, |f| at_precision(f, r));
     for &k in kept {
         let s = &samples[k];
         let p = |x: f64| at_precision(x, r);
@@ -123,12 +113,40 @@ pub fn series(id: u64, samples: &[Sample], kept: &[usize], opts: &RecordOptions)
         m.filtered_hand_force.push(p(s.filtered_fy));
         m.energy.push(p(s.energy));
         m.energy_excess.push(p(s.energy_excess));
+        m.mean_force_objective.push(f_tilde);
     }
     m
 }
 
-/// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in length.
+/// Every value column of a series (all but `t`).
+fn columns_mut(m: &mut GraspSeries) -> [&mut Vec<f64>; 16] {
+    [
+        &mut m.q11,
+        &mut m.q21,
+        &mut m.q11_dot,
+        &mut m.q21_dot,
+        &mut m.theta2,
+        &mut m.proximal_penetration,
+        &mut m.distal_penetration,
+        &mut m.proximal_normal_force,
+        &mut m.distal_normal_force,
+        &mut m.proximal_friction_force,
+        &mut m.distal_friction_force,
+        &mut m.hand_force,
+        &mut m.filtered_hand_force,
+        &mut m.energy,
+        &mut m.energy_excess,
+        &mut m.mean_force_objective,
+    ]
+}
+
+/// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in
+/// length. The placeholder of a design without a trajectory (`simulated_samples` = 0) gives
+/// no sample.
 pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
+    if m.simulated_samples == 0 {
+        return Some(vec![]);
+    }
     let n = m.t.len();
     let cols = [
         &m.q11,
@@ -167,191 +185,4 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
             })
             .collect(),
     )
-}
-
-fn rgba(r: f64, g: f64, b: f64, a: f64) -> Option<Color> {
-    Some(Color { r, g, b, a })
-}
-
-fn at(x: f64, y: f64, z: f64) -> Option<Pose> {
-    Some(Pose { position: Some(Vector3 { x, y, z }), orientation: Some(Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }) })
-}
-
-fn entity(t_ns: u64, frame: &str, id: &str, design_id: u64) -> SceneEntity {
-    SceneEntity {
-        timestamp: Some(stamp(t_ns)),
-        frame_id: frame.into(),
-        id: id.into(),
-        lifetime: Some(Duration::new(0, 0)),
-        metadata: vec![KeyValuePair { key: "design_id".into(), value: design_id.to_string() }],
-        ..Default::default()
-    }
-}
-
-fn delete_all(t_ns: u64) -> Vec<SceneEntityDeletion> {
-    vec![SceneEntityDeletion {
-        timestamp: Some(stamp(t_ns)),
-        r#type: scene_entity_deletion::Type::All as i32,
-        id: String::new(),
-    }]
-}
-
-/// `/tf` message at a design's window start: `world` (z up, ground at z = 0) → `hand`
-/// (the model's plane: x across the palm, y from the palm towards the object, which lies
-/// on the ground; so the hand looks down, its palm 2 r above the ground).
-pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    FrameTransforms {
-        transforms: vec![FrameTransform {
-            timestamp: Some(stamp(t_ns)),
-            parent_frame_id: "world".into(),
-            child_frame_id: "hand".into(),
-            translation: Some(Vector3 { x: 0.0, y: 0.0, z: 2.0 * sc.object.radius }),
-            // −90° about x: hand y → world −z, hand z (the object's axis) → world y
-            rotation: Some(Quaternion { x: -h, y: 0.0, z: 0.0, w: h }),
-        }],
-    }
-}
-
-/// `/scene/static` message at a design's window start: it first deletes everything of the
-/// previous design on this topic, then draws the ground plane (frame `world`), the palm
-/// (width b + 2 cm) and the object (frame `hand`). Its latest message is always valid.
-pub fn static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
-    let r = sc.object.radius;
-    let object = object_entity(t_ns, "hand", id, sc, at(0.0, r, 0.0));
-    SceneUpdate {
-        deletions: delete_all(t_ns),
-        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object],
-    }
-}
-
-/// The ground plane (frame `world`, top face at z = 0).
-fn ground_entity(t_ns: u64, id: u64) -> SceneEntity {
-    let mut ground = entity(t_ns, "world", "ground", id);
-    ground.cubes.push(CubePrimitive {
-        pose: at(0.0, 0.0, -0.0005),
-        size: Some(Vector3 { x: 0.6, y: 0.6, z: 0.001 }),
-        color: rgba(0.55, 0.55, 0.5, 1.0),
-    });
-    ground
-}
-
-/// The palm (frame `hand`: width b + 2 cm, its face the line y = 0, 4 cm across the plane).
-fn palm_entity(t_ns: u64, id: u64, design: &Design) -> SceneEntity {
-    let mut palm = entity(t_ns, "hand", "palm", id);
-    palm.cubes.push(CubePrimitive {
-        pose: at(0.0, -0.005, 0.0),
-        size: Some(Vector3 { x: design.b + 0.02, y: 0.01, z: 0.04 }),
-        color: rgba(0.5, 0.5, 0.5, 1.0),
-    });
-    palm
-}
-
-/// The bottle: a cylinder of radius R and length L_c along the z axis of `frame`, centred at `pose`.
-fn object_entity(t_ns: u64, frame: &str, id: u64, sc: &SceneParams, pose: Option<Pose>) -> SceneEntity {
-    let r = sc.object.radius;
-    let mut object = entity(t_ns, frame, "object", id);
-    object.cylinders.push(CylinderPrimitive {
-        pose,
-        size: Some(Vector3 { x: 2.0 * r, y: 2.0 * r, z: sc.object.length }),
-        bottom_scale: 1.0,
-        top_scale: 1.0,
-        color: rgba(0.2, 0.5, 0.9, 0.5),
-    });
-    object
-}
-
-/// Round a coordinate to 2⁻²⁰ m (≈ 1 µm): invisible, and the zeroed low mantissa bits
-/// compress well.
-fn q(x: f64) -> f64 {
-    (x * 1_048_576.0).round() / 1_048_576.0
-}
-
-/// `/scene` message: both fingers at sample `s` (a line strip per finger through tip, O22,
-/// base, O12, O13, O22); with `first`, it first deletes the previous design's fingers.
-/// `None` when there is no finger or the pose cannot be assembled (then, with `first`, a
-/// message that only deletes).
-pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, first: bool) -> Option<SceneUpdate> {
-    let deletions = if first { delete_all(t_ns) } else { vec![] };
-    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p)));
-    let Some((finger, p)) = pose else {
-        return first.then(|| SceneUpdate { deletions, entities: vec![] });
-    };
-    let mut e = entity(t_ns, "hand", "fingers", id);
-    for mirror in [1.0, -1.0] {
-        e.lines.push(finger_line(finger, &p, mirror));
-    }
-    Some(SceneUpdate { deletions, entities: vec![e] })
-}
-
-/// One finger at pose `p` as a line strip through tip, O22, base, O12, O13, O22 in the
-/// hand's plane (`mirror` −1: finger 2, mirrored in x).
-fn finger_line(finger: &Finger, p: &crate::model::Pose, mirror: f64) -> LinePrimitive {
-    let chain: [V2; 6] = [finger.tip(p), p.o22, finger.o21, p.o12, p.o13, p.o22];
-    LinePrimitive {
-        r#type: line_primitive::Type::LineStrip as i32,
-        pose: at(0.0, 0.0, 0.0),
-        thickness: 2.0 * finger.w,
-        scale_invariant: false,
-        points: chain.iter().map(|v| Point3 { x: q(mirror * v.x), y: q(v.y), z: 0.0 }).collect(),
-        color: rgba(0.9, 0.4, 0.1, 1.0),
-        ..Default::default()
-    }
-}
-
-// ---- the free scene (`gripopt verify`'s recording): the hand horizontal, the object a
-// ---- rigid body whose pose is the frame `object`
-
-/// `/tf` of the free scene at `t_ns`: with `hand`, `world` (z up, ground at z = 0) →
-/// `hand` (the free scene's frame, MODEL.md §14.1: the hand plane z = 0 at h_c above the
-/// ground, x along the palm, y toward the object, z up); always `hand` → `object` (origin at
-/// G, axes the body's: its axis along z) from the pose sample.
-pub fn free_frames(t_ns: u64, sc: &SceneParams, pose: &PoseSample, hand: bool) -> FrameTransforms {
-    let mut transforms = Vec::with_capacity(2);
-    if hand {
-        transforms.push(FrameTransform {
-            timestamp: Some(stamp(t_ns)),
-            parent_frame_id: "world".into(),
-            child_frame_id: "hand".into(),
-            translation: Some(Vector3 { x: 0.0, y: 0.0, z: sc.object.grasp_height }),
-            rotation: Some(Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }),
-        });
-    }
-    let [w, x, y, z] = pose.q;
-    let n = (w * w + x * x + y * y + z * z).sqrt();
-    transforms.push(FrameTransform {
-        timestamp: Some(stamp(t_ns)),
-        parent_frame_id: "hand".into(),
-        child_frame_id: "object".into(),
-        translation: Some(Vector3 { x: pose.g[0], y: pose.g[1], z: pose.g[2] }),
-        rotation: Some(Quaternion { x: x / n, y: y / n, z: z / n, w: w / n }),
-    });
-    FrameTransforms { transforms }
-}
-
-/// `/scene/static` of the free scene at a design's window start: deletes everything, then
-/// the ground (frame `world`), the palm (frame `hand`) and the bottle (frame `object`,
-/// centred at G, its axis along z).
-pub fn free_static_scene(t_ns: u64, id: u64, design: &Design, sc: &SceneParams) -> SceneUpdate {
-    let object = object_entity(t_ns, "object", id, sc, at(0.0, 0.0, 0.0));
-    SceneUpdate {
-        deletions: delete_all(t_ns),
-        entities: vec![ground_entity(t_ns, id), palm_entity(t_ns, id, design), object],
-    }
-}
-
-/// `/scene` of the free scene: both fingers, each at its own angles (`q`: q11, q21 of
-/// finger 1, then of finger 2 in its mirrored frame); with `first`, it first deletes the
-/// previous design's fingers. `None` when a pose cannot be assembled (then, with `first`,
-/// a message that only deletes).
-pub fn free_fingers(id: u64, t_ns: u64, finger: Option<&Finger>, q: [f64; 4], first: bool) -> Option<SceneUpdate> {
-    let deletions = if first { delete_all(t_ns) } else { vec![] };
-    let poses = finger.and_then(|f| Some((f, f.dgm(q[0], q[1]).ok()?, f.dgm(q[2], q[3]).ok()?)));
-    let Some((finger, p1, p2)) = poses else {
-        return first.then(|| SceneUpdate { deletions, entities: vec![] });
-    };
-    let mut e = entity(t_ns, "hand", "fingers", id);
-    e.lines.push(finger_line(finger, &p1, 1.0));
-    e.lines.push(finger_line(finger, &p2, -1.0));
-    Some(SceneUpdate { deletions, entities: vec![e] })
 }

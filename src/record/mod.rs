@@ -12,12 +12,17 @@
 //!
 //! This layer sits above the pipeline and the simulator and below the run layer: it never
 //! names the optimiser. A design to record is a [`DesignEntry`]; higher layers implement
-//! [`Recordable`] for their own types and call [`Recorder::record_generation`].
+//! [`Recordable`] for their own types and hand the recorder's shard tasks their designs.
 //!
 //! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
-//! scene's object pose as a moving frame (see `verify_rec`).
+//! scene's object pose as a moving frame (see `verify_rec`), in a time band after the run's
+//! designs. When the run ends, `recording/front.mcap` says which designs are on the final
+//! front ([`write_front`]). Every recording draws one physical scene (`scene`: `world` z up,
+//! the hand horizontal at the grasp height, the object standing on the ground).
 
 mod entry;
+mod front;
+mod index;
 mod layout;
 mod mcapfile;
 mod messages;
@@ -25,12 +30,17 @@ mod options;
 mod proto;
 mod recover;
 mod replay;
+mod scene;
 mod schema;
 mod verify_rec;
 mod writer;
 
 pub use entry::{DesignEntry, Recordable};
-pub use layout::{layout, write_layout, LAYOUT_FILE};
+pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
+pub use index::{read_index, ShardEntry};
+pub use layout::{
+    layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
+};
 pub use messages::{samples_from, window_start_ns};
 pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
@@ -38,8 +48,10 @@ pub use options::{
 pub use proto::{GraspSeries, SERIES_NAME};
 pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
 pub use replay::{read_design, replay, Recorded, Replay};
+pub use scene::{HAND, OBJECT, WORLD};
+pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
-    keep_poses, parameters as verify_parameters, verify_layout, verify_schema, write_verify, write_verify_layout,
-    Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart, VERIFY_LAYOUT_FILE, VERIFY_METADATA,
+    band_s, keep_poses, parameters as verify_parameters, verify_schema, verify_series_schema, write_verify, Parameters,
+    VerifyEntry, VerifyRecord, VerifyRecordOptions, VerifySeries, WindowStart, VERIFY_METADATA,
 };
-pub use writer::{read_index, write_shard, Recorder, ShardEntry, ShardTask};
+pub use writer::{write_shard, Recorder, ShardTask};

@@ -112,6 +112,33 @@ impl RecordOptions {
             epoch_s: 0,
         }
     }
+    /// Check the options a caller set (as flags are named: `--record-every`, `--scene-ms`,
+    /// `--zstd-level`, `--zstd-threads`): every ≥ 1, a finite scene interval ≥ 0, zstd
+    /// levels 1 to 22, at most 256 zstd threads.
+    pub fn validate(&self) -> crate::Result<()> {
+        let bad = |field: &str, value: String, rule: &str| {
+            Err(crate::Error::InvalidField {
+                file: "command line".into(),
+                field: field.into(),
+                value,
+                rule: rule.into(),
+            })
+        };
+        if self.every == 0 {
+            return bad("--record-every", "0".into(), "must be at least 1");
+        }
+        if !(self.scene_dt.is_finite() && self.scene_dt >= 0.0) {
+            return bad("--scene-ms", format!("{}", self.scene_dt * 1e3), "must be a number >= 0");
+        }
+        if !(1..=22).contains(&self.zstd_level) {
+            return bad("--zstd-level", self.zstd_level.to_string(), "zstd levels are 1 to 22");
+        }
+        if self.zstd_threads > 256 {
+            return bad("--zstd-threads", self.zstd_threads.to_string(), "at most 256");
+        }
+        Ok(())
+    }
+
     /// These options with the epoch set to the current time when it is still 0 (called
     /// once, where a run folder is created; the epoch is then stored in run.json).
     pub fn starting_now(self) -> Self {

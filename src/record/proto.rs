@@ -73,10 +73,15 @@ pub struct GraspSeries {
     /// E − V* (J).
     #[prost(double, repeated, tag = "19")]
     pub energy_excess: Vec<f64>,
+    /// The design's F̃ (N): stage 2's static mean contact force, the objective, repeated on
+    /// every sample (a line in the Plot panel beside the simulated forces; NaN when not
+    /// computed).
+    #[prost(double, repeated, tag = "20")]
+    pub mean_force_objective: Vec<f64>,
 }
 
 /// (name, number, type, repeated) of every field of [`GraspSeries`], in tag order.
-pub const SERIES_FIELDS: [(&str, i32, Type, bool); 19] = [
+pub const SERIES_FIELDS: [(&str, i32, Type, bool); 20] = [
     ("design_id", 1, Type::Uint64, false),
     ("full_resolution", 2, Type::Bool, false),
     ("simulated_samples", 3, Type::Uint32, false),
@@ -96,6 +101,7 @@ pub const SERIES_FIELDS: [(&str, i32, Type, bool); 19] = [
     ("filtered_hand_force", 17, Type::Double, true),
     ("energy", 18, Type::Double, true),
     ("energy_excess", 19, Type::Double, true),
+    ("mean_force_objective", 20, Type::Double, true),
 ];
 
 /// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3).
@@ -131,7 +137,7 @@ mod tests {
     fn descriptor_matches_the_encoding() {
         // every field gets a distinct value; decode the bytes by hand with the table
         let mut m = GraspSeries { design_id: 7, full_resolution: true, simulated_samples: 3, ..Default::default() };
-        let cols: [&mut Vec<f64>; 16] = [
+        let cols: [&mut Vec<f64>; 17] = [
             &mut m.t,
             &mut m.q11,
             &mut m.q21,
@@ -148,6 +154,7 @@ mod tests {
             &mut m.filtered_hand_force,
             &mut m.energy,
             &mut m.energy_excess,
+            &mut m.mean_force_objective,
         ];
         for (k, c) in cols.into_iter().enumerate() {
             c.push(k as f64 + 0.5);
@@ -182,7 +189,7 @@ mod tests {
             }
             seen.push(tag);
         }
-        assert_eq!(seen, (1..=19).collect::<Vec<_>>());
+        assert_eq!(seen, (1..=20).collect::<Vec<_>>());
         assert!(!series_descriptor().is_empty());
     }
 }

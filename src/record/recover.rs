@@ -13,7 +13,7 @@
 //! [epoch + k s, epoch + k s + 1 s), `epoch_s` from the same record, else 0) and the count
 //! from the `/designs` channel's statistics; the size from the file system.
 
-use super::writer::ShardEntry;
+use super::index::ShardEntry;
 use crate::{Error, Result};
 use std::path::Path;
 

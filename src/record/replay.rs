@@ -2,16 +2,16 @@
 //! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
 //! verify that the new trajectory equals the recorded one.
 
+use super::index::{read_index, ShardEntry};
 use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
-use super::writer::{read_index, ShardEntry};
+use super::schema::DesignMessage;
 use super::{RecordOptions, Resolution};
-use crate::eval::{evaluate_with_trajectory, EvalOptions};
+use crate::eval::{evaluate_into, EvalOptions, Record};
 use crate::params::{Design, Problem};
-use crate::sim::Sample;
+use crate::sim::{Sample, Trajectory};
 use crate::{Error, Result};
 use prost::Message;
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// A design read back from a recording.
@@ -20,7 +20,7 @@ pub struct Recorded {
     /// The shard it was found in.
     pub file: PathBuf,
     /// The `/designs` message.
-    pub record: Value,
+    pub record: DesignMessage,
     /// The recorded trajectory (possibly a subset, see the run's recording options).
     pub samples: Vec<Sample>,
     /// Resolution of the recorded trajectory (compact: values to f32 precision).
@@ -28,17 +28,9 @@ pub struct Recorded {
 }
 
 impl Recorded {
-    /// The design of the `/designs` record (its `parameters`; errors name the shard).
-    pub fn design(&self) -> Result<Design> {
-        let p = &self.record["parameters"];
-        let x: Vec<f64> =
-            ["l21", "b", "t22", "r", "p", "psi_deg"].iter().map(|k| p[k].as_f64()).collect::<Option<_>>().ok_or_else(
-                || Error::Recording {
-                    path: self.file.clone(),
-                    message: format!("design {}: field `parameters` incomplete", self.record["id"]),
-                },
-            )?;
-        Ok(Design::from_array(&x.try_into().expect("six")))
+    /// The design of the `/designs` record (its `parameters`).
+    pub fn design(&self) -> Design {
+        Design::from_array(&self.record.parameters.to_array())
     }
 }
 
@@ -62,27 +54,20 @@ pub struct Replay {
     pub values_compared: usize,
     /// Verdict recomputed.
     pub recomputed_feasible: bool,
+    /// The re-evaluation's record.
+    pub fresh: Record,
 }
 
-/// Compare the record's values with the re-evaluation `ev`: (values compared, all present
-/// on both sides alike, largest relative difference of the numbers).
-fn compare_values(rec: &Value, ev: &crate::eval::Evaluation) -> (usize, bool, f64) {
-    let st = ev.statics;
-    let t_stab = ev.dynamics.as_ref().and_then(|d| d.t_stab);
+/// Compare the recorded `/designs` message with the re-evaluation's record `fresh`:
+/// (values compared, all present on both sides alike, largest relative difference of the
+/// numbers). The values: objectives, violation, failing stage, reason, the grasp
+/// simulation's steps and right-hand-side evaluations.
+fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
+    let o = fresh.objectives();
     // the optimiser's negative max_offset placeholder (MODEL.md §6.7) is not a value
-    let fresh_obj = [
-        st.map(|s| s.max_offset).filter(|m| *m >= 0.0),
-        st.map(|s| s.alpha).filter(|a| a.is_finite()),
-        st.map(|s| s.mean_force),
-        t_stab,
-    ];
-    let o = &rec["objectives"];
-    let rec_obj = [
-        o["max_offset"].as_f64().filter(|m| *m >= 0.0),
-        o["alpha"].as_f64(),
-        o["mean_force"].as_f64(),
-        o["t_stab"].as_f64(),
-    ];
+    let fresh_obj = [o[0].filter(|m| *m >= 0.0), o[1], o[2], o[3]];
+    let r = &rec.objectives;
+    let rec_obj = [r.max_offset.filter(|m| *m >= 0.0), r.alpha, r.mean_force, r.t_stab];
     let (mut n, mut alike, mut maxd) = (0usize, true, 0.0f64);
     let mut num = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (Some(a), Some(b)) => {
@@ -98,11 +83,13 @@ fn compare_values(rec: &Value, ev: &crate::eval::Evaluation) -> (usize, bool, f6
     for (a, b) in fresh_obj.into_iter().zip(rec_obj) {
         num(a, b);
     }
-    num(ev.discard.map(|d| d.violation), rec["violation"].as_f64());
+    let v = &fresh.verdict;
+    num(v.violation, rec.violation);
+    let w = fresh.sim_work();
     let ints = [
-        (ev.discard.map(|d| d.stage as u64), rec["failed_stage"].as_u64()),
-        (ev.dynamics.as_ref().map(|d| d.stats.steps), rec["sim_steps"].as_u64()),
-        (ev.dynamics.as_ref().map(|d| d.rhs_evals), rec["sim_rhs_evals"].as_u64()),
+        (v.failed_stage.map(u64::from), rec.failed_stage.map(u64::from)),
+        (w.map(|w| w[0]), rec.sim_steps),
+        (w.map(|w| w[1]), rec.sim_rhs_evals),
     ];
     for (a, b) in ints {
         if a.is_some() || b.is_some() {
@@ -110,10 +97,9 @@ fn compare_values(rec: &Value, ev: &crate::eval::Evaluation) -> (usize, bool, f6
             alike &= a == b;
         }
     }
-    let reason = ev.discard.map(|d| d.reason.to_string());
-    if reason.is_some() || rec["reason"].is_string() {
+    if v.reason.is_some() || rec.reason.is_some() {
         n += 1;
-        alike &= reason.as_deref() == rec["reason"].as_str();
+        alike &= v.reason == rec.reason;
     }
     (n, alike, maxd)
 }
@@ -209,6 +195,54 @@ fn check_chunk(buf: &[u8], ci: &mcap::records::ChunkIndex) -> std::result::Resul
     Ok(())
 }
 
+/// The messages (channel id, log time, bytes) of the chunk `ci` points to, read with a record
+/// length limit of the chunk's uncompressed size: the mcap crate's own chunk reader
+/// (`Summary::stream_chunk`) has none, so a damaged record length inside a decompressed chunk
+/// made it allocate that length (an abort, not an error).
+fn chunk_messages<'a>(
+    buf: &'a [u8],
+    ci: &mcap::records::ChunkIndex,
+) -> std::result::Result<Vec<(u16, u64, Vec<u8>)>, String> {
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let (start, end) = (ci.chunk_start_offset as usize, (ci.chunk_start_offset + ci.chunk_length) as usize);
+    let mut input: &'a [u8] = &buf[start..end];
+    // no record, the chunk record included, is longer than the chunk or its content
+    let limit =
+        usize::try_from(ci.uncompressed_size.max(ci.chunk_length)).map_err(|_| "size beyond memory".to_string())?;
+    let mut r = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_start_magic(true)
+            .with_skip_end_magic(true)
+            .with_validate_chunk_crcs(true)
+            .with_record_length_limit(limit),
+    );
+    let mut out = vec![];
+    while let Some(event) = r.next_event() {
+        match event.map_err(|e| e.to_string())? {
+            LinearReadEvent::ReadRequest(n) => {
+                let n = n.min(input.len());
+                r.insert(n).copy_from_slice(&input[..n]);
+                r.notify_read(n);
+                input = &input[n..];
+            }
+            LinearReadEvent::Record { data, opcode } => {
+                if let mcap::records::Record::Message { header, data } =
+                    mcap::parse_record(opcode, data).map_err(|e| e.to_string())?
+                {
+                    out.push((header.channel_id, header.log_time, data.into_owned()));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// One message of a chunk.
+struct Msg {
+    log_time: u64,
+    data: Vec<u8>,
+}
+
 /// Find design `id` in the recording of `run_dir`.
 pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
@@ -256,21 +290,19 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
         check_chunk(&buf, ci)
             .map_err(|m| bad(format!("the file is damaged: chunk at offset {}: {m}", ci.chunk_start_offset)))?;
         let at = ci.chunk_start_offset;
-        for m in summary
-            .stream_chunk(&buf, ci)
-            .map_err(mc(format!("cannot read the chunk at offset {at} (the file is damaged)")))?
-        {
-            let m =
-                m.map_err(mc(format!("cannot read a message of the chunk at offset {at} (the file is damaged)")))?;
+        let messages = chunk_messages(&buf, ci)
+            .map_err(|e| bad(format!("cannot read the chunk at offset {at} (the file is damaged): {e}")))?;
+        for (channel, log_time, data) in messages {
+            let m = Msg { log_time, data };
             if m.log_time < lo || m.log_time >= hi {
                 continue;
             }
-            match m.channel.topic.as_str() {
+            let topic = summary.channels.get(&channel).map_or("", |c| c.topic.as_str());
+            match topic {
                 "/designs" => {
-                    design = Some(
-                        serde_json::from_slice::<Value>(&m.data)
-                            .map_err(|e| bad(format!("/designs message at {} ns is not JSON: {e}", m.log_time)))?,
-                    )
+                    design = Some(serde_json::from_slice::<DesignMessage>(&m.data).map_err(|e| {
+                        bad(format!("/designs message at {} ns is not a gripopt.Design: {e}", m.log_time))
+                    })?)
                 }
                 "/grasp/series" => {
                     series = Some(
@@ -307,18 +339,18 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let problem = Problem::load(run_dir.join("problem.toml"))?;
     let run_json = run_dir.join("run.json");
     let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
-    let run: Value = serde_json::from_str(&text).map_err(|source| Error::Json {
-        path: run_json.clone(),
-        what: "invalid run.json",
-        source,
-    })?;
-    let opts: RecordOptions = serde_json::from_value(run["recording"].clone()).map_err(|source| Error::Json {
-        path: run_json.clone(),
-        what: "field `recording`",
-        source,
-    })?;
-    let design = recorded.design()?;
-    let (ev, tr) = evaluate_with_trajectory(&design, &problem.scene, &EvalOptions::full(&problem));
+    // the recording options of run.json (its other fields are the run layer's)
+    #[derive(serde::Deserialize)]
+    struct RunJson {
+        recording: RecordOptions,
+    }
+    let opts = serde_json::from_str::<RunJson>(&text)
+        .map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json (field `recording`)", source })?
+        .recording;
+    let design = recorded.design();
+    let mut traj = Trajectory::default();
+    let ev = evaluate_into(&design, &problem.scene, &EvalOptions::full(&problem), &mut traj);
+    let tr = ev.dynamics.is_some().then_some(traj);
     let fresh: Vec<Sample> = match tr {
         Some(t) => {
             let p = |x: f64| at_precision(x, recorded.resolution);
@@ -367,14 +399,15 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
             maxd = maxd.max(rel(u, v));
         }
     }
-    let feasible_rec = recorded.record["feasible"].as_bool().unwrap_or(false);
+    let feasible_rec = recorded.record.feasible;
     // same build: 0 (bitwise); another build may differ in the last bits, then by at most
     // one unit of the recorded precision
     let tol = match recorded.resolution {
         Resolution::Full => 1e-12,
         Resolution::Compact => f32::EPSILON as f64,
     };
-    let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &ev);
+    let fresh_record = Record::from_eval(&ev);
+    let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh_record);
     let verified = same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol;
     let maxd = maxd.max(vmaxd);
     Ok(Replay {
@@ -384,5 +417,6 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         verified,
         max_difference: if same_len && alike { maxd } else { f64::INFINITY },
         recomputed_feasible: ev.feasible(),
+        fresh: fresh_record,
     })
 }

@@ -1,9 +1,128 @@
-//! JSON schema of `/designs` (`gripopt.Design`), written so that Foxglove's JSON-schema
-//! parser accepts it: one type per field (no union types; values not computed are left
-//! out of a message instead of being null), every object with its properties. The other
-//! channels are protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
+//! `/designs` (`gripopt.Design`, JSON): the typed message ([`DesignMessage`], derived from
+//! a design's evaluation record; read back as the same type by replay and the run-folder
+//! reader) and its JSON schema, written so that Foxglove's JSON-schema parser accepts it:
+//! one type per field (no union types; values not computed are left out of a message
+//! instead of being null), every object with its properties. The other channels are
+//! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
+use crate::eval::FreeSceneRecord;
+pub use crate::params::DesignParameters;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
+
+/// A window start as seconds and nanoseconds since 1970.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Window {
+    /// Seconds.
+    pub sec: u64,
+    /// Nanoseconds.
+    pub nsec: u64,
+}
+
+/// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Derived {
+    /// l11.
+    pub l11: Option<f64>,
+    /// l12.
+    pub l12: Option<f64>,
+    /// l22.
+    pub l22: Option<f64>,
+    /// l_hand.
+    pub l_hand: f64,
+}
+
+/// Objectives in their natural sense (max_offset only when form closed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Objectives {
+    /// m.
+    pub max_offset: Option<f64>,
+    /// Force isotropy.
+    pub alpha: Option<f64>,
+    /// N.
+    pub mean_force: Option<f64>,
+    /// s.
+    pub t_stab: Option<f64>,
+}
+
+/// Wall seconds per stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StageSeconds {
+    /// Stages 0–1.
+    pub stages_0_1: f64,
+    /// Stage 2.
+    pub stage_2: f64,
+    /// Stage 3.
+    pub stage_3: f64,
+}
+
+/// The `/designs` message of one design.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignMessage {
+    /// Design id.
+    pub id: u64,
+    /// Generation that created it.
+    pub generation: u64,
+    /// Problem name.
+    pub problem: String,
+    /// Start of its time window.
+    pub window_start: Window,
+    /// Its window start in seconds since the epoch (= id).
+    pub window_start_s: f64,
+    /// The recording's epoch (s since 1970).
+    pub epoch_s: u64,
+    /// The design.
+    pub parameters: DesignParameters,
+    /// Derived lengths.
+    pub derived: Derived,
+    /// Stages passed (4: all).
+    pub stages_passed: u8,
+    /// No stage discarded it.
+    pub feasible: bool,
+    /// Form closed at the centred object.
+    pub form_closed: Option<bool>,
+    /// The stage that discarded it.
+    pub failed_stage: Option<u8>,
+    /// Why.
+    pub reason: Option<String>,
+    /// By how much.
+    pub violation: Option<f64>,
+    /// Objectives.
+    pub objectives: Objectives,
+    /// Timings.
+    pub stage_seconds: StageSeconds,
+    /// Accepted steps of the grasp simulation.
+    pub sim_steps: Option<u64>,
+    /// Right-hand-side evaluations of the grasp simulation.
+    pub sim_rhs_evals: Option<u64>,
+    /// The free scene's measurement (free kind; keys not computed left out).
+    pub free_scene: Option<FreeSceneRecord>,
+    /// Trajectory samples simulated (the recorded ones may be a subset).
+    pub trajectory_samples: u64,
+}
+
+impl DesignMessage {
+    /// The message as written: JSON without its null values (values not computed are left
+    /// out, so Foxglove's schema parser needs one type per field, no unions).
+    pub fn to_json(&self) -> Vec<u8> {
+        fn strip(v: &mut Value) {
+            match v {
+                Value::Object(m) => {
+                    m.retain(|_, x| !x.is_null());
+                    m.values_mut().for_each(strip);
+                }
+                Value::Array(a) => a.iter_mut().for_each(strip),
+                _ => {}
+            }
+        }
+        // a message of plain numbers, texts and options always serialises
+        let mut v = serde_json::to_value(self).expect("a design message serialises");
+        strip(&mut v);
+        serde_json::to_vec(&v).expect("a JSON value serialises")
+    }
+}
 
 fn num() -> Value {
     json!({"type": "number"})
@@ -13,6 +132,29 @@ fn int() -> Value {
 }
 fn obj(props: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": props, "required": required})
+}
+
+/// The JSON type of every key of the free scene's record.
+fn free_scene_properties() -> Value {
+    // a record with every value set gives every key with its JSON type
+    let full = FreeSceneRecord::full_example();
+    let v = serde_json::to_value(full).expect("records serialise");
+    let props: serde_json::Map<String, Value> = v
+        .as_object()
+        .expect("an object")
+        .iter()
+        .map(|(k, x)| {
+            let t = match x {
+                Value::Bool(_) => json!({"type": "boolean"}),
+                Value::String(_) => json!({"type": "string"}),
+                Value::Number(n) if n.is_u64() => int(),
+                Value::Array(_) => json!({"type": "array", "items": num()}),
+                _ => num(),
+            };
+            (k.clone(), t)
+        })
+        .collect();
+    Value::Object(props)
 }
 
 /// `gripopt.Design` on `/designs`.
@@ -39,13 +181,8 @@ pub fn design() -> Value {
             "sim_rhs_evals": int(),
             "free_scene": {
                 "type": "object",
-                "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `simulate --scene free --json` (keys not computed, where the free scene did not run to t_obs, are left out)",
-                "properties": {
-                    "object_max_displacement": num(), "object_max_dx": num(), "object_max_dy": num(), "object_max_tilt_deg": num(),
-                    "object_final_displacement": num(), "object_final_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(),
-                    "moved": {"type": "boolean"}, "toppled": {"type": "boolean"}, "escaped": {"type": "boolean"}, "rim_contact": {"type": "boolean"},
-                    "object_x_off": num(), "free_end": {"type": "string"}, "free_steps": int(), "free_rhs_evals": int()
-                }
+                "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `evaluate --json` for the free scene (keys not computed, e.g. the verdict flags where the free scene did not run to t_obs, are left out)",
+                "properties": free_scene_properties()
             },
             "trajectory_samples": int()
         }),

@@ -1,14 +1,15 @@
 //! The MCAP recording of `gripopt verify` (`RUN_DIR/verify.mcap`, `verify_sample.mcap`):
-//! one design after another on the time convention of the optimisation recording (window k
-//! = [epoch + k s, epoch + k s + 1 s), simulated time t at epoch + k s + t), k the row's
-//! index in the verify table. Per design: its verify row on `/verify` (JSON,
-//! `gripopt.Verify`), and the free scene in 3-D with the official Foxglove schemas: `/tf`
-//! (`world` → `hand`, `hand` → `object` following the free object's pose), `/scene/static`
-//! (ground, palm, and the bottle in the frame `object`) and `/scene` (both fingers). See
-//! docs/recording.md.
+//! one design after another, on the run's epoch but in its own time band after the run's
+//! designs (window k = [epoch + (base + k) s, epoch + (base + k + 1) s), simulated time t at
+//! its start + t, k the row's index in the verify table; [`band_s`]), so that opened
+//! together with the run's shards no two designs share a second. Per design: its verify row
+//! on `/verify` (JSON, `gripopt.Verify`), the object's motion as columns on `/verify/series`
+//! (JSON, `gripopt.VerifySeries`), and the free scene in 3-D with the official Foxglove
+//! schemas, in the frames of every gripopt recording (`scene`): `/tf` (`world` → `hand` and
+//! `hand` → `object` following the free object's pose), `/scene/static` (ground, palm, the
+//! bottle in the frame `object`, a label) and `/scene` (both fingers). See docs/recording.md.
 
-use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_start_ns};
-use crate::fsutil::write_atomic;
+use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::sim::PoseSample;
@@ -19,12 +20,18 @@ use mcap::records::{MessageHeader, Metadata};
 use serde::Serialize;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Name of the metadata record of a verify recording.
 pub const VERIFY_METADATA: &str = "gripopt.verify";
-/// File name of the Foxglove layout for verify recordings inside a run folder.
-pub const VERIFY_LAYOUT_FILE: &str = "foxglove-verify-layout.json";
+
+/// Width (s) of one time band of a run's time axis: its design count rounded up to whole
+/// thousands (at least 1000). Band 0, [epoch, epoch + band), holds the run's designs (design
+/// k at second k); a study of the run records in a later band: `gripopt verify` in band 1,
+/// `verify --sample` in band 2 (later scenario recordings take the next free band).
+pub fn band_s(run_designs: u64) -> u64 {
+    run_designs.div_ceil(1000).max(1) * 1000
+}
 
 /// The `/verify` message of one design: the columns of verify.csv (values not computed are
 /// left out, as on `/designs`), its time window and the free scene's end time.
@@ -180,6 +187,8 @@ pub struct VerifyRecordOptions {
     /// Epoch of the time axis, whole seconds since 1970 (the run's start time, so the file
     /// does not depend on when verify ran).
     pub epoch_s: u64,
+    /// Seconds from the epoch to window 0 (the start of the recording's band, [`band_s`]).
+    pub window_base_s: u64,
     /// zstd level of the chunks.
     pub zstd_level: u32,
 }
@@ -210,47 +219,111 @@ fn fx<T: Encode>(m: &T) -> Vec<u8> {
 }
 
 /// Channels, in the order of the encoded messages' first field.
-const TOPICS: [&str; 4] = ["/verify", "/tf", "/scene/static", "/scene"];
+const TOPICS: [&str; 5] = ["/verify", "/tf", "/scene/static", "/scene", "/verify/series"];
+
+/// The object's motion of one window as columns against its simulated time, for the Plot
+/// panel: the horizontal displacement of G from its start and the tilt, at the drawn poses
+/// (the verdict's limits are Δx_max and θ_max; the exact maxima are in `/verify`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VerifySeries {
+    /// The window index k.
+    pub window: u64,
+    /// The design id.
+    pub id: u64,
+    /// Simulated time (s).
+    pub t: Vec<f64>,
+    /// |G_xy(t) − G_xy(0)| (mm).
+    pub displacement_mm: Vec<f64>,
+    /// Angle between the object's axis and the vertical (°).
+    pub tilt_deg: Vec<f64>,
+}
+
+/// JSON schema of `/verify/series` (`gripopt.VerifySeries`).
+pub fn verify_series_schema() -> Value {
+    let nums = || json!({"type": "array", "items": {"type": "number"}});
+    let int = || json!({"type": "integer", "minimum": 0});
+    json!({
+        "title": "gripopt.VerifySeries", "type": "object",
+        "properties": {"window": int(), "id": int(), "t": nums(), "displacement_mm": nums(), "tilt_deg": nums()},
+        "required": ["window", "id", "t", "displacement_mm", "tilt_deg"]
+    })
+}
+
+/// The series of window `k` from its poses (one sample at rest at t = 0 when there is none:
+/// an empty message would leave the previous window's curves in the Plot panel).
+fn series_of(k: u64, id: u64, poses: &[PoseSample]) -> VerifySeries {
+    let mut s = VerifySeries { window: k, id, t: vec![], displacement_mm: vec![], tilt_deg: vec![] };
+    let g0 = poses.first().map_or([0.0; 3], |p| p.g);
+    for p in poses {
+        s.t.push(p.t);
+        s.displacement_mm.push((p.g[0] - g0[0]).hypot(p.g[1] - g0[1]) * 1e3);
+        s.tilt_deg.push(p.tilt.to_degrees());
+    }
+    if s.t.is_empty() {
+        (s.t, s.displacement_mm, s.tilt_deg) = (vec![0.0], vec![0.0], vec![0.0]);
+    }
+    s
+}
+
+/// The label drawn above the scene: what was predicted and what the free object did.
+fn verdict(r: &VerifyRecord) -> String {
+    let outcome = match r.moved {
+        Some(true) => "moved",
+        Some(false) => "barely moved",
+        None => "not observed to the end",
+    };
+    let predicted = if r.predicted_moves { "moves" } else { "stays" };
+    format!(
+        "{} (row {}): predicted {predicted}; {outcome}: {:.3} mm, {:.3} deg",
+        r.id,
+        r.window,
+        r.object_max_displacement * 1e3,
+        r.object_max_tilt_deg
+    )
+}
 
 /// All messages of design `k` as (channel index into [`TOPICS`], log time, bytes), in
-/// time order: at the window start the record, both frames, the static scene and the
-/// fingers (deleting the previous design's first); then the object's frame and the fingers
-/// at every further pose.
+/// time order: at the window start the record, the series, the static scene, the frames and
+/// the fingers (deleting the previous design's first); then the frames and the fingers at
+/// every further pose; at the window's last nanosecond the frames at the final pose.
 fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions) -> Vec<(usize, u64, Vec<u8>)> {
-    let t0 = window_start_ns(opts.epoch_s.saturating_mul(1_000_000_000), k);
+    let t0 = window_start_ns(opts.epoch_s.saturating_mul(1_000_000_000), opts.window_base_s + k);
     let sc = &problem.scene;
     let mut r = e.record.clone();
     r.window = k;
     r.window_start = WindowStart { sec: t0 / 1_000_000_000, nsec: t0 % 1_000_000_000 };
-    r.window_start_s = k as f64;
+    r.window_start_s = (opts.window_base_s + k) as f64;
     r.epoch_s = opts.epoch_s;
     r.poses = e.poses.len() as u64;
     let p = &r.parameters;
     let design = Design::from_array(&[p.l21, p.b, p.t22, p.r, p.p, p.psi_deg]);
     let finger = Finger::new(&design, sc).ok();
-    let mut out = vec![(0, t0, serde_json::to_vec(&r).expect("records serialise"))];
-    out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc))));
-    if e.poses.is_empty() {
+    let series = serde_json::to_vec(&series_of(k, r.id, &e.poses)).expect("series serialise");
+    let mut out = vec![(0, t0, serde_json::to_vec(&r).expect("records serialise")), (4, t0, series)];
+    out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r)))));
+    let end = window_end_ns(t0);
+    let Some(last) = e.poses.last() else {
         if let Some(m) = free_fingers(r.id, t0, None, [0.0; 4], true) {
             out.push((3, t0, fx(&m)));
         }
         return out;
-    }
+    };
     for (j, pose) in e.poses.iter().enumerate() {
         let tn = if j == 0 { t0 } else { log_time(t0, pose.t) };
-        out.push((1, tn, fx(&free_frames(tn, sc, pose, j == 0))));
+        out.push((1, tn, fx(&free_frames(tn, sc, pose.g, pose.q))));
         if let Some(m) = free_fingers(r.id, tn, finger.as_ref(), pose.fingers, j == 0) {
             out.push((3, tn, fx(&m)));
         }
     }
+    out.push((1, end, fx(&free_frames(end, sc, last.g, last.q))));
     out
 }
 
 /// Write the verify recording of `entries` (window k = the entry's index) to `path`
 /// (through a temporary file renamed when complete; one zstd chunk per design; summary,
 /// statistics, chunk and message indexes). Besides `meta`, the `gripopt.verify` metadata
-/// record holds `designs`, `first_window`, `last_window`, `epoch_s`, `scene_dt` and
-/// `time_convention`. Returns the file size in bytes.
+/// record holds `designs`, `first_window`, `last_window`, `epoch_s`, `window_base_s`,
+/// `scene_dt` and `time_convention`. Returns the file size in bytes.
 pub fn write_verify(
     path: &Path,
     problem: &Problem,
@@ -266,8 +339,9 @@ pub fn write_verify(
     meta.insert("first_window".into(), "0".into());
     meta.insert("last_window".into(), entries.len().saturating_sub(1).to_string());
     meta.insert("epoch_s".into(), opts.epoch_s.to_string());
+    meta.insert("window_base_s".into(), opts.window_base_s.to_string());
     meta.insert("scene_dt".into(), opts.scene_dt.to_string());
-    meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + k s, epoch_s + k s + 1 s); simulated time t at epoch_s + k s + t".into());
+    meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into());
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
     let none = BTreeMap::new();
@@ -279,13 +353,25 @@ pub fn write_verify(
         w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
     };
     let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
-    let schema_of =
-        [(verify_schema, "json"), (tf_schema, "protobuf"), (scene_schema, "protobuf"), (scene_schema, "protobuf")];
-    let mut chans = [0u16; 4];
+    let series_schema = w
+        .add_schema(
+            "gripopt.VerifySeries",
+            "jsonschema",
+            &serde_json::to_vec(&verify_series_schema()).expect("schema serialises"),
+        )
+        .map_err(mc)?;
+    let schema_of = [
+        (verify_schema, "json"),
+        (tf_schema, "protobuf"),
+        (scene_schema, "protobuf"),
+        (scene_schema, "protobuf"),
+        (series_schema, "json"),
+    ];
+    let mut chans = [0u16; 5];
     for (k, topic) in TOPICS.iter().enumerate() {
         chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
     }
-    let mut seq = [0u32; 4];
+    let mut seq = [0u32; 5];
     for (k, e) in entries.iter().enumerate() {
         for (c, t_ns, data) in encode(k as u64, e, problem, opts) {
             seq[c] += 1;
@@ -298,41 +384,6 @@ pub fn write_verify(
         w.flush().map_err(mc)?; // one chunk per design
     }
     super::mcapfile::finish(w, &tmp, path)
-}
-
-/// The Foxglove layout for verify recordings: the 3-D scene following the hand, and the
-/// current design's `/verify` record.
-pub fn verify_layout() -> Value {
-    let three_d = json!({
-        "followTf": "hand",
-        "followMode": "follow-position",
-        "cameraState": {
-            "perspective": true, "distance": 0.45, "phi": 55.0, "thetaOffset": -30.0,
-            "targetOffset": [0.0, 0.04, -0.03], "target": [0.0, 0.0, 0.0], "targetOrientation": [0.0, 0.0, 0.0, 1.0],
-            "fovy": 45.0, "near": 0.005, "far": 50.0
-        },
-        "scene": {"enableStats": false, "transforms": {"showLabel": false, "axisScale": 0.3}},
-        "transforms": {"frame:world": {"visible": false}, "frame:hand": {"visible": true}, "frame:object": {"visible": true}},
-        "topics": {"/scene": {"visible": true}, "/scene/static": {"visible": true}},
-        "layers": {"grid": {"layerId": "foxglove.Grid", "visible": true, "frameId": "world", "size": 0.6, "divisions": 12, "lineWidth": 1, "color": "#248eff", "position": [0, 0, 0], "rotation": [0, 0, 0]}}
-    });
-    json!({
-        "configById": {
-            "3D!verify": three_d,
-            "RawMessages!verify": {"topicPath": "/verify", "diffEnabled": false, "diffMethod": "custom", "diffTopicPath": "", "showFullMessageForDiff": false, "expansion": "all"}
-        },
-        "globalVariables": {},
-        "userNodes": {},
-        "playbackConfig": {"speed": 0.1},
-        "layout": {"direction": "row", "splitPercentage": 62, "first": "3D!verify", "second": "RawMessages!verify"}
-    })
-}
-
-/// Write [`verify_layout`] to `RUN_DIR/foxglove-verify-layout.json`; returns its path.
-pub fn write_verify_layout(run_dir: &Path) -> Result<PathBuf> {
-    let path = run_dir.join(VERIFY_LAYOUT_FILE);
-    write_atomic(&path, serde_json::to_string_pretty(&verify_layout()).expect("the layout serialises").as_bytes())?;
-    Ok(path)
 }
 
 /// Rebuild the design's parameters record from a design (ψ in degrees).

@@ -1,8 +1,8 @@
 //! Shard writer and the per-generation [`Recorder`] (shard files and `index.jsonl`).
 
 use super::entry::{DesignEntry, Recordable};
+use super::index::{write_index, ShardEntry};
 use super::{messages, proto, schema, RecordOptions};
-use crate::fsutil::write_atomic;
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::{Error, Result};
@@ -11,55 +11,9 @@ use foxglove::Encode;
 use mcap::records::{MessageHeader, Metadata};
 use prost::Message;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// One line of `index.jsonl`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ShardEntry {
-    /// Generation.
-    pub generation: u64,
-    /// File name inside `recording/`.
-    pub file: String,
-    /// Smallest design id in the shard.
-    pub first_id: u64,
-    /// Largest design id.
-    pub last_id: u64,
-    /// Number of designs.
-    pub designs: u64,
-    /// File size (bytes).
-    pub bytes: u64,
-}
-
-/// Read `index.jsonl` of a recording folder (errors name the file and line).
-pub fn read_index(dir: &Path) -> Result<Vec<ShardEntry>> {
-    let p = dir.join("index.jsonl");
-    let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read the recording index", e))?;
-    text.lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(k, l)| {
-            serde_json::from_str(l)
-                .map_err(|e| Error::Recording { path: p.clone(), message: format!("line {}: {e}", k + 1) })
-        })
-        .collect()
-}
-
-fn write_index(dir: &Path, entries: &[ShardEntry]) -> Result<()> {
-    let path = dir.join("index.jsonl");
-    let mut s = String::new();
-    for e in entries {
-        s.push_str(&serde_json::to_string(e).map_err(|source| Error::Json {
-            path: path.clone(),
-            what: "cannot serialise an index line",
-            source,
-        })?);
-        s.push('\n');
-    }
-    write_atomic(&path, s.as_bytes())
-}
 
 /// Channels of a shard, in the order of [`Ch`].
 const TOPICS: [&str; 5] = ["/designs", "/grasp/series", "/tf", "/scene/static", "/scene"];
@@ -162,27 +116,28 @@ pub fn write_shard<R: Recordable>(
 
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
 /// start the record, the series, the frames, the static scene and the first finger pose
-/// (or a deletion); then the fingers every `scene_dt` of simulated time and at the last
-/// sample (t_stab or the discard time).
+/// (without a trajectory: the open and failing poses); then the fingers every `scene_dt` of
+/// simulated time and at the last sample (t_stab or the discard time); at the window's last
+/// nanosecond the frames again (the drawing is `scene`'s, see docs/recording.md).
 fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -> Vec<(Ch, u64, Vec<u8>)> {
     let t0 = messages::window_start_ns(opts.epoch_ns(), d.id);
     let sc = &problem.scene;
     let samples = d.trajectory.map_or(&[][..], |t| &t.samples[..]);
     let kept = opts.kept_samples(samples);
-    let record = serde_json::to_vec(&messages::design(d, &problem.name, t0, opts.epoch_s)).expect("records serialise");
+    let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
     let mut out =
-        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d.id, samples, &kept, opts).encode_to_vec())];
+        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d, samples, &kept, opts).encode_to_vec())];
     if opts.scene_dt <= 0.0 {
         return out;
     }
     let design = Design::from_array(&d.parameters);
-    let finger = d.lengths.and_then(|_| Finger::new(&design, sc).ok());
+    let finger = d.record.lengths().and_then(|_| Finger::new(&design, sc).ok());
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
-    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d.id, &design, sc))));
+    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, sc))));
+    let end = messages::window_end_ns(t0);
     let Some(last) = samples.len().checked_sub(1) else {
-        if let Some(m) = messages::scene(d.id, t0, None, None, true) {
-            out.push((Ch::Scene, t0, fx(&m)));
-        }
+        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, d.record.verdict.failed_stage, sc))));
+        out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
         return out;
     };
     let mut next = 0.0;
@@ -198,6 +153,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
         first = false;
         next = s.t + opts.scene_dt;
     }
+    out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
     out
 }
 
@@ -316,16 +272,5 @@ impl Recorder {
         let at = self.index.partition_point(|e| e.generation < entry.generation);
         self.index.insert(at, entry);
         write_index(&self.dir, &self.index)
-    }
-
-    /// Write generation `generation`'s evaluated designs (any order; written by id) as one
-    /// shard, replacing a shard of the same generation, and update the index. Does nothing
-    /// when recording is off or `designs` is empty.
-    pub fn record_generation<R: Recordable>(&mut self, generation: u64, designs: &[&R]) -> Result<()> {
-        let Some(task) = self.task(generation) else { return Ok(()) };
-        match task.write(designs)? {
-            Some((e, s)) => self.commit(e, s),
-            None => Ok(()),
-        }
     }
 }

@@ -13,13 +13,13 @@ use std::path::Path;
 
 /// Format tag written into every checkpoint.
 pub const FORMAT: &str = "gripopt-checkpoint";
-/// Format version.
-pub const VERSION: u32 = 2;
+/// Format version (3: each individual's info holds its typed evaluation record).
+pub const VERSION: u32 = 3;
 
-/// The checkpoint's content checksum did not match (or was missing, in a version-1 file).
+/// The checkpoint's content checksum did not match (or was missing).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ChecksumMismatch {
-    /// The checksum in the file (None in a version-1 checkpoint).
+    /// The checksum in the file (None: missing).
     pub stored: Option<String>,
     /// The checksum of the content as read.
     pub computed: String,
@@ -52,7 +52,7 @@ impl ChecksumMismatch {
     pub fn error(&self, path: &Path) -> Error {
         let message = match &self.stored {
             Some(s) => format!("content checksum mismatch (field `sha256` {} but the content hashes to {}): the file was edited or damaged after it was written; resuming would put parameters next to objectives that were never evaluated for them. Use --force only if you know what was edited (recorded in run.json)", short(s), short(&self.computed)),
-            None => "no content checksum (a version-1 checkpoint); use --force to resume it (recorded in run.json)".into(),
+            None => "no content checksum; use --force to resume it (recorded in run.json)".into(),
         };
         Error::Checkpoint { file: path.to_path_buf(), message }
     }
@@ -140,8 +140,13 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             return Err(invalid(format!("field `format` is {fmt:?}, expected \"{FORMAT}\"")));
         }
         let ver = head.get("version").and_then(|v| v.as_u64());
-        if ver != Some(VERSION as u64) && ver != Some(1) {
-            return Err(invalid(format!("field `version` is {ver:?}, expected {VERSION} (or 1)")));
+        if let Some(old @ (1 | 2)) = ver {
+            return Err(invalid(format!(
+                "field `version` is {old}: written by a gripopt before the typed evaluation record (version {VERSION}); resume the run with the gripopt that started it, or start a new one"
+            )));
+        }
+        if ver != Some(VERSION as u64) {
+            return Err(invalid(format!("field `version` is {ver:?}, expected {VERSION}")));
         }
         let mut head = head;
         let stored = head.as_object_mut().and_then(|m| m.remove("sha256")).and_then(|v| v.as_str().map(String::from));

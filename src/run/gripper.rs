@@ -2,7 +2,7 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use crate::eval::{evaluate_dynamics, evaluate_statics, stage3_ends_at_once, EvalOptions, Evaluation};
+use crate::eval::{evaluate_dynamics, evaluate_statics, stage3_ends_at_once, EvalOptions, Evaluation, Record};
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, Recordable};
@@ -10,29 +10,13 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::record::TrajectoryKeep;
 
-/// What is kept of each evaluated design (deterministic fields, plus wall-clock timings).
+/// What is kept of each evaluated design: its record, and (not deterministic) its timings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GripperInfo {
-    /// Derived lengths l11, l12, l22 (m), when stage 1 built the finger.
-    pub lengths: Option<[f64; 3]>,
-    /// l_hand (m).
-    pub l_hand: f64,
-    /// Objectives in natural sense: max_offset (m), α, F̃ (N), t_stab (s); null if not computed.
-    pub objectives: [Option<f64>; 4],
-    /// Failing stage, if discarded.
-    pub failed_stage: Option<u8>,
-    /// Why.
-    pub reason: Option<String>,
-    /// Violation.
-    pub violation: Option<f64>,
-    /// Stage-3 work: accepted steps and RHS evaluations (deterministic).
-    pub sim_work: Option<[u64; 2]>,
+    /// The evaluation's record (every output of the design is derived from it).
+    pub record: Record,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
     pub stage_seconds: [f64; 4],
-    /// The free scene's §14.4 keys (`eval::FreeRecord` as JSON) when the problem's scene
-    /// is free and stage 3 ran; absent otherwise (and in checkpoints of other scenes).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub free: Option<serde_json::Value>,
     /// The stage-3 trajectory, kept only until the recorder has written it (never
     /// checkpointed).
     #[serde(skip)]
@@ -42,30 +26,7 @@ pub struct GripperInfo {
 impl GripperInfo {
     /// From a pipeline evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
-        let st = ev.statics;
-        let t_stab = match (&ev.dynamics, &ev.discard) {
-            (Some(d), _) => d.t_stab,
-            _ => None,
-        };
-        GripperInfo {
-            lengths: ev.kin.map(|k| [k.finger.l11, k.finger.l12, k.finger.l22]),
-            l_hand: ev.design.l_hand(),
-            objectives: [
-                st.map(|s| s.max_offset),
-                st.map(|s| s.alpha).filter(|a| a.is_finite()),
-                st.map(|s| s.mean_force),
-                t_stab,
-            ],
-            failed_stage: ev.discard.map(|d| d.stage),
-            reason: ev.discard.map(|d| d.reason.to_string()),
-            violation: ev.discard.map(|d| d.violation),
-            sim_work: ev.dynamics.map(|d| [d.stats.steps, d.rhs_evals]),
-            stage_seconds: ev.stage_seconds,
-            free: (ev.scene == crate::params::SceneKind::Free && ev.dynamics.is_some())
-                .then(|| serde_json::to_value(crate::eval::FreeRecord::from_measure(ev.free.as_ref())).ok())
-                .flatten(),
-            trajectory: None,
-        }
+        GripperInfo { record: Record::from_eval(ev), stage_seconds: ev.stage_seconds, trajectory: None }
     }
 }
 
@@ -76,15 +37,8 @@ impl Recordable for Individual<GripperInfo> {
             id: self.id,
             generation: self.generation,
             parameters: self.x.as_slice().try_into().expect("six design variables"),
-            lengths: i.lengths,
-            l_hand: i.l_hand,
-            objectives: i.objectives,
-            failed_stage: i.failed_stage,
-            reason: i.reason.as_deref(),
-            violation: i.violation,
-            sim_work: i.sim_work,
+            record: &i.record,
             stage_seconds: i.stage_seconds,
-            free: i.free.as_ref(),
             trajectory: i.trajectory.as_deref(),
         }
     }
@@ -171,10 +125,10 @@ impl MooProblem for GripperProblem {
         let (scene, opts) = (&self.problem.scene, &self.options);
         let (ev, traj) = match self.keep_trajectories {
             _ if !opts.dynamics => (started, None),
-            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, None), None),
+            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, &mut ()), None),
             keep => {
                 let mut tr = crate::sim::Trajectory::default();
-                let ev = evaluate_dynamics(started, scene, opts, Some(&mut tr));
+                let ev = evaluate_dynamics(started, scene, opts, &mut tr);
                 let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) {
                     None
                 } else {
@@ -195,9 +149,9 @@ impl MooProblem for GripperProblem {
     /// time within a few per cent): the centred scene's, plus for a free-kind problem the
     /// free scene's weighted by `FREE_RHS_WEIGHT`.
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
-        let centred = e.info.sim_work.map(|w| w[1] as f64);
-        let free =
-            e.info.free.as_ref().and_then(|v| v.get("free_rhs_evals")?.as_u64()).map(|r| FREE_RHS_WEIGHT * r as f64);
+        let r = &e.info.record;
+        let centred = r.grasp.work.rhs_evals.map(|w| w as f64);
+        let free = r.free_scene.as_ref().and_then(|f| f.work.rhs_evals).map(|w| FREE_RHS_WEIGHT * w as f64);
         match (centred, free) {
             (None, None) => None,
             (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),

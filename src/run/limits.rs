@@ -17,6 +17,24 @@ pub const BYTES_PER_TRAJECTORY: u64 = 512 << 10;
 /// a u64 nanosecond clock.
 pub const MAX_EVALUATIONS: u64 = u64::MAX / 1_000_000_000 - 1;
 
+/// Most worker threads a run may ask for.
+pub const MAX_THREADS: usize = 1024;
+
+/// Check a thread count (`--threads`): 1 to [`MAX_THREADS`].
+pub fn check_threads(threads: Option<usize>) -> Result<()> {
+    let bad = |n: usize, rule: String| Error::InvalidField {
+        file: "command line".into(),
+        field: "--threads".into(),
+        value: n.to_string(),
+        rule,
+    };
+    match threads {
+        Some(0) => Err(bad(0, "must be at least 1".into())),
+        Some(n) if n > MAX_THREADS => Err(bad(n, format!("at most {MAX_THREADS}"))),
+        _ => Ok(()),
+    }
+}
+
 /// Fewer designs per thread than this draw a note: with 2 per thread (pop 128 on 64
 /// threads) `bench scaling` predicts about 50 % efficiency, with 8 (on 16) about 90 %.
 pub const MIN_DESIGNS_PER_THREAD: usize = 4;

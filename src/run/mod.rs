@@ -8,6 +8,7 @@
 
 mod archive;
 mod checkpoint;
+mod folder;
 mod grasp_plot;
 mod gripper;
 mod limits;
@@ -19,21 +20,31 @@ mod plots;
 mod rundir;
 mod verify;
 mod verify_rec;
+mod verify_run;
 
 pub use archive::{Archive, ARCHIVE_FILE};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
+pub use folder::{read_table, RunFolder};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
-pub use limits::{check_population, threads_note, BYTES_PER_DESIGN, MIN_DESIGNS_PER_THREAD};
+pub use limits::{
+    check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
+};
 pub use lock::{RunLock, LOCK_FILE};
-pub use observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
-pub use outputs::{final_front, header, write_outputs, write_tables, Column, DESIGN_COLUMNS, HISTORY_COLUMNS};
+pub use observers::{GenerationReport, OutputsObserver, Progress};
+pub use outputs::{
+    final_front, header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS,
+    HISTORY_COLUMNS,
+};
 pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
-pub use rundir::{optimise, resume, Resume, RunInfo, RunSpec, RunStatus, RunSummary};
+pub use rundir::{
+    optimise, optimise_with, resume, resume_with, Resume, RunHooks, RunInfo, RunSpec, RunStatus, RunSummary,
+};
 pub use verify::{
-    read_design_csv, run_designs, sample_designs, verify, verify_csv, verify_design, verify_design_poses,
-    verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_COLUMNS,
-    VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    read_design_csv, read_design_rows, run_designs, sample_designs, verify_csv, verify_design, verify_design_poses,
+    verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_FILE,
+    VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
+pub use verify_run::verify;

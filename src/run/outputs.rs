@@ -13,17 +13,21 @@
 
 use super::archive::Archive;
 use super::gripper::{GripperInfo, GripperProblem};
+use crate::cells::{line, Floats, RawCell};
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
 use crate::optim::Nsga2State;
+use crate::params::{DesignParameters, ForceModel};
 use crate::Result;
+use serde::{Deserialize, Serialize, Serializer};
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// A CSV column: name, unit ("-" = dimensionless), meaning (with the direction of objectives).
 pub type Column = (&'static str, &'static str, &'static str);
 
-/// Columns of pareto.csv, archive.csv and population.csv, in order.
+/// Columns of pareto.csv, archive.csv and population.csv, in order (the fields of
+/// [`DesignRow`], with units and meanings; a test checks they agree).
 pub const DESIGN_COLUMNS: [Column; 25] = [
     ("id", "-", "design id (replay with `gripopt replay RUN --design ID`)"),
     ("generation", "-", "generation that created the design (1 = initial population)"),
@@ -52,6 +56,139 @@ pub const DESIGN_COLUMNS: [Column; 25] = [
     ("force_model", "text", "forces defining alpha and mean_force (mobilised or frictionless)"),
 ];
 
+/// One row of pareto.csv, archive.csv and population.csv: a design's identity and the
+/// values of its evaluation record (read back with the csv crate: `#` lines are comments).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignRow {
+    /// Design id.
+    pub id: u64,
+    /// Generation that created it.
+    pub generation: u64,
+    /// Non-domination rank in the population (None in archive.csv).
+    pub rank: Option<usize>,
+    /// No stage discarded it.
+    pub feasible: bool,
+    /// The stage that discarded it.
+    pub failed_stage: Option<u8>,
+    /// By how much (§10 units).
+    pub violation: Option<f64>,
+    /// Why (written quoted, double quotes as single ones).
+    #[serde(serialize_with = "quoted_text")]
+    pub reason: Option<String>,
+    /// The design as evaluated.
+    #[serde(flatten)]
+    pub design: DesignParameters,
+    /// l11 (m), when stages 0–1 built the finger.
+    pub l11: Option<f64>,
+    /// l12 (m).
+    pub l12: Option<f64>,
+    /// l22 (m).
+    pub l22: Option<f64>,
+    /// l_hand (m).
+    pub l_hand: f64,
+    /// Form closed at the centred object.
+    pub form_closed: Option<bool>,
+    /// Objective (m), when form closed.
+    pub max_offset: Option<f64>,
+    /// Objective α.
+    pub alpha: Option<f64>,
+    /// Objective F̃ (N).
+    pub mean_force: Option<f64>,
+    /// Objective t_stab (s).
+    pub t_stab: Option<f64>,
+    /// Accepted steps of the grasp simulation.
+    pub sim_steps: Option<u64>,
+    /// Its right-hand-side evaluations.
+    pub sim_rhs_evals: Option<u64>,
+    /// The force model of α and F̃ (when stage 2 ran).
+    pub force_model: Option<ForceModel>,
+}
+
+/// A text cell always in double quotes (its own double quotes as single ones), as the
+/// run's tables have always written `reason`.
+fn quoted_text<S: Serializer>(v: &Option<String>, s: S) -> std::result::Result<S::Ok, S::Error> {
+    RawCell(format!("\"{}\"", v.as_deref().unwrap_or_default().replace('"', "'"))).serialize(s)
+}
+
+impl DesignRow {
+    /// Each column with its value as text (as in the file, `reason` unquoted; empty: not
+    /// computed).
+    pub fn text_cells(&self) -> Vec<(String, String)> {
+        let mut c = crate::cells::cells(self, Floats::Display);
+        if let Some(r) = c.iter_mut().find(|(k, _)| k == "reason") {
+            r.1 = self.reason.clone().unwrap_or_default();
+        }
+        c
+    }
+
+    /// The design as evaluated (l21, b, t22, r, p, ψ°).
+    pub fn parameters(&self) -> [f64; 6] {
+        self.design.to_array()
+    }
+
+    /// The row of an individual (`rank`: None in archive.csv).
+    pub fn of(ind: &Individual<GripperInfo>, rank: Option<usize>) -> Self {
+        let r = &ind.eval.info.record;
+        let v = &r.verdict;
+        let l = r.lengths();
+        let o = r.objectives();
+        let w = r.sim_work();
+        DesignRow {
+            id: ind.id,
+            generation: ind.generation,
+            rank,
+            feasible: ind.eval.cv.is_feasible(),
+            failed_stage: v.failed_stage,
+            violation: v.violation,
+            reason: v.reason.clone(),
+            design: DesignParameters::from_array(ind.x.as_slice().try_into().expect("six design variables")),
+            l11: l.map(|l| l[0]),
+            l12: l.map(|l| l[1]),
+            l22: l.map(|l| l[2]),
+            l_hand: r.kinematics.l_hand,
+            // MODEL.md §6.7: a design not form closed at 0 has max_offset = −Δ_off internally
+            // (the optimiser's finite placeholder); the file says form_closed = false and
+            // leaves it empty
+            form_closed: r.form_closed(),
+            max_offset: o[0].filter(|m| *m >= 0.0),
+            alpha: o[1],
+            mean_force: o[2],
+            t_stab: o[3],
+            sim_steps: w.map(|w| w[0]),
+            sim_rhs_evals: w.map(|w| w[1]),
+            force_model: r.statics.force_model,
+        }
+    }
+}
+
+/// One row of history.csv.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HistoryRow {
+    /// Generation.
+    pub generation: u64,
+    /// Designs evaluated up to it.
+    pub evaluations: u64,
+    /// Feasible designs in the population.
+    pub feasible: usize,
+    /// Normalised hypervolume of the population's feasible front.
+    pub hypervolume: f64,
+    /// Normalised hypervolume of the archive.
+    pub archive_hypervolume: Option<f64>,
+}
+
+/// One row of pareto_timings.csv (wall seconds, not deterministic).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimingRow {
+    /// Design id.
+    pub id: u64,
+    /// Stages 0–1 (s).
+    pub stage01_s: f64,
+    /// Stage 2 (s).
+    pub stage2_s: f64,
+    /// Stage 3 (s).
+    pub stage3_s: f64,
+}
+
 /// Columns of history.csv.
 pub const HISTORY_COLUMNS: [Column; 5] = [
     ("generation", "-", "generation"),
@@ -73,49 +210,9 @@ pub fn header(title: &str, columns: &[Column]) -> String {
     s
 }
 
-fn opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
 /// One row of [`DESIGN_COLUMNS`].
-fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>, force_model: &str) {
-    let i = &ind.eval.info;
-    let x = &ind.x;
-    let l = i.lengths.map(|l| l.map(Some)).unwrap_or([None; 3]);
-    let w = i.sim_work.map(|w| (w[0].to_string(), w[1].to_string())).unwrap_or_default();
-    // MODEL.md §6.7: a design not form closed at 0 has max_offset = −Δ_off internally (the
-    // optimiser's finite placeholder); the file says form_closed = false and leaves it empty
-    let form_closed = i.objectives[0].map(|m| m >= 0.0);
-    let max_offset = i.objectives[0].filter(|m| *m >= 0.0);
-    let _ = writeln!(
-        s,
-        "{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-        ind.id,
-        ind.generation,
-        rank.map(|r| r.to_string()).unwrap_or_default(),
-        ind.eval.cv.is_feasible(),
-        i.failed_stage.map(|s| s.to_string()).unwrap_or_default(),
-        opt(i.violation),
-        i.reason.clone().unwrap_or_default().replace('"', "'"),
-        x[0],
-        x[1],
-        x[2],
-        x[3],
-        x[4],
-        x[5],
-        opt(l[0]),
-        opt(l[1]),
-        opt(l[2]),
-        i.l_hand,
-        form_closed.map(|b| b.to_string()).unwrap_or_default(),
-        opt(max_offset),
-        opt(i.objectives[1]),
-        opt(i.objectives[2]),
-        opt(i.objectives[3]),
-        w.0,
-        w.1,
-        if i.objectives[0].is_some() { force_model } else { "" },
-    );
+fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>) {
+    s.push_str(&line(&DesignRow::of(ind, rank), Floats::Display));
 }
 
 /// The population's feasible non-dominated designs, sorted by id.
@@ -126,19 +223,14 @@ pub fn final_front(st: &Nsga2State<GripperInfo>) -> Vec<&Individual<GripperInfo>
 }
 
 /// Rewrite the CSV files of state `st` (and the archive) in `out`, each atomically.
-pub fn write_tables(out: &Path, force_model: &str, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<()> {
-    write_tables_timed(out, force_model, st, archive).map(|_| ())
+pub fn write_tables(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<()> {
+    write_tables_timed(out, st, archive).map(|_| ())
 }
 
 /// [`write_tables`], the five files built and written in parallel (in the current rayon
 /// pool): the seconds each took (built and written), in the order pareto, pareto_timings,
 /// archive, population, history.
-pub fn write_tables_timed(
-    out: &Path,
-    force_model: &str,
-    st: &Nsga2State<GripperInfo>,
-    archive: &Archive,
-) -> Result<[f64; 5]> {
+pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<[f64; 5]> {
     use rayon::prelude::*;
     const FILES: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
     let front = final_front(st);
@@ -148,19 +240,16 @@ pub fn write_tables_timed(
                 let mut csv =
                     header("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
                 for ind in &front {
-                    design_row(&mut csv, ind, Some(0), force_model);
+                    design_row(&mut csv, ind, Some(0));
                 }
                 csv
             }
             1 => {
                 let mut tim = String::from("# gripopt pareto_timings.csv: wall-clock seconds per stage (not deterministic)\nid,stage01_s,stage2_s,stage3_s\n");
                 for ind in &front {
-                    let i = &ind.eval.info;
-                    let _ = writeln!(
-                        tim,
-                        "{},{},{},{}",
-                        ind.id, i.stage_seconds[1], i.stage_seconds[2], i.stage_seconds[3]
-                    );
+                    let t = ind.eval.info.stage_seconds;
+                    let row = TimingRow { id: ind.id, stage01_s: t[1], stage2_s: t[2], stage3_s: t[3] };
+                    tim.push_str(&line(&row, Floats::Display));
                 }
                 tim
             }
@@ -170,7 +259,7 @@ pub fn write_tables_timed(
                     &DESIGN_COLUMNS,
                 );
                 for ind in &archive.members {
-                    design_row(&mut arc, ind, None, force_model);
+                    design_row(&mut arc, ind, None);
                 }
                 arc
             }
@@ -179,23 +268,21 @@ pub fn write_tables_timed(
                 let mut order: Vec<usize> = (0..st.population.len()).collect();
                 order.sort_by_key(|&k| (st.rank[k], st.population[k].id));
                 for k in order {
-                    design_row(&mut pop, &st.population[k], Some(st.rank[k]), force_model);
+                    design_row(&mut pop, &st.population[k], Some(st.rank[k]));
                 }
                 pop
             }
             _ => {
                 let mut hist = header("history.csv: per generation", &HISTORY_COLUMNS);
                 for (g, (hv, fe)) in st.hv_history.iter().zip(&st.feasible_history).enumerate() {
-                    let ahv = archive.hv_history.get(g).copied().filter(|v| v.is_finite());
-                    let _ = writeln!(
-                        hist,
-                        "{},{},{},{},{}",
-                        g + 1,
-                        (g as u64 + 1) * st.population.len() as u64,
-                        fe,
-                        hv,
-                        opt(ahv)
-                    );
+                    let row = HistoryRow {
+                        generation: g as u64 + 1,
+                        evaluations: (g as u64 + 1) * st.population.len() as u64,
+                        feasible: *fe,
+                        hypervolume: *hv,
+                        archive_hypervolume: archive.hv_history.get(g).copied().filter(|v| v.is_finite()),
+                    };
+                    hist.push_str(&line(&row, Floats::Display));
                 }
                 hist
             }
@@ -220,8 +307,54 @@ pub fn write_tables_timed(
 /// Write every result file of the final state `st` into the run folder `out`: the tables
 /// and the plots.
 pub fn write_outputs(out: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<()> {
-    write_tables(out, gp.problem.scene.criteria.force_model.as_str(), st, archive)?;
+    write_tables(out, st, archive)?;
     super::plots::pareto_matrix(&out.join("pareto_matrix.svg"), gp, st)?;
     super::plots::hypervolume(&out.join("hypervolume.svg"), &st.hv_history, &archive.hv_history)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented columns (names, units, meanings) are the row types' fields, in order.
+    #[test]
+    fn the_column_tables_are_the_rows_fields() {
+        let row = DesignRow {
+            id: 1,
+            generation: 1,
+            rank: Some(0),
+            feasible: true,
+            failed_stage: None,
+            violation: None,
+            reason: None,
+            design: DesignParameters::from_array(&[0.05, 0.06, 0.035, 0.5, 0.4, 130.0]),
+            l11: None,
+            l12: None,
+            l22: None,
+            l_hand: 0.23,
+            form_closed: None,
+            max_offset: None,
+            alpha: None,
+            mean_force: None,
+            t_stab: None,
+            sim_steps: None,
+            sim_rhs_evals: None,
+            force_model: None,
+        };
+        let names: Vec<&str> = DESIGN_COLUMNS.iter().map(|c| c.0).collect();
+        assert_eq!(crate::cells::header(&row), names);
+        let h = HistoryRow { generation: 1, evaluations: 4, feasible: 0, hypervolume: 0.0, archive_hypervolume: None };
+        let names: Vec<&str> = HISTORY_COLUMNS.iter().map(|c| c.0).collect();
+        assert_eq!(crate::cells::header(&h), names);
+        // a row read back from its own line is the row
+        let text = format!("{}{}", header("test", &DESIGN_COLUMNS), line(&row, Floats::Display));
+        let back: Vec<DesignRow> = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes())
+            .deserialize()
+            .collect::<std::result::Result<_, _>>()
+            .unwrap();
+        assert_eq!(back, vec![row]);
+    }
 }

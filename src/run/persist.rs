@@ -155,20 +155,17 @@ pub struct Persister {
     thread: Arc<Mutex<Option<JoinHandle<()>>>>,
     shared: SharedState,
     spec: Arc<CheckpointSpec>,
-    crash_after: Option<u64>,
 }
 
 impl Persister {
     /// Start the thread. `outputs`: the outputs observer (archive, CSVs); `recorder`: the
     /// shard recorder (None when recording is off); `threads`: the run's thread count (the
-    /// persister's pool gets a quarter of it, at least one); `crash_after`: test hook, fail once that
-    /// generation is durable, as a crash would.
+    /// persister's pool gets a quarter of it, at least one).
     pub fn start(
         outputs: Option<OutputsObserver>,
         recorder: Option<Arc<Mutex<Recorder>>>,
         spec: CheckpointSpec,
         threads: usize,
-        crash_after: Option<u64>,
     ) -> Result<Self> {
         // a quarter of the run's threads: enough to encode and compress beside the evaluation
         // at many cores, without oversubscribing a few (measured: 2 threads better with 1)
@@ -185,27 +182,12 @@ impl Persister {
             .name("gripopt-persist".into())
             .spawn(move || persist_loop(outputs, recorder, pool, sp, sh))
             .map_err(|e| Error::io(&spec.path, "cannot start the persister thread for", e))?;
-        Ok(Persister { thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec), crash_after })
+        Ok(Persister { thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec) })
     }
 
     /// The last generation whose shard and checkpoint are durable (0: none yet).
     pub fn durable_generation(&self) -> u64 {
         self.shared.0.lock().map(|s| s.done).unwrap_or(0)
-    }
-
-    /// Wait until generation `g` is durable (or the persister stopped); its first error.
-    fn wait_for(&self, g: u64) -> Result<()> {
-        let t0 = Instant::now();
-        let (m, cv) = &*self.shared;
-        let mut s = m.lock().expect("persister lock");
-        while s.done < g && !s.stopped && s.error.is_none() {
-            s = cv.wait(s).expect("persister lock");
-        }
-        s.stats.wait_s += t0.elapsed().as_secs_f64();
-        match s.error.take() {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
     }
 
     /// Hand generation `st.generation` over (blocks while one generation is already queued).
@@ -267,14 +249,7 @@ impl Persister {
     }
 
     fn observe_state(&self, st: &Nsga2State<GripperInfo>) -> std::result::Result<(), argmin::core::Error> {
-        self.submit(st)?;
-        if let Some(k) = self.crash_after {
-            if st.generation >= k {
-                self.wait_for(st.generation)?;
-                return Err(argmin::core::Error::msg(format!("simulated crash after generation {}", st.generation)));
-            }
-        }
-        Ok(())
+        Ok(self.submit(st)?)
     }
 }
 

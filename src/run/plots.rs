@@ -24,7 +24,7 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
     let nominal = {
         use crate::optim::MooProblem;
         let ev = gp.evaluate(&gp.problem.nominal.to_array());
-        let o = ev.info.objectives;
+        let o = ev.info.record.objectives();
         [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * [1e3, 1.0, 1.0, 1e3][k])
     };
     let scale = [1e3, 1.0, 1.0, 1e3];
@@ -34,7 +34,7 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
         .zip(&st.rank)
         .filter(|(p, _)| p.eval.cv.is_feasible())
         .map(|(p, r)| {
-            let o = &p.eval.info.objectives;
+            let o = &p.eval.info.record.objectives();
             ([0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k]), *r == 0)
         })
         .collect();

@@ -12,18 +12,18 @@ use super::archive::Archive;
 use super::checkpoint::{settings_hash, sha256_hex, Checkpoint};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::lock::{RunLock, LOCK_FILE};
-use super::observers::{OutputsObserver, ProgressObserver, RecordingObserver, SharedProgress};
+use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Persister};
 use crate::fsutil::write_atomic;
-use crate::optim::Operators;
-use crate::optim::{execute, observe, Nsga2Settings, Nsga2State};
+use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators, Scheduled};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder, LAYOUT_FILE};
 use crate::{Error, Result};
 use argmin::core::State;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -42,12 +42,30 @@ pub struct RunSpec {
     pub seed: u64,
     /// Worker threads (None = all cores). Results do not depend on it.
     pub threads: Option<usize>,
-    /// Show a progress bar.
-    pub progress: bool,
-    /// Test hook: fail after this generation's checkpoint, as a crash would.
-    pub crash_after: Option<u64>,
     /// What to record to MCAP.
     pub record: RecordOptions,
+}
+
+impl RunSpec {
+    /// Check the settings before anything is created: the population and run length
+    /// (memory, recording ids), the thread count and the recording options.
+    pub fn validate(&self) -> Result<()> {
+        super::limits::check_population(self.pop, self.generations, self.record.enabled)?;
+        super::limits::check_threads(self.threads)?;
+        self.record.validate()
+    }
+}
+
+/// What a caller adds to a run: progress reports, a stop flag, another batch evaluator.
+#[derive(Default)]
+pub struct RunHooks {
+    /// Told of every generation and of notes (warnings); None: nothing reported.
+    pub progress: Option<Box<dyn Progress>>,
+    /// When set (e.g. by ctrl-c), the run stops after the current generation's
+    /// checkpoint: status interrupted, resumable.
+    pub stop: Option<Arc<AtomicBool>>,
+    /// The batch evaluator (None: [`Scheduled`], the default two-pass scheduler).
+    pub evaluator: Option<Box<dyn Evaluator<GripperProblem>>>,
 }
 
 /// State of a run as written to `run.json` (`"running"`, `"finished"`, `"interrupted"`).
@@ -157,7 +175,12 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 
 /// Start a new run in `spec.out` (which must not hold a checkpoint already).
 pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
-    super::limits::check_population(spec.pop, spec.generations, spec.record.enabled)?;
+    optimise_with(spec, RunHooks::default())
+}
+
+/// [`optimise`] with the caller's progress, stop flag or evaluator.
+pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
+    spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     let cp_path = spec.out.join("checkpoint.json");
@@ -176,7 +199,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     let _lock = RunLock::acquire(&spec.out)?;
     holds_run()?; // again under the lock: another process may have started meanwhile
     write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
-    crate::record::write_layout(&spec.out)?;
+    crate::record::write_layout(&spec.out, &spec.record)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let info = RunInfo {
@@ -197,17 +220,23 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
         recording_s: 0.0,
     };
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    drive(gp, settings, state, info, &spec.out, spec.threads, spec.progress, spec.crash_after, 0.0)
+    drive(gp, settings, state, info, &spec.out, spec.threads, hooks, 0.0)
 }
 
 /// Continue a stopped, killed or finished run; `generations` is the new total.
-pub fn resume(
+pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option<usize>) -> Result<RunSummary> {
+    resume_with(dir, generations, force, threads, RunHooks::default())
+}
+
+/// [`resume`] with the caller's progress, stop flag or evaluator.
+pub fn resume_with(
     dir: &Path,
     generations: Option<u64>,
     force: bool,
     threads: Option<usize>,
-    progress: bool,
+    hooks: RunHooks,
 ) -> Result<RunSummary> {
+    super::limits::check_threads(threads)?;
     let run_json = dir.join("run.json");
     let text = std::fs::read_to_string(&run_json)
         .map_err(|e| Error::io(&run_json, "cannot read (is its folder a run folder?)", e))?;
@@ -288,7 +317,7 @@ pub fn resume(
     info.status = RunStatus::Running;
     let gp = GripperProblem::new(problem);
     let state = cp.state.with_max_generations(total);
-    drive(gp, cp.settings, state, info, dir, threads, progress, None, cp.wall_s)
+    drive(gp, cp.settings, state, info, dir, threads, hooks, cp.wall_s)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -299,10 +328,11 @@ fn drive(
     mut info: RunInfo,
     out: &Path,
     threads: Option<usize>,
-    progress: bool,
-    crash_after: Option<u64>,
+    hooks: RunHooks,
     wall_before: f64,
 ) -> Result<RunSummary> {
+    let progress = ProgressObserver(Arc::new(Mutex::new(hooks.progress.unwrap_or_else(|| Box::new(())))));
+    let note = |m: &str| progress.0.lock().expect("progress lock").note(m);
     let start = Instant::now();
     let pool = pool(threads)?;
     info.threads = pool.current_num_threads();
@@ -316,30 +346,19 @@ fn drive(
     let recorder = if info.recording.enabled {
         let meta = recording_metadata(&gp, &settings, &info);
         let r = Recorder::open(out, gp.problem.clone(), meta, info.recording, state.generation)?;
-        if progress {
-            for w in &r.warnings {
-                eprintln!("warning: {w}");
-            }
+        for w in &r.warnings {
+            note(&format!("warning: {w}"));
         }
-        Some(RecordingObserver(Arc::new(Mutex::new(r))))
+        Some(Arc::new(Mutex::new(r)))
     } else {
         None
     };
     write_json(&out.join("run.json"), &info)?;
-    let first = state.generation.max(1);
-    if progress {
-        if let Some(note) = super::limits::threads_note(settings.pop_size, info.threads) {
-            eprintln!("{note}");
-        }
+    if let Some(n) = super::limits::threads_note(settings.pop_size, info.threads) {
+        note(&n);
     }
-    let prog = SharedProgress(Arc::new(Mutex::new(ProgressObserver::new(state.max_generations, first, progress))));
     let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
-    let outputs = OutputsObserver {
-        out: out.to_path_buf(),
-        force_model: gp.problem.scene.criteria.force_model.as_str(),
-        settings: settings.clone(),
-        archive: archive.clone(),
-    };
+    let outputs = OutputsObserver { out: out.to_path_buf(), settings: settings.clone(), archive: archive.clone() };
     // outputs and archive, shard k, then checkpoint k, in that order on a background thread
     // while k+1 evaluates (src/run/persist.rs)
     let ckpt = CheckpointSpec {
@@ -350,11 +369,12 @@ fn drive(
         wall_before,
         start,
     };
-    let persister =
-        Persister::start(Some(outputs), recorder.as_ref().map(|r| r.0.clone()), ckpt, info.threads, crash_after)?;
-    let (pers2, prog2) = (persister.clone(), prog.clone());
-    let result = pool
-        .install(|| execute(gp, settings, state, move |e| observe(observe(e, pers2), prog2), crash_after.is_none()));
+    let persister = Persister::start(Some(outputs), recorder.clone(), ckpt, info.threads)?;
+    let (pers2, prog2) = (persister.clone(), progress.clone());
+    let evaluator = hooks.evaluator.unwrap_or_else(|| Box::new(Scheduled::default()));
+    let mut solver = Nsga2::with_evaluator(settings, evaluator);
+    solver.stop = hooks.stop;
+    let result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));
     // on success every output of the final state is written below: the persister need
     // not write the last views too
     let ok = result.is_ok();
@@ -362,9 +382,8 @@ fn drive(
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
     };
-    prog.0.lock().expect("progress").finish();
     if let Some(r) = &recorder {
-        let r = r.0.lock().expect("recorder");
+        let r = r.lock().expect("recorder");
         info.recording_bytes += r.bytes;
         info.recording_s += r.seconds;
     }
@@ -394,6 +413,10 @@ fn drive(
     info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
     let archive = archive.lock().expect("archive").clone();
     write_outputs(out, &gp, &st, &archive)?;
+    let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
+    let status =
+        std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
+    crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     write_json(&out.join("run.json"), &info)?;
     Ok(RunSummary {
         out: out.to_path_buf(),

@@ -1,20 +1,23 @@
 //! `verify`: does the thesis's prediction hold? Every design of a run's front (or every
-//! feasible design, or a seeded sample of the problem's box) is simulated twice: in the
-//! centred scene, whose impact (§9.1) and force (§9.3) criteria *predict* whether the object
-//! moves, and in the free scene (MODEL.md §14), which *measures* it (§14.4's verdict). The
-//! rows go to `RUN_DIR/verify.csv` (or `verify_sample.csv`), written atomically under the
-//! run folder's lock; [`Confusion`] counts prediction against measurement.
+//! feasible design, or a seeded sample of the problem's box) is simulated in the free scene
+//! (MODEL.md §14) by the one simulation call: the centred scene's impact (§9.1) and force
+//! (§9.3) criteria *predict* whether the object moves, the free scene *measures* it
+//! (§14.4's verdict). The rows ([`VerifyRow`], serialised as verify.csv's columns);
+//! [`Confusion`] counts prediction against measurement. The command itself (folder, lock,
+//! files) is `verify_run`.
 
-use super::lock::RunLock;
-use super::verify_rec::VerifyRecording;
-use crate::eval::{evaluate, EvalOptions, FreeEnd, FreeMeasure};
-use crate::fsutil::write_atomic;
-use crate::params::{Design, Problem, SceneKind, DESIGN_NAMES};
+use super::folder::read_table;
+use super::outputs::DesignRow;
+use crate::cells::{line, Floats};
+use crate::eval::{evaluate, simulate, EvalOptions};
+use crate::params::{Design, DesignParameters, Problem, DESIGN_NAMES};
 use crate::record::keep_poses;
-use crate::sim::{simulate_free, simulate_grasp, FreeSetup, PoseSample, SimOptions};
+use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -93,11 +96,8 @@ impl VerifyRow {
         (e.map(|e| self.peak_e.0 / e.0), e.map(|e| self.peak_e.1 / e.1))
     }
     /// `free_end` as verify.csv writes it: "t_obs", or why the free scene stopped early.
-    pub fn free_end(&self) -> &'static str {
-        match self.end {
-            FreeEnd::Observed => "t_obs",
-            FreeEnd::Early(why) => why,
-        }
+    pub fn free_end(&self) -> String {
+        self.end.to_string()
     }
 }
 
@@ -173,24 +173,20 @@ pub fn verify_design_poses(
     scene_dt: Option<f64>,
 ) -> Option<(VerifyRow, Vec<PoseSample>)> {
     let s = &p.scene;
-    let ev = evaluate(x, s, &EvalOptions::statics_only());
-    let (k, st) = (ev.kin?, ev.statics?);
-    let o = SimOptions::diagnostic(p.solver.rtol, p.solver.atol, p.solver.max_steps);
-    let c = simulate_grasp(&k.finger, s, &st, &o);
-    let f = simulate_free(
-        &k.finger,
-        s,
-        st.tau_s0,
-        s.setup.x_off,
-        FreeSetup::default(),
-        &SimOptions { record: scene_dt.is_some(), ..o },
-        None,
-    );
-    let poses = scene_dt.map(|dt| keep_poses(&f.poses, dt)).unwrap_or_default();
+    let integ = Integration::from_solver(&p.solver);
+    let spec = SceneSpec::free(s.setup.x_off);
+    let ctl = Controls::DIAGNOSTIC;
+    let mut all_poses: Vec<PoseSample> = vec![];
+    let ev = if scene_dt.is_some() {
+        simulate(x, s, &spec, &integ, &ctl, &mut all_poses)
+    } else {
+        simulate(x, s, &spec, &integ, &ctl, &mut ())
+    };
+    let (c, f) = (ev.dynamics?, ev.free?);
+    let poses = scene_dt.map(|dt| keep_poses(&all_poses, dt)).unwrap_or_default();
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
-    let end = FreeMeasure::from_result(&f, s.setup.x_off).end;
-    let seen = |v: bool| (end == FreeEnd::Observed).then_some(v);
+    let seen = |v: bool| f.end.observed().then_some(v);
     let row = VerifyRow {
         id,
         design: *x,
@@ -206,68 +202,32 @@ pub fn verify_design_poses(
         toppled: seen(f.toppled),
         escaped: seen(f.escaped),
         rim_contact: f.rim_contact,
-        end,
+        end: f.end,
         t_end: f.t_end,
     };
     Some((row, poses))
 }
 
-/// Split one CSV line into fields (double-quoted fields with `""` escapes).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(ch) = chars.next() {
-        match (ch, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(ch),
-        }
-    }
-    out.push(cur);
-    out
+/// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`
+/// lines skipped), feasible ones only; read with the csv crate into [`DesignRow`]s.
+pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
+    Ok(read_design_rows(path)?
+        .into_iter()
+        .filter(|r| r.feasible)
+        .map(|r| (r.id, Design::from_array(&r.parameters())))
+        .collect())
 }
 
-/// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`
-/// lines skipped), feasible ones only.
-pub fn read_design_csv(path: &Path) -> Result<Vec<(u64, Design)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "cannot read the run's design table", e))?;
-    let bad = |line: usize, m: String| Error::RunDir { path: path.to_path_buf(), message: format!("line {line}: {m}") };
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
-    let Some((hl, header)) = lines.next() else { return Err(bad(1, "no header row".into())) };
-    let cols = split_csv(header);
-    let col =
-        |name: &str| cols.iter().position(|c| c == name).ok_or_else(|| bad(hl + 1, format!("no column `{name}`")));
-    let id_c = col("id")?;
-    let feas_c = col("feasible")?;
-    let xs: Vec<usize> = DESIGN_NAMES.iter().map(|n| col(n)).collect::<Result<_>>()?;
-    let mut out = Vec::new();
-    for (i, l) in lines {
-        let f = split_csv(l);
-        let get = |c: usize| f.get(c).map(String::as_str).ok_or_else(|| bad(i + 1, format!("only {} fields", f.len())));
-        if get(feas_c)? != "true" {
-            continue;
+/// Every row of a design CSV (errors name the file and line; see [`read_table`]).
+pub fn read_design_rows(path: &Path) -> Result<Vec<DesignRow>> {
+    let rows: Vec<DesignRow> = read_table(path)?;
+    for row in &rows {
+        if let Some(k) = row.parameters().iter().position(|v| !v.is_finite()) {
+            let message = format!("design {}: {} is not a finite number", row.id, crate::params::DESIGN_NAMES[k]);
+            return Err(Error::RunDir { path: path.to_path_buf(), message });
         }
-        let id: u64 = get(id_c)?
-            .parse()
-            .map_err(|_| bad(i + 1, format!("id `{}` is not an integer", get(id_c).unwrap_or(""))))?;
-        let mut a = [0.0; 6];
-        for (k, &c) in xs.iter().enumerate() {
-            let v = get(c)?;
-            a[k] = v
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| bad(i + 1, format!("{} = `{v}` is not a number", DESIGN_NAMES[k])))?;
-        }
-        out.push((id, Design::from_array(&a)));
     }
-    Ok(out)
+    Ok(rows)
 }
 
 /// The run's designs to verify, in id order.
@@ -337,185 +297,50 @@ pub fn verify_designs_poses(
         .collect()
 }
 
-fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
-/// A CSV field: quoted when it holds a comma or a quote.
-fn field(v: &str) -> String {
-    if v.contains([',', '"']) {
-        format!("\"{}\"", v.replace('"', "\"\""))
-    } else {
-        v.to_string()
+/// A verified design as verify.csv writes it: its columns, in order (the design's, the
+/// centred prediction's, the free scene's measurement, and their comparison).
+impl Serialize for VerifyRow {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let d = DesignParameters::from_array(&self.design.to_array());
+        let (et, er) = self.energy_ratios();
+        let mut m = s.serialize_map(Some(25))?;
+        m.serialize_entry("id", &self.id)?;
+        for (k, v) in DESIGN_NAMES.iter().zip(d.to_array()) {
+            m.serialize_entry(k, &v)?;
+        }
+        m.serialize_entry("impact_ratio", &self.impact_ratio)?;
+        m.serialize_entry("e_trans", &self.e_trans_rot.map(|e| e.0))?;
+        m.serialize_entry("e_rot", &self.e_trans_rot.map(|e| e.1))?;
+        m.serialize_entry("force_margin", &self.force_margin)?;
+        m.serialize_entry("stable", &self.stable)?;
+        m.serialize_entry("predicted_moves", &self.predicted_moves)?;
+        m.serialize_entry("object_max_displacement", &self.max_displacement)?;
+        m.serialize_entry("object_max_tilt_deg", &self.max_tilt_deg)?;
+        m.serialize_entry("object_peak_e_trans", &self.peak_e.0)?;
+        m.serialize_entry("object_peak_e_rot", &self.peak_e.1)?;
+        m.serialize_entry("free_end", &self.end)?;
+        m.serialize_entry("moved", &self.moved)?;
+        m.serialize_entry("toppled", &self.toppled)?;
+        m.serialize_entry("escaped", &self.escaped)?;
+        m.serialize_entry("rim_contact", &self.rim_contact)?;
+        m.serialize_entry("agrees", &self.agrees())?;
+        m.serialize_entry("peak_e_trans_ratio", &et)?;
+        m.serialize_entry("peak_e_rot_ratio", &er)?;
+        m.end()
     }
 }
-
-/// Columns of verify.csv.
-pub const VERIFY_COLUMNS: [&str; 25] = [
-    "id",
-    "l21",
-    "b",
-    "t22",
-    "r",
-    "p",
-    "psi_deg",
-    "impact_ratio",
-    "e_trans",
-    "e_rot",
-    "force_margin",
-    "stable",
-    "predicted_moves",
-    "object_max_displacement",
-    "object_max_tilt_deg",
-    "object_peak_e_trans",
-    "object_peak_e_rot",
-    "free_end",
-    "moved",
-    "toppled",
-    "escaped",
-    "rim_contact",
-    "agrees",
-    "peak_e_trans_ratio",
-    "peak_e_rot_ratio",
-];
 
 /// verify.csv's text (`#` header lines, then one row per design).
 pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {
     let mut s = String::from("# gripopt verify.csv: the centred criteria's prediction (impact ratio E_cyl/E_lim > 1 or force margin < 0 → predicted_moves) against the free scene's measured motion (MODEL.md §14.4)\n");
     let _ = writeln!(s, "# scene free, x_off {x_off} m; units: lengths m, psi_deg and object_max_tilt_deg deg, energies J, force_margin N; *_ratio = object peak / §9.1 value");
     s.push_str("# free_end: t_obs, or why the free scene stopped early (then moved, toppled, escaped, agrees and the ratios are empty: nothing observed)\n");
-    s.push_str(&VERIFY_COLUMNS.join(","));
-    s.push('\n');
+    if let Some(first) = rows.first() {
+        s.push_str(&crate::cells::header(first).join(","));
+        s.push('\n');
+    }
     for r in rows {
-        let a = r.design.to_array();
-        let (et, er) = r.energy_ratios();
-        let (pt, pr) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.id,
-            a[0],
-            a[1],
-            a[2],
-            a[3],
-            a[4],
-            a[5],
-            opt(r.impact_ratio),
-            opt(pt),
-            opt(pr),
-            r.force_margin,
-            r.stable,
-            r.predicted_moves,
-            r.max_displacement,
-            r.max_tilt_deg,
-            r.peak_e.0,
-            r.peak_e.1,
-            field(r.free_end()),
-            opt(r.moved),
-            opt(r.toppled),
-            opt(r.escaped),
-            r.rim_contact,
-            opt(r.agrees()),
-            opt(et),
-            opt(er),
-        );
+        s.push_str(&line(r, Floats::Display));
     }
     s
-}
-
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
-}
-
-/// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
-/// loads the run's problem, switches it to the free scene (at `x_off`, default the
-/// problem's), simulates the designs of `source` and writes the CSV atomically; with
-/// `record`, also the MCAP recording of the free scene (verify.mcap or verify_sample.mcap,
-/// with the Foxglove layout `foxglove-verify-layout.json`).
-pub fn verify(
-    dir: &Path,
-    source: VerifySource,
-    x_off: Option<f64>,
-    record: bool,
-    tick_len: &dyn Fn(usize),
-    tick: &(dyn Fn() + Sync),
-) -> Result<VerifySummary> {
-    if !dir.is_dir() {
-        return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
-    }
-    for f in ["run.json", "problem.toml"] {
-        if !dir.join(f).is_file() {
-            return Err(Error::RunDir {
-                path: dir.to_path_buf(),
-                message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
-            });
-        }
-    }
-    let _lock = RunLock::acquire(dir)?;
-    let mut p = Problem::load(dir.join("problem.toml"))?;
-    if p.scene.env.g_eq != 0.0 {
-        return Err(Error::RunDir {
-            path: dir.join("problem.toml"),
-            message: "environment.g_eq must be 0 for the free scene (hand horizontal, MODEL.md §14.1)".into(),
-        });
-    }
-    p.scene.setup.kind = SceneKind::Free;
-    if let Some(x) = x_off {
-        p.scene.setup.x_off = x;
-    }
-    let (designs, file) = match source {
-        VerifySource::Pareto => (run_designs(dir, false)?, VERIFY_FILE),
-        VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
-        VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
-    };
-    if designs.is_empty() {
-        let message = match source {
-            VerifySource::Sample { n, seed } => format!("--sample {n} --seed {seed}: no drawn design passes stages 0–2 of problem.toml; nothing to verify, nothing written"),
-            _ => "no feasible design to verify; nothing written".into(),
-        };
-        let path = match source {
-            VerifySource::Pareto => dir.join("pareto.csv"),
-            VerifySource::All => dir.join("population.csv"),
-            VerifySource::Sample { .. } => dir.join("problem.toml"),
-        };
-        return Err(Error::RunDir { path, message });
-    }
-    tick_len(designs.len());
-    let rec = if record { Some(VerifyRecording::new(dir, &source)?) } else { None };
-    let with_poses = verify_designs_poses(&p, &designs, rec.as_ref().map(|r| r.opts.scene_dt), tick);
-    let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
-    let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
-    if rows.is_empty() {
-        return Err(Error::RunDir {
-            path: dir.to_path_buf(),
-            message: format!(
-                "all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written",
-                designs.len()
-            ),
-        });
-    }
-    let file = dir.join(file);
-    write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
-    let recording = match rec {
-        Some(r) => Some(r.write(&p, with_poses)?),
-        None => None,
-    };
-    let et: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().0).collect();
-    let er: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().1).collect();
-    let median_energy_ratio = median(et).zip(median(er));
-    Ok(VerifySummary {
-        file,
-        skipped,
-        confusion: Confusion::of(&rows),
-        rows,
-        median_energy_ratio,
-        recording,
-        designs: designs.len(),
-    })
 }

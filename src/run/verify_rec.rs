@@ -1,13 +1,16 @@
 //! `gripopt verify`'s MCAP recording: the verify rows and the free scene's poses handed to
 //! the recorder ([`crate::record::write_verify`]) as `RUN_DIR/verify.mcap` (or
 //! `verify_sample.mcap` for `--sample`), on the run's own time axis (its recording epoch
-//! from run.json), so the file depends only on the run and the verified designs.
+//! from run.json) in a band after the run's designs (band 1, `--sample` band 2; the band's
+//! width from run.json's `evaluations`, [`crate::record::band_s`]), so the file depends only
+//! on the run and the verified designs, and opened together with the shards no second holds
+//! two designs.
 
 use super::verify::{VerifyRow, VerifySource};
 use crate::params::Problem;
 use crate::record::{
-    verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions, WindowStart,
-    DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
+    band_s, verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions,
+    WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
 use crate::{Error, Result};
@@ -47,10 +50,21 @@ impl VerifyRecording {
                 message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds"),
             })?,
         };
-        let (file, src) = match source {
-            VerifySource::Pareto => (VERIFY_MCAP, "pareto".to_string()),
-            VerifySource::All => (VERIFY_MCAP, "all".to_string()),
-            VerifySource::Sample { n, seed } => (VERIFY_SAMPLE_MCAP, format!("sample {n} seed {seed}")),
+        let designs = match &run["evaluations"] {
+            serde_json::Value::Null => 0,
+            v => v.as_u64().ok_or_else(|| Error::RunDir {
+                path: run_json.clone(),
+                message: format!("field `evaluations` = {v} is not a whole number"),
+            })?,
+        };
+        // the recording's last design id, should run.json's count be short of it
+        let recorded =
+            crate::record::read_index(&dir.join("recording")).ok().and_then(|i| i.last().map(|e| e.last_id + 1));
+        let designs = designs.max(recorded.unwrap_or(0));
+        let (file, src, band) = match source {
+            VerifySource::Pareto => (VERIFY_MCAP, "pareto".to_string(), 1),
+            VerifySource::All => (VERIFY_MCAP, "all".to_string(), 1),
+            VerifySource::Sample { n, seed } => (VERIFY_SAMPLE_MCAP, format!("sample {n} seed {seed}"), 2),
         };
         let mut meta = BTreeMap::new();
         meta.insert("gripopt_version".into(), env!("CARGO_PKG_VERSION").into());
@@ -60,7 +74,12 @@ impl VerifyRecording {
                 meta.insert(k.into(), v.into());
             }
         }
-        let opts = VerifyRecordOptions { scene_dt: DEFAULT_SCENE_DT, epoch_s, zstd_level: DEFAULT_ZSTD_LEVEL };
+        let opts = VerifyRecordOptions {
+            scene_dt: DEFAULT_SCENE_DT,
+            epoch_s,
+            window_base_s: band * band_s(designs),
+            zstd_level: DEFAULT_ZSTD_LEVEL,
+        };
         Ok(VerifyRecording { path: dir.join(file), dir: dir.to_path_buf(), meta, opts })
     }
 
@@ -73,7 +92,8 @@ impl VerifyRecording {
         let entries: Vec<VerifyEntry> =
             rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
         write_verify(&self.path, p, &meta, &entries, &self.opts)?;
-        write_verify_layout(&self.dir)?;
+        let c = &p.scene.criteria;
+        write_verify_layout(&self.dir, c.dx_max * 1e3, c.theta_max.to_degrees())?;
         Ok(self.path)
     }
 }

@@ -1,6 +1,7 @@
 //! Events of a simulation (MODEL.md §8.7): their kinds, the crossing rule of each, the
-//! test that decides whether to sample inside a step, and the root locator on the dense
-//! interpolant of a step.
+//! test that decides whether to sample inside a step, the root locator on the dense
+//! interpolant of a step, and the search for a step's earliest event ([`EventSearch`],
+//! root finding as a type, as in diffsol).
 
 /// What an event function watches. Indices name a scene's contacts and fingers (the centred
 /// scene: contact 0 proximal, 1 distal; finger 0 only).
@@ -76,6 +77,95 @@ pub struct EventValues<const E: usize> {
     pub g: [f64; E],
     /// dg_i/dt.
     pub rate: [f64; E],
+}
+
+/// The search for the earliest event in a step (t0, t1], given the event functions' values
+/// at both ends; it counts the model evaluations the root location makes.
+#[derive(Debug, Clone, Copy)]
+pub struct EventSearch<const E: usize> {
+    kinds: [EventKind; E],
+    /// Model evaluations made to locate events (right-hand-side evaluations of the run).
+    pub evals: u64,
+}
+
+impl<const E: usize> EventSearch<E> {
+    /// A search over event functions of these kinds.
+    pub fn new(kinds: [EventKind; E]) -> Self {
+        EventSearch { kinds, evals: 0 }
+    }
+
+    /// The kind of event `k`.
+    pub fn kind(&self, k: usize) -> EventKind {
+        self.kinds[k]
+    }
+
+    /// The earliest event in the step (t0, t1] with event values `g0`, `g1` at its ends,
+    /// as (time, index). `crossing(k)`: how event k triggers now (None: not watched);
+    /// `values(t)`: the event values on the step's interpolant (None where the model is
+    /// undefined). Events that may open and close inside the step are sampled at four
+    /// points where the cubic through the end values and rates may cross.
+    pub fn earliest(
+        &mut self,
+        crossing: impl Fn(usize) -> Option<Crossing>,
+        values: impl Fn(f64) -> Option<EventValues<E>>,
+        (t0, g0): (f64, &EventValues<E>),
+        (t1, g1): (f64, &EventValues<E>),
+    ) -> Option<(f64, usize)> {
+        let kinds = self.kinds;
+        let evals = &mut self.evals;
+        // g_k on the interpolant at t (each evaluation counted)
+        let mut at = |k: usize, t: f64| {
+            *evals += 1;
+            values(t).map(|v| v.g[k])
+        };
+        let mut best: Option<(f64, usize)> = None;
+        let mut sampled = false;
+        for k in 0..E {
+            let Some(c) = crossing(k) else { continue };
+            let (ga, gb) = (g0.g[k], g1.g[k]);
+            if c.crossed(ga, gb) {
+                let te = locate(c, t0, ga, t1, gb, |t| at(k, t));
+                if best.is_none_or(|(tb, _)| te < tb) {
+                    best = Some((te, k));
+                }
+            } else if kinds[k].sampled_inside()
+                && !sampled
+                && hermite_may_cross(ga, g0.rate[k], gb, g1.rate[k], t1 - t0)
+            {
+                sampled = true;
+                let mut ta = t0;
+                let mut gprev = *g0;
+                for j in 1..=4 {
+                    let tj = t0 + (t1 - t0) * j as f64 / 4.0;
+                    let gj = if j == 4 {
+                        *g1
+                    } else {
+                        let Some(v) = values(tj) else { break };
+                        v
+                    };
+                    for kk in 0..E {
+                        if !kinds[kk].sampled_inside() {
+                            continue;
+                        }
+                        let Some(c) = crossing(kk) else { continue };
+                        let (a, b) = (gprev.g[kk], gj.g[kk]);
+                        if c.crossed(a, b) && j < 4 {
+                            let te = locate(c, ta, a, tj, b, |t| at(kk, t));
+                            if best.is_none_or(|(tb, _)| te < tb) {
+                                best = Some((te, kk));
+                            }
+                        }
+                    }
+                    if best.is_some_and(|(tb, _)| tb <= tj) {
+                        break;
+                    }
+                    ta = tj;
+                    gprev = gj;
+                }
+            }
+        }
+        best
+    }
 }
 
 /// Which end of the bracket the last Illinois step kept.

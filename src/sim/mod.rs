@@ -3,13 +3,15 @@
 //!
 //! Layout (private modules, re-exported flat): `integrate/` (one file per method, LU,
 //! finite-difference Jacobian, block elimination of Newton matrices, Hermite dense output)
-//! → `events` (kinds, crossing rules, root locator) → `driver` (the step loop, generic over
-//! a [`Scene`]) ← `scene/` (what is integrated: the centred scene [`CentredScene`], the
-//! offset and the free scene, `contact3d` its 3-D contacts) built from `finger` (one finger
-//! against a given object), `memory` (the contact-memory rule), `tracking` (criteria during
-//! a grasp), `equilibrium` (§8.9) and `criteria` (§9); `result` holds what a simulation
-//! takes and gives. Nothing here imports the evaluation pipeline, the optimiser, the
-//! recorder or the CLI.
+//! → `events` (kinds, crossing rules, root locator, the search for a step's earliest
+//! event) → `scene/` (the [`Scene`] trait and what is integrated: the centred, offset and
+//! free scenes, `contact3d` the free scene's 3-D contacts) built from `finger` (one finger
+//! against a given object), `memory` (the contact-memory rule), `tracking` (the criteria
+//! the grasp scenes share), `equilibrium` (§8.9) and `criteria` (§9) → `driver` (the step
+//! loop, generic over a scene) → `simulate` (the one entry: a finger in a [`SceneSpec`]).
+//! `settings` holds the numerics and run controls, `sink` where samples and events go,
+//! `result` what a simulation gives. Nothing here imports the evaluation pipeline, the
+//! optimiser, the recorder or the CLI.
 
 mod contact3d;
 mod criteria;
@@ -21,28 +23,33 @@ mod integrate;
 mod memory;
 mod result;
 mod scene;
+mod settings;
+mod simulate;
+mod sink;
 mod tracking;
 
 pub use contact3d::{closest_segments, quat_matrix, V3};
 pub use criteria::{force_margin, impact, impact_limits, r_area, u_min, Impact};
-pub use driver::{drive, simulate as simulate_scene, End, Run};
+pub use driver::drive;
 pub use equilibrium::{finger_equilibrium, Equilibrium};
-pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventValues};
+pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventSearch, EventValues};
 pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
 pub use integrate::{
     fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, RadauCoefficients, RadauIIA, Rhs, Scalar,
     Stats, StepError, Stepper, Tol, TrBdf2,
 };
 pub use memory::{Memory, MemoryChange};
-pub use result::{DynOutcome, DynamicsResult, FirstContact, Method, Mode, Sample, SimOptions, Trajectory, MAX_EVENTS};
+pub use result::{DynOutcome, DynamicsResult, FirstContact, FreeEnd, PoseSample, Sample, Trajectory, MAX_EVENTS};
 pub use scene::centred::{
-    compliant_equilibrium, simulate_grasp, simulate_grasp_into, simulate_grasp_traj, CentredScene, FingerOde, State,
-    EVENTS as CENTRED_EVENTS, NS,
+    compliant_equilibrium, tolerances as centred_tolerances, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS,
+    NS,
 };
 pub use scene::free::{
-    free_tolerances, simulate_free, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, PoseSample,
-    EF as FREE_EVENTS, NF as FREE_NS,
+    free_tolerances, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, EF as FREE_EVENTS, NF as FREE_NS,
 };
-pub use scene::offset::{simulate_offset, OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};
-pub use scene::{Point, Response, Scene};
-pub use tracking::Tracker;
+pub use scene::offset::{OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};
+pub use scene::{End, Response, Run, Scene};
+pub use settings::{Controls, Integration, Method, Mode};
+pub use simulate::{diagnostic_grasp, simulate, SceneResult, SceneSpec};
+pub use sink::{EventNote, Point, Sink};
+pub use tracking::{EndValues, GraspLimits, Tracker};

@@ -1,128 +1,115 @@
-//! What a grasp simulation takes and gives: options, the outcome, the stage-3 results of
-//! the centred scene, trajectory samples.
+//! What a simulation gives: how a grasp ended ([`DynOutcome`]) and its stage-3 results
+//! ([`DynamicsResult`]), how the free scene ended ([`FreeEnd`]), and the samples a
+//! [`Sink`](super::Sink) receives ([`Sample`], [`PoseSample`]; [`Trajectory`] keeps them).
 
 use super::criteria::Impact;
 use super::integrate::Stats;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
-
-/// Integration method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Method {
-    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
-    Radau5,
-    /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
-    TrBdf2,
-    /// Dormand–Prince 5(4) (explicit; for comparison only).
-    Dopri5,
-}
-
-/// Pipeline mode stops at the first violated criterion; diagnostic mode runs to t_stab or t_max.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Mode {
-    /// Stop at the first violated criterion.
-    Pipeline,
-    /// Always run to t_stab (or t_max), reporting every criterion.
-    Diagnostic,
-}
-
-/// Simulation options.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SimOptions {
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Absolute tolerance on angles (rad) and rates (rad/s).
-    pub atol: f64,
-    /// Budget of accepted + rejected steps.
-    pub max_steps: u64,
-    /// Pipeline or diagnostic.
-    pub mode: Mode,
-    /// Method.
-    pub method: Method,
-    /// Record a trajectory at accepted steps.
-    pub record: bool,
-    /// Also sample a uniform grid with this step (s) when recording.
-    pub grid_dt: Option<f64>,
-    /// Contacts with the object (false: the fingers close on nothing — a diagnostic scene
-    /// for the linkage alone; no compliant equilibrium, no stability).
-    pub contacts: bool,
-    /// Print every located event to stderr (a debugging aid).
-    pub trace: bool,
-}
-
-impl SimOptions {
-    /// Pipeline-mode options with Radau IIA.
-    pub fn pipeline(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions {
-            rtol,
-            atol,
-            max_steps,
-            mode: Mode::Pipeline,
-            method: Method::Radau5,
-            record: false,
-            grid_dt: None,
-            contacts: true,
-            trace: false,
-        }
-    }
-    /// Diagnostic-mode options with Radau IIA.
-    pub fn diagnostic(rtol: f64, atol: f64, max_steps: u64) -> Self {
-        SimOptions { mode: Mode::Diagnostic, ..Self::pipeline(rtol, atol, max_steps) }
-    }
-}
 
 /// Maximum number of events before the simulation is aborted (§8.7).
 pub const MAX_EVENTS: u32 = 20_000;
 
-/// How a grasp simulation ended, or the first criterion it violated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DynOutcome {
-    /// All criteria hold and stability was reached.
-    Stable,
-    /// Impact energy above the limit at the first contact.
-    ImpactEnergy,
-    /// Distal fold above fold_max at the first contact.
-    Fold,
-    /// Filtered hand force left the stability region.
-    ForceCriterion,
-    /// The static hand force F⁰_hand violates the force criterion.
-    StaticForceLimit,
-    /// E_ex did not fall below η U_min by t_max.
-    NoStability,
-    /// |sin q13| fell to 1e-3.
-    Singular,
-    /// The linkage could not be assembled along the trajectory.
-    DgmFailure,
-    /// More than 20 000 events.
-    Aborted,
-    /// More than max_steps steps.
-    StepBudget,
-    /// The step size underflowed.
-    StepTooSmall,
-    /// The open finger penetrates the object at t = 0.
-    InitialPenetration,
-    /// The compliant equilibrium of §8.9 was not found.
-    NoEquilibrium,
+/// An enum whose variants each stand for one fixed text: its `Display`, and its JSON form
+/// (serialised as the text, read back from it); `ALL` lists the variants.
+macro_rules! text_enum {
+    ($(#[$m:meta])* pub enum $name:ident { $($(#[$vm:meta])* $v:ident => $text:expr,)* }) => {
+        $(#[$m])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum $name {
+            $($(#[$vm])* $v,)*
+        }
+
+        impl $name {
+            /// Every variant.
+            pub const ALL: &'static [$name] = &[$($name::$v,)*];
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                match self {
+                    $($name::$v => f.write_fmt($text),)*
+                }
+            }
+        }
+
+        impl Serialize for $name {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.collect_str(self)
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let text = String::deserialize(d)?;
+                Self::ALL
+                    .iter()
+                    .copied()
+                    .find(|v| v.to_string() == text)
+                    .ok_or_else(|| serde::de::Error::custom(format!("unknown value {text:?}")))
+            }
+        }
+    };
 }
 
-impl fmt::Display for DynOutcome {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = match self {
-            DynOutcome::Stable => "stable",
-            DynOutcome::ImpactEnergy => "impact criterion: first impact energy above the limit",
-            DynOutcome::Fold => "spring validity: distal fold at first contact above the limit",
-            DynOutcome::ForceCriterion => "force criterion: filtered hand force outside the stability region",
-            DynOutcome::StaticForceLimit => "force criterion: static hand force outside the stability region",
-            DynOutcome::NoStability => "no stability by t_max",
-            DynOutcome::Singular => "singular configuration during the grasp (|sin q13| <= 1e-3)",
-            DynOutcome::DgmFailure => "linkage not mountable during the grasp",
-            DynOutcome::Aborted => "aborted: more than 20000 events",
-            DynOutcome::StepBudget => "aborted: step budget exhausted",
-            DynOutcome::StepTooSmall => "aborted: step size underflow",
-            DynOutcome::InitialPenetration => "open finger penetrates the object at t = 0",
-            DynOutcome::NoEquilibrium => "compliant static equilibrium not found",
-        };
-        f.write_str(s)
+text_enum! {
+    /// How a grasp simulation ended, or the first criterion it violated (in JSON: its text).
+    pub enum DynOutcome {
+        /// All criteria hold and stability was reached.
+        Stable => format_args!("stable"),
+        /// Impact energy above the limit at the first contact.
+        ImpactEnergy => format_args!("impact criterion: first impact energy above the limit"),
+        /// Distal fold above fold_max at the first contact.
+        Fold => format_args!("spring validity: distal fold at first contact above the limit"),
+        /// Filtered hand force left the stability region.
+        ForceCriterion => format_args!("force criterion: filtered hand force outside the stability region"),
+        /// The static hand force F⁰_hand violates the force criterion.
+        StaticForceLimit => format_args!("force criterion: static hand force outside the stability region"),
+        /// E_ex did not fall below η U_min by t_max.
+        NoStability => format_args!("no stability by t_max"),
+        /// |sin q13| fell to 1e-3.
+        Singular => format_args!("singular configuration during the grasp (|sin q13| <= 1e-3)"),
+        /// The linkage could not be assembled along the trajectory.
+        DgmFailure => format_args!("linkage not mountable during the grasp"),
+        /// More than [`MAX_EVENTS`] events.
+        Aborted => format_args!("aborted: more than {MAX_EVENTS} events"),
+        /// More than max_steps steps.
+        StepBudget => format_args!("aborted: step budget exhausted"),
+        /// The step size underflowed.
+        StepTooSmall => format_args!("aborted: step size underflow"),
+        /// The open finger penetrates the object at t = 0.
+        InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
+        /// The compliant equilibrium of §8.9 was not found.
+        NoEquilibrium => format_args!("compliant static equilibrium not found"),
+    }
+}
+
+text_enum! {
+    /// How the free scene's run ended (in JSON: `t_obs`, or the text of why it ended early).
+    pub enum FreeEnd {
+        /// It reached t_end = min(t_max, t_obs): the motion was observed.
+        Observed => format_args!("t_obs"),
+        /// A finger reached |sin q13| = 1e-3.
+        Singular => format_args!("singular configuration during the grasp (|sin q13| <= 1e-3)"),
+        /// An open finger penetrates the object at t = 0.
+        InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
+        /// The step budget was spent.
+        StepBudget => format_args!("aborted: step budget exhausted"),
+        /// The step size underflowed.
+        StepTooSmall => format_args!("aborted: step size underflow"),
+        /// A linkage could not be assembled along the trajectory.
+        NotMountable => format_args!("linkage not mountable during the grasp"),
+        /// More than [`MAX_EVENTS`] events.
+        TooManyEvents => format_args!("aborted: more than {MAX_EVENTS} events"),
+        /// The run stopped before t_obs otherwise.
+        Stopped => format_args!("the simulation ended before t_obs"),
+    }
+}
+
+impl FreeEnd {
+    /// The run observed the object to t_end.
+    pub fn observed(self) -> bool {
+        self == FreeEnd::Observed
     }
 }
 
@@ -230,6 +217,23 @@ pub struct Sample {
     pub energy: f64,
     /// E_ex = E − V* (J).
     pub energy_excess: f64,
+}
+
+/// A sample of the free scene's object pose and fingers (for `--csv` and recordings).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseSample {
+    /// Time (s).
+    pub t: f64,
+    /// Position of G (m).
+    pub g: [f64; 3],
+    /// Orientation (w, x, y, z).
+    pub q: [f64; 4],
+    /// Tilt (rad).
+    pub tilt: f64,
+    /// Active angles (q11, q21) of finger 1 and finger 2.
+    pub fingers: [f64; 4],
+    /// Total energy (J).
+    pub energy: f64,
 }
 
 /// A recorded trajectory.

@@ -17,11 +17,11 @@
 
 pub mod plot;
 
-use crate::eval::{evaluate, stage_kinematics, EvalOptions, Evaluation, Reason, Record};
+use crate::cells::{cells, Floats};
+use crate::eval::{evaluate, stage_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::{Error, Result};
 use rayon::prelude::*;
-use serde::de::{Deserializer, MapAccess, Visitor};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -369,48 +369,10 @@ pub fn set_field(p: &mut Problem, field: &str, v: f64) -> Result<()> {
     Ok(())
 }
 
-/// The verdict class of an evaluation: `pass` or what discarded it, as a short word
-/// (`singular_open`, `singular_closing`, `mode_change`, `impact`, `force`, …).
+/// The verdict class of an evaluation: `pass` or what discarded it, as a short word (the
+/// record's [`Cause`]: `singular_open`, `singular_closing`, `mode_change`, `impact`, `force`, …).
 pub fn verdict(ev: &Evaluation) -> &'static str {
-    use crate::model::GeomError as G;
-    use crate::model::OffsetFailure as O;
-    use crate::model::SweepFailure as S;
-    use crate::sim::DynOutcome as D;
-    let Some(d) = ev.discard else { return "pass" };
-    match d.reason {
-        Reason::InvalidDesign => "invalid",
-        Reason::Geometry(G::NoOpenPose) => "no_open_pose",
-        Reason::Geometry(G::AssemblyModeChange) | Reason::Sweep(S::Pose(_, G::AssemblyModeChange)) => "mode_change",
-        Reason::Geometry(_) | Reason::Sweep(S::Pose(..)) => "not_mountable",
-        Reason::Sweep(S::ClosedPose(..)) => "no_closed_pose",
-        Reason::Sweep(S::Margin(s)) => {
-            if s.at_theta2 == 0.0 {
-                "singular_open"
-            } else {
-                "singular_closing"
-            }
-        }
-        Reason::SpringUndefined => "spring",
-        Reason::Grasp(O::NoClosedPose(..)) => "no_grasp_pose",
-        Reason::Grasp(O::SingularForces) => "singular_forces",
-        Reason::Grasp(O::ForceNotPositive(_)) => "force_positiveness",
-        Reason::Grasp(O::PalmForceNotPositive(_)) => "palm_force",
-        Reason::Grasp(O::NotFormClosed) => "no_form_closure",
-        Reason::Dynamics(o) => match o {
-            D::Stable => "pass",
-            D::ImpactEnergy => "impact",
-            D::Fold => "fold",
-            D::ForceCriterion => "force",
-            D::StaticForceLimit => "static_force",
-            D::NoStability => "no_stability",
-            D::Singular | D::DgmFailure => "singular_dynamic",
-            D::Aborted | D::StepBudget | D::StepTooSmall => "aborted",
-            D::InitialPenetration => "initial_penetration",
-            D::NoEquilibrium => "no_equilibrium",
-        },
-        Reason::ObjectMoved(_) => "object_moved",
-        Reason::FreeSceneEnded(_) => "free_scene_aborted",
-    }
+    ev.discard.and_then(|d| d.reason.cause()).map_or("pass", Cause::as_str)
 }
 
 /// Evaluate one design of one problem through the chosen stages.
@@ -447,66 +409,18 @@ impl Row {
     }
 }
 
-/// The record's keys in record order, as (key, JSON value).
-struct Ordered(Vec<(String, serde_json::Value)>);
-
-impl<'de> serde::Deserialize<'de> for Ordered {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Ordered;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a JSON object")
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> std::result::Result<Ordered, A::Error> {
-                let mut v = Vec::new();
-                while let Some((k, x)) = m.next_entry::<String, serde_json::Value>()? {
-                    v.push((k, x));
-                }
-                Ok(Ordered(v))
-            }
-        }
-        d.deserialize_map(V)
-    }
-}
-
 /// Keys of the record that hold fixed-length arrays, with their lengths.
-const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4)];
+const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4), ("free_scene.energy", 2)];
 
 /// The evaluation record (the JSON of `gripopt evaluate --json`) as CSV cells, in record
-/// order; arrays become `key_0`, `key_1`, …
+/// order, numbers as in the JSON; arrays become `key_0`, `key_1`, … (a null one keeps its
+/// columns, so every row has the header's width).
 pub fn record_cells(ev: &Evaluation) -> Vec<(String, String)> {
-    let json = serde_json::to_string(&Record::from_eval(ev)).unwrap_or_else(|_| "{}".into());
-    let Ordered(kv) = serde_json::from_str(&json).unwrap_or(Ordered(Vec::new()));
-    let mut out = Vec::with_capacity(kv.len() + 4);
-    fn cell(v: &serde_json::Value) -> String {
-        match v {
-            serde_json::Value::Null => String::new(),
-            serde_json::Value::String(s) => {
-                if s.contains([',', '"', '\n']) {
-                    format!("\"{}\"", s.replace('"', "\"\""))
-                } else {
-                    s.clone()
-                }
-            }
-            other => other.to_string(),
-        }
-    }
-    for (k, v) in kv {
-        if let (serde_json::Value::Null, Some(n)) = (&v, ARRAY_KEYS.iter().find(|a| a.0 == k).map(|a| a.1)) {
-            // a null array keeps its columns, so every row has the header's width
-            for i in 0..n {
-                out.push((format!("{k}_{i}"), String::new()));
-            }
-            continue;
-        }
-        match &v {
-            serde_json::Value::Array(a) => {
-                for (i, x) in a.iter().enumerate() {
-                    out.push((format!("{k}_{i}"), cell(x)));
-                }
-            }
-            _ => out.push((k, cell(&v))),
+    let mut out = Vec::new();
+    for (k, v) in cells(&Record::from_eval(ev), Floats::Json) {
+        match ARRAY_KEYS.iter().find(|a| a.0 == k) {
+            Some(&(_, n)) => out.extend((0..n).map(|i| (format!("{k}_{i}"), String::new()))),
+            None => out.push((k, v)),
         }
     }
     out

@@ -43,13 +43,7 @@ pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
 /// has 4 designs on its front) in `target/mcap-check/NAME` (or `$GRIPOPT_MCAP_CHECK_DIR`),
 /// so that `make test` checks its recording with the independent reader.
 pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: u64) -> std::path::PathBuf {
-    use std::path::PathBuf;
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&base).unwrap();
+    let d = check_dir(name);
     let spec = gripopt::run::RunSpec {
         problem_path: problem.to_path_buf(),
         out: d.clone(),
@@ -57,8 +51,6 @@ pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: 
         generations,
         seed: 16,
         threads: Some(1),
-        progress: false,
-        crash_after: None,
         record: gripopt::record::RecordOptions::default(),
     };
     gripopt::run::optimise(&spec).unwrap();
@@ -67,3 +59,60 @@ pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: 
 
 /// The default problem file, bottle-1l.
 pub const BOTTLE_FILE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+
+/// The centred grasp of finger `f` (statics `st`) with `integ` under the controls `ctl`,
+/// and its trajectory (through the library's one simulation call).
+pub fn grasp_traj(
+    f: &gripopt::model::Finger,
+    s: &SceneParams,
+    st: &gripopt::eval::StaticsResult,
+    integ: &gripopt::sim::Integration,
+    ctl: &gripopt::sim::Controls,
+) -> (gripopt::sim::DynamicsResult, gripopt::sim::Trajectory) {
+    let mut tr = gripopt::sim::Trajectory::default();
+    let r = gripopt::sim::simulate(f, s, st, &gripopt::sim::SceneSpec::Centred, integ, ctl, &mut tr);
+    (*r.grasp().expect("a grasp"), tr)
+}
+
+/// `optimise` with a progress observer that fails at generation `k`, as a crash would (a
+/// failing observer stops the run; the checkpoint of generation `k` is kept): how tests
+/// crash a run without a hook in the library's types.
+pub fn optimise_crashing_after(spec: &gripopt::run::RunSpec, k: u64) -> gripopt::Result<gripopt::run::RunSummary> {
+    struct Crash(u64);
+    impl gripopt::run::Progress for Crash {
+        fn generation(&mut self, g: &gripopt::run::GenerationReport) -> Result<(), String> {
+            if g.generation >= self.0 {
+                return Err(format!("simulated crash after generation {}", g.generation));
+            }
+            Ok(())
+        }
+    }
+    let hooks = gripopt::run::RunHooks { progress: Some(Box::new(Crash(k))), ..Default::default() };
+    gripopt::run::optimise_with(spec, hooks)
+}
+
+/// A fresh folder `name` under `target/mcap-check` (or `$GRIPOPT_MCAP_CHECK_DIR`), whose
+/// MCAP files `make test` checks with the independent reader.
+pub fn check_dir(name: &str) -> std::path::PathBuf {
+    use std::path::PathBuf;
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let d = base.join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&base).unwrap();
+    d
+}
+
+/// A run of bottle-1l into `out`: population 12, every design recorded.
+pub fn bottle_spec(out: &std::path::Path, generations: u64, seed: u64, threads: usize) -> gripopt::run::RunSpec {
+    gripopt::run::RunSpec {
+        problem_path: BOTTLE_FILE.into(),
+        out: out.to_path_buf(),
+        pop: 12,
+        generations,
+        seed,
+        threads: Some(threads),
+        record: gripopt::record::RecordOptions::default(),
+    }
+}

@@ -4,22 +4,23 @@
 //! its four mechanical states plus the low-pass filtered hand force of the force criterion
 //! (§9.3) — and the hand force is twice finger 1's.
 
-use super::{Point, Response, Scene};
+use super::{KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::Finger;
 use crate::model::StaticsResult;
 use crate::params::SceneParams;
-use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
-use crate::sim::driver::{self, Run};
+use crate::sim::criteria::{force_margin, r_area, u_min};
+use crate::sim::driver;
 use crate::sim::equilibrium::{finger_equilibrium, Equilibrium};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel};
-use crate::sim::integrate::{Partition, Piece, Rhs, Stats, Tol};
-use crate::sim::memory::{Memory, MemoryChange};
-use crate::sim::result::{DynOutcome, DynamicsResult, Mode, Sample, SimOptions, Trajectory};
-use crate::sim::tracking::Tracker;
-use nalgebra::{Matrix2, SVector, Vector2};
-use std::time::Instant;
+use crate::sim::integrate::{Partition, Piece, Rhs, Tol};
+use crate::sim::memory::Memory;
+use crate::sim::result::{DynOutcome, DynamicsResult};
+use crate::sim::settings::{Controls, Integration, Mode};
+use crate::sim::sink::{Point, Sink};
+use crate::sim::tracking::{grasp_sample, EndValues, GraspLimits, Tracker};
+use nalgebra::{SVector, Vector2};
 
 /// State dimension of the centred scene.
 pub const NS: usize = 5;
@@ -43,7 +44,7 @@ pub struct FingerOde<'a> {
     /// Right-hand-side evaluations.
     pub evals: u64,
     /// The full evaluation at the end of the last accepted step (see [`FingerOde::take_accepted`]).
-    accepted: Option<(State, FingerEval)>,
+    accepted: KeptEval<NS, FingerEval>,
 }
 
 impl<'a> FingerOde<'a> {
@@ -56,7 +57,7 @@ impl<'a> FingerOde<'a> {
             mem: [Memory::default(); 2],
             contacts_enabled: true,
             evals: 0,
-            accepted: None,
+            accepted: KeptEval::default(),
         }
     }
 
@@ -83,10 +84,7 @@ impl<'a> FingerOde<'a> {
     /// that step ended at `y` (saves the driver a second evaluation per step).
     #[inline]
     pub fn take_accepted(&mut self, y: &State) -> Option<FingerEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
 
     /// The hand force F_hand,y: twice finger 1's force on the object (the mirror image).
@@ -133,7 +131,7 @@ impl Rhs<NS> for FingerOde<'_> {
         self.evals += 1;
         let ev = self.evaluate_with(y, true)?;
         let out = (self.derivative(y, &ev), ev.piece);
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
 
@@ -161,89 +159,56 @@ pub const EVENTS: [EventKind; 6] = [
 /// Index of the force event in [`EVENTS`].
 const FORCE: usize = 3;
 
-/// The centred scene during a run: the ODE, the criteria and the outputs.
-pub struct CentredScene<'a, 't> {
+/// The centred scene during a run: the ODE and the criteria.
+pub struct CentredScene<'a> {
     ode: FingerOde<'a>,
     s: &'a SceneParams,
-    eq: Equilibrium,
-    threshold: f64,
-    r_area: f64,
-    static_force_margin: f64,
+    limits: GraspLimits,
     tracker: Tracker<2>,
-    traj: Option<&'t mut Trajectory>,
 }
 
-impl<'a, 't> CentredScene<'a, 't> {
+impl<'a> CentredScene<'a> {
     /// The scene of finger `f` with its statics `st` (before [`CentredScene::prepare`]).
-    pub fn new(
-        f: &'a Finger,
-        s: &'a SceneParams,
-        st: &StaticsResult,
-        opts: &SimOptions,
-        traj: Option<&'t mut Trajectory>,
-    ) -> Self {
+    pub fn new(f: &'a Finger, s: &'a SceneParams, st: &StaticsResult, ctl: &Controls) -> Self {
         let ode = FingerOde::new(f, s, st.tau_s0, 0.0);
-        let ra = r_area(s);
-        let static_margin = force_margin(s, ra, V2::new(st.hand0[0], st.hand0[1]));
-        let threshold = s.criteria.eta_stab * u_min(s, st.f0);
-        let none = Equilibrium { q: Vector2::repeat(f64::NAN), v_star: f64::NAN, fstar: [f64::NAN; 2] };
-        let tracker = Tracker::new(opts.mode == Mode::Pipeline);
-        CentredScene { ode, s, eq: none, threshold, r_area: ra, static_force_margin: static_margin, tracker, traj }
+        let r_area = r_area(s);
+        let limits = GraspLimits {
+            static_force_margin: force_margin(s, r_area, V2::new(st.hand0[0], st.hand0[1])),
+            threshold: s.criteria.eta_stab * u_min(s, st.f0),
+            ..GraspLimits::unknown(r_area)
+        };
+        CentredScene { ode, s, limits, tracker: Tracker::new(ctl.mode == Mode::Pipeline) }
     }
 
     /// The static force criterion and the compliant equilibrium (from the static forces
     /// `f0`) before the run. False: the simulation ends here (pipeline mode and a violated
     /// static force criterion, or no equilibrium); [`CentredScene::result`] says why.
-    pub fn prepare(&mut self, f0: [f64; 2], opts: &SimOptions) -> bool {
-        if self.static_force_margin < 0.0 {
+    pub fn prepare(&mut self, f0: [f64; 2], ctl: &Controls) -> bool {
+        if self.limits.static_force_margin < 0.0 {
             self.tracker.fail(DynOutcome::StaticForceLimit);
             if self.tracker.pipeline {
                 return false;
             }
         }
-        if opts.contacts {
+        if ctl.contacts {
             let Some(eq) = compliant_equilibrium(&self.ode, self.s, f0) else {
                 self.tracker.outcome = DynOutcome::NoEquilibrium;
                 return false;
             };
-            self.eq = eq;
+            (self.limits.fstar, self.limits.v_star) = (eq.fstar, eq.v_star);
         } else {
             self.ode.contacts_enabled = false;
         }
         true
     }
 
-    /// The result as far as known (without a run, or before the run's end values).
+    /// The result as far as known, without a run.
     pub fn result(&self) -> DynamicsResult {
-        let k = &self.tracker;
-        DynamicsResult {
-            outcome: k.outcome,
-            first: k.first,
-            impact_ok: k.impact_ok,
-            fold_ok: k.fold_ok,
-            min_force_margin: k.min_force_margin,
-            t_force_violation: k.t_force_violation,
-            static_force_margin: self.static_force_margin,
-            r_area: self.r_area,
-            t_stab: k.t_stab,
-            f_end: [0.0; 2],
-            fstar: self.eq.fstar,
-            v_star: self.eq.v_star,
-            threshold: self.threshold,
-            e_ex_end: f64::NAN,
-            max_qdd_end: f64::NAN,
-            t_end: 0.0,
-            events: 0,
-            stats: Stats::default(),
-            rhs_evals: self.ode.evals,
-            cpu_s: 0.0,
-            knuckle_flag: k.knuckle,
-            onsets: k.onsets,
-        }
+        self.tracker.result::<NS, FingerEval>(&self.limits, self.ode.evals, None)
     }
 }
 
-impl Rhs<NS> for CentredScene<'_, '_> {
+impl Rhs<NS> for CentredScene<'_> {
     #[inline]
     fn eval(&mut self, t: f64, y: &State) -> Option<State> {
         self.ode.eval(t, y)
@@ -265,13 +230,9 @@ impl Rhs<NS> for CentredScene<'_, '_> {
     }
 }
 
-impl Scene<NS, 6> for CentredScene<'_, '_> {
+impl Scene<NS, 6> for CentredScene<'_> {
     type Eval = FingerEval;
     type Output = DynamicsResult;
-
-    fn events(&self) -> [EventKind; 6] {
-        EVENTS
-    }
 
     fn initial_state(&self) -> State {
         let f = self.ode.model.finger;
@@ -293,6 +254,10 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
         self.ode.derivative(y, ev)
     }
 
+    fn events(&self) -> [EventKind; 6] {
+        EVENTS
+    }
+
     fn event_values(&self, y: &State, ev: &FingerEval) -> EventValues<6> {
         let s = self.s;
         let mut contact = [0.0; 2];
@@ -304,9 +269,12 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
                 self.ode.mem[i].event_value(ev.contacts[i].geom.delta, s.contact.eps_sep)
             };
         }
-        let stab =
-            if self.tracker.first.is_some() { ev.energy - self.eq.v_star - self.threshold } else { f64::INFINITY };
-        let force = force_margin(s, self.r_area, V2::new(0.0, y[4]));
+        let stab = if self.tracker.first.is_some() {
+            ev.energy - self.limits.v_star - self.limits.threshold
+        } else {
+            f64::INFINITY
+        };
+        let force = force_margin(s, self.limits.r_area, V2::new(0.0, y[4]));
         let sing = ev.sin_q13.abs() - 1e-3;
         EventValues {
             g: [contact[0], contact[1], stab, force, sing, ev.theta2],
@@ -332,28 +300,8 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
     }
 
     fn handle(&mut self, i: usize, t: f64, ev: &FingerEval, end: &EventValues<6>) -> Response {
-        let s = self.s;
         match EVENTS[i] {
-            EventKind::Contact(_) => {
-                let mut impacts: [Option<Impact>; 2] = [None, None];
-                for c in 0..2 {
-                    let cs = &ev.contacts[c];
-                    let located = EVENTS[i] == EventKind::Contact(c as u8);
-                    if self.ode.mem[c].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min)
-                        == MemoryChange::Onset
-                    {
-                        self.tracker.onset(c, t);
-                        if self.tracker.first.is_none() {
-                            let minv = ev.m.try_inverse().unwrap_or(Matrix2::zeros());
-                            let mf = 1.0 / cs.row.dot(&(minv * cs.row));
-                            impacts[c] = Some(impact(s, mf, cs.delta_dot));
-                        }
-                    }
-                }
-                let stop = self.tracker.first.is_none() && self.tracker.first_contact(s, t, &impacts, ev.theta2);
-                // memory changed: f is discontinuous
-                Response { restart: true, stop }
-            }
+            EventKind::Contact(_) => self.tracker.contact_event(self.s, t, i, &mut self.ode.mem, |_| ev),
             other => self.tracker.on_event(other, t, end.g[FORCE]),
         }
     }
@@ -365,99 +313,48 @@ impl Scene<NS, 6> for CentredScene<'_, '_> {
         }
     }
 
-    fn sample(&mut self, at: Point, t: f64, y: &State, ev: &FingerEval) {
-        let Some(tr) = self.traj.as_deref_mut() else { return };
-        let c = &ev.contacts;
-        let smp = Sample {
-            t,
-            q: [y[0], y[1]],
-            qd: [y[2], y[3]],
-            theta2: ev.theta2,
-            delta: [c[0].geom.delta, c[1].geom.delta],
-            normal: [c[0].normal_force, c[1].normal_force],
-            friction: [c[0].friction_force, c[1].friction_force],
-            hand_fy: FingerOde::hand_fy(ev),
-            filtered_fy: y[4],
-            energy: ev.energy,
-            energy_excess: ev.energy - self.eq.v_star,
-        };
-        if at == Point::Grid {
-            tr.grid.push(smp);
-        } else {
-            tr.samples.push(smp);
-        }
+    fn memories(&self) -> &[Memory] {
+        &self.ode.mem
     }
 
-    fn trace_state(&self) -> String {
-        format!("mem {:?}", self.ode.mem)
+    fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &State, ev: &FingerEval, sink: &mut K) {
+        let hand = [FingerOde::hand_fy(ev), y[4]];
+        sink.finger(at, &grasp_sample(t, [y[0], y[1], y[2], y[3]], ev, hand, ev.energy, self.limits.v_star));
     }
 
-    fn finish(mut self, run: &Run<FingerEval>) -> DynamicsResult {
+    fn finish(mut self, run: &Run<NS, FingerEval>) -> DynamicsResult {
         self.tracker.on_end(run.end);
-        let mut res = self.result();
-        if let Some(ev) = &run.last {
-            res.t_end = run.t;
-            res.f_end = [ev.contacts[0].normal_force, ev.contacts[1].normal_force];
-            res.e_ex_end = ev.energy - self.eq.v_star;
-            res.max_qdd_end = ev.qdd.amax();
-        }
-        res.events = run.events;
-        res.stats = run.stats;
-        res.rhs_evals = self.ode.evals + run.locate_evals;
-        res
+        let end = run.last.map(|ev| EndValues {
+            f_end: [ev.contacts[0].normal_force, ev.contacts[1].normal_force],
+            energy: ev.energy,
+            max_qdd: ev.qdd.amax(),
+        });
+        self.tracker.result(&self.limits, self.ode.evals, Some((run, end)))
     }
-}
-
-/// Simulate the grasp of the design's finger on the centred object (pipeline entry point).
-pub fn simulate_grasp(f: &Finger, s: &SceneParams, st: &StaticsResult, opts: &SimOptions) -> DynamicsResult {
-    simulate(f, s, st, opts, None)
-}
-
-/// Simulate, recording the trajectory into `traj` when given (the result does not depend
-/// on recording).
-pub fn simulate_grasp_into(
-    f: &Finger,
-    s: &SceneParams,
-    st: &StaticsResult,
-    opts: &SimOptions,
-    traj: Option<&mut Trajectory>,
-) -> DynamicsResult {
-    let o = SimOptions { record: traj.is_some(), ..*opts };
-    simulate(f, s, st, &o, traj)
-}
-
-/// Simulate and also return the recorded trajectory (forces `record`).
-pub fn simulate_grasp_traj(
-    f: &Finger,
-    s: &SceneParams,
-    st: &StaticsResult,
-    opts: &SimOptions,
-) -> (DynamicsResult, Trajectory) {
-    let mut tr = Trajectory::default();
-    let r = simulate(f, s, st, &SimOptions { record: true, ..*opts }, Some(&mut tr));
-    (r, tr)
 }
 
 /// Tolerances of the centred scene's state.
-fn tolerances(opts: &SimOptions) -> Tol<NS> {
+pub fn tolerances(integ: &Integration) -> Tol<NS> {
     // The filter state is in N: an absolute tolerance of 1e4·atol (1e-5 N at atol 1e-9).
-    Tol { rtol: opts.rtol, atol: State::from([opts.atol, opts.atol, opts.atol, opts.atol, opts.atol * 1e4]) }
+    Tol { rtol: integ.rtol, atol: State::from([integ.atol, integ.atol, integ.atol, integ.atol, integ.atol * 1e4]) }
 }
 
-fn simulate(
+/// Simulate the grasp of the design's finger on the centred object, reporting to `sink`
+/// (the result does not depend on it).
+// not inlined: its own symbol for `make bench-instructions`' inclusive count
+#[inline(never)]
+pub(crate) fn run<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,
     st: &StaticsResult,
-    opts: &SimOptions,
-    traj: Option<&mut Trajectory>,
+    integ: &Integration,
+    ctl: &Controls,
+    sink: &mut K,
 ) -> DynamicsResult {
-    let clock = Instant::now();
-    let mut scene = CentredScene::new(f, s, st, opts, traj);
-    let mut res = if scene.prepare(st.f0, opts) {
-        driver::simulate(scene, opts, tolerances(opts), s.criteria.t_max)
+    let mut scene = CentredScene::new(f, s, st, ctl);
+    if scene.prepare(st.f0, ctl) {
+        driver::simulate(scene, integ, ctl, tolerances(integ), s.criteria.t_max, sink)
     } else {
         scene.result()
-    };
-    res.cpu_s = clock.elapsed().as_secs_f64();
-    res
+    }
 }

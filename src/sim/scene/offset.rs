@@ -3,21 +3,22 @@
 //! force is the sum of both fingers' forces in the world frame, and F_hand,x ≠ 0 in
 //! general. State y = (finger 1: q11, q21, q̇11, q̇21 | finger 2: the same | F̄_x, F̄_y).
 
-use super::{Point, Response, Scene};
+use super::{KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::{grasp_at, Finger, StaticsResult};
 use crate::params::SceneParams;
-use crate::sim::criteria::{force_margin, impact, r_area, u_min, Impact};
-use crate::sim::driver::{self, Run};
+use crate::sim::criteria::{force_margin, r_area, u_min};
+use crate::sim::driver;
 use crate::sim::equilibrium::finger_equilibrium;
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel, Kink};
-use crate::sim::integrate::{Piece, Rhs, Stats, Tol};
-use crate::sim::memory::{Memory, MemoryChange};
-use crate::sim::result::{DynOutcome, DynamicsResult, Mode, SimOptions};
-use crate::sim::tracking::Tracker;
-use nalgebra::{Matrix2, SVector, Vector2};
-use std::time::Instant;
+use crate::sim::integrate::{Piece, Rhs, Tol};
+use crate::sim::memory::Memory;
+use crate::sim::result::{DynOutcome, DynamicsResult};
+use crate::sim::settings::{Controls, Integration, Mode};
+use crate::sim::sink::{Point, Sink};
+use crate::sim::tracking::{grasp_sample, EndValues, GraspLimits, Tracker};
+use nalgebra::{SVector, Vector2};
 
 /// State dimension of the offset scene.
 pub const NO: usize = 10;
@@ -71,15 +72,11 @@ pub struct OffsetScene<'a> {
     centre: [V2; 2],
     mem: [Memory; 4],
     s: &'a SceneParams,
-    v_star: f64,
-    fstar: [f64; 2],
-    threshold: f64,
-    r_area: f64,
-    static_margin: f64,
+    limits: GraspLimits,
     hand0: [f64; 2],
     tracker: Tracker<4>,
     evals: u64,
-    accepted: Option<(St, PairEval)>,
+    accepted: KeptEval<NO, PairEval>,
     x_off: f64,
 }
 
@@ -91,42 +88,40 @@ impl<'a> OffsetScene<'a> {
         s: &'a SceneParams,
         st: &StaticsResult,
         x_off: f64,
-        opts: &SimOptions,
+        ctl: &Controls,
     ) -> Result<Self, DynOutcome> {
         let model = FingerModel::new(f, s, st.tau_s0);
         let r = s.object.radius;
         let centre = [V2::new(x_off, r), V2::new(-x_off, r)];
         let g = grasp_at(f, s, st.tau_s0, x_off).map_err(|_| DynOutcome::NoEquilibrium)?;
         let f0 = [g.forces[0].f0, g.forces[1].f0];
-        let ra = r_area(s);
-        let hand0 = [g.hand0.x, g.hand0.y];
-        let static_margin = force_margin(s, ra, g.hand0);
-        // E_ex sums both fingers: the centred scene's per-finger threshold η U_min, once per finger
-        let threshold = 2.0 * s.criteria.eta_stab * u_min(s, f0[0]).min(u_min(s, f0[1]));
+        let r_area = r_area(s);
+        let limits = GraspLimits {
+            static_force_margin: force_margin(s, r_area, g.hand0),
+            // E_ex sums both fingers: the centred scene's per-finger threshold η U_min, once per finger
+            threshold: 2.0 * s.criteria.eta_stab * u_min(s, f0[0]).min(u_min(s, f0[1])),
+            ..GraspLimits::unknown(r_area)
+        };
         let mut sc = OffsetScene {
             model,
             centre,
             mem: [Memory::default(); 4],
             s,
-            v_star: f64::NAN,
-            fstar: [f64::NAN; 2],
-            threshold,
-            r_area: ra,
-            static_margin,
-            hand0,
-            tracker: Tracker::new(opts.mode == Mode::Pipeline),
+            limits,
+            hand0: [g.hand0.x, g.hand0.y],
+            tracker: Tracker::new(ctl.mode == Mode::Pipeline),
             evals: 0,
-            accepted: None,
+            accepted: KeptEval::default(),
             x_off,
         };
-        if static_margin < 0.0 {
+        if limits.static_force_margin < 0.0 {
             sc.tracker.fail(DynOutcome::StaticForceLimit);
         }
         let e1 = finger_equilibrium(&sc.model, centre[0], s, f0[0]);
         let e2 = finger_equilibrium(&sc.model, centre[1], s, f0[1]);
         if let (Some(a), Some(b)) = (e1, e2) {
-            sc.v_star = a.v_star + b.v_star;
-            sc.fstar = [a.fstar[0].max(b.fstar[0]), a.fstar[1].max(b.fstar[1])];
+            sc.limits.v_star = a.v_star + b.v_star;
+            sc.limits.fstar = [a.fstar[0].max(b.fstar[0]), a.fstar[1].max(b.fstar[1])];
         } else {
             return Err(DynOutcome::NoEquilibrium);
         }
@@ -198,7 +193,7 @@ impl Rhs<NO> for OffsetScene<'_> {
         self.evals += 1;
         let ev = self.eval_with(y, true)?;
         let out = (self.deriv(y, &ev), Self::piece_of(&ev));
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
 }
@@ -218,10 +213,7 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         self.eval_with(y, true)
     }
     fn take_accepted(&mut self, y: &St) -> Option<PairEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
     fn derivative(&self, y: &St, ev: &PairEval) -> St {
         self.deriv(y, ev)
@@ -230,8 +222,12 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         let eps = self.s.contact.eps_sep;
         let c = |k: usize| &ev.f[k / 2].contacts[k % 2];
         let g_c = |k: usize| self.mem[k].event_value(c(k).geom.delta, eps);
-        let stab = if self.tracker.first.is_some() { ev.energy - self.v_star - self.threshold } else { f64::INFINITY };
-        let force = force_margin(self.s, self.r_area, V2::new(y[8], y[9]));
+        let stab = if self.tracker.first.is_some() {
+            ev.energy - self.limits.v_star - self.limits.threshold
+        } else {
+            f64::INFINITY
+        };
+        let force = force_margin(self.s, self.limits.r_area, V2::new(y[8], y[9]));
         EventValues {
             g: [
                 g_c(0),
@@ -278,36 +274,8 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         true
     }
     fn handle(&mut self, i: usize, t: f64, ev: &PairEval, end: &EventValues<EO>) -> Response {
-        let s = self.s;
         match OFFSET_EVENTS[i] {
-            EventKind::Contact(_) => {
-                let mut impacts: [Option<Impact>; 4] = [None; 4];
-                let mut theta2 = f64::NAN;
-                for k in 0..4 {
-                    let fe = &ev.f[k / 2];
-                    let cs = &fe.contacts[k % 2];
-                    let located = OFFSET_EVENTS[i] == EventKind::Contact(k as u8);
-                    if self.mem[k].update(cs.geom.delta, cs.delta_dot, located, s.contact.eps_sep, s.contact.v_min)
-                        == MemoryChange::Onset
-                    {
-                        self.tracker.onset(k, t);
-                        if self.tracker.first.is_none() {
-                            let minv = fe.m.try_inverse().unwrap_or(Matrix2::zeros());
-                            let mf = 1.0 / cs.row.dot(&(minv * cs.row));
-                            impacts[k] = Some(impact(s, mf, cs.delta_dot));
-                            if theta2.is_nan() || fe.theta2 > theta2 {
-                                theta2 = fe.theta2;
-                            }
-                        }
-                    }
-                }
-                let stop = self.tracker.first.is_none() && self.tracker.first_contact(s, t, &impacts, theta2);
-                if let Some(fc) = self.tracker.first.as_mut() {
-                    // contacts 2, 3 are finger 2's proximal and distal phalanges
-                    fc.phalanx = (fc.phalanx - 1) % 2 + 1;
-                }
-                Response { restart: true, stop }
-            }
+            EventKind::Contact(_) => self.tracker.contact_event(self.s, t, i, &mut self.mem, |k| &ev.f[k / 2]),
             other => self.tracker.on_event(other, t, end.g[FORCE]),
         }
     }
@@ -317,91 +285,57 @@ impl Scene<NO, EO> for OffsetScene<'_> {
             self.tracker.knuckle |= ev.f[0].knuckle_contact() || ev.f[1].knuckle_contact();
         }
     }
-    fn sample(&mut self, _at: Point, _t: f64, _y: &St, _ev: &PairEval) {}
-    fn finish(mut self, run: &Run<PairEval>) -> OffsetResult {
+    fn memories(&self) -> &[Memory] {
+        &self.mem
+    }
+    /// Finger 1's sample (its angles, contacts and θ2; finger 2 is not its mirror image
+    /// here), with the hand force (both fingers, y component), its filtered value and the
+    /// energy of both fingers.
+    fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &St, ev: &PairEval, sink: &mut K) {
+        let q = [y[0], y[1], y[2], y[3]];
+        sink.finger(at, &grasp_sample(t, q, &ev.f[0], [ev.hand.y, y[9]], ev.energy, self.limits.v_star));
+    }
+    fn finish(mut self, run: &Run<NO, PairEval>) -> OffsetResult {
         self.tracker.on_end(run.end);
-        let k = &self.tracker;
-        let on = |a: Option<f64>, b: Option<f64>| match (a, b) {
-            (Some(x), Some(y)) => Some(x.min(y)),
-            (x, y) => x.or(y),
-        };
-        let mut d = DynamicsResult {
-            outcome: k.outcome,
-            first: k.first,
-            impact_ok: k.impact_ok,
-            fold_ok: k.fold_ok,
-            min_force_margin: k.min_force_margin,
-            t_force_violation: k.t_force_violation,
-            static_force_margin: self.static_margin,
-            r_area: self.r_area,
-            t_stab: k.t_stab,
-            f_end: [0.0; 2],
-            fstar: self.fstar,
-            v_star: self.v_star,
-            threshold: self.threshold,
-            e_ex_end: f64::NAN,
-            max_qdd_end: f64::NAN,
-            t_end: run.t,
-            events: run.events,
-            stats: run.stats,
-            rhs_evals: self.evals + run.locate_evals,
-            cpu_s: 0.0,
-            knuckle_flag: k.knuckle,
-            onsets: [on(k.onsets[0], k.onsets[2]), on(k.onsets[1], k.onsets[3])],
-        };
-        let mut hand_end = [f64::NAN; 2];
-        if let Some(ev) = &run.last {
-            d.f_end = [ev.f[0].contacts[0].normal_force, ev.f[0].contacts[1].normal_force];
-            d.e_ex_end = ev.energy - self.v_star;
-            d.max_qdd_end = ev.f[0].qdd.amax().max(ev.f[1].qdd.amax());
-            hand_end = [ev.hand.x, ev.hand.y];
-        }
-        OffsetResult { dynamics: d, x_off: self.x_off, hand_end, hand0: self.hand0 }
+        let end = run.last.map(|ev| EndValues {
+            f_end: [ev.f[0].contacts[0].normal_force, ev.f[0].contacts[1].normal_force],
+            energy: ev.energy,
+            max_qdd: ev.f[0].qdd.amax().max(ev.f[1].qdd.amax()),
+        });
+        let dynamics = self.tracker.result(&self.limits, self.evals, Some((run, end)));
+        let hand_end = run.last.map_or([f64::NAN; 2], |ev| [ev.hand.x, ev.hand.y]);
+        OffsetResult { dynamics, x_off: self.x_off, hand_end, hand0: self.hand0 }
     }
 }
 
 /// Tolerances of the offset scene (the filter states in N: 1e4·atol).
-fn tolerances(opts: &SimOptions) -> Tol<NO> {
-    let mut atol = St::repeat(opts.atol);
-    atol[8] = opts.atol * 1e4;
-    atol[9] = opts.atol * 1e4;
-    Tol { rtol: opts.rtol, atol }
+fn tolerances(integ: &Integration) -> Tol<NO> {
+    let mut atol = St::repeat(integ.atol);
+    atol[8] = integ.atol * 1e4;
+    atol[9] = integ.atol * 1e4;
+    Tol { rtol: integ.rtol, atol }
 }
 
-/// Simulate the grasp of the design's fingers on the fixed object at world offset `x_off`.
-pub fn simulate_offset(f: &Finger, s: &SceneParams, st: &StaticsResult, x_off: f64, opts: &SimOptions) -> OffsetResult {
-    let clock = Instant::now();
-    let mut res = match OffsetScene::new(f, s, st, x_off, opts) {
-        Ok(sc) => driver::simulate(sc, opts, tolerances(opts), s.criteria.t_max),
+/// Simulate the grasp of the design's fingers on the fixed object at world offset `x_off`,
+/// reporting finger 1's samples to `sink`.
+pub(crate) fn run<K: Sink + ?Sized>(
+    f: &Finger,
+    s: &SceneParams,
+    st: &StaticsResult,
+    x_off: f64,
+    integ: &Integration,
+    ctl: &Controls,
+    sink: &mut K,
+) -> OffsetResult {
+    match OffsetScene::new(f, s, st, x_off, ctl) {
+        Ok(sc) => driver::simulate(sc, integ, ctl, tolerances(integ), s.criteria.t_max, sink),
         Err(why) => {
-            let nan2 = [f64::NAN; 2];
-            let d = DynamicsResult {
-                outcome: why,
-                first: None,
-                impact_ok: None,
-                fold_ok: None,
-                min_force_margin: f64::NAN,
-                t_force_violation: None,
-                static_force_margin: f64::NAN,
-                r_area: r_area(s),
-                t_stab: None,
-                f_end: nan2,
-                fstar: nan2,
-                v_star: f64::NAN,
-                threshold: f64::NAN,
-                e_ex_end: f64::NAN,
-                max_qdd_end: f64::NAN,
-                t_end: 0.0,
-                events: 0,
-                stats: Stats::default(),
-                rhs_evals: 0,
-                cpu_s: 0.0,
-                knuckle_flag: false,
-                onsets: [None; 2],
-            };
-            OffsetResult { dynamics: d, x_off, hand_end: nan2, hand0: nan2 }
+            // the scene could not be set up: nothing simulated, nothing known but R_area
+            let mut k = Tracker::<4>::new(ctl.mode == Mode::Pipeline);
+            k.outcome = why;
+            k.min_force_margin = f64::NAN;
+            let dynamics = k.result::<NO, PairEval>(&GraspLimits::unknown(r_area(s)), 0, None);
+            OffsetResult { dynamics, x_off, hand_end: [f64::NAN; 2], hand0: [f64::NAN; 2] }
         }
-    };
-    res.dynamics.cpu_s = clock.elapsed().as_secs_f64();
-    res
+    }
 }

@@ -13,21 +13,21 @@ mod rhs;
 
 pub use jacobian::FreeJacobian;
 
-use super::{Point, Response, Scene};
+use super::{End, KeptEval, Response, Run, Scene};
 use crate::math::V2;
 use crate::model::{Finger, FrictionLaw};
 use crate::params::SceneParams;
 use crate::sim::contact3d::V3;
 use crate::sim::criteria::{impact, Impact};
-use crate::sim::driver::{self, End, Run};
+use crate::sim::driver;
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerLinkage, FingerModel};
 use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
-use crate::sim::result::SimOptions;
+use crate::sim::result::{FreeEnd, PoseSample};
+use crate::sim::settings::{Controls, Integration};
+use crate::sim::sink::{Point, Sink};
 use nalgebra::{Matrix2, SVector, Vector2};
-use serde::Serialize;
-use std::time::Instant;
 
 /// State dimension of the free scene.
 pub const NF: usize = 21;
@@ -109,26 +109,11 @@ pub struct FreeEval {
     pub axis: V3,
 }
 
-/// A sample of the object's pose (for `--csv` and recordings).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PoseSample {
-    /// Time (s).
-    pub t: f64,
-    /// Position of G (m).
-    pub g: [f64; 3],
-    /// Orientation (w, x, y, z).
-    pub q: [f64; 4],
-    /// Tilt (rad).
-    pub tilt: f64,
-    /// Active angles (q11, q21) of finger 1 and finger 2.
-    pub fingers: [f64; 4],
-    /// Total energy (J).
-    pub energy: f64,
-}
-
 /// The outputs of MODEL.md §14.4.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FreeResult {
+    /// Object offset x_off (m).
+    pub x_off: f64,
     /// Largest horizontal displacement of G (m).
     pub object_max_displacement: f64,
     /// Largest |Δx| of G (m).
@@ -164,7 +149,7 @@ pub struct FreeResult {
     /// A loaded phalanx met the object's rim or a face.
     pub rim_contact: bool,
     /// How the run ended.
-    pub end: String,
+    pub end: FreeEnd,
     /// Time reached (s).
     pub t_end: f64,
     /// Events located.
@@ -182,9 +167,6 @@ pub struct FreeResult {
     pub energy: [f64; 2],
     /// Largest energy increase between two consecutive accepted states (J; ≈ 0).
     pub max_energy_rise: f64,
-    /// Pose samples (when recording).
-    #[serde(skip)]
-    pub poses: Vec<PoseSample>,
 }
 
 /// The free scene during a run.
@@ -203,20 +185,20 @@ pub struct FreeScene<'a> {
     x_off: f64,
     evals: u64,
     jac_evals: u64,
-    last_sampled: Option<(f64, St)>,
-    accepted: Option<(St, FreeEval)>,
+    accepted: KeptEval<NF, FreeEval>,
     // tracking
     g_start: V3,
     out: FreeResult,
     first_k: Option<usize>,
     first_open: bool,
     last_energy: Option<f64>,
-    record: bool,
+    /// How the run ended, when the scene ended it (else the driver's end says).
+    end: Option<FreeEnd>,
 }
 
 impl<'a> FreeScene<'a> {
     /// The scene of finger `f` with spring preload `tau_s0` on the object at x_off.
-    pub fn new(f: &'a Finger, s: &'a SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup, record: bool) -> Self {
+    pub fn new(f: &'a Finger, s: &'a SceneParams, tau_s0: f64, x_off: f64, setup: FreeSetup) -> Self {
         let ng = s.setup.ground_points.min(NG_MAX);
         let mut rim_body = [V3::zeros(); NG_MAX];
         for k in 0..ng {
@@ -233,6 +215,7 @@ impl<'a> FreeScene<'a> {
         let m = s.object.mass();
         let k = &s.contact;
         let out = FreeResult {
+            x_off,
             object_max_displacement: 0.0,
             object_max_dx: 0.0,
             object_max_dy: 0.0,
@@ -250,7 +233,7 @@ impl<'a> FreeScene<'a> {
             toppled: false,
             escaped: false,
             rim_contact: false,
-            end: String::new(),
+            end: FreeEnd::Stopped,
             t_end: 0.0,
             events: 0,
             stats: Stats::default(),
@@ -259,7 +242,6 @@ impl<'a> FreeScene<'a> {
             cpu_s: 0.0,
             energy: [f64::NAN; 2],
             max_energy_rise: 0.0,
-            poses: Vec::new(),
         };
         FreeScene {
             model: FingerModel::new(f, s, tau_s0),
@@ -281,21 +263,14 @@ impl<'a> FreeScene<'a> {
             x_off,
             evals: 0,
             jac_evals: 0,
-            last_sampled: None,
-            accepted: None,
+            accepted: KeptEval::default(),
             g_start: V3::zeros(),
             out,
             first_k: None,
             first_open: false,
             last_energy: None,
-            record,
+            end: None,
         }
-    }
-
-    /// The last state sampled (when recording) and its time: with [`crate::sim::drive`],
-    /// a state reached mid-run with the contact memories of that moment.
-    pub fn last_sampled(&self) -> Option<(f64, St)> {
-        self.last_sampled
     }
 
     /// Pre-sink δ_g0 = (m_c g / (n_g K_g))^{2/3} of §14.1.
@@ -343,7 +318,7 @@ impl Rhs<NF> for FreeScene<'_> {
         self.evals += 1;
         let ev = self.eval_with(y, true)?;
         let out = (self.deriv(y, &ev), ev.piece);
-        self.accepted = Some((*y, ev));
+        self.accepted.keep(y, ev);
         Some(out)
     }
     fn newton_partition(&self) -> Option<Partition<NF>> {
@@ -406,10 +381,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
         self.eval_with(y, true)
     }
     fn take_accepted(&mut self, y: &St) -> Option<FreeEval> {
-        match self.accepted.take() {
-            Some((ya, ev)) if ya == *y => Some(ev),
-            _ => None,
-        }
+        self.accepted.take(y)
     }
     fn derivative(&self, y: &St, ev: &FreeEval) -> St {
         self.deriv(y, ev)
@@ -450,7 +422,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
             }
         }
         if (0..5).any(|k| ev.c[k].delta > 1e-12) {
-            self.out.end = "initial penetration".into();
+            self.end = Some(FreeEnd::InitialPenetration);
             return false;
         }
         let ev1 = self.eval_with(y, true);
@@ -506,7 +478,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
                 Response { restart: true, stop: false }
             }
             EventKind::Singular(_) => {
-                self.out.end = "singular".into();
+                self.end = Some(FreeEnd::Singular);
                 Response { restart: false, stop: true }
             }
             _ => Response { restart: true, stop: false },
@@ -515,10 +487,10 @@ impl Scene<NF, EF> for FreeScene<'_> {
     fn track(&mut self, _at: Point, ev: &FreeEval, _g: &EventValues<EF>) {
         self.note(ev);
     }
-    fn sample(&mut self, at: Point, t: f64, y: &St, ev: &FreeEval) {
-        if !self.record || at == Point::Grid {
-            return;
-        }
+    fn memories(&self) -> &[Memory] {
+        &self.mem
+    }
+    fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &St, ev: &FreeEval, sink: &mut K) {
         let pose = PoseSample {
             t,
             g: [y[G0], y[G0 + 1], y[G0 + 2]],
@@ -527,23 +499,18 @@ impl Scene<NF, EF> for FreeScene<'_> {
             fingers: [y[0], y[1], y[4], y[5]],
             energy: ev.energy,
         };
-        self.out.poses.push(pose);
-        self.last_sampled = Some((t, *y));
+        sink.pose(at, &pose);
     }
-    fn finish(self, run: &Run<FreeEval>) -> FreeResult {
+    fn finish(self, run: &Run<NF, FreeEval>) -> FreeResult {
         let mut o = self.out;
-        if o.end.is_empty() {
-            o.end = match run.end {
-                End::Stopped => "stopped",
-                End::TimeUp => "t_obs",
-                End::StepBudget => "step budget",
-                End::StepTooSmall => "step size underflow",
-                End::Undefined => "linkage not mountable",
-                End::Aborted => "aborted: more than 20000 events",
-                End::Declined => "declined",
-            }
-            .into();
-        }
+        o.end = self.end.unwrap_or(match run.end {
+            End::TimeUp => FreeEnd::Observed,
+            End::StepBudget => FreeEnd::StepBudget,
+            End::StepTooSmall => FreeEnd::StepTooSmall,
+            End::Undefined => FreeEnd::NotMountable,
+            End::Aborted => FreeEnd::TooManyEvents,
+            End::Stopped | End::Declined => FreeEnd::Stopped,
+        });
         o.t_end = run.t;
         o.events = run.events;
         o.stats = run.stats;
@@ -564,29 +531,32 @@ impl Scene<NF, EF> for FreeScene<'_> {
 
 /// Tolerances of the free scene: fingers as the centred scene, the object's position and
 /// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
-pub fn free_tolerances(opts: &SimOptions) -> Tol<NF> {
-    let mut atol = St::repeat(opts.atol);
+pub fn free_tolerances(integ: &Integration) -> Tol<NF> {
+    let mut atol = St::repeat(integ.atol);
     for j in 0..7 {
-        atol[G0 + j] = opts.atol * 0.1;
+        atol[G0 + j] = integ.atol * 0.1;
     }
-    Tol { rtol: opts.rtol, atol }
+    Tol { rtol: integ.rtol, atol }
 }
 
 /// Simulate the free scene of finger `f` (spring preload `tau_s0`) with the object at
-/// `x_off`, from t = 0 to min(t_max, t_obs) (`t_end` overrides it when given).
-pub fn simulate_free(
+/// `x_off`, from t = 0 to min(t_max, t_obs) (`t_end` overrides it when given), reporting
+/// the poses to `sink`.
+#[allow(clippy::too_many_arguments)]
+// not inlined: its own symbol for `make bench-instructions`' inclusive count
+#[inline(never)]
+pub(crate) fn run<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,
     tau_s0: f64,
     x_off: f64,
     setup: FreeSetup,
-    opts: &SimOptions,
     t_end: Option<f64>,
+    integ: &Integration,
+    sink: &mut K,
 ) -> FreeResult {
-    let clock = Instant::now();
-    let scene = FreeScene::new(f, s, tau_s0, x_off, setup, opts.record);
+    let scene = FreeScene::new(f, s, tau_s0, x_off, setup);
     let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));
-    let mut r = driver::simulate(scene, opts, free_tolerances(opts), t_end);
-    r.cpu_s = clock.elapsed().as_secs_f64();
-    r
+    // the free scene has no pipeline mode: it always runs to t_end
+    driver::simulate(scene, integ, &Controls::DIAGNOSTIC, free_tolerances(integ), t_end, sink)
 }

@@ -1,0 +1,137 @@
+//! `gripopt export`: a design (of a problem file, or of a run folder by id) to a MuJoCo
+//! model (MJCF) or a build sheet (JSON, CSV). The library's `export` layer writes the
+//! files; this resolves the design and the scene (docs/export.md).
+
+use anyhow::{bail, Context, Result};
+use gripopt::export::{write_file, ExportScene, ExportedDesign, ObjectMode};
+use gripopt::params::{Design, Problem, SceneKind};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `gripopt export`.
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// Problem file (TOML), or a run folder (then --design is a design id of the run).
+    source: PathBuf,
+    /// With a problem file: l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the nominal);
+    /// with a run folder: the design id (pareto.csv, `gripopt show`).
+    #[arg(long)]
+    design: Option<String>,
+    /// mjcf (MuJoCo model), json or csv (build sheet); default: from the --out extension
+    /// (.xml, .json, .csv).
+    #[arg(long, value_enum)]
+    format: Option<FormatArg>,
+    /// The file to write (`-` for standard output).
+    #[arg(long)]
+    out: PathBuf,
+    /// The object fixed at (0, R) (centred) or free on the ground (free); default: the
+    /// problem's [scene] (an offset scene's object fixed at x_off, a free one at its x_off).
+    #[arg(long, value_enum)]
+    scene: Option<SceneArg>,
+    /// Overwrite --out if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Output format.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FormatArg {
+    /// MuJoCo MJCF model.
+    Mjcf,
+    /// Build sheet as JSON.
+    Json,
+    /// Build sheet as CSV.
+    Csv,
+}
+
+/// Scene of the exported model.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneArg {
+    /// The object fixed at (0, R) (MODEL.md §8).
+    Centred,
+    /// The object a free body on the ground, against the palm (MODEL.md §14).
+    Free,
+}
+
+fn format_of(a: &ExportArgs) -> Result<FormatArg> {
+    if let Some(f) = a.format {
+        return Ok(f);
+    }
+    let ext = a.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    Ok(match ext.as_deref() {
+        Some("xml") | Some("mjcf") => FormatArg::Mjcf,
+        Some("json") => FormatArg::Json,
+        Some("csv") => FormatArg::Csv,
+        _ => bail!("--out {}: give --format mjcf|json|csv (the extension does not say which)", a.out.display()),
+    })
+}
+
+/// The design and problem of a run folder's design `id`, with a source text.
+fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, String)> {
+    let Some(id) = id else {
+        bail!("{}: a run folder needs --design ID (a design id of the run: pareto.csv, `gripopt show`)", dir.display());
+    };
+    let id: u64 = id.trim().parse().map_err(|_| {
+        gripopt::Error::Input(format!(
+            "--design `{id}`: with a run folder ({}) the design is its id, a whole number (pareto.csv, `gripopt show`)",
+            dir.display()
+        ))
+    })?;
+    let problem = Problem::load(dir.join("problem.toml"))?;
+    let rec = gripopt::record::read_design(dir, id)?;
+    let x = rec.design();
+    Ok((problem, x, format!("run folder {}, design {id} (recorded in {})", dir.display(), rec.file.display())))
+}
+
+/// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--force]`.
+pub fn run(a: ExportArgs) -> Result<()> {
+    let format = format_of(&a)?;
+    let (p, x, source) = if a.source.is_dir() {
+        run_design(&a.source, &a.design)?
+    } else {
+        let p = super::load_problem(&a.source)?;
+        let x = super::design_of(&p, &a.design)?;
+        let what = match &a.design {
+            None => "the nominal design".to_string(),
+            Some(d) => format!("design {d}"),
+        };
+        let src = format!("problem file {}, {what}", a.source.display());
+        (p, x, src)
+    };
+    let setup = p.scene.setup;
+    let placement = match (a.scene, setup.kind) {
+        (Some(SceneArg::Centred), _) | (None, SceneKind::Centred) => ExportScene::centred(),
+        (None, SceneKind::Offset) => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
+        (Some(SceneArg::Free), k) => ExportScene::free(if k == SceneKind::Free { setup.x_off } else { 0.0 }),
+        (None, SceneKind::Free) => ExportScene::free(setup.x_off),
+    };
+    if placement.object == ObjectMode::Free && p.scene.env.g_eq != 0.0 {
+        bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
+    }
+    let e = ExportedDesign::new(&x, &p.scene, placement, &source)?;
+    let text = match format {
+        FormatArg::Mjcf => e.mjcf(),
+        FormatArg::Json => e.build_sheet().to_json(),
+        FormatArg::Csv => e.build_sheet().to_csv(),
+    };
+    if a.out.as_os_str() == "-" {
+        print!("{text}");
+        return Ok(());
+    }
+    write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
+    let kind = match format {
+        FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),
+        FormatArg::Json => "build sheet (JSON)".into(),
+        FormatArg::Csv => "build sheet (CSV)".into(),
+    };
+    eprintln!("wrote {} ({kind}) from {source}", a.out.display());
+    if let Some(d) = &e.statics_discard {
+        eprintln!("note: gripopt {d}");
+    }
+    if format == FormatArg::Mjcf {
+        eprintln!(
+            "view it: python -m mujoco.viewer --mjcf={}  (load the keyframe `grasp` to close the hand; docs/export.md)",
+            a.out.display()
+        );
+    }
+    Ok(())
+}

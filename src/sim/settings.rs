@@ -1,0 +1,98 @@
+//! What a simulation is run with: the numerics ([`Integration`]: method, tolerances, step
+//! budget, first step) and the run controls ([`Controls`]: pipeline or diagnostic mode,
+//! contacts, the uniform sampling grid). Plain structs passed explicitly (rapier's
+//! `IntegrationParameters`); recording and tracing are the caller's [`Sink`](super::Sink).
+
+use crate::params::SolverSettings;
+use serde::{Deserialize, Serialize};
+
+/// Integration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
+    Radau5,
+    /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
+    TrBdf2,
+    /// Dormand–Prince 5(4) (explicit; for comparison only).
+    Dopri5,
+}
+
+impl Method {
+    /// The method's first step size (s): the implicit methods start at 10 µs, the explicit
+    /// one at 1 µs (a stiff contact would reject a longer first step several times).
+    pub fn first_step(self) -> f64 {
+        match self {
+            Method::Radau5 | Method::TrBdf2 => 1e-5,
+            Method::Dopri5 => 1e-6,
+        }
+    }
+    /// The command-line spelling (`radau5`, `trbdf2`, `dopri5`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Method::Radau5 => "radau5",
+            Method::TrBdf2 => "trbdf2",
+            Method::Dopri5 => "dopri5",
+        }
+    }
+}
+
+/// The numerics of a simulation (built from the problem's `[solver]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Integration {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance on angles (rad) and rates (rad/s); each scene scales it for its
+    /// other states.
+    pub atol: f64,
+    /// Budget of accepted + rejected steps.
+    pub max_steps: u64,
+    /// Method.
+    pub method: Method,
+    /// First step size (s).
+    pub h0: f64,
+}
+
+impl Integration {
+    /// Radau IIA with these tolerances and budget, from its own first step.
+    pub fn new(rtol: f64, atol: f64, max_steps: u64) -> Self {
+        Integration { rtol, atol, max_steps, method: Method::Radau5, h0: Method::Radau5.first_step() }
+    }
+    /// The problem's `[solver]` settings with Radau IIA.
+    pub fn from_solver(s: &SolverSettings) -> Self {
+        Self::new(s.rtol, s.atol, s.max_steps)
+    }
+    /// The same settings with method `m` and its first step.
+    pub fn with_method(self, m: Method) -> Self {
+        Integration { method: m, h0: m.first_step(), ..self }
+    }
+}
+
+/// Pipeline mode stops at the first violated criterion; diagnostic mode runs to t_stab or t_max.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Stop at the first violated criterion.
+    Pipeline,
+    /// Always run to t_stab (or t_max), reporting every criterion.
+    Diagnostic,
+}
+
+/// How a run is controlled (not numerics).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Controls {
+    /// Pipeline or diagnostic.
+    pub mode: Mode,
+    /// Contacts with the object (false: the fingers close on nothing — a diagnostic scene
+    /// for the linkage alone; no compliant equilibrium, no stability; centred scene only).
+    pub contacts: bool,
+    /// Also sample a uniform grid with this step (s), when the sink takes samples.
+    pub grid_dt: Option<f64>,
+}
+
+impl Controls {
+    /// Pipeline mode: stop at the first violated criterion.
+    pub const PIPELINE: Controls = Controls { mode: Mode::Pipeline, contacts: true, grid_dt: None };
+    /// Diagnostic mode: run to t_stab (or t_max), reporting every criterion.
+    pub const DIAGNOSTIC: Controls = Controls { mode: Mode::Diagnostic, contacts: true, grid_dt: None };
+}

@@ -1,0 +1,250 @@
+//! `gripopt export` (docs/export.md): the build sheet against MODEL.md §3.4's nominal numbers
+//! and the geometry's own identities, the MJCF's open pose, masses and spring against the
+//! finger model, bad input (exit 2, the file or flag named, never a panic), and a small run
+//! in target/mjcf-check/run whose front design `make test` then exports and simulates with
+//! MuJoCo (tools/check_mjcf.py).
+
+use gripopt::export::{BuildSheet, ExportScene, ExportedDesign};
+use gripopt::params::{Design, Problem};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
+const BOTTLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// A scratch folder of this module under target/.
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/export-tests")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn nominal() -> ExportedDesign {
+    let p = Problem::load(BOTTLE).unwrap();
+    ExportedDesign::new(&Design::nominal(), &p.scene, ExportScene::centred(), "test").unwrap()
+}
+
+fn row(s: &BuildSheet, section: &str, name: &str) -> f64 {
+    s.rows.iter().find(|r| r.section == section && r.name == name).unwrap_or_else(|| panic!("{section}.{name}")).value
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+/// MODEL.md §3.4 in the build sheet's units (mm, degrees, grams).
+#[test]
+fn build_sheet_holds_model_md_nominal_numbers() {
+    let s = nominal().build_sheet();
+    let want = [
+        ("lengths", "l11", 19.76),
+        ("lengths", "l22", 9.0896),
+        ("lengths", "l12", 45.419424436),
+        ("lengths", "t22", 37.6),
+        ("lengths", "k10", 16.093476939),
+        ("design", "l_hand", 230.0),
+        ("open_pose", "q11", -44.441240127),
+        ("open_pose", "q21", 45.558759873),
+        ("open_pose", "q12", 106.332636305),
+        ("open_pose", "q22", -129.76),
+        ("open_pose", "q13", -146.092636305),
+        ("closed_pose", "theta1", 57.825595319),
+        ("closed_pose", "theta2", 68.174528183),
+        ("closed_pose", "k1", 18.947295321),
+        ("closed_pose", "k2", 30.452704679),
+        ("closed_pose", "q11", -4.104849277),
+        ("closed_pose", "q12", 73.927843801),
+        ("closed_pose", "q22", -61.585471817),
+        ("closed_pose", "q13", -73.582871023),
+        ("masses", "m11", 2.141686543805),
+        ("masses", "m12", 4.922781889786),
+        ("masses", "m21", 5.354216359513),
+        ("masses", "m22", 5.060449800387),
+        ("masses", "I11", 292.1314701809),
+        ("masses", "I12", 3415.875879736),
+        ("masses", "I21", 4388.868997281),
+        ("masses", "I22", 1979.246277171),
+        ("masses", "S22_x", -8.798342151567),
+        ("masses", "S22_y", 11.63856653168),
+        ("object", "m_c", 1005.310),
+        ("assembly", "gamma", 1.0),
+        ("assembly", "sigma", 1.0),
+    ];
+    for (sec, name, v) in want {
+        let got = row(&s, sec, name);
+        let tol = if name == "m_c" { 1e-6 } else { 1e-9 };
+        assert!(rel(got, v) <= tol, "{sec}.{name} = {got}, MODEL.md §3.4: {v}");
+    }
+}
+
+/// The joint positions close the loop and keep every link's length, at the open and the
+/// closed pose; finger 2 is finger 1 mirrored; the closed pose's contact points lie on the
+/// object (the phalanx axes at distance R + w from its centre).
+#[test]
+fn build_sheet_joint_positions_are_a_closed_linkage() {
+    let s = nominal().build_sheet();
+    let pt = |sec: &str, f: u8, n: &str| {
+        [row(&s, sec, &format!("finger{f}_{n}_x")), row(&s, sec, &format!("finger{f}_{n}_y"))]
+    };
+    let dist = |a: [f64; 2], b: [f64; 2]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+    for sec in ["open_pose", "closed_pose"] {
+        for f in [1u8, 2] {
+            let (o11, o12, o22, o13, tip) =
+                (pt(sec, f, "O11"), pt(sec, f, "O12"), pt(sec, f, "O22"), pt(sec, f, "O13"), pt(sec, f, "tip"));
+            for (a, b, l) in
+                [(o11, o12, "l11"), (o12, o13, "l12"), (o11, o22, "l21"), (o22, o13, "l22"), (o22, tip, "t22")]
+            {
+                let want = row(&s, "lengths", l);
+                assert!((dist(a, b) - want).abs() < 1e-9, "{sec} finger {f}: {l} = {} mm, sheet {want}", dist(a, b));
+            }
+        }
+        for n in ["O11", "O12", "O22", "O13", "tip"] {
+            let (a, b) = (pt(sec, 1, n), pt(sec, 2, n));
+            assert!(a[0] == -b[0] && a[1] == b[1], "{sec}.{n}: finger 2 {b:?} is not the mirror of finger 1 {a:?}");
+        }
+    }
+    // closed pose on R = 40 mm: both phalanx axes tangent to the circle of radius R + w at (0, R)
+    let c = [0.0, 40.0];
+    let (o11, o22, tip) = (pt("closed_pose", 1, "O11"), pt("closed_pose", 1, "O22"), pt("closed_pose", 1, "tip"));
+    for (a, b) in [(o11, o22), (o22, tip)] {
+        let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
+        let d = ((c[0] - a[0]) * uy - (c[1] - a[1]) * ux).abs() / (ux * ux + uy * uy).sqrt();
+        assert!((d - 45.0).abs() < 1e-9, "phalanx axis at {d} mm from the object centre, want R + w = 45 mm");
+    }
+}
+
+/// The MJCF holds the open pose as every hinge's `ref` (qpos0), the stop at θ2 = 0, the
+/// spring preload, MODEL.md's masses, and is the same text every time.
+#[test]
+fn mjcf_holds_the_open_pose_masses_and_torques() {
+    let x = nominal();
+    let m = x.mjcf();
+    assert_eq!(m, nominal().mjcf(), "the export is deterministic");
+    assert!(m.starts_with("<?xml") && m.trim_end().ends_with("</mujoco>"), "not one MJCF document");
+    assert!(!m.contains("NaN") && !m.contains("inf"), "non-finite numbers");
+    let o = x.finger.open;
+    for (j, q) in [("q11", o.q11), ("q12", o.q12), ("q21", o.q21), ("q22", o.q22)] {
+        for f in ["f1", "f2"] {
+            let tag = format!("<joint name=\"{f}_{j}\" type=\"hinge\" axis=\"0 0 1\" ref=\"{q}\"");
+            assert!(m.contains(&tag), "missing {tag}");
+        }
+    }
+    let psi = Design::nominal().psi;
+    assert!(m.contains(&format!("range=\"{} {}\"", -psi, std::f64::consts::PI)), "stop at q22 = −ψ");
+    assert!(m.contains(&format!("biasprm=\"{} 0 0\"", -x.tau_s0)), "spring bias −τ_s0");
+    assert!((x.tau_s0 - x.tau_s_min).abs() == 0.0 && x.tau_s0 > 0.0);
+    for mass in ["0.002141686543805234", "0.004922781889786219", "0.005354216359513085", "0.005060449800387088"] {
+        assert_eq!(m.matches(&format!("mass=\"{mass}\"")).count(), 2, "{mass} on both fingers");
+    }
+    for q in ["<connect name=\"f1_loop\"", "<connect name=\"f2_loop\"", "<key name=\"grasp\"", "<freejoint"] {
+        assert_eq!(m.contains(q), q != "<freejoint", "{q}");
+    }
+    let free = ExportedDesign::new(&Design::nominal(), &x.scene, ExportScene::free(0.0), "test").unwrap().mjcf();
+    for q in ["<freejoint name=\"object_free\"/>", "name=\"palm_object\"", "name=\"ground_object\""] {
+        assert!(free.contains(q), "free scene: {q}");
+    }
+}
+
+/// A design without an open pose is bad input, not a panic.
+#[test]
+fn an_unbuildable_design_is_an_input_error() {
+    let p = Problem::load(BOTTLE).unwrap();
+    let mut d = Design::nominal();
+    d.b = 0.02; // k10² < 0
+    let e = ExportedDesign::new(&d, &p.scene, ExportScene::centred(), "problem x").unwrap_err();
+    assert!(e.is_input() && e.to_string().contains("open pose"), "{e}");
+    let o = run(&["export", BOTTLE, "--design", "l21=0.05,b=0.02,t22=0.03,r=0.5,p=0.4,psi_deg=130", "--out", "-"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+}
+
+fn bad(args: &[&str], names: &[&str]) {
+    let o = run(args);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {t}");
+    assert!(!t.contains("panicked"), "{args:?}: {t}");
+    for n in names {
+        assert!(t.contains(n), "{args:?}: the message must name `{n}`: {t}");
+    }
+}
+
+/// Bad flags and files: exit 2 with the file or flag named; an existing file is kept
+/// unless --force; `--out -` writes to standard output.
+#[test]
+fn bad_input_is_refused_with_exit_2() {
+    let d = scratch("cli");
+    let out = d.join("model.xml");
+    let o = run(&["export", BOTTLE, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::write(&out, "keep me").unwrap();
+    bad(&["export", BOTTLE, "--out", out.to_str().unwrap()], &["model.xml", "--force"]);
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "keep me", "an existing file was overwritten");
+    let o = run(&["export", BOTTLE, "--out", out.to_str().unwrap(), "--force"]);
+    assert!(o.status.success() && std::fs::read_to_string(&out).unwrap().contains("<mujoco"), "{}", text(&o));
+    let under_file = out.join("x.xml");
+    bad(&["export", BOTTLE, "--out", under_file.to_str().unwrap()], &["x.xml"]);
+    bad(&["export", BOTTLE, "--out", "/nonexistent-gripopt-dir/m.xml"], &["/nonexistent-gripopt-dir"]);
+    bad(&["export", BOTTLE, "--out", d.to_str().unwrap(), "--format", "mjcf"], &["folder"]);
+    bad(&["export", BOTTLE, "--out", d.join("m.txt").to_str().unwrap()], &["--format", "m.txt"]);
+    bad(&["export", BOTTLE, "--out", "-", "--format", "mjfc"], &["mjfc", "--format"]);
+    bad(&["export", BOTTLE, "--out", "-", "--format", "mjcf", "--scene", "fre"], &["fre", "--scene"]);
+    bad(&["export", BOTTLE, "--out", "-", "--format", "json", "--design", "l21=0.05"], &["--design", "b"]);
+    bad(&["export", "/nonexistent/problem.toml", "--out", "-", "--format", "json"], &["/nonexistent/problem.toml"]);
+    let o = run(&["export", BOTTLE, "--out", "-", "--format", "csv"]);
+    assert!(
+        o.status.success() && String::from_utf8_lossy(&o.stdout).contains("section,name,value,unit"),
+        "{}",
+        text(&o)
+    );
+    let o = run(&["export", BOTTLE, "--out", "-", "--format", "json"]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON build sheet");
+    assert!(rel(j["lengths"]["l12_mm"].as_f64().unwrap(), 45.419424436) < 1e-9, "{j}");
+}
+
+/// The run of `make test`'s MuJoCo check: a tiny recorded run in target/mjcf-check/run;
+/// its front designs export as `RUN_DIR --design ID`, with the run's source named; bad ids
+/// and folders are exit 2.
+#[test]
+fn run_folder_designs_export() {
+    let base = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mjcf-check"));
+    std::fs::create_dir_all(&base).unwrap();
+    let dir = base.join("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    let spec = gripopt::run::RunSpec {
+        problem_path: PathBuf::from(BOTTLE),
+        out: dir.clone(),
+        pop: 8,
+        generations: 2,
+        seed: 16,
+        threads: Some(1),
+        record: gripopt::record::RecordOptions::default(),
+    };
+    gripopt::run::optimise(&spec).unwrap();
+    let id = front_id(&dir);
+    let r = dir.to_str().unwrap();
+    let out = scratch("run").join("front.xml");
+    let o = run(&["export", r, "--design", &id, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let m = std::fs::read_to_string(&out).unwrap();
+    assert!(m.contains(&format!("design {id}")) && m.contains("run folder"), "the source is not named");
+    bad(&["export", r, "--design", "999999", "--out", "-", "--format", "mjcf"], &["999999"]);
+    bad(&["export", r, "--design", "front", "--out", "-", "--format", "mjcf"], &["--design", "front"]);
+    bad(&["export", r, "--out", "-", "--format", "mjcf"], &["--design"]);
+    let not_a_run = scratch("not-a-run");
+    bad(&["export", not_a_run.to_str().unwrap(), "--design", "1", "--out", "-", "--format", "mjcf"], &["problem.toml"]);
+}
+
+/// The first design id of a run's pareto.csv.
+fn front_id(dir: &Path) -> String {
+    let text = std::fs::read_to_string(dir.join("pareto.csv")).unwrap();
+    let line = text.lines().filter(|l| !l.starts_with('#')).nth(1).expect("a front design");
+    line.split(',').next().unwrap().to_string()
+}

@@ -1,0 +1,165 @@
+//! What a designer sees in Foxglove is the grasp that was simulated (issue 27): the shards
+//! draw the model's physical scene in world coordinates (the hand horizontal at the grasp
+//! height, the object standing on the ground touching the palm, the fingers in the hand
+//! plane, every base joint at (±b/2, 0) of the design), a design without a grasp clears the
+//! plots and shows its open (and failing) linkage, every window ends with a /tf message, and
+//! `recording/front.mcap` marks the final front, also after a resume. Decoded with the
+//! Foxglove SDK's own decoders and compared with the problem file and the design parameters;
+//! the runs live under target/mcap-check/ so that `make test` also runs the independent
+//! checker (tools/check_mcap.py) over them.
+
+use foxglove::messages::{FrameTransforms, SceneUpdate};
+use foxglove::Decode;
+use gripopt::record::{read_index, GraspSeries, RecordOptions};
+use gripopt::run::{optimise, resume, RunSpec};
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+fn dir(name: &str) -> PathBuf {
+    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
+    let d = base.join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn spec(out: &Path, generations: u64) -> RunSpec {
+    RunSpec {
+        problem_path: PathBuf::from(crate::common::BOTTLE_FILE),
+        out: out.to_path_buf(),
+        pop: 16,
+        generations,
+        seed: 16,
+        threads: Some(2),
+        record: RecordOptions::default(),
+    }
+}
+
+/// Messages of every shard of a run, by design id (window), as (topic, log time, bytes).
+fn windows(run: &Path) -> BTreeMap<u64, Vec<(String, u64, Vec<u8>)>> {
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    let epoch = info["recording"]["epoch_s"].as_u64().unwrap() * 1_000_000_000;
+    let mut out = BTreeMap::new();
+    for e in read_index(&run.join("recording")).unwrap() {
+        let buf = std::fs::read(run.join("recording").join(&e.file)).unwrap();
+        for m in mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()) {
+            let id = (m.log_time - epoch) / 1_000_000_000;
+            out.entry(id).or_insert_with(Vec::new).push((m.channel.topic.clone(), m.log_time - epoch, m.data.to_vec()));
+        }
+    }
+    out
+}
+
+fn csv_ids(p: &Path) -> Vec<u64> {
+    let text = std::fs::read_to_string(p).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn shards_draw_the_simulated_scene_in_world_coordinates() {
+    let run = dir("scene-world");
+    optimise(&spec(&run, 3)).unwrap();
+    let p = gripopt::params::Problem::load(run.join("problem.toml")).unwrap();
+    let (r, lc, hc, w) = (p.scene.object.radius, p.scene.object.length, p.scene.object.grasp_height, p.scene.hand.w);
+    let (mut grasps, mut open_only, mut failing) = (0, 0, 0);
+    for (id, msgs) in windows(&run) {
+        let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
+        let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
+        let b = rec["parameters"]["b"].as_f64().unwrap();
+        // world → hand: at h_c, not rotated, in every /tf message, the last at the window's end
+        let tfs: Vec<(u64, FrameTransforms)> =
+            of("/tf").map(|m| (m.1, FrameTransforms::decode(&m.2[..]).unwrap())).collect();
+        assert_eq!((tfs[0].0 % 1_000_000_000, tfs.last().unwrap().0 % 1_000_000_000), (0, 999_999_999), "design {id}");
+        for (_, t) in &tfs {
+            let x = &t.transforms[0];
+            assert_eq!((x.parent_frame_id.as_str(), x.child_frame_id.as_str()), ("world", "hand"));
+            let (tr, q) = (x.translation.unwrap(), x.rotation.unwrap());
+            assert_eq!((tr.x, tr.y, tr.z), (0.0, 0.0, hc), "the hand plane at the grasp height");
+            assert_eq!((q.x, q.y, q.z, q.w), (0.0, 0.0, 0.0, 1.0), "the hand horizontal");
+        }
+        // the object: a cylinder R × L_c in `hand`, axis along z, touching the palm face y = 0,
+        // its base on the ground (world z = 0 = hand z − h_c); the ground's top face at z = 0
+        let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+        let ent = |id: &str| st.entities.iter().find(|e| e.id == id).unwrap();
+        let (obj, ground) = (ent("object"), ent("ground"));
+        assert!(st.entities.iter().all(|e| e.frame_locked), "entities follow their frames");
+        assert_eq!(obj.frame_id, "hand");
+        let c = &obj.cylinders[0];
+        let (pos, size) = (c.pose.unwrap().position.unwrap(), c.size.unwrap());
+        assert_eq!((size.x, size.y, size.z), (2.0 * r, 2.0 * r, lc));
+        assert_eq!((pos.x, pos.y - r), (0.0, 0.0), "design {id}: the object touches the palm, centred");
+        assert!((hc + pos.z - lc / 2.0).abs() < 1e-15, "design {id}: the object's base on the ground");
+        let g = &ground.cubes[0];
+        assert_eq!(ground.frame_id, "world");
+        assert!((g.pose.unwrap().position.unwrap().z + g.size.unwrap().z / 2.0).abs() < 1e-15);
+        let label = &ent("label").texts[0].text;
+        assert!(label.starts_with(&format!("{id} (gen ")), "{label}");
+        // the series: never empty (an empty one would leave the previous curves on screen)
+        let s = <GraspSeries as prost::Message>::decode(&of("/grasp/series").next().unwrap().2[..]).unwrap();
+        assert!(!s.t.is_empty());
+        let scenes: Vec<SceneUpdate> = of("/scene").map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).collect();
+        if s.simulated_samples == 0 {
+            // no grasp: one NaN sample at t = 0, and the open linkage (and the failing pose)
+            assert!(s.t == [0.0] && s.q11[0].is_nan() && s.proximal_normal_force[0].is_nan(), "design {id}");
+            assert_eq!(scenes.len(), 1);
+            assert!(label.contains(" stage "), "{label}");
+            open_only += scenes[0].entities.iter().any(|e| e.id == "fingers") as usize;
+            failing += scenes[0].entities.iter().any(|e| e.id == "failing_pose") as usize;
+        } else {
+            grasps += 1;
+            assert_eq!(s.mean_force_objective.len(), s.t.len());
+            let f = rec["objectives"]["mean_force"].as_f64().unwrap();
+            assert!(s.mean_force_objective.iter().all(|&v| v == f as f32 as f64), "design {id}: F~ line");
+        }
+        // every finger point in the hand plane, its rod wholly above the ground; the base
+        // joints at (±b/2, 0), the design's palm
+        for e in scenes.iter().flat_map(|m| &m.entities) {
+            assert_eq!(e.frame_id, "hand");
+            for (k, l) in e.lines.iter().enumerate() {
+                assert!(l.points.iter().all(|q| q.z == 0.0 && hc + q.z - l.thickness / 2.0 > 0.0));
+                assert!((l.thickness - 2.0 * w).abs() < 1e-15);
+                let base = &l.points[2];
+                let sign = if k == 0 { 1.0 } else { -1.0 };
+                assert!((base.x - sign * b / 2.0).abs() < 1e-6 && base.y.abs() < 1e-6, "design {id}: base joint");
+            }
+        }
+    }
+    assert!(grasps > 0 && open_only > 0 && failing > 0, "{grasps} {open_only} {failing}");
+}
+
+/// The final front is known only when the run ends: front.mcap is written then, for every
+/// recorded design (also those of the generations written before a crash), and says exactly
+/// what pareto.csv says; a resumed run rewrites it.
+#[test]
+fn front_recording_marks_the_final_front_after_a_resume() {
+    let run = dir("scene-front-resume");
+    let s = spec(&run, 4);
+    assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
+    assert!(!run.join("recording/front.mcap").exists(), "no front before the run ends");
+    resume(&run, None, false, Some(1)).unwrap();
+    let buf = std::fs::read(run.join("recording/front.mcap")).unwrap();
+    let mut on = vec![];
+    let mut ids = vec![];
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    let epoch = info["recording"]["epoch_s"].as_u64().unwrap() * 1_000_000_000;
+    for m in mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()) {
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let id = v["id"].as_u64().unwrap();
+        assert_eq!(m.log_time, epoch + id * 1_000_000_000, "at the design's window start");
+        ids.push(id);
+        if v["on_final_front"].as_bool().unwrap() {
+            on.push(id);
+        }
+    }
+    assert_eq!(ids, (0..64).collect::<Vec<_>>(), "every recorded design");
+    assert_eq!(on, csv_ids(&run.join("pareto.csv")));
+    assert!(!on.is_empty());
+}
