@@ -51,13 +51,16 @@ pub fn grasp_plot(path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
     Ok(())
 }
 
-/// One panel of the plot: each series (name, colour, points (t in ms, value)) against time.
+/// One line of a panel: its name, colour and points (t in ms, value).
+type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
+
+/// One panel of the plot: each series against time.
 struct Panel<'a> {
     caption: &'a str,
     font: u32,
     y: std::ops::Range<f64>,
     unit: &'a str,
-    series: Vec<(&'a str, RGBColor, Vec<(f64, f64)>)>,
+    series: Vec<Series<'a>>,
 }
 
 /// Draws panel `p` on `area`, time 0..`tmax` ms, with its legend.
