@@ -101,13 +101,15 @@ impl<const E: usize> EventSearch<E> {
 
     /// The earliest event in the step (t0, t1] with event values `g0`, `g1` at its ends,
     /// as (time, index). `crossing(k)`: how event k triggers now (None: not watched);
-    /// `values(t)`: the event values on the step's interpolant (None where the model is
-    /// undefined). Events that may open and close inside the step are sampled at four
-    /// points where the cubic through the end values and rates may cross.
+    /// `values(t)`: the event values on the step's interpolant, `value(k, t)`: event k's
+    /// alone, which the root location iterates on (None where the model is undefined).
+    /// Events that may open and close inside the step are sampled at four points where the
+    /// cubic through the end values and rates may cross.
     pub fn earliest(
         &mut self,
         crossing: impl Fn(usize) -> Option<Crossing>,
         values: impl Fn(f64) -> Option<EventValues<E>>,
+        value: impl Fn(usize, f64) -> Option<f64>,
         (t0, g0): (f64, &EventValues<E>),
         (t1, g1): (f64, &EventValues<E>),
     ) -> Option<(f64, usize)> {
@@ -116,7 +118,7 @@ impl<const E: usize> EventSearch<E> {
         // g_k on the interpolant at t (each evaluation counted)
         let mut at = |k: usize, t: f64| {
             *evals += 1;
-            values(t).map(|v| v.g[k])
+            value(k, t)
         };
         let mut best: Option<(f64, usize)> = None;
         let mut sampled = false;

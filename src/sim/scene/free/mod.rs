@@ -403,6 +403,9 @@ impl Scene<NF, EF> for FreeScene<'_> {
         rate[NC + 3] = ev.f[1].theta2_dot;
         EventValues { g, rate }
     }
+    fn event_value(&self, i: usize, y: &St) -> Option<f64> {
+        self.event_value_at(i, y)
+    }
     fn crossing(&self, i: usize) -> Option<Crossing> {
         let kind = free_events()[i];
         match kind {
