@@ -218,6 +218,13 @@ pub fn locate(crossing: Crossing, ta: f64, ga: f64, tb: f64, gb: f64, mut g: imp
 pub fn hermite_may_cross(a: f64, da: f64, b: f64, db: f64, h: f64) -> bool {
     // p(s) = h00 a + h10 h da + h01 b + h11 h db on s ∈ [0, 1]; find the extrema of the cubic.
     let (m0, m1) = (h * da, h * db);
+    // h00 + h01 = 1 with both in [0, 1], |h10|, |h11| ≤ 4/27: p stays within 4/27 (|m0| + |m1|)
+    // of [min(a, b), max(a, b)], so ends farther than that (0.15 > 4/27) on one side cannot
+    // cross (most calls: contacts far apart or deep in)
+    let reach = 0.15 * (m0.abs() + m1.abs());
+    if (a > 0.0 && b > 0.0 && a.min(b) > reach) || (a <= 0.0 && b <= 0.0 && a.max(b) < -reach) {
+        return false;
+    }
     // p'(s) = 6(a − b)(s² − s) + m0(3s² − 4s + 1) + m1(3s² − 2s) = A s² + B s + C
     let qa = 6.0 * (a - b) + 3.0 * m0 + 3.0 * m1;
     let qb = -6.0 * (a - b) - 4.0 * m0 - 2.0 * m1;
