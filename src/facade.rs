@@ -102,11 +102,14 @@ pub fn evaluate_rows(
 ) -> Result<Vec<EvaluatedRow>> {
     let mut gp = GripperProblem::new(problem.clone());
     gp.options = stages.options(problem);
+    // a simulation (ms) is a task of its own, for balance; static evaluations (tens of µs)
+    // are split adaptively, in chunks, by rayon
+    let max_len = if stages == Stages::All { 1 } else { usize::MAX };
     in_pool(threads, || {
         designs
             .par_iter()
             .enumerate()
-            .with_max_len(1)
+            .with_max_len(max_len)
             .map(|(k, d)| {
                 let x = d.to_array().to_vec();
                 let eval = gp.evaluate(&x);

@@ -153,3 +153,64 @@ def test_random_designs_are_the_bench_stream(problem):
     lo, hi = problem.bounds.lower, problem.bounds.upper
     assert ((a >= lo) & (a <= hi)).all().all()
     assert not a.equals(problem.bounds.sample(50, seed=5))
+
+
+# MODEL.md §3.4 (nominal derived values, "compare at 1e-9 relative") and D22 (the nominal's
+# α and F̃ under each force model): numbers of the spec, not of this code.
+NOMINAL_SPEC = {"l11": 0.01976, "l12": 0.045419424436, "l22": 0.0090896, "l_hand": 0.230}
+NOMINAL_RECORD_SPEC = {
+    "q11_0": -44.441240127,  # degrees in the spec, radians in the record
+    "q21_0": 45.558759873,
+    "q12_0": 106.332636305,
+    "q13_0": -146.092636305,
+    "theta1": 57.825595319,
+    "theta2": 68.174528183,
+}
+FORCE_MODEL_SPEC = {"mobilised": (0.630876786547, 11.0872485551), "frictionless": (0.134162947086, 8.29512361390)}
+
+
+def test_the_nominal_design_has_the_specs_values(problem):
+    row = problem.evaluate(problem.nominal).iloc[0]
+    for col, want in NOMINAL_SPEC.items():
+        assert row[col] == pytest.approx(want, rel=1e-9, abs=0), col
+    rec = problem.record()
+    for key, deg in NOMINAL_RECORD_SPEC.items():
+        assert np.degrees(rec[key]) == pytest.approx(deg, rel=1e-9), key
+    assert rec["k1"] == pytest.approx(0.018947295321, rel=1e-9)
+    assert rec["masses"] == pytest.approx([2.141686543805e-3, 4.922781889786e-3, 5.354216359513e-3, 5.060449800387e-3], rel=1e-9)
+    # the force model of the problem file decides alpha and mean_force (from_toml: an edited problem)
+    text = problem.toml
+    assert 'force_model = "mobilised"' in text
+    for model, (alpha, force) in FORCE_MODEL_SPEC.items():
+        p = gripopt.Problem.from_toml(text.replace('force_model = "mobilised"', f'force_model = "{model}"'))
+        r = p.evaluate(p.nominal, static_only=True).iloc[0]
+        assert r["force_model"] == model
+        assert (r["alpha"], r["mean_force"]) == (pytest.approx(alpha, rel=1e-9), pytest.approx(force, rel=1e-9))
+
+
+def test_the_gil_is_released_while_rust_evaluates(problem):
+    # Python code in another thread goes on while evaluate runs: were the GIL held through
+    # the native call, the sampling loop below would stall for the call's whole duration
+    import threading
+    import time
+
+    designs = problem.bounds.sample(20_000, seed=3)
+    span: dict[str, float] = {}
+
+    def work() -> None:
+        span["start"] = time.perf_counter()
+        problem.evaluate(designs, static_only=True, threads=1)
+        span["end"] = time.perf_counter()
+
+    worker = threading.Thread(target=work)
+    stamps = []
+    worker.start()
+    while worker.is_alive():
+        stamps.append(time.perf_counter())
+        time.sleep(0.0005)
+    worker.join()
+    inside = [t for t in stamps if span["start"] <= t <= span["end"]]
+    duration = span["end"] - span["start"]
+    assert len(inside) > 2, "no Python progress during the evaluation"
+    gaps = np.diff([span["start"], *inside, span["end"]])
+    assert gaps.max() < 0.5 * duration, f"Python stalled {gaps.max():.3f} s of a {duration:.3f} s evaluation"
