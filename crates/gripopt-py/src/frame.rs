@@ -420,38 +420,22 @@ impl<'a> ser::Serializer for Ser<'a> {
     }
 }
 
-impl ser::SerializeSeq for Fields<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-        self.element(v)
-    }
-    fn end(self) -> Result<(), FrameError> {
-        Ok(())
-    }
+/// serde's three kinds of sequence (`[T]`, tuples, tuple structs): elements `key_0`, `key_1`, …
+macro_rules! elements {
+    ($($trait:ident $method:ident),*) => {$(
+        impl ser::$trait for Fields<'_> {
+            type Ok = ();
+            type Error = FrameError;
+            fn $method<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
+                self.element(v)
+            }
+            fn end(self) -> Result<(), FrameError> {
+                Ok(())
+            }
+        }
+    )*};
 }
-
-impl ser::SerializeTuple for Fields<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-        self.element(v)
-    }
-    fn end(self) -> Result<(), FrameError> {
-        Ok(())
-    }
-}
-
-impl ser::SerializeTupleStruct for Fields<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-        self.element(v)
-    }
-    fn end(self) -> Result<(), FrameError> {
-        Ok(())
-    }
-}
+elements!(SerializeSeq serialize_element, SerializeTuple serialize_element, SerializeTupleStruct serialize_field);
 
 impl ser::SerializeStruct for Fields<'_> {
     type Ok = ();
