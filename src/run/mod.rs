@@ -17,6 +17,8 @@ mod observers;
 mod outputs;
 mod persist;
 mod plots;
+mod robust_columns;
+mod robust_eval;
 mod rundir;
 mod verify;
 mod verify_rec;
@@ -26,7 +28,7 @@ pub use archive::{Archive, ARCHIVE_FILE};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
 pub use folder::{read_table, RunFolder};
 pub use grasp_plot::grasp_plot;
-pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
+pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
 pub use limits::{
     check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
 };
@@ -38,6 +40,8 @@ pub use outputs::{
 };
 pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
+pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
+pub use robust_eval::RobustScheduled;
 pub use rundir::{
     optimise, optimise_with, resume, resume_with, Resume, RunHooks, RunInfo, RunSpec, RunStatus, RunSummary,
 };
