@@ -170,7 +170,7 @@ impl RawRobust {
                 (Some(f), _, false) => {
                     let path = c.file.parent().unwrap_or(std::path::Path::new(".")).join(f);
                     object_of_file(&path).map_err(|e| {
-                        c.fail(&field("file"), format!("{f:?}"), &format!("must be a problem file with a valid [object]: {e}"))
+                        c.fail(&field("file"), format!("{f:?}"), &format!("must be a problem file with a valid [object] (paths are relative to this file; a run folder keeps only its problem.toml: inline the object there): {e}"))
                     })?
                 }
                 (None, true, _) => {

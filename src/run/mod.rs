@@ -22,6 +22,7 @@ mod robust_eval;
 mod rundir;
 mod verify;
 mod verify_rec;
+mod verify_robust;
 mod verify_run;
 
 pub use archive::{Archive, ARCHIVE_FILE};
@@ -51,4 +52,5 @@ pub use verify::{
     VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
+pub use verify_robust::{is_robust_run, verify_robust, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE};
 pub use verify_run::verify;
