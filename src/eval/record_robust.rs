@@ -93,6 +93,7 @@ impl ScenarioRecord {
 
 /// One object of a robust design.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct ObjectRecord {
     /// Its name.
     pub name: String,
@@ -135,6 +136,7 @@ pub struct RobustObjectives {
 
 /// The robust sub-record.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct RobustRecord {
     /// The aggregated objectives.
     pub objectives: RobustObjectives,

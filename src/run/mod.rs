@@ -17,6 +17,7 @@ mod observers;
 mod outputs;
 mod persist;
 mod plots;
+mod replay_scenario;
 mod robust_columns;
 mod robust_eval;
 mod rundir;
@@ -41,6 +42,7 @@ pub use outputs::{
 };
 pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
+pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
 pub use robust_eval::RobustScheduled;
 pub use rundir::{

@@ -116,10 +116,10 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     let _lock = RunLock::acquire(dir)?;
     let file = dir.join("problem.toml");
     let p = Problem::load(&file)?;
-    let r = p.robust.clone().ok_or_else(|| Error::RunDir {
-        path: file.clone(),
-        message: "not a robust problem (no [robust])".into(),
-    })?;
+    let r = p
+        .robust
+        .clone()
+        .ok_or_else(|| Error::RunDir { path: file.clone(), message: "not a robust problem (no [robust])".into() })?;
     let front = folder.front()?;
     if front.is_empty() {
         return Err(Error::RunDir {
@@ -132,8 +132,11 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     let starts: Vec<_> =
         front.par_iter().map(|row| robust_start(&Design::from_array(&row.parameters()), &setup)).collect();
     let seq: Vec<(usize, usize)> = setup.sequence().collect();
-    let tasks: Vec<(usize, usize)> =
-        (0..starts.len()).filter(|&d| starts[d].passed()).flat_map(|d| seq.iter().map(move |&(o, k)| (d, o, k))).map(|(d, o, k)| (d, o * setup.k + k)).collect();
+    let tasks: Vec<(usize, usize)> = (0..starts.len())
+        .filter(|&d| starts[d].passed())
+        .flat_map(|d| seq.iter().map(move |&(o, k)| (d, o, k)))
+        .map(|(d, o, k)| (d, o * setup.k + k))
+        .collect();
     let done: Vec<ScenarioRecord> = tasks
         .par_iter()
         .with_max_len(1)

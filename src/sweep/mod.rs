@@ -9,6 +9,7 @@
 //! * derived (thesis §4.1.2–4.2.2): `l11` sets p = l11/l21 and, unless `psi_deg` is varied
 //!   too, ψ = 140 − 25.6 p (eq. 4.15); `l22` sets r = l22/l11; `l_hand` sets
 //!   t22 = (l_hand − b − 2 l21)/2 (b and l21 as set at that point);
+//! * `mu_scale`: a factor on the phalanx friction μ_s and μ_d together (0 allowed);
 //! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
 //!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
 //!
@@ -54,6 +55,9 @@ pub enum Knob {
     LHand,
     /// A numeric problem-file field, by its index into [`LIMITS`].
     Field(usize),
+    /// `mu_scale`: a factor on the object–phalanx friction μ_s and μ_d together (0 =
+    /// frictionless phalanges; the friction mechanism of docs/scenes.md).
+    MuScale,
 }
 
 /// One `--vary NAME=LO:HI:N`.
@@ -84,6 +88,7 @@ pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
         "l11" => return Ok(Knob::L11),
         "l22" => return Ok(Knob::L22),
         "l_hand" => return Ok(Knob::LHand),
+        "mu_scale" => return Ok(Knob::MuScale),
         _ => {}
     }
     let is_field = |l: &&crate::params::Limit| !DESIGN_NAMES.contains(&l.field) && l.field != "criteria.r_sing";
@@ -99,7 +104,7 @@ pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
             flag,
             name,
             format!(
-                "unknown name (a design variable {}, a derived l11, l22, l_hand, or a numeric problem-file field such as tau, density, grasp_height, radius, restitution, hand.w)",
+                "unknown name (a design variable {}, a derived l11, l22, l_hand, mu_scale (phalanx friction factor), or a numeric problem-file field such as tau, density, grasp_height, radius, restitution, hand.w)",
                 DESIGN_NAMES.join(", ")
             ),
         )),
@@ -115,6 +120,7 @@ fn knob_limit(k: Knob) -> (f64, bool, f64, &'static str) {
         // derived lengths: the same range as the design lengths
         Knob::L11 | Knob::L22 => limit("l21"),
         Knob::LHand => return (0.0, true, 2.0, "m"),
+        Knob::MuScale => return (0.0, false, 10.0, "-"),
     };
     (l.lo, l.lo_open, l.hi, l.unit)
 }
@@ -294,6 +300,10 @@ impl SweepSpec {
                     _ => {}
                 }
             }
+        }
+        for &(_, val) in derived.iter().filter(|(k, _)| *k == Knob::MuScale) {
+            p.scene.contact.mu_s *= val;
+            p.scene.contact.mu_d *= val;
         }
         if self.hold_l_hand && !derived.iter().any(|(k, _)| *k == Knob::LHand) {
             x[2] = (base_l_hand - x[1] - 2.0 * x[0]) / 2.0;
