@@ -266,7 +266,8 @@ fn tables(dir: &Path) -> Vec<Vec<u8>> {
 /// front out of sample.
 #[test]
 fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
-    let dir = tmp("run");
+    // under target/mcap-check: `make test` checks the recordings with the independent reader
+    let dir = crate::common::check_dir("robust-run");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("robust.toml");
     std::fs::write(&file, robust_text("")).unwrap();
@@ -281,6 +282,12 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     let pop = folder.population().unwrap();
     assert_eq!(pop[0].robust.objects(), vec!["bottle", "can"]);
     assert!(pop.iter().any(|r| r.robust.get("can", "p_stay").is_some()));
+    // a scenario of a design that ran scenarios: re-simulated equal to its record, recorded
+    let rec = pop.iter().find(|r| r.robust.get("bottle", "scenarios").is_some_and(|n| n > 0.0)).unwrap();
+    let r = gripopt::run::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
+    assert_eq!(r.verified, Some(true), "{r:?}");
+    assert!(r.recording.as_ref().unwrap().is_file());
+    assert_eq!(r.scenario.inputs.x_off, r.record.x_off.unwrap());
     let front = folder.front().unwrap();
     if front.is_empty() {
         return;
@@ -290,4 +297,23 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     assert!(s.rows.iter().all(|r| r.scenarios_out == 3 && r.keeps == (r.p_stay_out.unwrap() >= 0.5)));
     let text = std::fs::read_to_string(one.join(gripopt::run::VERIFY_ROBUST_FILE)).unwrap();
     assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 1 + 2 * front.len());
+}
+
+/// The shipped multi-object problem loads, its objects are the shipped single-object files'
+/// (inline, so a run folder's copy is self-contained), and a design is evaluated over them.
+#[test]
+fn the_shipped_kitchen_problem() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/problems");
+    let k = Problem::load(format!("{dir}/kitchen.toml")).unwrap();
+    let r = k.robust.as_ref().unwrap();
+    let names: Vec<&str> = r.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["bottle-full", "bottle-half", "can", "small-bottle"]);
+    for (i, f) in [(0, "bottle-1l"), (1, "light-bottle"), (2, "can")] {
+        assert_eq!(r.objects[i].object, Problem::load(format!("{dir}/{f}.toml")).unwrap().scene.object, "{f}");
+    }
+    assert!(!k.source_text.contains("file ="));
+    assert_eq!((r.scenarios, r.count(1)), (8, 32));
+    // the can alone is feasible in the free scene (its file says why not in the centred one)
+    let can = Problem::load(format!("{dir}/can.toml")).unwrap();
+    assert_eq!(can.scene.setup.kind, gripopt::params::SceneKind::Free);
 }
