@@ -65,13 +65,14 @@ run: build
 # free scene — optimised (pop 40, 15 generations: about 9 minutes on 2 cores), then its front
 # re-evaluated out of sample (`gripopt verify`: 32 fresh scenarios per object, verify_robust.csv).
 KITCHEN_OUT ?= results/kitchen
+KITCHEN_PROBLEM ?= problems/kitchen.toml
 KITCHEN_POP ?= 40
 KITCHEN_GENERATIONS ?= 15
 .PHONY: kitchen
 kitchen: build
 	@mkdir -p results
 	@if [ -e $(KITCHEN_OUT) ]; then keep=$(KITCHEN_OUT).$$(date +%Y%m%d-%H%M%S); echo "$(KITCHEN_OUT) holds an earlier run: moving it to $$keep (nothing is deleted)"; mv $(KITCHEN_OUT) $$keep; fi
-	$(BIN) optimise problems/kitchen.toml --out $(KITCHEN_OUT) --pop $(KITCHEN_POP) --generations $(KITCHEN_GENERATIONS) --seed $(SEED)
+	$(BIN) optimise $(KITCHEN_PROBLEM) --out $(KITCHEN_OUT) --pop $(KITCHEN_POP) --generations $(KITCHEN_GENERATIONS) --seed $(SEED)
 	$(BIN) verify $(KITCHEN_OUT)
 	@echo "Robust front: $(KITCHEN_OUT)/pareto.csv (per object NAME.p_stay, …); out of sample: $(KITCHEN_OUT)/verify_robust.csv; show it: $(BIN) show $(KITCHEN_OUT)"
 	@id=$$(grep -v "^#" $(KITCHEN_OUT)/pareto.csv | sed -n 2p | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a scenario of a front design: $(BIN) replay $(KITCHEN_OUT) --design $$id --scenario can:0"; fi
