@@ -476,6 +476,18 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
         let p = pareto.iter().find(|p| p[0] == r[0]).unwrap();
         assert_eq!(r[2], p[col(&format!("{}.p_stay", r[1]))], "{r:?}");
     }
+    // `show` lists each front design's P(stay) per object, as in pareto.csv
+    let shown = std::process::Command::new(env!("CARGO_BIN_EXE_gripopt")).arg("show").arg(&out).output().unwrap();
+    let shown = String::from_utf8_lossy(&shown.stdout);
+    let first = &pareto[1];
+    let line = shown
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some(first[0].as_str()))
+        .unwrap_or_else(|| panic!("{shown}"));
+    for o in ["bottle-full", "bottle-half", "can", "small-bottle"] {
+        let p: f64 = first[col(&format!("{o}.p_stay"))].parse().unwrap();
+        assert!(line.contains(&format!(" {o} {p:.3}")), "{o}: {line}");
+    }
     // the shipped problem's run: the same bytes at 1 thread and after a crash and a resume
     let again = |name: &str, threads: usize| RunSpec {
         problem_path: problem.clone(),

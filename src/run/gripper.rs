@@ -150,7 +150,7 @@ impl MooProblem for GripperProblem {
         if let Some(setup) = &self.robust {
             let st = robust_start(&design_of(x), setup);
             let hint = robust_hint(x, &st);
-            return (Started::Robust(Box::new(st)), hint);
+            return (Started::Robust(st), hint);
         }
         let ev = evaluate_statics(&design_of(x), &self.problem.scene);
         let hint = match (&ev.kin, &ev.statics) {
@@ -227,7 +227,7 @@ pub enum Started {
     /// Stages 0–2 of a single-object problem.
     Nominal(Evaluation),
     /// Stages 0–2 on every object of a robust problem.
-    Robust(Box<RobustStart>),
+    Robust(RobustStart),
 }
 
 /// The cost hint of a robust design: costly (its design vector and derived lengths as

@@ -54,7 +54,7 @@ impl Evaluator<GripperProblem> for RobustScheduled {
                 let t = Instant::now();
                 let (s, h) = p.start(x);
                 let Started::Robust(s) = s else { unreachable!("a robust problem starts robust designs") };
-                (*s, h, t.elapsed().as_secs_f64())
+                (s, h, t.elapsed().as_secs_f64())
             })
             .collect();
         let hints: Vec<CostHint> = starts.iter().map(|s| s.1.clone()).collect();
