@@ -10,19 +10,18 @@ mod binomial;
 mod record;
 mod record_robust;
 mod robust;
+mod robust_result;
 mod scene_record;
 mod stage3;
 mod stages;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
 pub use record::{KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
-pub use record_robust::{
-    robust_record, robust_summary, ObjectRecord, RobustObjectives, RobustRecord, ScenarioInputs, ScenarioRecord,
-};
+pub use record_robust::{robust_summary, ObjectRecord, RobustObjectives, RobustRecord, ScenarioInputs, ScenarioRecord};
 pub use robust::{
-    evaluate_record, evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup,
-    RobustStart,
+    evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,
 };
+pub use robust_result::{evaluate_record, robust_record};
 pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
 pub use stage3::{
     barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,

@@ -249,30 +249,3 @@ pub fn evaluate_sequential(x: &Design, setup: &RobustSetup, opts: &EvalOptions) 
     let scen = if st.passed() { fold(setup, |o, k| run_scenario(&st, setup, o, k, opts, &mut ()).0) } else { vec![] };
     (st, scen)
 }
-
-/// The record of design `x` of problem `p` through `opts`' stages: for a robust problem with
-/// stage 3 the robust evaluation (`setup`: the problem's, computed once by the caller, or
-/// None to compute it here), otherwise the single-object pipeline's.
-pub fn evaluate_record(
-    p: &Problem,
-    x: &Design,
-    opts: &EvalOptions,
-    setup: Option<&RobustSetup>,
-) -> super::record::Record {
-    let own;
-    let setup = match (setup, opts.dynamics) {
-        (Some(s), true) => Some(s),
-        (None, true) => {
-            own = RobustSetup::of(p);
-            own.as_ref()
-        }
-        _ => None,
-    };
-    match setup {
-        Some(setup) => {
-            let (st, scen) = evaluate_sequential(x, setup, opts);
-            super::record_robust::robust_record(setup, &st, scen)
-        }
-        None => super::record::Record::from_eval(&super::stage3::evaluate(x, &p.scene, opts)),
-    }
-}

@@ -3,8 +3,9 @@
 //! required and unknown keys are rejected: there are no silent defaults. Errors name the
 //! file and the field.
 
+use super::checker::Checker;
 use super::design::{Bounds, Design, DESIGN_NAMES};
-use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
+use super::limits::{MAX_FILE_BYTES, MAX_R_SING};
 use super::robust::Robust;
 use super::robust_load::RawRobust;
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
@@ -153,24 +154,6 @@ struct RawBounds {
     r: Vec<f64>,
     p: Vec<f64>,
     psi_deg: Vec<f64>,
-}
-
-pub(super) struct Checker<'a> {
-    pub(super) file: &'a Path,
-}
-
-impl Checker<'_> {
-    pub(super) fn check(&self, field: &str, v: f64) -> Result<f64> {
-        limit(field).check(v).map_err(|rule| Error::InvalidField {
-            file: self.file.to_path_buf(),
-            field: field.to_string(),
-            value: super::limits::num(v),
-            rule,
-        })
-    }
-    pub(super) fn fail(&self, field: &str, value: String, rule: &str) -> Error {
-        Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
-    }
 }
 
 impl Problem {

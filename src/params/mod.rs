@@ -3,6 +3,7 @@
 //! settings, the nominal [`Design`] and the [`Bounds`]. The lowest layer: it depends on
 //! nothing of gripopt but `math` and `error`.
 
+mod checker;
 mod design;
 mod limits;
 mod load;

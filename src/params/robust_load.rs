@@ -1,7 +1,7 @@
 //! `[robust]` as written in a problem file and its validation: every key required (the
 //! uncertain inputs are the ones listed), errors naming the file and the field.
 
-use super::load::Checker;
+use super::checker::Checker;
 use super::robust::{corner_count, Aggregation, ObjectCase, Robust, Sampling};
 use super::scene::{Object, SceneParams};
 use super::uncertainty::{phi, Dist, Uncertainty, INPUTS};

@@ -4,7 +4,8 @@
 //! `NAME.stays` of `NAME.scenarios`, the worst free-object displacement and the object's
 //! own objectives. A single-object problem has none (its files are as before, byte for byte).
 
-use super::outputs::Column;
+/// A column: name, unit, meaning (`outputs::Column`).
+type Column = (&'static str, &'static str, &'static str);
 use crate::eval::Record;
 use serde::de::{MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
