@@ -41,9 +41,10 @@ impl Stages {
 }
 
 /// Evaluate `design` through `stages` of `problem`'s pipeline: its record (the JSON of
-/// `gripopt evaluate --json`).
+/// `gripopt evaluate --json`; for a robust problem with all stages, the robust evaluation
+/// over every object and scenario, docs/robust.md).
 pub fn evaluate(problem: &Problem, design: &Design, stages: Stages) -> Record {
-    Record::from_eval(&crate::eval::evaluate(design, &problem.scene, &stages.options(problem)))
+    crate::eval::evaluate_record(problem, design, &stages.options(problem), None)
 }
 
 /// Evaluate a batch of designs in parallel on `threads` threads (None: all cores): their
@@ -55,11 +56,12 @@ pub fn evaluate_batch(
     threads: Option<usize>,
 ) -> Result<Vec<Record>> {
     let opts = stages.options(problem);
+    let robust = crate::eval::RobustSetup::of(problem);
     in_pool(threads, || {
         designs
             .par_iter()
             .with_max_len(1)
-            .map(|x| Record::from_eval(&crate::eval::evaluate(x, &problem.scene, &opts)))
+            .map(|x| crate::eval::evaluate_record(problem, x, &opts, robust.as_ref()))
             .collect()
     })
 }

@@ -24,6 +24,7 @@ mod recorded;
 mod recording;
 mod recording_scene;
 mod replay_scene;
+mod robust;
 mod robustness;
 mod robustness_cli;
 mod scene_cli;

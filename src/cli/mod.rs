@@ -10,6 +10,7 @@ mod export;
 mod optcmd;
 mod progress;
 mod report;
+mod robust;
 mod scenes;
 mod show;
 mod sweep;
@@ -136,6 +137,10 @@ enum Cmd {
         /// reports it like `simulate --scene` (it cannot be verified against the recording).
         #[arg(long)]
         scene: Option<String>,
+        /// A robust run: replay scenario K of OBJECT (e.g. can:3) of the design, compare it
+        /// with the recording and record it to RUN_DIR/scenario-ID-OBJECT-K.mcap.
+        #[arg(long, conflicts_with_all = ["scene", "plot"])]
+        scenario: Option<String>,
     },
     /// Continue a stopped, killed or finished run.
     Resume {
@@ -347,7 +352,10 @@ pub fn run() -> Result<i32> {
             let s = gripopt::run::optimise_with(&spec, hooks())?;
             optcmd::summary(&s, json)
         }
-        Cmd::Replay { run_dir, design, json, csv, plot, scene } => {
+        Cmd::Replay { run_dir, design, json, csv, plot, scene, scenario } => {
+            if let Some(sc) = &scenario {
+                return robust::replay_scenario(&run_dir, design, sc, json, csv.as_deref());
+            }
             if let Some(sc) = &scene {
                 if let Some(code) =
                     scenes::replay_in_scene(&run_dir, design, sc, json, csv.as_deref(), plot.as_deref())?

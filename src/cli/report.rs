@@ -2,7 +2,7 @@
 //! (shared with `simulate`).
 
 use anyhow::Result;
-use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, Record, WorkRecord};
+use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, WorkRecord};
 use gripopt::params::{Design, Problem};
 
 /// A value scaled, to `prec` decimals, or "—".
@@ -25,8 +25,7 @@ pub fn yes_no(v: Option<bool>) -> &'static str {
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
     let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
-    let ev = gripopt::eval::evaluate(x, &p.scene, &opts);
-    let rec = Record::from_eval(&ev);
+    let rec = gripopt::eval::evaluate_record(p, x, &opts, None);
     if json {
         println!("{}", serde_json::to_string_pretty(&rec)?);
         return Ok(());
@@ -99,18 +98,21 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
             print_free(f, rec.x_off);
         }
     }
+    if let Some(rb) = &rec.robust {
+        print!("{}", gripopt::eval::robust_summary(rb));
+    }
     let v = &rec.verdict;
     match (&v.failed_stage, &v.reason) {
         (Some(s), Some(why)) => {
             println!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
         }
         _ => {
-            let o = ev.objectives();
+            let o = rec.objectives().map(|v| v.unwrap_or(f64::NAN));
             println!(
                 "verdict    FEASIBLE  objectives: max_offset {:.3} mm, alpha {:.5}, mean force {:.4} N, t_stab {}",
-                -o[0] * 1e3,
+                o[0] * 1e3,
                 o[1],
-                -o[2],
+                o[2],
                 if o[3].is_nan() { "— (not computed)".to_string() } else { format!("{:.6} s", o[3]) }
             );
         }

@@ -202,7 +202,15 @@ pub fn run(a: ShowArgs) -> Result<()> {
                 }
             })
             .collect();
-        println!("{}  {}", cells.join(""), replay(r.id));
+        // a robust run: each object's P(stay) (docs/robust.md)
+        let p_stay: String = r
+            .robust
+            .objects()
+            .iter()
+            .map(|o| format!("  {o} {}", r.robust.get(o, "p_stay").map_or("—".into(), |p| format!("{p:.3}"))))
+            .collect();
+        let p_stay = if p_stay.is_empty() { p_stay } else { format!("  P(stay):{p_stay}") };
+        println!("{}  {}{p_stay}", cells.join(""), replay(r.id));
     }
     Ok(())
 }

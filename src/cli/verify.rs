@@ -78,6 +78,12 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         b = b.num_threads(t);
     }
     let pool = b.build()?;
+    if gripopt::run::is_robust_run(&a.run_dir) {
+        // a robust run: the front out of sample (docs/robust.md)
+        let s = pool.install(|| gripopt::run::verify_robust(&a.run_dir))?;
+        print!("{}", s.report());
+        return Ok(());
+    }
     let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         indicatif::ProgressBar::new(0)
     } else {

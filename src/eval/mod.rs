@@ -6,12 +6,22 @@
 //! Files: `stages` (stages 0–2, [`Evaluation`], [`Reason`], [`Cause`]) ← `stage3` (stage
 //! 3, [`evaluate`], [`simulate`]); `record` ([`Record`]) ← `scene_record` (its stage-3 parts).
 
+mod binomial;
 mod record;
+mod record_robust;
+mod robust;
+mod robust_result;
 mod scene_record;
 mod stage3;
 mod stages;
 
+pub use binomial::{binomial_cdf, clopper_pearson};
 pub use record::{KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use record_robust::{robust_summary, ObjectRecord, RobustObjectives, RobustRecord, ScenarioInputs, ScenarioRecord};
+pub use robust::{
+    evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,
+};
+pub use robust_result::{evaluate_record, robust_record};
 pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
 pub use stage3::{
     barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,

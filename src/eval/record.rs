@@ -4,6 +4,7 @@
 //! scene (flat keys in JSON, snake_case; `null` = not computed), enums where a value is
 //! one of a set (the scene, how a simulation ended, what discarded the design).
 
+use super::record_robust::RobustRecord;
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
 use super::stages::{Cause, Evaluation, PartialGrasp, StaticsResult};
 use crate::params::{DesignParameters, ForceModel, SceneKind};
@@ -40,6 +41,10 @@ pub struct Record {
     /// The object offset of that scene (m).
     #[serde(default)]
     pub x_off: Option<f64>,
+    /// A robust problem's evaluation: aggregated objectives, per object P(stay), per
+    /// scenario what happened (absent for a single-object problem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<RobustRecord>,
 }
 
 /// Stages 0–1: the finger built from the design (every value computed before a discard).
@@ -178,6 +183,7 @@ impl Record {
             },
             scene: ev.scene,
             x_off: ev.scene.map(|_| ev.x_off),
+            robust: None,
         }
     }
 }
@@ -254,6 +260,10 @@ impl Record {
     /// Objectives in their natural sense: max_offset (m; negative: the placeholder of a
     /// design not form closed at 0), α, F̃ (N), t_stab (s); None where not computed.
     pub fn objectives(&self) -> [Option<f64>; 4] {
+        if let Some(r) = &self.robust {
+            let o = &r.objectives;
+            return [o.max_offset, o.alpha, o.mean_force, o.t_stab];
+        }
         let st = &self.statics;
         [st.max_offset, st.alpha, st.mean_force, self.grasp.t_stab]
     }
@@ -264,7 +274,11 @@ impl Record {
         built.then_some([k.l11?, k.l12?, k.l22?])
     }
     /// Stage 3's grasp work: accepted steps and right-hand-side evaluations.
+    /// For a robust design: all its simulations' (centred and free, every scenario run).
     pub fn sim_work(&self) -> Option<[u64; 2]> {
+        if let Some(r) = &self.robust {
+            return (r.scenarios_run > 0).then(|| [r.steps[0] + r.steps[1], r.rhs_evals[0] + r.rhs_evals[1]]);
+        }
         Some([self.grasp.work.steps?, self.grasp.work.rhs_evals?])
     }
     /// Form closed at the centred object (by the sign of max_offset, MODEL.md §6.7).

@@ -126,7 +126,7 @@ pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptio
 /// The discard the centred scene gives in a free-kind stage 3: only the finger's own
 /// criteria (fold, stability, singular or aborted grasps); the impact and force criteria
 /// are the measurement's to decide.
-fn finger_discard(c: &DynamicsResult) -> Option<Discard> {
+pub(crate) fn finger_discard(c: &DynamicsResult) -> Option<Discard> {
     use DynOutcome as D;
     let fail = match c.outcome {
         D::Stable | D::ImpactEnergy | D::ForceCriterion | D::StaticForceLimit | D::Fold | D::NoStability => {

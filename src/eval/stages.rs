@@ -89,6 +89,8 @@ pub enum Cause {
     ObjectMoved,
     /// The free scene ended before t_obs.
     FreeSceneAborted,
+    /// A robust design: the object barely moves in too few scenarios (P(stay) < p_min).
+    PStay,
 }
 
 impl Cause {
@@ -99,7 +101,7 @@ impl Cause {
 }
 
 /// [`Cause`]'s words in variant order (checked against serde's by a test).
-const CAUSE_WORDS: [&str; 24] = [
+const CAUSE_WORDS: [&str; 25] = [
     "invalid",
     "no_open_pose",
     "mode_change",
@@ -124,6 +126,7 @@ const CAUSE_WORDS: [&str; 24] = [
     "no_equilibrium",
     "object_moved",
     "free_scene_aborted",
+    "p_stay",
 ];
 
 impl Reason {
@@ -392,7 +395,7 @@ pub fn stage_statics(f: &Finger, s: &SceneParams) -> Result<StaticsResult, Disca
 /// Stages 0 and 1, with the finger when the sweep discarded it.
 // The large error carries the partial values by value: an evaluation allocates nothing.
 #[allow(clippy::result_large_err)]
-fn kinematics_partial(x: &Design, s: &SceneParams) -> Result<KinematicsResult, (Discard, Partial)> {
+pub(crate) fn kinematics_partial(x: &Design, s: &SceneParams) -> Result<KinematicsResult, (Discard, Partial)> {
     let finger = Finger::new(x, s).map_err(|g| match g {
         GeomError::InvalidLength => Discard { stage: 0, reason: Reason::InvalidDesign, violation: 1.0 },
         other => Discard { stage: 1, reason: Reason::Geometry(other), violation: 90.0 },
@@ -411,6 +414,19 @@ fn statics_partial(f: &Finger, s: &SceneParams) -> Result<StaticsResult, (Discar
     let d2 = |reason, violation| Discard { stage: 2, reason, violation };
     let (tau_s_min, tau_s0) =
         spring_preload(f, s).ok_or((d2(Reason::SpringUndefined, MISSING_POSE_VIOLATION), Partial::default()))?;
+    statics_with_spring(f, s, tau_s_min, tau_s0)
+}
+
+/// Stage 2 with the spring preload given (τ_s^min, τ_s0): a robust problem sizes the spring
+/// once, at the hand's torque, and grips each object with its own torque.
+#[allow(clippy::result_large_err)]
+pub(crate) fn statics_with_spring(
+    f: &Finger,
+    s: &SceneParams,
+    tau_s_min: f64,
+    tau_s0: f64,
+) -> Result<StaticsResult, (Discard, Partial)> {
+    let d2 = |reason, violation| Discard { stage: 2, reason, violation };
     let spring = Partial { spring: Some([tau_s_min, tau_s0]), ..Partial::default() };
     let g = grasp_at(f, s, tau_s0, 0.0).map_err(|e| (d2(Reason::Grasp(e), MISSING_POSE_VIOLATION), spring))?;
     let fmin = g.min_force();

@@ -3,8 +3,11 @@
 //! required and unknown keys are rejected: there are no silent defaults. Errors name the
 //! file and the field.
 
+use super::checker::Checker;
 use super::design::{Bounds, Design, DESIGN_NAMES};
-use super::limits::{limit, MAX_FILE_BYTES, MAX_R_SING};
+use super::limits::{MAX_FILE_BYTES, MAX_R_SING};
+use super::robust::Robust;
+use super::robust_load::RawRobust;
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
 use super::scene_kind::{SceneKind, SceneSetup};
 use crate::math::deg;
@@ -38,6 +41,10 @@ pub struct Problem {
     pub nominal: Design,
     /// Design bounds.
     pub bounds: Bounds,
+    /// `[robust]`: several objects and the uncertainty of the grasp (None: one object, the
+    /// nominal inputs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robust: Option<Robust>,
     /// Raw text of the file (hashed into checkpoints).
     #[serde(skip)]
     pub source_text: String,
@@ -58,6 +65,8 @@ struct RawFile {
     solver: SolverSettings,
     nominal: RawDesign,
     bounds: RawBounds,
+    #[serde(default)]
+    robust: Option<RawRobust>,
 }
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -145,24 +154,6 @@ struct RawBounds {
     r: Vec<f64>,
     p: Vec<f64>,
     psi_deg: Vec<f64>,
-}
-
-struct Checker<'a> {
-    file: &'a Path,
-}
-
-impl Checker<'_> {
-    fn check(&self, field: &str, v: f64) -> Result<f64> {
-        limit(field).check(v).map_err(|rule| Error::InvalidField {
-            file: self.file.to_path_buf(),
-            field: field.to_string(),
-            value: super::limits::num(v),
-            rule,
-        })
-    }
-    fn fail(&self, field: &str, value: String, rule: &str) -> Error {
-        Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
-    }
 }
 
 impl Problem {
@@ -341,12 +332,17 @@ impl Problem {
             }
         }
         check_scene(&scene, path)?;
+        let robust = match &raw.robust {
+            Some(r) => Some(r.validate(&scene, &c)?),
+            None => None,
+        };
         Ok(Problem {
             name: raw.name,
             scene,
             solver: raw.solver,
             nominal,
             bounds: Bounds { lo, hi },
+            robust,
             source_text: text.to_string(),
         })
     }

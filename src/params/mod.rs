@@ -3,15 +3,23 @@
 //! settings, the nominal [`Design`] and the [`Bounds`]. The lowest layer: it depends on
 //! nothing of gripopt but `math` and `error`.
 
+mod checker;
 mod design;
 mod limits;
 mod load;
+mod robust;
+mod robust_load;
 mod scene;
 mod scene_kind;
+mod uncertainty;
 
 pub use design::{Bounds, Design, DesignParameters, DESIGN_NAMES};
 pub(crate) use limits::num as fmt_num;
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
+pub use robust::{
+    corner_count, describe, Aggregation, ObjectCase, Robust, Sampling, Scenario, STREAM_OPTIMISE, STREAM_VERIFY,
+};
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
 pub use scene_kind::{SceneKind, SceneSetup};
+pub use uncertainty::{phi, phi_inv, Dist, Uncertainty, INPUTS, INPUT_MEANINGS};

@@ -60,6 +60,7 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         sim_steps: r.sim_work().map(|w| w[0]),
         sim_rhs_evals: r.sim_work().map(|w| w[1]),
         free_scene: r.free_scene.clone(),
+        robust: r.robust.clone(),
         trajectory_samples: i.trajectory.map_or(0, |t| t.samples.len() as u64),
     }
 }

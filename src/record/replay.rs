@@ -348,6 +348,21 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         .map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json (field `recording`)", source })?
         .recording;
     let design = recorded.design();
+    if problem.robust.is_some() {
+        // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
+        let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
+        let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
+        let verified = alike && vmaxd == 0.0 && recorded.record.robust == fresh.robust;
+        return Ok(Replay {
+            compared: 0,
+            values_compared,
+            verified,
+            max_difference: if alike { vmaxd } else { f64::INFINITY },
+            recomputed_feasible: fresh.verdict.feasible,
+            recorded,
+            fresh,
+        });
+    }
     let mut traj = Trajectory::default();
     let ev = evaluate_into(&design, &problem.scene, &EvalOptions::full(&problem), &mut traj);
     let tr = ev.dynamics.is_some().then_some(traj);

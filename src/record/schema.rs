@@ -99,6 +99,10 @@ pub struct DesignMessage {
     pub sim_rhs_evals: Option<u64>,
     /// The free scene's measurement (free kind; keys not computed left out).
     pub free_scene: Option<FreeSceneRecord>,
+    /// A robust problem's design (docs/robust.md): aggregated objectives, per object
+    /// P(stay), per scenario its drawn inputs and outcome (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<crate::eval::RobustRecord>,
     /// Trajectory samples simulated (the recorded ones may be a subset).
     pub trajectory_samples: u64,
 }
@@ -157,6 +161,40 @@ fn free_scene_properties() -> Value {
     Value::Object(props)
 }
 
+/// The robust sub-record (issue 22): one type per key, arrays with typed items.
+fn robust_schema() -> Value {
+    let nums = |keys: &[&str]| -> Value { Value::Object(keys.iter().map(|k| (k.to_string(), num())).collect()) };
+    let pair = json!({"type": "array", "items": int()});
+    let mut object =
+        nums(&["max_offset", "alpha", "mean_force", "t_stab", "p_stay", "p_stay_lo", "p_stay_hi", "max_displacement"]);
+    object["name"] = json!({"type": "string"});
+    object["scenarios"] = int();
+    object["stays"] = int();
+    object["meets_p_min"] = json!({"type": "boolean"});
+    let mut scenario = nums(&["t_stab", "max_displacement", "max_tilt_deg"]);
+    scenario["object"] = int();
+    scenario["k"] = int();
+    scenario["inputs"] = obj(nums(&crate::params::INPUTS), &[]);
+    scenario["stays"] = json!({"type": "boolean"});
+    scenario["cause"] = json!({"type": "string"});
+    scenario["rhs_evals"] = pair.clone();
+    scenario["steps"] = pair.clone();
+    json!({
+        "type": "object",
+        "description": "robust problems only (docs/robust.md): the aggregated objectives, per object P(stay) and its Clopper-Pearson interval, per scenario (object, k) its drawn inputs and outcome",
+        "properties": {
+            "objectives": obj(nums(&["max_offset", "alpha", "mean_force", "t_stab"]), &[]),
+            "objects": {"type": "array", "items": obj(object, &[])},
+            "scenarios_planned": int(),
+            "scenarios_run": int(),
+            "scenarios_saved": int(),
+            "rhs_evals": pair.clone(),
+            "steps": pair,
+            "scenarios": {"type": "array", "items": obj(scenario, &[])}
+        }
+    })
+}
+
 /// `gripopt.Design` on `/designs`.
 pub fn design() -> Value {
     let mut s = obj(
@@ -184,6 +222,7 @@ pub fn design() -> Value {
                 "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `evaluate --json` for the free scene (keys not computed, e.g. the verdict flags where the free scene did not run to t_obs, are left out)",
                 "properties": free_scene_properties()
             },
+            "robust": robust_schema(),
             "trajectory_samples": int()
         }),
         &[

@@ -2,7 +2,10 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use crate::eval::{evaluate_dynamics, evaluate_statics, stage3_ends_at_once, EvalOptions, Evaluation, Record};
+use crate::eval::{
+    evaluate_dynamics, evaluate_statics, fold, robust_record, robust_start, run_scenario, stage3_ends_at_once,
+    EvalOptions, Evaluation, Record, RobustSetup, RobustStart,
+};
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, Recordable};
@@ -53,6 +56,8 @@ pub struct GripperProblem {
     pub options: EvalOptions,
     /// Which trajectories to keep for the recorder.
     pub keep_trajectories: TrajectoryKeep,
+    /// A robust problem's objects and scenarios (None: one object, nominal inputs).
+    pub robust: Option<std::sync::Arc<RobustSetup>>,
     lo: Vec<f64>,
     hi: Vec<f64>,
 }
@@ -62,7 +67,44 @@ impl GripperProblem {
     pub fn new(problem: Problem) -> Self {
         let options = EvalOptions::full(&problem);
         let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
-        GripperProblem { problem, options, keep_trajectories: TrajectoryKeep::None, lo, hi }
+        let robust = RobustSetup::of(&problem).map(std::sync::Arc::new);
+        GripperProblem { problem, options, keep_trajectories: TrajectoryKeep::None, robust, lo, hi }
+    }
+
+    /// The batch evaluator a run uses unless its caller gives one: for a robust problem the
+    /// one that spreads every design's scenarios over the threads
+    /// ([`RobustScheduled`](super::RobustScheduled)), else [`crate::optim::Scheduled`].
+    pub fn default_evaluator(&self) -> Box<dyn crate::optim::Evaluator<GripperProblem>> {
+        match self.robust {
+            Some(_) => Box::new(super::RobustScheduled::default()),
+            None => Box::new(crate::optim::Scheduled::default()),
+        }
+    }
+
+    /// The evaluation of a robust design from its stages 0–2 and its scenarios.
+    pub fn robust_evaluated(
+        &self,
+        setup: &RobustSetup,
+        start: &RobustStart,
+        scen: Vec<crate::eval::ScenarioRecord>,
+    ) -> Evaluated<GripperInfo> {
+        let mut seconds = start.base.stage_seconds;
+        seconds[3] = 0.0;
+        let record = robust_record(setup, start, scen);
+        let v = &record.verdict;
+        let cv = match v.failed_stage {
+            None => Infeasibility::FEASIBLE,
+            Some(stage) => Infeasibility { stages_short: 4 - stage, violation: v.violation.unwrap_or(1e3) },
+        };
+        let o = record.objectives();
+        let ph = self.placeholders();
+        let f = (0..4).map(|k| o[k].map(|v| if k == 0 || k == 2 { -v } else { v }).unwrap_or(ph[k])).collect();
+        Evaluated { f, cv, info: GripperInfo { record, stage_seconds: seconds, trajectory: None } }
+    }
+
+    /// The finite placeholders of MODEL.md §10 for missing objectives (minimisation form).
+    fn placeholders(&self) -> [f64; 4] {
+        [self.problem.scene.criteria.offset_step, 1e6, 0.0, self.problem.scene.criteria.t_max]
     }
 
     /// Objectives used for ranking: feasible designs have all four; missing values are the
@@ -70,7 +112,7 @@ impl GripperProblem {
     /// are ranked by objectives).
     pub fn minimisation_objectives(&self, ev: &Evaluation) -> Vec<f64> {
         let o = ev.objectives();
-        let ph = [self.problem.scene.criteria.offset_step, 1e6, 0.0, self.problem.scene.criteria.t_max];
+        let ph = self.placeholders();
         (0..4).map(|k| if o[k].is_finite() { o[k] } else { ph[k] }).collect()
     }
 
@@ -103,8 +145,13 @@ impl MooProblem for GripperProblem {
     /// objectives (more stage-2 values, e.g. spring preload, contact angles and forces,
     /// ordered worse on the bottle problem: too many features for the few rows of the
     /// first generations).
-    type Started = Evaluation;
-    fn start(&self, x: &[f64]) -> (Evaluation, CostHint) {
+    type Started = Started;
+    fn start(&self, x: &[f64]) -> (Started, CostHint) {
+        if let Some(setup) = &self.robust {
+            let st = robust_start(&design_of(x), setup);
+            let hint = robust_hint(x, &st);
+            return (Started::Robust(st), hint);
+        }
         let ev = evaluate_statics(&design_of(x), &self.problem.scene);
         let hint = match (&ev.kin, &ev.statics) {
             (Some(k), Some(st))
@@ -117,11 +164,23 @@ impl MooProblem for GripperProblem {
             }
             _ => CostHint::Cheap,
         };
-        (ev, hint)
+        (Started::Nominal(ev), hint)
     }
     /// Stage 3 (the simulation in the problem's scene), keeping the trajectory for the
     /// recorder as `keep_trajectories` says.
-    fn finish(&self, _x: &[f64], started: Evaluation) -> Evaluated<GripperInfo> {
+    fn finish(&self, _x: &[f64], started: Started) -> Evaluated<GripperInfo> {
+        let started = match (started, &self.robust) {
+            (Started::Nominal(ev), _) => ev,
+            (Started::Robust(st), Some(setup)) => {
+                let scen = if st.passed() {
+                    fold(setup, |o, k| run_scenario(&st, setup, o, k, &self.options, &mut ()).0)
+                } else {
+                    vec![]
+                };
+                return self.robust_evaluated(setup, &st, scen);
+            }
+            (Started::Robust(_), None) => unreachable!("a robust start comes from a robust problem"),
+        };
         let (scene, opts) = (&self.problem.scene, &self.options);
         let (ev, traj) = match self.keep_trajectories {
             _ if !opts.dynamics => (started, None),
@@ -150,6 +209,9 @@ impl MooProblem for GripperProblem {
     /// free scene's weighted by `FREE_RHS_WEIGHT`.
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
         let r = &e.info.record;
+        if let Some(rb) = &r.robust {
+            return (rb.scenarios_run > 0).then(|| rb.rhs_evals[0] as f64 + FREE_RHS_WEIGHT * rb.rhs_evals[1] as f64);
+        }
         let centred = r.grasp.work.rhs_evals.map(|w| w as f64);
         let free = r.free_scene.as_ref().and_then(|f| f.work.rhs_evals).map(|w| FREE_RHS_WEIGHT * w as f64);
         match (centred, free) {
@@ -159,11 +221,34 @@ impl MooProblem for GripperProblem {
     }
 }
 
+/// What [`GripperProblem::start`] leaves for [`GripperProblem::finish`].
+#[derive(Debug)]
+pub enum Started {
+    /// Stages 0–2 of a single-object problem.
+    Nominal(Evaluation),
+    /// Stages 0–2 on every object of a robust problem.
+    Robust(RobustStart),
+}
+
+/// The cost hint of a robust design: costly (its design vector and derived lengths as
+/// features) when its scenarios will run.
+fn robust_hint(x: &[f64], st: &RobustStart) -> CostHint {
+    match (&st.base.kin, st.passed()) {
+        (Some(k), true) => {
+            let f = &k.finger;
+            let mut v = x.to_vec();
+            v.extend([f.l11, f.l12, f.l22]);
+            CostHint::Costly(v)
+        }
+        _ => CostHint::Cheap,
+    }
+}
+
 /// Cost of one right-hand side of the free scene (21 states, both fingers and the object)
 /// in centred-scene right-hand sides (6 states, one finger): `gripopt simulate
 /// problems/bottle-1l.toml [--scene free] --json` gave 2.2 ms for 7 717 and 18.3 ms for
 /// 9 881. Only weighs work for ordering it.
-const FREE_RHS_WEIGHT: f64 = 6.5;
+pub(crate) const FREE_RHS_WEIGHT: f64 = 6.5;
 
 /// The design of a decision vector (the solver always passes six variables).
 fn design_of(x: &[f64]) -> Design {

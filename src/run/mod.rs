@@ -17,16 +17,20 @@ mod observers;
 mod outputs;
 mod persist;
 mod plots;
+mod replay_scenario;
+mod robust_columns;
+mod robust_eval;
 mod rundir;
 mod verify;
 mod verify_rec;
+mod verify_robust;
 mod verify_run;
 
 pub use archive::{Archive, ARCHIVE_FILE};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
 pub use folder::{read_table, RunFolder};
 pub use grasp_plot::grasp_plot;
-pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
+pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
 pub use limits::{
     check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
 };
@@ -38,6 +42,9 @@ pub use outputs::{
 };
 pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
+pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
+pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
+pub use robust_eval::RobustScheduled;
 pub use rundir::{
     optimise, optimise_with, resume, resume_with, Resume, RunHooks, RunInfo, RunSpec, RunStatus, RunSummary,
 };
@@ -47,4 +54,5 @@ pub use verify::{
     VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
+pub use verify_robust::{is_robust_run, verify_robust, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE};
 pub use verify_run::verify;

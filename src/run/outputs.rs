@@ -13,6 +13,7 @@
 
 use super::archive::Archive;
 use super::gripper::{GripperInfo, GripperProblem};
+use super::robust_columns::RobustColumns;
 use crate::cells::{line, Floats, RawCell};
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
@@ -102,6 +103,9 @@ pub struct DesignRow {
     pub sim_rhs_evals: Option<u64>,
     /// The force model of α and F̃ (when stage 2 ran).
     pub force_model: Option<ForceModel>,
+    /// A robust problem's columns (docs/robust.md); none for a single-object problem.
+    #[serde(flatten, default)]
+    pub robust: RobustColumns,
 }
 
 /// A text cell always in double quotes (its own double quotes as single ones), as the
@@ -157,6 +161,7 @@ impl DesignRow {
             sim_steps: w.map(|w| w[0]),
             sim_rhs_evals: w.map(|w| w[1]),
             force_model: r.statics.force_model,
+            robust: RobustColumns::of(r),
         }
     }
 }
@@ -200,12 +205,26 @@ pub const HISTORY_COLUMNS: [Column; 5] = [
 
 /// The `#` header lines of a CSV with `columns`.
 pub fn header(title: &str, columns: &[Column]) -> String {
+    header_with(title, columns, &RobustColumns::default())
+}
+
+/// The `#` header lines of a design table, with a robust problem's columns after `columns`
+/// (those of `robust`, a row of the table).
+fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> String {
+    let extra = robust.columns();
     let mut s = format!("# gripopt {title}\n# units:");
     for (n, u, _) in columns {
         let _ = write!(s, " {n} [{u}]");
     }
+    for (n, u) in &extra {
+        let _ = write!(s, " {n} [{u}]");
+    }
     s.push_str("\n# objectives: max_offset maximise, alpha minimise, mean_force maximise, t_stab minimise\n");
-    s.push_str(&columns.iter().map(|c| c.0).collect::<Vec<_>>().join(","));
+    if !extra.is_empty() {
+        s.push_str("# robust problem: the objectives are aggregated over the objects and scenarios (docs/robust.md); NAME.* are per object\n");
+    }
+    let names = columns.iter().map(|c| c.0.to_string()).chain(extra.into_iter().map(|c| c.0));
+    s.push_str(&names.collect::<Vec<_>>().join(","));
     s.push('\n');
     s
 }
@@ -234,11 +253,14 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
     use rayon::prelude::*;
     const FILES: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
     let front = final_front(st);
+    // a robust problem's columns, named by its objects (every row of a run has the same)
+    let robust = st.population.first().map(|p| RobustColumns::of(&p.eval.info.record)).unwrap_or_default();
+    let dheader = |title: &str, columns: &[Column]| header_with(title, columns, &robust);
     let build = |k: usize| -> String {
         match k {
             0 => {
                 let mut csv =
-                    header("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
+                    dheader("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
                 for ind in &front {
                     design_row(&mut csv, ind, Some(0));
                 }
@@ -254,7 +276,7 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
                 tim
             }
             2 => {
-                let mut arc = header(
+                let mut arc = dheader(
                     "archive.csv: every feasible non-dominated design evaluated in the run, by id",
                     &DESIGN_COLUMNS,
                 );
@@ -264,7 +286,7 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
                 arc
             }
             3 => {
-                let mut pop = header("population.csv: the whole population, by rank then id", &DESIGN_COLUMNS);
+                let mut pop = dheader("population.csv: the whole population, by rank then id", &DESIGN_COLUMNS);
                 let mut order: Vec<usize> = (0..st.population.len()).collect();
                 order.sort_by_key(|&k| (st.rank[k], st.population[k].id));
                 for k in order {
@@ -341,6 +363,7 @@ mod tests {
             sim_steps: None,
             sim_rhs_evals: None,
             force_model: None,
+            robust: RobustColumns::default(),
         };
         let names: Vec<&str> = DESIGN_COLUMNS.iter().map(|c| c.0).collect();
         assert_eq!(crate::cells::header(&row), names);

@@ -16,7 +16,7 @@ use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Persister};
 use crate::fsutil::write_atomic;
-use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators, Scheduled};
+use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{RecordOptions, Recorder, LAYOUT_FILE};
 use crate::{Error, Result};
@@ -64,7 +64,7 @@ pub struct RunHooks {
     /// When set (e.g. by ctrl-c), the run stops after the current generation's
     /// checkpoint: status interrupted, resumable.
     pub stop: Option<Arc<AtomicBool>>,
-    /// The batch evaluator (None: [`Scheduled`], the default two-pass scheduler).
+    /// The batch evaluator (None: the problem's default, `GripperProblem::default_evaluator`).
     pub evaluator: Option<Box<dyn Evaluator<GripperProblem>>>,
 }
 
@@ -371,7 +371,7 @@ fn drive(
     };
     let persister = Persister::start(Some(outputs), recorder.clone(), ckpt, info.threads)?;
     let (pers2, prog2) = (persister.clone(), progress.clone());
-    let evaluator = hooks.evaluator.unwrap_or_else(|| Box::new(Scheduled::default()));
+    let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
     let mut solver = Nsga2::with_evaluator(settings, evaluator);
     solver.stop = hooks.stop;
     let result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));

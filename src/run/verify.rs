@@ -182,8 +182,14 @@ pub fn verify_design_poses(
     } else {
         simulate(x, s, &spec, &integ, &ctl, &mut ())
     };
-    let (c, f) = (ev.dynamics?, ev.free?);
     let poses = scene_dt.map(|dt| keep_poses(&all_poses, dt)).unwrap_or_default();
+    Some((row_of(id, x, &ev)?, poses))
+}
+
+/// The verify row of design `x`'s free-kind evaluation `ev` (None: the free scene did not
+/// run); also a robust scenario's (`gripopt replay --scenario`).
+pub(crate) fn row_of(id: u64, x: &Design, ev: &crate::eval::Evaluation) -> Option<VerifyRow> {
+    let (c, f) = (ev.dynamics?, ev.free?);
     let impact_ratio = c.first.map(|fc| fc.impact.e_cyl / fc.impact.e_lim);
     let force_margin = c.min_force_margin.min(c.static_force_margin);
     let seen = |v: bool| f.end.observed().then_some(v);
@@ -205,7 +211,7 @@ pub fn verify_design_poses(
         end: f.end,
         t_end: f.t_end,
     };
-    Some((row, poses))
+    Some(row)
 }
 
 /// The (id, design) rows of a design CSV (pareto.csv, population.csv, archive.csv; `#`

@@ -83,6 +83,16 @@ impl VerifyRecording {
         Ok(VerifyRecording { path: dir.join(file), dir: dir.to_path_buf(), meta, opts })
     }
 
+    /// The recording of one robust scenario replayed (`gripopt replay --scenario`): the file
+    /// `name` in the run folder, in the run's band 3 (bands 1 and 2 are verify's).
+    pub fn for_scenario(dir: &Path, name: &str, what: String) -> Result<Self> {
+        let mut r = Self::new(dir, &VerifySource::Pareto)?;
+        r.opts.window_base_s *= 3;
+        r.path = dir.join(name);
+        r.meta.insert("source".into(), what);
+        Ok(r)
+    }
+
     /// Write the rows (in order: row k is window k) with their poses, and the layout file;
     /// returns the recording's path.
     pub fn write(self, p: &Problem, rows: Vec<(VerifyRow, Vec<PoseSample>)>) -> Result<PathBuf> {

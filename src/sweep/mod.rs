@@ -9,6 +9,8 @@
 //! * derived (thesis §4.1.2–4.2.2): `l11` sets p = l11/l21 and, unless `psi_deg` is varied
 //!   too, ψ = 140 − 25.6 p (eq. 4.15); `l22` sets r = l22/l11; `l_hand` sets
 //!   t22 = (l_hand − b − 2 l21)/2 (b and l21 as set at that point);
+//! * `mu_scale`: a factor on the phalanx friction μ_s and μ_d of the simulated grasp
+//!   together (stage 3 only; 0 allowed);
 //! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
 //!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
 //!
@@ -54,6 +56,10 @@ pub enum Knob {
     LHand,
     /// A numeric problem-file field, by its index into [`LIMITS`].
     Field(usize),
+    /// `mu_scale`: a factor on the object–phalanx friction μ_s and μ_d of the simulated grasp
+    /// (stage 3; stage 2's design statics keep the problem's μ_s, as a robust scenario does);
+    /// 0 = frictionless phalanges (the friction mechanism of docs/scenes.md).
+    MuScale,
 }
 
 /// One `--vary NAME=LO:HI:N`.
@@ -84,6 +90,7 @@ pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
         "l11" => return Ok(Knob::L11),
         "l22" => return Ok(Knob::L22),
         "l_hand" => return Ok(Knob::LHand),
+        "mu_scale" => return Ok(Knob::MuScale),
         _ => {}
     }
     let is_field = |l: &&crate::params::Limit| !DESIGN_NAMES.contains(&l.field) && l.field != "criteria.r_sing";
@@ -99,7 +106,7 @@ pub fn resolve(name: &str, flag: &str) -> Result<Knob> {
             flag,
             name,
             format!(
-                "unknown name (a design variable {}, a derived l11, l22, l_hand, or a numeric problem-file field such as tau, density, grasp_height, radius, restitution, hand.w)",
+                "unknown name (a design variable {}, a derived l11, l22, l_hand, mu_scale (phalanx friction factor), or a numeric problem-file field such as tau, density, grasp_height, radius, restitution, hand.w)",
                 DESIGN_NAMES.join(", ")
             ),
         )),
@@ -115,6 +122,7 @@ fn knob_limit(k: Knob) -> (f64, bool, f64, &'static str) {
         // derived lengths: the same range as the design lengths
         Knob::L11 | Knob::L22 => limit("l21"),
         Knob::LHand => return (0.0, true, 2.0, "m"),
+        Knob::MuScale => return (0.0, false, 10.0, "-"),
     };
     (l.lo, l.lo_open, l.hi, l.unit)
 }
@@ -429,7 +437,22 @@ pub fn record_cells(ev: &Evaluation) -> Vec<(String, String)> {
 /// Evaluate one point of the sweep.
 pub fn eval_row(spec: &SweepSpec, values: &[f64]) -> Result<Row> {
     let (p, x) = spec.apply(values)?;
-    let ev = evaluate_point(&p, &x, spec.stage);
+    let mu = spec.vary.iter().zip(values).find(|(v, _)| v.knob == Knob::MuScale).map(|(_, &m)| m);
+    let ev = match (mu, spec.stage) {
+        (Some(m), Stage::Dynamic) => {
+            // the grasp's friction scaled, the design statics at the problem's
+            let mut s3 = p.scene.clone();
+            s3.contact.mu_s *= m;
+            s3.contact.mu_d *= m;
+            crate::eval::evaluate_dynamics(
+                crate::eval::evaluate_statics(&x, &p.scene),
+                &s3,
+                &EvalOptions::full(&p),
+                &mut (),
+            )
+        }
+        _ => evaluate_point(&p, &x, spec.stage),
+    };
     Ok(Row { values: values.to_vec(), verdict: verdict(&ev), cells: record_cells(&ev) })
 }
 

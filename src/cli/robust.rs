@@ -1,0 +1,56 @@
+//! `gripopt replay RUN --design ID --scenario OBJECT:K`: one scenario of a robust design
+//! re-simulated, compared with its recording, recorded to MCAP (docs/robust.md).
+
+use anyhow::Result;
+use std::path::Path;
+
+/// Replay the scenario and report it (text or JSON; `--csv`: the free object's poses).
+pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&Path>) -> Result<i32> {
+    let (object, k) = gripopt::run::parse_scenario(arg)?;
+    let r = gripopt::run::replay_scenario(dir, id, &object, k, true)?;
+    if let Some(path) = csv {
+        let mut s = String::from("t,x,y,z,qw,qx,qy,qz\n");
+        for p in &r.poses {
+            let (g, q) = (p.g, p.q);
+            s.push_str(&format!(
+                "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+                p.t, g[0], g[1], g[2], q[0], q[1], q[2], q[3]
+            ));
+        }
+        std::fs::write(path, s)?;
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        let s = &r.scenario;
+        let i = &s.inputs;
+        println!("design {id}, object {object}, scenario {k} of {}", dir.display());
+        println!(
+            "  inputs: x_off {:.3} mm, height offset {:.3} mm, phalanx friction x{:.3}, ground friction x{:.3}, restitution {:.3}, fill x{:.3}, torque x{:.4}",
+            i.x_off * 1e3, i.height_offset * 1e3, i.mu_phalanx, i.mu_ground, i.restitution, i.fill, i.tau
+        );
+        let mm = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.4} mm", v * 1e3));
+        println!(
+            "  outcome: {} (max displacement {}, max tilt {}, t_stab {})",
+            if s.stays { "stays".to_string() } else { format!("fails: {}", s.cause.map_or("?", |c| c.as_str())) },
+            mm(s.max_displacement),
+            s.max_tilt_deg.map_or("—".into(), |v| format!("{v:.4}°")),
+            s.t_stab.map_or("—".into(), |v| format!("{:.3} ms", v * 1e3))
+        );
+        match r.verified {
+            Some(true) => println!("  verified: the re-simulation equals the recorded scenario, bit for bit"),
+            Some(false) => println!("  NOT verified: the recording says {:?}", r.recorded),
+            None => {
+                println!("  not in the recording (the design's scenarios stopped early before it): nothing compared")
+            }
+        }
+        if let Some(m) = &r.recording {
+            println!(
+                "  recorded to {} (open in Foxglove with {})",
+                m.display(),
+                dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
+            );
+        }
+    }
+    Ok(if r.verified == Some(false) { 3 } else { 0 })
+}

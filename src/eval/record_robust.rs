@@ -1,0 +1,189 @@
+//! The robust sub-record of an evaluation record (`robust`): the aggregated objectives, per
+//! object its static objectives, its scenarios' P(stay) with a Clopper–Pearson interval and
+//! aggregates, and per scenario a compact record (which scenario, its drawn inputs, the
+//! outcome) — enough to replay a failing scenario.
+
+use super::scene_record::fin;
+use super::stages::{Cause, Evaluation};
+use crate::params::Scenario;
+use serde::{Deserialize, Serialize};
+
+/// The drawn inputs of a scenario (nominal where not uncertain).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioInputs {
+    /// Object offset along the palm (m).
+    pub x_off: f64,
+    /// Grasp height offset (m).
+    pub height_offset: f64,
+    /// Factor on the phalanx friction.
+    pub mu_phalanx: f64,
+    /// Factor on the ground friction.
+    pub mu_ground: f64,
+    /// Restitution.
+    pub restitution: f64,
+    /// Factor on the object's density.
+    pub fill: f64,
+    /// Factor on the grip torque.
+    pub tau: f64,
+}
+
+impl ScenarioInputs {
+    /// From a scenario's values.
+    pub fn of(v: &[f64; 7]) -> Self {
+        ScenarioInputs {
+            x_off: v[0],
+            height_offset: v[1],
+            mu_phalanx: v[2],
+            mu_ground: v[3],
+            restitution: v[4],
+            fill: v[5],
+            tau: v[6],
+        }
+    }
+}
+
+/// One scenario of a design: which, its inputs, what happened.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioRecord {
+    /// Object index.
+    pub object: usize,
+    /// Scenario index within the object.
+    pub k: usize,
+    /// The drawn inputs.
+    pub inputs: ScenarioInputs,
+    /// The grasp held the object in place: the centred grasp met the finger's criteria and
+    /// the free object barely moved (MODEL.md §14.4).
+    pub stays: bool,
+    /// What failed (null when it stayed).
+    pub cause: Option<Cause>,
+    /// Time to stability of the centred grasp (s; null when it did not stabilise).
+    pub t_stab: Option<f64>,
+    /// The free object's largest horizontal displacement (m; null: the free scene did not run).
+    pub max_displacement: Option<f64>,
+    /// Its largest tilt (°).
+    pub max_tilt_deg: Option<f64>,
+    /// Right-hand-side evaluations of the centred grasp and of the free scene.
+    pub rhs_evals: [u64; 2],
+    /// Accepted steps of both.
+    pub steps: [u64; 2],
+}
+
+impl ScenarioRecord {
+    /// The record of scenario `sc` evaluated as `ev`.
+    pub fn of(sc: &Scenario, ev: &Evaluation) -> Self {
+        let d = ev.dynamics.as_ref();
+        let f = ev.free.as_ref();
+        ScenarioRecord {
+            object: sc.object,
+            k: sc.k,
+            inputs: ScenarioInputs::of(&sc.values),
+            stays: ev.discard.is_none(),
+            cause: ev.discard.and_then(|d| d.reason.cause()),
+            t_stab: d.and_then(|d| d.t_stab),
+            max_displacement: f.and_then(|f| fin(f.object_max_displacement)),
+            max_tilt_deg: f.and_then(|f| fin(f.object_max_tilt_deg)),
+            rhs_evals: [d.map_or(0, |d| d.rhs_evals), f.map_or(0, |f| f.rhs_evals)],
+            steps: [d.map_or(0, |d| d.stats.steps), f.map_or(0, |f| f.stats.steps)],
+        }
+    }
+}
+
+/// One object of a robust design.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ObjectRecord {
+    /// Its name.
+    pub name: String,
+    /// Objective 1 on this object (m; stage 2 at its nominal inputs).
+    pub max_offset: Option<f64>,
+    /// α on this object.
+    pub alpha: Option<f64>,
+    /// F̃ on this object (N).
+    pub mean_force: Option<f64>,
+    /// t_stab aggregated over this object's scenarios (s; the problem's aggregation).
+    pub t_stab: Option<f64>,
+    /// Scenarios run.
+    pub scenarios: usize,
+    /// Of them, those in which the object stayed.
+    pub stays: usize,
+    /// P̂(stay) = stays / scenarios.
+    pub p_stay: Option<f64>,
+    /// Lower end of its Clopper–Pearson interval.
+    pub p_stay_lo: Option<f64>,
+    /// Upper end.
+    pub p_stay_hi: Option<f64>,
+    /// P(stay) ≥ p_min holds (null: the design's scenarios stopped before this was known).
+    pub meets_p_min: Option<bool>,
+    /// The worst displacement of the free object over its scenarios (m).
+    pub max_displacement: Option<f64>,
+}
+
+/// The aggregated objectives (natural sense), what the optimiser ranks.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct RobustObjectives {
+    /// max_offset (m), aggregated over the objects.
+    pub max_offset: Option<f64>,
+    /// α, aggregated over the objects.
+    pub alpha: Option<f64>,
+    /// F̃ (N), aggregated over the objects.
+    pub mean_force: Option<f64>,
+    /// t_stab (s), aggregated over every scenario run.
+    pub t_stab: Option<f64>,
+}
+
+/// The robust sub-record.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RobustRecord {
+    /// The aggregated objectives.
+    pub objectives: RobustObjectives,
+    /// Per object.
+    pub objects: Vec<ObjectRecord>,
+    /// Scenarios the design would run without early stop.
+    pub scenarios_planned: usize,
+    /// Scenarios it ran.
+    pub scenarios_run: usize,
+    /// Scenarios early stop saved (planned − run; 0 when stage 2 discarded the design).
+    pub scenarios_saved: usize,
+    /// Right-hand-side evaluations of all its simulations (centred, free).
+    pub rhs_evals: [u64; 2],
+    /// Their accepted steps.
+    pub steps: [u64; 2],
+    /// Every scenario run, in the order run.
+    pub scenarios: Vec<ScenarioRecord>,
+}
+
+/// The robust part of `gripopt evaluate`'s report: per object its static objectives,
+/// P(stay) with its interval and the scenarios run.
+pub fn robust_summary(r: &RobustRecord) -> String {
+    let o = |v: Option<f64>, s: f64, p: usize| v.map_or("—".to_string(), |v| format!("{:.*}", p, v * s));
+    let mut out = format!(
+        "robust     {} scenarios run of {} ({} saved by early stop)\n",
+        r.scenarios_run, r.scenarios_planned, r.scenarios_saved
+    );
+    for ob in &r.objects {
+        out.push_str(&format!(
+            "  {:<14} P(stay) {} ({} of {}; CI [{}, {}])  max displacement {} mm  max_offset {} mm  alpha {}  mean force {} N  t_stab {} ms\n",
+            ob.name,
+            o(ob.p_stay, 1.0, 3),
+            ob.stays,
+            ob.scenarios,
+            o(ob.p_stay_lo, 1.0, 3),
+            o(ob.p_stay_hi, 1.0, 3),
+            o(ob.max_displacement, 1e3, 3),
+            o(ob.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
+            o(ob.alpha, 1.0, 4),
+            o(ob.mean_force, 1.0, 3),
+            o(ob.t_stab, 1e3, 3)
+        ));
+    }
+    let a = &r.objectives;
+    out.push_str(&format!(
+        "  aggregated     max_offset {} mm  alpha {}  mean force {} N  t_stab {} ms\n",
+        o(a.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
+        o(a.alpha, 1.0, 4),
+        o(a.mean_force, 1.0, 3),
+        o(a.t_stab, 1e3, 3)
+    ));
+    out
+}

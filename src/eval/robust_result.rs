@@ -1,0 +1,163 @@
+//! A robust design's record (issue 22, docs/robust.md): the flat part, the `robust`
+//! sub-record folded from its scenarios (per object P(stay) with its Clopper–Pearson
+//! interval, the aggregated objectives) and the verdict over all objects; and the record of
+//! one design of any problem, robust or not.
+
+use super::binomial::clopper_pearson;
+use super::record::{Record, Verdict};
+use super::record_robust::{ObjectRecord, RobustObjectives, RobustRecord, ScenarioRecord};
+use super::robust::{evaluate_sequential, RobustSetup, RobustStart};
+use super::scene_record::fin;
+use super::stage3::evaluate;
+use super::stages::{Cause, EvalOptions};
+use crate::params::{Design, Problem, SceneKind};
+
+/// The record of design `x` of problem `p` through `opts`' stages: for a robust problem with
+/// stage 3 the robust evaluation (`setup`: the problem's, computed once by the caller, or
+/// None to compute it here), otherwise the single-object pipeline's.
+pub fn evaluate_record(p: &Problem, x: &Design, opts: &EvalOptions, setup: Option<&RobustSetup>) -> Record {
+    let own;
+    let setup = match (setup, opts.dynamics) {
+        (Some(s), true) => Some(s),
+        (None, true) => {
+            own = RobustSetup::of(p);
+            own.as_ref()
+        }
+        _ => None,
+    };
+    match setup {
+        Some(setup) => {
+            let (st, scen) = evaluate_sequential(x, setup, opts);
+            robust_record(setup, &st, scen)
+        }
+        None => Record::from_eval(&evaluate(x, &p.scene, opts)),
+    }
+}
+
+/// The record of a robust design: the flat part from stages 0–1 and the first object's stage
+/// 2, the robust sub-record, and the verdict over all objects and scenarios.
+pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<ScenarioRecord>) -> Record {
+    let spec = &setup.spec;
+    let mut rec = Record::from_eval(&start.base);
+    let n = setup.objects();
+    let fmax = setup.failures_allowed();
+    let agg = &spec.aggregate;
+    let mut objects = Vec::with_capacity(n);
+    let mut all_t = vec![];
+    for o in 0..n {
+        let st = match &start.objects[o] {
+            Some(Ok(st)) => Some(st),
+            _ => None,
+        };
+        let mine: Vec<&ScenarioRecord> = scen.iter().filter(|r| r.object == o).collect();
+        let stays = mine.iter().filter(|r| r.stays).count();
+        let runs = mine.len();
+        let t: Vec<f64> = mine.iter().filter_map(|r| r.t_stab).collect();
+        all_t.extend(&t);
+        let (lo, hi) = clopper_pearson(stays as u64, runs as u64, spec.confidence);
+        let meets = if runs - stays > fmax {
+            Some(false)
+        } else if runs == setup.k {
+            Some(true)
+        } else {
+            None
+        };
+        objects.push(ObjectRecord {
+            name: spec.objects[o].name.clone(),
+            max_offset: st.map(|s| s.max_offset),
+            alpha: st.and_then(|s| fin(s.alpha)),
+            mean_force: st.map(|s| s.mean_force),
+            t_stab: fin(agg[3].apply(&t)),
+            scenarios: runs,
+            stays,
+            p_stay: (runs > 0).then(|| stays as f64 / runs as f64),
+            p_stay_lo: (runs > 0).then_some(lo),
+            p_stay_hi: (runs > 0).then_some(hi),
+            meets_p_min: (runs > 0 || start.passed()).then_some(meets).flatten(),
+            max_displacement: mine
+                .iter()
+                .filter_map(|r| r.max_displacement)
+                .fold(None, |a, b| Some(a.map_or(b, |a: f64| a.max(b)))),
+        });
+    }
+    let statics_known = objects.iter().all(|o| o.mean_force.is_some());
+    let over_objects = |k: usize, v: fn(&ObjectRecord) -> Option<f64>, sign: f64| -> Option<f64> {
+        if !statics_known {
+            return None;
+        }
+        let vals: Vec<f64> = objects.iter().map(|o| sign * v(o).unwrap_or(f64::NAN)).collect();
+        if vals.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        fin(sign * agg[k].apply(&vals))
+    };
+    let objectives = RobustObjectives {
+        max_offset: over_objects(0, |o| o.max_offset, -1.0),
+        alpha: over_objects(1, |o| o.alpha, 1.0),
+        mean_force: over_objects(2, |o| o.mean_force, -1.0),
+        t_stab: fin(agg[3].apply(&all_t)),
+    };
+    let sum = |f: fn(&ScenarioRecord) -> [u64; 2]| {
+        scen.iter().fold([0, 0], |a, r| {
+            let v = f(r);
+            [a[0] + v[0], a[1] + v[1]]
+        })
+    };
+    let planned = if start.passed() { setup.planned() } else { 0 };
+    let rr = RobustRecord {
+        objectives,
+        scenarios_planned: planned,
+        scenarios_run: scen.len(),
+        scenarios_saved: planned - scen.len(),
+        rhs_evals: sum(|r| r.rhs_evals),
+        steps: sum(|r| r.steps),
+        objects,
+        scenarios: scen,
+    };
+    rec.verdict = verdict(setup, start, &rr);
+    if start.passed() {
+        (rec.scene, rec.x_off) = (Some(SceneKind::Free), None);
+    }
+    rec.robust = Some(rr);
+    rec
+}
+
+/// Feasible iff every object passed stage 2 and meets P(stay) ≥ p_min over its scenarios;
+/// otherwise stage 2's discard (the first failing object's reason, the violations summed) or
+/// stage 3's: violation Σ_o max(0, p_min − P̂_o) over the scenarios run.
+fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdict {
+    if let Some((stage, reason, violation, cause)) = &start.discard {
+        return Verdict {
+            feasible: false,
+            failed_stage: Some(*stage),
+            reason: Some(reason.clone()),
+            violation: Some(*violation),
+            cause: *cause,
+        };
+    }
+    let spec = &setup.spec;
+    let failing: Vec<&ObjectRecord> = rr.objects.iter().filter(|o| o.meets_p_min == Some(false)).collect();
+    let Some(first) = failing.first() else { return Verdict { feasible: true, ..Verdict::default() } };
+    let violation: f64 = rr.objects.iter().filter_map(|o| o.p_stay).map(|p| (spec.p_min - p).max(0.0)).sum();
+    let mut reason = format!(
+        "object {}: stays (barely moves) in {} of {} scenarios (P(stay) {:.3} < p_min {}; Clopper–Pearson {}%: [{:.3}, {:.3}])",
+        first.name,
+        first.stays,
+        first.scenarios,
+        first.p_stay.unwrap_or(0.0),
+        spec.p_min,
+        spec.confidence * 100.0,
+        first.p_stay_lo.unwrap_or(0.0),
+        first.p_stay_hi.unwrap_or(1.0)
+    );
+    if rr.scenarios_saved > 0 {
+        reason.push_str(&format!("; stopped early after {} of {} scenarios", rr.scenarios_run, rr.scenarios_planned));
+    }
+    Verdict {
+        feasible: false,
+        failed_stage: Some(3),
+        reason: Some(reason),
+        violation: Some(violation),
+        cause: Some(Cause::PStay),
+    }
+}

@@ -1,0 +1,27 @@
+//! A problem file's field checked against its limit, an error naming the file and the field
+//! (shared by the loader and the `[robust]` section's checks).
+
+use super::limits::{limit, num};
+use crate::{Error, Result};
+use std::path::Path;
+
+/// Checks fields of the problem file `file`.
+pub(super) struct Checker<'a> {
+    pub(super) file: &'a Path,
+}
+
+impl Checker<'_> {
+    /// `v` if it is within `field`'s limit, else an error naming the file and the field.
+    pub(super) fn check(&self, field: &str, v: f64) -> Result<f64> {
+        limit(field).check(v).map_err(|rule| Error::InvalidField {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            value: num(v),
+            rule,
+        })
+    }
+    /// The error for `field` holding `value` against `rule`.
+    pub(super) fn fail(&self, field: &str, value: String, rule: &str) -> Error {
+        Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
+    }
+}

@@ -1,0 +1,232 @@
+//! `[robust]`: robust multi-object design (issue 22) — the objects a gripper must hold, the
+//! uncertain inputs of a grasp, how many scenarios per object and how they are drawn (common
+//! random numbers: ChaCha8 streams keyed by (seed, object, scenario), the same scenarios for
+//! every design; or a deterministic centre-plus-corners design), how each objective is
+//! aggregated over them and the constraint P(object barely moves) ≥ p_min per object.
+
+use super::scene::{Object, SceneParams};
+use super::uncertainty::{Dist, Uncertainty};
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+/// Scenario draws of an optimisation (stream 0) and of `verify`'s out-of-sample check (1).
+pub const STREAM_OPTIMISE: u64 = 0;
+/// The out-of-sample stream of `gripopt verify` on a robust run.
+pub const STREAM_VERIFY: u64 = 1;
+
+/// One object of a robust problem: its cylinder, grasp height and grip torque.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectCase {
+    /// Its name (CSV columns `NAME.p_stay`, …).
+    pub name: String,
+    /// The cylinder and where it is grasped.
+    pub object: Object,
+    /// The grip torque τ the controller applies to this object (N·m; the spring preload is
+    /// sized once, at `[hand] tau`).
+    pub tau: f64,
+}
+
+/// How the scenarios are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampling {
+    /// K random draws per object (common random numbers).
+    Random,
+    /// The centre and every corner of the uncertain inputs' box (1 + 2^d scenarios).
+    Corners,
+}
+
+/// How one objective is aggregated over an object set's scenarios (in minimisation form,
+/// "worse" = larger).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Aggregation {
+    /// The worst value.
+    Worst,
+    /// The arithmetic mean.
+    Mean,
+    /// The q-quantile in the worse direction (inverted empirical CDF: the smallest value v
+    /// such that at least a fraction q of the values are ≤ v; q = 1 is the worst).
+    Quantile(f64),
+}
+
+impl Aggregation {
+    /// Aggregate `v` (minimisation form: larger is worse); NaN for an empty set.
+    pub fn apply(&self, v: &[f64]) -> f64 {
+        if v.is_empty() {
+            return f64::NAN;
+        }
+        match *self {
+            Aggregation::Worst => v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            Aggregation::Mean => v.iter().sum::<f64>() / v.len() as f64,
+            Aggregation::Quantile(q) => {
+                let mut s = v.to_vec();
+                s.sort_by(f64::total_cmp);
+                // inverted empirical CDF: the smallest s[j] with (j + 1)/n ≥ q
+                let n = s.len();
+                let j = (0..n).find(|&j| (j + 1) as f64 >= q * n as f64).unwrap_or(n - 1);
+                s[j]
+            }
+        }
+    }
+    /// As written in a problem file: "worst", "mean" or the quantile.
+    pub fn label(&self) -> String {
+        match self {
+            Aggregation::Worst => "worst".into(),
+            Aggregation::Mean => "mean".into(),
+            Aggregation::Quantile(q) => format!("quantile {q}"),
+        }
+    }
+}
+
+/// `[robust]` of a problem file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Robust {
+    /// The objects (at least one).
+    pub objects: Vec<ObjectCase>,
+    /// The uncertain inputs.
+    pub uncertainty: Uncertainty,
+    /// How the scenarios are chosen.
+    pub sampling: Sampling,
+    /// K: scenarios per object.
+    pub scenarios: usize,
+    /// Seed of the scenario streams.
+    pub seed: u64,
+    /// Aggregation of max_offset, α, F̃, t_stab.
+    pub aggregate: [Aggregation; 4],
+    /// The constraint P(barely moves) ≥ p_min per object.
+    pub p_min: f64,
+    /// Level of the P(stay) confidence interval (Clopper–Pearson).
+    pub confidence: f64,
+    /// Stop a design's scenarios once an object's constraint can no longer be met.
+    pub early_stop: bool,
+    /// Scenarios per object of `gripopt verify`'s out-of-sample draw.
+    pub verify_scenarios: usize,
+}
+
+/// One scenario: an object and the values of every uncertain input (nominal where fixed).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    /// Object index (in `objects`).
+    pub object: usize,
+    /// Scenario index k within the object.
+    pub k: usize,
+    /// The stream it was drawn from (0: optimisation, 1: verify).
+    pub stream: u64,
+    /// x_off (m), height_offset (m), mu_phalanx, mu_ground (factors), restitution, fill,
+    /// tau (factors), in the order of [`INPUTS`].
+    pub values: [f64; 7],
+}
+
+impl Scenario {
+    /// The scene parameters of this scenario for object `o` of problem scene `base`: the
+    /// free scene at the drawn offset, the object's cylinder filled and raised as drawn, the
+    /// frictions scaled, the restitution and the grip torque as drawn.
+    pub fn scene(&self, base: &SceneParams, o: &ObjectCase) -> SceneParams {
+        let v = &self.values;
+        let mut s = base.clone();
+        s.object = o.object;
+        s.object.grasp_height += v[1];
+        s.object.density *= v[5];
+        s.contact.mu_s *= v[2];
+        s.contact.mu_d *= v[2];
+        s.env.mu_g *= v[3];
+        s.contact.restitution = v[4];
+        s.hand.tau = o.tau * v[6];
+        s.setup.kind = super::SceneKind::Free;
+        s.setup.x_off = v[0];
+        s
+    }
+}
+
+impl Robust {
+    /// The nominal value of each input for problem scene `base` (x_off from `[scene]`,
+    /// restitution from `[contact]`, no height offset, factors 1).
+    pub fn nominal_values(base: &SceneParams) -> [f64; 7] {
+        [base.setup.x_off, 0.0, 1.0, 1.0, base.contact.restitution, 1.0, 1.0]
+    }
+
+    /// Number of scenarios per object of `stream` (the optimisation's K, or verify's count).
+    pub fn count(&self, stream: u64) -> usize {
+        match (self.sampling, stream) {
+            (Sampling::Corners, STREAM_OPTIMISE) => corner_count(self.uncertainty.uncertain().len()),
+            (_, STREAM_OPTIMISE) => self.scenarios,
+            _ => self.verify_scenarios,
+        }
+    }
+
+    /// Scenario `k` of object `object` drawn from `stream` (verify always draws at random).
+    pub fn scenario(&self, base: &SceneParams, object: usize, k: usize, stream: u64) -> Scenario {
+        let mut values = Self::nominal_values(base);
+        if self.sampling == Sampling::Corners && stream == STREAM_OPTIMISE {
+            let unc = self.uncertainty.uncertain();
+            for (bit, &i) in unc.iter().enumerate() {
+                let d = self.uncertainty.inputs[i].as_ref().expect("uncertain");
+                let (lo, hi) = d.support();
+                values[i] = if k == 0 {
+                    d.centre()
+                } else if (k - 1) >> bit & 1 == 0 {
+                    lo
+                } else {
+                    hi
+                };
+            }
+        } else {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
+            rng.set_stream((stream << 56) ^ ((object as u64) << 32) ^ k as u64);
+            for (i, slot) in self.uncertainty.inputs.iter().enumerate() {
+                let u: f64 = rng.random();
+                if let Some(d) = slot {
+                    values[i] = d.at(u);
+                }
+            }
+        }
+        Scenario { object, k, stream, values }
+    }
+
+    /// Every scenario of `stream`, object-major (object 0's K, then object 1's, …).
+    pub fn all_scenarios(&self, base: &SceneParams, stream: u64) -> Vec<Scenario> {
+        let n = self.count(stream);
+        (0..self.objects.len())
+            .flat_map(|o| (0..n).map(move |k| (o, k)))
+            .map(|(o, k)| self.scenario(base, o, k, stream))
+            .collect()
+    }
+
+    /// Largest number of scenarios of an object that may fail while P̂ = stays/K ≥ p_min
+    /// still holds (K = `n`).
+    pub fn failures_allowed(&self, n: usize) -> usize {
+        (0..=n).rev().find(|&f| (n - f) as f64 / n as f64 >= self.p_min).unwrap_or(0)
+    }
+}
+
+/// Scenarios of a centre-plus-corners design with `d` uncertain inputs.
+pub fn corner_count(d: usize) -> usize {
+    1 + (1usize << d)
+}
+
+/// A distribution's description as written (`uniform [lo, hi]`, …) for messages.
+pub fn describe(d: &Dist) -> String {
+    match d {
+        Dist::Uniform { lo, hi } => format!("uniform [{lo}, {hi}]"),
+        Dist::Normal { mean, sd, lo, hi } => format!("normal(mean {mean}, sd {sd}) in [{lo}, {hi}]"),
+        Dist::List(v) => format!("list {v:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantile_is_the_inverted_empirical_cdf() {
+        let v = [4.0, 1.0, 3.0, 2.0];
+        assert_eq!(Aggregation::Quantile(0.5).apply(&v), 2.0);
+        assert_eq!(Aggregation::Quantile(0.51).apply(&v), 3.0);
+        assert_eq!(Aggregation::Quantile(0.75).apply(&v), 3.0);
+        assert_eq!(Aggregation::Quantile(1.0).apply(&v), 4.0);
+        assert_eq!(Aggregation::Worst.apply(&v), 4.0);
+        assert_eq!(Aggregation::Mean.apply(&v), 2.5);
+        assert!(Aggregation::Mean.apply(&[]).is_nan());
+    }
+}

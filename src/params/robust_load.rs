@@ -1,0 +1,395 @@
+//! `[robust]` as written in a problem file and its validation: every key required (the
+//! uncertain inputs are the ones listed), errors naming the file and the field.
+
+use super::checker::Checker;
+use super::robust::{corner_count, Aggregation, ObjectCase, Robust, Sampling};
+use super::scene::{Object, SceneParams};
+use super::uncertainty::{phi, Dist, Uncertainty, INPUTS};
+use super::SceneKind;
+use crate::Result;
+use serde::Deserialize;
+
+/// Most objects of a robust problem.
+pub const MAX_OBJECTS: usize = 16;
+/// Most values of a list distribution.
+const MAX_LIST: usize = 1000;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawRobust {
+    sampling: String,
+    scenarios: f64,
+    seed: u64,
+    p_min: f64,
+    confidence: f64,
+    early_stop: bool,
+    verify_scenarios: f64,
+    aggregate: RawAggregate,
+    objects: Vec<RawObjectCase>,
+    uncertainty: RawUncertainty,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAggregate {
+    max_offset: RawAgg,
+    alpha: RawAgg,
+    mean_force: RawAgg,
+    t_stab: RawAgg,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawAgg {
+    Quantile(f64),
+    Word(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawObjectCase {
+    name: String,
+    file: Option<String>,
+    radius: Option<f64>,
+    length: Option<f64>,
+    density: Option<f64>,
+    grasp_height: Option<f64>,
+    tau: f64,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawUncertainty {
+    x_off: Option<RawDist>,
+    height_offset: Option<RawDist>,
+    mu_phalanx: Option<RawDist>,
+    mu_ground: Option<RawDist>,
+    restitution: Option<RawDist>,
+    fill: Option<RawDist>,
+    tau: Option<RawDist>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDist {
+    uniform: Option<Vec<f64>>,
+    normal: Option<Vec<f64>>,
+    list: Option<Vec<f64>>,
+}
+
+impl RawRobust {
+    /// The checked `[robust]` of a problem whose other sections are `scene`.
+    pub(super) fn validate(&self, scene: &SceneParams, c: &Checker<'_>) -> Result<Robust> {
+        if scene.setup.kind != SceneKind::Free {
+            return Err(c.fail(
+                "scene.kind",
+                format!("{:?}", scene.setup.kind.as_str()),
+                "must be \"free\" with [robust]: a scenario's verdict is the free object's motion (MODEL.md §14.4)",
+            ));
+        }
+        let sampling = match self.sampling.as_str() {
+            "random" => Sampling::Random,
+            "corners" => Sampling::Corners,
+            other => return Err(c.fail("robust.sampling", format!("{other:?}"), "must be \"random\" or \"corners\"")),
+        };
+        let scenarios = whole(c, "robust.scenarios", self.scenarios, 1.0, 4096.0)?;
+        let verify_scenarios = whole(c, "robust.verify_scenarios", self.verify_scenarios, 1.0, 100_000.0)?;
+        let p_min = self.p_min;
+        if !(0.0..=1.0).contains(&p_min) {
+            return Err(c.fail("robust.p_min", format!("{p_min}"), "must be a probability in [0, 1]"));
+        }
+        if !(self.confidence > 0.0 && self.confidence < 1.0) {
+            return Err(c.fail("robust.confidence", format!("{}", self.confidence), "must be in (0, 1), e.g. 0.95"));
+        }
+        let a = &self.aggregate;
+        let aggregate = [
+            agg(c, "robust.aggregate.max_offset", &a.max_offset)?,
+            agg(c, "robust.aggregate.alpha", &a.alpha)?,
+            agg(c, "robust.aggregate.mean_force", &a.mean_force)?,
+            agg(c, "robust.aggregate.t_stab", &a.t_stab)?,
+        ];
+        let objects = self.objects(scene, c)?;
+        let uncertainty = self.uncertainty.validate(c)?;
+        let robust = Robust {
+            objects,
+            uncertainty,
+            sampling,
+            scenarios,
+            seed: self.seed,
+            aggregate,
+            p_min,
+            confidence: self.confidence,
+            early_stop: self.early_stop,
+            verify_scenarios,
+        };
+        check_supports(&robust, scene, c)?;
+        if sampling == Sampling::Corners {
+            let d = robust.uncertainty.uncertain().len();
+            if d == 0 {
+                return Err(c.fail("robust.sampling", "\"corners\"".into(), "needs at least one uncertain input"));
+            }
+            if scenarios != corner_count(d) {
+                return Err(c.fail(
+                    "robust.scenarios",
+                    format!("{scenarios}"),
+                    &format!(
+                        "must be 1 + 2^{d} = {} with sampling = \"corners\" ({d} uncertain inputs)",
+                        corner_count(d)
+                    ),
+                ));
+            }
+        }
+        Ok(robust)
+    }
+
+    fn objects(&self, scene: &SceneParams, c: &Checker<'_>) -> Result<Vec<ObjectCase>> {
+        if self.objects.is_empty() {
+            return Err(c.fail("robust.objects", "[]".into(), "must list at least one object ([[robust.objects]])"));
+        }
+        if self.objects.len() > MAX_OBJECTS {
+            let n = self.objects.len();
+            return Err(c.fail("robust.objects", format!("{n} objects"), &format!("at most {MAX_OBJECTS}")));
+        }
+        let mut out: Vec<ObjectCase> = Vec::new();
+        for (i, o) in self.objects.iter().enumerate() {
+            let field = |f: &str| format!("robust.objects[{i}].{f}");
+            let ok =
+                !o.name.is_empty() && o.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_');
+            if !ok {
+                return Err(c.fail(
+                    &field("name"),
+                    format!("{:?}", o.name),
+                    "must be letters, digits, - or _ (a CSV column prefix)",
+                ));
+            }
+            if out.iter().any(|p| p.name == o.name) {
+                return Err(c.fail(&field("name"), format!("{:?}", o.name), "names another object already"));
+            }
+            let inline = [o.radius, o.length, o.density, o.grasp_height];
+            let object = match (&o.file, inline.iter().all(Option::is_some), inline.iter().any(Option::is_some)) {
+                (Some(f), _, false) => {
+                    let path = c.file.parent().unwrap_or(std::path::Path::new(".")).join(f);
+                    object_of_file(&path).map_err(|e| {
+                        c.fail(&field("file"), format!("{f:?}"), &format!("must be a problem file with a valid [object] (paths are relative to this file; a run folder keeps only its problem.toml: inline the object there): {e}"))
+                    })?
+                }
+                (None, true, _) => {
+                    let chk = |name: &str, v: Option<f64>| -> Result<f64> {
+                        let v = v.expect("all four given");
+                        super::limits::limit(&format!("object.{name}"))
+                            .check(v)
+                            .map_err(|rule| c.fail(&field(name), super::limits::num(v), &rule))
+                    };
+                    Object {
+                        radius: chk("radius", o.radius)?,
+                        length: chk("length", o.length)?,
+                        density: chk("density", o.density)?,
+                        grasp_height: chk("grasp_height", o.grasp_height)?,
+                    }
+                }
+                _ => {
+                    return Err(c.fail(
+                        &field("file"),
+                        o.file.clone().unwrap_or_default(),
+                        "give either `file` (a problem file whose [object] is taken) or all of radius, length, density, grasp_height",
+                    ))
+                }
+            };
+            if object.grasp_height >= object.length {
+                return Err(c.fail(
+                    &field("grasp_height"),
+                    format!("{}", object.grasp_height),
+                    &format!("must be below the object's top (length {})", object.length),
+                ));
+            }
+            let tau = super::limits::limit("hand.tau")
+                .check(o.tau)
+                .map_err(|rule| c.fail(&field("tau"), super::limits::num(o.tau), &rule))?;
+            let _ = scene;
+            out.push(ObjectCase { name: o.name.clone(), object, tau });
+        }
+        Ok(out)
+    }
+}
+
+impl RawUncertainty {
+    fn validate(&self, c: &Checker<'_>) -> Result<Uncertainty> {
+        let raw = [
+            &self.x_off,
+            &self.height_offset,
+            &self.mu_phalanx,
+            &self.mu_ground,
+            &self.restitution,
+            &self.fill,
+            &self.tau,
+        ];
+        let mut u = Uncertainty::default();
+        for (i, r) in raw.iter().enumerate() {
+            if let Some(r) = r {
+                u.inputs[i] = Some(r.validate(c, &format!("robust.uncertainty.{}", INPUTS[i]))?);
+            }
+        }
+        Ok(u)
+    }
+}
+
+impl RawDist {
+    fn validate(&self, c: &Checker<'_>, field: &str) -> Result<Dist> {
+        let given = [&self.uniform, &self.normal, &self.list];
+        if given.iter().filter(|g| g.is_some()).count() != 1 {
+            return Err(c.fail(
+                field,
+                "{…}".into(),
+                "must be exactly one of uniform = [lo, hi], normal = [mean, sd, lo, hi], list = [v1, v2, …]",
+            ));
+        }
+        let finite = |v: &[f64], what: &str| -> Result<()> {
+            match v.iter().find(|x| !x.is_finite()) {
+                Some(x) => Err(c.fail(&format!("{field}.{what}"), format!("{x}"), "must be finite numbers")),
+                None => Ok(()),
+            }
+        };
+        if let Some(v) = &self.uniform {
+            finite(v, "uniform")?;
+            if v.len() != 2 {
+                return Err(c.fail(&format!("{field}.uniform"), format!("{v:?}"), "must be [lo, hi]: two numbers"));
+            }
+            if v[0] >= v[1] {
+                return Err(c.fail(
+                    &format!("{field}.uniform"),
+                    format!("{v:?}"),
+                    "lo must be < hi (a fixed value: leave the input out)",
+                ));
+            }
+            return Ok(Dist::Uniform { lo: v[0], hi: v[1] });
+        }
+        if let Some(v) = &self.normal {
+            finite(v, "normal")?;
+            let f = format!("{field}.normal");
+            if v.len() != 4 {
+                return Err(c.fail(
+                    &f,
+                    format!("{v:?}"),
+                    "must be [mean, sd, lo, hi]: four numbers (the bounds are required)",
+                ));
+            }
+            let (mean, sd, lo, hi) = (v[0], v[1], v[2], v[3]);
+            if !(sd > 0.0) {
+                return Err(c.fail(&f, format!("{v:?}"), "the standard deviation (second number) must be > 0"));
+            }
+            if lo >= hi {
+                return Err(c.fail(&f, format!("{v:?}"), "the bounds must be lo < hi (third < fourth number)"));
+            }
+            if phi((hi - mean) / sd) - phi((lo - mean) / sd) < 1e-9 {
+                return Err(c.fail(&f, format!("{v:?}"), "the bounds hold almost none of the distribution"));
+            }
+            return Ok(Dist::Normal { mean, sd, lo, hi });
+        }
+        let v = self.list.as_ref().expect("one given");
+        finite(v, "list")?;
+        if v.is_empty() || v.len() > MAX_LIST {
+            return Err(c.fail(&format!("{field}.list"), format!("{} values", v.len()), "must hold 1 to 1000 values"));
+        }
+        Ok(Dist::List(v.clone()))
+    }
+}
+
+/// Every value a draw can take keeps each object's inputs in their admissible range (no
+/// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …).
+fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()> {
+    for (i, d) in r.uncertainty.inputs.iter().enumerate() {
+        let Some(d) = d else { continue };
+        let (lo, hi) = d.support();
+        let field = format!("robust.uncertainty.{}", INPUTS[i]);
+        let bad = |rule: String| c.fail(&field, format!("draws in [{lo}, {hi}]"), &rule);
+        match INPUTS[i] {
+            "x_off" => {
+                if lo < -0.1 || hi > 0.1 {
+                    return Err(bad("must keep the offset in [-0.1, 0.1] m".into()));
+                }
+            }
+            "restitution" => {
+                if lo < 0.01 || hi > 0.99 {
+                    return Err(bad("must keep the restitution in [0.01, 0.99]".into()));
+                }
+            }
+            name => {
+                if name != "height_offset" && !(lo > 0.0) {
+                    let what = match name {
+                        "mu_phalanx" | "mu_ground" => {
+                            "a friction factor must be > 0 (no negative or zero friction draws)"
+                        }
+                        "fill" => "a fill factor must be > 0 (an object has mass)",
+                        _ => "a torque factor must be > 0",
+                    };
+                    return Err(bad(what.into()));
+                }
+                for o in &r.objects {
+                    let (limit, v) = match name {
+                        "height_offset" => {
+                            let h = (o.object.grasp_height + lo, o.object.grasp_height + hi);
+                            if !(h.0 > 0.0) || h.1 >= o.object.length {
+                                return Err(bad(format!(
+                                    "keeps object {}'s grasp height {} + offset on its side, in (0, {})",
+                                    o.name, o.object.grasp_height, o.object.length
+                                )));
+                            }
+                            continue;
+                        }
+                        "mu_phalanx" => ("contact.mu_s", scene.contact.mu_s.max(scene.contact.mu_d) * hi),
+                        "mu_ground" => ("environment.mu_g", scene.env.mu_g * hi),
+                        "fill" => ("object.density", o.object.density * hi),
+                        _ => ("hand.tau", o.tau * hi),
+                    };
+                    if let Err(rule) = super::limits::limit(limit).check(v) {
+                        return Err(bad(format!("gives {limit} = {v} for object {}: {rule}", o.name)));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The `[object]` of another problem file (only that section is read: a file that names
+/// objects of its own cannot make a cycle).
+fn object_of_file(path: &std::path::Path) -> std::result::Result<Object, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut text = String::new();
+    file.take(super::limits::MAX_FILE_BYTES)
+        .read_to_string(&mut text)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let table: toml::Table = toml::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let raw = table.get("object").ok_or_else(|| format!("{}: no [object] section", path.display()))?;
+    let o: Object = raw.clone().try_into().map_err(|e| format!("{}: [object]: {e}", path.display()))?;
+    for (name, v) in
+        [("radius", o.radius), ("length", o.length), ("density", o.density), ("grasp_height", o.grasp_height)]
+    {
+        super::limits::limit(&format!("object.{name}"))
+            .check(v)
+            .map_err(|rule| format!("{}: object.{name} = {v} {rule}", path.display()))?;
+    }
+    Ok(o)
+}
+
+fn whole(c: &Checker<'_>, field: &str, v: f64, lo: f64, hi: f64) -> Result<usize> {
+    if !v.is_finite() || v.fract() != 0.0 || v < lo || v > hi {
+        return Err(c.fail(field, format!("{v}"), &format!("must be a whole number in [{lo}, {hi}]")));
+    }
+    Ok(v as usize)
+}
+
+fn agg(c: &Checker<'_>, field: &str, a: &RawAgg) -> Result<Aggregation> {
+    match a {
+        RawAgg::Word(w) if w == "worst" => Ok(Aggregation::Worst),
+        RawAgg::Word(w) if w == "mean" => Ok(Aggregation::Mean),
+        RawAgg::Quantile(q) if *q > 0.0 && *q <= 1.0 => Ok(Aggregation::Quantile(*q)),
+        RawAgg::Quantile(q) => Err(c.fail(field, format!("{q}"), "a quantile must be a probability in (0, 1]")),
+        RawAgg::Word(w) => Err(c.fail(
+            field,
+            format!("{w:?}"),
+            "must be \"worst\", \"mean\" or a quantile q in (0, 1] (the value at least a fraction q of the scenarios meet)",
+        )),
+    }
+}

@@ -1,0 +1,106 @@
+//! `gripopt replay RUN_DIR --design ID --scenario OBJECT:K` (issue 22): one scenario of a
+//! robust design re-simulated — its inputs re-drawn from the run's problem (the same
+//! common-random-number stream), stage 3 of the free kind exactly as the optimisation ran it
+//! — and compared with what the recording's `/designs` message says of that scenario; the
+//! free scene's poses are recorded to `RUN_DIR/scenario-ID-OBJECT-K.mcap` (band 3 of the
+//! run's time axis) so the scenario can be watched in Foxglove with the verify layout.
+
+use super::folder::RunFolder;
+use super::verify::row_of;
+use super::verify_rec::VerifyRecording;
+use crate::eval::{robust_start, run_scenario, EvalOptions, Record, RobustSetup, ScenarioRecord};
+use crate::sim::PoseSample;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// A replayed scenario.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioReplay {
+    /// Design id.
+    pub id: u64,
+    /// Object name.
+    pub object: String,
+    /// Scenario index within the object.
+    pub k: usize,
+    /// What the re-simulation gives (inputs and outcome).
+    pub scenario: ScenarioRecord,
+    /// What the recording says of this scenario (None: the design's scenarios stopped
+    /// early before it, or the run recorded no robust record).
+    pub recorded: Option<ScenarioRecord>,
+    /// The re-simulation equals the recording (None: nothing recorded to compare).
+    pub verified: Option<bool>,
+    /// The scenario's evaluation record (the free kind: the centred grasp and the free scene).
+    pub record: Record,
+    /// The recording written (None: not asked).
+    pub recording: Option<PathBuf>,
+    /// The free object's poses (not serialised).
+    #[serde(skip)]
+    pub poses: Vec<PoseSample>,
+}
+
+/// Parse `OBJECT:K`.
+pub fn parse_scenario(arg: &str) -> Result<(String, usize)> {
+    let bad = || {
+        Error::Input(format!(
+            "--scenario {arg}: expected OBJECT:K, e.g. can:3 (an object of the run's [robust] and a scenario index)"
+        ))
+    };
+    let (o, k) = arg.rsplit_once(':').ok_or_else(bad)?;
+    Ok((o.to_string(), k.parse().map_err(|_| bad())?))
+}
+
+/// Replay scenario `k` of object `object` of design `id` of the robust run in `dir`;
+/// `record`: write its MCAP.
+pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool) -> Result<ScenarioReplay> {
+    let folder = RunFolder::open(dir)?;
+    let p = folder.problem()?;
+    let file = dir.join("problem.toml");
+    let not = |m: String| Error::RunDir { path: file.clone(), message: m };
+    let setup =
+        RobustSetup::of(&p).ok_or_else(|| not("not a robust problem (no [robust]): --scenario needs one".into()))?;
+    let names: Vec<&str> = setup.spec.objects.iter().map(|o| o.name.as_str()).collect();
+    let o = names.iter().position(|n| *n == object).ok_or_else(|| {
+        Error::Input(format!("--scenario {object}:{k}: no object {object:?} (the run's objects: {})", names.join(", ")))
+    })?;
+    if k >= setup.k {
+        return Err(Error::Input(format!(
+            "--scenario {object}:{k}: the run has scenarios 0 to {} per object",
+            setup.k - 1
+        )));
+    }
+    let rec = folder.design(id)?;
+    let design = rec.design();
+    let start = robust_start(&design, &setup);
+    if let Some((stage, why, ..)) = &start.discard {
+        return Err(Error::Input(format!("design {id} is discarded at stage {stage} ({why}): it has no scenarios")));
+    }
+    let mut poses: Vec<PoseSample> = vec![];
+    let (scenario, ev) = run_scenario(&start, &setup, o, k, &EvalOptions::full(&p), &mut poses);
+    let recorded =
+        rec.record.robust.as_ref().and_then(|r| r.scenarios.iter().find(|s| s.object == o && s.k == k).cloned());
+    let verified = recorded.as_ref().map(|r| *r == scenario);
+    let recording = match (record, row_of(id, &design, &ev)) {
+        (true, Some(row)) => {
+            let name = format!("scenario-{id}-{object}-{k}.mcap");
+            let what = format!("design {id} scenario {object}:{k}");
+            let r = VerifyRecording::for_scenario(dir, &name, what)?;
+            let mut ps = p.clone();
+            ps.scene = setup.scenario_scenes[o * setup.k + k].clone();
+            let kept = crate::record::keep_poses(&poses, r.opts.scene_dt);
+            Some(r.write(&ps, vec![(row, kept)])?)
+        }
+        _ => None,
+    };
+    Ok(ScenarioReplay {
+        id,
+        object: object.to_string(),
+        k,
+        scenario,
+        recorded,
+        verified,
+        record: Record::from_eval(&ev),
+        recording,
+        poses,
+    })
+}

@@ -1,0 +1,167 @@
+//! The robust columns of pareto.csv, archive.csv and population.csv (issue 22): for a robust
+//! problem, after the design columns, `scenarios_run` and `scenarios_saved` (early stop),
+//! then per object `NAME.p_stay`, its Clopper–Pearson interval `NAME.p_stay_lo`/`_hi`,
+//! `NAME.stays` of `NAME.scenarios`, the worst free-object displacement and the object's
+//! own objectives. A single-object problem has none (its files are as before, byte for byte).
+
+/// A column: name, unit, meaning (`outputs::Column`).
+type Column = (&'static str, &'static str, &'static str);
+use crate::eval::Record;
+use serde::de::{MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// The design-level robust columns.
+pub const ROBUST_COLUMNS: [Column; 2] = [
+    ("scenarios_run", "-", "scenarios simulated for this design (all objects)"),
+    ("scenarios_saved", "-", "scenarios early stop did not need (an object's P(stay) >= p_min could no longer hold)"),
+];
+
+/// The per-object robust columns, each `NAME.column`.
+pub const OBJECT_COLUMNS: [Column; 10] = [
+    ("p_stay", "-", "P(object barely moves) over its scenarios run (constraint: >= p_min)"),
+    ("p_stay_lo", "-", "Clopper-Pearson lower end of p_stay at the problem's confidence"),
+    ("p_stay_hi", "-", "Clopper-Pearson upper end"),
+    ("stays", "-", "scenarios in which the object stayed"),
+    ("scenarios", "-", "scenarios run on this object"),
+    ("max_displacement", "m", "worst displacement of the free object over its scenarios"),
+    ("max_offset", "m", "max_offset on this object (stage 2, nominal inputs)"),
+    ("alpha", "-", "alpha on this object"),
+    ("mean_force", "N", "mean force on this object"),
+    ("t_stab", "s", "t_stab aggregated over this object's scenarios"),
+];
+
+/// The robust cells of a row, in column order (empty for a single-object problem).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RobustColumns(pub Vec<(String, Option<f64>)>);
+
+impl RobustColumns {
+    /// The cells of a record.
+    pub fn of(r: &Record) -> Self {
+        let Some(rb) = &r.robust else { return RobustColumns::default() };
+        let n = |v: usize| Some(v as f64);
+        let mut c = vec![
+            ("scenarios_run".to_string(), n(rb.scenarios_run)),
+            ("scenarios_saved".to_string(), n(rb.scenarios_saved)),
+        ];
+        for o in &rb.objects {
+            let vals = [
+                o.p_stay,
+                o.p_stay_lo,
+                o.p_stay_hi,
+                n(o.stays),
+                n(o.scenarios),
+                o.max_displacement,
+                o.max_offset.filter(|m| *m >= 0.0),
+                o.alpha,
+                o.mean_force,
+                o.t_stab,
+            ];
+            for (col, v) in OBJECT_COLUMNS.iter().zip(vals) {
+                c.push((format!("{}.{}", o.name, col.0), v));
+            }
+        }
+        RobustColumns(c)
+    }
+
+    /// The value of `column` of object `object` (None: not computed or no such column).
+    pub fn get(&self, object: &str, column: &str) -> Option<f64> {
+        let key = format!("{object}.{column}");
+        self.0.iter().find(|(k, _)| *k == key).and_then(|c| c.1)
+    }
+
+    /// The object names, in column order.
+    pub fn objects(&self) -> Vec<String> {
+        let mut names: Vec<String> = vec![];
+        for (k, _) in &self.0 {
+            if let Some((o, _)) = k.split_once('.') {
+                if names.last().map(String::as_str) != Some(o) {
+                    names.push(o.to_string());
+                }
+            }
+        }
+        names
+    }
+
+    /// The columns with units and meanings (for a CSV's `#` header).
+    pub fn columns(&self) -> Vec<(String, &'static str)> {
+        self.0
+            .iter()
+            .map(|(k, _)| {
+                let base = k.rsplit('.').next().unwrap_or(k);
+                let unit = ROBUST_COLUMNS.iter().chain(&OBJECT_COLUMNS).find(|c| c.0 == base).map_or("-", |c| c.1);
+                (k.clone(), unit)
+            })
+            .collect()
+    }
+}
+
+impl Serialize for RobustColumns {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// A cell read back: a number, or empty.
+struct CellNumber(Option<f64>);
+
+impl<'de> Deserialize<'de> for CellNumber {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = CellNumber;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an empty cell")
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<CellNumber, E> {
+                Ok(CellNumber(Some(v)))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<CellNumber, E> {
+                Ok(CellNumber(Some(v as f64)))
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<CellNumber, E> {
+                Ok(CellNumber(Some(v as f64)))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<CellNumber, E> {
+                if v.is_empty() {
+                    return Ok(CellNumber(None));
+                }
+                v.parse().map(|x| CellNumber(Some(x))).map_err(|_| E::custom(format!("not a number: {v:?}")))
+            }
+            fn visit_unit<E>(self) -> Result<CellNumber, E> {
+                Ok(CellNumber(None))
+            }
+            fn visit_none<E>(self) -> Result<CellNumber, E> {
+                Ok(CellNumber(None))
+            }
+            fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<CellNumber, D::Error> {
+                CellNumber::deserialize(d)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl<'de> Deserialize<'de> for RobustColumns {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RobustColumns;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("the robust columns")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<RobustColumns, A::Error> {
+                let mut out = vec![];
+                while let Some((k, v)) = m.next_entry::<String, CellNumber>()? {
+                    out.push((k, v.0));
+                }
+                Ok(RobustColumns(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}

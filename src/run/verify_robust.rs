@@ -1,0 +1,185 @@
+//! `gripopt verify RUN_DIR` on a robust run (issue 22): the out-of-sample check. Every design
+//! of the run's front is re-evaluated on a fresh, larger draw of scenarios — the problem's
+//! `verify_scenarios` per object from another ChaCha stream (`STREAM_VERIFY`) than the
+//! optimisation's, every scenario run (no early stop) — and each object's P(stay) is compared
+//! with `p_min`: how many front designs keep it, i.e. whether the optimiser overfitted its K
+//! scenarios. Writes `RUN_DIR/verify_robust.csv` (one row per design and object) atomically,
+//! under the run folder's lock; the rows do not depend on the thread count.
+
+use super::folder::RunFolder;
+use super::lock::RunLock;
+use crate::cells::{line, Floats};
+use crate::eval::{robust_record, robust_start, run_scenario, EvalOptions, RobustSetup, ScenarioRecord};
+use crate::fsutil::write_atomic;
+use crate::params::{Design, Problem, STREAM_VERIFY};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The file `verify` writes for a robust run.
+pub const VERIFY_ROBUST_FILE: &str = "verify_robust.csv";
+
+/// One front design on one object, in sample (the run's K scenarios) and out of sample.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobustVerifyRow {
+    /// Design id.
+    pub id: u64,
+    /// Object name.
+    pub object: String,
+    /// P(stay) over the optimisation's scenarios (from pareto.csv).
+    pub p_stay_in: Option<f64>,
+    /// Scenarios of it.
+    pub scenarios_in: Option<f64>,
+    /// P(stay) over the fresh draw.
+    pub p_stay_out: Option<f64>,
+    /// Its Clopper–Pearson interval, lower end.
+    pub p_stay_out_lo: Option<f64>,
+    /// Upper end.
+    pub p_stay_out_hi: Option<f64>,
+    /// Scenarios of the fresh draw in which the object stayed.
+    pub stays_out: usize,
+    /// Scenarios of the fresh draw.
+    pub scenarios_out: usize,
+    /// Worst displacement of the free object over the fresh draw (m).
+    pub max_displacement_out: Option<f64>,
+    /// The fresh draw's P(stay) ≥ p_min.
+    pub keeps: bool,
+}
+
+/// What `verify` found on a robust run.
+#[derive(Debug, Clone)]
+pub struct RobustVerifySummary {
+    /// The file written.
+    pub file: PathBuf,
+    /// Rows, by design id then object.
+    pub rows: Vec<RobustVerifyRow>,
+    /// Front designs verified.
+    pub designs: usize,
+    /// Of them, those that keep P(stay) ≥ p_min on every object out of sample.
+    pub keep_all: usize,
+    /// p_min, and scenarios per object of the fresh draw.
+    pub p_min: f64,
+    /// Scenarios per object out of sample.
+    pub scenarios: usize,
+}
+
+impl RobustVerifySummary {
+    /// The report `gripopt verify` prints.
+    pub fn report(&self) -> String {
+        let mut s = format!(
+            "verified {} front designs out of sample ({} fresh scenarios per object, a stream the optimiser never saw) → {}\n",
+            self.designs,
+            self.scenarios,
+            self.file.display()
+        );
+        s.push_str(&format!(
+            "  {} of {} keep P(stay) >= p_min {} on every object\n",
+            self.keep_all, self.designs, self.p_min
+        ));
+        let mut objects: Vec<&str> = vec![];
+        for r in &self.rows {
+            if !objects.contains(&r.object.as_str()) {
+                objects.push(&r.object);
+            }
+        }
+        for o in objects {
+            let mine: Vec<&RobustVerifyRow> = self.rows.iter().filter(|r| r.object == o).collect();
+            let keep = mine.iter().filter(|r| r.keeps).count();
+            let mean = |f: &dyn Fn(&RobustVerifyRow) -> Option<f64>| {
+                let v: Vec<f64> = mine.iter().filter_map(|r| f(r)).collect();
+                if v.is_empty() {
+                    f64::NAN
+                } else {
+                    v.iter().sum::<f64>() / v.len() as f64
+                }
+            };
+            s.push_str(&format!(
+                "  {o:<14} keeps {keep}/{}  mean P(stay) in sample {:.3}, out of sample {:.3}\n",
+                mine.len(),
+                mean(&|r| r.p_stay_in),
+                mean(&|r| r.p_stay_out)
+            ));
+        }
+        s
+    }
+}
+
+/// True when `dir` holds a run of a robust problem.
+pub fn is_robust_run(dir: &Path) -> bool {
+    Problem::load(dir.join("problem.toml")).is_ok_and(|p| p.robust.is_some())
+}
+
+/// Verify the front of the robust run in `dir` out of sample (in the current rayon pool).
+pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
+    let folder = RunFolder::open(dir)?;
+    let _lock = RunLock::acquire(dir)?;
+    let file = dir.join("problem.toml");
+    let p = Problem::load(&file)?;
+    let r = p
+        .robust
+        .clone()
+        .ok_or_else(|| Error::RunDir { path: file.clone(), message: "not a robust problem (no [robust])".into() })?;
+    let front = folder.front()?;
+    if front.is_empty() {
+        return Err(Error::RunDir {
+            path: dir.join("pareto.csv"),
+            message: "no feasible design on the front; nothing to verify, nothing written".into(),
+        });
+    }
+    let setup = RobustSetup::with_stream(&p, &r, STREAM_VERIFY, r.verify_scenarios, false);
+    let opts = EvalOptions::full(&p);
+    let starts: Vec<_> =
+        front.par_iter().map(|row| robust_start(&Design::from_array(&row.parameters()), &setup)).collect();
+    let seq: Vec<(usize, usize)> = setup.sequence().collect();
+    let tasks: Vec<(usize, usize)> = (0..starts.len())
+        .filter(|&d| starts[d].passed())
+        .flat_map(|d| seq.iter().map(move |&(o, k)| (d, o, k)))
+        .map(|(d, o, k)| (d, o * setup.k + k))
+        .collect();
+    let done: Vec<ScenarioRecord> = tasks
+        .par_iter()
+        .with_max_len(1)
+        .map(|&(d, i)| run_scenario(&starts[d], &setup, i / setup.k, i % setup.k, &opts, &mut ()).0)
+        .collect();
+    let mut rows = vec![];
+    let mut keep_all = 0;
+    for (d, row) in front.iter().enumerate() {
+        let scen: Vec<ScenarioRecord> =
+            tasks.iter().zip(&done).filter(|((td, _), _)| *td == d).map(|(_, s)| s.clone()).collect();
+        let rec = robust_record(&setup, &starts[d], scen);
+        let rb = rec.robust.as_ref().expect("a robust record");
+        let mut all = starts[d].passed();
+        for o in &rb.objects {
+            let keeps = o.p_stay.is_some_and(|p| p >= r.p_min);
+            all &= keeps;
+            rows.push(RobustVerifyRow {
+                id: row.id,
+                object: o.name.clone(),
+                p_stay_in: row.robust.get(&o.name, "p_stay"),
+                scenarios_in: row.robust.get(&o.name, "scenarios"),
+                p_stay_out: o.p_stay,
+                p_stay_out_lo: o.p_stay_lo,
+                p_stay_out_hi: o.p_stay_hi,
+                stays_out: o.stays,
+                scenarios_out: o.scenarios,
+                max_displacement_out: o.max_displacement,
+                keeps,
+            });
+        }
+        keep_all += usize::from(all);
+    }
+    let mut csv = format!(
+        "# gripopt verify_robust.csv: the front re-evaluated out of sample ({} fresh scenarios per object, stream {STREAM_VERIFY}; p_min {}, Clopper-Pearson {} %)\n# units: p_stay_* [-] scenarios_* [-] stays_out [-] max_displacement_out [m] keeps [bool]\n",
+        setup.k,
+        r.p_min,
+        r.confidence * 100.0
+    );
+    csv.push_str("id,object,p_stay_in,scenarios_in,p_stay_out,p_stay_out_lo,p_stay_out_hi,stays_out,scenarios_out,max_displacement_out,keeps\n");
+    for row in &rows {
+        csv.push_str(&line(row, Floats::Display));
+    }
+    let out = dir.join(VERIFY_ROBUST_FILE);
+    write_atomic(&out, csv.as_bytes())?;
+    Ok(RobustVerifySummary { file: out, designs: front.len(), keep_all, p_min: r.p_min, scenarios: setup.k, rows })
+}
