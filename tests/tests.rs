@@ -25,6 +25,8 @@ mod recording_scene;
 mod replay_scene;
 mod robustness;
 mod robustness_cli;
+mod robustness_edges;
+mod robustness_folders;
 mod scene_cli;
 mod scenes;
 mod seams;
