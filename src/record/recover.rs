@@ -230,9 +230,11 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
             }
             continue;
         }
-        let refuse = |why: String| Error::Recording {
+        let refuse = |why: String| {
+            Error::Recording {
             path: p.clone(),
             message: format!("{why}; the index cannot be rebuilt without it (generation {g} is covered by the checkpoint): restore the file, or move it away to resume without its designs"),
+        }
         };
         match read {
             Ok(e) if foreign(&e) => {

@@ -4,8 +4,8 @@
 //! of its own content (`sha256`: the canonical JSON of every other field, keys sorted), so
 //! that a hand-edited or damaged checkpoint is refused (unless forced).
 
-use crate::fsutil::write_atomic;
 use super::archive::Archive;
+use crate::fsutil::write_atomic;
 use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::{Error, Result};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
@@ -159,7 +159,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         }
         let ver = head.get("version").and_then(|v| v.as_u64());
         if let Some(old @ (1..=3)) = ver {
-            let before = if old == 3 { "the archive inside the checkpoint (issue 24)" } else { "the typed evaluation record" };
+            let before =
+                if old == 3 { "the archive inside the checkpoint (issue 24)" } else { "the typed evaluation record" };
             return Err(invalid(format!(
                 "field `version` is {old}: written by a gripopt before {before} (version {VERSION}); resume the run with the gripopt that started it, or start a new one"
             )));

@@ -125,9 +125,9 @@ impl Scan {
             None => None,
             Some(Ok(i)) => Some(i),
             Some(Err(e)) => {
-                return Err(self.err(format!(
-                    "cannot tell which run this folder holds ({e}); give a new or empty folder"
-                )))
+                return Err(
+                    self.err(format!("cannot tell which run this folder holds ({e}); give a new or empty folder"))
+                )
             }
         };
         if let Some(i) = info.filter(|i| i.completed_generations > 0 || i.status == RunStatus::Finished) {
@@ -145,7 +145,9 @@ impl Scan {
             if !ours {
                 let why = match (&e, info) {
                     (_, None) => "and the folder has no run.json".to_string(),
-                    (Ok(e), Some(_)) => format!("written by another run (run id {})", e.run_id.as_deref().unwrap_or("none")),
+                    (Ok(e), Some(_)) => {
+                        format!("written by another run (run id {})", e.run_id.as_deref().unwrap_or("none"))
+                    }
                     (Err(e), Some(_)) => format!("unreadable: {e}"),
                 };
                 return Err(Error::RunDir {
@@ -197,9 +199,9 @@ impl Scan {
         let text = || std::fs::read_to_string(&p).unwrap_or_default();
         match n {
             "problem.toml" => crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256,
-            LAYOUT_FILE => [true, false].iter().any(|s| {
-                serde_json::to_string_pretty(&layout(*s)).is_ok_and(|l| l == text())
-            }),
+            LAYOUT_FILE => {
+                [true, false].iter().any(|s| serde_json::to_string_pretty(&layout(*s)).is_ok_and(|l| l == text()))
+            }
             n if VIEWS.contains(&n) => text().starts_with(&format!("# gripopt {n}")),
             // written beside the first checkpoint by a gripopt before issue 24
             "archive.json" => i.run_id.is_empty(),

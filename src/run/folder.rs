@@ -119,11 +119,14 @@ impl RunFolder {
         let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
             return Ok(None);
         };
-        let word_after = |key: &str| line.split(key).nth(1).and_then(|r| r.split([' ', ',', ';']).find(|w| !w.is_empty()));
+        let word_after =
+            |key: &str| line.split(key).nth(1).and_then(|r| r.split([' ', ',', ';']).find(|w| !w.is_empty()));
         let generation = word_after("generation ").and_then(|w| w.parse().ok());
         let sha = word_after("checkpoint sha256 ");
         match (generation, sha) {
-            (Some(generation), Some(s)) => Ok(Some(VerifiedGeneration { generation, checkpoint_sha256: s.to_string() })),
+            (Some(generation), Some(s)) => {
+                Ok(Some(VerifiedGeneration { generation, checkpoint_sha256: s.to_string() }))
+            }
             _ => Err(Error::RunDir { path: p, message: format!("its `# run:` line is damaged: {line:?}") }),
         }
     }

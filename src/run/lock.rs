@@ -86,7 +86,9 @@ impl RunLock {
                     std::thread::sleep(RETRY);
                     continue;
                 }
-                Err(TryLockError::WouldBlock) => return Err(Error::Locked { path: dir.to_path_buf(), pid: pid_in(dir) }),
+                Err(TryLockError::WouldBlock) => {
+                    return Err(Error::Locked { path: dir.to_path_buf(), pid: pid_in(dir) })
+                }
                 Err(TryLockError::Error(e)) => return Err(Error::io(dir, "cannot lock the run folder", e)),
             }
             // the folder locked is still the one at `dir` (not moved away meanwhile)

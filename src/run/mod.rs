@@ -29,9 +29,9 @@ pub use crate::error::{printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
 pub use folder::{read_table, RunFolder, RunState, VerifiedGeneration};
-pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
+pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
     check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
 };
@@ -42,8 +42,8 @@ pub use outputs::{
     HISTORY_COLUMNS,
 };
 pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
-pub use problems::PROBLEM_FILE;
 pub use plots::{hypervolume, pareto_matrix};
+pub use problems::PROBLEM_FILE;
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use verify::{
     read_design_csv, read_design_rows, run_designs, sample_designs, verify_csv, verify_design, verify_design_poses,

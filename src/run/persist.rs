@@ -448,7 +448,14 @@ fn persist_loop(
                         });
                         cv.notify_all();
                     });
-                    pending.push_back(Pending { generation: g, shard, evaluations, wall_s, discards, checkpoint: None });
+                    pending.push_back(Pending {
+                        generation: g,
+                        shard,
+                        evaluations,
+                        wall_s,
+                        discards,
+                        checkpoint: None,
+                    });
                 }
                 Msg::Shard { generation, result } => {
                     if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {

@@ -78,7 +78,10 @@ pub(crate) fn switch(dir: &Path, info: &mut RunInfo, at: u64, problem: &Problem)
             if let Some(h) = hash_of(dir, &kept)?.filter(|h| *h != last.sha256) {
                 return Err(Error::RunDir {
                     path: dir.join(&kept),
-                    message: format!("exists and is not this run's earlier problem (sha256 {}): move it away", &h[..12]),
+                    message: format!(
+                        "exists and is not this run's earlier problem (sha256 {}): move it away",
+                        &h[..12]
+                    ),
                 });
             }
             write_atomic(&dir.join(&kept), &bytes)?;
