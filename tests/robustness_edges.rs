@@ -5,12 +5,10 @@
 //! simulation, the ground stiffness, `#` unit lines and docs/outputs.md on every CSV).
 
 use crate::robustness::{checkpoint_generation, cli, code, read, spec, stderr, tmp, wait_for, BIN, PROBLEM};
-use crate::robustness_folders::{odd_folder, stdout, wait_at_most};
+use crate::robustness_folders::{odd_folder, spawn_collecting, stdout, wait_at_most};
 use gripopt::run::{optimise, resume};
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Feasible, not form closed at the centred object (max_offset is not computed).
@@ -101,7 +99,6 @@ fn item9_a_full_stdout_is_a_clean_error_in_every_command() {
     let r = run.display().to_string();
     let id = crate::robustness::rows(&run.join("pareto.csv"))[1][0].clone();
     let (sw, opt) = (tmp("i9-sweep").display().to_string(), tmp("i9-optimise").display().to_string());
-    let mjcf = tmp("i9-export").display().to_string();
     let cases: Vec<Vec<&str>> = vec![
         vec!["evaluate", PROBLEM],
         vec!["evaluate", PROBLEM, "--json"],
@@ -118,7 +115,6 @@ fn item9_a_full_stdout_is_a_clean_error_in_every_command() {
         vec!["resume", &r, "--generations", "3", "--json"],
         vec!["verify", &r, "--record", "none"],
         vec!["export", PROBLEM, "--format", "json", "--out", "-"],
-        vec!["export", PROBLEM, "--format", "mjcf", "--out", &mjcf],
     ];
     for args in cases {
         let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
@@ -202,16 +198,8 @@ fn item12_values_before_a_discard_and_none_after() {
 fn item12_ctrl_c_is_acknowledged_and_a_second_one_ends_at_once() {
     let dir = tmp("i12-ctrl-c");
     let d = dir.display().to_string();
-    let mut child = Command::new(BIN)
-        .args(["optimise", PROBLEM, "--out", &d, "--pop", "3000", "--generations", "50", "--record", "none"])
-        .args(["--threads", "1"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let lines = Arc::new(Mutex::new(Vec::<String>::new()));
-    let (l2, err) = (lines.clone(), child.stderr.take().unwrap());
-    std::thread::spawn(move || BufReader::new(err).lines().map_while(Result::ok).for_each(|l| l2.lock().unwrap().push(l)));
+    let args = ["--pop", "3000", "--generations", "50", "--record", "none", "--threads", "1"];
+    let (mut child, lines) = spawn_collecting(&[&["optimise", PROBLEM, "--out", &d][..], &args[..]].concat());
     wait_for("the first checkpoint", || checkpoint_generation(&dir) >= 1);
     let int = || assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
     int();
@@ -289,7 +277,20 @@ fn item12_verify_csv_names_the_generation_it_checked() {
 fn item12_printed_paths_are_quoted_and_control_characters_escaped() {
     let dir = odd_folder("i12-quoted");
     let d = dir.display().to_string();
-    let o = cli(&["optimise", PROBLEM, "--out", &d, "--pop", "12", "--generations", "2", "--seed", "16", "--record", "none"]);
+    let o = cli(&[
+        "optimise",
+        PROBLEM,
+        "--out",
+        &d,
+        "--pop",
+        "12",
+        "--generations",
+        "2",
+        "--seed",
+        "16",
+        "--record",
+        "none",
+    ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let quoted = format!("'{}'", d.replace('\'', r"'\''"));
     assert!(stdout(&o).contains(&format!("gripopt show {quoted}")), "{}", stdout(&o));
@@ -306,16 +307,13 @@ fn item12_printed_paths_are_quoted_and_control_characters_escaped() {
 /// Item 12: a long single simulation says on stderr that it is still running (and where).
 #[test]
 fn item12_a_long_simulation_reports_progress() {
+    // a tiny v_s with a step budget large enough to run for minutes (the default budget
+    // ends it within a second)
     let p = problem_with("i12-slow", "v_s", "v_s = 1e-10");
-    let mut child = Command::new(BIN)
-        .args(["simulate", p.to_str().unwrap()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let lines = Arc::new(Mutex::new(Vec::<String>::new()));
-    let (l2, err) = (lines.clone(), child.stderr.take().unwrap());
-    std::thread::spawn(move || BufReader::new(err).lines().map_while(Result::ok).for_each(|l| l2.lock().unwrap().push(l)));
+    let text = read(&p);
+    let budget = text.lines().find(|l| l.starts_with("max_steps ")).unwrap();
+    std::fs::write(&p, text.replacen(budget, "max_steps = 50000000", 1)).unwrap();
+    let (mut child, lines) = spawn_collecting(&["simulate", p.to_str().unwrap()]);
     let t0 = Instant::now();
     let seen = loop {
         if lines.lock().unwrap().iter().any(|l| l.contains("simulating") && l.contains("steps")) {
@@ -357,12 +355,14 @@ fn item12_every_csv_has_unit_lines_and_documented_columns() {
     let d = dir.display().to_string();
     optimise(&front_spec(&dir)).unwrap();
     let id = crate::robustness::rows(&dir.join("pareto.csv"))[1][0].clone();
-    let mut files: Vec<PathBuf> =
-        ["pareto.csv", "population.csv", "archive.csv", "history.csv", "pareto_timings.csv"].map(|f| dir.join(f)).into();
+    let mut files: Vec<PathBuf> = ["pareto.csv", "population.csv", "archive.csv", "history.csv", "pareto_timings.csv"]
+        .map(|f| dir.join(f))
+        .into();
     let ok = |o: std::process::Output| assert_eq!(code(&o), 0, "{}", stderr(&o));
     ok(cli(&["verify", &d, "--record", "none"]));
     files.push(dir.join("verify.csv"));
-    for (scene, name) in [("centred", "sim-centred.csv"), ("offset:0.002", "sim-offset.csv"), ("free", "sim-free.csv")] {
+    for (scene, name) in [("centred", "sim-centred.csv"), ("offset:0.002", "sim-offset.csv"), ("free", "sim-free.csv")]
+    {
         ok(cli(&["simulate", PROBLEM, "--scene", scene, "--csv", dir.join(name).to_str().unwrap()]));
         files.push(dir.join(name));
     }

@@ -7,8 +7,10 @@
 use crate::robustness::{checkpoint_generation, cli, code, read, spec, stderr, tmp, wait_for, BIN, PROBLEM};
 use gripopt::record::read_index;
 use gripopt::run::{optimise, resume};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// The shard files of a run folder, sorted.
@@ -36,6 +38,25 @@ pub(crate) fn stdout(o: &std::process::Output) -> String {
 /// `gripopt ARGS` in the background, output discarded but stderr kept.
 pub(crate) fn spawn(args: &[&str]) -> Child {
     Command::new(BIN).args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap()
+}
+
+/// `gripopt optimise` into folder `d` for 5 000 generations (stopped by the test), in the
+/// background.
+fn spawn_endless(d: &str) -> Child {
+    let args = ["--pop", "16", "--generations", "5000", "--record", "none", "--threads", "1"];
+    spawn(&[&["optimise", PROBLEM, "--out", d][..], &args[..]].concat())
+}
+
+/// `gripopt ARGS` in the background, output discarded, with the lines of its stderr
+/// collected as they come.
+pub(crate) fn spawn_collecting(args: &[&str]) -> (Child, Arc<Mutex<Vec<String>>>) {
+    let mut child = spawn(args);
+    let lines = Arc::new(Mutex::new(Vec::<String>::new()));
+    let (l2, err) = (lines.clone(), child.stderr.take().unwrap());
+    std::thread::spawn(move || {
+        BufReader::new(err).lines().map_while(Result::ok).for_each(|l| l2.lock().unwrap().push(l))
+    });
+    (child, lines)
 }
 
 /// Wait for `child` at most `secs` seconds; its exit code (None: still running).
@@ -90,20 +111,20 @@ fn item1_a_run_without_its_checkpoint_is_refused_never_restarted() {
 fn item2_the_lock_holds_against_make_run_a_lost_lock_file_and_a_moved_folder() {
     let dir = tmp("i2-live");
     let d = dir.display().to_string();
-    let mut child = spawn(&[
-        "optimise",
-        PROBLEM,
-        "--out",
-        &d,
-        "--pop",
-        "16",
-        "--generations",
-        "5000",
-        "--record",
-        "none",
-        "--threads",
-        "1",
-    ]);
+    let parent = dir.parent().unwrap();
+    let moved_aside = || -> Vec<String> {
+        std::fs::read_dir(parent)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .filter(|n| n.starts_with("robust-i2-live."))
+            .collect()
+    };
+    // folders an earlier test run's failure left aside
+    for n in moved_aside() {
+        std::fs::remove_dir_all(parent.join(n)).unwrap();
+    }
+    let mut child = spawn_endless(&d);
     wait_for("the first checkpoint", || checkpoint_generation(&dir) >= 1);
     let make = Command::new("make")
         .current_dir(env!("CARGO_MANIFEST_DIR"))
@@ -114,13 +135,7 @@ fn item2_the_lock_holds_against_make_run_a_lost_lock_file_and_a_moved_folder() {
     assert!(!make.status.success(), "make run into a live run folder must fail: {said}");
     assert!(said.contains("in use"), "{said}");
     assert!(dir.join("run.json").exists() && dir.join("checkpoint.json").exists(), "the live folder stays");
-    let parent = dir.parent().unwrap();
-    let moved: Vec<String> = std::fs::read_dir(parent)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| n.starts_with("robust-i2-live."))
-        .collect();
+    let moved = moved_aside();
     assert!(moved.is_empty(), "make run moved the live folder aside: {moved:?}");
     // the lock file removed, then replaced by another file: still refused
     let _ = std::fs::remove_file(dir.join(".lock"));
@@ -164,11 +179,9 @@ fn item3_a_lost_or_damaged_archive_json_changes_nothing() {
     let spec16 = |d: &Path, g: u64| crate::common::bottle_spec(d, g, 16, 2);
     let full = tmp("i3-full");
     optimise(&spec16(&full, 7)).unwrap();
-    for (case, damage) in [
-        ("missing", None),
-        ("emptied", Some(r#"{"members":[],"hv_history":[]}"#)),
-        ("garbage", Some("{not json")),
-    ] {
+    for (case, damage) in
+        [("missing", None), ("emptied", Some(r#"{"members":[],"hv_history":[]}"#)), ("garbage", Some("{not json"))]
+    {
         let cut = tmp(&format!("i3-{case}"));
         optimise(&spec16(&cut, 4)).unwrap();
         let _ = std::fs::remove_file(cut.join("archive.json"));
@@ -232,6 +245,11 @@ fn item4_a_forced_resume_keeps_each_generations_problem() {
 /// `optimise` reuses the folder.
 #[test]
 fn item5_a_folder_left_before_the_first_checkpoint_is_reused() {
+    // killed before it created its folder (the kill trial's 0.2 ms)
+    let none = tmp("i5-never-created");
+    let o = cli(&["resume", none.to_str().unwrap()]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("nothing to resume") && !none.exists(), "{}", stderr(&o));
     let dir = tmp("i5-first-run-json");
     let d = dir.display().to_string();
     // the first run.json cannot be written (its temporary file's name is taken by a folder)
@@ -264,20 +282,7 @@ fn item5_a_folder_left_before_the_first_checkpoint_is_reused() {
 fn item6_show_tells_a_killed_run_from_a_running_one() {
     let dir = tmp("i6-show");
     let d = dir.display().to_string();
-    let mut child = spawn(&[
-        "optimise",
-        PROBLEM,
-        "--out",
-        &d,
-        "--pop",
-        "16",
-        "--generations",
-        "5000",
-        "--record",
-        "none",
-        "--threads",
-        "1",
-    ]);
+    let mut child = spawn_endless(&d);
     wait_for("the second checkpoint", || checkpoint_generation(&dir) >= 2);
     let run = run_json(&dir);
     assert!(run["completed_generations"].as_u64().unwrap() >= 1, "run.json follows the checkpoints: {run}");

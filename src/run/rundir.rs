@@ -191,6 +191,11 @@ pub fn resume_with(
     hooks: RunHooks,
 ) -> Result<RunSummary> {
     super::limits::check_threads(threads)?;
+    if !dir.exists() {
+        // e.g. an optimise killed before it created its folder
+        let message = "no such folder: nothing to resume (`gripopt optimise PROBLEM --out DIR` starts a run)";
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: message.into() });
+    }
     if !dir.is_dir() {
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder (is it a run folder?)".into() });
     }
@@ -232,7 +237,10 @@ pub fn resume_with(
     if !info.run_id.is_empty() && cp.run_id != info.run_id {
         return Err(Error::Checkpoint {
             file: cp_path.clone(),
-            message: format!("written by another run (run id {:?}; run.json's is {}): restore this run's checkpoint.json", cp.run_id, info.run_id),
+            message: format!(
+                "written by another run (run id {:?}; run.json's is {}): restore this run's checkpoint.json",
+                cp.run_id, info.run_id
+            ),
         });
     }
     if cp.state.generation < info.completed_generations {
@@ -242,7 +250,10 @@ pub fn resume_with(
                 message: format!("holds generation {} but run.json records {} completed generations: an older checkpoint (restored from a backup?). Restore the latest one, or resume with --force to continue from generation {} (later generations are evaluated again and their shards replaced)", cp.state.generation, info.completed_generations, cp.state.generation),
             });
         }
-        notes.push(format!("forced: an older checkpoint (generation {} of {})", cp.state.generation, info.completed_generations));
+        notes.push(format!(
+            "forced: an older checkpoint (generation {} of {})",
+            cp.state.generation, info.completed_generations
+        ));
     }
     let Some(archive) = cp.archive.clone() else {
         return Err(Error::Checkpoint { file: cp_path, message: "holds no archive (field `archive`)".into() });
