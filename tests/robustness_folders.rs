@@ -162,8 +162,15 @@ fn item2_the_lock_holds_against_make_run_a_lost_lock_file_and_a_moved_folder() {
     };
     assert_eq!(rc, Some(1), "{err}");
     assert!(err.contains("moved"), "{err}");
-    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.file_name()).collect();
-    assert!(left.is_empty(), "the run wrote into the folder that replaced its own: {left:?}");
+    // writes go by path: the CSV views being written at the moment of the move may land
+    // in the new folder (docs/cli.md); nothing that makes it look like a run does
+    let left: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.file_name().to_string_lossy().to_string()).collect();
+    let runlike = ["run.json", "checkpoint.json", "recording", ".lock", "problem.toml", "foxglove-layout.json"];
+    assert!(
+        !left.iter().any(|n| runlike.contains(&n.as_str())),
+        "the run wrote into the folder that replaced its own: {left:?}"
+    );
     // the moved run resumes where it is; its clean end leaves no lock file
     let g = checkpoint_generation(&away);
     let r = resume(&away, Some(g + 1), false, Some(1)).unwrap();

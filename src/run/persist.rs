@@ -484,6 +484,8 @@ fn persist_loop(
                     drop(s);
                     r.lock().expect("recorder lock").commit(entry, secs)?;
                 }
+                // again right before the checkpoint: the recorder's commit takes a while
+                hooks.check()?;
                 write_atomic(&sp.path, &checkpoint)?;
                 if let Some(f) = hooks.on_commit.as_mut() {
                     let (generation, evaluations, wall_s) = (p.generation, p.evaluations, p.wall_s);

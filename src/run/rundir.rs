@@ -389,8 +389,11 @@ fn drive(
         start,
     };
     let shared = Arc::new(Mutex::new(info.clone()));
-    let (run_file, sh) = (out.join(RUN_FILE), shared.clone());
+    let (run_file, sh, commit_lock) = (out.join(RUN_FILE), shared.clone(), lock.clone());
     let on_commit = move |c: &Committed| -> Result<()> {
+        // the folder may have been moved since the checkpoint was written: never write
+        // run.json into the folder that replaced it
+        commit_lock.check()?;
         let mut i = sh.lock().expect("run.json");
         i.completed_generations = c.generation;
         i.evaluations = c.evaluations;
