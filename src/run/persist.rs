@@ -125,6 +125,9 @@ pub struct Committed {
     pub discards: Discards,
 }
 
+/// The call after every commit (it writes run.json).
+pub type OnCommit = Box<dyn FnMut(&Committed) -> Result<()> + Send>;
+
 /// What a run adds to its persister: the run's id (in every checkpoint), a check before
 /// every write that the run folder is still the one locked, and a call after every commit.
 #[derive(Default)]
@@ -135,7 +138,7 @@ pub struct PersistHooks {
     /// error stops the persister (nothing more is written).
     pub guard: Option<Arc<dyn Fn() -> Result<()> + Send + Sync>>,
     /// Called after each generation's checkpoint is written; an error stops the persister.
-    pub on_commit: Option<Box<dyn FnMut(&Committed) -> Result<()> + Send>>,
+    pub on_commit: Option<OnCommit>,
 }
 
 impl PersistHooks {
