@@ -74,13 +74,25 @@ run: build
 # diffsol's solvers are compared by a cargo bench of the package crates/diffsol-bench (so the
 # gripopt binary never depends on diffsol), which writes its own
 # results/bench/work_precision_diffsol.csv and .svg next to work_precision.csv.
-bench: build
+bench: build bench-instructions
 	$(BIN) bench static $(PROBLEM)
 	$(BIN) bench work-precision $(PROBLEM)
 	$(BIN) bench nsga
 	$(BIN) bench replay $(PROBLEM)
 	$(BIN) moo-test all --seeds 1-11
 	$(CARGO) bench --locked -p gripopt-diffsol-bench --bench diffsol -- $(PROBLEM)
+
+# Instruction counts (valgrind's callgrind: repeatable on a noisy machine) of the nominal
+# centred grasp, the nominal free scene and a one-thread `optimise --pop 128 --generations
+# 10` (scripts/bench-instructions.sh; docs/benchmarks.md). valgrind is installed with apt-get
+# when missing and this runs as root; otherwise it says how.
+.PHONY: bench-instructions
+bench-instructions: build
+	@command -v valgrind > /dev/null || { \
+		if [ "$$(id -u)" = 0 ] && command -v apt-get > /dev/null; then \
+			apt-get install -y valgrind || { apt-get update && apt-get install -y valgrind; }; \
+		else echo "valgrind is missing: install it (Debian/Ubuntu: sudo apt-get install valgrind)"; exit 2; fi; }
+	scripts/bench-instructions.sh
 
 clean:
 	$(CARGO) clean

@@ -1,8 +1,12 @@
 //! Recordings written by an older gripopt (tests/fixtures/recorded-5d2a08e: run folders of
 //! the 5d2a08e binary, each its problem, run.json, CSVs and MCAP shards) are read and
 //! verified by this one: every design replays (the `/designs` record read back typed, the
-//! re-evaluation agreeing with it), and a full-resolution trajectory recorded by that
-//! binary is reproduced bit for bit by the samples the simulation now hands its sink.
+//! re-evaluation agreeing with it). Issue 23 changed the simulator's arithmetic (block
+//! elimination, cheaper right-hand side) within its integration tolerance, so a design that
+//! reaches stage 3 no longer replays bit for bit (its steps differ): it must then agree in
+//! its verdict (feasibility, failing stage, reason) and in its objectives, violation and the
+//! end time of a full-resolution trajectory within [`ACROSS_SIMULATORS`]. Designs discarded
+//! before stage 3 still verify exactly; that the sink changes nothing is tests/seams.rs's.
 
 use gripopt::record::{read_index, Resolution};
 use gripopt::RunFolder;
@@ -22,9 +26,56 @@ fn copy(name: &str) -> PathBuf {
     to
 }
 
+/// Relative agreement of a stage-3 design's values with 5d2a08e's: t_stab moved by at most
+/// 1.8e-4 over the 40 designs of the work-precision ensemble (docs/benchmarks.md, issue 23).
+const ACROSS_SIMULATORS: f64 = 1e-3;
+
+/// `a` and `b` both absent, or within [`ACROSS_SIMULATORS`] relative.
+fn close(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => (a - b).abs() <= ACROSS_SIMULATORS * a.abs().max(b.abs()),
+        (a, b) => a.is_none() && b.is_none(),
+    }
+}
+
+/// A design whose exact replay failed because the simulator changed (issue 23): the same
+/// verdict, objectives, violation and (full resolution) end time within tolerance.
+fn agrees_across_simulators(r: &gripopt::Replay) -> Result<(), String> {
+    let (rec, fresh) = (&r.recorded.record, &r.fresh);
+    if rec.failed_stage.is_some_and(|s| s < 3) {
+        return Err("discarded before stage 3: must replay exactly".into());
+    }
+    if (rec.feasible, rec.failed_stage, &rec.reason)
+        != (fresh.verdict.feasible, fresh.verdict.failed_stage, &fresh.verdict.reason)
+    {
+        return Err("verdict differs".into());
+    }
+    let o = fresh.objectives();
+    let r_o = &rec.objectives;
+    let pairs = [
+        ("max_offset", r_o.max_offset.filter(|m| *m >= 0.0), o[0].filter(|m| *m >= 0.0)),
+        ("alpha", r_o.alpha, o[1]),
+        ("mean_force", r_o.mean_force, o[2]),
+        ("t_stab", r_o.t_stab, o[3]),
+        ("violation", rec.violation, fresh.verdict.violation),
+    ];
+    for (what, a, b) in pairs {
+        if !close(a, b) {
+            return Err(format!("{what}: recorded {a:?}, now {b:?}"));
+        }
+    }
+    if r.recorded.resolution == gripopt::record::Resolution::Full && !r.recorded.samples.is_empty() {
+        let t_rec = r.recorded.samples.last().map(|s| s.t);
+        if !close(t_rec, fresh.grasp.t_end) {
+            return Err(format!("trajectory end: recorded {t_rec:?}, now {:?}", fresh.grasp.t_end));
+        }
+    }
+    Ok(())
+}
+
 #[test]
 fn designs_recorded_by_5d2a08e_replay_and_verify() {
-    let mut bitwise = 0;
+    let mut full = 0;
     for name in ["centred", "free", "full"] {
         let dir = copy(name);
         let run = RunFolder::open(&dir).unwrap();
@@ -34,16 +85,15 @@ fn designs_recorded_by_5d2a08e_replay_and_verify() {
         let mut with_trajectory = 0;
         for id in ids {
             let r = run.replay(id).unwrap_or_else(|e| panic!("{name} design {id}: {e}"));
-            assert!(r.verified && r.compared + r.values_compared > 0, "{name} design {id}: {r:?}");
+            assert!(r.compared + r.values_compared > 0, "{name} design {id}: {r:?}");
+            if !r.verified {
+                agrees_across_simulators(&r).unwrap_or_else(|e| panic!("{name} design {id}: {e}: {r:?}"));
+            }
             assert_eq!(r.recorded.record.id, id);
             assert_eq!(r.recomputed_feasible, r.recorded.record.feasible, "{name} design {id}");
             if r.compared > 0 {
                 with_trajectory += 1;
-                if r.recorded.resolution == Resolution::Full {
-                    // every kept sample, all sixteen values, equal to the last bit
-                    assert_eq!(r.max_difference, 0.0, "{name} design {id}");
-                    bitwise += 1;
-                }
+                full += usize::from(r.recorded.resolution == Resolution::Full);
             }
         }
         assert!(with_trajectory > 0, "{name}: a design with a trajectory");
@@ -52,5 +102,5 @@ fn designs_recorded_by_5d2a08e_replay_and_verify() {
             assert!(row.feasible && run.design(row.id).is_ok(), "{name} design {}", row.id);
         }
     }
-    assert!(bitwise > 0, "a full-resolution trajectory compared bit for bit");
+    assert!(full > 0, "a full-resolution trajectory compared");
 }

@@ -4,8 +4,9 @@ use super::say;
 use super::work_precision::{check_atol, rel};
 use super::{progress, time_it};
 use crate::eval::{stage_kinematics, stage_statics};
-use crate::params::Problem;
-use crate::sim::{diagnostic_grasp, Integration, Method};
+use crate::model::{Finger, StaticsResult};
+use crate::params::{Design, Problem, DESIGN_NAMES};
+use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use std::io::Write;
@@ -41,25 +42,8 @@ pub fn work_precision_ensemble(
     check_atol(atol)?;
     let p = problem;
     let s = &p.scene;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let diag = |m: Method, rtol: f64| Integration::new(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000).with_method(m);
-    let tight = Integration::new(1e-11, 1e-14, 5_000_000);
-    let mut cases = vec![];
-    let mut drawn = 0usize;
-    let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
-    while cases.len() < n && drawn < 1000 * n {
-        drawn += 1;
-        let d = p.bounds.sample(&mut rng);
-        let Ok(k) = stage_kinematics(&d, s) else { continue };
-        let Ok(st) = stage_statics(&k.finger, s) else { continue };
-        let reference = diagnostic_grasp(&k.finger, s, &st, &tight);
-        if reference.t_stab.is_none() {
-            continue;
-        }
-        cases.push((k.finger, st, reference));
-        pb.inc(1);
-    }
-    pb.finish_and_clear();
+    let (cases, drawn) = draw_cases(p, n, seed)?;
     if cases.is_empty() {
         return Err(Error::bench(format!(
             "{}: no random design of the box passed stage 2 and reached stability in {drawn} draws",
@@ -68,6 +52,7 @@ pub fn work_precision_ensemble(
     }
     say!(out, "ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
+    write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.design), out)?;
     let csv = out_dir.join("work_precision_ensemble.csv");
     let io = |e| Error::io(&csv, "cannot write", e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
@@ -94,7 +79,8 @@ pub fn work_precision_ensemble(
             let o = diag(m, rtol);
             let (mut cpu, mut steps, mut rhs, mut ets, mut ee) = (vec![], vec![], vec![], vec![], vec![]);
             let mut differ = 0;
-            for (f, st, reference) in &cases {
+            for c in &cases {
+                let (f, st, reference) = (&c.finger, &c.statics, &c.reference);
                 let (r, _, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 0.05, 7);
                 cpu.push(tmed);
                 steps.push(r.stats.steps as f64);
@@ -150,4 +136,74 @@ pub fn work_precision_ensemble(
     Ok(
         serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
     )
+}
+
+/// One design of the ensemble: its finger and statics, and the reference simulation (Radau
+/// IIA at rtol 1e-11) that reached stability.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// The design.
+    pub design: Design,
+    /// Its finger.
+    pub finger: Finger,
+    /// Its statics (stage 2).
+    pub statics: StaticsResult,
+    /// The reference simulation.
+    pub reference: DynamicsResult,
+}
+
+/// `n` random designs of the box (seed `seed`) that pass stage 2 and whose reference reaches
+/// stability, and how many were drawn (at most 1000·n).
+fn draw_cases(p: &Problem, n: usize, seed: u64) -> Result<(Vec<Case>, usize)> {
+    let s = &p.scene;
+    let tight = Integration::new(1e-11, 1e-14, 5_000_000);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut cases = vec![];
+    let mut drawn = 0usize;
+    let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
+    while cases.len() < n && drawn < 1000 * n {
+        drawn += 1;
+        let d = p.bounds.sample(&mut rng);
+        let Ok(k) = stage_kinematics(&d, s) else { continue };
+        let Ok(st) = stage_statics(&k.finger, s) else { continue };
+        let reference = diagnostic_grasp(&k.finger, s, &st, &tight);
+        if reference.t_stab.is_none() {
+            continue;
+        }
+        cases.push(Case { design: d, finger: k.finger, statics: st, reference });
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    Ok((cases, drawn))
+}
+
+/// The ensemble of `gripopt bench work-precision --sample n --seed seed`: the same designs,
+/// with their references.
+pub fn ensemble_cases(p: &Problem, n: usize, seed: u64) -> Result<Vec<Case>> {
+    if n == 0 {
+        return Err(Error::Input("--sample 0: must be at least 1".into()));
+    }
+    let (cases, drawn) = draw_cases(p, n, seed)?;
+    if cases.is_empty() {
+        return Err(Error::bench(format!(
+            "no random design of the box passed stage 2 and reached stability in {drawn} draws"
+        )));
+    }
+    Ok(cases)
+}
+
+/// The ensemble's designs, one `--design` argument per line (for `tools/compare_baseline.py`,
+/// which runs two binaries on them).
+fn write_designs<'a>(csv: &Path, designs: impl Iterator<Item = &'a Design>, out: super::Out) -> Result<()> {
+    let io = |e| Error::io(csv, "cannot write", e);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(csv).map_err(|e| Error::io(csv, "cannot create", e))?);
+    writeln!(w, "design").map_err(io)?;
+    for d in designs {
+        let x = d.to_array();
+        let arg: Vec<String> = DESIGN_NAMES.iter().zip(x).map(|(n, v)| format!("{n}={v}")).collect();
+        writeln!(w, "\"{}\"", arg.join(",")).map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    say!(out, "wrote {}", csv.display());
+    Ok(())
 }

@@ -10,15 +10,17 @@
 mod ensemble;
 mod free;
 mod nsga;
+mod order;
 mod replay;
 mod scaling;
 mod static_eval;
 mod table;
 mod work_precision;
 
-pub use ensemble::work_precision_ensemble;
+pub use ensemble::{ensemble_cases, work_precision_ensemble, Case};
 pub use free::{free_scene, FreeBench, FreeRow, FREE_REFERENCE_RTOL, FREE_RTOLS};
 pub use nsga::nsga;
+pub use order::{radau_order, simulate_order, Order};
 pub use replay::{replay, ReplayBench};
 pub use scaling::{scaling, ScalingBench};
 pub use static_eval::static_pipeline;

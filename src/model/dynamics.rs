@@ -43,25 +43,46 @@ fn reduce4(jd: &Matrix2<f64>, v: Vector4<f64>) -> Vector2<f64> {
     Vector2::new(v[0] + jd[(0, 0)] * v[1] + jd[(1, 0)] * v[3], v[2] + jd[(0, 1)] * v[1] + jd[(1, 1)] * v[3])
 }
 
-/// Reduced M and c at pose `p` with active rates `qa_dot`.
+/// Reduced M and c at pose `p` with active rates `qa_dot` (see [`reduced_parts`]).
 #[inline]
 pub fn reduced(f: &Finger, p: &Pose, k: &Kin, qa_dot: Vector2<f64>) -> Reduced {
-    let ms = &f.mass;
-    let qd_dot = k.jd * qa_dot;
-    let bd = k.bd(f, qa_dot);
     let cs12 = (p.x11.dot(&p.x12), crate::math::cross(p.x11, p.x12));
     let cs22 = (p.x21.dot(&p.x22), crate::math::cross(p.x21, p.x22));
+    reduced_parts(f, cs12, cs22, &k.jd, k.bd(f, qa_dot), qa_dot)
+}
+
+/// Reduced M and c from the relative angles' (cos, sin) of q12 and q22, J_d and b_d at
+/// active rates `qa_dot`: M = Wᵀ M_t W and c = Wᵀ (M_t (0, b_d1, 0, b_d2) + c_t) with the
+/// block structure of W written out (chain 1 has rates (q̇11, J11 q̇11 + J12 q̇21), chain 2
+/// (q̇21, J21 q̇11 + J22 q̇21)).
+#[inline(always)]
+fn reduced_parts(
+    f: &Finger,
+    cs12: (f64, f64),
+    cs22: (f64, f64),
+    jd: &Matrix2<f64>,
+    bd: Vector2<f64>,
+    qa_dot: Vector2<f64>,
+) -> Reduced {
+    let ms = &f.mass;
+    let qd_dot = jd * qa_dot;
     let (m1, c1) = chain(ms.i[0], f.l11, ms.m[1], ms.i[1], V2::new(f.l12 / 2.0, 0.0), cs12, qa_dot[0], qd_dot[0]);
     let (m2, c2) = chain(ms.i[2], f.l21, ms.m[3], ms.i[3], ms.s22, cs22, qa_dot[1], qd_dot[1]);
-    // Block rows for chain 1: (q11, q12), chain 2: (q21, q22).
-    // W restricted: chain 1 rates = [[1,0],[J11,J12]] q̇_a, chain 2 = [[0,1],[J21,J22]] q̇_a.
-    let w1 = Matrix2::new(1.0, 0.0, k.jd[(0, 0)], k.jd[(0, 1)]);
-    let w2 = Matrix2::new(0.0, 1.0, k.jd[(1, 0)], k.jd[(1, 1)]);
-    let m = w1.transpose() * m1 * w1 + w2.transpose() * m2 * w2;
-    let f1 = m1 * Vector2::new(0.0, bd[0]) + c1;
-    let f2 = m2 * Vector2::new(0.0, bd[1]) + c2;
-    let c = w1.transpose() * f1 + w2.transpose() * f2;
-    Reduced { m, c }
+    let (a1, b1, d1) = (m1[(0, 0)], m1[(0, 1)], m1[(1, 1)]);
+    let (a2, b2, d2) = (m2[(0, 0)], m2[(0, 1)], m2[(1, 1)]);
+    let (j11, j12, j21, j22) = (jd[(0, 0)], jd[(0, 1)], jd[(1, 0)], jd[(1, 1)]);
+    // chain 1: W1 = [[1, 0], [J11, J12]]; chain 2: W2 = [[0, 1], [J21, J22]]
+    let e1 = b1 + d1 * j11;
+    let e2 = b2 + d2 * j22;
+    let m00 = a1 + j11 * (b1 + e1) + d2 * j21 * j21;
+    let m01 = e1 * j12 + j21 * e2;
+    let m11 = d1 * j12 * j12 + a2 + j22 * (b2 + e2);
+    let (f10, f11) = (b1 * bd[0] + c1[0], d1 * bd[0] + c1[1]);
+    let (f20, f21) = (b2 * bd[1] + c2[0], d2 * bd[1] + c2[1]);
+    Reduced {
+        m: Matrix2::new(m00, m01, m01, m11),
+        c: Vector2::new(f10 + j11 * f11 + j21 * f21, j12 * f11 + f20 + j22 * f21),
+    }
 }
 
 /// Mass matrix only (rates zero).

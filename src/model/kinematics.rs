@@ -27,7 +27,7 @@ impl Kin {
         let u1 = f.l12 * x12;
         let u2 = f.l22 * x22;
         let c = Matrix2::from_columns(&[perp(u1), -perp(u2)]);
-        let cinv = c.try_inverse()?;
+        let cinv = crate::math::inv2(&c)?;
         let col_q11 = cinv * (-perp(f.l11 * x11 + u1));
         let col_q21 = cinv * perp(f.l21 * x21 + u2);
         let jd = Matrix2::from_columns(&[col_q11, col_q21]);

@@ -301,7 +301,7 @@ impl<'a> FingerModel<'a> {
             }
         }
         let q_total = gf - bias;
-        let minv = m.try_inverse()?;
+        let minv = crate::math::inv2(&m)?;
         let qdd = minv * q_total;
         let energy = if full { 0.5 * qd.dot(&(m * qd)) + v } else { f64::NAN };
         let sin_q13 = crate::math::cross(pose.x12, pose.x22);

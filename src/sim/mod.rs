@@ -35,12 +35,15 @@ pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventSearch, EventValues};
 pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
 pub use integrate::{
-    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, Rhs, Scalar, Stats, StepError, Stepper, Tol,
-    TrBdf2,
+    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, RadauCoefficients, RadauIIA, Rhs, Scalar,
+    Stats, StepError, Stepper, Tol, TrBdf2,
 };
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, FreeEnd, PoseSample, Sample, Trajectory, MAX_EVENTS};
-pub use scene::centred::{compliant_equilibrium, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS, NS};
+pub use scene::centred::{
+    compliant_equilibrium, tolerances as centred_tolerances, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS,
+    NS,
+};
 pub use scene::free::{
     free_tolerances, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, EF as FREE_EVENTS, NF as FREE_NS,
 };

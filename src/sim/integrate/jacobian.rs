@@ -20,6 +20,8 @@ pub(super) struct JacobianCache<const N: usize> {
     pub(super) slow: bool,
     /// The piece of the last accepted state, known from its evaluation.
     pub(super) known: Option<(SVector<f64, N>, Piece)>,
+    /// Counts the Jacobians computed (what a factorisation was prepared from).
+    pub(super) version: u64,
 }
 
 impl<const N: usize> JacobianCache<N> {
@@ -32,6 +34,7 @@ impl<const N: usize> JacobianCache<N> {
             piece: Piece::SMOOTH,
             slow: false,
             known: None,
+            version: 0,
         }
     }
 
@@ -78,6 +81,7 @@ impl<const N: usize> JacobianCache<N> {
             return false;
         }
         stats.jac += 1;
+        self.version += 1;
         self.valid = true;
         self.fresh = true;
         true
@@ -87,7 +91,9 @@ impl<const N: usize> JacobianCache<N> {
 /// The dense forward-difference Jacobian of `sys` at (t, y), f = f(t, y), into `jac`: one
 /// evaluation per column (counted in `stats.rhs`), step √ε·max(|y_j|, 1e-3); where the
 /// perturbed state leaves `piece` (the piece of y), the difference is taken on the other
-/// side. False if f is undefined at a perturbed state. [`Rhs::jacobian`]'s default.
+/// side. Columns the system's [`Partition`](super::Partition) knows (a linear trailing
+/// state) are set without evaluating. False if f is undefined at a perturbed state.
+/// [`Rhs::jacobian`]'s default.
 pub fn fd_jacobian<S: Rhs<N> + ?Sized, const N: usize>(
     sys: &mut S,
     t: f64,
@@ -98,8 +104,14 @@ pub fn fd_jacobian<S: Rhs<N> + ?Sized, const N: usize>(
     stats: &mut Stats,
 ) -> bool {
     let sq = f64::EPSILON.sqrt();
+    let part = sys.newton_partition();
     let mut yp = *y;
     for j in 0..N {
+        if let Some(d) = part.as_ref().and_then(|p| p.known_column(j)) {
+            jac.set_column(j, &SVector::<f64, N>::zeros());
+            jac[(j, j)] = d;
+            continue;
+        }
         let mut dy = sq * y[j].abs().max(1e-3);
         yp[j] = y[j] + dy;
         stats.rhs += 1;
@@ -116,4 +128,37 @@ pub fn fd_jacobian<S: Rhs<N> + ?Sized, const N: usize>(
         yp[j] = y[j];
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::integrate::Partition;
+
+    /// An oscillator with a low-pass filter of its position: y2' = (y0 − y2)/T.
+    struct Filtered(f64);
+    impl Rhs<3> for Filtered {
+        fn eval(&mut self, _t: f64, y: &SVector<f64, 3>) -> Option<SVector<f64, 3>> {
+            Some(SVector::<f64, 3>::new(y[1], -y[0], (y[0] - y[2]) / self.0))
+        }
+        fn newton_partition(&self) -> Option<Partition<3>> {
+            Partition::new(&[&[0]])?.with_trailing_linear(&[(2, -1.0 / self.0)])
+        }
+    }
+
+    /// The known column of a linear trailing state is set without an evaluation; the others
+    /// are the forward differences.
+    #[test]
+    fn known_columns_need_no_evaluation() {
+        let mut sys = Filtered(0.25);
+        let y = SVector::<f64, 3>::new(0.3, -0.7, 0.1);
+        let f = sys.eval(0.0, &y).unwrap();
+        let mut jac = SMatrix::<f64, 3, 3>::zeros();
+        let mut stats = Stats::default();
+        assert!(fd_jacobian(&mut sys, 0.0, &y, &f, Piece::SMOOTH, &mut jac, &mut stats));
+        assert_eq!(stats.rhs, 2);
+        assert_eq!(jac.column(2), SVector::<f64, 3>::new(0.0, 0.0, -4.0));
+        let exact = SMatrix::<f64, 3, 3>::new(0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 4.0, 0.0, -4.0);
+        assert!((jac - exact).amax() < 1e-7, "{jac}");
+    }
 }

@@ -12,9 +12,22 @@ pub struct Lu<T: Scalar, const N: usize> {
 }
 
 /// The field of an [`Lu`]: `f64` or `Complex<f64>`.
-pub trait Scalar: nalgebra::ComplexField<RealField = f64> + Copy {}
-impl Scalar for f64 {}
-impl Scalar for Complex<f64> {}
+pub trait Scalar: nalgebra::ComplexField<RealField = f64> + Copy {
+    /// `self · r` for a real `r` (two multiplications for a complex `self`, not four).
+    fn mul_real(self, r: f64) -> Self;
+}
+impl Scalar for f64 {
+    #[inline(always)]
+    fn mul_real(self, r: f64) -> Self {
+        self * r
+    }
+}
+impl Scalar for Complex<f64> {
+    #[inline(always)]
+    fn mul_real(self, r: f64) -> Self {
+        Complex::new(self.re * r, self.im * r)
+    }
+}
 
 impl<T: Scalar, const N: usize> Lu<T, N> {
     /// Factor `a`; `None` if singular.

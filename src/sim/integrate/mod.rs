@@ -12,15 +12,20 @@ mod dense;
 mod dopri5;
 mod jacobian;
 mod lu;
+mod radau;
 mod radau5;
+mod radau_coefficients;
 mod reduced;
+mod schur_lu;
 mod trbdf2;
 
 pub use dense::hermite;
 pub use dopri5::Dopri5;
 pub use jacobian::fd_jacobian;
 pub use lu::{Lu, Scalar};
+pub use radau::RadauIIA;
 pub use radau5::Radau5;
+pub use radau_coefficients::RadauCoefficients;
 pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
@@ -127,6 +132,25 @@ pub struct Tol<const N: usize> {
 }
 
 impl<const N: usize> Tol<N> {
+    /// The weights 1/(atol_i + rtol·max(|y0_i|, |y1_i|)) of the scaled norm (see
+    /// [`Tol::sum_sq`]).
+    #[inline]
+    pub fn weights(&self, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> SVector<f64, N> {
+        SVector::<f64, N>::from_fn(|i, _| 1.0 / (self.atol[i] + self.rtol * y0[i].abs().max(y1[i].abs())))
+    }
+
+    /// Σ (e_i w_i)² with weights `w` from [`Tol::weights`] (the scaled RMS norm is
+    /// √(sum / N)).
+    #[inline]
+    pub fn sum_sq(e: &SVector<f64, N>, w: &SVector<f64, N>) -> f64 {
+        let mut s = 0.0;
+        for i in 0..N {
+            let r = e[i] * w[i];
+            s += r * r;
+        }
+        s
+    }
+
     /// Scaled RMS norm of `e` with weights from `y0`, `y1`.
     #[inline]
     pub fn norm(&self, e: &SVector<f64, N>, y0: &SVector<f64, N>, y1: &SVector<f64, N>) -> f64 {
@@ -173,6 +197,11 @@ pub trait Stepper<const N: usize> {
     ) -> Result<Accepted<N>, StepError>;
     /// Forget step-size history and Jacobians (after a discontinuity of f).
     fn restart(&mut self, h: f64);
+    /// The method's own continuous output on the last accepted step at `t` (inside it), where
+    /// it has one (a collocation method's polynomial); `None`: use [`hermite`].
+    fn dense(&self, _t: f64) -> Option<SVector<f64, N>> {
+        None
+    }
     /// Counters.
     fn stats(&self) -> Stats;
     /// Current step size proposal.

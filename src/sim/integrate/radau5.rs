@@ -6,9 +6,6 @@ use super::reduced::ReducedLu;
 use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
 use nalgebra::{Complex, SMatrix, SVector};
 
-/// The real and the complex reduced factorisations.
-type ReducedPair<const N: usize> = (ReducedLu<f64, N>, ReducedLu<Complex<f64>, N>);
-
 /// Radau IIA of order 5 after Hairer & Wanner's RADAU5: stiffly accurate, L-stable. The
 /// simplified Newton iteration uses their transformation A⁻¹ = T Λ T⁻¹, so each Jacobian
 /// costs one real N×N LU of γ/h − J and one complex N×N LU of (α + iβ)/h − J instead of a
@@ -27,7 +24,10 @@ pub struct Radau5<const N: usize> {
     lu_c: Option<Lu<Complex<f64>, N>>,
     /// The system's partition for the Newton solves (asked at the first step), with the
     /// storage of both reduced factorisations.
-    part: Option<Option<ReducedPair<N>>>,
+    part: Option<Option<ReducedLu<N>>>,
+    /// The Jacobian (its [`JacobianCache`] version) the reduced parts were prepared from,
+    /// and whether it fitted the partition.
+    prepared: Option<(u64, bool)>,
     /// The reduced factorisations are the current ones (else `lu_r`, `lu_c`).
     reduced: bool,
     lu_h: f64,
@@ -35,6 +35,8 @@ pub struct Radau5<const N: usize> {
     first: bool,
     last_rejected: bool,
     prev_z: Option<(f64, [SVector<f64, N>; 3])>,
+    /// (t, y) at the start of the last accepted step (for [`Stepper::dense`]).
+    prev_start: Option<(f64, SVector<f64, N>)>,
     /// Newton's η = θ/(1 − θ) of the last step (the first iteration's estimate).
     eta: f64,
     /// (h, err) of the last accepted step, for the predictive controller.
@@ -94,8 +96,14 @@ impl RadauEig {
 
 #[inline(always)]
 fn mix3<const N: usize>(m: &[[f64; 3]; 3], v: &[SVector<f64, N>; 3]) -> [SVector<f64, N>; 3] {
-    let row = |i: usize| v[0] * m[i][0] + v[1] * m[i][1] + v[2] * m[i][2];
-    [row(0), row(1), row(2)]
+    let mut out = [SVector::<f64, N>::zeros(); 3];
+    for j in 0..N {
+        let (a, b, c) = (v[0][j], v[1][j], v[2][j]);
+        for (i, o) in out.iter_mut().enumerate() {
+            o[j] = a * m[i][0] + b * m[i][1] + c * m[i][2];
+        }
+    }
+    out
 }
 
 impl<const N: usize> Radau5<N> {
@@ -108,12 +116,14 @@ impl<const N: usize> Radau5<N> {
             lu_r: None,
             lu_c: None,
             part: None,
+            prepared: None,
             reduced: false,
             lu_h: 0.0,
             stats: Stats::default(),
             first: true,
             last_rejected: false,
             prev_z: None,
+            prev_start: None,
             eta: 1.0,
             acc: None,
             eig: RadauEig::new(),
@@ -130,10 +140,18 @@ impl<const N: usize> Radau5<N> {
         let j = &self.jc.jac;
         self.reduced = false;
         if let Some(Some(red)) = self.part.as_mut() {
-            if red.0.partition().fits(j) {
+            let fits = match self.prepared {
+                Some((v, fits)) if v == self.jc.version => fits,
+                _ => {
+                    let fits = red.prepare(j);
+                    self.prepared = Some((self.jc.version, fits));
+                    fits
+                }
+            };
+            if fits {
                 self.stats.lu += 1;
                 let ac = Complex::new(self.eig.alpha / h, self.eig.beta / h);
-                if red.0.factor(j, self.eig.gamma / h) && red.1.factor(j, ac) {
+                if red.factor(self.eig.gamma / h, ac) {
                     self.reduced = true;
                     self.lu_h = h;
                     return true;
@@ -169,17 +187,21 @@ impl<const N: usize> Radau5<N> {
     #[inline]
     fn solve_r(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         match (&self.part, self.reduced) {
-            (Some(Some(red)), true) => red.0.solve(b),
+            (Some(Some(red)), true) => red.solve_real(b),
             _ => self.lu_r.as_ref().expect("factored").solve(b),
         }
     }
 
-    /// Solve ((α + iβ)/h − J) x = b with the current factorisation.
+    /// Solve ((α + iβ)/h − J) x = re + i·im with the current factorisation: (Re x, Im x).
     #[inline]
-    fn solve_c(&self, b: &SVector<Complex<f64>, N>) -> SVector<Complex<f64>, N> {
+    fn solve_c(&self, re: &SVector<f64, N>, im: &SVector<f64, N>) -> (SVector<f64, N>, SVector<f64, N>) {
         match (&self.part, self.reduced) {
-            (Some(Some(red)), true) => red.1.solve(b),
-            _ => self.lu_c.as_ref().expect("factored").solve(b),
+            (Some(Some(red)), true) => red.solve_complex(re, im),
+            _ => {
+                let b = SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(re[k], im[k]));
+                let x = self.lu_c.as_ref().expect("factored").solve(&b);
+                (x.map(|c| c.re), x.map(|c| c.im))
+            }
         }
     }
 
@@ -190,25 +212,30 @@ impl<const N: usize> Radau5<N> {
         if let Some((hp, zp)) = self.prev_z.filter(|_| !self.first && !self.last_rejected) {
             // The polynomial through (0, 0), (c_i, zp_i) in s = (t − t_{n−1}) / hp; the new
             // stages sit at s = 1 + c_i h / hp, and the origin moves to y_n = y_{n−1} + zp_3.
+            // Its Lagrange weights at s, L_k(s) = Π_{m≠k} (s − n_m)/(n_k − n_m) over the nodes
+            // (0, c1, c2, 1), minus 1 for the third (the origin's move).
             let nodes = [0.0, RC[0], RC[1], RC[2]];
-            for i in 0..3 {
+            for (i, zi) in z.iter_mut().enumerate() {
                 let sv = 1.0 + RC[i] * h / hp;
-                let mut val = SVector::<f64, N>::zeros();
-                for k in 1..4 {
-                    let mut l = 1.0;
-                    for m in 0..4 {
-                        if m != k {
-                            l *= (sv - nodes[m]) / (nodes[k] - nodes[m]);
-                        }
-                    }
-                    val += zp[k - 1] * l;
+                let d = [sv - nodes[0], sv - nodes[1], sv - nodes[2], sv - nodes[3]];
+                let l1 = d[0] * d[2] * d[3] * LAGRANGE_DEN[0];
+                let l2 = d[0] * d[1] * d[3] * LAGRANGE_DEN[1];
+                let l3 = d[0] * d[1] * d[2] * LAGRANGE_DEN[2] - 1.0;
+                for j in 0..N {
+                    zi[j] = zp[0][j] * l1 + zp[1][j] * l2 + zp[2][j] * l3;
                 }
-                z[i] = val - zp[2];
             }
         }
         z
     }
 }
+
+/// 1/Π_{m≠k} (n_k − n_m) for the nodes (0, c1, c2, 1) and k = 1, 2, 3.
+const LAGRANGE_DEN: [f64; 3] = [
+    1.0 / (RC[0] * (RC[0] - RC[1]) * (RC[0] - RC[2])),
+    1.0 / (RC[1] * (RC[1] - RC[0]) * (RC[1] - RC[2])),
+    1.0 / (RC[2] * (RC[2] - RC[0]) * (RC[2] - RC[1])),
+];
 
 /// Why a Newton iteration stopped without converging.
 enum NewtonFail {
@@ -228,6 +255,7 @@ impl<const N: usize> Radau5<N> {
         h: f64,
     ) -> Result<([SVector<f64, N>; 3], f64, usize), NewtonFail> {
         let (gh, ah, bh) = (self.eig.gamma / h, self.eig.alpha / h, self.eig.beta / h);
+        let wts = self.tol.weights(y, y);
         let mut z = self.predict(h);
         let mut w = mix3(&RTI, &z);
         let mut eta = self.eta.max(f64::EPSILON).powf(0.8);
@@ -245,13 +273,9 @@ impl<const N: usize> Radau5<N> {
             let r2 = r[1] - (w[1] * ah - w[2] * bh);
             let r3 = r[2] - (w[1] * bh + w[2] * ah);
             let d1 = self.solve_r(&r1);
-            let dc = self.solve_c(&SVector::<Complex<f64>, N>::from_fn(|k, _| Complex::new(r2[k], r3[k])));
-            let d2 = dc.map(|c| c.re);
-            let d3 = dc.map(|c| c.im);
-            let n1 = self.tol.norm(&d1, y, y);
-            let n2 = self.tol.norm(&d2, y, y);
-            let n3 = self.tol.norm(&d3, y, y);
-            let n = ((n1 * n1 + n2 * n2 + n3 * n3) / 3.0).sqrt();
+            let (d2, d3) = self.solve_c(&r2, &r3);
+            let n =
+                ((Tol::sum_sq(&d1, &wts) + Tol::sum_sq(&d2, &wts) + Tol::sum_sq(&d3, &wts)) / (3 * N) as f64).sqrt();
             if !n.is_finite() {
                 return Err(NewtonFail::Diverged);
             }
@@ -309,7 +333,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
         h_max: f64,
     ) -> Result<Accepted<N>, StepError> {
         if self.part.is_none() {
-            self.part = Some(sys.newton_partition().map(|p| (ReducedLu::new(p), ReducedLu::new(p))));
+            self.part = Some(sys.newton_partition().map(ReducedLu::new));
         }
         self.jc.start_step(sys, y);
         loop {
@@ -365,6 +389,7 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
                 self.first = false;
                 self.last_rejected = false;
                 self.prev_z = Some((h, z));
+                self.prev_start = Some((t, *y));
                 self.jc.fresh = false;
                 self.jc.known = Some((y1, piece));
                 if theta > self.theta_jac {
@@ -381,6 +406,19 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
                 self.jc.valid = false;
             }
         }
+    }
+
+    fn dense(&self, tt: f64) -> Option<SVector<f64, N>> {
+        let ((h, z), (t0, y0)) = (self.prev_z.as_ref()?, self.prev_start.as_ref()?);
+        // the collocation polynomial through (0, 0), (c_k, Z_k) at θ = (t − t0)/h
+        let th = (tt - t0) / h;
+        let d = [th - RC[0], th - RC[1], th - RC[2]];
+        let l = [
+            th * d[1] * d[2] * LAGRANGE_DEN[0],
+            th * d[0] * d[2] * LAGRANGE_DEN[1],
+            th * d[0] * d[1] * LAGRANGE_DEN[2],
+        ];
+        Some(y0 + z[0] * l[0] + z[1] * l[1] + z[2] * l[2])
     }
 
     fn restart(&mut self, h: f64) {

@@ -14,7 +14,7 @@ use crate::sim::driver;
 use crate::sim::equilibrium::{finger_equilibrium, Equilibrium};
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerEval, FingerModel};
-use crate::sim::integrate::{Piece, Rhs, Tol};
+use crate::sim::integrate::{Partition, Piece, Rhs, Tol};
 use crate::sim::memory::Memory;
 use crate::sim::result::{DynOutcome, DynamicsResult};
 use crate::sim::settings::{Controls, Integration, Mode};
@@ -134,6 +134,12 @@ impl Rhs<NS> for FingerOde<'_> {
         self.accepted.keep(y, ev);
         Some(out)
     }
+
+    /// The angles (rates: the velocities) eliminated, the filter state solved last (its
+    /// rate is linear in itself: −1/T_f).
+    fn newton_partition(&self) -> Option<Partition<NS>> {
+        Partition::new(&[&[0], &[1]])?.with_trailing_linear(&[(4, -1.0 / self.t_filter)])
+    }
 }
 
 /// Compliant static equilibrium (§8.9) of the scene's finger on its object.
@@ -218,6 +224,9 @@ impl Rhs<NS> for CentredScene<'_> {
     #[inline]
     fn eval_accepted(&mut self, t: f64, y: &State) -> Option<(State, Piece)> {
         self.ode.eval_accepted(t, y)
+    }
+    fn newton_partition(&self) -> Option<Partition<NS>> {
+        self.ode.newton_partition()
     }
 }
 
@@ -325,13 +334,15 @@ impl Scene<NS, 6> for CentredScene<'_> {
 }
 
 /// Tolerances of the centred scene's state.
-fn tolerances(integ: &Integration) -> Tol<NS> {
+pub fn tolerances(integ: &Integration) -> Tol<NS> {
     // The filter state is in N: an absolute tolerance of 1e4·atol (1e-5 N at atol 1e-9).
     Tol { rtol: integ.rtol, atol: State::from([integ.atol, integ.atol, integ.atol, integ.atol, integ.atol * 1e4]) }
 }
 
 /// Simulate the grasp of the design's finger on the centred object, reporting to `sink`
 /// (the result does not depend on it).
+// not inlined: its own symbol for `make bench-instructions`' inclusive count
+#[inline(never)]
 pub(crate) fn run<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,

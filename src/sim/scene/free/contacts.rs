@@ -194,16 +194,34 @@ impl FreeScene<'_> {
         }
     }
 
-    /// The world inertia tensor of the object `b`.
-    #[inline(always)]
-    pub(super) fn inertia(&self, b: &Body) -> Matrix3<f64> {
-        b.rot * Matrix3::from_diagonal(&self.j_body) * b.rot.transpose()
-    }
-
-    /// Its inverse.
+    /// The inverse of the object's world inertia tensor: the cylinder is axisymmetric (J_c
+    /// about every transverse axis, J_a about its axis a), so I = J_c·1 + (J_a − J_c) a aᵀ
+    /// and I⁻¹ = 1/J_c·1 + (1/J_a − 1/J_c) a aᵀ.
     #[inline(always)]
     pub(super) fn inertia_inverse(&self, b: &Body) -> Matrix3<f64> {
-        b.rot * Matrix3::from_diagonal(&self.j_body.map(|j| 1.0 / j)) * b.rot.transpose()
+        let (jt, ja) = self.axisymmetric();
+        Matrix3::from_diagonal_element(1.0 / jt) + b.a * b.a.transpose() * (1.0 / ja - 1.0 / jt)
+    }
+
+    /// I v without forming I.
+    #[inline(always)]
+    pub(super) fn inertia_times(&self, b: &Body, v: &V3) -> V3 {
+        let (jt, ja) = self.axisymmetric();
+        v * jt + b.a * ((ja - jt) * b.a.dot(v))
+    }
+
+    /// I⁻¹ v without forming I⁻¹.
+    #[inline(always)]
+    pub(super) fn inertia_inverse_times(&self, b: &Body, v: &V3) -> V3 {
+        let (jt, ja) = self.axisymmetric();
+        v * (1.0 / jt) + b.a * ((1.0 / ja - 1.0 / jt) * b.a.dot(v))
+    }
+
+    /// (J_c, J_a): the body-frame inertia is diag(J_c, J_c, J_a).
+    #[inline(always)]
+    fn axisymmetric(&self) -> (f64, f64) {
+        debug_assert_eq!(self.j_body.x, self.j_body.y);
+        (self.j_body.x, self.j_body.z)
     }
 }
 

@@ -193,7 +193,7 @@ impl FreeScene<'_> {
             Some((_, tp)) => t + tp,
             None => t,
         };
-        i_inv * (t - b.om.cross(&(self.inertia(b) * b.om)))
+        i_inv * (t - b.om.cross(&self.inertia_times(b, &b.om)))
     }
 
     /// The Jacobian at `y` (on the smooth piece `piece`) into `jac`, by blocks; false where
@@ -213,7 +213,7 @@ impl FreeScene<'_> {
         let qd = [self.finger_rates(y, 0), self.finger_rates(y, 1)];
         let b = self.body(y);
         let base = self.loads(&fe, &qd, &b);
-        let m_inv = [fe[0].m.try_inverse()?, fe[1].m.try_inverse()?];
+        let m_inv = [crate::math::inv2(&fe[0].m)?, crate::math::inv2(&fe[1].m)?];
         let i_inv = self.inertia_inverse(&b);
         let (f0, t0, g0) = sum(&base.load, 0..NC);
         let wdot0 = self.omega_dot(&b, &i_inv, t0);
@@ -245,7 +245,7 @@ impl FreeScene<'_> {
                             continue;
                         }
                         let (fk, tk, gk) = sum(&load, ks.clone());
-                        let qdd = fp.m.try_inverse()? * (fp.gf - fp.c + gk[i]);
+                        let qdd = crate::math::inv2(&fp.m)? * (fp.gf - fp.c + gk[i]);
                         break (qdd - qdd0, fk - fb, tk - tb);
                     };
                     let c = o + j;

@@ -543,6 +543,8 @@ pub fn free_tolerances(integ: &Integration) -> Tol<NF> {
 /// `x_off`, from t = 0 to min(t_max, t_obs) (`t_end` overrides it when given), reporting
 /// the poses to `sink`.
 #[allow(clippy::too_many_arguments)]
+// not inlined: its own symbol for `make bench-instructions`' inclusive count
+#[inline(never)]
 pub(crate) fn run<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,

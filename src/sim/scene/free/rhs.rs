@@ -110,11 +110,11 @@ impl FreeScene<'_> {
         let mut qdd = [Vector2::zeros(); 2];
         if self.setup.fingers {
             for i in 0..2 {
-                qdd[i] = fe[i].m.try_inverse()? * gen[i];
+                qdd[i] = crate::math::inv2(&fe[i].m)? * gen[i];
             }
         }
-        let l = self.inertia(&b) * b.om;
-        let wdot = self.inertia_inverse(&b) * (torque - b.om.cross(&l));
+        let l = self.inertia_times(&b, &b.om);
+        let wdot = self.inertia_inverse_times(&b, &(torque - b.om.cross(&l)));
         Some(Forces { fe, b, qdd, acc: (force / self.m, wdot), l, piece })
     }
 
