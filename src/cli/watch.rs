@@ -49,7 +49,7 @@ impl Watch {
 
     fn tick(&mut self, t: f64) {
         self.samples += 1;
-        if self.samples % 512 != 0 {
+        if !self.samples.is_multiple_of(512) {
             return;
         }
         let e = self.start.elapsed();
