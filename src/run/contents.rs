@@ -170,6 +170,11 @@ impl Scan {
         let mut foreign = vec![];
         for n in &self.names {
             let p = self.dir.join(n);
+            // a folder with a temporary file's name is no file of ours: left alone (a
+            // write of that file then fails, naming it)
+            if n.starts_with('.') && n.ends_with(".tmp") && p.is_dir() {
+                continue;
+            }
             let ours = match n.as_str() {
                 LOCK_FILE | RUN_FILE => true,
                 "recording" => p.is_dir(),

@@ -47,15 +47,6 @@ impl RunState {
     }
 }
 
-/// Which run state a `verify.csv` checked (its `# run:` line).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VerifiedGeneration {
-    /// The completed generations of the run when it was verified.
-    pub generation: u64,
-    /// The checkpoint's content checksum then.
-    pub checkpoint_sha256: String,
-}
-
 impl RunFolder {
     /// The run folder `dir` (an error when it is not a folder).
     pub fn open(dir: impl AsRef<Path>) -> Result<Self> {
@@ -105,29 +96,6 @@ impl RunFolder {
                 message: format!("{why}: restore it (replay and verify need the problem the run used)"),
             }),
             None => Ok(p.problem),
-        }
-    }
-    /// The run state the folder's `verify.csv` checked (None: no verify.csv, or one
-    /// written by a gripopt before issue 24, without a `# run:` line).
-    pub fn verified_generation(&self) -> Result<Option<VerifiedGeneration>> {
-        let p = self.dir.join(super::verify::VERIFY_FILE);
-        let text = match std::fs::read_to_string(&p) {
-            Ok(t) => t,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(Error::io(p, "cannot read", e)),
-        };
-        let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
-            return Ok(None);
-        };
-        let word_after =
-            |key: &str| line.split(key).nth(1).and_then(|r| r.split([' ', ',', ';']).find(|w| !w.is_empty()));
-        let generation = word_after("generation ").and_then(|w| w.parse().ok());
-        let sha = word_after("checkpoint sha256 ");
-        match (generation, sha) {
-            (Some(generation), Some(s)) => {
-                Ok(Some(VerifiedGeneration { generation, checkpoint_sha256: s.to_string() }))
-            }
-            _ => Err(Error::RunDir { path: p, message: format!("its `# run:` line is damaged: {line:?}") }),
         }
     }
     /// pareto.csv: the population's feasible non-dominated designs.

@@ -28,7 +28,7 @@ mod verify_run;
 pub use crate::error::{printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
-pub use folder::{read_table, RunFolder, RunState, VerifiedGeneration};
+pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
@@ -51,4 +51,4 @@ pub use verify::{
     VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
-pub use verify_run::verify;
+pub use verify_run::{verify, VerifiedGeneration};
