@@ -1,11 +1,12 @@
 # gripopt — build, test, run and benchmark. Needs only the Rust toolchain (cargo) and
-# python3 (for the independent MCAP reader, installed into .venv by `make venv`).
+# python3 (for the independent MCAP reader and the Python package, installed into .venv by
+# `make venv` / `make python`).
 CARGO   ?= cargo
 PROBLEM ?= problems/bottle-1l.toml
 OUT     ?= results/bottle-1l
 BIN     := target/release/gripopt
 
-.PHONY: all build test run bench clean venv
+.PHONY: all build test run bench clean venv python
 
 all: build
 
@@ -18,13 +19,24 @@ PYTHON  ?= python3
 # The independent checks in a local venv: PyPI mcap (reference reader),
 # mcap-protobuf-support (protobuf decoding), foxglove-schemas-protobuf (the official
 # Foxglove descriptors to compare with), jsonschema, pandas (docs/python.md), and mujoco
-# (the exported MJCF, docs/export.md: 3.17.0 is one self-contained wheel per platform).
-$(VENV)/.installed-4:
+# (the exported MJCF, docs/export.md: 3.17.0 is one self-contained wheel per platform);
+# for the Python package (docs/python.md): maturin (its build), pymoo, dask[distributed],
+# matplotlib (the docs' plot) and pytest (its suite).
+VENV_STAMP := $(VENV)/.installed-5
+VENV_PACKAGES := mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas mujoco==3.17.0 \
+	maturin==1.16.0 pymoo==0.6.2 'dask[distributed]==2026.8.0' matplotlib==3.11.2 pytest==9.2.0
+$(VENV_STAMP):
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/pip install --quiet --disable-pip-version-check mcap mcap-protobuf-support foxglove-schemas-protobuf jsonschema pandas mujoco==3.17.0
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check $(VENV_PACKAGES)
 	touch $@
 
-venv: $(VENV)/.installed-4
+venv: $(VENV_STAMP)
+
+# The Python package `gripopt` (docs/python.md) into .venv: maturin builds its native module
+# (crates/gripopt-py, release profile; cargo rebuilds only what changed) and installs it
+# editable over python/gripopt. `pip install .` does the same on any machine with cargo.
+python: $(VENV_STAMP)
+	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --release --locked --quiet
 
 # The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
 .PHONY: lint
@@ -36,13 +48,19 @@ lint:
 # then the independent reader over every MCAP file and shipped layout the tests wrote (after
 # its self-test: it must reject the scene and layout defects it checks for), then the pandas
 # example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
-# (docs/export.md).
-test: $(VENV)/.installed-4 lint
+# (docs/export.md). The Python package: clippy on its crate, its build (make python), its
+# pytest suite against the gripopt command (exit code 5, no test collected, fails too) and
+# every block of docs/python.md (tools/check_python_docs.py).
+test: $(VENV_STAMP) lint
 	rm -rf target/mcap-check
 	$(CARGO) test --locked
 	$(VENV)/bin/python tools/test_check_mcap.py
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
-	$(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
+	PYO3_PYTHON=$(abspath $(VENV))/bin/python $(CARGO) clippy --locked -p gripopt-py --all-targets -- -D warnings
+	$(MAKE) python
+	GRIPOPT=$${CARGO_TARGET_DIR:-target}/debug/gripopt $(VENV)/bin/python -m pytest python/tests -q -p no:cacheprovider; \
+	  rc=$$?; if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
+	MPLBACKEND=Agg $(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
 	$(VENV)/bin/python tools/check_mjcf.py $${CARGO_TARGET_DIR:-target}/debug/gripopt problems/bottle-1l.toml target/mjcf-check --nominal
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25

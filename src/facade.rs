@@ -3,14 +3,20 @@
 //! with its trajectory, optimise or resume through a builder ([`Optimiser`]), and read a
 //! run folder back ([`RunFolder`]). Everything here is built from the layers below; their
 //! own modules are internals (see the crate documentation).
+//!
+//! For callers that tabulate (the Python package's DataFrames): [`evaluate_rows`] gives a
+//! batch as the run's own rows ([`DesignRow`], population.csv's columns) with how the
+//! optimiser ranks each design, [`parse_scene`] reads a scene as `--scene` spells it, and
+//! [`SAMPLE_COLUMNS`] / [`POSE_COLUMNS`] name a trajectory's values with their units.
 
 use crate::eval::{EvalOptions, Record, SimulationRecord};
-use crate::optim::Evaluator;
-use crate::params::{Design, Problem, SceneKind};
+use crate::optim::{Evaluator, Individual, Infeasibility, MooProblem};
+use crate::params::{Design, DesignParameters, Problem, SceneKind};
 use crate::record::RecordOptions;
-use crate::run::{GripperProblem, Progress, RunHooks, RunSpec, RunSummary};
-use crate::sim::{Controls, Integration, PoseSample, SceneSpec, Trajectory};
-use crate::Result;
+use crate::run::{Column, DesignRow, GripperProblem, Progress, RunHooks, RunSpec, RunSummary};
+use crate::sim::{Controls, Integration, PoseSample, Sample, SceneSpec, Trajectory};
+use crate::{Error, Result};
+use rand::SeedableRng;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -48,19 +54,161 @@ pub fn evaluate_batch(
     stages: Stages,
     threads: Option<usize>,
 ) -> Result<Vec<Record>> {
-    crate::run::check_threads(threads)?;
     let opts = stages.options(problem);
-    let run = || {
+    in_pool(threads, || {
         designs
             .par_iter()
             .with_max_len(1)
             .map(|x| Record::from_eval(&crate::eval::evaluate(x, &problem.scene, &opts)))
             .collect()
-    };
+    })
+}
+
+/// `run` on `threads` threads (None: the current pool, all cores by default).
+fn in_pool<T: Send>(threads: Option<usize>, run: impl FnOnce() -> T + Send) -> Result<T> {
+    crate::run::check_threads(threads)?;
     Ok(match threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build()?.install(run),
         None => run(),
     })
+}
+
+/// One design of a batch evaluated as a run evaluates it: its row of population.csv, and
+/// what the optimiser ranks it by.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvaluatedRow {
+    /// The row (population.csv's columns; `id` its place in the batch plus the first id,
+    /// `generation` 0: not created by a run, `rank` None: not ranked).
+    pub row: DesignRow,
+    /// The objectives in minimisation form (−max_offset, α, −F̃, t_stab); where one was not
+    /// computed, the finite placeholder of MODEL.md §10 (never compared: only feasible
+    /// designs are ranked by objectives).
+    pub minimised: [f64; 4],
+    /// Constrained domination's key (MODEL.md §10): stages not reached (0 = feasible) and
+    /// the violation at the failing stage; smaller is better, lexicographically.
+    pub infeasibility: Infeasibility,
+}
+
+/// Evaluate a batch of designs (ψ in degrees, as written in files) through `stages`, in
+/// parallel on `threads` threads (None: all cores), exactly as a run evaluates a
+/// generation: each design's row and ranking key, in the order given, the same whatever
+/// the thread count. Ids are `first_id`, `first_id + 1`, …
+pub fn evaluate_rows(
+    problem: &Problem,
+    designs: &[DesignParameters],
+    first_id: u64,
+    stages: Stages,
+    threads: Option<usize>,
+) -> Result<Vec<EvaluatedRow>> {
+    let mut gp = GripperProblem::new(problem.clone());
+    gp.options = stages.options(problem);
+    // a simulation (ms) is a task of its own, for balance; static evaluations (tens of µs)
+    // are split adaptively, in chunks, by rayon
+    let max_len = if stages == Stages::All { 1 } else { usize::MAX };
+    in_pool(threads, || {
+        designs
+            .par_iter()
+            .enumerate()
+            .with_max_len(max_len)
+            .map(|(k, d)| {
+                let x = d.to_array().to_vec();
+                let eval = gp.evaluate(&x);
+                let minimised = eval.f.as_slice().try_into().expect("four objectives");
+                let infeasibility = eval.cv;
+                let ind = Individual { id: first_id + k as u64, generation: 0, x, eval };
+                EvaluatedRow { row: DesignRow::of(&ind, None), minimised, infeasibility }
+            })
+            .collect()
+    })
+}
+
+/// `n` designs drawn uniformly in `problem`'s bounds from the stream of `seed` (the
+/// designs of `gripopt bench static --seed`), ψ in degrees.
+pub fn random_designs(problem: &Problem, n: usize, seed: u64) -> Vec<DesignParameters> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..n).map(|_| DesignParameters::from_array(&problem.bounds.sample(&mut rng).to_array())).collect()
+}
+
+/// A scene as `--scene` spells it: `centred`, `offset:X` or `free[:X]` (the object's
+/// offset X in metres; None keeps the problem's), for [`simulate`].
+pub fn parse_scene(text: &str) -> Result<(SceneKind, Option<f64>)> {
+    let bad = |why: &str| Error::Input(format!("scene `{text}`: {why}"));
+    let num = |x: &str| x.trim().parse::<f64>().map_err(|_| bad(&format!("`{x}` is not a number (metres)")));
+    match text.trim().split_once(':') {
+        None if text.trim() == "centred" => Ok((SceneKind::Centred, None)),
+        None if text.trim() == "free" => Ok((SceneKind::Free, None)),
+        Some(("offset", x)) => Ok((SceneKind::Offset, Some(num(x)?))),
+        Some(("free", x)) => Ok((SceneKind::Free, Some(num(x)?))),
+        _ => Err(bad("must be centred, offset:X or free[:X] (X in metres)")),
+    }
+}
+
+/// The values of a grasp [`Sample`] (finger 1, its local frame; finger 2 is its mirror),
+/// named as `gripopt simulate --csv` and `replay --csv` name them, with units.
+pub const SAMPLE_COLUMNS: [Column; 16] = [
+    ("t", "s", "time"),
+    ("q11", "rad", "active joint angle q11"),
+    ("q21", "rad", "active joint angle q21"),
+    ("q11_dot", "rad/s", "its rate"),
+    ("q21_dot", "rad/s", "its rate"),
+    ("theta2", "rad", "distal phalanx angle θ2"),
+    ("delta_1", "m", "penetration of the proximal contact"),
+    ("delta_2", "m", "penetration of the distal contact"),
+    ("fn_1", "N", "normal force of the proximal contact"),
+    ("fn_2", "N", "normal force of the distal contact"),
+    ("ft_1", "N", "friction force of the proximal contact (on the finger along t_c)"),
+    ("ft_2", "N", "friction force of the distal contact"),
+    ("hand_fy", "N", "hand force F_hand,y (raw)"),
+    ("filtered_fy", "N", "hand force, filtered"),
+    ("energy", "J", "total energy E"),
+    ("energy_excess", "J", "E − V*"),
+];
+
+/// A [`Sample`]'s values in the order of [`SAMPLE_COLUMNS`].
+pub fn sample_values(s: &Sample) -> [f64; 16] {
+    [
+        s.t,
+        s.q[0],
+        s.q[1],
+        s.qd[0],
+        s.qd[1],
+        s.theta2,
+        s.delta[0],
+        s.delta[1],
+        s.normal[0],
+        s.normal[1],
+        s.friction[0],
+        s.friction[1],
+        s.hand_fy,
+        s.filtered_fy,
+        s.energy,
+        s.energy_excess,
+    ]
+}
+
+/// The values of a free-scene [`PoseSample`], named as `gripopt simulate
+/// --scene free --csv` names them, with units.
+pub const POSE_COLUMNS: [Column; 14] = [
+    ("t", "s", "time"),
+    ("gx", "m", "object centre of mass, x"),
+    ("gy", "m", "object centre of mass, y"),
+    ("gz", "m", "object centre of mass, z"),
+    ("qw", "-", "object orientation quaternion, w"),
+    ("qx", "-", "object orientation quaternion, x"),
+    ("qy", "-", "object orientation quaternion, y"),
+    ("qz", "-", "object orientation quaternion, z"),
+    ("tilt_deg", "deg", "object tilt"),
+    ("q11_1", "rad", "finger 1: q11"),
+    ("q21_1", "rad", "finger 1: q21"),
+    ("q11_2", "rad", "finger 2: q11"),
+    ("q21_2", "rad", "finger 2: q21"),
+    ("energy", "J", "total energy"),
+];
+
+/// A [`PoseSample`]'s values in the order of [`POSE_COLUMNS`].
+pub fn pose_values(p: &PoseSample) -> [f64; 14] {
+    let [a, b, c, d] = p.fingers;
+    [p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), a, b, c, d, p.energy]
 }
 
 /// A design simulated in a scene: its record, and the samples of the simulation.
@@ -197,5 +345,92 @@ impl Optimiser {
             None => crate::run::optimise_with(&self.spec, self.hooks),
             Some(r) => crate::run::resume_with(&self.spec.out, r.generations, r.force, self.spec.threads, self.hooks),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bottle() -> Problem {
+        Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap()
+    }
+
+    #[test]
+    fn scenes_parse_as_the_cli_spells_them() {
+        assert_eq!(parse_scene("centred").unwrap(), (SceneKind::Centred, None));
+        assert_eq!(parse_scene("offset:0.002").unwrap(), (SceneKind::Offset, Some(0.002)));
+        assert_eq!(parse_scene("free").unwrap(), (SceneKind::Free, None));
+        assert_eq!(parse_scene("free:-0.001").unwrap(), (SceneKind::Free, Some(-0.001)));
+        for bad in ["offset", "centred:1", "offset:x", "sideways", ""] {
+            let e = parse_scene(bad).unwrap_err().to_string();
+            assert!(e.contains(&format!("scene `{bad}`")), "{e}");
+        }
+    }
+
+    /// A batch's rows are each design's own evaluation (its record, one at a time), in
+    /// order, numbered from the first id, whatever the thread count; the ranking key is
+    /// the verdict's (MODEL.md §10).
+    #[test]
+    fn batch_rows_are_each_designs_record() {
+        let p = bottle();
+        let mut xs = random_designs(&p, 60, 3);
+        xs.push(DesignParameters::from_array(&p.nominal.to_array()));
+        for stages in [Stages::Static, Stages::All] {
+            let one = evaluate_rows(&p, &xs, 7, stages, Some(1)).unwrap();
+            assert_eq!(one, evaluate_rows(&p, &xs, 7, stages, Some(2)).unwrap());
+            for (k, (x, r)) in xs.iter().zip(&one).enumerate() {
+                let rec = evaluate(&p, &x.design(), stages);
+                let row = &r.row;
+                assert_eq!((row.id, row.generation, row.rank), (7 + k as u64, 0, None));
+                assert_eq!(row.design, *x);
+                assert_eq!((row.feasible, row.failed_stage), (rec.verdict.feasible, rec.verdict.failed_stage));
+                assert_eq!((&row.reason, row.violation), (&rec.verdict.reason, rec.verdict.violation));
+                let o = rec.objectives();
+                assert_eq!([row.alpha, row.mean_force, row.t_stab], [o[1], o[2], o[3]]);
+                assert_eq!(row.max_offset, o[0].filter(|m| *m >= 0.0));
+                let short = rec.verdict.failed_stage.map_or(0, |s| 4 - s);
+                assert_eq!(r.infeasibility.stages_short, short);
+                assert_eq!(r.infeasibility.violation, rec.verdict.violation.unwrap_or(0.0));
+                if rec.verdict.feasible {
+                    // in minimisation form; t_stab after stage 3 only
+                    let sign = [-1.0, 1.0, -1.0, 1.0];
+                    for k in 0..4 {
+                        if let Some(v) = o[k] {
+                            assert_eq!(r.minimised[k], sign[k] * v);
+                        }
+                    }
+                }
+                assert!(r.minimised.iter().all(|f| f.is_finite()));
+            }
+        }
+        let all = evaluate_rows(&p, &xs, 0, Stages::All, None).unwrap();
+        assert!(all.iter().any(|r| r.row.feasible) && all.iter().any(|r| r.row.failed_stage == Some(1)));
+    }
+
+    #[test]
+    fn trajectory_values_follow_their_columns() {
+        let p = bottle();
+        let s = simulate(&p, &p.nominal, None, &Integration::from_solver(&p.solver), &Controls::DIAGNOSTIC).unwrap();
+        let x = s.trajectory.samples[s.trajectory.samples.len() / 2];
+        let v = sample_values(&x);
+        assert_eq!(SAMPLE_COLUMNS.len(), v.len());
+        let at = |name: &str| v[SAMPLE_COLUMNS.iter().position(|c| c.0 == name).unwrap()];
+        assert_eq!([at("t"), at("q21"), at("fn_2"), at("energy_excess")], [x.t, x.q[1], x.normal[1], x.energy_excess]);
+        let f = simulate(
+            &p,
+            &p.nominal,
+            Some((SceneKind::Free, None)),
+            &Integration::from_solver(&p.solver),
+            &Controls::DIAGNOSTIC,
+        )
+        .unwrap();
+        let q = f.poses[f.poses.len() / 2];
+        let v = pose_values(&q);
+        let at = |name: &str| v[POSE_COLUMNS.iter().position(|c| c.0 == name).unwrap()];
+        assert_eq!(
+            [at("gz"), at("qw"), at("tilt_deg"), at("q21_2")],
+            [q.g[2], q.q[0], q.tilt.to_degrees(), q.fingers[3]]
+        );
     }
 }

@@ -71,9 +71,15 @@ mod facade;
 
 pub use error::{Error, Result};
 pub use eval::{Cause, Record, SimulationRecord};
-pub use facade::{evaluate, evaluate_batch, simulate, Optimiser, Simulation, Stages};
-pub use optim::{Batch, Evaluations, Evaluator};
-pub use params::{Bounds, Design, Problem, SceneKind, DESIGN_NAMES};
+pub use facade::{
+    evaluate, evaluate_batch, evaluate_rows, parse_scene, pose_values, random_designs, sample_values, simulate,
+    EvaluatedRow, Optimiser, Simulation, Stages, POSE_COLUMNS, SAMPLE_COLUMNS,
+};
+pub use optim::{Batch, Evaluations, Evaluator, Infeasibility};
+pub use params::{Bounds, Design, DesignParameters, Problem, SceneKind, DESIGN_NAMES};
 pub use record::{DesignMessage, RecordOptions, Recorded, Replay, Resolution, TrajectoryKeep};
-pub use run::{DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RunFolder, RunInfo, RunSummary};
+pub use run::{
+    Column, DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RunFolder, RunInfo, RunSummary,
+    DESIGN_COLUMNS, HISTORY_COLUMNS,
+};
 pub use sim::{Controls, EventNote, Integration, Method, Mode, Point, PoseSample, Sample, Sink, Trajectory};

@@ -1,6 +1,6 @@
 //! Stage-1/2 boundary cases (MODEL.md §7, §10, §13 items 1, 2).
 use crate::common::*;
-use gripopt::eval::{evaluate, EvalOptions, Reason};
+use gripopt::eval::{evaluate, Discard, EvalOptions, Reason};
 use gripopt::math::dist_to_singular;
 use gripopt::model::Finger;
 use gripopt::model::{singularity_sweep, SweepFailure};
@@ -14,6 +14,12 @@ fn margin_deg(x: &Design) -> Option<f64> {
         Err(SweepFailure::Margin(sw)) => Some(sw.min_margin.to_degrees()),
         Err(_) => None,
     }
+}
+
+/// Why statics discard `x` in the nominal scene (it must be discarded).
+#[track_caller]
+fn statics_discard(x: &Design) -> Discard {
+    evaluate(x, &scene(), &EvalOptions::statics_only()).discard.unwrap_or_else(|| panic!("{x:?} passes statics"))
 }
 
 #[test]
@@ -71,26 +77,22 @@ fn designs_just_inside_and_outside_the_30_degree_margin() {
 #[test]
 fn open_pose_undefined_for_a_short_palm() {
     // k10² = (b/2)² + R_open² − (R_open + w)² ≤ 0 for b ≤ 2 sqrt(0.055² − 0.05²) = 45.8 mm
-    let s = scene();
-    let x = Design { b: 0.045, ..nominal() };
-    let ev = evaluate(&x, &s, &EvalOptions::statics_only());
-    let d = ev.discard.unwrap();
+    let d = statics_discard(&Design { b: 0.045, ..nominal() });
     assert_eq!(d.stage, 1);
     assert!(d.reason.to_string().contains("k10"), "{}", d.reason);
     let x = Design { b: 0.0459, ..nominal() };
-    assert!(Finger::new(&x, &s).is_ok());
+    assert!(Finger::new(&x, &scene()).is_ok());
 }
 
 #[test]
 fn invalid_lengths_are_stage_0() {
-    let s = scene();
     for x in [
         Design { l21: -0.01, ..nominal() },
         Design { t22: 0.0, ..nominal() },
         Design { p: 0.0, ..nominal() },
         Design { r: f64::NAN, ..nominal() },
     ] {
-        let d = evaluate(&x, &s, &EvalOptions::statics_only()).discard.unwrap();
+        let d = statics_discard(&x);
         assert_eq!(d.stage, 0);
         assert_eq!(d.reason, Reason::InvalidDesign);
     }
@@ -99,23 +101,18 @@ fn invalid_lengths_are_stage_0() {
 #[test]
 fn distal_contact_beyond_tip_is_stage_2() {
     // nominal k2 = 30.45 mm on R = 40 mm: a distal of 30.4 mm is just too short, 30.5 mm fits
-    let s = scene();
-    let short = Design { t22: 0.0304, ..nominal() };
-    let ev = evaluate(&short, &s, &EvalOptions::statics_only());
-    let d = ev.discard.unwrap();
+    let d = statics_discard(&Design { t22: 0.0304, ..nominal() });
     assert_eq!(d.stage, 2, "{}", d.reason);
     assert!(d.reason.to_string().contains("k2 > t22"), "{}", d.reason);
     let ok = Design { t22: 0.0305, ..nominal() };
-    let ev = evaluate(&ok, &s, &EvalOptions::statics_only());
+    let ev = evaluate(&ok, &scene(), &EvalOptions::statics_only());
     assert!(ev.statics.is_some(), "{:?}", ev.discard);
 }
 
 #[test]
 fn proximal_contact_beyond_the_proximal_phalanx() {
     // k1 = 18.95 mm for the nominal base: a proximal phalanx of 18 mm cannot reach the tangent point
-    let s = scene();
-    let x = Design { l21: 0.018, ..nominal() };
-    let d = evaluate(&x, &s, &EvalOptions::statics_only()).discard.unwrap();
+    let d = statics_discard(&Design { l21: 0.018, ..nominal() });
     assert!(d.stage == 1 || d.stage == 2);
     assert!(d.reason.to_string().contains("k1") || d.reason.to_string().contains("R = "), "{}", d.reason);
 }

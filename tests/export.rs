@@ -4,21 +4,10 @@
 //! in target/mjcf-check/run whose front design `make test` then exports and simulates with
 //! MuJoCo (tools/check_mjcf.py).
 
+use crate::common::{output_text as text, run_gripopt as run, BOTTLE_FILE as BOTTLE};
 use gripopt::export::{BuildSheet, ExportScene, ExportedDesign};
 use gripopt::params::{Design, Problem};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
-const BOTTLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
 
 /// A scratch folder of this module under target/.
 fn scratch(name: &str) -> PathBuf {

@@ -23,18 +23,25 @@ fn record(p: &Problem) -> Record {
     Record::from_eval(&evaluate(&Design::nominal(), &p.scene, &EvalOptions::statics_only()))
 }
 
+/// The record's objective pair (α, F̃) is `objective` under `model`, and both the mobilised
+/// and the frictionless pairs are reported with MODEL.md's nominal values whatever the model.
+#[track_caller]
+fn assert_reports_both_pairs(r: &Record, model: ForceModel, objective: (f64, f64)) {
+    assert_eq!(r.statics.force_model, Some(model));
+    close_rel(r.statics.alpha.unwrap(), objective.0, 1e-9, &format!("alpha under {model:?}"));
+    close_rel(r.statics.mean_force.unwrap(), objective.1, 1e-9, &format!("mean_force under {model:?}"));
+    close_rel(r.statics.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu");
+    close_rel(r.statics.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu");
+    close_rel(r.statics.alpha_0.unwrap(), ALPHA_0, 1e-9, "alpha_0");
+    close_rel(r.statics.mean_force_0.unwrap(), FMEAN_0, 1e-9, "mean_force_0");
+}
+
 #[test]
 fn default_problem_is_mobilised_and_reports_both_pairs() {
     let p = bottle();
     assert_eq!(p.scene.criteria.force_model, ForceModel::Mobilised);
     let r = record(&p);
-    close_rel(r.statics.alpha.unwrap(), ALPHA_MU, 1e-9, "alpha = alpha_mu");
-    close_rel(r.statics.mean_force.unwrap(), FMEAN_MU, 1e-9, "mean_force = mean_force_mu");
-    close_rel(r.statics.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu");
-    close_rel(r.statics.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu");
-    close_rel(r.statics.alpha_0.unwrap(), ALPHA_0, 1e-9, "alpha_0");
-    close_rel(r.statics.mean_force_0.unwrap(), FMEAN_0, 1e-9, "mean_force_0");
-    assert_eq!(r.statics.force_model, Some(ForceModel::Mobilised));
+    assert_reports_both_pairs(&r, ForceModel::Mobilised, (ALPHA_MU, FMEAN_MU));
     // eq. 3.12 by hand from the reported f^μ (an independent path to the same number)
     let (f1, f2) = (r.statics.fmu_1.unwrap(), r.statics.fmu_2.unwrap());
     let m = 0.5 * (f1 + f2);
@@ -50,11 +57,7 @@ fn frictionless_model_switches_the_objectives_only() {
     let p = with_model("frictionless");
     assert_eq!(p.scene.criteria.force_model, ForceModel::Frictionless);
     let r = record(&p);
-    close_rel(r.statics.alpha.unwrap(), ALPHA_0, 1e-9, "alpha = alpha_0");
-    close_rel(r.statics.mean_force.unwrap(), FMEAN_0, 1e-9, "mean_force = mean_force_0");
-    close_rel(r.statics.alpha_mu.unwrap(), ALPHA_MU, 1e-9, "alpha_mu still reported");
-    close_rel(r.statics.mean_force_mu.unwrap(), FMEAN_MU, 1e-9, "mean_force_mu still reported");
-    assert_eq!(r.statics.force_model, Some(ForceModel::Frictionless));
+    assert_reports_both_pairs(&r, ForceModel::Frictionless, (ALPHA_0, FMEAN_0));
     // the constraints do not depend on the model (D7): same max_offset, same forces
     let m = record(&bottle());
     assert_eq!(r.statics.max_offset, m.statics.max_offset);

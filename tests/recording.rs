@@ -1,20 +1,12 @@
 //! MCAP recording: round trip, replay verification, corrupt files, crash/resume without
 //! duplicates. Runs are written under target/mcap-check/ so that `make test` also checks
 //! every file with the independent Python reader (tools/check_mcap.py).
+use crate::common::check_dir;
 use gripopt::record::read_index;
 use gripopt::record::{read_design, replay};
 use gripopt::record::{RecordOptions, Resolution};
 use gripopt::run::{optimise, resume, RunSpec};
-use std::path::{Path, PathBuf};
-
-fn dir(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use std::path::Path;
 
 fn spec(out: &Path, generations: u64) -> RunSpec {
     crate::common::bottle_spec(out, generations, 11, 2)
@@ -22,7 +14,7 @@ fn spec(out: &Path, generations: u64) -> RunSpec {
 
 #[test]
 fn every_design_is_recorded_and_replays_verified() {
-    let d = dir("roundtrip");
+    let d = check_dir("roundtrip");
     let before = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs();
     let s = optimise(&spec(&d, 4)).unwrap();
     let after = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs();
@@ -89,12 +81,12 @@ fn every_design_is_recorded_and_replays_verified() {
 
 #[test]
 fn corrupt_shards_give_clear_errors_and_the_rest_stays_readable() {
-    let d = dir("corrupt");
+    let d = check_dir("corrupt");
     optimise(&spec(&d, 3)).unwrap();
     let shard = d.join("recording/gen-00002.mcap");
     let bytes = std::fs::read(&shard).unwrap();
     // keep the damaged copy out of the folder the Python checker reads
-    let bad_dir = dir("corrupt-shards-not-checked").with_extension("bad");
+    let bad_dir = check_dir("corrupt-shards-not-checked").with_extension("bad");
     std::fs::create_dir_all(&bad_dir).unwrap();
     std::fs::write(&shard, &bytes[..bytes.len() / 2]).unwrap();
     let e = read_design(&d, 14).unwrap_err().to_string();
@@ -117,7 +109,7 @@ fn corrupt_shards_give_clear_errors_and_the_rest_stays_readable() {
 
 #[test]
 fn crash_and_resume_records_each_design_once_and_identically() {
-    let (full, cut) = (dir("resume-full"), dir("resume-cut"));
+    let (full, cut) = (check_dir("resume-full"), check_dir("resume-cut"));
     optimise(&spec(&full, 5)).unwrap();
     let s = spec(&cut, 5);
     assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
@@ -140,7 +132,7 @@ fn crash_and_resume_records_each_design_once_and_identically() {
 
 #[test]
 fn recording_options_are_honoured() {
-    let d = dir("decimated");
+    let d = check_dir("decimated");
     let mut s = spec(&d, 4);
     s.record = RecordOptions { every: 10, scene_dt: 0.0, resolution: Resolution::Full, ..RecordOptions::default() };
     let r = optimise(&s).unwrap();
@@ -158,7 +150,7 @@ fn recording_options_are_honoured() {
     }
     assert!(any);
     // no recording at all
-    let d2 = dir("norecord");
+    let d2 = check_dir("norecord");
     let mut s = spec(&d2, 2);
     s.record = RecordOptions::none();
     optimise(&s).unwrap();
@@ -171,7 +163,7 @@ fn recording_options_are_honoured() {
 /// values to f32; full replays bitwise; the layout is in both run folders.
 #[test]
 fn compact_recording_keeps_contacts_peaks_and_the_final_state() {
-    let (full, compact) = (dir("full-resolution"), dir("compact"));
+    let (full, compact) = (check_dir("full-resolution"), check_dir("compact"));
     let mut s = spec(&full, 4);
     s.record = RecordOptions { resolution: Resolution::Full, ..RecordOptions::default() };
     let n = optimise(&s).unwrap().evaluations;

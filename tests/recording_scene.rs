@@ -10,31 +10,15 @@
 
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Decode;
-use gripopt::record::{read_index, GraspSeries, RecordOptions};
+use gripopt::record::{read_index, GraspSeries};
 use gripopt::run::{optimise, resume, RunSpec};
 
+use crate::common::check_dir;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-
-fn dir(name: &str) -> PathBuf {
-    let base = std::env::var_os("GRIPOPT_MCAP_CHECK_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mcap-check")));
-    let d = base.join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use std::path::Path;
 
 fn spec(out: &Path, generations: u64) -> RunSpec {
-    RunSpec {
-        problem_path: PathBuf::from(crate::common::BOTTLE_FILE),
-        out: out.to_path_buf(),
-        pop: 16,
-        generations,
-        seed: 16,
-        threads: Some(2),
-        record: RecordOptions::default(),
-    }
+    RunSpec { pop: 16, ..crate::common::bottle_spec(out, generations, 16, 2) }
 }
 
 /// Messages of every shard of a run, by design id (window), as (topic, log time, bytes).
@@ -64,7 +48,7 @@ fn csv_ids(p: &Path) -> Vec<u64> {
 
 #[test]
 fn shards_draw_the_simulated_scene_in_world_coordinates() {
-    let run = dir("scene-world");
+    let run = check_dir("scene-world");
     optimise(&spec(&run, 3)).unwrap();
     let p = gripopt::params::Problem::load(run.join("problem.toml")).unwrap();
     let (r, lc, hc, w) = (p.scene.object.radius, p.scene.object.length, p.scene.object.grasp_height, p.scene.hand.w);
@@ -139,7 +123,7 @@ fn shards_draw_the_simulated_scene_in_world_coordinates() {
 /// what pareto.csv says; a resumed run rewrites it.
 #[test]
 fn front_recording_marks_the_final_front_after_a_resume() {
-    let run = dir("scene-front-resume");
+    let run = check_dir("scene-front-resume");
     let s = spec(&run, 4);
     assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
     assert!(!run.join("recording/front.mcap").exists(), "no front before the run ends");

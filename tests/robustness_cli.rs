@@ -11,10 +11,7 @@ use std::process::Output;
 /// stderr), with the discard counts adding up to the designs drawn.
 #[test]
 fn bench_json_summaries() {
-    let bin = env!("CARGO_BIN_EXE_gripopt");
-    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
-    let out =
-        std::process::Command::new(bin).args(["bench", "static", problem, "--n", "200", "--json"]).output().unwrap();
+    let out = cli(&["bench", "static", PROBLEM, "--n", "200", "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
     let discarded: u64 = v["discarded_by_stage"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap()).sum();
@@ -26,19 +23,19 @@ fn bench_json_summaries() {
 /// `gripopt bench replay --out DIR` never deletes a folder it did not write itself.
 #[test]
 fn bench_replay_refuses_to_clear_a_folder_it_did_not_write() {
-    let bin = env!("CARGO_BIN_EXE_gripopt");
-    let problem = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
     let dir = tmp("bench-replay-guard");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("precious.csv"), "keep me").unwrap();
-    let out = std::process::Command::new(bin)
-        .args(["bench", "replay", problem, "--designs", "10", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = cli(&["bench", "replay", PROBLEM, "--designs", "10", "--out", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a synthetic run"));
     assert_eq!(std::fs::read_to_string(dir.join("precious.csv")).unwrap(), "keep me");
+}
+
+/// `gripopt optimise` of the default problem into `out` with `flags`.
+fn optimise_cli(out: &Path, flags: &[&str]) -> Output {
+    let o = out.to_str().unwrap();
+    cli(&[&["optimise", PROBLEM, "--out", o], flags].concat())
 }
 
 /// Too few designs per thread draw a note on stderr (the run still succeeds, and its
@@ -46,51 +43,14 @@ fn bench_replay_refuses_to_clear_a_folder_it_did_not_write() {
 #[test]
 fn few_designs_per_thread_draw_a_note() {
     let (a, b) = (tmp("note-few"), tmp("note-enough"));
-    let few = cli(&[
-        "optimise",
-        PROBLEM,
-        "--pop",
-        "8",
-        "--generations",
-        "1",
-        "--threads",
-        "4",
-        "--record",
-        "none",
-        "--out",
-        a.to_str().unwrap(),
-    ]);
+    let few = optimise_cli(&a, &["--pop", "8", "--generations", "1", "--threads", "4", "--record", "none"]);
     assert_eq!(code(&few), 0, "{}", stderr(&few));
     assert!(stderr(&few).contains("a population of 8 on 4 threads is 2.0 designs per thread"), "{}", stderr(&few));
     // a bad value is refused first, without the note
-    let bad = cli(&[
-        "optimise",
-        PROBLEM,
-        "--pop",
-        "2",
-        "--generations",
-        "1",
-        "--threads",
-        "4",
-        "--out",
-        tmp("note-bad").to_str().unwrap(),
-    ]);
+    let bad = optimise_cli(&tmp("note-bad"), &["--pop", "2", "--generations", "1", "--threads", "4"]);
     assert_eq!(code(&bad), 2, "{}", stderr(&bad));
     assert!(!stderr(&bad).contains("designs per thread"), "{}", stderr(&bad));
-    let enough = cli(&[
-        "optimise",
-        PROBLEM,
-        "--pop",
-        "8",
-        "--generations",
-        "1",
-        "--threads",
-        "2",
-        "--record",
-        "none",
-        "--out",
-        b.to_str().unwrap(),
-    ]);
+    let enough = optimise_cli(&b, &["--pop", "8", "--generations", "1", "--threads", "2", "--record", "none"]);
     assert_eq!(code(&enough), 0, "{}", stderr(&enough));
     assert!(!stderr(&enough).contains("designs per thread"), "{}", stderr(&enough));
     assert_eq!(read(&a.join("population.csv")), read(&b.join("population.csv")));
@@ -173,20 +133,7 @@ fn bench_scaling_has_no_ceiling_at_one_thread() {
 /// A small finished run (seed 4: three designs in the final front), without recording.
 fn small_front_run(name: &str) -> PathBuf {
     let dir = tmp(name);
-    let o = cli(&[
-        "optimise",
-        PROBLEM,
-        "--pop",
-        "12",
-        "--generations",
-        "2",
-        "--seed",
-        "4",
-        "--record",
-        "none",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+    let o = optimise_cli(&dir, &["--pop", "12", "--generations", "2", "--seed", "4", "--record", "none"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     dir
 }

@@ -3,19 +3,8 @@
 //! refused with exit 2 instead of being ignored, `verify` with nothing to verify writes
 //! nothing, and `replay --scene` compares the scene's offset numerically (-0 = 0).
 
+use crate::common::{output_text as text, run_gripopt as run, BOTTLE_FILE as BOTTLE};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_gripopt");
-const BOTTLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
 
 /// A tiny run of `problem` (pop `pop`, `generations`, seed 16) under target/mcap-check/.
 fn tiny_run(name: &str, problem: &Path, pop: usize, generations: u64) -> PathBuf {

@@ -9,6 +9,7 @@ mod common;
 mod architecture;
 mod constraints;
 mod dynamics;
+mod event_values;
 mod export;
 mod force_model;
 mod free_jacobian;

@@ -13,7 +13,7 @@ use std::io::Write;
 use std::path::Path;
 
 /// The `f`-quantile (nearest rank) of the non-NaN values of `v`; NaN if none.
-fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
+pub(super) fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
     v.retain(|x| !x.is_nan());
     if v.is_empty() {
         return f64::NAN;

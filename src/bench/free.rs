@@ -4,7 +4,7 @@
 //! a reference at rtol 1e-10: CPU time (min / median), steps, evaluations, and the relative
 //! errors of the §14.4 outputs.
 
-use super::work_precision::{check_atol, rel};
+use super::work_precision::{check_atol, rel, WorkPrecision};
 use super::{progress, say, time_it, Out};
 use crate::eval::StaticsResult;
 use crate::eval::{stage_kinematics, stage_statics};
@@ -12,8 +12,7 @@ use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
 use crate::sim::{simulate, Controls, FreeEnd, FreeResult, FreeSetup, Integration, SceneSpec};
 use crate::{Error, Result};
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The rtols of the table by default (atol 1e-3·rtol unless fixed).
 pub const FREE_RTOLS: [f64; 5] = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8];
@@ -24,27 +23,17 @@ pub const FREE_REFERENCE_RTOL: f64 = 1e-10;
 /// Settings of the free-scene table.
 #[derive(Debug, Clone)]
 pub struct FreeBench {
-    /// Output folder (free_work_precision.csv and .svg).
-    pub out_dir: PathBuf,
-    /// Maximum repetitions per point (each point also stops after ~1 s; at least 3 run).
-    pub reps: usize,
-    /// Absolute tolerance at every rtol (`None`: 1e-3·rtol, the problem file's ratio).
-    pub atol: Option<f64>,
-    /// Relative tolerances, one row per Jacobian and rtol.
-    pub rtols: Vec<f64>,
+    /// The table's output folder (free_work_precision.csv and .svg), repetitions and
+    /// tolerances (one row per Jacobian and rtol).
+    pub table: WorkPrecision,
     /// Also the rows with the dense finite-difference Jacobian.
     pub dense: bool,
 }
 
 impl Default for FreeBench {
     fn default() -> Self {
-        FreeBench {
-            out_dir: PathBuf::from("results/bench"),
-            reps: 100,
-            atol: None,
-            rtols: FREE_RTOLS.to_vec(),
-            dense: true,
-        }
+        let table = WorkPrecision { reps: 100, rtols: FREE_RTOLS.to_vec(), ..WorkPrecision::default() };
+        FreeBench { table, dense: true }
     }
 }
 
@@ -130,9 +119,10 @@ fn run(f: &Finger, s: &SceneParams, st: &StaticsResult, dense: bool, o: &Integra
 
 /// The free-scene work-precision table of `design`: the reference (rtol 1e-10 with the
 /// block Jacobian, checked against the dense Jacobian at the same tolerance), then each
-/// rtol of `b` with each Jacobian. Writes free_work_precision.csv and .svg into
-/// `b.out_dir`; the text goes to `out`, the figures come back as JSON.
-pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -> Result<serde_json::Value> {
+/// rtol of `free.table` with each Jacobian. Writes free_work_precision.csv and .svg into
+/// `free.table.out_dir`; the text goes to `out`, the figures come back as JSON.
+pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out) -> Result<serde_json::Value> {
+    let b = &free.table;
     check_atol(b.atol)?;
     if b.rtols.is_empty() || b.rtols.iter().any(|r| !(*r > 0.0 && *r < 1.0)) {
         return Err(Error::Input("--rtols: one or more values in (0, 1) are needed".into()));
@@ -144,8 +134,7 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
         ));
     }
     let (f, st) = finger_of(problem, design)?;
-    let atol_at = |rtol: f64| b.atol.unwrap_or(rtol * 1e-3);
-    let opts = |rtol: f64| Integration::new(rtol, atol_at(rtol), 50_000_000);
+    let opts = |rtol: f64| Integration::new(rtol, b.atol_at(rtol), 50_000_000);
     let tight = opts(FREE_REFERENCE_RTOL);
     let reference = run(&f, s, &st, false, &tight);
     if reference.end != FreeEnd::Observed {
@@ -168,7 +157,7 @@ pub fn free_scene(problem: &Problem, design: &Design, b: &FreeBench, out: Out) -
         e.iter().cloned().fold(0.0, f64::max)
     );
     let jacs: &[(&'static str, bool)] =
-        if b.dense { &[("blocks", false), ("dense", true)] } else { &[("blocks", false)] };
+        if free.dense { &[("blocks", false), ("dense", true)] } else { &[("blocks", false)] };
     let pb = progress((jacs.len() * b.rtols.len()) as u64, "bench free [{bar:30}] {pos}/{len} {msg}");
     let mut rows = vec![];
     for &(label, dense) in jacs {
@@ -239,15 +228,9 @@ fn print_rows(rows: &[FreeRow], out: Out) -> Result<()> {
 
 /// Writes the rows as CSV to `path` (its folder created if need be).
 fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create", e))?;
-    }
-    let io = |e| Error::io(path, "cannot write", e);
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
-    writeln!(w, "jacobian,rtol,cpu_min_s,cpu_median_s,reps,steps,rejected,rhs_evals,jacobians,jac_block_evals,lu,events,err_max_displacement,err_max_tilt,err_final_displacement,err_peak_e_trans,err_peak_e_rot,err_t_first_contact,err_max,same_verdict").map_err(io)?;
-    for r in rows {
-        writeln!(
-            w,
+    let header = "jacobian,rtol,cpu_min_s,cpu_median_s,reps,steps,rejected,rhs_evals,jacobians,jac_block_evals,lu,events,err_max_displacement,err_max_tilt,err_final_displacement,err_peak_e_trans,err_peak_e_rot,err_t_first_contact,err_max,same_verdict";
+    let lines = rows.iter().map(|r| {
+        format!(
             "{},{:e},{:e},{:e},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
             r.jacobian,
             r.rtol,
@@ -270,9 +253,8 @@ fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
             r.err_max,
             r.verdict_same
         )
-        .map_err(io)?;
-    }
-    w.flush().map_err(io)
+    });
+    super::table::write_csv_lines(path, header, lines)
 }
 
 /// Plots median CPU time against the largest relative error, one line per Jacobian, to

@@ -5,7 +5,7 @@
 //! the ensemble's reference. Run by `cargo bench -p gripopt-diffsol-bench --bench radau_order`
 //! (docs/benchmarks.md has the figures).
 
-use super::ensemble::ensemble_cases;
+use super::ensemble::{ensemble_cases, quantile};
 use super::work_precision::rel;
 use super::{say, time_it, Out};
 use crate::model::{Finger, StaticsResult};
@@ -54,16 +54,6 @@ pub fn simulate_order(
         Order::Five => with(f, s, st, integ, &mut Radau5::new(tol, 1e-5)),
         Order::Nine => with(f, s, st, integ, &mut RadauIIA::<NS, 5>::new(tol, 1e-5)),
     }
-}
-
-/// The q-quantile (nearest rank) of the non-NaN values of `v`.
-fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
-    v.retain(|x| !x.is_nan());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 /// The experiment over `n` ensemble designs (seed `seed`) at each of `rtols` (atol

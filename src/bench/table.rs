@@ -32,33 +32,39 @@ pub struct Row {
     pub verdict_same: bool,
 }
 
-/// Writes `rows` as CSV to `path` (its folder created if need be).
-pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {
+impl Row {
+    /// The relative errors against the reference: t of first contact, E_cyl, t_stab, forces.
+    fn errors(&self) -> [f64; 4] {
+        [self.err_t_first, self.err_e_cyl, self.err_t_stab, self.err_force]
+    }
+}
+
+/// Writes the CSV file `path` (its folder created if need be): the `header` line, then
+/// each of `lines` (without their line breaks).
+pub(super) fn write_csv_lines(path: &Path, header: &str, lines: impl IntoIterator<Item = String>) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create", e))?;
     }
     let io = |e| Error::io(path, "cannot write", e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
-    writeln!(w, "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict").map_err(io)?;
-    for r in rows {
-        writeln!(
-            w,
-            "{},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}",
-            r.method,
-            r.rtol,
-            r.cpu_min,
-            r.cpu_med,
-            r.steps,
-            r.rhs,
-            r.err_t_first,
-            r.err_e_cyl,
-            r.err_t_stab,
-            r.err_force,
-            r.verdict_same
-        )
-        .map_err(io)?;
+    writeln!(w, "{header}").map_err(io)?;
+    for line in lines {
+        writeln!(w, "{line}").map_err(io)?;
     }
     w.flush().map_err(io)
+}
+
+/// Writes `rows` as CSV to `path` (its folder created if need be).
+pub fn write_csv(rows: &[Row], path: &Path) -> Result<()> {
+    let header = "method,rtol,cpu_min_s,cpu_median_s,steps,rhs_evals,err_t_first_contact,err_e_cyl,err_t_stab,err_final_forces,same_verdict";
+    let lines = rows.iter().map(|r| {
+        let errors = r.errors().map(|e| format!("{e:e}")).join(",");
+        format!(
+            "{},{:e},{:e},{:e},{},{},{errors},{}",
+            r.method, r.rtol, r.cpu_min, r.cpu_med, r.steps, r.rhs, r.verdict_same
+        )
+    });
+    write_csv_lines(path, header, lines)
 }
 
 /// Writes `rows` as a table to `out`.
@@ -78,19 +84,16 @@ pub fn print_table(rows: &[Row], out: super::Out) -> Result<()> {
         "e(f_stab)"
     );
     for r in rows {
+        let errors = r.errors().map(|e| format!("{e:>10.2e}")).join(" ");
         say!(
             out,
-            "{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {}",
+            "{:<8} {:>7.0e} {:>8.3}ms {:>8.3}ms {:>7} {:>8} {errors} {}",
             r.method,
             r.rtol,
             r.cpu_min * 1e3,
             r.cpu_med * 1e3,
             r.steps,
             r.rhs,
-            r.err_t_first,
-            r.err_e_cyl,
-            r.err_t_stab,
-            r.err_force,
             if r.verdict_same { "same" } else { "DIFFERS" }
         );
     }

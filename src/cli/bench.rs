@@ -6,6 +6,29 @@ use clap::Subcommand;
 use gripopt::bench::{FreeBench, ReplayBench, ScalingBench, WorkPrecision};
 use std::path::PathBuf;
 
+/// The design a table is about, and where it is written (`bench work-precision`, `bench free`).
+#[derive(clap::Args)]
+pub struct DesignTable {
+    /// Problem file.
+    #[arg(default_value = "problems/bottle-1l.toml")]
+    problem: PathBuf,
+    /// Design (default: the problem's nominal).
+    #[arg(long)]
+    design: Option<String>,
+    /// Output folder.
+    #[arg(long, default_value = "results/bench")]
+    out: PathBuf,
+}
+
+impl DesignTable {
+    /// The problem and the design.
+    fn load(&self) -> Result<(gripopt::params::Problem, gripopt::params::Design)> {
+        let p = super::load_problem(&self.problem)?;
+        let x = super::design_of(&p, &self.design)?;
+        Ok((p, x))
+    }
+}
+
 /// Benchmarks.
 #[derive(Subcommand)]
 pub enum BenchCmd {
@@ -83,15 +106,8 @@ pub enum BenchCmd {
     /// CPU time against error (t of first contact, impact energy, t_stab, final forces) for
     /// rtol 1e-3 … 1e-10 and each integrator; writes work_precision.csv and .svg.
     WorkPrecision {
-        /// Problem file.
-        #[arg(default_value = "problems/bottle-1l.toml")]
-        problem: PathBuf,
-        /// Design (default: the problem's nominal).
-        #[arg(long)]
-        design: Option<String>,
-        /// Output folder.
-        #[arg(long, default_value = "results/bench")]
-        out: PathBuf,
+        #[command(flatten)]
+        target: DesignTable,
         /// Maximum repetitions per point (each point also stops after ~1 s).
         #[arg(long, default_value_t = 200)]
         reps: usize,
@@ -113,15 +129,8 @@ pub enum BenchCmd {
     /// the error of its outputs, per rtol, with the block and the dense Jacobian; writes
     /// free_work_precision.csv and .svg.
     Free {
-        /// Problem file.
-        #[arg(default_value = "problems/bottle-1l.toml")]
-        problem: PathBuf,
-        /// Design (default: the problem's nominal).
-        #[arg(long)]
-        design: Option<String>,
-        /// Output folder.
-        #[arg(long, default_value = "results/bench")]
-        out: PathBuf,
+        #[command(flatten)]
+        target: DesignTable,
         /// Maximum repetitions per point (each point also stops after ~1 s).
         #[arg(long, default_value_t = 100)]
         reps: usize,
@@ -217,21 +226,20 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             gripopt::bench::scaling(&p, &b, &dir, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
-        BenchCmd::WorkPrecision { problem, sample: Some(n), seed, out: dir, atol, .. } => {
+        BenchCmd::WorkPrecision { target, sample: Some(n), seed, atol, .. } => {
             gripopt::bench::check_atol(atol)?;
-            let p = super::load_problem(&problem)?;
-            gripopt::bench::work_precision_ensemble(&p, &problem, n, seed, &dir, atol, out)?
+            let p = super::load_problem(&target.problem)?;
+            gripopt::bench::work_precision_ensemble(&p, &target.problem, n, seed, &target.out, atol, out)?
         }
-        BenchCmd::WorkPrecision { problem, design, out: dir, reps, atol, rtols, .. } => {
+        BenchCmd::WorkPrecision { target, reps, atol, rtols, .. } => {
             gripopt::bench::check_atol(atol)?;
-            let p = super::load_problem(&problem)?;
-            let x = super::design_of(&p, &design)?;
-            gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: dir, reps, atol, rtols }, out)?
+            let (p, x) = target.load()?;
+            gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: target.out, reps, atol, rtols }, out)?
         }
-        BenchCmd::Free { problem, design, out: dir, reps, atol, rtols, no_dense } => {
-            let p = super::load_problem(&problem)?;
-            let x = super::design_of(&p, &design)?;
-            gripopt::bench::free_scene(&p, &x, &FreeBench { out_dir: dir, reps, atol, rtols, dense: !no_dense }, out)?
+        BenchCmd::Free { target, reps, atol, rtols, no_dense } => {
+            let (p, x) = target.load()?;
+            let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
+            gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out)?
         }
     };
     if json {

@@ -55,6 +55,14 @@ fn list(v: &[f64]) -> String {
     v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ")
 }
 
+/// One empty element `tag` per finger, its attributes made from the finger's name prefix
+/// (`f1`, `f2`).
+fn each_finger(xml: &mut XmlWriter, tag: &str, attrs: impl Fn(&str) -> Vec<(&'static str, String)>) {
+    for pre in ["f1", "f2"] {
+        xml.empty(tag, &attrs(pre));
+    }
+}
+
 fn a(k: &'static str, v: impl Into<String>) -> (&'static str, String) {
     (k, v.into())
 }
@@ -466,19 +474,16 @@ fn loops(xml: &mut XmlWriter, x: &ExportedDesign, set: &MujocoSettings) {
         list(&set.loop_solref),
         list(&set.loop_solimp)
     ));
-    for pre in ["f1", "f2"] {
-        xml.empty(
-            "connect",
-            &[
-                a("name", format!("{pre}_loop")),
-                a("body1", format!("{pre}_link12")),
-                a("body2", format!("{pre}_body22")),
-                a("anchor", list(&[x.finger.l12, 0.0, 0.0])),
-                a("solref", list(&set.loop_solref)),
-                a("solimp", list(&set.loop_solimp)),
-            ],
-        );
-    }
+    each_finger(xml, "connect", |pre| {
+        vec![
+            a("name", format!("{pre}_loop")),
+            a("body1", format!("{pre}_link12")),
+            a("body2", format!("{pre}_body22")),
+            a("anchor", list(&[x.finger.l12, 0.0, 0.0])),
+            a("solref", list(&set.loop_solref)),
+            a("solimp", list(&set.loop_solimp)),
+        ]
+    });
     xml.close();
 }
 
@@ -532,17 +537,14 @@ fn actuators(xml: &mut XmlWriter, x: &ExportedDesign) {
         "the motor: torque τ = ctrl on q11 (link 11 about O11, closing), τ = {} N·m in MODEL.md (§1.1, §8.3); the keyframe `grasp` sets it",
         num(h.tau)
     ));
-    for pre in ["f1", "f2"] {
-        xml.empty(
-            "motor",
-            &[
-                a("name", format!("{pre}_motor")),
-                a("joint", format!("{pre}_q11")),
-                a("gear", "1"),
-                a("ctrlrange", list(&[-h.tau, h.tau])),
-            ],
-        );
-    }
+    each_finger(xml, "motor", |pre| {
+        vec![
+            a("name", format!("{pre}_motor")),
+            a("joint", format!("{pre}_q11")),
+            a("gear", "1"),
+            a("ctrlrange", list(&[-h.tau, h.tau])),
+        ]
+    });
     xml.comment(&format!(
         "the spring at O22 between bodies 21 and 22, opening the distal phalanx (§6.2): generalised force −τ_s(θ2) on q22, \
          τ_s = τ_s0 + k_s θ2 = τ_s0 + k_s (q22 + ψ), τ_s0 = max(0, τ_s^min) = {} N·m (τ_s^min = {} N·m), k_s = {} N·m/rad: \
@@ -551,18 +553,15 @@ fn actuators(xml: &mut XmlWriter, x: &ExportedDesign) {
         num(x.tau_s_min),
         num(h.k_s)
     ));
-    for pre in ["f1", "f2"] {
-        xml.empty(
-            "general",
-            &[
-                a("name", format!("{pre}_spring")),
-                a("joint", format!("{pre}_q22")),
-                a("gainprm", "0"),
-                a("biastype", "affine"),
-                a("biasprm", list(&[-x.tau_s0 - h.k_s * psi, -h.k_s, 0.0])),
-            ],
-        );
-    }
+    each_finger(xml, "general", |pre| {
+        vec![
+            a("name", format!("{pre}_spring")),
+            a("joint", format!("{pre}_q22")),
+            a("gainprm", "0"),
+            a("biastype", "affine"),
+            a("biasprm", list(&[-x.tau_s0 - h.k_s * psi, -h.k_s, 0.0])),
+        ]
+    });
     xml.close();
 }
 

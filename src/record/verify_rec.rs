@@ -113,22 +113,8 @@ pub struct WindowStart {
     pub nsec: u64,
 }
 
-/// The design's parameters, as on `/designs`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Parameters {
-    /// l21 (m).
-    pub l21: f64,
-    /// b (m).
-    pub b: f64,
-    /// t22 (m).
-    pub t22: f64,
-    /// r.
-    pub r: f64,
-    /// p.
-    pub p: f64,
-    /// ψ (°).
-    pub psi_deg: f64,
-}
+/// The design's parameters, as on `/designs` (the one type of a design as written).
+pub use crate::params::DesignParameters as Parameters;
 
 /// JSON schema of `/verify` (`gripopt.Verify`), parsable by Foxglove (one type per field).
 pub fn verify_schema() -> Value {
@@ -388,6 +374,5 @@ pub fn write_verify(
 
 /// Rebuild the design's parameters record from a design (ψ in degrees).
 pub fn parameters(x: &Design) -> Parameters {
-    let a = x.to_array();
-    Parameters { l21: a[0], b: a[1], t22: a[2], r: a[3], p: a[4], psi_deg: a[5] }
+    Parameters::from_array(&x.to_array())
 }

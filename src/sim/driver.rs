@@ -85,6 +85,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
                 let yt = interp(tt);
                 sc.evaluate(&yt).map(|e| sc.event_values(&yt, &e))
             },
+            |k, tt| sc.event_value(k, &interp(tt)),
             (t0, &g),
             (acc.t, &g1),
         );

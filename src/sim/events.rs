@@ -101,13 +101,15 @@ impl<const E: usize> EventSearch<E> {
 
     /// The earliest event in the step (t0, t1] with event values `g0`, `g1` at its ends,
     /// as (time, index). `crossing(k)`: how event k triggers now (None: not watched);
-    /// `values(t)`: the event values on the step's interpolant (None where the model is
-    /// undefined). Events that may open and close inside the step are sampled at four
-    /// points where the cubic through the end values and rates may cross.
+    /// `values(t)`: the event values on the step's interpolant, `value(k, t)`: event k's
+    /// alone, which the root location iterates on (None where the model is undefined).
+    /// Events that may open and close inside the step are sampled at four points where the
+    /// cubic through the end values and rates may cross.
     pub fn earliest(
         &mut self,
         crossing: impl Fn(usize) -> Option<Crossing>,
         values: impl Fn(f64) -> Option<EventValues<E>>,
+        value: impl Fn(usize, f64) -> Option<f64>,
         (t0, g0): (f64, &EventValues<E>),
         (t1, g1): (f64, &EventValues<E>),
     ) -> Option<(f64, usize)> {
@@ -116,7 +118,7 @@ impl<const E: usize> EventSearch<E> {
         // g_k on the interpolant at t (each evaluation counted)
         let mut at = |k: usize, t: f64| {
             *evals += 1;
-            values(t).map(|v| v.g[k])
+            value(k, t)
         };
         let mut best: Option<(f64, usize)> = None;
         let mut sampled = false;
@@ -216,6 +218,13 @@ pub fn locate(crossing: Crossing, ta: f64, ga: f64, tb: f64, gb: f64, mut g: imp
 pub fn hermite_may_cross(a: f64, da: f64, b: f64, db: f64, h: f64) -> bool {
     // p(s) = h00 a + h10 h da + h01 b + h11 h db on s ∈ [0, 1]; find the extrema of the cubic.
     let (m0, m1) = (h * da, h * db);
+    // h00 + h01 = 1 with both in [0, 1], |h10|, |h11| ≤ 4/27: p stays within 4/27 (|m0| + |m1|)
+    // of [min(a, b), max(a, b)], so ends farther than that (0.15 > 4/27) on one side cannot
+    // cross (most calls: contacts far apart or deep in)
+    let reach = 0.15 * (m0.abs() + m1.abs());
+    if (a > 0.0 && b > 0.0 && a.min(b) > reach) || (a <= 0.0 && b <= 0.0 && a.max(b) < -reach) {
+        return false;
+    }
     // p'(s) = 6(a − b)(s² − s) + m0(3s² − 4s + 1) + m1(3s² − 2s) = A s² + B s + C
     let qa = 6.0 * (a - b) + 3.0 * m0 + 3.0 * m1;
     let qb = -6.0 * (a - b) - 4.0 * m0 - 2.0 * m1;

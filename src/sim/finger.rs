@@ -193,9 +193,20 @@ impl<'a> FingerModel<'a> {
     /// (local frame).
     #[inline]
     pub fn geometry(&self, p: &Pose, centre: V2) -> [CapsuleGeom; 2] {
+        let xd = self.finger.distal_dir(p);
+        [self.phalanx(p, xd, centre, 0), self.phalanx(p, xd, centre, 1)]
+    }
+
+    /// Capsule geometry of phalanx `i` (0 proximal, 1 distal, of direction `xd`) at pose `p`
+    /// against the object centred at `centre` (local frame).
+    #[inline(always)]
+    pub fn phalanx(&self, p: &Pose, xd: V2, centre: V2, i: usize) -> CapsuleGeom {
         let f = self.finger;
-        let xd = f.distal_dir(p);
-        [capsule(f.o21, p.x21, f.l21, centre, self.rw, f.w), capsule(p.o22, xd, f.t22, centre, self.rw, f.w)]
+        if i == 0 {
+            capsule(f.o21, p.x21, f.l21, centre, self.rw, f.w)
+        } else {
+            capsule(p.o22, xd, f.t22, centre, self.rw, f.w)
+        }
     }
 
     /// The linkage part of [`FingerModel::evaluate`] (everything but the contacts) at joint
@@ -261,8 +272,7 @@ impl<'a> FingerModel<'a> {
         let f = self.finger;
         let FingerLinkage { pose, kin, m, c: bias, xd, theta2, theta2_dot, mut gf, mut v, mut piece } =
             self.linkage(q, qd, full)?;
-        let geo =
-            [capsule(f.o21, pose.x21, f.l21, centre, self.rw, f.w), capsule(pose.o22, xd, f.t22, centre, self.rw, f.w)];
+        let geo = [self.phalanx(&pose, xd, centre, 0), self.phalanx(&pose, xd, centre, 1)];
         let mut object_force = V2::zeros();
         let mut contacts = [ContactState {
             geom: geo[0],

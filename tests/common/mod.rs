@@ -116,3 +116,16 @@ pub fn bottle_spec(out: &std::path::Path, generations: u64, seed: u64, threads: 
         record: gripopt::record::RecordOptions::default(),
     }
 }
+
+/// The gripopt binary that cargo built for the tests.
+pub const GRIPOPT_BIN: &str = env!("CARGO_BIN_EXE_gripopt");
+
+/// Run the gripopt binary with `args` and wait for its output.
+pub fn run_gripopt(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(GRIPOPT_BIN).args(args).output().unwrap()
+}
+
+/// A command's stdout followed by its stderr, as text.
+pub fn output_text(o: &std::process::Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}

@@ -282,6 +282,28 @@ impl Scene<NS, 6> for CentredScene<'_> {
         }
     }
 
+    /// The force margin from the filter state alone; the contacts, the singularity and the
+    /// stop from the pose (the DGM, no kinematics or forces); stability from the full model.
+    fn event_value(&self, i: usize, y: &State) -> Option<f64> {
+        let f = self.ode.model.finger;
+        let pose = || f.dgm_fast(y[0], y[1]).ok();
+        match EVENTS[i] {
+            EventKind::Force => Some(force_margin(self.s, self.limits.r_area, V2::new(0.0, y[4]))),
+            EventKind::Contact(_) if !self.ode.contacts_enabled => Some(-1.0),
+            EventKind::Contact(c) => {
+                let (p, c) = (pose()?, c as usize);
+                let g = self.ode.model.phalanx(&p, f.distal_dir(&p), self.ode.centre, c);
+                Some(self.ode.mem[c].event_value(g.delta, self.s.contact.eps_sep))
+            }
+            EventKind::Singular(_) => pose().map(|p| crate::math::cross(p.x12, p.x22).abs() - 1e-3),
+            EventKind::Stop(_) => pose().map(|p| p.q22_from_vectors() + f.psi),
+            EventKind::Stability => {
+                let ev = self.evaluate(y)?;
+                Some(self.event_values(y, &ev).g[i])
+            }
+        }
+    }
+
     fn crossing(&self, i: usize) -> Option<Crossing> {
         match EVENTS[i] {
             EventKind::Force if !self.tracker.force_armed => None,

@@ -117,6 +117,14 @@ pub trait Scene<const N: usize, const E: usize>: Rhs<N> {
     fn event_values(&self, y: &SVector<f64, N>, ev: &Self::Eval) -> EventValues<E>;
     /// How event `i` triggers now; `None`: not watched.
     fn crossing(&self, i: usize) -> Option<Crossing>;
+    /// Event function `i` alone at `y`, as [`Scene::event_values`] gives it: what event
+    /// location evaluates, many times per event. The default evaluates the full model; a
+    /// scene overrides it with the part event `i` needs, in the same arithmetic (`None`
+    /// where that part is undefined).
+    fn event_value(&self, i: usize, y: &SVector<f64, N>) -> Option<f64> {
+        let ev = self.evaluate(y)?;
+        Some(self.event_values(y, &ev).g[i])
+    }
 
     // ---- the response
     /// Check the initial state; false ends the run before the first step (the scene

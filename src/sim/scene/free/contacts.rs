@@ -4,8 +4,9 @@
 //! ([`CapsuleHit`]), one ground point's ([`GroundHit`]), and their loads. The right-hand
 //! side (`eval_with`) adds them up in a fixed order.
 
-use super::{FreeScene, St, G0, Q0, V0, W0};
+use super::{FreeScene, St, G0, NC, Q0, V0, W0};
 use crate::math::V2;
+use crate::model::Pose;
 use crate::sim::contact3d::{closest_segments, point_force, quat_matrix, V3};
 use crate::sim::finger::FingerLinkage;
 use nalgebra::{Matrix2, Matrix3, Vector2};
@@ -103,19 +104,8 @@ impl FreeScene<'_> {
     pub(super) fn capsule_hit(&self, k: usize, fe: &FingerLinkage, qd: Vector2<f64>, b: &Body) -> CapsuleHit {
         let (r, w) = (self.s.object.radius, self.s.hand.w);
         let f = self.model.finger;
-        let (a3, b3) = if k < 4 {
-            let (i, j) = (k / 2, k % 2);
-            let p = &fe.pose;
-            let mx = mirror(i);
-            let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, fe.xd, f.t22) };
-            (V3::new(mx * start.x, start.y, 0.0), V3::new(mx * dir.x * len, dir.y * len, 0.0))
-        } else {
-            let hb = f.o21.x;
-            (V3::new(-hb, -w, 0.0), V3::new(2.0 * hb, 0.0, 0.0))
-        };
-        let (sp, tp, clamped) = closest_segments(a3, b3, b.p0, b.d2);
-        let n = a3 + b3 * sp;
-        let qa = b.p0 + b.d2 * tp;
+        let seg = if k < 4 { self.phalanx_segment(k, &fe.pose, fe.xd) } else { self.palm_segment() };
+        let (n, qa, clamped) = Self::closest(seg, b);
         let dv = qa - n;
         let d = dv.norm();
         let yc = dv / d;
@@ -134,6 +124,66 @@ impl FreeScene<'_> {
         let mut h = CapsuleHit { delta, dd: 0.0, u: V3::zeros(), yc, po, vf, jm, rim: clamped };
         h.relative_velocity(b);
         h
+    }
+
+    /// The axis segment (start, start to end) of phalanx contact `k` (0–3: phalanx k % 2 of
+    /// finger k / 2, at that finger's pose `p` with distal direction `xd`).
+    #[inline(always)]
+    fn phalanx_segment(&self, k: usize, p: &Pose, xd: V2) -> (V3, V3) {
+        let f = self.model.finger;
+        let (i, j) = (k / 2, k % 2);
+        let mx = mirror(i);
+        let (start, dir, len) = if j == 0 { (f.o21, p.x21, f.l21) } else { (p.o22, xd, f.t22) };
+        (V3::new(mx * start.x, start.y, 0.0), V3::new(mx * dir.x * len, dir.y * len, 0.0))
+    }
+
+    /// The palm's axis segment (contact 4).
+    #[inline(always)]
+    fn palm_segment(&self) -> (V3, V3) {
+        let hb = self.model.finger.o21.x;
+        (V3::new(-hb, -self.s.hand.w, 0.0), V3::new(2.0 * hb, 0.0, 0.0))
+    }
+
+    /// The closest points of a capsule's axis segment `(a3, b3)` and the object's axis:
+    /// (the capsule's point, the object's, whether the object's was clamped to an end).
+    #[inline(always)]
+    fn closest((a3, b3): (V3, V3), b: &Body) -> (V3, V3, bool) {
+        let (sp, tp, clamped) = closest_segments(a3, b3, b.p0, b.d2);
+        (a3 + b3 * sp, b.p0 + b.d2 * tp, clamped)
+    }
+
+    /// Event function `i` alone at `y` (`Scene::event_value`), in the arithmetic of
+    /// `eval_with` and `event_values`: a contact from its geometry only (a phalanx from its
+    /// finger's DGM, a ground point from the object's pose), the singularity and the stop
+    /// from the DGM; no kinematics, forces or energies.
+    pub(super) fn event_value_at(&self, i: usize, y: &St) -> Option<f64> {
+        let f = self.model.finger;
+        let pose = |j: usize| f.dgm_fast(y[4 * j], y[4 * j + 1]).ok();
+        let fingers = if self.setup.fingers { 1.0 } else { f64::NAN };
+        if i >= NC {
+            let p = pose((i - NC) % 2)?;
+            return Some(if i < NC + 2 {
+                (crate::math::cross(p.x12, p.x22).abs() - 1e-3) * fingers
+            } else {
+                (p.q22_from_vectors() + f.psi) * fingers
+            });
+        }
+        let (r, w) = (self.s.object.radius, self.s.hand.w);
+        let delta = if i < 4 && !self.setup.fingers {
+            -1.0
+        } else if i < 4 {
+            let p = pose(i / 2)?;
+            let (n, qa, _) = Self::closest(self.phalanx_segment(i, &p, f.distal_dir(&p)), &self.body(y));
+            r + w - (qa - n).norm()
+        } else if i == 4 {
+            let (n, qa, _) = Self::closest(self.palm_segment(), &self.body(y));
+            r + w - (qa - n).norm()
+        } else if i - 5 < self.ng {
+            self.ground_hit(i - 5, &self.body(y)).delta
+        } else {
+            -1.0
+        };
+        Some(self.mem[i].event_value(delta, self.s.contact.eps_sep))
     }
 
     /// Is contact `k` loaded at penetration `delta` (memory set, δ > 0)?

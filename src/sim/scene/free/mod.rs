@@ -339,10 +339,12 @@ impl Rhs<NF> for FreeScene<'_> {
     }
 }
 
-fn free_events() -> [EventKind; EF] {
+const fn free_events() -> [EventKind; EF] {
     let mut e = [EventKind::Stability; EF];
-    for (k, slot) in e.iter_mut().enumerate().take(NC) {
-        *slot = EventKind::Contact(k as u8);
+    let mut k = 0;
+    while k < NC {
+        e[k] = EventKind::Contact(k as u8);
+        k += 1;
     }
     e[NC] = EventKind::Singular(0);
     e[NC + 1] = EventKind::Singular(1);
@@ -351,12 +353,15 @@ fn free_events() -> [EventKind; EF] {
     e
 }
 
+/// The free scene's event kinds, built once.
+const FREE_EVENT_KINDS: [EventKind; EF] = free_events();
+
 impl Scene<NF, EF> for FreeScene<'_> {
     type Eval = FreeEval;
     type Output = FreeResult;
 
     fn events(&self) -> [EventKind; EF] {
-        free_events()
+        FREE_EVENT_KINDS
     }
     fn initial_state(&self) -> St {
         let s = self.s;
@@ -403,8 +408,11 @@ impl Scene<NF, EF> for FreeScene<'_> {
         rate[NC + 3] = ev.f[1].theta2_dot;
         EventValues { g, rate }
     }
+    fn event_value(&self, i: usize, y: &St) -> Option<f64> {
+        self.event_value_at(i, y)
+    }
     fn crossing(&self, i: usize) -> Option<Crossing> {
-        let kind = free_events()[i];
+        let kind = FREE_EVENT_KINDS[i];
         match kind {
             EventKind::Contact(c) if (c as usize) >= 5 + self.ng => None,
             EventKind::Contact(c) if (c as usize) < 4 && !self.setup.fingers => None,
@@ -434,7 +442,7 @@ impl Scene<NF, EF> for FreeScene<'_> {
     }
     fn handle(&mut self, i: usize, t: f64, ev: &FreeEval, _end: &EventValues<EF>) -> Response {
         let s = self.s;
-        match free_events()[i] {
+        match FREE_EVENT_KINDS[i] {
             EventKind::Contact(_) => {
                 for k in 0..5 + self.ng {
                     let c = &ev.c[k];

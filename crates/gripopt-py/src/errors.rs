@@ -1,0 +1,74 @@
+//! gripopt's errors as the Python package's exceptions (`gripopt.errors`): the class by the
+//! kind of error, gripopt's own message (it names the file and field), the file, the field
+//! and the CLI's exit code as attributes.
+
+use gripopt::Error;
+use pyo3::prelude::*;
+
+/// The exception class (in `gripopt.errors`) of `e`.
+fn class_of(e: &Error) -> &'static str {
+    match e {
+        Error::ProblemParse { .. } | Error::InvalidField { .. } => "ProblemError",
+        Error::Locked { .. } => "RunLockedError",
+        Error::RunDir { .. } | Error::Checkpoint { .. } => "RunFolderError",
+        Error::Recording { .. } | Error::DamagedRecording { .. } => "RecordingError",
+        Error::Stopped { .. } | Error::StoppedBeforeCheckpoint { .. } => "RunStoppedError",
+        e if e.is_input() => "InputError",
+        _ => "GripoptError",
+    }
+}
+
+/// The file (or folder) and the field an error is about, where it names them.
+fn file_and_field(e: &Error) -> (Option<String>, Option<String>) {
+    let shown = |p: &std::path::Path| Some(p.display().to_string());
+    match e {
+        Error::Io { path, .. }
+        | Error::Json { path, .. }
+        | Error::Mcap { path, .. }
+        | Error::DamagedRecording { path, .. }
+        | Error::RunDir { path, .. }
+        | Error::Locked { path, .. }
+        | Error::Recording { path, .. }
+        | Error::Plot { path, .. }
+        | Error::Stopped { path, .. }
+        | Error::StoppedBeforeCheckpoint { path, .. } => (shown(path), None),
+        Error::ProblemParse { file, .. } | Error::Checkpoint { file, .. } => (shown(file), None),
+        Error::InvalidField { file, field, .. } => (shown(file), Some(field.clone())),
+        _ => (None, None),
+    }
+}
+
+/// `e` as a Python exception of the package's hierarchy.
+pub fn to_py(e: Error) -> PyErr {
+    Python::attach(|py| {
+        let (file, field) = file_and_field(&e);
+        let made = (|| -> PyResult<PyErr> {
+            let cls = py.import("gripopt.errors")?.getattr(class_of(&e))?;
+            let v = cls.call1((e.to_string(), file, field, e.exit_code()))?;
+            Ok(PyErr::from_value(v))
+        })();
+        // the package is installed with its Python side; without it, a plain RuntimeError
+        made.unwrap_or_else(|imp| {
+            let err = pyo3::exceptions::PyRuntimeError::new_err(e.to_string());
+            err.set_cause(py, Some(imp));
+            err
+        })
+    })
+}
+
+/// An input error (exit code 2) with `message`, e.g. a design array of the wrong shape.
+pub fn input(message: impl Into<String>) -> PyErr {
+    to_py(Error::Input(message.into()))
+}
+
+/// `Result<T, gripopt::Error>` → `PyResult<T>`.
+pub trait IntoPy<T> {
+    /// The error as the package's exception.
+    fn py(self) -> PyResult<T>;
+}
+
+impl<T> IntoPy<T> for gripopt::Result<T> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}

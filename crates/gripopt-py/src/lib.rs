@@ -1,0 +1,33 @@
+//! `gripopt._gripopt`, the native module of the `gripopt` Python package (python/gripopt):
+//! the library's facade for Python — problems evaluated and simulated with the GIL
+//! released, runs started and resumed with a progress callback and ctrl-c, run folders read
+//! back — handing tables over as typed columns that the Python side turns into pandas
+//! DataFrames. Errors become the exceptions of `gripopt.errors`. docs/python.md.
+
+mod errors;
+mod frame;
+mod problem;
+mod run;
+
+use pyo3::prelude::*;
+
+/// A table's columns as (name, unit, meaning) for Python.
+fn columns(cols: &[gripopt::Column]) -> Vec<(&'static str, &'static str, &'static str)> {
+    cols.to_vec()
+}
+
+/// The native module.
+#[pymodule]
+fn _gripopt(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<problem::PyProblem>()?;
+    m.add_class::<run::PyRunFolder>()?;
+    m.add_function(wrap_pyfunction!(run::optimise, m)?)?;
+    m.add_function(wrap_pyfunction!(run::resume, m)?)?;
+    m.add("DESIGN_NAMES", gripopt::DESIGN_NAMES.to_vec())?;
+    m.add("DESIGN_COLUMNS", columns(&gripopt::DESIGN_COLUMNS))?;
+    m.add("HISTORY_COLUMNS", columns(&gripopt::HISTORY_COLUMNS))?;
+    m.add("SAMPLE_COLUMNS", columns(&gripopt::SAMPLE_COLUMNS))?;
+    m.add("POSE_COLUMNS", columns(&gripopt::POSE_COLUMNS))?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

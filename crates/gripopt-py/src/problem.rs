@@ -1,0 +1,211 @@
+//! `_gripopt.Problem`: a problem file, evaluated and simulated through the library's facade
+//! with the GIL released (the Python side, `gripopt.Problem`, makes the DataFrames).
+
+use crate::errors::{input, IntoPy};
+use crate::frame::Table;
+use gripopt::{DesignParameters, Integration, Method, Problem, Stages, DESIGN_NAMES};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+use std::path::{Path, PathBuf};
+
+/// A loaded, validated problem file.
+#[pyclass(name = "Problem", module = "gripopt._gripopt", frozen)]
+pub struct PyProblem {
+    pub problem: Problem,
+    /// The file it was read from (None: TOML text).
+    pub path: Option<PathBuf>,
+}
+
+/// What errors name when the problem came as text.
+const TEXT: &str = "<problem text>";
+
+/// The rows of an (n, 6) array as designs (ψ in degrees); every value finite.
+fn designs_of(a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<DesignParameters>> {
+    let a = a.as_array();
+    if a.ncols() != 6 {
+        return Err(input(format!("designs: {} columns, expected 6 ({})", a.ncols(), DESIGN_NAMES.join(", "))));
+    }
+    let mut out = Vec::with_capacity(a.nrows());
+    for (k, row) in a.rows().into_iter().enumerate() {
+        let x: [f64; 6] = std::array::from_fn(|i| row[i]);
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return Err(input(format!("designs: row {k}, `{}` = {} is not finite", DESIGN_NAMES[i], x[i])));
+        }
+        out.push(DesignParameters::from_array(&x));
+    }
+    Ok(out)
+}
+
+/// One design (six values, ψ in degrees).
+fn design_of(a: &PyReadonlyArray1<'_, f64>) -> PyResult<DesignParameters> {
+    let a = a.as_array();
+    if a.len() != 6 {
+        return Err(input(format!("design: {} values, expected 6 ({})", a.len(), DESIGN_NAMES.join(", "))));
+    }
+    let x: [f64; 6] = std::array::from_fn(|i| a[i]);
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(input(format!("design: `{}` = {} is not finite", DESIGN_NAMES[i], x[i])));
+    }
+    Ok(DesignParameters::from_array(&x))
+}
+
+fn stages(static_only: bool) -> Stages {
+    if static_only {
+        Stages::Static
+    } else {
+        Stages::All
+    }
+}
+
+fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
+    serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+}
+
+impl PyProblem {
+    /// The problem of a run folder or a file.
+    pub fn from_file(path: &Path) -> PyResult<Self> {
+        Ok(PyProblem { problem: Problem::load(path).py()?, path: Some(path.to_path_buf()) })
+    }
+}
+
+#[pymethods]
+impl PyProblem {
+    /// Load and validate a problem file.
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        Self::from_file(&path)
+    }
+
+    /// Parse and validate problem text; `path`, if given, is what errors name.
+    #[staticmethod]
+    #[pyo3(signature = (text, path=None))]
+    fn from_toml(text: &str, path: Option<PathBuf>) -> PyResult<Self> {
+        let shown = path.clone().unwrap_or_else(|| PathBuf::from(TEXT));
+        Ok(PyProblem { problem: Problem::from_toml_str(text, &shown).py()?, path })
+    }
+
+    /// The problem's name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.problem.name
+    }
+    /// The file it was read from, or None.
+    #[getter]
+    fn path(&self) -> Option<PathBuf> {
+        self.path.clone()
+    }
+    /// The problem's TOML text.
+    #[getter]
+    fn toml(&self) -> &str {
+        &self.problem.source_text
+    }
+    /// Lower bounds (optimiser units: m, m, m, -, -, deg).
+    #[getter]
+    fn lower<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.problem.bounds.lo)
+    }
+    /// Upper bounds.
+    #[getter]
+    fn upper<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.problem.bounds.hi)
+    }
+    /// The nominal design (ψ in degrees).
+    #[getter]
+    fn nominal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.problem.nominal.to_array())
+    }
+
+    /// Evaluate designs (n, 6) in parallel with the GIL released: their rows as columns,
+    /// the minimised objectives (n, 4) and the constrained-domination key (n, 2: stages
+    /// not reached, violation).
+    #[pyo3(signature = (designs, static_only=false, threads=None, first_id=0))]
+    #[allow(clippy::type_complexity)]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        designs: PyReadonlyArray2<'py, f64>,
+        static_only: bool,
+        threads: Option<usize>,
+        first_id: u64,
+    ) -> PyResult<(Bound<'py, PyList>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        let xs = designs_of(&designs)?;
+        let p = &self.problem;
+        let (table, f, k) = py
+            .detach(|| -> gripopt::Result<_> {
+                let rows = gripopt::evaluate_rows(p, &xs, first_id, stages(static_only), threads)?;
+                let table = Table::of(rows.iter().map(|r| &r.row))
+                    .map_err(|e| gripopt::Error::Input(format!("a row as columns: {e}")))?;
+                let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
+                for r in &rows {
+                    f.extend(r.minimised);
+                    k.extend([f64::from(r.infeasibility.stages_short), r.infeasibility.violation]);
+                }
+                Ok((table, f, k))
+            })
+            .py()?;
+        let n = xs.len();
+        let f = PyArray1::from_vec(py, f).reshape([n, 4])?;
+        let k = PyArray1::from_vec(py, k).reshape([n, 2])?;
+        Ok((table.into_py(py)?, f, k))
+    }
+
+    /// The evaluation record of one design (the JSON text of `gripopt evaluate --json`).
+    #[pyo3(signature = (design, static_only=false))]
+    fn record(&self, py: Python<'_>, design: PyReadonlyArray1<'_, f64>, static_only: bool) -> PyResult<String> {
+        let x = design_of(&design)?.design();
+        let p = &self.problem;
+        let r = py.detach(|| gripopt::evaluate(p, &x, stages(static_only)));
+        json(&r)
+    }
+
+    /// Simulate one design in a scene (None: the problem's) in diagnostic mode, as
+    /// `gripopt simulate --json --csv` does: the record's JSON text, the grasp samples and
+    /// (free scene) the object's poses as columns.
+    #[pyo3(signature = (design, scene=None, rtol=None, method="radau5"))]
+    #[allow(clippy::type_complexity)]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        design: PyReadonlyArray1<'py, f64>,
+        scene: Option<&str>,
+        rtol: Option<f64>,
+        method: &str,
+    ) -> PyResult<(String, Bound<'py, PyList>, Bound<'py, PyList>)> {
+        let x = design_of(&design)?.design();
+        let p = &self.problem;
+        let scene = scene.map(gripopt::parse_scene).transpose().py()?;
+        let method = match method {
+            "radau5" => Method::Radau5,
+            "trbdf2" => Method::TrBdf2,
+            "dopri5" => Method::Dopri5,
+            m => return Err(input(format!("method `{m}`: must be radau5, trbdf2 or dopri5"))),
+        };
+        if let Some(r) = rtol {
+            gripopt::params::limit("solver.rtol").check(r).map_err(|rule| {
+                crate::errors::to_py(gripopt::Error::InvalidField {
+                    file: "simulate()".into(),
+                    field: "rtol".into(),
+                    value: r.to_string(),
+                    rule,
+                })
+            })?;
+        }
+        let s = &p.solver;
+        let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
+        let sim = py.detach(|| gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC)).py()?;
+        let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
+        let traj = Table::of_numbers(&names, sim.trajectory.samples.iter().map(gripopt::sample_values));
+        let names = gripopt::POSE_COLUMNS.map(|c| c.0);
+        let poses = Table::of_numbers(&names, sim.poses.iter().map(gripopt::pose_values));
+        Ok((json(&sim.record)?, traj.into_py(py)?, poses.into_py(py)?))
+    }
+
+    /// `n` designs (n, 6) drawn uniformly in the bounds from `seed`'s stream (those of
+    /// `gripopt bench static --seed`).
+    fn random_designs<'py>(&self, py: Python<'py>, n: usize, seed: u64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let xs = gripopt::random_designs(&self.problem, n, seed);
+        let flat: Vec<f64> = xs.iter().flat_map(|d| d.to_array()).collect();
+        PyArray1::from_vec(py, flat).reshape([n, 6])
+    }
+}

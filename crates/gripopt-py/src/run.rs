@@ -1,0 +1,292 @@
+//! Runs from Python: `optimise` / `resume` through the facade's `Optimiser` (a progress
+//! callback, the stop flag set by ctrl-c or by the callback's exception) and
+//! `_gripopt.RunFolder`, a run folder read back through the library's reader.
+
+use crate::errors::{input, to_py, IntoPy};
+use crate::frame::Table;
+use crate::problem::PyProblem;
+use gripopt::{GenerationReport, Optimiser, Progress, RecordOptions, RunFolder, RunSummary};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// How often the waiting thread lets Python run its signal handlers (ctrl-c).
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// The run's progress, told to a Python callable; an exception it raises stops the run
+/// after the generation's checkpoint and is raised again when the run has stopped. Notes
+/// (warnings) become Python warnings (`gripopt.errors.GripoptWarning`).
+struct PyProgress {
+    callback: Option<Py<PyAny>>,
+    stop: Arc<AtomicBool>,
+    raised: Arc<Mutex<Option<PyErr>>>,
+}
+
+impl PyProgress {
+    fn keep(&self, e: PyErr) {
+        self.stop.store(true, Ordering::SeqCst);
+        let mut r = self.raised.lock().expect("progress error");
+        if r.is_none() {
+            *r = Some(e);
+        }
+    }
+}
+
+impl Progress for PyProgress {
+    fn generation(&mut self, g: &GenerationReport) -> Result<(), String> {
+        let Some(cb) = &self.callback else { return Ok(()) };
+        let r = Python::attach(|py| -> PyResult<()> {
+            let d = PyDict::new(py);
+            d.set_item("generation", g.generation)?;
+            d.set_item("max_generations", g.max_generations)?;
+            d.set_item("evaluations", g.evaluations)?;
+            d.set_item("population", g.population)?;
+            d.set_item("feasible", g.feasible)?;
+            d.set_item("hypervolume", g.hypervolume)?;
+            cb.call1(py, (d,))?;
+            Ok(())
+        });
+        if let Err(e) = r {
+            self.keep(e);
+        }
+        Ok(())
+    }
+    fn note(&mut self, message: &str) {
+        let r = Python::attach(|py| -> PyResult<()> {
+            let w = py.import("gripopt.errors")?.getattr("GripoptWarning")?;
+            py.import("warnings")?.call_method1("warn", (message, w, 2))?;
+            Ok(())
+        });
+        if let Err(e) = r {
+            self.keep(e);
+        }
+    }
+}
+
+/// Run `opt` on a thread of its own while this one, the caller's, lets Python handle
+/// signals: ctrl-c (KeyboardInterrupt) sets the stop flag, the run ends after the
+/// generation's checkpoint (resumable), and the KeyboardInterrupt is raised then, with a
+/// note saying so. The run's own error comes first, then the callback's exception.
+fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path) -> PyResult<RunSummary> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let raised = Arc::new(Mutex::new(None));
+    let progress = PyProgress { callback, stop: stop.clone(), raised: raised.clone() };
+    let opt = opt.progress(progress).stop_flag(stop.clone());
+    let mut interrupt: Option<PyErr> = None;
+    let joined = py.detach(|| {
+        std::thread::scope(|s| {
+            let run = s.spawn(move || opt.run());
+            while !run.is_finished() {
+                std::thread::sleep(SIGNAL_POLL);
+                if interrupt.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        stop.store(true, Ordering::SeqCst);
+                        interrupt = Some(e);
+                    }
+                }
+            }
+            run.join()
+        })
+    });
+    let result = joined.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    let summary = result.py()?;
+    if let Some(e) = raised.lock().expect("progress error").take() {
+        return Err(e);
+    }
+    if let Some(e) = interrupt {
+        let note = format!(
+            "gripopt: the run stopped after generation {}'s checkpoint; gripopt.resume({:?}) continues it",
+            summary.generations,
+            out.display().to_string()
+        );
+        let _ = e.value(py).call_method1("add_note", (note,));
+        return Err(e);
+    }
+    Ok(summary)
+}
+
+/// The summary as a dict.
+fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("out", &s.out)?;
+    d.set_item("generations", s.generations)?;
+    d.set_item("evaluations", s.evaluations)?;
+    d.set_item("front_size", s.front_size)?;
+    d.set_item("feasible", s.feasible)?;
+    d.set_item("hypervolume", s.hv)?;
+    d.set_item("archive_size", s.archive_size)?;
+    d.set_item("archive_hypervolume", s.archive_hv)?;
+    d.set_item("interrupted", s.interrupted)?;
+    d.set_item("wall_s", s.wall_s)?;
+    Ok(d)
+}
+
+/// Recording options: None = the defaults, "none" = nothing recorded, else a JSON object
+/// of fields over the defaults (`gripopt optimise --record-*`; checked by the library).
+fn record_options(record: Option<&str>) -> PyResult<RecordOptions> {
+    let Some(text) = record else { return Ok(RecordOptions::default()) };
+    if text == "none" {
+        return Ok(RecordOptions::none());
+    }
+    let bad = |m: String| input(format!("record: {m}"));
+    let mut v = serde_json::to_value(RecordOptions::default()).map_err(|e| bad(e.to_string()))?;
+    let given: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_str(text).map_err(|e| bad(format!("not a mapping of options: {e}")))?;
+    let fields = v.as_object_mut().expect("options are an object");
+    for (k, x) in given {
+        if !fields.contains_key(&k) {
+            let known: Vec<&str> = fields.keys().map(String::as_str).filter(|k| *k != "epoch_s").collect();
+            return Err(bad(format!("unknown option `{k}` (known: {})", known.join(", "))));
+        }
+        fields.insert(k, x);
+    }
+    serde_json::from_value(v).map_err(|e| bad(e.to_string()))
+}
+
+/// A problem file for a run: the problem's own, or, for one given as text, its copy
+/// written into `out` (which must then be new or empty).
+fn problem_file(problem: &PyProblem, out: &Path) -> PyResult<PathBuf> {
+    if let Some(p) = &problem.path {
+        return Ok(p.clone());
+    }
+    let empty = match std::fs::read_dir(out) {
+        Ok(mut rd) => rd.next().is_none(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => true,
+        Err(e) => return Err(to_py(gripopt::Error::io(out, "cannot list the run folder", e))),
+    };
+    if !empty {
+        return Err(to_py(gripopt::Error::RunDir {
+            path: out.to_path_buf(),
+            message: "not empty: a problem given as text starts a run only in a new or empty folder (its text is written there as problem.toml); load it from a file instead".into(),
+        }));
+    }
+    std::fs::create_dir_all(out).map_err(|e| to_py(gripopt::Error::io(out, "cannot create the run folder", e)))?;
+    let file = out.join("problem.toml");
+    std::fs::write(&file, &problem.problem.source_text)
+        .map_err(|e| to_py(gripopt::Error::io(&file, "cannot write", e)))?;
+    Ok(file)
+}
+
+/// Start a run of `problem` in `out`: its summary.
+#[pyfunction]
+#[pyo3(signature = (problem, out, pop=100, generations=50, seed=1, threads=None, record=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn optimise<'py>(
+    py: Python<'py>,
+    problem: &PyProblem,
+    out: PathBuf,
+    pop: usize,
+    generations: u64,
+    seed: u64,
+    threads: Option<usize>,
+    record: Option<&str>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let rec = record_options(record)?;
+    let file = problem_file(problem, &out)?;
+    let mut opt = Optimiser::new(file, &out).pop(pop).generations(generations).seed(seed).record(rec);
+    if let Some(t) = threads {
+        opt = opt.threads(t);
+    }
+    let s = drive(py, opt, progress, &out)?;
+    summary_dict(py, &s)
+}
+
+/// Resume the run in `path` (to `generations` in all, or the run's own total).
+#[pyfunction]
+#[pyo3(signature = (path, generations=None, threads=None, force=false, progress=None))]
+pub fn resume<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    generations: Option<u64>,
+    threads: Option<usize>,
+    force: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut opt = Optimiser::resume(&path).force(force);
+    if let Some(g) = generations {
+        opt = opt.generations(g);
+    }
+    if let Some(t) = threads {
+        opt = opt.threads(t);
+    }
+    let s = drive(py, opt, progress, &path)?;
+    summary_dict(py, &s)
+}
+
+/// A run folder, read through the library.
+#[pyclass(name = "RunFolder", module = "gripopt._gripopt", frozen)]
+pub struct PyRunFolder {
+    folder: RunFolder,
+}
+
+fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
+    serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+}
+
+fn columns<'py, T: serde::Serialize + serde::de::DeserializeOwned>(
+    py: Python<'py>,
+    rows: &[T],
+) -> PyResult<Bound<'py, PyList>> {
+    Table::of(rows).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?.into_py(py)
+}
+
+#[pymethods]
+impl PyRunFolder {
+    #[new]
+    fn new(path: PathBuf) -> PyResult<Self> {
+        Ok(PyRunFolder { folder: RunFolder::open(path).py()? })
+    }
+    /// The folder.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.folder.dir().to_path_buf()
+    }
+    /// run.json as JSON text.
+    fn info(&self) -> PyResult<String> {
+        json(&self.folder.info().py()?)
+    }
+    /// The run's problem (its copy in the folder).
+    fn problem(&self) -> PyResult<PyProblem> {
+        PyProblem::from_file(&self.folder.dir().join("problem.toml"))
+    }
+    /// A table as columns: `front`, `population`, `archive` or `history`.
+    fn table<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyList>> {
+        let f = &self.folder;
+        match name {
+            "front" => columns(py, &f.front().py()?),
+            "population" => columns(py, &f.population().py()?),
+            "archive" => columns(py, &f.archive().py()?),
+            "history" => columns(py, &f.history().py()?),
+            _ => Err(input(format!("table `{name}`: must be front, population, archive or history"))),
+        }
+    }
+    /// Design `id` as recorded: its `/designs` message (JSON text), its trajectory as
+    /// columns, the resolution and the shard.
+    #[allow(clippy::type_complexity)]
+    fn design<'py>(&self, py: Python<'py>, id: u64) -> PyResult<(String, Bound<'py, PyList>, String, PathBuf)> {
+        let f = &self.folder;
+        let rec = py.detach(|| f.design(id)).py()?;
+        let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
+        let traj = Table::of_numbers(&names, rec.samples.iter().map(gripopt::sample_values));
+        let res = serde_json::to_value(rec.resolution).ok().and_then(|v| v.as_str().map(String::from));
+        Ok((json(&rec.record)?, traj.into_py(py)?, res.unwrap_or_default(), rec.file))
+    }
+    /// Re-simulate design `id` and compare it with its recording.
+    fn replay<'py>(&self, py: Python<'py>, id: u64) -> PyResult<Bound<'py, PyDict>> {
+        let f = &self.folder;
+        let r = py.detach(|| f.replay(id)).py()?;
+        let d = PyDict::new(py);
+        d.set_item("verified", r.verified)?;
+        d.set_item("max_difference", r.max_difference)?;
+        d.set_item("compared", r.compared)?;
+        d.set_item("values_compared", r.values_compared)?;
+        d.set_item("recomputed_feasible", r.recomputed_feasible)?;
+        d.set_item("fresh", json(&r.fresh)?)?;
+        d.set_item("file", &r.recorded.file)?;
+        Ok(d)
+    }
+}

@@ -1,0 +1,59 @@
+"""Columns handed over by the native module as pandas DataFrames, with units.
+
+The native module gives each table as ``(name, kind, values, missing)`` tuples derived
+from the library's row types (so the columns follow the rows' fields); here they become
+DataFrame columns: floats as float64 (NaN: not computed), optional integers and booleans
+as pandas' nullable ``Int64`` / ``boolean`` (``<NA>``: not computed), text as strings.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional, Sequence
+
+import numpy as np
+import pandas as pd
+
+from . import _gripopt
+
+Columns = Sequence[tuple[str, str, Any, Optional[np.ndarray]]]
+ColumnTable = Sequence[tuple[str, str, str]]
+
+
+def units_of(table: ColumnTable) -> dict[str, str]:
+    """``{column: unit}`` of a column table such as ``DESIGN_COLUMNS``."""
+    return {name: unit for name, unit, _ in table}
+
+
+def meanings_of(table: ColumnTable) -> dict[str, str]:
+    """``{column: meaning}`` of a column table."""
+    return {name: meaning for name, _, meaning in table}
+
+
+def _column(kind: str, values: Any, missing: Optional[np.ndarray]) -> Any:
+    if kind == "i64" and missing is not None:
+        return pd.arrays.IntegerArray(values, missing)
+    if kind == "bool" and missing is not None:
+        return pd.arrays.BooleanArray(values, missing)
+    if kind == "str":
+        return pd.array(values, dtype="str")
+    return values
+
+
+def frame(columns: Columns, table: ColumnTable, index: Optional[pd.Index] = None) -> pd.DataFrame:
+    """A DataFrame of native ``columns``; ``table`` gives the units and meanings put in
+    ``df.attrs["units"]`` and ``df.attrs["meanings"]`` (and the columns of an empty table)."""
+    if columns:
+        data = {name: _column(kind, values, missing) for name, kind, values, missing in columns}
+        df = pd.DataFrame(data, index=index)
+    else:
+        df = pd.DataFrame({name: pd.Series(dtype="float64") for name, _, _ in table}, index=index)
+    df.attrs["units"] = {c: units_of(table).get(c, "") for c in df.columns}
+    df.attrs["meanings"] = {c: meanings_of(table).get(c, "") for c in df.columns}
+    return df
+
+
+DESIGN_NAMES: tuple[str, ...] = tuple(_gripopt.DESIGN_NAMES)
+DESIGN_COLUMNS: ColumnTable = tuple(_gripopt.DESIGN_COLUMNS)
+HISTORY_COLUMNS: ColumnTable = tuple(_gripopt.HISTORY_COLUMNS)
+SAMPLE_COLUMNS: ColumnTable = tuple(_gripopt.SAMPLE_COLUMNS)
+POSE_COLUMNS: ColumnTable = tuple(_gripopt.POSE_COLUMNS)

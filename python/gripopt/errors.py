@@ -1,0 +1,93 @@
+"""gripopt's errors as Python exceptions.
+
+Every error the library reports is a :class:`GripoptError` carrying gripopt's own message,
+which names the file (or folder) and the field at fault, as the command line prints it.
+The subclasses say what kind of error it is; ``exit_code`` is the code the ``gripopt``
+command would have ended with (2: bad input, 1: a failed run).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+
+class GripoptError(Exception):
+    """An error of gripopt (the base class of every exception the package raises).
+
+    Attributes:
+        message: gripopt's message (names the file and the field).
+        path: the file or folder the error is about, where there is one.
+        field: the field of a problem file (e.g. ``object.radius``), where there is one.
+        exit_code: the ``gripopt`` command's exit code for this error (2 bad input, 1 failure).
+    """
+
+    def __init__(
+        self,
+        message: str,
+        path: Optional[str] = None,
+        field: Optional[str] = None,
+        exit_code: int = 1,
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.path = path
+        self.field = field
+        self.exit_code = exit_code
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # keep the attributes through pickling (errors come back from Dask workers so)
+        return (type(self), (self.message, self.path, self.field, self.exit_code))
+
+
+class InputError(GripoptError, ValueError):
+    """Bad input: a problem file, a design, an argument, a folder that cannot be used as
+    asked (the command line's exit code 2)."""
+
+    def __init__(
+        self,
+        message: str,
+        path: Optional[str] = None,
+        field: Optional[str] = None,
+        exit_code: int = 2,
+    ) -> None:
+        super().__init__(message, path, field, exit_code)
+
+
+class ProblemError(InputError):
+    """A problem file (or problem text) that is not valid TOML of the expected shape, or a
+    field out of its range: ``path`` is the file, ``field`` the dotted field name."""
+
+
+class RunFolderError(InputError):
+    """A run folder that cannot be used as asked: it holds no run or already one, its
+    checkpoint or run.json is damaged, its inputs changed."""
+
+
+class RunLockedError(RunFolderError):
+    """Another gripopt process is running in the run folder (its lock is released when it
+    ends, also when killed)."""
+
+
+class RecordingError(InputError):
+    """A recording (MCAP shard) that is missing, damaged or does not hold the design asked for."""
+
+
+class RunStoppedError(GripoptError):
+    """A run stopped before its last generation because something failed; its checkpoint
+    allows ``gripopt.resume(path)`` (the message says whether there is one)."""
+
+
+class GripoptWarning(UserWarning):
+    """A note of a run: a recording recovered, the thread count, a resume forced."""
+
+
+__all__ = [
+    "GripoptError",
+    "InputError",
+    "ProblemError",
+    "RunFolderError",
+    "RunLockedError",
+    "RecordingError",
+    "RunStoppedError",
+    "GripoptWarning",
+]

@@ -1,0 +1,226 @@
+"""A gripper design problem: load it, evaluate designs into DataFrames, simulate one."""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Optional, Sequence, Union
+
+import numpy as np
+import pandas as pd
+
+from . import _gripopt
+from ._frames import DESIGN_COLUMNS, DESIGN_NAMES, POSE_COLUMNS, SAMPLE_COLUMNS, frame
+from .errors import InputError
+
+#: Designs as accepted by :meth:`Problem.evaluate`: a DataFrame with the six named columns
+#: (others are ignored), an (n, 6) array, or one design (a Series, a mapping by name, six
+#: values). ψ is ``psi_deg``, in degrees, everywhere.
+Designs = Union[pd.DataFrame, np.ndarray, Sequence[Sequence[float]], pd.Series, Mapping[str, float], Sequence[float]]
+
+
+def design_frame(designs: Designs) -> pd.DataFrame:
+    """``designs`` as a DataFrame of the six design columns (float64), one row per design;
+    a DataFrame keeps its index. Raises :class:`InputError` for a missing column or a
+    wrong shape."""
+    names = list(DESIGN_NAMES)
+    if isinstance(designs, pd.DataFrame):
+        missing = [n for n in names if n not in designs.columns]
+        if missing:
+            raise InputError(
+                f"designs: missing column(s) {', '.join(missing)} (a design is {', '.join(names)}; "
+                "psi_deg is ψ in degrees)",
+            )
+        return designs[names].astype("float64")
+    if isinstance(designs, (pd.Series, Mapping)):
+        row = pd.Series(designs)
+        missing = [n for n in names if n not in row.index]
+        if missing:
+            raise InputError(f"design: missing {', '.join(missing)} (psi_deg is ψ in degrees)")
+        return pd.DataFrame([row[names].astype("float64").to_numpy()], columns=names)
+    a = np.asarray(designs, dtype="float64")
+    if a.ndim == 1:
+        a = a[None, :]
+    if a.ndim != 2 or a.shape[1] != 6:
+        raise InputError(
+            f"designs: an array of shape {np.shape(designs)}, expected (n, 6) or (6,): {', '.join(names)}"
+        )
+    return pd.DataFrame(a, columns=names)
+
+
+def _one(design: Designs) -> np.ndarray:
+    d = design_frame(design)
+    if len(d) != 1:
+        raise InputError(f"design: {len(d)} designs given, expected one")
+    return np.ascontiguousarray(d.to_numpy()[0])
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """The design box (optimiser units: l21, b, t22 in m; r, p dimensionless; psi_deg in
+    degrees), each bound a Series indexed by design name."""
+
+    lower: pd.Series
+    upper: pd.Series
+    _native: Any
+
+    def sample(self, n: int, seed: int = 1) -> pd.DataFrame:
+        """``n`` designs drawn uniformly in the box from ``seed``'s stream (the designs of
+        ``gripopt bench static --seed``)."""
+        return pd.DataFrame(self._native.random_designs(n, seed), columns=list(DESIGN_NAMES))
+
+    def to_frame(self) -> pd.DataFrame:
+        """The bounds as a two-row DataFrame (``lower``, ``upper``)."""
+        return pd.DataFrame({"lower": self.lower, "upper": self.upper}).T
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """One design simulated in a scene (diagnostic mode: to stability or t_max).
+
+    Attributes:
+        record: the record, as ``gripopt simulate --json`` prints it (a dict).
+        trajectory: what ``gripopt simulate --csv`` writes: the grasp samples (finger 1,
+            centred and offset scenes), or in the free scene the object's pose and the
+            fingers' angles. Units in ``trajectory.attrs["units"]``.
+        grasp: the grasp samples (in the free scene, the centred scene's prediction).
+    """
+
+    record: dict[str, Any]
+    trajectory: pd.DataFrame
+    grasp: pd.DataFrame
+
+
+class Problem:
+    """A gripper design problem (a problem file, checked where it is loaded).
+
+    Load one with :meth:`load` (a file) or :meth:`from_toml` (its text). Problems pickle
+    (as their TOML text), so they travel to Dask workers.
+    """
+
+    __slots__ = ("_native",)
+
+    def __init__(self, native: Any) -> None:
+        self._native = native
+
+    @classmethod
+    def load(cls, path: Union[str, os.PathLike]) -> "Problem":
+        """Load and validate a problem file (errors name the file and the field)."""
+        return cls(_gripopt.Problem.load(os.fspath(path)))
+
+    @classmethod
+    def from_toml(cls, text: str, path: Optional[Union[str, os.PathLike]] = None) -> "Problem":
+        """Parse and validate problem text; ``path``, if given, is the file errors name."""
+        return cls(_gripopt.Problem.from_toml(text, None if path is None else os.fspath(path)))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (Problem.from_toml, (self.toml, self.path))
+
+    def __repr__(self) -> str:
+        where = f" from {self.path}" if self.path else ""
+        return f"<gripopt.Problem {self.name!r}{where}>"
+
+    @property
+    def name(self) -> str:
+        """The problem's name."""
+        return self._native.name
+
+    @property
+    def path(self) -> Optional[Path]:
+        """The file it was loaded from (None: given as text)."""
+        p = self._native.path
+        return None if p is None else Path(p)
+
+    @property
+    def toml(self) -> str:
+        """The problem's TOML text."""
+        return self._native.toml
+
+    @property
+    def bounds(self) -> Bounds:
+        """The design bounds."""
+        n = list(DESIGN_NAMES)
+        return Bounds(pd.Series(self._native.lower, index=n), pd.Series(self._native.upper, index=n), self._native)
+
+    @property
+    def nominal(self) -> pd.Series:
+        """The nominal design (a Series by design name; ψ as psi_deg, degrees)."""
+        return pd.Series(self._native.nominal, index=list(DESIGN_NAMES), name="nominal")
+
+    def evaluate(
+        self,
+        designs: Designs,
+        static_only: bool = False,
+        threads: Optional[int] = None,
+        *,
+        first_id: int = 0,
+    ) -> pd.DataFrame:
+        """Evaluate designs through the staged pipeline, in parallel in Rust (the GIL is
+        released), exactly as a run evaluates them.
+
+        Args:
+            designs: a DataFrame with the columns l21, b, t22, r, p, psi_deg (others are
+                ignored; its index is kept), an (n, 6) array, or one design.
+            static_only: stages 0–2 only (kinematics, singularities, statics, form
+                closure; tens of µs a design), no grasp simulation: t_stab stays empty.
+            threads: worker threads (None: all cores). Results do not depend on it.
+            first_id: the id of the first design (the ``id`` column counts on from it).
+
+        Returns:
+            One row per design, in order, with the columns and units of a run's
+            population.csv (docs/outputs.md; ``df.attrs["units"]``): id, generation (0: not
+            from a run), rank (empty: not ranked), feasible, failed_stage, violation,
+            reason, the design, derived lengths, form_closed, the four objectives,
+            sim_steps, sim_rhs_evals, force_model. Empty values (NaN / <NA>) were not
+            computed.
+        """
+        rows, _, _ = self._evaluate_batch(designs, static_only, threads, first_id)
+        return rows
+
+    def _evaluate_batch(
+        self,
+        designs: Designs,
+        static_only: bool = False,
+        threads: Optional[int] = None,
+        first_id: int = 0,
+    ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
+        """The rows, the minimised objectives (n, 4) and the constrained-domination key
+        (n, 2: stages not reached, violation) of ``designs``."""
+        d = design_frame(designs)
+        x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
+        cols, f, key = self._native.evaluate(x, static_only, threads, first_id)
+        return frame(cols, DESIGN_COLUMNS, index=d.index), f, key
+
+    def record(self, design: Optional[Designs] = None, static_only: bool = False) -> dict[str, Any]:
+        """The full evaluation record of one design (default: the nominal) as a dict: the
+        JSON of ``gripopt evaluate --json`` (docs/outputs.md), values not computed None."""
+        x = self._native.nominal if design is None else _one(design)
+        return json.loads(self._native.record(x, static_only))
+
+    def simulate(
+        self,
+        design: Optional[Designs] = None,
+        scene: Optional[str] = None,
+        rtol: Optional[float] = None,
+        method: str = "radau5",
+    ) -> Simulation:
+        """Simulate one design (default: the nominal) in a scene, as ``gripopt simulate``.
+
+        Args:
+            design: one design (a Series or mapping by name, or six values; psi_deg in degrees).
+            scene: ``"centred"``, ``"offset:0.002"`` (object offset in metres), ``"free"``
+                or ``"free:0.002"``; None: the problem's ``[scene]``.
+            rtol: relative tolerance (None: the problem's ``solver.rtol``).
+            method: ``"radau5"`` (default), ``"trbdf2"`` or ``"dopri5"``.
+
+        Raises:
+            InputError: the design is discarded before its grasp (stages 0–2), or a bad scene.
+        """
+        x = self._native.nominal if design is None else _one(design)
+        text, samples, poses = self._native.simulate(x, scene, rtol, method)
+        record = json.loads(text)
+        grasp = frame(samples, SAMPLE_COLUMNS)
+        trajectory = frame(poses, POSE_COLUMNS) if record.get("scene") == "free" else grasp
+        return Simulation(record, trajectory, grasp)

@@ -1,0 +1,264 @@
+"""Optimisation runs: start or resume one (gripopt's NSGA-II, in Rust), and read a run
+folder back — its tables as DataFrames, a design's recorded grasp, a replay."""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Mapping, Optional, Union
+
+import pandas as pd
+
+from . import _gripopt
+from ._frames import DESIGN_COLUMNS, HISTORY_COLUMNS, SAMPLE_COLUMNS, frame
+from .problem import Problem
+
+PathLike = Union[str, os.PathLike]
+
+
+@dataclass(frozen=True)
+class GenerationReport:
+    """One generation of a run, as the ``progress`` callback receives it.
+
+    Attributes:
+        generation: completed generations (1 = the initial population).
+        max_generations: the run's total.
+        evaluations: designs evaluated so far.
+        population: population size.
+        feasible: feasible members of the population.
+        hypervolume: normalised hypervolume of the population's feasible front.
+    """
+
+    generation: int
+    max_generations: int
+    evaluations: int
+    population: int
+    feasible: int
+    hypervolume: float
+
+
+#: A progress callback: called after every generation (before its checkpoint is written).
+#: An exception it raises stops the run after that checkpoint and is raised again by
+#: :func:`optimise` / :func:`resume` (the run stays resumable).
+ProgressCallback = Callable[[GenerationReport], Any]
+
+
+@dataclass(frozen=True)
+class RecordedDesign:
+    """A design read back from a run's recording (the MCAP shards, through gripopt's reader).
+
+    Attributes:
+        id: the design id.
+        record: its ``/designs`` message (docs/recording.md) as a dict.
+        trajectory: its recorded grasp samples (units in ``attrs["units"]``; a compact
+            recording keeps a subset of the samples, values to f32 precision).
+        resolution: ``"compact"`` or ``"full"``.
+        file: the shard it was read from.
+    """
+
+    id: int
+    record: dict[str, Any]
+    trajectory: pd.DataFrame
+    resolution: str
+    file: Path
+
+
+@dataclass(frozen=True)
+class Replay:
+    """A design re-simulated and compared with its recording (``gripopt replay``).
+
+    Attributes:
+        verified: the re-simulation equals the recording (bitwise for the same build; else
+            within 1e-12 relative at full resolution, one f32 unit when compact).
+        max_difference: the largest relative difference found.
+        compared: trajectory samples compared.
+        values_compared: values of the ``/designs`` record compared.
+        recomputed_feasible: the re-evaluation's verdict.
+        record: the re-evaluation's record (as ``gripopt evaluate --json``).
+        file: the shard the design was read from.
+    """
+
+    verified: bool
+    max_difference: float
+    compared: int
+    values_compared: int
+    recomputed_feasible: bool
+    record: dict[str, Any]
+    file: Path
+
+
+class Run:
+    """A run folder written by ``gripopt optimise`` / :func:`optimise` (finished, stopped,
+    or running: its tables are rewritten whole every generation and read afresh at each
+    access).
+
+    Tables carry their units in ``df.attrs["units"]`` and meanings in
+    ``df.attrs["meanings"]`` (docs/outputs.md).
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        self._folder = _gripopt.RunFolder(os.fspath(path))
+        #: What the :func:`optimise` / :func:`resume` call that returned this run reported
+        #: (generations, evaluations, front_size, hypervolume, interrupted, wall_s, …);
+        #: None for a run opened from its folder.
+        self.summary: Optional[dict[str, Any]] = None
+
+    def __repr__(self) -> str:
+        return f"<gripopt.Run {str(self.path)!r}>"
+
+    @property
+    def path(self) -> Path:
+        """The run folder."""
+        return Path(self._folder.path)
+
+    @property
+    def info(self) -> dict[str, Any]:
+        """run.json: settings, status, generations, evaluations, resumes."""
+        return json.loads(self._folder.info())
+
+    @property
+    def status(self) -> str:
+        """``"running"``, ``"finished"`` or ``"interrupted"``."""
+        return str(self.info["status"])
+
+    @property
+    def problem(self) -> Problem:
+        """The run's problem (its copy in the folder)."""
+        return Problem(self._folder.problem())
+
+    @property
+    def front(self) -> pd.DataFrame:
+        """pareto.csv: the population's feasible non-dominated designs, by id."""
+        return frame(self._folder.table("front"), DESIGN_COLUMNS)
+
+    @property
+    def population(self) -> pd.DataFrame:
+        """population.csv: the whole population, by rank then id, with discard stages and reasons."""
+        return frame(self._folder.table("population"), DESIGN_COLUMNS)
+
+    @property
+    def archive(self) -> pd.DataFrame:
+        """archive.csv: every feasible non-dominated design evaluated in the run, by id."""
+        return frame(self._folder.table("archive"), DESIGN_COLUMNS)
+
+    @property
+    def history(self) -> pd.DataFrame:
+        """history.csv: per generation, evaluations, feasible count and hypervolumes."""
+        return frame(self._folder.table("history"), HISTORY_COLUMNS)
+
+    def design(self, id: int) -> RecordedDesign:
+        """Design ``id`` as recorded: its ``/designs`` record and grasp trajectory, read
+        from the MCAP shard that holds it (one chunk read)."""
+        text, samples, resolution, file = self._folder.design(int(id))
+        return RecordedDesign(int(id), json.loads(text), frame(samples, SAMPLE_COLUMNS), resolution, Path(file))
+
+    def replay(self, id: int) -> Replay:
+        """Re-simulate design ``id`` from its recorded parameters and compare it with its
+        recording."""
+        r = self._folder.replay(int(id))
+        return Replay(
+            verified=r["verified"],
+            max_difference=r["max_difference"],
+            compared=r["compared"],
+            values_compared=r["values_compared"],
+            recomputed_feasible=r["recomputed_feasible"],
+            record=json.loads(r["fresh"]),
+            file=Path(r["file"]),
+        )
+
+    def resume(
+        self,
+        generations: Optional[int] = None,
+        threads: Optional[int] = None,
+        force: bool = False,
+        progress: Optional[ProgressCallback] = None,
+    ) -> "Run":
+        """Continue this run: :func:`resume` on its folder."""
+        return resume(self.path, generations=generations, threads=threads, force=force, progress=progress)
+
+
+def _callback(progress: Optional[ProgressCallback]) -> Optional[Callable[[dict[str, Any]], Any]]:
+    if progress is None:
+        return None
+    return lambda report: progress(GenerationReport(**report))
+
+
+def _record(record: Union[bool, Mapping[str, Any]]) -> Optional[str]:
+    if record is True:
+        return None
+    if record is False:
+        return "none"
+    return json.dumps(dict(record))
+
+
+def optimise(
+    problem: Union[Problem, PathLike],
+    out: PathLike,
+    *,
+    pop: int = 100,
+    generations: int = 50,
+    seed: int = 1,
+    threads: Optional[int] = None,
+    record: Union[bool, Mapping[str, Any]] = True,
+    progress: Optional[ProgressCallback] = None,
+) -> Run:
+    """Run gripopt's NSGA-II on ``problem`` into the run folder ``out`` (as ``gripopt
+    optimise``): every generation checkpointed, the tables, plots and MCAP recording
+    written as it goes.
+
+    Args:
+        problem: a :class:`Problem` or a problem file. A problem given as text starts a
+            run only in a new or empty folder (its text is written there as problem.toml).
+        out: the run folder (new or empty).
+        pop: population size.
+        generations: total generations (1 = the initial population).
+        seed: the seed; it fixes the run (whatever the thread count).
+        threads: worker threads (None: all cores).
+        record: record every design and grasp to MCAP (True), nothing (False), or a
+            mapping of recording options over the defaults (the fields of run.json's
+            ``recording``, e.g. ``{"trajectories": "feasible", "resolution": "full"}``).
+        progress: called with a :class:`GenerationReport` after every generation.
+
+    Returns:
+        The :class:`Run` (its ``summary`` says what the run did).
+
+    Raises:
+        KeyboardInterrupt: ctrl-c (or a notebook's stop button): the run stopped after the
+            current generation's checkpoint and can be continued with :func:`resume`.
+        GripoptError: bad input (:class:`InputError`, e.g. a folder that holds a run) or a
+            failed run (:class:`RunStoppedError`, resumable).
+    """
+    if not isinstance(problem, Problem):
+        problem = Problem.load(problem)
+    summary = _gripopt.optimise(
+        problem._native, os.fspath(out), pop, generations, seed, threads, _record(record), _callback(progress)
+    )
+    run = Run(out)
+    run.summary = dict(summary)
+    return run
+
+
+def resume(
+    path: PathLike,
+    *,
+    generations: Optional[int] = None,
+    threads: Optional[int] = None,
+    force: bool = False,
+    progress: Optional[ProgressCallback] = None,
+) -> Run:
+    """Continue the run in ``path`` (stopped, killed or finished) exactly where its last
+    checkpoint left it, as ``gripopt resume``.
+
+    Args:
+        path: the run folder.
+        generations: the new total (None: the run's own).
+        threads: worker threads (None: all cores).
+        force: resume although the problem file or the checkpoint's checksum changed.
+        progress: called with a :class:`GenerationReport` after every generation.
+    """
+    summary = _gripopt.resume(os.fspath(path), generations, threads, force, _callback(progress))
+    run = Run(path)
+    run.summary = dict(summary)
+    return run

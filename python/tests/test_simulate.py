@@ -1,0 +1,64 @@
+"""Problem.simulate against `gripopt simulate --json --csv` (a separate process): the
+record and every trajectory value bit for bit, in each scene."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+import gripopt
+from conftest import same_float
+
+
+def untimed(rec: dict) -> dict:
+    rec = dict(rec)
+    rec.pop("cpu_s", None)
+    if isinstance(rec.get("free_scene"), dict):
+        rec["free_scene"] = {k: v for k, v in rec["free_scene"].items() if k != "cpu_s"}
+    return rec
+
+
+def same_record(a, b) -> bool:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(same_record(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(same_record(x, y) for x, y in zip(a, b))
+    return same_float(a, b)
+
+
+@pytest.mark.parametrize("scene", ["centred", "offset:0.002", "free"])
+def test_simulation_equals_the_cli(problem, cli_json, tmp_path, scene):
+    csv = tmp_path / "traj.csv"
+    cli = cli_json("simulate", "problems/bottle-1l.toml", "--scene", scene, "--json", "--csv", csv)
+    sim = problem.simulate(scene=scene)
+    assert same_record(untimed(sim.record), untimed(cli))
+    want = pd.read_csv(csv)
+    table = gripopt.POSE_COLUMNS if scene == "free" else gripopt.SAMPLE_COLUMNS
+    assert list(sim.trajectory.columns) == list(want.columns) == [c[0] for c in table]
+    assert len(sim.trajectory) == len(want) > 10
+    for col in want.columns:
+        a, b = sim.trajectory[col].to_numpy(), want[col].to_numpy()
+        assert [x.hex() for x in a] == [float(x).hex() for x in b], col
+    assert sim.trajectory.attrs["units"]["t"] == "s"
+    if scene == "free":
+        assert sim.record["scene"] == "free" and sim.trajectory.attrs["units"]["tilt_deg"] == "deg"
+        assert len(sim.grasp) > 10 and list(sim.grasp.columns)[:3] == ["t", "q11", "q21"]
+    else:
+        assert sim.grasp is sim.trajectory
+    if scene.startswith("offset"):
+        assert sim.record["scene"] == "offset" and sim.record["x_off"] == 0.002
+
+
+def test_bad_scenes_and_discarded_designs_are_input_errors(problem):
+    with pytest.raises(gripopt.InputError, match="must be centred, offset:X or free"):
+        problem.simulate(scene="sideways")
+    with pytest.raises(gripopt.InputError, match="not a number"):
+        problem.simulate(scene="offset:far")
+    discarded = problem.evaluate(problem.bounds.sample(50, seed=1), static_only=True).query("failed_stage == 1")
+    with pytest.raises(gripopt.InputError, match="discarded at stage 1"):
+        problem.simulate(discarded.iloc[0])
+    with pytest.raises(gripopt.ProblemError, match="rtol") as e:
+        problem.simulate(rtol=2.0)
+    assert e.value.field == "rtol"
+    with pytest.raises(gripopt.InputError, match="method"):
+        problem.simulate(method="euler")
