@@ -114,7 +114,9 @@ impl Scan {
     /// reached its first checkpoint wrote (provably: see the module doc). Returns that
     /// run's files, which the new run removes before it starts (everything but run.json,
     /// which it rewrites, and the lock's pid file).
-    pub fn check_new_run_folder(&self) -> Result<Vec<PathBuf>> {
+    /// `problem` is the problem file given: when it is the folder's own `problem.toml` (a
+    /// problem given as text, written there by the caller), it is the run's input, kept.
+    pub fn check_new_run_folder(&self, problem: &Path) -> Result<Vec<PathBuf>> {
         if self.checkpoint {
             return Err(self.err(format!(
                 "already holds a run (checkpoint.json); use `gripopt resume {}` or another --out",
@@ -175,6 +177,9 @@ impl Scan {
             if n.starts_with('.') && n.ends_with(".tmp") && p.is_dir() {
                 continue;
             }
+            if n == "problem.toml" && same_file(&p, problem) {
+                continue;
+            }
             let ours = match n.as_str() {
                 LOCK_FILE | RUN_FILE => true,
                 "recording" => p.is_dir(),
@@ -213,4 +218,9 @@ impl Scan {
             _ => false,
         }
     }
+}
+
+/// `a` and `b` are the same file (both exist and resolve to one path).
+fn same_file(a: &Path, b: &Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }

@@ -132,10 +132,10 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     let problem = Problem::load(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     // refused before the lock's pid file is written into a folder that is not ours
-    Scan::of(&spec.out)?.check_new_run_folder()?;
+    Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
     let lock = RunLock::acquire(&spec.out)?;
     // again under the lock: another process may have started meanwhile
-    for f in Scan::of(&spec.out)?.check_new_run_folder()? {
+    for f in Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)? {
         // files of the earlier attempt that never reached its first checkpoint (proven)
         std::fs::remove_file(&f).map_err(|e| Error::io(&f, "cannot remove a file of the earlier attempt", e))?;
     }
