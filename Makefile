@@ -65,13 +65,23 @@ test: $(VENV_STAMP) lint
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
 # generations, 1 500 designs through all four stages, every design and grasp recorded to
-# MCAP) writing results/bottle-1l/.
+# MCAP) writing results/bottle-1l/. An earlier run there is moved aside (nothing is
+# deleted) while holding its folder's lock (`flock`, util-linux: the lock gripopt takes on a
+# run folder), so a run still in progress is never moved: `make run` then stops (exit 1).
 POP ?= 60
 GENERATIONS ?= 25
 SEED ?= 1
 run: build
 	@mkdir -p results
-	@if [ -e $(OUT) ]; then keep=$(OUT).$$(date +%Y%m%d-%H%M%S); echo "$(OUT) holds an earlier run: moving it to $$keep (nothing is deleted)"; mv $(OUT) $$keep; fi
+	@if [ -e $(OUT) ]; then \
+	  keep=$(OUT).$$(date +%Y%m%d-%H%M%S); \
+	  if command -v flock >/dev/null 2>&1; then flock -n -E 75 $(OUT) mv $(OUT) $$keep; rc=$$?; \
+	  elif $(BIN) show $(OUT) --json 2>/dev/null | grep -q '"status": "running"'; then rc=75; \
+	  else mv $(OUT) $$keep; rc=$$?; fi; \
+	  if [ $$rc = 75 ]; then echo "$(OUT) is in use by a running gripopt (pid $$(cat $(OUT)/.lock 2>/dev/null || echo unknown)): not moved; wait for it to end, or give another OUT=..." >&2; exit 1; fi; \
+	  if [ $$rc != 0 ]; then exit $$rc; fi; \
+	  echo "$(OUT) held an earlier run: moved it to $$keep (nothing is deleted)"; \
+	fi
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"

@@ -126,9 +126,17 @@ pub enum Error {
     /// The worker thread pool could not be started.
     #[error("cannot start the worker threads: {0}")]
     ThreadPool(#[from] rayon::ThreadPoolBuildError),
+    /// The run folder was moved away, removed or replaced while a process wrote into it: the
+    /// process stopped without writing into what is now at the folder's path (a failed run,
+    /// exit 1; the run resumes where its folder went).
+    #[error("{}: the run folder was moved away, removed or replaced while this process was writing into it: stopped, nothing more is written there; resume the run where its folder now is (`gripopt resume NEW_PATH`)", path.display())]
+    FolderMoved {
+        /// The run folder's path.
+        path: PathBuf,
+    },
     /// An optimisation run stopped before its last generation (crash hook, failed observer);
     /// its checkpoint allows a resume.
-    #[error("run in {} stopped: {source}; resume with `gripopt resume {}`", path.display(), path.display())]
+    #[error("run in {} stopped: {source}; resume with `gripopt resume {}`", path.display(), shell_quote(&path.to_string_lossy()))]
     Stopped {
         /// The run folder.
         path: PathBuf,
@@ -138,7 +146,7 @@ pub enum Error {
     },
     /// An optimisation run stopped before its first checkpoint: there is nothing to resume,
     /// and the folder can be given to `optimise` again.
-    #[error("run in {} stopped before its first checkpoint: {source}; nothing to resume: run `gripopt optimise` with `--out {}` again", path.display(), path.display())]
+    #[error("run in {} stopped before its first checkpoint: {source}; nothing to resume: run `gripopt optimise` with `--out {}` again", path.display(), shell_quote(&path.to_string_lossy()))]
     StoppedBeforeCheckpoint {
         /// The run folder.
         path: PathBuf,
@@ -156,6 +164,47 @@ pub enum Error {
         #[source]
         source: Option<Box<dyn std::error::Error + Send + Sync>>,
     },
+}
+
+/// `s` as one word of a POSIX shell command line, to be copied from a message: as it is
+/// when it holds only characters no shell treats specially, in single quotes otherwise
+/// (`'` written `'\''`), and as `$'…'` with escapes when it holds control characters (so
+/// that none reaches a terminal raw).
+pub fn shell_quote(s: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "@%+=:,./_-".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        return s.to_string();
+    }
+    if !s.chars().any(char::is_control) {
+        return format!("'{}'", s.replace('\'', r"'\''"));
+    }
+    let mut out = String::from("$'");
+    for c in s.chars() {
+        match c {
+            '\'' => out.push_str("\\'"),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('\'');
+    out
+}
+
+/// `s` with its control characters written as `\u{…}` escapes (a line break kept), so that
+/// none reaches a terminal raw.
+pub fn printable(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c.is_control() && c != '\n' {
+            out.push_str(&format!("\\u{{{:x}}}", c as u32));
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// Result with the library's [`Error`].

@@ -5,6 +5,12 @@ use crate::{Error, Result};
 use std::io::Write;
 use std::path::Path;
 
+/// SHA-256 of `data` as 64 lowercase hex digits (what run folders record of their files).
+pub fn sha256_hex(data: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(data).iter().map(|b| format!("{b:02x}")).collect()
+}
+
 /// Write `bytes` to `path` atomically: a temporary file in the same folder, fsync, rename,
 /// fsync of the folder. Errors name the file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {

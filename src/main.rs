@@ -4,14 +4,16 @@
 //! flag or folder that cannot be used as asked); 3 `replay` did not verify the recording;
 //! 130 interrupted by ctrl-c after the checkpoint of the current generation (resumable);
 //! 141 the output pipe was closed by its reader (quietly, like a program ended by SIGPIPE).
+//! A standard output that cannot be written (a full disk) is exit 1 with one line, never a
+//! panic; no control character of a message reaches the terminal raw.
 
 // Index loops mirror the formulas of MODEL.md, as in the library.
 #![allow(clippy::needless_range_loop)]
 
 mod cli;
 
-/// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
-const EXIT_BROKEN_PIPE: i32 = 141;
+use cli::out::EXIT_BROKEN_PIPE;
+use std::io::Write as _;
 
 /// The error and its causes on one line, each cause once: the library's errors name their
 /// file and often repeat their source's text, which anyhow's `{:#}` would print twice.
@@ -27,7 +29,7 @@ fn message(e: &anyhow::Error) -> String {
             msg.push_str(s);
         }
     }
-    msg
+    gripopt::run::printable(&msg)
 }
 
 /// Exit code of an error: the library's classification where it is a library error, a
@@ -47,7 +49,9 @@ fn exit_code(e: &anyhow::Error) -> i32 {
 }
 
 fn main() {
-    // `println!` panics when stdout is a closed pipe (`gripopt … | head -1`): end quietly
+    // the CLI prints through `cli::out`, which never panics; a `println!` elsewhere (the
+    // library's benchmarks) panics when stdout or stderr cannot be written: end as `out`
+    // does, quietly for a closed pipe (`gripopt … | head -1`), else with one line
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let text = info
@@ -59,9 +63,21 @@ fn main() {
         if text.contains("Broken pipe") || text.contains("os error 32") {
             std::process::exit(EXIT_BROKEN_PIPE);
         }
+        if let Some(why) = text.strip_prefix("failed printing to stdout: ") {
+            let _ = writeln!(std::io::stderr(), "error: cannot write to standard output: {why}");
+            std::process::exit(1);
+        }
+        if text.starts_with("failed printing to stderr") {
+            std::process::exit(1);
+        }
         default_hook(info);
     }));
-    match cli::run() {
+    let result = cli::run();
+    // what is still buffered (a last line without its line break) is written before the exit
+    if let Err(e) = std::io::stdout().flush() {
+        cli::out::failed(&e);
+    }
+    match result {
         Ok(code) => std::process::exit(code),
         Err(e) => {
             let code = exit_code(&e);

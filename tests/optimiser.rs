@@ -296,6 +296,14 @@ fn a_folder_left_before_the_first_checkpoint_is_reused() {
     for f in ["run.json", "problem.toml", "foxglove-layout.json", "pareto.csv", "pareto_timings.csv", "history.csv"] {
         std::fs::copy(done.join(f), left.join(f)).unwrap();
     }
+    // run.json as a run writes it at its start (no completed generation: a run.json that
+    // records one is a run whose checkpoint is lost, which optimise refuses, issue 24 item 1)
+    let mut run: serde_json::Value = serde_json::from_slice(&std::fs::read(left.join("run.json")).unwrap()).unwrap();
+    run["completed_generations"] = 0.into();
+    run["evaluations"] = 0.into();
+    run["checkpoint_sha256"] = serde_json::Value::Null;
+    run["status"] = "running".into();
+    std::fs::write(left.join("run.json"), serde_json::to_string_pretty(&run).unwrap()).unwrap();
     let s = optimise(&spec(&left, 2, 2)).unwrap();
     assert_eq!(s.generations, 2);
     std::fs::create_dir_all(&other).unwrap();

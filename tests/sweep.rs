@@ -28,7 +28,7 @@ fn out_dir(name: &str) -> PathBuf {
 /// Parse sweep.csv into (header, rows) — simple: no quoted commas in the numeric columns we read.
 fn read_csv(dir: &std::path::Path) -> (Vec<String>, Vec<Vec<String>>) {
     let t = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
-    let mut lines = t.lines();
+    let mut lines = t.lines().filter(|l| !l.starts_with('#'));
     let h: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
     let rows = lines.map(|l| l.split(',').map(String::from).collect()).collect();
     (h, rows)

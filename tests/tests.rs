@@ -27,6 +27,8 @@ mod replay_scene;
 mod robust;
 mod robustness;
 mod robustness_cli;
+mod robustness_edges;
+mod robustness_folders;
 mod scene_cli;
 mod scenes;
 mod seams;

@@ -70,7 +70,8 @@ def export(binary, source, out, *extra):
 
 def read_csv(path):
     with open(path, newline="") as f:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        # the `#` title and units lines first (docs/outputs.md)
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(l for l in f if not l.startswith("#"))]
 
 
 # ------------------------------------------------------------------------- MuJoCo side

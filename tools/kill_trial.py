@@ -6,10 +6,14 @@ docs/cli.md tells a user to, and compare its outputs byte for byte with an unint
     tools/kill_trial.py BIN [--trials 30] [--problem problems/bottle-1l.toml] [--pop 32]
                             [--generations 12] [--seed 5] [--work DIR] [--first-ms 100]
 
-The first trials kill inside the first `--first-ms` milliseconds (folder creation, the first
-run.json, the first generation); the others at moments spread over the whole run. A trial
+The first third of the trials kill inside the first `--first-ms` milliseconds (folder
+creation, the first run.json, the first generation); the others at moments spread over the
+whole run; every other trial kills the `resume` that follows too. The last line tallies the
+processes actually killed (one that ended before its moment is not counted). A trial
 passes when the finished folder's pareto.csv, population.csv, archive.csv and history.csv
-equal the reference run's and its recording index lists every design exactly once.
+equal the reference run's byte for byte, its recording index lists the reference's shards
+(generation, file, id range, designs: every design exactly once, every shard present), and
+run.json's status, completed generations and evaluations are the reference's.
 Exit status: 0 when every trial passes, 1 otherwise. Prints one line per trial.
 """
 
@@ -69,29 +73,44 @@ def finish(bin_, problem, out, a, kill_resume_after=None):
     return steps, False
 
 
-def index_ids(folder):
-    """Design ids listed by the recording index (one JSON object per line)."""
+def index_entries(folder):
+    """The recording index's shards as (generation, file, first id, last id, designs), and
+    whether each listed shard exists; None without an index."""
     idx = folder / "recording" / "index.jsonl"
-    ids = []
     if not idx.exists():
         return None
+    entries = []
     for line in idx.read_text().splitlines():
-        if not line.strip():
-            continue
-        v = json.loads(line)
-        for key in ("ids", "designs"):
-            if key in v and isinstance(v[key], list):
-                ids.extend(d if isinstance(d, int) else d.get("id") for d in v[key])
-        if "first_id" in v and "count" in v:
-            ids.extend(range(v["first_id"], v["first_id"] + v["count"]))
-    return ids
+        if line.strip():
+            v = json.loads(line)
+            present = (folder / "recording" / v["file"]).is_file()
+            entries.append((v["generation"], v["file"], v["first_id"], v["last_id"], v["designs"], present))
+    return sorted(entries)
+
+
+def run_totals(folder):
+    """run.json's status, completed generations and evaluations."""
+    try:
+        v = json.loads((folder / "run.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return v.get("status"), v.get("completed_generations"), v.get("evaluations")
 
 
 def compare(ref, got):
+    """What differs between the finished folder `got` and the reference run: the CSVs byte
+    for byte, the recording index (every design exactly once, every shard present), run.json's
+    totals."""
     diffs = [f for f in COMPARED if (ref / f).read_bytes() != ((got / f).read_bytes() if (got / f).exists() else b"")]
-    ri, gi = index_ids(ref), index_ids(got)
-    if ri is not None and gi is not None and sorted(ri) != sorted(gi):
-        diffs.append(f"recording index ({len(gi)} ids, reference {len(ri)})")
+    ri, gi = index_entries(ref), index_entries(got)
+    if ri != gi:
+        diffs.append(f"recording index ({len(gi or [])} shards, reference {len(ri or [])})")
+    if gi:
+        ids = [i for e in gi for i in range(e[2], e[3] + 1)]
+        if len(ids) != len(set(ids)) or not all(e[5] for e in gi):
+            diffs.append("recording index: a design twice or a shard missing")
+    if run_totals(ref) != run_totals(got):
+        diffs.append(f"run.json {run_totals(got)} (reference {run_totals(ref)})")
     return diffs
 
 
@@ -122,18 +141,24 @@ def main():
     rng = random.Random(a.rng)
     early = max(1, a.trials // 3)
     failed = 0
+    kills = {"optimise": 0, "first": 0, "resume": 0}
     for i in range(a.trials):
-        d = rng.uniform(0.0, a.first_ms / 1e3) if i < early else rng.uniform(0.0, 1.1 * t_run)
-        kill_resume = rng.uniform(0.0, 0.8 * t_run) if i % 2 == 1 else None
+        d = rng.uniform(0.0, a.first_ms / 1e3) if i < early else rng.uniform(0.0, 0.95 * t_run)
+        kill_resume = rng.uniform(0.0, 0.6 * t_run) if i % 2 == 1 else None
         out = work / f"trial-{i:02d}"
         rc = start_and_kill(run_args(bin_, a.problem, out, a), d)
+        kills["optimise"] += rc == -signal.SIGKILL
+        kills["first"] += rc == -signal.SIGKILL and d < a.first_ms / 1e3
         steps, ok = finish(bin_, a.problem, out, a, kill_resume)
+        kills["resume"] += any("resume killed" in s and "(rc -9)" in s for s in steps)
         diffs = compare(ref, out) if ok else ["not finished"]
         status = "ok  " if not diffs else "FAIL"
         failed += bool(diffs)
         print(f"{status} trial {i:2d}: optimise killed after {d * 1e3:7.1f} ms (rc {rc}); {'; '.join(steps)}"
               + (f"; differs: {', '.join(diffs)}" if diffs else ""))
-    print(f"kill trial: {a.trials - failed} passed, {failed} failed")
+    print(f"kill trial: {a.trials - failed} passed, {failed} failed; processes killed by SIGKILL: "
+          f"{kills['optimise']} optimise ({kills['first']} within the first {a.first_ms:.0f} ms), "
+          f"{kills['resume']} resume (a process that had ended before its moment is not counted)")
     return 0 if failed == 0 else 1
 
 

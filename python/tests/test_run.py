@@ -47,7 +47,7 @@ def test_a_recorded_design_and_its_replay(cli_run, cli, tmp_path):
     assert d.record["id"] == id and d.resolution == "compact" and d.file.name.startswith("gen-")
     csv = tmp_path / "traj.csv"
     cli("replay", cli_run, "--design", id, "--csv", csv)
-    want = pd.read_csv(csv)
+    want = pd.read_csv(csv, comment="#")
     assert list(d.trajectory.columns) == list(want.columns)
     assert len(d.trajectory) == len(want) > 2
     for col in want.columns:

@@ -85,6 +85,8 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
             last_id: ids.end - 1,
             designs: ids.end - ids.start,
             bytes: b,
+            run_id: None,
+            problem_sha256: None,
         };
         index.push_str(&serde_json::to_string(&entry).map_err(json_err(&index_path))?);
         index.push('\n');

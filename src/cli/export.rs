@@ -114,7 +114,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
         FormatArg::Csv => e.build_sheet().to_csv(),
     };
     if a.out.as_os_str() == "-" {
-        print!("{text}");
+        out!("{text}");
         return Ok(());
     }
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;

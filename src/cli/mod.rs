@@ -5,6 +5,8 @@ use clap::{Parser, Subcommand};
 use gripopt::params::{Design, Problem};
 use std::path::PathBuf;
 
+#[macro_use]
+pub(crate) mod out;
 mod bench;
 mod export;
 mod optcmd;
@@ -15,6 +17,7 @@ mod scenes;
 mod show;
 mod sweep;
 mod verify;
+mod watch;
 
 /// Design optimisation of underactuated two-finger grippers for high-speed grasping.
 #[derive(Parser)]

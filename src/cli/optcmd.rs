@@ -47,7 +47,7 @@ pub fn moo_test(
         for &s in &seed_list {
             let r = run_test(p, s, pop, generations);
             if json {
-                println!("{}", serde_json::to_string(&r)?);
+                outln!("{}", serde_json::to_string(&r)?);
             }
             runs.push(r);
             pb.inc(1);
@@ -65,7 +65,7 @@ pub fn moo_test(
             };
             let wall: f64 = runs.iter().map(|r| r.wall_s).sum::<f64>() / runs.len() as f64;
             let verdict = if med >= lo && med <= hi { "inside" } else { "OUTSIDE" };
-            println!(
+            outln!(
                 "{:<8} seeds {:>2}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
                 p.name(), runs.len(), med, hv[0], hv[hv.len() - 1], rm, lo, hi, igd_med, runs[0].evaluations, wall
             );
@@ -86,17 +86,20 @@ struct SummaryJson<'a> {
     hypervolume: Option<f64>,
     wall_s: f64,
     exit_code: i32,
+    /// Why no design is feasible (null when one is).
+    no_feasible_design: Option<Vec<String>>,
 }
 
-/// Print where the results are (text, or one JSON object with `--json`); the exit code:
-/// 130 when the run was interrupted (after the checkpoint of the current generation), else 0.
+/// Print where the results are (text, or one JSON object with `--json`), and when no design
+/// was feasible, why (the discard causes); the exit code: 130 when the run was interrupted
+/// (after the checkpoint of the current generation), else 0.
 pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
-    let d = s.out.display();
+    let d = crate::cli::out::path(&s.out);
     let code = if s.interrupted { 130 } else { 0 };
     if json {
         let v = SummaryJson {
             status: if s.interrupted { "interrupted" } else { "finished" },
-            run_dir: d.to_string(),
+            run_dir: s.out.display().to_string(),
             generations: s.generations,
             evaluations: s.evaluations,
             feasible: s.feasible,
@@ -104,19 +107,27 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
             hypervolume: s.hv.is_finite().then_some(s.hv),
             wall_s: s.wall_s,
             exit_code: code,
+            no_feasible_design: s.discards.explain(),
         };
-        println!("{}", serde_json::to_string(&v)?);
+        outln!("{}", serde_json::to_string(&v)?);
         return Ok(code);
     }
     if s.interrupted {
-        println!(
+        outln!(
             "interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`",
-            s.generations, s.evaluations
+            s.generations,
+            s.evaluations
         );
     } else {
-        println!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
+        outln!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
     }
-    println!("results in {d}/: pareto.csv (front), archive.csv, population.csv, history.csv, pareto_matrix.svg, hypervolume.svg, run.json, checkpoint.json; best designs: `gripopt show {d}`");
+    if let Some(lines) = s.discards.explain() {
+        for l in lines {
+            outln!("{l}");
+        }
+        outln!("every value of a design: `gripopt show {d} --design ID`");
+    }
+    outln!("results in {d}: pareto.csv (front), archive.csv, population.csv, history.csv, pareto_matrix.svg, hypervolume.svg, run.json, checkpoint.json; best designs: `gripopt show {d}`");
     Ok(code)
 }
 
@@ -126,6 +137,8 @@ struct ReplayJson<'a> {
     #[serde(flatten)]
     recorded: &'a gripopt::record::DesignMessage,
     verified: bool,
+    /// Why it cannot verify (a problem file edited since the run), else null.
+    problem_note: Option<&'a str>,
     verdict_agrees: bool,
     max_difference: Option<f64>,
     compared_samples: usize,
@@ -163,6 +176,7 @@ pub fn replay(
         let v = ReplayJson {
             recorded: rec,
             verified,
+            problem_note: r.problem_note.as_deref(),
             verdict_agrees: r.recomputed_feasible == rec.feasible,
             max_difference: r.max_difference.is_finite().then_some(r.max_difference),
             compared_samples: r.compared,
@@ -170,43 +184,48 @@ pub fn replay(
             file: r.recorded.file.display().to_string(),
             replay_s: secs,
         };
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(code);
     }
     let text = |v: serde_json::Result<String>| v.unwrap_or_default();
-    println!("design {id} (generation {}) from {}", rec.generation, r.recorded.file.display());
-    println!("  parameters {}", text(serde_json::to_string(&rec.parameters)));
-    println!("  derived    {}", text(serde_json::to_string(&rec.derived)));
+    outln!("design {id} (generation {}) from {}", rec.generation, crate::cli::out::path(&r.recorded.file));
+    if let Some(n) = &r.problem_note {
+        outln!("  NOT verified: {n}; restore the run's problem file to verify the recording");
+    }
+    outln!("  parameters {}", text(serde_json::to_string(&rec.parameters)));
+    outln!("  derived    {}", text(serde_json::to_string(&rec.derived)));
     match rec.failed_stage {
-        Some(s) => println!(
+        Some(s) => outln!(
             "  DISCARDED at stage {s}: {} (violation {})",
             rec.reason.as_deref().unwrap_or(""),
             rec.violation.map_or("null".into(), |v| v.to_string())
         ),
-        None => println!("  feasible; objectives {}", text(serde_json::to_string(&rec.objectives))),
+        None => outln!("  feasible; objectives {}", text(serde_json::to_string(&rec.objectives))),
     }
-    println!(
+    outln!(
         "  trajectory: {} samples{}",
         samples.len(),
         samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default()
     );
     if r.compared == 0 && verified {
-        println!("  verified (no trajectory recorded for this design): the re-evaluation reproduces the record's stage, reason, violation, objectives and simulation work ({} values)", r.values_compared);
+        outln!("  verified (no trajectory recorded for this design): the re-evaluation reproduces the record's stage, reason, violation, objectives and simulation work ({} values)", r.values_compared);
     } else if r.compared == 0 {
-        println!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);
+        outln!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);
     } else if verified {
         let precision = if r.recorded.resolution == gripopt::record::Resolution::Full {
             "every sample, f64"
         } else {
             "compact subset, to the recorded f32 precision"
         };
-        println!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
+        outln!("  verified ({precision}): re-simulation reproduces the recorded trajectory (max relative difference {:e}, {} samples)", r.max_difference, r.compared);
     } else {
-        println!(
+        outln!(
             "  NOT verified: max relative difference {:e} over {} samples (recomputed feasible: {})",
-            r.max_difference, r.compared, r.recomputed_feasible
+            r.max_difference,
+            r.compared,
+            r.recomputed_feasible
         );
     }
-    println!("  ({:.1} ms)", secs * 1e3);
+    outln!("  ({:.1} ms)", secs * 1e3);
     Ok(code)
 }

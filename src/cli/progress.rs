@@ -1,9 +1,12 @@
 //! The run's progress as the CLI shows it (the library reports it, [`gripopt::run::Progress`]):
 //! on a terminal an indicatif bar (generation, evaluations/s, feasible count, hypervolume,
 //! ETA); otherwise (a log file, a pipe) one line per generation on stderr. Notes and
-//! warnings go to stderr. Ctrl-c sets the run's stop flag.
+//! warnings go to stderr. The first ctrl-c sets the run's stop flag and says so on stderr
+//! (the run stops after the current generation's checkpoint); a second one ends the
+//! process at once (exit 130; the last checkpoint resumes it).
 
 use gripopt::run::{GenerationReport, Progress};
+use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
@@ -84,11 +87,21 @@ impl Progress for Bar {
     }
 }
 
-/// A stop flag set by ctrl-c: the run stops after the current generation's checkpoint.
+/// A stop flag set by ctrl-c: the run stops after the current generation's checkpoint, which
+/// a line on stderr acknowledges; a second ctrl-c ends the process at once (exit 130).
 pub fn ctrl_c_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
     // a second handler cannot be installed; the first one (this process's only run) stands
-    let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));
+    let _ = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            let _ = writeln!(std::io::stderr(), "\nctrl-c again: stopped now (the last checkpoint resumes the run)");
+            std::process::exit(130);
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "\nctrl-c: stopping after this generation's checkpoint (ctrl-c again to stop now; the last checkpoint resumes the run)"
+        );
+    });
     flag
 }

@@ -25,17 +25,25 @@ pub fn yes_no(v: Option<bool>) -> &'static str {
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
     let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
-    let rec = gripopt::eval::evaluate_record(p, x, &opts, None);
+    // a robust problem: the robust evaluation over every object and scenario; otherwise the
+    // single pipeline, with progress on stderr when the grasp simulation takes long
+    let rec = match gripopt::eval::RobustSetup::of(p) {
+        Some(setup) if opts.dynamics => gripopt::eval::evaluate_record(p, x, &opts, Some(&setup)),
+        _ => {
+            let ev = gripopt::eval::evaluate_into(x, &p.scene, &opts, &mut crate::cli::watch::Watch::new(false, false));
+            gripopt::eval::Record::from_eval(&ev)
+        }
+    };
     if json {
-        println!("{}", serde_json::to_string_pretty(&rec)?);
+        outln!("{}", serde_json::to_string_pretty(&rec)?);
         return Ok(());
     }
     let (k, r) = (&rec.kinematics, &rec.statics);
     let d = |v: Option<f64>| opt(v, 180.0 / std::f64::consts::PI, 4);
     let mm = |v: Option<f64>| opt(v, 1e3, 4);
-    println!(
+    outln!(
         "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m)",
-        p.name,
+        crate::cli::out::shown(&p.name),
         x.l21,
         x.b,
         x.t22,
@@ -44,9 +52,9 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         x.psi.to_degrees(),
         x.l_hand()
     );
-    println!("stage 0/1  kinematics");
-    println!("  l11 {} mm  l22 {} mm  l12 {} mm", mm(k.l11), mm(k.l22), mm(k.l12));
-    println!(
+    outln!("stage 0/1  kinematics");
+    outln!("  l11 {} mm  l22 {} mm  l12 {} mm", mm(k.l11), mm(k.l22), mm(k.l12));
+    outln!(
         "  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {}  sigma {}",
         d(k.q11_0),
         d(k.q21_0),
@@ -56,40 +64,40 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         opt(k.gamma, 1.0, 0),
         opt(k.sigma, 1.0, 0)
     );
-    println!(
+    outln!(
         "  singularity margin {} deg (limit {:.1})",
         opt(k.min_margin_deg, 1.0, 3),
         p.scene.criteria.margin_sing.to_degrees()
     );
-    println!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
-    println!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
-    println!(
+    outln!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
+    outln!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
+    outln!(
         "  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm",
         d(r.theta1),
         d(r.theta2),
         mm(r.k1),
         mm(r.k2)
     );
-    println!(
+    outln!(
         "  f0  {} / {} N   f_mu {} / {} N",
         opt(r.f0_1, 1.0, 4),
         opt(r.f0_2, 1.0, 4),
         opt(r.fmu_1, 1.0, 4),
         opt(r.fmu_2, 1.0, 4)
     );
-    println!(
+    outln!(
         "  F_hand0 ({}, {}) N   F_hand_mu ({}, {}) N",
         opt(r.fhand0_x, 1.0, 4),
         opt(r.fhand0_y, 1.0, 4),
         opt(r.fhandmu_x, 1.0, 4),
         opt(r.fhandmu_y, 1.0, 4)
     );
-    println!(
+    outln!(
         "  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}",
         opt(r.alpha, 1.0, 5),
         opt(r.mean_force, 1.0, 4),
         yes_no(r.form_closed_0),
-        mm(r.max_offset.filter(|m| *m >= 0.0)),
+        mm(r.max_offset),
         r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default()
     );
     if !static_only {
@@ -99,21 +107,23 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         }
     }
     if let Some(rb) = &rec.robust {
-        print!("{}", gripopt::eval::robust_summary(rb));
+        out!("{}", gripopt::eval::robust_summary(rb));
     }
     let v = &rec.verdict;
     match (&v.failed_stage, &v.reason) {
         (Some(s), Some(why)) => {
-            println!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
+            outln!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
         }
         _ => {
-            let o = rec.objectives().map(|v| v.unwrap_or(f64::NAN));
-            println!(
-                "verdict    FEASIBLE  objectives: max_offset {:.3} mm, alpha {:.5}, mean force {:.4} N, t_stab {}",
-                o[0] * 1e3,
-                o[1],
-                o[2],
-                if o[3].is_nan() { "— (not computed)".to_string() } else { format!("{:.6} s", o[3]) }
+            // the record's objectives: null (—) where not computed, e.g. max_offset of a
+            // design not form closed at the centred object
+            let [m, a, f, t] = rec.objectives();
+            outln!(
+                "verdict    FEASIBLE  objectives: max_offset {} mm, alpha {}, mean force {} N, t_stab {}",
+                opt(m, 1e3, 3),
+                opt(a, 1.0, 5),
+                opt(f, 1.0, 4),
+                t.map_or("— (not computed)".to_string(), |t| format!("{t:.6} s"))
             );
         }
     }
@@ -122,18 +132,18 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
 
 /// The grasp's lines.
 pub fn print_dyn(r: &GraspRecord) {
-    println!("stage 3    dynamics");
+    outln!("stage 3    dynamics");
     if r.work.steps.is_none() {
-        println!("  not run");
+        outln!("  not run");
         return;
     }
     print_impact(&r.impact, r.theta2_first_contact);
-    println!(
+    outln!(
         "  force margin min {} N (static {} N)",
         opt(r.min_force_margin, 1.0, 4),
         opt(r.static_force_margin, 1.0, 4)
     );
-    println!(
+    outln!(
         "  t_stab {} ms  forces at t_stab {} / {} N  f* {} / {} N  max|qdd| {} rad/s^2",
         opt(r.t_stab, 1e3, 5),
         opt(r.f_stab_1, 1.0, 4),
@@ -147,7 +157,7 @@ pub fn print_dyn(r: &GraspRecord) {
 
 /// The first contact's lines (θ2 at the contact, when known).
 fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
-    println!(
+    outln!(
         "  first contact t {} ms on {}  v_impact {} m/s  m_finger {} g  theta2 {} deg",
         opt(i.t_first_contact, 1e3, 4),
         i.first_contact_phalanx.map_or("—".into(), |p| format!("{p:?}").to_lowercase()),
@@ -155,7 +165,7 @@ fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
         opt(i.m_finger, 1e3, 4),
         opt(theta2, 180.0 / std::f64::consts::PI, 4)
     );
-    println!(
+    outln!(
         "  impact energy E_cyl {} mJ (limit {} mJ)  E_trans {} mJ  E_rot {} mJ",
         opt(i.e_cyl, 1e3, 5),
         opt(i.e_lim, 1e3, 5),
@@ -166,7 +176,7 @@ fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
 
 /// A simulation's work on one line.
 fn print_work(w: &WorkRecord) {
-    println!(
+    outln!(
         "  steps {} rejected {} rhs {} events {} cpu {} ms",
         w.steps.unwrap_or(0),
         w.rejected_steps.unwrap_or(0),
@@ -178,18 +188,18 @@ fn print_work(w: &WorkRecord) {
 
 /// The free scene's measurement (MODEL.md §14.4), in a free-kind evaluation or simulation.
 pub fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
-    println!(
+    outln!(
         "free scene (x_off {} mm): the impact and force criteria above are the prediction; this measurement decides",
         opt(x_off, 1e3, 3)
     );
     let Some(end) = f.end else {
-        println!("  not run (the centred grasp was discarded first)");
+        outln!("  not run (the centred grasp was discarded first)");
         return;
     };
     if !end.observed() {
-        println!("  ended early at t {} ms: {end} (nothing observed: no verdict)", opt(f.t_end, 1e3, 4));
+        outln!("  ended early at t {} ms: {end} (nothing observed: no verdict)", opt(f.t_end, 1e3, 4));
     }
-    println!(
+    outln!(
         "  object max displacement {} mm (dx {} mm, dy {} mm)  max tilt {} deg  final {} mm / {} deg",
         opt(f.object_max_displacement, 1e3, 4),
         opt(f.object_max_dx, 1e3, 4),
@@ -198,12 +208,12 @@ pub fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
         opt(f.object_final_displacement, 1e3, 4),
         opt(f.object_final_tilt_deg, 1.0, 4)
     );
-    println!(
+    outln!(
         "  peak E_trans {} mJ  E_rot {} mJ during the first contact",
         opt(f.object_peak_e_trans, 1e3, 4),
         opt(f.object_peak_e_rot, 1e3, 4)
     );
-    println!(
+    outln!(
         "  moved {}  toppled {}  escaped {}  rim_contact {}",
         yes_no(f.moved),
         yes_no(f.toppled),

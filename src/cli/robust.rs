@@ -20,17 +20,17 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
         std::fs::write(path, s)?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
         let s = &r.scenario;
         let i = &s.inputs;
-        println!("design {id}, object {object}, scenario {k} of {}", dir.display());
-        println!(
+        outln!("design {id}, object {object}, scenario {k} of {}", dir.display());
+        outln!(
             "  inputs: x_off {:.3} mm, height offset {:.3} mm, phalanx friction x{:.3}, ground friction x{:.3}, restitution {:.3}, fill x{:.3}, torque x{:.4}",
             i.x_off * 1e3, i.height_offset * 1e3, i.mu_phalanx, i.mu_ground, i.restitution, i.fill, i.tau
         );
         let mm = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.4} mm", v * 1e3));
-        println!(
+        outln!(
             "  outcome: {} (max displacement {}, max tilt {}, t_stab {})",
             if s.stays { "stays".to_string() } else { format!("fails: {}", s.cause.map_or("?", |c| c.as_str())) },
             mm(s.max_displacement),
@@ -38,14 +38,14 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
             s.t_stab.map_or("—".into(), |v| format!("{:.3} ms", v * 1e3))
         );
         match r.verified {
-            Some(true) => println!("  verified: the re-simulation equals the recorded scenario, bit for bit"),
-            Some(false) => println!("  NOT verified: the recording says {:?}", r.recorded),
+            Some(true) => outln!("  verified: the re-simulation equals the recorded scenario, bit for bit"),
+            Some(false) => outln!("  NOT verified: the recording says {:?}", r.recorded),
             None => {
-                println!("  not in the recording (the design's scenarios stopped early before it): nothing compared")
+                outln!("  not in the recording (the design's scenarios stopped early before it): nothing compared")
             }
         }
         if let Some(m) = &r.recording {
-            println!(
+            outln!(
                 "  recorded to {} (open in Foxglove with {})",
                 m.display(),
                 dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()

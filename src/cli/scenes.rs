@@ -3,10 +3,11 @@
 //! plot), in the same way for every scene.
 
 use crate::cli::report::{opt, print_dyn, print_free, yes_no};
+use crate::cli::watch::Watch;
 use anyhow::{bail, Context, Result};
 use gripopt::eval::{Record, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
-use gripopt::sim::{Controls, EventNote, Integration, Method, PoseSample, SceneSpec, Sink, Trajectory};
+use gripopt::sim::{Controls, Integration, Method, PoseSample, SceneSpec};
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -45,18 +46,6 @@ pub struct SimulateOpts<'a> {
     pub replay: Option<ReplayInScene>,
 }
 
-/// Prints each located event to stderr (`--trace`).
-struct Trace;
-
-impl Sink for Trace {
-    fn event(&mut self, e: &EventNote<'_>) {
-        eprintln!(
-            "event {:?} at t {:.9e} (step {:.9e}..{:.9e}) mem {:?}",
-            e.kind, e.t, e.step[0], e.step[1], e.memories
-        );
-    }
-}
-
 /// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
 pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
     let kind = p.scene.setup.kind;
@@ -69,13 +58,12 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
     let integ =
         Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(o.method);
     let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
-    let (mut traj, mut poses) = (Trajectory::default(), Vec::<PoseSample>::new());
     let spec = SceneSpec::of(&p.scene.setup);
-    let ev = if o.trace {
-        gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut ((&mut traj, &mut poses), Trace))
-    } else {
-        gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut (&mut traj, &mut poses))
-    };
+    // the samples only for a CSV or a plot; progress on stderr when it takes long
+    let mut watch = Watch::new(o.csv.is_some() || o.plot.is_some(), o.trace);
+    let ev = gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch);
+    let (traj, poses) = (std::mem::take(&mut watch.traj), std::mem::take(&mut watch.poses));
+    drop(watch);
     if ev.scene.is_none() {
         let d = ev.discard.expect("a design without statics was discarded");
         bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
@@ -92,13 +80,13 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
     }
     if o.json {
         let v = SimulateJson { sim: SimulationRecord { record, method: o.method }, replay: o.replay.as_ref() };
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
     print_simulation(p, &record, o.method, integ.rtol);
     if o.csv.is_some() {
         let n = if kind == SceneKind::Free { poses.len() } else { traj.samples.len() };
-        println!("trajectory: {n} samples written to {}", o.csv.map(|c| c.display().to_string()).unwrap_or_default());
+        outln!("trajectory: {n} samples written to {}", o.csv.map(crate::cli::out::path).unwrap_or_default());
     }
     Ok(())
 }
@@ -116,21 +104,25 @@ struct SimulateJson<'a> {
 fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
     let kind = r.scene.unwrap_or_default();
     let x_off = r.x_off.unwrap_or(0.0);
-    println!("problem {}  scene {kind}  x_off {x_off} m  method {}  rtol {rtol:e}", p.name, method.as_str());
+    outln!(
+        "problem {}  scene {kind}  x_off {x_off} m  method {}  rtol {rtol:e}",
+        crate::cli::out::shown(&p.name),
+        method.as_str()
+    );
     let g = &r.grasp;
     if kind == SceneKind::Free {
-        println!("centred grasp (the criteria's prediction):");
+        outln!("centred grasp (the criteria's prediction):");
     }
     print_dyn(g);
-    println!("  f0 (rigid statics) {} / {} N", opt(r.statics.f0_1, 1.0, 4), opt(r.statics.f0_2, 1.0, 4));
+    outln!("  f0 (rigid statics) {} / {} N", opt(r.statics.f0_1, 1.0, 4), opt(r.statics.f0_2, 1.0, 4));
     let ok = |v: Option<bool>| match v {
         Some(true) => "ok",
         Some(false) => "VIOLATED",
         None => "not reached",
     };
-    println!("  criteria: impact {}  fold {}  force {}", ok(g.impact_ok), ok(g.fold_ok), ok(g.force_ok));
+    outln!("  criteria: impact {}  fold {}  force {}", ok(g.impact_ok), ok(g.fold_ok), ok(g.force_ok));
     if let Some(h) = &r.offset_scene {
-        println!(
+        outln!(
             "  hand force at the end ({}, {}) N (static ({}, {}) N); recentres {}",
             opt(h.hand_x_end, 1.0, 4),
             opt(h.hand_y_end, 1.0, 4),
@@ -143,20 +135,68 @@ fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
         print_free(f, r.x_off);
     }
     match &r.verdict.reason {
-        None => println!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),
-        Some(why) => println!("verdict    DISCARDED at stage 3: {why}"),
+        None => outln!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),
+        Some(why) => outln!("verdict    DISCARDED at stage 3: {why}"),
     }
+}
+
+/// Columns of a grasp trajectory CSV (`simulate --csv` in the centred and offset scenes,
+/// `replay --csv`): name and unit.
+pub const SAMPLE_COLUMNS: [(&str, &str); 16] = [
+    ("t", "s"),
+    ("q11", "rad"),
+    ("q21", "rad"),
+    ("q11_dot", "rad/s"),
+    ("q21_dot", "rad/s"),
+    ("theta2", "rad"),
+    ("delta_1", "m"),
+    ("delta_2", "m"),
+    ("fn_1", "N"),
+    ("fn_2", "N"),
+    ("ft_1", "N"),
+    ("ft_2", "N"),
+    ("hand_fy", "N"),
+    ("filtered_fy", "N"),
+    ("energy", "J"),
+    ("energy_excess", "J"),
+];
+
+/// Columns of the free scene's pose CSV (`simulate --scene free --csv`): name and unit.
+pub const POSE_COLUMNS: [(&str, &str); 14] = [
+    ("t", "s"),
+    ("gx", "m"),
+    ("gy", "m"),
+    ("gz", "m"),
+    ("qw", "-"),
+    ("qx", "-"),
+    ("qy", "-"),
+    ("qz", "-"),
+    ("tilt_deg", "deg"),
+    ("q11_1", "rad"),
+    ("q21_1", "rad"),
+    ("q11_2", "rad"),
+    ("q21_2", "rad"),
+    ("energy", "J"),
+];
+
+/// The `#` title and units lines and the header of a CSV with `columns`.
+fn csv_head(title: &str, columns: &[(&str, &str)]) -> String {
+    let units: Vec<String> = columns.iter().map(|(n, u)| format!("{n} [{u}]")).collect();
+    let names: Vec<&str> = columns.iter().map(|c| c.0).collect();
+    format!("# gripopt {title}\n# units: {}\n{}", units.join(" "), names.join(","))
+}
+
+/// Create the CSV file `path` (errors name it).
+fn create(path: &Path) -> Result<std::io::BufWriter<std::fs::File>> {
+    let f = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    Ok(std::io::BufWriter::new(f))
 }
 
 /// The grasp samples as CSV (`fmt` formats each number).
 pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(f64) -> String) -> Result<()> {
-    let mut w = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-    );
-    writeln!(
-        w,
-        "t,q11,q21,q11_dot,q21_dot,theta2,delta_1,delta_2,fn_1,fn_2,ft_1,ft_2,hand_fy,filtered_fy,energy,energy_excess"
-    )?;
+    let mut w = create(path)?;
+    let title = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
+    writeln!(w, "{}", csv_head(title, &SAMPLE_COLUMNS))?;
     for s in samples {
         let v = [
             s.t,
@@ -178,23 +218,22 @@ pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(
         ];
         writeln!(w, "{}", v.map(fmt).join(","))?;
     }
-    w.flush()?;
+    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
 
 /// The free scene's poses as CSV.
 fn write_poses_csv(path: &Path, poses: &[PoseSample]) -> Result<()> {
-    let mut w = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-    );
-    writeln!(w, "t,gx,gy,gz,qw,qx,qy,qz,tilt_deg,q11_1,q21_1,q11_2,q21_2,energy")?;
+    let mut w = create(path)?;
+    let title = "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
+    writeln!(w, "{}", csv_head(title, &POSE_COLUMNS))?;
     for p in poses {
         let [a, b, c, d] = p.fingers;
         let v =
             [p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), a, b, c, d, p.energy];
         writeln!(w, "{}", v.map(|x| format!("{x:e}")).join(","))?;
     }
-    w.flush()?;
+    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
 
@@ -259,10 +298,10 @@ pub fn replay_in_scene(
     let x = rec.design();
     let note = format!(
         "design {id} of {} re-simulated in the {ran} scene; the run recorded the {recorded} scene, so a different scene cannot be verified against the recording (nothing compared)",
-        dir.display()
+        crate::cli::out::path(dir)
     );
     if !json {
-        println!("{note}");
+        outln!("{note}");
     }
     let replay = ReplayInScene {
         replay: ReplaySource {

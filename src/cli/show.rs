@@ -1,10 +1,12 @@
-//! `gripopt show RUN`: a run's front sorted by an objective, with units, each design with
-//! its replay command (text or JSON). Reads the run's CSV files through the library's run
-//! folder reader, typed (they are rewritten every generation, so a running run can be
-//! shown too).
+//! `gripopt show RUN`: a run's state (running, stopped and resumable, interrupted,
+//! finished), its front sorted by an objective, with units, each design with its replay
+//! command (text or JSON); when no design is feasible, why; whether verify.csv checked the
+//! run's current generation. Reads the run's files through the library's run folder reader,
+//! typed (they are rewritten every generation, so a running run can be shown too).
 
+use crate::cli::out::path as quoted;
 use anyhow::{bail, Result};
-use gripopt::run::{DesignRow, RunFolder, DESIGN_COLUMNS};
+use gripopt::run::{DesignRow, RunFolder, RunInfo, RunState, DESIGN_COLUMNS};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -55,13 +57,49 @@ struct WithUnit {
 #[derive(Serialize)]
 struct ShowJson<'a> {
     run_dir: String,
-    status: gripopt::run::RunStatus,
+    /// running, stopped (killed or crashed), interrupted or finished.
+    status: &'static str,
+    /// The pid of the process running it (status running).
+    pid: Option<u32>,
+    /// `gripopt resume` can continue it now.
+    resumable: bool,
     completed_generations: u64,
+    generations: u64,
+    evaluations: u64,
+    /// Why no design is feasible (null when one is).
+    no_feasible_design: Option<Vec<String>>,
+    /// What verify.csv checked (null: no verify.csv).
+    verify: Option<VerifyJson>,
     file: &'a str,
     sorted_by: &'a str,
     direction: &'a str,
     units: BTreeMap<&'static str, &'static str>,
     designs: Vec<Shown<'a>>,
+}
+
+/// `show --json`'s verify.csv.
+#[derive(Serialize)]
+struct VerifyJson {
+    /// The run's completed generations when verify.csv was written.
+    generation: u64,
+    /// It checked the run's current state (the last checkpoint).
+    current: bool,
+}
+
+/// The run's state in words, with what to do (text of `show`).
+fn state_text(state: RunState, info: &RunInfo, dir: &std::path::Path, resumable: bool) -> String {
+    let d = quoted(dir);
+    let g = format!("{} of {} generations", info.completed_generations, info.generations);
+    match state {
+        RunState::Running(pid) => format!("running{}, {g}", pid.map(|p| format!(" (pid {p})")).unwrap_or_default()),
+        RunState::Stopped if resumable => format!("stopped (killed or crashed), {g}; resumable: `gripopt resume {d}`"),
+        RunState::Stopped => format!(
+            "stopped (killed or crashed) before its first checkpoint; nothing to resume: `{}`",
+            info.optimise_command(dir)
+        ),
+        RunState::Interrupted => format!("interrupted, {g}; resume with `gripopt resume {d}`"),
+        RunState::Finished => format!("finished, {g}"),
+    }
 }
 
 /// The objective `name` of a row.
@@ -84,7 +122,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
     let folder = RunFolder::open(dir)?;
     let file = if a.archive { "archive.csv" } else { "pareto.csv" };
     let run = folder.info()?;
-    let replay = |id: u64| format!("gripopt replay {} --design {id}", dir.display());
+    let replay = |id: u64| format!("gripopt replay {} --design {id}", quoted(dir));
     if let Some(id) = a.design {
         let mut found = None;
         for (f, read) in [
@@ -104,7 +142,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
         let Some((row, f)) = found else {
             bail!(
                 "--design {id}: not in pareto.csv, archive.csv or population.csv of {} (older designs: `{}`)",
-                dir.display(),
+                quoted(dir),
                 replay(id)
             )
         };
@@ -119,19 +157,31 @@ pub fn run(a: ShowArgs) -> Result<()> {
             }
             m.insert("file".into(), f.into());
             m.insert("replay".into(), replay(id).into());
-            println!("{}", serde_json::to_string_pretty(&m)?);
+            outln!("{}", serde_json::to_string_pretty(&m)?);
         } else {
-            println!("design {id} (from {f})");
+            outln!("design {id} (from {f})");
             for (k, v) in &cells {
                 let u = unit(k);
                 let u = if matches!(u, "-" | "text" | "bool") { String::new() } else { format!(" {u}") };
-                println!("  {k:<14} {}{u}", if v.is_empty() { "—" } else { v });
+                outln!("  {k:<14} {}{u}", if v.is_empty() { "—" } else { v });
             }
-            println!("  replay: {}", replay(id));
+            outln!("  replay: {}", replay(id));
         }
         return Ok(());
     }
-    let mut rows = if a.archive { folder.archive()? } else { folder.front()? };
+    let state = folder.state()?;
+    let resumable = folder.resumable()?;
+    let verified = folder.verified_generation()?;
+    let verify_current =
+        |v: &gripopt::run::VerifiedGeneration| run.checkpoint_sha256.as_deref() == Some(&v.checkpoint_sha256);
+    let why_none = run.discards.explain();
+    // a run killed in its first generation has no table yet
+    let none_yet = run.completed_generations == 0 && !dir.join(file).exists();
+    let mut rows = match (none_yet, a.archive) {
+        (true, _) => vec![],
+        (false, true) => folder.archive()?,
+        (false, false) => folder.front()?,
+    };
     rows.sort_by(|x, y| {
         // designs without the value go last, whichever way the objective is better
         let (a, b) = (objective(x, obj).filter(|v| !v.is_nan()), objective(y, obj).filter(|v| !v.is_nan()));
@@ -150,23 +200,50 @@ pub fn run(a: ShowArgs) -> Result<()> {
     if a.json {
         let v = ShowJson {
             run_dir: dir.display().to_string(),
-            status: run.status,
+            status: state.word(),
+            pid: match state {
+                RunState::Running(pid) => pid,
+                _ => None,
+            },
+            resumable,
             completed_generations: run.completed_generations,
+            generations: run.generations,
+            evaluations: run.evaluations,
+            no_feasible_design: why_none,
+            verify: verified.as_ref().map(|v| VerifyJson { generation: v.generation, current: verify_current(v) }),
             file,
             sorted_by: obj,
             direction: if maximise { "maximise" } else { "minimise" },
             units: DESIGN_COLUMNS.iter().map(|c| (c.0, c.1)).collect(),
             designs: rows.iter().map(|r| Shown { row: r, replay: replay(r.id) }).collect(),
         };
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let status = serde_json::to_value(run.status)?;
-    println!(
-        "{} ({}, {} generations): {} designs of {file}, sorted by {obj} ({}), best first",
-        dir.display(),
-        status.as_str().unwrap_or("?"),
-        run.completed_generations,
+    outln!("{}: {}", quoted(dir), state_text(state, &run, dir, resumable));
+    if let Some(v) = &verified {
+        if verify_current(v) {
+            outln!("verify.csv: generation {}'s front (the run's current state)", v.generation);
+        } else {
+            outln!(
+                "verify.csv: generation {}'s front; the run has changed since (now {} generations): run `gripopt verify {}` again",
+                v.generation,
+                run.completed_generations,
+                quoted(dir)
+            );
+        }
+    }
+    if none_yet {
+        outln!("no generation completed yet");
+        return Ok(());
+    }
+    if rows.is_empty() {
+        for l in why_none.iter().flatten() {
+            outln!("{l}");
+        }
+    }
+    outln!(
+        "{} designs of {file}, sorted by {obj} ({}), best first",
         rows.len(),
         if maximise { "higher is better" } else { "lower is better" }
     );
@@ -180,7 +257,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
         _ => n.to_string(),
     };
     let line: Vec<String> = shown.iter().map(|n| format!(" {:>13}", label(n))).collect();
-    println!("{}  replay", line.join(""));
+    outln!("{}  replay", line.join(""));
     for r in &rows {
         let x = r.parameters();
         let values = [None, r.max_offset, r.alpha, r.mean_force, r.t_stab, Some(x[0]), Some(x[1]), Some(x[2])];
@@ -210,7 +287,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
             .map(|o| format!("  {o} {}", r.robust.get(o, "p_stay").map_or("—".into(), |p| format!("{p:.3}"))))
             .collect();
         let p_stay = if p_stay.is_empty() { p_stay } else { format!("  P(stay):{p_stay}") };
-        println!("{}  {}{p_stay}", cells.join(""), replay(r.id));
+        outln!("{}  {}{p_stay}", cells.join(""), replay(r.id));
     }
     Ok(())
 }

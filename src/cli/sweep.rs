@@ -1,6 +1,6 @@
 //! `gripopt sweep`: a parameter study on a grid (see `gripopt::sweep`).
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use gripopt::params::{Design, Problem};
 use gripopt::sweep::{self, Stage, SweepSpec, Vary};
 use std::path::{Path, PathBuf};
@@ -100,6 +100,9 @@ pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
 /// Run the sweep.
 pub fn run(a: SweepArgs) -> Result<()> {
     let spec = spec_of(&a)?;
+    // the folder is checked before anything is evaluated (a run folder, a file a sweep did
+    // not write: refused); an earlier sweep's files are replaced
+    let earlier = sweep::out::check_out_folder(&a.out)?;
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(t) = a.threads {
         b = b.num_threads(t);
@@ -111,15 +114,9 @@ pub fn run(a: SweepArgs) -> Result<()> {
     );
     let rows = pool.install(|| sweep::run(&spec, &|| pb.inc(1)))?;
     pb.finish_and_clear();
-    sweep::write_csv(&a.out, &spec, &rows)?;
     let mut bounds = Vec::new();
     for name in &a.bisect {
         bounds.extend(pool.install(|| sweep::bisect(&spec, &rows, name, a.bisect_steps))?);
-    }
-    if !a.bisect.is_empty() {
-        let f = a.out.join("boundaries.csv");
-        std::fs::write(&f, sweep::boundaries_csv(&spec, &bounds))
-            .with_context(|| format!("writing {}", f.display()))?;
     }
     let ys: Vec<String> = if !a.ys.is_empty() {
         a.ys.clone()
@@ -130,6 +127,16 @@ pub fn run(a: SweepArgs) -> Result<()> {
             Stage::Kinematics => vec!["min_margin_deg".into()],
         }
     };
+    // sweep.csv first, listing every file this sweep writes (a sweep stopped halfway
+    // leaves nothing a later one cannot attribute)
+    let mut planned = sweep::plot::planned(&spec, &ys, &a.color);
+    if !a.bisect.is_empty() {
+        planned.push(sweep::out::BOUNDARIES_FILE.into());
+    }
+    sweep::write_outputs(&a.out, &spec, &rows, &earlier, &planned)?;
+    if !a.bisect.is_empty() {
+        sweep::write_boundaries(&a.out, &spec, &bounds)?;
+    }
     let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, &a.color, &bounds)?;
     summary(&a.out, &rows, &bounds, &files);
     Ok(())
@@ -143,17 +150,13 @@ fn summary(out: &Path, rows: &[sweep::Row], bounds: &[sweep::Boundary], files: &
             None => counts.push((r.verdict, 1)),
         }
     }
-    println!(
-        "{} points: {}",
-        rows.len(),
-        counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", ")
-    );
+    outln!("{} points: {}", rows.len(), counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", "));
     for b in bounds {
         let o = if b.others.is_empty() { String::new() } else { format!(" at {:?}", b.others) };
-        println!("boundary {}{}: {} at {} | {} at {}", b.name, o, b.verdict_lo, b.lo, b.verdict_hi, b.hi);
+        outln!("boundary {}{}: {} at {} | {} at {}", b.name, o, b.verdict_lo, b.lo, b.verdict_hi, b.hi);
     }
-    println!("wrote {}", out.join("sweep.csv").display());
+    outln!("wrote {}", crate::cli::out::path(&out.join("sweep.csv")));
     for f in files {
-        println!("wrote {}", f.display());
+        outln!("wrote {}", crate::cli::out::path(f));
     }
 }

@@ -1,5 +1,6 @@
 //! `gripopt verify RUN_DIR`: the free scene against the centred criteria's prediction.
 
+use crate::cli::out::path as quoted;
 use anyhow::{bail, Context, Result};
 use gripopt::run::{verify, Confusion, VerifySource};
 use std::path::PathBuf;
@@ -53,9 +54,9 @@ fn x_off_of(scene: &str) -> Result<Option<f64>> {
 
 /// Print the 2×2 table.
 fn print_table(c: &Confusion) {
-    println!("                     measured moved   measured stayed");
-    println!("  predicted moves    {:>14}   {:>15}", c.pred_moved, c.pred_stayed);
-    println!("  predicted stays    {:>14}   {:>15}", c.ok_moved, c.ok_stayed);
+    outln!("                     measured moved   measured stayed");
+    outln!("  predicted moves    {:>14}   {:>15}", c.pred_moved, c.pred_stayed);
+    outln!("  predicted stays    {:>14}   {:>15}", c.ok_moved, c.ok_stayed);
 }
 
 /// Run `gripopt verify`.
@@ -81,7 +82,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if gripopt::run::is_robust_run(&a.run_dir) {
         // a robust run: the front out of sample (docs/robust.md)
         let s = pool.install(|| gripopt::run::verify_robust(&a.run_dir))?;
-        print!("{}", s.report());
+        out!("{}", s.report());
         return Ok(());
     }
     let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
@@ -98,7 +99,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
     let plural = |n: usize| if n == 1 { "" } else { "s" };
-    println!("verified {} design{} in the free scene → {}", s.rows.len(), plural(s.rows.len()), s.file.display());
+    outln!("verified {} design{} in the free scene → {}", s.rows.len(), plural(s.rows.len()), quoted(&s.file));
     if let VerifySource::Sample { n, .. } = source {
         if s.designs < n {
             eprintln!(
@@ -110,10 +111,10 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         }
     }
     if let Some(r) = &s.recording {
-        println!(
+        outln!(
             "recorded to {} (open in Foxglove with {}, see docs/recording.md)",
-            r.display(),
-            a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
+            quoted(r),
+            quoted(&a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE))
         );
     }
     if !s.skipped.is_empty() {
@@ -130,17 +131,17 @@ pub fn run(a: VerifyArgs) -> Result<()> {
             *why.entry(r.free_end()).or_default() += 1;
         }
         let why: Vec<String> = why.into_iter().map(|(w, k)| format!("{k} {w}")).collect();
-        println!(
+        outln!(
             "  not observed (the free scene ended before t_obs; left out of the table): {} ({})",
             c.not_observed,
             why.join(", ")
         );
     }
     if c.total() > 0 {
-        println!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
+        outln!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
     }
     let n = |f: &dyn Fn(&gripopt::run::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
-    println!(
+    outln!(
         "  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}",
         n(&|r| r.toppled == Some(true)),
         n(&|r| r.escaped == Some(true)),
@@ -149,7 +150,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         n(&|r| r.force_margin < 0.0)
     );
     if let Some((t, r)) = s.median_energy_ratio {
-        println!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
+        outln!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
     }
     Ok(())
 }

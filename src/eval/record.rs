@@ -6,7 +6,8 @@
 
 use super::record_robust::RobustRecord;
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
-use super::stages::{Cause, Evaluation, PartialGrasp, StaticsResult};
+use super::stages::{Cause, Evaluation, PartialGrasp, Reason, StaticsResult};
+use crate::model::SweepFailure;
 use crate::params::{DesignParameters, ForceModel, SceneKind};
 use crate::sim::Method;
 use serde::{Deserialize, Serialize};
@@ -113,7 +114,11 @@ pub struct StaticsRecord {
     pub fhandmu_y: Option<f64>,
     /// Form closed at x_off = 0.
     pub form_closed_0: Option<bool>,
-    /// Objective 1 (m); −Δ_off, the optimiser's placeholder, when not form closed at 0.
+    /// The offset scan admits the centred object (x_off = 0): max_offset is computed
+    /// (MODEL.md §6.7; false: max_offset is null, as in the CSVs).
+    pub form_closed: Option<bool>,
+    /// Objective 1 (m); null when not computed, also when not form closed at 0 (the
+    /// optimiser ranks such a design with −Δ_off internally, a placeholder never reported).
     pub max_offset: Option<f64>,
     /// What ended the offset scan (null if off_max was reached).
     pub max_offset_ended_by: Option<String>,
@@ -207,7 +212,11 @@ impl KinematicsRecord {
             gamma: f.map(|f| f.gamma),
             sigma: f.map(|f| f.sigma),
             masses: f.map(|f| f.mass.m),
-            min_margin_deg: ev.kin.map(|k| k.sweep.min_margin.to_degrees()),
+            // a sweep that discarded the design computed its margin too (the reason prints it)
+            min_margin_deg: ev.kin.map(|k| k.sweep.min_margin.to_degrees()).or_else(|| match ev.discard?.reason {
+                Reason::Sweep(SweepFailure::Margin(s)) => Some(s.min_margin.to_degrees()),
+                _ => None,
+            }),
         }
     }
 }
@@ -243,7 +252,8 @@ impl StaticsRecord {
             fhandmu_x: hand_mu.map(|v| v[0]),
             fhandmu_y: hand_mu.map(|v| v[1]),
             form_closed_0: st.map(|s| s.form_closed_0),
-            max_offset: st.map(|s| s.max_offset),
+            form_closed: st.map(|s| s.max_offset >= 0.0),
+            max_offset: st.map(|s| s.max_offset).filter(|m| *m >= 0.0),
             max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
             alpha: st.and_then(|s| fin(s.alpha)),
             mean_force: st.map(|s| s.mean_force),
@@ -257,8 +267,8 @@ impl StaticsRecord {
 }
 
 impl Record {
-    /// Objectives in their natural sense: max_offset (m; negative: the placeholder of a
-    /// design not form closed at 0), α, F̃ (N), t_stab (s); None where not computed.
+    /// Objectives in their natural sense: max_offset (m; None also for a design not form
+    /// closed at 0), α, F̃ (N), t_stab (s); None where not computed.
     pub fn objectives(&self) -> [Option<f64>; 4] {
         if let Some(r) = &self.robust {
             let o = &r.objectives;
@@ -281,8 +291,8 @@ impl Record {
         }
         Some([self.grasp.work.steps?, self.grasp.work.rhs_evals?])
     }
-    /// Form closed at the centred object (by the sign of max_offset, MODEL.md §6.7).
+    /// Form closed at the centred object (the offset scan admits x_off = 0, MODEL.md §6.7).
     pub fn form_closed(&self) -> Option<bool> {
-        self.statics.max_offset.map(|m| m >= 0.0)
+        self.statics.form_closed
     }
 }

@@ -152,7 +152,9 @@ impl GraspRecord {
         GraspRecord {
             impact: fc.map_or_else(ImpactRecord::default, |f| ImpactRecord::of(f.t, f.phalanx, &f.impact)),
             theta2_first_contact: fc.map(|f| f.theta2),
-            min_force_margin: fin(d.min_force_margin),
+            // watched only once a contact force acts: null when the simulation ended at or
+            // before its first contact (a design discarded at its first impact)
+            min_force_margin: fin(d.min_force_margin).filter(|_| fc.is_some_and(|f| d.t_end > f.t)),
             static_force_margin: fin(d.static_force_margin),
             t_stab: d.t_stab,
             f_stab_1: d.t_stab.map(|_| d.f_end[0]),

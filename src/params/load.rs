@@ -361,7 +361,9 @@ impl Problem {
     }
 }
 
-/// The rules between sections: the free scene needs the hand horizontal (MODEL.md §14.1).
+/// The rules between sections: the free scene needs the hand horizontal (MODEL.md §14.1),
+/// and a ground that bears the object (its static sink under its weight at most
+/// [`MAX_GROUND_SINK`]).
 fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
     if scene.setup.kind == SceneKind::Free && scene.env.g_eq != 0.0 {
         return Err(Checker { file: path }.fail(
@@ -370,5 +372,30 @@ fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
             "must be 0 for the free scene ([scene] kind = \"free\": the hand horizontal, MODEL.md §14.1)",
         ));
     }
+    if scene.setup.kind == SceneKind::Free {
+        // Hertz points K_g δ^1.5 share the weight: δ = (m g / (n K_g))^(2/3)
+        let st = &scene.setup;
+        let per_point = scene.object.mass() * scene.env.g / st.ground_points as f64;
+        let sink = (per_point / st.ground_k).powf(2.0 / 3.0);
+        if sink > MAX_GROUND_SINK {
+            let least = per_point / MAX_GROUND_SINK.powf(1.5);
+            return Err(Checker { file: path }.fail(
+                "scene.ground_k",
+                super::limits::num(st.ground_k),
+                &format!(
+                    "the object would sink {:.3} mm into the ground under its own weight ({} points of K_g δ^1.5 bearing {:.3} N each); the free scene models a rigid floor: at least {} N/m^1.5 keeps the sink within {} mm",
+                    sink * 1e3,
+                    st.ground_points,
+                    per_point,
+                    super::limits::num(least),
+                    MAX_GROUND_SINK * 1e3
+                ),
+            ));
+        }
+    }
     Ok(())
 }
+
+/// The largest static sink of the object into the ground the free scene accepts (m): the
+/// ground is a stiff contact standing in for a rigid floor (MODEL.md §14).
+pub const MAX_GROUND_SINK: f64 = 1e-3;

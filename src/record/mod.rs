@@ -37,7 +37,7 @@ mod writer;
 
 pub use entry::{DesignEntry, Recordable};
 pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
-pub use index::{read_index, ShardEntry};
+pub use index::{read_index, ProblemUse, ShardEntry};
 pub use layout::{
     layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };
@@ -46,8 +46,8 @@ pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
 };
 pub use proto::{GraspSeries, SERIES_NAME};
-pub use recover::{index_entry_from_shard, recover, shard_generation, Recovery};
-pub use replay::{read_design, replay, Recorded, Replay};
+pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
+pub use replay::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{

@@ -113,8 +113,9 @@ impl RecordOptions {
         }
     }
     /// Check the options a caller set (as flags are named: `--record-every`, `--scene-ms`,
-    /// `--zstd-level`, `--zstd-threads`): every ≥ 1, a finite scene interval ≥ 0, zstd
-    /// levels 1 to 22, at most 256 zstd threads.
+    /// `--zstd-level`, `--zstd-threads`, `--record-full`): every ≥ 1 and only with a
+    /// full-resolution recording of trajectories, full resolution only with trajectories,
+    /// a finite scene interval ≥ 0, zstd levels 1 to 22, at most 256 zstd threads.
     pub fn validate(&self) -> crate::Result<()> {
         let bad = |field: &str, value: String, rule: &str| {
             Err(crate::Error::InvalidField {
@@ -126,6 +127,25 @@ impl RecordOptions {
         };
         if self.every == 0 {
             return bad("--record-every", "0".into(), "must be at least 1");
+        }
+        // flags that would be silently ignored: nothing to thin or keep in full
+        let no_trajectories = !self.enabled || self.trajectories == TrajectoryKeep::None;
+        if no_trajectories && self.every != 1 {
+            return bad(
+                "--record-every",
+                self.every.to_string(),
+                "no trajectory is recorded (--record none or designs)",
+            );
+        }
+        if no_trajectories && self.resolution == Resolution::Full {
+            return bad("--record-full", "given".into(), "no trajectory is recorded (--record none or designs)");
+        }
+        if self.every != 1 && self.resolution == Resolution::Compact {
+            return bad(
+                "--record-every",
+                self.every.to_string(),
+                "thins a full-resolution recording only: give --record-full too (the compact recording keeps its own subset of samples)",
+            );
         }
         if !(self.scene_dt.is_finite() && self.scene_dt >= 0.0) {
             return bad("--scene-ms", format!("{}", self.scene_dt * 1e3), "must be a number >= 0");

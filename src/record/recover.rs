@@ -1,14 +1,21 @@
 //! Recovery of a recording folder when a run resumes: the index is rebuilt from the shards
-//! themselves where it is missing, corrupt or incomplete, and nothing the checkpoint covers
-//! is ever deleted. Only shards of generations after the checkpoint (left by a generation
-//! that was being recorded when the run stopped) and temporary files are removed. A covered
-//! shard that must be re-indexed but cannot be read stops the recovery before anything is
-//! removed (its designs would silently leave the index); a covered generation without a
-//! shard is reported, and stays visible as a gap in the index's ids.
+//! themselves where it is missing, unreadable, corrupt or incomplete (whatever the damage:
+//! it is read as bytes, and every line is checked against its shard), every shard the
+//! checkpoint covers is checked against what wrote it (its generation, and the run that
+//! wrote it), and nothing the checkpoint covers is ever deleted. Shards of generations
+//! after the checkpoint (left by a generation that was being recorded when the run stopped)
+//! are removed when they are provably this run's (their metadata names it); one that
+//! cannot be read, or that another run wrote, is set aside (renamed, never deleted).
+//! gripopt's temporary files (`*.tmp`) are removed. A covered shard that must be re-indexed
+//! but cannot be read, or that another run wrote, stops the recovery before anything is
+//! changed (its designs would silently leave the index, or be taken for this run's); a
+//! covered generation without a shard is reported, and stays visible as a gap in the
+//! index's ids.
 //!
-//! A shard's index line is rebuilt from the MCAP file alone, without decoding any message
-//! payload: the generation, the first and last design ids and the number of designs from
-//! its `gripopt.run` metadata record; where a key is missing, the generation from the file
+//! A shard's index line is rebuilt from the MCAP file alone (mapped, only its summary and
+//! metadata read), without decoding any message payload: the generation, the first and last
+//! design ids, the number of designs, the run id and the problem's hash from its
+//! `gripopt.run` metadata record; where a key is missing, the generation from the file
 //! name, the ids from the chunk indexes' log times (design k lives in
 //! [epoch + k s, epoch + k s + 1 s), `epoch_s` from the same record, else 0) and the count
 //! from the `/designs` channel's statistics; the size from the file system.
@@ -24,8 +31,12 @@ pub struct Recovery {
     pub index: Vec<ShardEntry>,
     /// Index lines rebuilt from shards (the index was missing, corrupt or lacked them).
     pub rebuilt: Vec<String>,
-    /// Files removed (shards of generations after the checkpoint, temporary files).
+    /// Files removed (this run's shards of generations after the checkpoint, temporary
+    /// files).
     pub removed: Vec<String>,
+    /// Files set aside (renamed to `NAME.set-aside`): shards of generations after the
+    /// checkpoint that cannot be read or that another run wrote.
+    pub set_aside: Vec<String>,
     /// Generations the checkpoint covers that have no shard (moved away or lost): their
     /// designs are not in the recording; the index keeps the gap in ids, which
     /// [`read_design`](super::read_design) names.
@@ -34,7 +45,8 @@ pub struct Recovery {
 
 impl Recovery {
     /// One warning per run of consecutive generations without a shard (see `missing`),
-    /// naming the recording folder `dir`, the generations and the shard files.
+    /// naming the recording folder `dir`, the generations and the shard files; one per
+    /// file set aside.
     pub fn warnings(&self, dir: &Path) -> Vec<String> {
         let mut out = vec![];
         let mut k = 0;
@@ -53,6 +65,9 @@ impl Recovery {
             };
             out.push(format!("{}: {gens} no shard ({files}): those designs are not in the recording; restore the file(s) and resume again to index them", dir.display()));
         }
+        for f in &self.set_aside {
+            out.push(format!("{}: {f} is not this run's shard (unreadable, or written by another run) and lies after the checkpoint: set aside as {f}.set-aside", dir.display()));
+        }
         out
     }
 }
@@ -62,11 +77,18 @@ pub fn shard_generation(name: &str) -> Option<u64> {
     name.strip_prefix("gen-")?.strip_suffix(".mcap")?.parse().ok()
 }
 
+fn mmap(path: &Path) -> Result<memmap2::Mmap> {
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "cannot open the shard", e))?;
+    // SAFETY: shards are written to a temporary name and renamed when complete; nothing
+    // writes to a shard after that, so the mapping does not change under us.
+    unsafe { memmap2::Mmap::map(&f) }.map_err(|e| Error::io(path, "cannot map the shard", e))
+}
+
 /// Rebuild the index line of one shard from the file (see the module doc).
 pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
     let file = path.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string();
     let bad = |message: String| Error::Recording { path: path.to_path_buf(), message };
-    let buf = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the shard", e))?;
+    let buf = mmap(path)?;
     let summary = mcap::Summary::read(&buf)
         .map_err(|source| Error::DamagedRecording {
             path: path.to_path_buf(),
@@ -75,6 +97,7 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         })?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
     let (mut generation, mut first, mut last, mut count, mut epoch_s) = (None, None, None, None, 0u64);
+    let (mut run_id, mut problem_sha256) = (None, None);
     for mi in summary.metadata_indexes.iter().filter(|m| m.name == "gripopt.run") {
         let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording {
             path: path.to_path_buf(),
@@ -87,6 +110,8 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         last = num("last_id");
         count = num("designs");
         epoch_s = num("epoch_s").unwrap_or(0);
+        run_id = m.metadata.get("run_id").cloned();
+        problem_sha256 = m.metadata.get("problem_sha256").cloned();
     }
     let generation = generation
         .or_else(|| shard_generation(&file))
@@ -110,6 +135,8 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         last_id: last.unwrap_or(id_at(end)),
         designs,
         bytes,
+        run_id,
+        problem_sha256,
     })
 }
 
@@ -123,48 +150,85 @@ fn detail(e: &Error) -> String {
     }
 }
 
-/// Recover the recording folder `dir` of a run whose checkpoint covers generations
-/// `1..=completed`: keep every shard of those generations in the index (rebuilding lines
-/// the index lacks), remove shards of later generations and `.tmp` files. Writes nothing
-/// else; the caller writes the returned index.
-///
-/// A shard of a covered generation whose index line must be rebuilt but which cannot be
-/// read is an error ([`Error::Recording`], naming the shard), returned before anything is
-/// removed: its designs would otherwise vanish from the index. A covered generation with
-/// no shard at all (moved away) is reported in [`Recovery::missing`].
-pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
-    let idx_path = dir.join("index.jsonl");
-    let text = match std::fs::read_to_string(&idx_path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
-        Err(e) => return Err(Error::io(&idx_path, "cannot read the recording index", e)),
-    };
-    // lines that parse and name an existing shard are kept; anything else is rebuilt
-    let mut listed: Vec<ShardEntry> = text.lines().filter_map(|l| serde_json::from_str::<ShardEntry>(l).ok()).collect();
-    let mut out = Recovery::default();
+/// The lines of `index.jsonl` that parse, whatever else the file holds (bytes that are not
+/// UTF-8, a cut line, garbage); none when it cannot be read at all.
+fn readable_lines(path: &Path) -> Vec<ShardEntry> {
+    let bytes = std::fs::read(path).unwrap_or_default();
+    String::from_utf8_lossy(&bytes).lines().filter_map(|l| serde_json::from_str::<ShardEntry>(l).ok()).collect()
+}
+
+/// The shard files (`gen-NNNNN.mcap`) and the other names of the recording folder `dir`.
+fn names(dir: &Path) -> Result<Vec<String>> {
     let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the recording folder", e))?;
     let mut names: Vec<String> = rd.flatten().map(|f| f.file_name().to_string_lossy().to_string()).collect();
     names.sort();
+    Ok(names)
+}
+
+/// The index of the recording folder `dir` for a reader: `index.jsonl` when it can be read
+/// and every line parses; otherwise (missing, unreadable, damaged: whatever the damage)
+/// [`rebuilt_index`].
+pub fn index_or_rebuilt(dir: &Path) -> Result<Vec<ShardEntry>> {
+    match super::index::read_index(dir) {
+        Ok(index) => Ok(index),
+        Err(_) => rebuilt_index(dir),
+    }
+}
+
+/// The index of the recording folder `dir` rebuilt in memory from its shards (unreadable
+/// shards left out; nothing is written), sorted by generation.
+pub fn rebuilt_index(dir: &Path) -> Result<Vec<ShardEntry>> {
+    let mut out = vec![];
+    for n in names(dir)? {
+        if shard_generation(&n).is_some() {
+            if let Ok(e) = index_entry_from_shard(&dir.join(&n)) {
+                out.push(e);
+            }
+        }
+    }
+    out.sort_by_key(|e| e.generation);
+    Ok(out)
+}
+
+/// Recover the recording folder `dir` of a run whose checkpoint covers generations
+/// `1..=completed` (see [`recover_run`]; no run id: shards are not checked for the run
+/// that wrote them).
+pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
+    recover_run(dir, completed, None)
+}
+
+/// Recover the recording folder `dir` of run `run_id` whose checkpoint covers generations
+/// `1..=completed`: keep every shard of those generations in the index (rebuilding lines
+/// the index lacks or gets wrong), remove this run's shards of later generations and `.tmp`
+/// files, set aside later shards that are not provably this run's. Writes nothing else;
+/// the caller writes the returned index.
+///
+/// A shard of a covered generation that another run wrote (its metadata's `run_id`), or
+/// whose index line must be rebuilt but which cannot be read, is an error
+/// ([`Error::Recording`], naming the shard), returned before anything is changed. A covered
+/// generation with no shard at all (moved away) is reported in [`Recovery::missing`].
+pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<Recovery> {
+    let mut listed = readable_lines(&dir.join("index.jsonl"));
+    let mut out = Recovery::default();
+    let names = names(dir)?;
     listed.retain(|e| names.contains(&e.file) && shard_generation(&e.file) == Some(e.generation));
-    // first every covered shard (reading only), so that an error leaves the folder untouched
-    let mut remove = vec![];
+    let foreign = |e: &ShardEntry| matches!((run_id, e.run_id.as_deref()), (Some(a), Some(b)) if a != b);
+    // first every shard (reading only), so that an error leaves the folder untouched
+    let (mut remove, mut aside) = (vec![], vec![]);
     for n in &names {
         if n.ends_with(".tmp") {
             remove.push(n.clone());
             continue;
         }
         let Some(g) = shard_generation(n) else { continue };
-        if g > completed {
-            remove.push(n.clone());
-            continue;
-        }
         let p = dir.join(n);
-        if let Some(e) = listed.iter().find(|e| &e.file == n) {
-            let size = std::fs::metadata(&p).map(|m| m.len()).ok();
-            if size == Some(e.bytes) {
-                out.index.push(e.clone());
-                continue;
+        let read = index_entry_from_shard(&p);
+        if g > completed {
+            match read {
+                Ok(e) if !foreign(&e) => remove.push(n.clone()),
+                _ => aside.push(n.clone()),
             }
+            continue;
         }
         let refuse = |why: String| {
             Error::Recording {
@@ -172,18 +236,36 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
             message: format!("{why}; the index cannot be rebuilt without it (generation {g} is covered by the checkpoint): restore the file, or move it away to resume without its designs"),
         }
         };
-        match index_entry_from_shard(&p) {
-            Ok(e) if e.generation == g => {
-                out.rebuilt.push(n.clone());
-                out.index.push(e);
+        match read {
+            Ok(e) if foreign(&e) => {
+                return Err(Error::Recording {
+                    path: p.clone(),
+                    message: format!("written by another run (run id {}, this run's {}): it is not this run's generation {g}; restore this run's shard, or move it away to resume without its designs", e.run_id.as_deref().unwrap_or("?"), run_id.unwrap_or("?")),
+                })
             }
-            Ok(e) => {
+            Ok(e) if e.generation != g => {
                 return Err(refuse(format!(
                     "its metadata names generation {}, its file name generation {g}",
                     e.generation
                 )))
             }
-            Err(e) => return Err(refuse(format!("cannot read its metadata ({})", detail(&e)))),
+            Ok(e) => {
+                let line = listed.iter().find(|l| &l.file == n);
+                let same = line.is_some_and(|l| {
+                    (l.first_id, l.last_id, l.designs, l.bytes) == (e.first_id, e.last_id, e.designs, e.bytes)
+                });
+                if !same {
+                    out.rebuilt.push(n.clone());
+                }
+                out.index.push(e);
+            }
+            Err(err) => match listed.iter().find(|l| &l.file == n) {
+                // listed with its size: kept (a read names the damage when it is read)
+                Some(l) if std::fs::metadata(&p).map(|m| m.len()).ok() == Some(l.bytes) && !foreign(l) => {
+                    out.index.push(l.clone())
+                }
+                _ => return Err(refuse(format!("cannot read its metadata ({})", detail(&err)))),
+            },
         }
     }
     out.index.sort_by_key(|e| e.generation);
@@ -197,6 +279,16 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
         };
         std::fs::remove_file(&p).map_err(|e| Error::io(&p, what, e))?;
         out.removed.push(n);
+    }
+    for n in aside {
+        // a name not taken: nothing is overwritten
+        let to = (0..)
+            .map(|k| dir.join(if k == 0 { format!("{n}.set-aside") } else { format!("{n}.set-aside.{k}") }))
+            .find(|t| !t.exists())
+            .expect("a free name");
+        let p = dir.join(&n);
+        std::fs::rename(&p, &to).map_err(|e| Error::io(&p, "cannot set aside the unreadable or foreign shard", e))?;
+        out.set_aside.push(n);
     }
     Ok(out)
 }

@@ -2,7 +2,7 @@
 //! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
 //! verify that the new trajectory equals the recorded one.
 
-use super::index::{read_index, ShardEntry};
+use super::index::{read_index, ProblemUse, ShardEntry};
 use super::messages::{at_precision, samples_from, window_start_ns};
 use super::proto::GraspSeries;
 use super::schema::DesignMessage;
@@ -25,6 +25,9 @@ pub struct Recorded {
     pub samples: Vec<Sample>,
     /// Resolution of the recorded trajectory (compact: values to f32 precision).
     pub resolution: Resolution,
+    /// SHA-256 of the problem the design was evaluated with, as the shard's metadata says
+    /// (absent in shards of a very early gripopt).
+    pub problem_sha256: Option<String>,
 }
 
 impl Recorded {
@@ -56,6 +59,76 @@ pub struct Replay {
     pub recomputed_feasible: bool,
     /// The re-evaluation's record.
     pub fresh: Record,
+    /// The run's problem file the design was re-simulated with (the one its generation was
+    /// evaluated with, run.json's `problems`).
+    pub problem_file: PathBuf,
+    /// Why the re-simulation cannot verify the recording whatever it gives: the problem
+    /// file was edited after the design was recorded (its SHA-256 is not the one recorded).
+    pub problem_note: Option<String>,
+}
+
+/// The problem file a run evaluated one generation with, loaded and checked.
+#[derive(Debug, Clone)]
+pub struct RunProblem {
+    /// The problem.
+    pub problem: Problem,
+    /// Its file in the run folder.
+    pub file: PathBuf,
+    /// SHA-256 the run recorded for it (run.json).
+    pub recorded_sha256: String,
+    /// SHA-256 of the file as it is now.
+    pub sha256: String,
+}
+
+impl RunProblem {
+    /// Why the file cannot be the one the run used (without the file's name): edited since
+    /// (its hash differs from the recorded one); None when it is the run's.
+    pub fn edited(&self) -> Option<String> {
+        (self.sha256 != self.recorded_sha256).then(|| {
+            format!(
+                "edited after the run used it (sha256 {}, the run recorded {})",
+                &self.sha256[..12],
+                &self.recorded_sha256[..self.recorded_sha256.len().min(12)]
+            )
+        })
+    }
+}
+
+/// The parts of run.json the record layer reads (the rest is the run layer's).
+#[derive(serde::Deserialize)]
+struct RunJson {
+    recording: RecordOptions,
+    #[serde(default)]
+    problem_sha256: String,
+    #[serde(default)]
+    problems: Vec<ProblemUse>,
+}
+
+fn run_json(run_dir: &Path) -> Result<RunJson> {
+    let path = run_dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, "cannot read", e))?;
+    serde_json::from_str::<RunJson>(&text).map_err(|source| Error::Json {
+        path,
+        what: "invalid run.json (fields `recording`, `problem_sha256`, `problems`)",
+        source,
+    })
+}
+
+/// The problem file of run folder `run_dir` that evaluated generation `generation` (run.json's
+/// `problems`; a run folder without that list has one problem, `problem.toml`), loaded, with
+/// the hash the run recorded for it and its hash now (see [`RunProblem::edited`]).
+pub fn problem_of_generation(run_dir: &Path, generation: u64) -> Result<RunProblem> {
+    let run = run_json(run_dir)?;
+    let list = if run.problems.is_empty() {
+        vec![ProblemUse { first_generation: 1, file: "problem.toml".into(), sha256: run.problem_sha256 }]
+    } else {
+        run.problems
+    };
+    let entry = ProblemUse::of_generation(&list, generation).expect("a non-empty list");
+    let file = run_dir.join(&entry.file);
+    let problem = Problem::load(&file)?;
+    let sha256 = crate::fsutil::sha256_hex(problem.source_text.as_bytes());
+    Ok(RunProblem { problem, file, recorded_sha256: entry.sha256.clone(), sha256 })
 }
 
 /// Compare the recorded `/designs` message with the re-evaluation's record `fresh`:
@@ -252,10 +325,24 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
             message: format!("no recording ({} is missing; was the run started with --record none?)", dir.display()),
         });
     }
-    let index = read_index(&dir)?;
-    let entry = index
-        .iter()
-        .find(|e| e.first_id <= id && id <= e.last_id)
+    // the index, or (unreadable, or without the design) the index rebuilt from the shards
+    let holds = |index: &[ShardEntry]| index.iter().find(|e| e.first_id <= id && id <= e.last_id).cloned();
+    let (index, entry) = match read_index(&dir) {
+        Ok(index) => match holds(&index) {
+            Some(e) => (index, Some(e)),
+            None => {
+                let rebuilt = super::recover::rebuilt_index(&dir)?;
+                let e = holds(&rebuilt);
+                (if e.is_some() { rebuilt } else { index }, e)
+            }
+        },
+        Err(_) => {
+            let rebuilt = super::recover::rebuilt_index(&dir)?;
+            let e = holds(&rebuilt);
+            (rebuilt, e)
+        }
+    };
+    let entry = entry
         .ok_or_else(|| Error::Recording { path: dir.join("index.jsonl"), message: not_indexed(&dir, &index, id) })?;
     let path = dir.join(&entry.file);
     let buf = mmap(&path)?;
@@ -321,7 +408,8 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     }
     let samples = samples_from(&series)
         .ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
-    Ok(Recorded { file: path, record, samples, resolution })
+    let problem_sha256 = meta.metadata.get("problem_sha256").cloned();
+    Ok(Recorded { file: path, record, samples, resolution, problem_sha256 })
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -332,27 +420,31 @@ fn rel(a: f64, b: f64) -> f64 {
     }
 }
 
-/// Replay design `id`: read it, re-simulate it with the run's problem (`problem.toml` in
-/// the run folder) and recording options, and compare.
+/// Replay design `id`: read it, re-simulate it with the run's problem of its generation
+/// (`problem.toml`, or after a forced resume with another problem the earlier
+/// `problem-G.toml`, as run.json's `problems` say) and the run's recording options, and
+/// compare. A problem file edited since (its hash is not the one the run or the shard
+/// recorded) is used, but the replay is then not verified ([`Replay::problem_note`]).
 pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let recorded = read_design(run_dir, id)?;
-    let problem = Problem::load(run_dir.join("problem.toml"))?;
-    let run_json = run_dir.join("run.json");
-    let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
-    // the recording options of run.json (its other fields are the run layer's)
-    #[derive(serde::Deserialize)]
-    struct RunJson {
-        recording: RecordOptions,
-    }
-    let opts = serde_json::from_str::<RunJson>(&text)
-        .map_err(|source| Error::Json { path: run_json.clone(), what: "invalid run.json (field `recording`)", source })?
-        .recording;
+    let run = problem_of_generation(run_dir, recorded.record.generation)?;
+    let opts = run_json(run_dir)?.recording;
+    let problem_note = run.edited().map(|why| format!("{}: {why}", run.file.display())).or_else(|| {
+        let shard = recorded.problem_sha256.as_deref().filter(|s| *s != run.sha256)?;
+        Some(format!(
+            "{} (sha256 {}) is not the problem design {id} was recorded with (sha256 {}, its shard says)",
+            run.file.display(),
+            &run.sha256[..12],
+            &shard[..shard.len().min(12)]
+        ))
+    });
+    let problem = run.problem.clone();
     let design = recorded.design();
     if problem.robust.is_some() {
         // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
         let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
         let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
-        let verified = alike && vmaxd == 0.0 && recorded.record.robust == fresh.robust;
+        let verified = alike && vmaxd == 0.0 && recorded.record.robust == fresh.robust && problem_note.is_none();
         return Ok(Replay {
             compared: 0,
             values_compared,
@@ -361,6 +453,8 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
             recomputed_feasible: fresh.verdict.feasible,
             recorded,
             fresh,
+            problem_file: run.file,
+            problem_note,
         });
     }
     let mut traj = Trajectory::default();
@@ -423,7 +517,8 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     };
     let fresh_record = Record::from_eval(&ev);
     let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh_record);
-    let verified = same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol;
+    let verified =
+        same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol && problem_note.is_none();
     let maxd = maxd.max(vmaxd);
     Ok(Replay {
         compared: fresh.len().min(recorded.samples.len()),
@@ -433,5 +528,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         max_difference: if same_len && alike { maxd } else { f64::INFINITY },
         recomputed_feasible: ev.feasible(),
         fresh: fresh_record,
+        problem_file: run.file,
+        problem_note,
     })
 }

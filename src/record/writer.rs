@@ -209,15 +209,19 @@ impl ShardTask {
             last_id,
             designs: designs.len() as u64,
             bytes,
+            run_id: self.meta.get("run_id").cloned(),
+            problem_sha256: self.meta.get("problem_sha256").cloned(),
         };
         Ok(Some((e, t0.elapsed().as_secs_f64())))
     }
 }
 
 impl Recorder {
-    /// Open `RUN_DIR/recording`, dropping shards of generations after `completed` (left by a
-    /// generation that was being recorded when the run stopped); an error when a covered
-    /// shard cannot be re-indexed (see `recover`).
+    /// Open `RUN_DIR/recording`, dropping this run's shards of generations after `completed`
+    /// (left by a generation that was being recorded when the run stopped); an error when a
+    /// covered shard cannot be re-indexed or was written by another run (see `recover_run`;
+    /// the run is `meta`'s `run_id`, which every shard and index line then carries, with
+    /// `meta`'s `problem_sha256`).
     pub fn open(
         run_dir: &Path,
         problem: Problem,
@@ -229,7 +233,7 @@ impl Recorder {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
         // never deletes what the checkpoint covers; refuses (touching nothing) when a covered
         // shard must be re-indexed but cannot be read
-        let recovery = super::recover::recover(&dir, completed)?;
+        let recovery = super::recover::recover_run(&dir, completed, meta.get("run_id").map(String::as_str))?;
         let warnings = recovery.warnings(&dir);
         write_index(&dir, &recovery.index)?;
         Ok(Recorder {

@@ -4,17 +4,18 @@
 //! of its own content (`sha256`: the canonical JSON of every other field, keys sorted), so
 //! that a hand-edited or damaged checkpoint is refused (unless forced).
 
+use super::archive::Archive;
 use crate::fsutil::write_atomic;
 use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::{Error, Result};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use std::path::Path;
 
 /// Format tag written into every checkpoint.
 pub const FORMAT: &str = "gripopt-checkpoint";
-/// Format version (3: each individual's info holds its typed evaluation record).
-pub const VERSION: u32 = 3;
+/// Format version (3: each individual's info holds its typed evaluation record; 4: the
+/// run's id and archive inside).
+pub const VERSION: u32 = 4;
 
 /// The checkpoint's content checksum did not match (or was missing).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -45,6 +46,13 @@ pub struct Checkpoint<I> {
     pub state: Nsga2State<I>,
     /// Wall time spent so far (s).
     pub wall_s: f64,
+    /// The run that wrote it (run.json's `run_id`).
+    #[serde(default)]
+    pub run_id: String,
+    /// The run's archive after the same generation (None: written without one, e.g. by a
+    /// benchmark).
+    #[serde(default)]
+    pub archive: Option<Archive<I>>,
 }
 
 impl ChecksumMismatch {
@@ -58,11 +66,7 @@ impl ChecksumMismatch {
     }
 }
 
-/// SHA-256 hex of bytes.
-pub fn sha256_hex(data: &[u8]) -> String {
-    let d = Sha256::digest(data);
-    d.iter().map(|b| format!("{b:02x}")).collect()
-}
+pub use crate::fsutil::sha256_hex;
 
 /// SHA-256 of the canonical JSON (keys sorted, shortest round-trip numbers) of a checkpoint
 /// without its `sha256` field.
@@ -99,7 +103,16 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             options,
             state,
             wall_s,
+            run_id: String::new(),
+            archive: None,
         }
+    }
+
+    /// This checkpoint with the run's id and archive.
+    pub fn of_run(mut self, run_id: String, archive: Option<Archive<I>>) -> Self {
+        self.run_id = run_id;
+        self.archive = archive;
+        self
     }
 
     /// Save atomically, with the content checksum `sha256`.
@@ -109,11 +122,16 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
 
     /// The file's bytes, with the content checksum `sha256` (errors name `path`).
     pub fn to_bytes(&self, path: &Path) -> Result<Vec<u8>> {
+        Ok(self.to_bytes_and_sha256(path)?.0)
+    }
+
+    /// The file's bytes and its content checksum (its field `sha256`; errors name `path`).
+    pub fn to_bytes_and_sha256(&self, path: &Path) -> Result<(Vec<u8>, String)> {
         let ser = |source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source };
         let mut v = serde_json::to_value(self).map_err(ser)?;
         let sum = content_sha256(&v).map_err(ser)?;
-        v["sha256"] = serde_json::Value::String(sum);
-        serde_json::to_vec(&v).map_err(ser)
+        v["sha256"] = serde_json::Value::String(sum.clone());
+        Ok((serde_json::to_vec(&v).map_err(ser)?, sum))
     }
 
     /// Load, check the format and the content checksum (a mismatch is an error).
@@ -140,9 +158,11 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             return Err(invalid(format!("field `format` is {fmt:?}, expected \"{FORMAT}\"")));
         }
         let ver = head.get("version").and_then(|v| v.as_u64());
-        if let Some(old @ (1 | 2)) = ver {
+        if let Some(old @ (1..=3)) = ver {
+            let before =
+                if old == 3 { "the archive inside the checkpoint (issue 24)" } else { "the typed evaluation record" };
             return Err(invalid(format!(
-                "field `version` is {old}: written by a gripopt before the typed evaluation record (version {VERSION}); resume the run with the gripopt that started it, or start a new one"
+                "field `version` is {old}: written by a gripopt before {before} (version {VERSION}); resume the run with the gripopt that started it, or start a new one"
             )));
         }
         if ver != Some(VERSION as u64) {

@@ -1,12 +1,15 @@
 //! Reading a run folder back, typed ([`RunFolder`]): run.json, the CSV tables (read with
 //! the csv crate into the rows they were written from), the recorded designs (their
-//! `/designs` record and trajectory from the MCAP shards) and replay. What `gripopt show`,
-//! `verify` and the Python package read.
+//! `/designs` record and trajectory from the MCAP shards) and replay; the run's state
+//! (running, stopped, interrupted, finished: run.json and the folder's lock) and its problem
+//! files, checked against the hashes run.json recorded. What `gripopt show`, `verify` and
+//! the Python package read.
 
+use super::info::{RunInfo, RunStatus};
+use super::lock::{LockHolder, RunLock};
 use super::outputs::{DesignRow, HistoryRow};
-use super::rundir::RunInfo;
 use crate::params::Problem;
-use crate::record::{read_design, replay, Recorded, Replay};
+use crate::record::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
 use crate::{Error, Result};
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -16,6 +19,32 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone)]
 pub struct RunFolder {
     dir: PathBuf,
+}
+
+/// What a run is doing, from run.json and the folder's lock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunState {
+    /// A process runs or resumes it (its pid, when known).
+    Running(Option<u32>),
+    /// It was killed (or crashed) while running: run.json says running, but no process
+    /// holds the folder; resumable when it has a checkpoint.
+    Stopped,
+    /// Stopped by ctrl-c or an error after a checkpoint; resumable.
+    Interrupted,
+    /// All requested generations are done (a resume with more generations continues it).
+    Finished,
+}
+
+impl RunState {
+    /// The state as one word: running, stopped, interrupted, finished.
+    pub fn word(&self) -> &'static str {
+        match self {
+            RunState::Running(_) => "running",
+            RunState::Stopped => "stopped",
+            RunState::Interrupted => "interrupted",
+            RunState::Finished => "finished",
+        }
+    }
 }
 
 impl RunFolder {
@@ -33,13 +62,41 @@ impl RunFolder {
     }
     /// `run.json`: settings, status, generations, resumes.
     pub fn info(&self) -> Result<RunInfo> {
-        let p = self.dir.join("run.json");
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read (is this a run folder?)", e))?;
-        serde_json::from_str(&text).map_err(|source| Error::Json { path: p, what: "invalid run.json", source })
+        RunInfo::load(&self.dir)
     }
-    /// The run's problem (its copy in the folder).
+    /// What the run is doing: run.json's status, told apart by the folder's lock (a run
+    /// that says running but whose folder no process holds was killed).
+    pub fn state(&self) -> Result<RunState> {
+        let info = self.info()?;
+        Ok(match (info.status, RunLock::holder(&self.dir)?) {
+            (RunStatus::Running, LockHolder::Held(pid)) => RunState::Running(pid),
+            (RunStatus::Running, LockHolder::Free) => RunState::Stopped,
+            (RunStatus::Interrupted, _) => RunState::Interrupted,
+            (RunStatus::Finished, _) => RunState::Finished,
+        })
+    }
+    /// The run can be resumed: it has a checkpoint and no process holds it.
+    pub fn resumable(&self) -> Result<bool> {
+        Ok(self.dir.join("checkpoint.json").is_file() && RunLock::holder(&self.dir)? == LockHolder::Free)
+    }
+    /// The run's problem in force (`problem.toml`), checked against the hash run.json
+    /// recorded: an edited copy is an error naming it.
     pub fn problem(&self) -> Result<Problem> {
-        Problem::load(self.dir.join("problem.toml"))
+        let g = self.info()?.problem_files().last().map_or(1, |p| p.first_generation);
+        self.problem_of_generation(g)
+    }
+    /// The problem generation `g` was evaluated with (after a forced resume with another
+    /// problem, the earlier `problem-G.toml` for the generations before it), checked
+    /// against the hash run.json recorded: an edited file is an error naming it.
+    pub fn problem_of_generation(&self, g: u64) -> Result<Problem> {
+        let p: RunProblem = problem_of_generation(&self.dir, g)?;
+        match p.edited() {
+            Some(why) => Err(Error::RunDir {
+                path: p.file,
+                message: format!("{why}: restore it (replay and verify need the problem the run used)"),
+            }),
+            None => Ok(p.problem),
+        }
     }
     /// pareto.csv: the population's feasible non-dominated designs.
     pub fn front(&self) -> Result<Vec<DesignRow>> {

@@ -8,15 +8,18 @@
 
 mod archive;
 mod checkpoint;
+mod contents;
 mod folder;
 mod grasp_plot;
 mod gripper;
+mod info;
 mod limits;
 mod lock;
 mod observers;
 mod outputs;
 mod persist;
 mod plots;
+mod problems;
 mod replay_scenario;
 mod robust_columns;
 mod robust_eval;
@@ -26,28 +29,29 @@ mod verify_rec;
 mod verify_robust;
 mod verify_run;
 
-pub use archive::{Archive, ARCHIVE_FILE};
+pub use crate::error::{printable, shell_quote};
+pub use archive::{Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
-pub use folder::{read_table, RunFolder};
+pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
+pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
     check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
 };
-pub use lock::{RunLock, LOCK_FILE};
+pub use lock::{LockHolder, RunLock, LOCK_FILE};
 pub use observers::{GenerationReport, OutputsObserver, Progress};
 pub use outputs::{
     final_front, header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS,
     HISTORY_COLUMNS,
 };
-pub use persist::{CheckpointSpec, PersistStats, Persister, VIEWS_MIN_INTERVAL};
+pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
+pub use problems::PROBLEM_FILE;
 pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
 pub use robust_eval::RobustScheduled;
-pub use rundir::{
-    optimise, optimise_with, resume, resume_with, Resume, RunHooks, RunInfo, RunSpec, RunStatus, RunSummary,
-};
+pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use verify::{
     read_design_csv, read_design_rows, run_designs, sample_designs, verify_csv, verify_design, verify_design_poses,
     verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary, VERIFY_FILE,
@@ -55,4 +59,4 @@ pub use verify::{
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{is_robust_run, verify_robust, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE};
-pub use verify_run::verify;
+pub use verify_run::{verify, VerifiedGeneration};

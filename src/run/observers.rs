@@ -85,12 +85,12 @@ pub struct OutputsObserver {
 }
 
 impl OutputsObserver {
-    /// Add `st`'s last generation to the archive; the archive's bytes for `archive.json`
-    /// (written later, just before the generation's checkpoint).
-    pub fn update_archive(&self, st: &Nsga2State<GripperInfo>) -> crate::Result<Vec<u8>> {
+    /// Add `st`'s last generation to the archive; a copy of the archive after it (for the
+    /// generation's checkpoint).
+    pub fn update_archive(&self, st: &Nsga2State<GripperInfo>) -> Archive {
         let mut a = self.archive.lock().expect("archive lock");
         a.update(st, &self.settings);
-        a.to_bytes(&self.out)
+        a.clone()
     }
 
     /// Rewrite the CSV views (pareto, population, archive, history) of `st` and the archive,

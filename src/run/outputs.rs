@@ -267,7 +267,7 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
                 csv
             }
             1 => {
-                let mut tim = String::from("# gripopt pareto_timings.csv: wall-clock seconds per stage (not deterministic)\nid,stage01_s,stage2_s,stage3_s\n");
+                let mut tim = String::from("# gripopt pareto_timings.csv: wall-clock seconds per stage (not deterministic)\n# units: id [-] stage01_s [s] stage2_s [s] stage3_s [s]\nid,stage01_s,stage2_s,stage3_s\n");
                 for ind in &front {
                     let t = ind.eval.info.stage_seconds;
                     let row = TimingRow { id: ind.id, stage01_s: t[1], stage2_s: t[2], stage3_s: t[3] };

@@ -4,11 +4,12 @@
 //! while the next generations evaluate, and checkpoint k, which is serialised there too;
 //! several generations can be in the pool at once. Generations are committed strictly in
 //! order: once shard k is durable and checkpoint k serialised, its index
-//! line, `archive.json` and then checkpoint k are written. So the crash guarantee is the one
-//! of synchronous observers: every shard up to the checkpoint's generation is durable, and a
-//! resume drops and rewrites later ones (nothing lost or duplicated after kill -9); the
-//! archive is never more than one generation ahead of the checkpoint, which a resume
-//! re-evaluates identically.
+//! line and then checkpoint k (which holds the archive of generation k) are written, and the
+//! caller is told ([`PersistHooks::on_commit`]: run.json follows the checkpoints). So the
+//! crash guarantee is the one of synchronous observers: every shard up to the checkpoint's
+//! generation is durable, and a resume drops and rewrites later ones (nothing lost or
+//! duplicated after kill -9). Before it writes anything, the thread checks that the run
+//! folder is still the one the run locked ([`PersistHooks::guard`]).
 //!
 //! Bounded memory (backpressure): one generation queued for the thread, and at most the
 //! pool's threads + 1 generations handed over but not yet committed. The CSV views are
@@ -26,6 +27,7 @@
 //! designs are encoded in parallel and written in id order, so the bytes do not depend on
 //! the thread count.
 
+use super::archive::{Archive, Discards};
 use super::checkpoint::Checkpoint;
 use super::gripper::GripperInfo;
 use super::observers::OutputsObserver;
@@ -53,7 +55,7 @@ pub struct PersistStats {
     /// Seconds writing shards (encoding, compression, framing, fsync), summed over the
     /// shards, which the pool writes several at a time.
     pub record_s: f64,
-    /// Seconds committing generations (index line, archive.json, checkpoint).
+    /// Seconds committing generations (index line, checkpoint, the caller's `on_commit`).
     pub checkpoint_s: f64,
     /// Seconds serialising checkpoints in the pool (before their commit).
     pub checkpoint_pool_s: f64,
@@ -107,6 +109,44 @@ struct Job {
     wall_s: f64,
 }
 
+/// A generation made durable (its shard and checkpoint written), as [`PersistHooks::on_commit`]
+/// is told.
+#[derive(Debug, Clone)]
+pub struct Committed {
+    /// The generation.
+    pub generation: u64,
+    /// Evaluations up to it.
+    pub evaluations: u64,
+    /// Wall seconds of the run up to it (over all processes).
+    pub wall_s: f64,
+    /// The checkpoint's content checksum.
+    pub checkpoint_sha256: String,
+    /// The run's discard causes up to it (empty without an outputs observer).
+    pub discards: Discards,
+}
+
+/// The call after every commit (it writes run.json).
+pub type OnCommit = Box<dyn FnMut(&Committed) -> Result<()> + Send>;
+
+/// What a run adds to its persister: the run's id (in every checkpoint), a check before
+/// every write that the run folder is still the one locked, and a call after every commit.
+#[derive(Default)]
+pub struct PersistHooks {
+    /// The run's id.
+    pub run_id: String,
+    /// Called before the thread writes anything (and in the pool, before each shard); an
+    /// error stops the persister (nothing more is written).
+    pub guard: Option<Arc<dyn Fn() -> Result<()> + Send + Sync>>,
+    /// Called after each generation's checkpoint is written; an error stops the persister.
+    pub on_commit: Option<OnCommit>,
+}
+
+impl PersistHooks {
+    fn check(&self) -> Result<()> {
+        self.guard.as_ref().map_or(Ok(()), |g| g())
+    }
+}
+
 /// What the persister thread receives: generations from the optimiser, finished shards from
 /// its pool.
 enum Msg {
@@ -115,10 +155,11 @@ enum Msg {
         generation: u64,
         result: Result<Option<(ShardEntry, f64)>>,
     },
-    /// A checkpoint's bytes, serialised in the pool, and the seconds it took.
+    /// A checkpoint's bytes and content checksum, serialised in the pool, and the seconds
+    /// it took.
     Checkpoint {
         generation: u64,
-        result: Result<Vec<u8>>,
+        result: Result<(Vec<u8>, String)>,
         secs: f64,
     },
 }
@@ -167,6 +208,17 @@ impl Persister {
         spec: CheckpointSpec,
         threads: usize,
     ) -> Result<Self> {
+        Self::start_with(outputs, recorder, spec, threads, PersistHooks::default())
+    }
+
+    /// [`Persister::start`] with the run's [`PersistHooks`].
+    pub fn start_with(
+        outputs: Option<OutputsObserver>,
+        recorder: Option<Arc<Mutex<Recorder>>>,
+        spec: CheckpointSpec,
+        threads: usize,
+        hooks: PersistHooks,
+    ) -> Result<Self> {
         // a quarter of the run's threads: enough to encode and compress beside the evaluation
         // at many cores, without oversubscribing a few (measured: 2 threads better with 1)
         let pool_threads = (threads / 4).max(1);
@@ -180,7 +232,7 @@ impl Persister {
         let sp = spec.clone();
         let thread = std::thread::Builder::new()
             .name("gripopt-persist".into())
-            .spawn(move || persist_loop(outputs, recorder, pool, sp, sh))
+            .spawn(move || persist_loop(outputs, recorder, pool, sp, sh, hooks))
             .map_err(|e| Error::io(&spec.path, "cannot start the persister thread for", e))?;
         Ok(Persister { thread: Arc::new(Mutex::new(Some(thread))), shared, spec: Arc::new(spec) })
     }
@@ -273,9 +325,11 @@ struct Pending {
     generation: u64,
     /// None while the shard is being written (Some(Ok(None)): nothing to record).
     shard: Option<Result<Option<(ShardEntry, f64)>>>,
-    archive: Option<Vec<u8>>,
-    /// None while the checkpoint is being serialised.
-    checkpoint: Option<Result<Vec<u8>>>,
+    evaluations: u64,
+    wall_s: f64,
+    discards: Discards,
+    /// None while the checkpoint is being serialised; its bytes and content checksum.
+    checkpoint: Option<Result<(Vec<u8>, String)>>,
 }
 
 /// The next message; generations only while fewer than `max_pending` wait for their
@@ -311,6 +365,7 @@ fn persist_loop(
     pool: rayon::ThreadPool,
     sp: CheckpointSpec,
     shared: SharedState,
+    mut hooks: PersistHooks,
 ) {
     let max_pending = pool.current_num_threads() + 1;
     let mut pending: VecDeque<Pending> = VecDeque::new();
@@ -322,13 +377,13 @@ fn persist_loop(
                     let g = job.state.generation;
                     let t0 = Instant::now();
                     let mut skipped = false;
-                    let archive = match &outputs {
+                    let archive: Option<Archive> = match &outputs {
                         // in the persister's pool: the archive's hypervolume is measured in parallel
                         Some(o) => {
                             let ta = Instant::now();
-                            let bytes = pool.install(|| o.update_archive(&job.state))?;
+                            let a = pool.install(|| o.update_archive(&job.state));
                             shared.0.lock().expect("persister lock").stats.archive_s += ta.elapsed().as_secs_f64();
-                            Some(bytes)
+                            Some(a)
                         }
                         None => None,
                     };
@@ -342,6 +397,7 @@ fn persist_loop(
                             skipped = true;
                             stale_views = Some(job.state.clone());
                         } else {
+                            hooks.check()?;
                             let tv = Instant::now();
                             let files = pool.install(|| o.write_views(&job.state))?;
                             shared
@@ -359,9 +415,10 @@ fn persist_loop(
                     let shard = match task {
                         Some(task) => {
                             let sh = shared.clone();
+                            let guard = hooks.guard.clone();
                             pool.spawn(move || {
                                 let refs: Vec<&Individual<GripperInfo>> = designs.iter().collect();
-                                let result = task.write(&refs);
+                                let result = guard.map_or(Ok(()), |g| g()).and_then(|_| task.write(&refs));
                                 drop(refs);
                                 drop(designs);
                                 let (m, cv) = &*sh;
@@ -377,11 +434,15 @@ fn persist_loop(
                     s.stats.views_skipped += skipped as u64;
                     drop(s);
                     // the checkpoint is serialised in the pool too; only its write is serial
+                    let (evaluations, discards) =
+                        (job.state.evaluations, archive.as_ref().map(|a| a.discards.clone()).unwrap_or_default());
                     let (sh, spc, state, wall_s) = (shared.clone(), sp.clone(), job.state, job.wall_s);
+                    let run_id = hooks.run_id.clone();
                     pool.spawn(move || {
                         let t = Instant::now();
                         let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s)
-                            .to_bytes(&spc.path);
+                            .of_run(run_id, archive)
+                            .to_bytes_and_sha256(&spc.path);
                         let (m, cv) = &*sh;
                         m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint {
                             generation: g,
@@ -390,7 +451,14 @@ fn persist_loop(
                         });
                         cv.notify_all();
                     });
-                    pending.push_back(Pending { generation: g, shard, archive, checkpoint: None });
+                    pending.push_back(Pending {
+                        generation: g,
+                        shard,
+                        evaluations,
+                        wall_s,
+                        discards,
+                        checkpoint: None,
+                    });
                 }
                 Msg::Shard { generation, result } => {
                     if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {
@@ -411,17 +479,21 @@ fn persist_loop(
                 let t = Instant::now();
                 let shard = p.shard.expect("checked")?;
                 // nothing of generation k is committed unless its checkpoint can follow
-                let checkpoint = p.checkpoint.expect("checked")?;
+                let (checkpoint, checkpoint_sha256) = p.checkpoint.expect("checked")?;
+                hooks.check()?;
                 if let (Some((entry, secs)), Some(r)) = (shard, &recorder) {
                     let mut s = shared.0.lock().expect("persister lock");
                     s.stats.record_s += secs;
                     drop(s);
                     r.lock().expect("recorder lock").commit(entry, secs)?;
                 }
-                if let (Some(bytes), Some(o)) = (&p.archive, &outputs) {
-                    super::archive::save_bytes(&o.out, bytes)?;
-                }
+                // again right before the checkpoint: the recorder's commit takes a while
+                hooks.check()?;
                 write_atomic(&sp.path, &checkpoint)?;
+                if let Some(f) = hooks.on_commit.as_mut() {
+                    let (generation, evaluations, wall_s) = (p.generation, p.evaluations, p.wall_s);
+                    f(&Committed { generation, evaluations, wall_s, checkpoint_sha256, discards: p.discards })?;
+                }
                 let (m, cv) = &*shared;
                 let mut s = m.lock().expect("persister lock");
                 s.stats.checkpoint_s += t.elapsed().as_secs_f64();
@@ -433,6 +505,7 @@ fn persist_loop(
         // the views of the last generation, if they were skipped
         let final_views = shared.0.lock().expect("persister lock").final_views;
         if let (Some(st), Some(o), true) = (stale_views.take(), &outputs, final_views) {
+            hooks.check()?;
             let t = Instant::now();
             let files = pool.install(|| o.write_views(&st))?;
             let mut s = shared.0.lock().expect("persister lock");

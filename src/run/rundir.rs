@@ -8,20 +8,21 @@
 //! stage timings, which are not deterministic), `population.csv` (the whole final
 //! population with discard stages and reasons), `pareto_matrix.svg`, `hypervolume.svg`.
 
-use super::archive::Archive;
+use super::archive::{Archive, Discards};
 use super::checkpoint::{settings_hash, sha256_hex, Checkpoint};
+use super::contents::Scan;
 use super::gripper::{GripperInfo, GripperProblem};
-use super::lock::{RunLock, LOCK_FILE};
+use super::info::{new_run_id, write_json, Resume, RunInfo, RunStatus, RUN_FILE};
+use super::lock::RunLock;
 use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
-use super::persist::{CheckpointSpec, Persister};
-use crate::fsutil::write_atomic;
+use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
+use super::problems::{check_copy, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
-use crate::record::{RecordOptions, Recorder, LAYOUT_FILE};
+use crate::record::{ProblemUse, RecordOptions, Recorder};
 use crate::{Error, Result};
 use argmin::core::State;
-use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -68,66 +69,6 @@ pub struct RunHooks {
     pub evaluator: Option<Box<dyn Evaluator<GripperProblem>>>,
 }
 
-/// State of a run as written to `run.json` (`"running"`, `"finished"`, `"interrupted"`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum RunStatus {
-    /// A process is running it, or was killed while running it.
-    Running,
-    /// All requested generations are done.
-    Finished,
-    /// Stopped by ctrl-c or an error; resumable.
-    Interrupted,
-}
-
-/// `run.json`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct RunInfo {
-    /// gripopt version.
-    pub gripopt_version: String,
-    /// Problem name.
-    pub problem_name: String,
-    /// Path of the problem file given at the start.
-    pub problem_path: PathBuf,
-    /// SHA-256 of the problem file at the start.
-    pub problem_sha256: String,
-    /// Algorithm settings.
-    pub settings: Nsga2Settings,
-    /// Total generations requested.
-    pub generations: u64,
-    /// Completed generations.
-    pub completed_generations: u64,
-    /// Evaluations.
-    pub evaluations: u64,
-    /// Threads of the last process.
-    pub threads: usize,
-    /// Wall time over all processes (s).
-    pub wall_s: f64,
-    /// Whether the run is running, finished or interrupted.
-    pub status: RunStatus,
-    /// Resumes: generation at which each happened, new total, and whether forced.
-    pub resumes: Vec<Resume>,
-    /// Recording options.
-    pub recording: RecordOptions,
-    /// Bytes recorded, over all processes (a process killed with -9 does not add its own).
-    pub recording_bytes: u64,
-    /// Seconds spent recording, over all processes (as `recording_bytes`).
-    pub recording_s: f64,
-}
-
-/// One resume.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Resume {
-    /// Completed generations when resumed.
-    pub at_generation: u64,
-    /// New total.
-    pub generations: u64,
-    /// Forced despite a changed problem file.
-    pub forced: bool,
-    /// Note (e.g. what changed).
-    pub note: String,
-}
-
 /// Summary returned to the CLI.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
@@ -151,6 +92,9 @@ pub struct RunSummary {
     pub interrupted: bool,
     /// Wall time of this process (s).
     pub wall_s: f64,
+    /// Every design of the run counted by what discarded it ([`Discards::explain`] says why
+    /// a run has no feasible design).
+    pub discards: Discards,
 }
 
 fn settings_for(p: &GripperProblem, pop: usize, seed: u64) -> Nsga2Settings {
@@ -173,44 +117,43 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     Ok(b.build()?)
 }
 
-/// Start a new run in `spec.out` (which must not hold a checkpoint already).
+/// Start a new run in `spec.out` (a new or empty folder, or one left by a run that never
+/// reached its first checkpoint).
 pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     optimise_with(spec, RunHooks::default())
 }
 
 /// [`optimise`] with the caller's progress, stop flag or evaluator.
+///
+/// run.json is written first (under the folder's lock), so that every other file of the
+/// folder is attributable to the run it names.
 pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
-    let cp_path = spec.out.join("checkpoint.json");
-    let holds_run = || -> Result<()> {
-        if cp_path.exists() {
-            let message = format!(
-                "already holds a run (checkpoint.json); use `gripopt resume {}` or another --out",
-                spec.out.display()
-            );
-            return Err(Error::RunDir { path: spec.out.clone(), message });
-        }
-        Ok(())
-    };
-    holds_run()?;
-    check_new_run_folder(&spec.out)?;
-    let _lock = RunLock::acquire(&spec.out)?;
-    holds_run()?; // again under the lock: another process may have started meanwhile
-    write_atomic(&spec.out.join("problem.toml"), problem.source_text.as_bytes())?;
-    crate::record::write_layout(&spec.out, &spec.record)?;
+    // refused before the lock's pid file is written into a folder that is not ours
+    Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
+    let lock = RunLock::acquire(&spec.out)?;
+    // again under the lock: another process may have started meanwhile
+    for f in Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)? {
+        // files of the earlier attempt that never reached its first checkpoint (proven)
+        std::fs::remove_file(&f).map_err(|e| Error::io(&f, "cannot remove a file of the earlier attempt", e))?;
+    }
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
+    let problem_sha256 = sha256_hex(gp.problem.source_text.as_bytes());
     let info = RunInfo {
         gripopt_version: env!("CARGO_PKG_VERSION").into(),
+        run_id: new_run_id(&spec.out),
         problem_name: gp.problem.name.clone(),
-        problem_path: spec.problem_path.clone(),
-        problem_sha256: sha256_hex(gp.problem.source_text.as_bytes()),
+        problem_path: std::path::absolute(&spec.problem_path).unwrap_or_else(|_| spec.problem_path.clone()),
+        problems: vec![ProblemUse { first_generation: 1, file: "problem.toml".into(), sha256: problem_sha256.clone() }],
+        problem_sha256,
         settings: settings.clone(),
         generations: spec.generations,
         completed_generations: 0,
         evaluations: 0,
+        checkpoint_sha256: None,
         threads: 0,
         wall_s: 0.0,
         status: RunStatus::Running,
@@ -218,9 +161,15 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
         recording: spec.record.starting_now(),
         recording_bytes: 0,
         recording_s: 0.0,
+        discards: Discards::default(),
     };
+    write_json(&spec.out.join(RUN_FILE), &info)?;
+    write_current(&spec.out, &info, &gp.problem)?;
+    crate::record::write_layout(&spec.out, &spec.record)?;
+    let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    drive(gp, settings, state, info, &spec.out, spec.threads, hooks, 0.0)
+    let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0 };
+    drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
 /// Continue a stopped, killed or finished run; `generations` is the new total.
@@ -229,6 +178,11 @@ pub fn resume(dir: &Path, generations: Option<u64>, force: bool, threads: Option
 }
 
 /// [`resume`] with the caller's progress, stop flag or evaluator.
+///
+/// Every file read back is checked against what wrote it: run.json and the checkpoint name
+/// the same run; the checkpoint is not older than run.json's last one (unless forced); the
+/// problem copy is the one recorded; the shards are this run's (see `record::recover_run`).
+/// A refused resume changes nothing.
 pub fn resume_with(
     dir: &Path,
     generations: Option<u64>,
@@ -237,23 +191,37 @@ pub fn resume_with(
     hooks: RunHooks,
 ) -> Result<RunSummary> {
     super::limits::check_threads(threads)?;
-    let run_json = dir.join("run.json");
-    let text = std::fs::read_to_string(&run_json)
-        .map_err(|e| Error::io(&run_json, "cannot read (is its folder a run folder?)", e))?;
-    let mut info: RunInfo = serde_json::from_str(&text).map_err(|source| Error::Json {
-        path: run_json.clone(),
-        what: "invalid run.json",
-        source,
-    })?;
-    let _lock = RunLock::acquire(dir)?;
+    if !dir.exists() {
+        // e.g. an optimise killed before it created its folder
+        let message = "no such folder: nothing to resume (`gripopt optimise PROBLEM --out DIR` starts a run)";
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: message.into() });
+    }
+    if !dir.is_dir() {
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder (is it a run folder?)".into() });
+    }
+    let lock = RunLock::acquire(dir)?;
+    let scan = Scan::of(dir)?;
+    if !scan.checkpoint {
+        return Err(scan.no_checkpoint());
+    }
+    let run_json = dir.join(RUN_FILE);
+    let mut info = match scan.run {
+        Some(r) => r?,
+        None => {
+            return Err(Error::RunDir {
+                path: run_json,
+                message: "missing beside checkpoint.json: restore it (e.g. from a backup) to resume".into(),
+            })
+        }
+    };
     let cp_path = dir.join("checkpoint.json");
     let (cp, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
-    let mut forced_notes = vec![];
+    let mut notes = vec![];
     if let Some(m) = mismatch {
         if !force {
             return Err(m.error(&cp_path));
         }
-        forced_notes.push(format!(
+        notes.push(format!(
             "forced: checkpoint content checksum mismatch (stored {}, content {})",
             m.stored.as_deref().map(|s| &s[..s.len().min(12)]).unwrap_or("none"),
             &m.computed[..12]
@@ -266,31 +234,51 @@ pub fn resume_with(
     if cp.settings != info.settings || cp.settings_hash != settings_hash(&cp.settings, &cp.options) {
         return Err(modified("settings"));
     }
-    // problem file: the original path, or the copy in the run folder if it is gone
-    let (problem_path, note) = if info.problem_path.exists() {
-        (info.problem_path.clone(), String::new())
-    } else {
-        (dir.join("problem.toml"), format!("{} not found; used the run's copy", info.problem_path.display()))
+    if !info.run_id.is_empty() && cp.run_id != info.run_id {
+        return Err(Error::Checkpoint {
+            file: cp_path.clone(),
+            message: format!(
+                "written by another run (run id {:?}; run.json's is {}): restore this run's checkpoint.json",
+                cp.run_id, info.run_id
+            ),
+        });
+    }
+    if cp.state.generation < info.completed_generations {
+        if !force {
+            return Err(Error::Checkpoint {
+                file: cp_path.clone(),
+                message: format!("holds generation {} but run.json records {} completed generations: an older checkpoint (restored from a backup?). Restore the latest one, or resume with --force to continue from generation {} (later generations are evaluated again and their shards replaced)", cp.state.generation, info.completed_generations, cp.state.generation),
+            });
+        }
+        notes.push(format!(
+            "forced: an older checkpoint (generation {} of {})",
+            cp.state.generation, info.completed_generations
+        ));
+    }
+    let Some(archive) = cp.archive.clone() else {
+        return Err(Error::Checkpoint { file: cp_path, message: "holds no archive (field `archive`)".into() });
     };
+    // the problem: the file the run started with, or the run's copy if it is gone
+    let original = info.problem_path.is_absolute().then(|| info.problem_path.clone()).filter(|p| p.exists());
+    let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
     let problem = Problem::load(&problem_path)?;
+    check_copy(dir, &info, &problem)?;
+    if original.is_none() {
+        notes.push(format!("{} not found; used the run's copy", info.problem_path.display()));
+    }
     let now = sha256_hex(problem.source_text.as_bytes());
-    let mut note = note;
-    if now != cp.problem_hash {
+    let problem_changed = now != cp.problem_hash;
+    if problem_changed {
         if !force {
             let message = format!(
-                "the problem file changed since the run started (sha256 {} → {}); resuming would mix two problems. Use --force to resume with the new file (recorded in run.json)",
+                "the problem file changed since the run started (sha256 {} → {}); resuming would mix two problems. Use --force to resume with the new file (recorded in run.json; the earlier problem is kept for the generations it evaluated)",
                 &cp.problem_hash[..12],
                 &now[..12]
             );
             return Err(Error::RunDir { path: problem_path, message });
         }
-        note = format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]);
+        notes.insert(0, format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]));
     }
-    let checksum_forced = !forced_notes.is_empty();
-    if !note.is_empty() {
-        forced_notes.insert(0, note);
-    }
-    let note = forced_notes.join("; ");
     let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json {
         path: run_json.clone(),
         what: "field `recording`",
@@ -307,17 +295,47 @@ pub fn resume_with(
             cp.state.generation
         )));
     }
+    let gp = GripperProblem::new(problem);
+    let at = cp.state.generation;
+    // the recording first: a resume it refuses (an unreadable or foreign shard) changes nothing
+    let mut probe = info.clone();
+    probe.problem_sha256 = now;
+    let recorder = open_recorder(dir, &gp, &probe, at)?;
+    switch(dir, &mut info, at, &gp.problem)?;
     info.resumes.push(Resume {
-        at_generation: cp.state.generation,
+        at_generation: at,
         generations: total,
-        forced: (force && now != cp.problem_hash) || checksum_forced,
-        note,
+        forced: problem_changed || notes.iter().any(|n| n.starts_with("forced")),
+        note: notes.join("; "),
     });
+    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).collect();
     info.generations = total;
     info.status = RunStatus::Running;
-    let gp = GripperProblem::new(problem);
+    info.completed_generations = at;
+    info.evaluations = cp.state.evaluations;
+    write_json(&run_json, &info)?;
+    write_current(dir, &info, &gp.problem)?;
     let state = cp.state.with_max_generations(total);
-    drive(gp, cp.settings, state, info, dir, threads, hooks, cp.wall_s)
+    let start = Start { recorder, archive, notes, wall_before: cp.wall_s };
+    drive(gp, cp.settings, state, info, dir, threads, hooks, lock, start)
+}
+
+/// The recorder of run `info` in `out` (None when recording is off), recovering the
+/// recording of a run whose checkpoint covers `completed` generations.
+fn open_recorder(out: &Path, gp: &GripperProblem, info: &RunInfo, completed: u64) -> Result<Option<Recorder>> {
+    if !info.recording.enabled {
+        return Ok(None);
+    }
+    let meta = recording_metadata(gp, info);
+    Recorder::open(out, gp.problem.clone(), meta, info.recording, completed).map(Some)
+}
+
+/// What `drive` starts from besides the optimiser's state.
+struct Start {
+    recorder: Option<Recorder>,
+    archive: Archive,
+    notes: Vec<String>,
+    wall_before: f64,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -325,16 +343,19 @@ fn drive(
     gp: GripperProblem,
     settings: Nsga2Settings,
     state: Nsga2State<GripperInfo>,
-    mut info: RunInfo,
+    info: RunInfo,
     out: &Path,
     threads: Option<usize>,
     hooks: RunHooks,
-    wall_before: f64,
+    lock: RunLock,
+    begin: Start,
 ) -> Result<RunSummary> {
     let progress = ProgressObserver(Arc::new(Mutex::new(hooks.progress.unwrap_or_else(|| Box::new(())))));
     let note = |m: &str| progress.0.lock().expect("progress lock").note(m);
     let start = Instant::now();
     let pool = pool(threads)?;
+    let wall_before = begin.wall_before;
+    let mut info = info;
     info.threads = pool.current_num_threads();
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
     let options = run_options(&gp, &info.recording);
@@ -342,25 +363,23 @@ fn drive(
     if info.recording.enabled {
         gp.keep_trajectories = info.recording.trajectories;
     }
-    // the recording first: a resume it refuses (an unreadable shard) leaves run.json as it was
-    let recorder = if info.recording.enabled {
-        let meta = recording_metadata(&gp, &settings, &info);
-        let r = Recorder::open(out, gp.problem.clone(), meta, info.recording, state.generation)?;
+    for n in &begin.notes {
+        note(n);
+    }
+    let recorder = begin.recorder.map(|r| {
         for w in &r.warnings {
             note(&format!("warning: {w}"));
         }
-        Some(Arc::new(Mutex::new(r)))
-    } else {
-        None
-    };
-    write_json(&out.join("run.json"), &info)?;
+        Arc::new(Mutex::new(r))
+    });
     if let Some(n) = super::limits::threads_note(settings.pop_size, info.threads) {
         note(&n);
     }
-    let archive = Arc::new(Mutex::new(if state.generation == 0 { Archive::default() } else { Archive::load(out)? }));
+    let lock = Arc::new(lock);
+    let archive = Arc::new(Mutex::new(begin.archive));
     let outputs = OutputsObserver { out: out.to_path_buf(), settings: settings.clone(), archive: archive.clone() };
     // outputs and archive, shard k, then checkpoint k, in that order on a background thread
-    // while k+1 evaluates (src/run/persist.rs)
+    // while k+1 evaluates (src/run/persist.rs); run.json follows each checkpoint
     let ckpt = CheckpointSpec {
         path: out.join("checkpoint.json"),
         problem_hash,
@@ -369,7 +388,27 @@ fn drive(
         wall_before,
         start,
     };
-    let persister = Persister::start(Some(outputs), recorder.clone(), ckpt, info.threads)?;
+    let shared = Arc::new(Mutex::new(info.clone()));
+    let (run_file, sh, commit_lock) = (out.join(RUN_FILE), shared.clone(), lock.clone());
+    let on_commit = move |c: &Committed| -> Result<()> {
+        // the folder may have been moved since the checkpoint was written: never write
+        // run.json into the folder that replaced it
+        commit_lock.check()?;
+        let mut i = sh.lock().expect("run.json");
+        i.completed_generations = c.generation;
+        i.evaluations = c.evaluations;
+        i.wall_s = c.wall_s;
+        i.checkpoint_sha256 = Some(c.checkpoint_sha256.clone());
+        i.discards = c.discards.clone();
+        write_json(&run_file, &*i)
+    };
+    let guard_lock = lock.clone();
+    let persist_hooks = PersistHooks {
+        run_id: info.run_id.clone(),
+        guard: Some(Arc::new(move || guard_lock.check())),
+        on_commit: Some(Box::new(on_commit)),
+    };
+    let persister = Persister::start_with(Some(outputs), recorder.clone(), ckpt, info.threads, persist_hooks)?;
     let (pers2, prog2) = (persister.clone(), progress.clone());
     let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
     let mut solver = Nsga2::with_evaluator(settings, evaluator);
@@ -382,23 +421,21 @@ fn drive(
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
     };
+    // the committed generations, as run.json has them
+    let mut info = shared.lock().expect("run.json").clone();
     if let Some(r) = &recorder {
         let r = r.lock().expect("recorder");
         info.recording_bytes += r.bytes;
         info.recording_s += r.seconds;
     }
+    // the folder moved away or replaced: nothing more is written at its path
+    lock.check()?;
     let (gp, st) = match result {
         Ok(r) => r,
         Err(e) => {
-            // what the checkpoint holds: the last generation the persister made durable
-            let done = persister.durable_generation();
-            if done > info.completed_generations {
-                info.completed_generations = done;
-                info.evaluations = done * info.settings.pop_size as u64;
-            }
             info.status = RunStatus::Interrupted;
             info.wall_s = wall_before + start.elapsed().as_secs_f64();
-            let _ = write_json(&out.join("run.json"), &info);
+            let _ = write_json(&out.join(RUN_FILE), &info);
             return Err(if out.join("checkpoint.json").exists() {
                 Error::Stopped { path: out.to_path_buf(), source: Box::new(e) }
             } else {
@@ -412,12 +449,14 @@ fn drive(
     info.wall_s = wall_before + start.elapsed().as_secs_f64();
     info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
     let archive = archive.lock().expect("archive").clone();
+    info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
     let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
     let status =
         std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
-    write_json(&out.join("run.json"), &info)?;
+    lock.check()?;
+    write_json(&out.join(RUN_FILE), &info)?;
     Ok(RunSummary {
         out: out.to_path_buf(),
         generations: st.generation,
@@ -429,61 +468,20 @@ fn drive(
         archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
         interrupted,
         wall_s: start.elapsed().as_secs_f64(),
+        discards: archive.discards,
     })
 }
 
-/// `optimise --out DIR` only into a new or empty folder, or one left by a run that never
-/// reached its first checkpoint: never into a folder of other files.
-fn check_new_run_folder(dir: &Path) -> Result<()> {
-    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the run folder", e))?;
-    let ours = ["run.json", "problem.toml", "recording", "checkpoint.json", LOCK_FILE];
-    // what a run writes before its first checkpoint (and at its end); accepted only beside
-    // the run.json of that run
-    let outputs = [
-        LAYOUT_FILE,
-        "archive.json",
-        "pareto.csv",
-        "pareto_timings.csv",
-        "archive.csv",
-        "population.csv",
-        "history.csv",
-        "pareto_matrix.svg",
-        "hypervolume.svg",
-    ];
-    let names: Vec<String> = rd.flatten().map(|f| f.file_name().to_string_lossy().to_string()).collect();
-    let run_json = names.iter().any(|n| n == "run.json");
-    let foreign: Vec<String> = names
-        .into_iter()
-        .filter(|n| {
-            let tmp = n.starts_with('.') && n.ends_with(".tmp");
-            !(ours.contains(&n.as_str()) || (run_json && outputs.contains(&n.as_str())) || tmp)
-        })
-        .collect();
-    if foreign.is_empty() {
-        return Ok(());
-    }
-    let mut shown: Vec<&str> = foreign.iter().map(String::as_str).take(3).collect();
-    shown.sort();
-    let message = format!(
-        "--out: the folder is not empty and is not a gripopt run (it holds {}{}); give a new or empty folder",
-        shown.join(", "),
-        if foreign.len() > 3 { ", …" } else { "" }
-    );
-    Err(Error::RunDir { path: dir.to_path_buf(), message })
-}
-
-/// Metadata written into every shard of the recording.
-fn recording_metadata(
-    gp: &GripperProblem,
-    settings: &Nsga2Settings,
-    info: &RunInfo,
-) -> std::collections::BTreeMap<String, String> {
+/// Metadata written into every shard of the recording: the run (its id, problem and the
+/// problem's hash, settings, recording options) and the time convention.
+fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::BTreeMap<String, String> {
     let mut meta = std::collections::BTreeMap::new();
     meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
+    meta.insert("run_id".to_string(), info.run_id.clone());
     meta.insert("problem".to_string(), gp.problem.name.clone());
     meta.insert("problem_sha256".to_string(), info.problem_sha256.clone());
     // plain structs of numbers, strings and enums: serialising cannot fail
-    meta.insert("settings".to_string(), serde_json::to_string(settings).expect("settings serialise"));
+    meta.insert("settings".to_string(), serde_json::to_string(&info.settings).expect("settings serialise"));
     meta.insert("recording".to_string(), serde_json::to_string(&info.recording).expect("recording options serialise"));
     meta.insert(
         "time_convention".to_string(),
@@ -495,14 +493,4 @@ fn recording_metadata(
 /// Run options hashed into checkpoints: pipeline settings and recording.
 fn run_options(gp: &GripperProblem, rec: &RecordOptions) -> serde_json::Value {
     serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": gp.problem.solver.rtol, "atol": gp.problem.solver.atol, "max_steps": gp.problem.solver.max_steps, "recording": rec })
-}
-
-fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<()> {
-    let mut s = serde_json::to_string_pretty(v).map_err(|source| Error::Json {
-        path: path.to_path_buf(),
-        what: "cannot serialise",
-        source,
-    })?;
-    s.push('\n');
-    write_atomic(path, s.as_bytes())
 }

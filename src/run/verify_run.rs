@@ -1,16 +1,24 @@
 //! `gripopt verify RUN_DIR`: the run folder's designs (or a sample of its problem's box)
 //! verified in the free scene ([`super::verify`]), written to verify.csv under the folder's
-//! lock, and recorded (`verify_rec`).
+//! lock, and recorded (`verify_rec`). Each design is verified with the problem its
+//! generation was evaluated with (run.json's `problems`, checked against their hashes: an
+//! edited problem file is refused, naming it), and verify.csv's `# run:` line says which
+//! run state it checked (the generation, the checkpoint's and the problems' hashes), so
+//! that `gripopt show` can tell when it no longer matches the run.
 
+use super::folder::RunFolder;
+use super::info::RunInfo;
 use super::lock::RunLock;
 use super::verify::{
-    run_designs, sample_designs, verify_csv, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary,
-    VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    read_design_rows, run_designs, sample_designs, verify_csv, verify_designs_poses, Confusion, VerifyRow,
+    VerifySource, VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 use super::verify_rec::VerifyRecording;
 use crate::fsutil::write_atomic;
-use crate::params::{Problem, SceneKind};
+use crate::params::{Design, Problem, SceneKind};
+use crate::record::ProblemUse;
 use crate::{Error, Result};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -23,9 +31,21 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
 }
 
+/// The generation of each design of the run's tables (pareto, population, archive).
+fn generations(dir: &Path) -> Result<BTreeMap<u64, u64>> {
+    let mut m = BTreeMap::new();
+    for f in ["pareto.csv", "population.csv", "archive.csv"] {
+        if dir.join(f).is_file() {
+            m.extend(read_design_rows(&dir.join(f))?.into_iter().map(|r| (r.id, r.generation)));
+        }
+    }
+    Ok(m)
+}
+
 /// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
-/// loads the run's problem, switches it to the free scene (at `x_off`, default the
-/// problem's), simulates the designs of `source` and writes the CSV atomically; with
+/// loads the run's problems (each checked against the hash run.json recorded), switches
+/// them to the free scene (at `x_off`, default the problem's), simulates the designs of
+/// `source` each with its generation's problem and writes the CSV atomically; with
 /// `record`, also the MCAP recording of the free scene (verify.mcap or verify_sample.mcap,
 /// with the Foxglove layout `foxglove-verify-layout.json`).
 pub fn verify(
@@ -48,17 +68,27 @@ pub fn verify(
         }
     }
     let _lock = RunLock::acquire(dir)?;
-    let file = dir.join("problem.toml");
-    let p = Problem::load(&file)?.in_scene(SceneKind::Free, x_off, &file)?;
+    let info = RunInfo::load(dir)?;
+    let folder = RunFolder::open(dir)?;
+    let files = info.problem_files();
+    // every problem file the designs need, checked, in the free scene
+    let free = |f: &ProblemUse| -> Result<Problem> {
+        let file = dir.join(&f.file);
+        folder.problem_of_generation(f.first_generation)?.in_scene(SceneKind::Free, x_off, &file)
+    };
+    let current = free(files.last().expect("a problem file"))?;
     let (designs, file) = match source {
         VerifySource::Pareto => (run_designs(dir, false)?, VERIFY_FILE),
         VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
-        VerifySource::Sample { n, seed } => (sample_designs(&p, n, seed), VERIFY_SAMPLE_FILE),
+        VerifySource::Sample { n, seed } => (sample_designs(&current, n, seed), VERIFY_SAMPLE_FILE),
     };
     if designs.is_empty() {
         let message = match source {
             VerifySource::Sample { n, seed } => format!("--sample {n} --seed {seed}: no drawn design passes stages 0–2 of problem.toml; nothing to verify, nothing written"),
-            _ => "no feasible design to verify; nothing written".into(),
+            _ => match info.discards.explain() {
+                Some(why) => format!("nothing to verify, nothing written; {}", why.join("\n")),
+                None => "no feasible design to verify; nothing written".into(),
+            },
         };
         let path = match source {
             VerifySource::Pareto => dir.join("pareto.csv"),
@@ -67,9 +97,31 @@ pub fn verify(
         };
         return Err(Error::RunDir { path, message });
     }
+    // the designs by the problem file their generation was evaluated with
+    let gens = match source {
+        VerifySource::Sample { .. } => BTreeMap::new(),
+        _ => generations(dir)?,
+    };
+    let mut groups: BTreeMap<usize, Vec<(u64, Design)>> = BTreeMap::new();
+    for d in &designs {
+        let k = match gens.get(&d.0) {
+            Some(g) => files.iter().rposition(|f| f.first_generation <= *g).unwrap_or(0),
+            None => files.len() - 1,
+        };
+        groups.entry(k).or_default().push(*d);
+    }
+    let mut problems = BTreeMap::new();
+    for k in groups.keys() {
+        problems.insert(*k, if *k == files.len() - 1 { current.clone() } else { free(&files[*k])? });
+    }
     tick_len(designs.len());
     let rec = if record { Some(VerifyRecording::new(dir, &source)?) } else { None };
-    let with_poses = verify_designs_poses(&p, &designs, rec.as_ref().map(|r| r.opts.scene_dt), tick);
+    let scene_dt = rec.as_ref().map(|r| r.opts.scene_dt);
+    let mut with_poses = vec![];
+    for (k, ds) in &groups {
+        with_poses.extend(verify_designs_poses(&problems[k], ds, scene_dt, tick));
+    }
+    with_poses.sort_by_key(|(r, _)| designs.iter().position(|d| d.0 == r.id));
     let rows: Vec<VerifyRow> = with_poses.iter().map(|(r, _)| r.clone()).collect();
     let skipped: Vec<u64> = designs.iter().map(|d| d.0).filter(|id| !rows.iter().any(|r| r.id == *id)).collect();
     if rows.is_empty() {
@@ -82,9 +134,10 @@ pub fn verify(
         });
     }
     let file = dir.join(file);
-    write_atomic(&file, verify_csv(&rows, p.scene.setup.x_off).as_bytes())?;
+    let used: Vec<&ProblemUse> = groups.keys().map(|k| &files[*k]).collect();
+    write_atomic(&file, attributed(&verify_csv(&rows, current.scene.setup.x_off), &info, &used).as_bytes())?;
     let recording = match rec {
-        Some(r) => Some(r.write(&p, with_poses)?),
+        Some(r) => Some(r.write(&current, with_poses)?),
         None => None,
     };
     let et: Vec<f64> = rows.iter().filter_map(|r| r.energy_ratios().0).collect();
@@ -99,4 +152,73 @@ pub fn verify(
         recording,
         designs: designs.len(),
     })
+}
+
+/// verify.csv's text with its `# run:` line after the title: the run state it checked (the
+/// completed generations, the checkpoint's content checksum) and the problem files used.
+fn attributed(csv: &str, info: &RunInfo, used: &[&ProblemUse]) -> String {
+    let problems: Vec<String> = used.iter().map(|p| format!("{} {}", p.file, p.sha256)).collect();
+    let line = format!(
+        "# run: {}, generation {}, checkpoint sha256 {}; problem sha256: {}\n",
+        if info.run_id.is_empty() { "run" } else { &info.run_id },
+        info.completed_generations,
+        info.checkpoint_sha256.as_deref().unwrap_or("none"),
+        problems.join(", ")
+    );
+    // the unit of every column, as in every CSV gripopt writes (docs/outputs.md)
+    let header = csv.lines().find(|l| !l.starts_with('#')).unwrap_or_default();
+    let units: Vec<String> = header.split(',').map(|c| format!("{c} [{}]", verify_unit(c))).collect();
+    let line = format!("{line}# units: {}\n", units.join(" "));
+    match csv.split_once('\n') {
+        Some((title, rest)) => format!("{title}\n{line}{rest}"),
+        None => format!("{line}{csv}"),
+    }
+}
+
+/// The unit of a column of verify.csv (`-`: none).
+fn verify_unit(column: &str) -> &'static str {
+    match column {
+        "l21" | "b" | "t22" | "object_max_displacement" => "m",
+        "psi_deg" | "object_max_tilt_deg" => "deg",
+        "e_trans" | "e_rot" | "object_peak_e_trans" | "object_peak_e_rot" => "J",
+        "force_margin" => "N",
+        "stable" | "predicted_moves" | "moved" | "toppled" | "escaped" | "rim_contact" | "agrees" => "bool",
+        "free_end" => "text",
+        _ => "-",
+    }
+}
+
+/// Which run state a `verify.csv` checked (its `# run:` line).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VerifiedGeneration {
+    /// The completed generations of the run when it was verified.
+    pub generation: u64,
+    /// The checkpoint's content checksum then.
+    pub checkpoint_sha256: String,
+}
+
+impl RunFolder {
+    /// The run state the folder's `verify.csv` checked (None: no verify.csv, or one
+    /// written by a gripopt before issue 24, without a `# run:` line).
+    pub fn verified_generation(&self) -> Result<Option<VerifiedGeneration>> {
+        let p = self.dir().join(VERIFY_FILE);
+        let text = match std::fs::read_to_string(&p) {
+            Ok(t) => t,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::io(p, "cannot read", e)),
+        };
+        let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
+            return Ok(None);
+        };
+        let word_after =
+            |key: &str| line.split(key).nth(1).and_then(|r| r.split([' ', ',', ';']).find(|w| !w.is_empty()));
+        let generation = word_after("generation ").and_then(|w| w.parse().ok());
+        let sha = word_after("checkpoint sha256 ");
+        match (generation, sha) {
+            (Some(generation), Some(s)) => {
+                Ok(Some(VerifiedGeneration { generation, checkpoint_sha256: s.to_string() }))
+            }
+            _ => Err(Error::RunDir { path: p, message: format!("its `# run:` line is damaged: {line:?}") }),
+        }
+    }
 }

@@ -17,15 +17,21 @@
 //! Results do not depend on the number of threads: every point is evaluated on its own and
 //! rows are written in grid order.
 
+pub mod out;
 pub mod plot;
 
 use crate::cells::{cells, Floats};
 use crate::eval::{evaluate, stage_kinematics, Cause, EvalOptions, Evaluation, Record};
+use crate::fsutil::write_atomic;
 use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::{Error, Result};
+use out::{record_unit, BOUNDARIES_FILE, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Problem-file fields that are whole numbers: swept over whole values only.
+pub const INTEGER_FIELDS: [&str; 2] = ["scene.ground_points", "solver.max_steps"];
 
 /// Largest number of values along one varied name.
 pub const MAX_N: usize = 10_000;
@@ -179,7 +185,31 @@ impl Vary {
                 ));
             }
         }
-        Ok(Vary { name: name.to_string(), knob, lo, hi, n })
+        let v = Vary { name: name.to_string(), knob, lo, hi, n };
+        if v.is_integer() {
+            if let Some(x) = v.values().into_iter().find(|x| x.fract() != 0.0) {
+                let field = match knob {
+                    Knob::Field(i) => LIMITS[i].field,
+                    _ => name,
+                };
+                return Err(bad(
+                    flag,
+                    s,
+                    format!("{field} is a whole number, and this grid gives {x} (which would run as {}): choose LO, HI and N so that every value is whole, e.g. N = HI − LO + 1", x.round()),
+                ));
+            }
+        }
+        Ok(v)
+    }
+
+    /// It sets a whole-number field (swept over whole values, bisected over them).
+    pub fn is_integer(&self) -> bool {
+        matches!(self.knob, Knob::Field(i) if INTEGER_FIELDS.contains(&LIMITS[i].field))
+    }
+
+    /// The unit of its values.
+    pub fn unit(&self) -> &'static str {
+        knob_limit(self.knob).3
     }
 
     /// The n values, evenly spaced, lo and hi exact.
@@ -474,22 +504,54 @@ pub fn run(spec: &SweepSpec, tick: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
         .collect()
 }
 
-/// The CSV text: varied names, `verdict`, then every record key (keys equal to a varied
-/// name are not repeated).
+/// The record keys of `rows` that are columns (every key of any row, in record order; keys
+/// equal to a varied name are not repeated): a row whose record lacks a scene's keys (stage
+/// 3 did not run) has empty cells there, so every row has the header's width.
+fn columns<'a>(spec: &SweepSpec, rows: &'a [Row]) -> Vec<&'a str> {
+    let names: Vec<&str> = spec.vary.iter().map(|v| v.name.as_str()).collect();
+    let mut keys: Vec<&str> = vec![];
+    for r in rows {
+        for (i, (k, _)) in r.cells.iter().enumerate() {
+            if names.contains(&k.as_str()) || keys.contains(&k.as_str()) {
+                continue;
+            }
+            // after the key that precedes it in this row (record order)
+            let at = r.cells[..i].iter().rev().find_map(|(p, _)| keys.iter().position(|q| q == p)).map_or(0, |p| p + 1);
+            keys.insert(at.min(keys.len()), k);
+        }
+    }
+    keys
+}
+
+/// The CSV table (header and rows, without the `#` lines): varied names, `verdict`, then
+/// every record key ([`columns`]).
 pub fn to_csv(spec: &SweepSpec, rows: &[Row]) -> String {
     let mut s = String::new();
     let names: Vec<&str> = spec.vary.iter().map(|v| v.name.as_str()).collect();
-    let keys: Vec<&str> = rows
-        .first()
-        .map(|r| r.cells.iter().map(|(k, _)| k.as_str()).filter(|k| !names.contains(k)).collect())
-        .unwrap_or_default();
+    let keys = columns(spec, rows);
     let _ = writeln!(s, "{},verdict,{}", names.join(","), keys.join(","));
     for r in rows {
         let vals: Vec<String> = r.values.iter().map(|v| format!("{v}")).collect();
         let cells: Vec<&str> =
-            r.cells.iter().filter(|(k, _)| !names.contains(&k.as_str())).map(|(_, v)| v.as_str()).collect();
+            keys.iter().map(|k| r.cells.iter().find(|(c, _)| c == k).map_or("", |(_, v)| v.as_str())).collect();
         let _ = writeln!(s, "{},{},{}", vals.join(","), r.verdict, cells.join(","));
     }
+    s
+}
+
+/// sweep.csv's text: its `#` lines (title, the units of every column, the files the sweep
+/// writes) and [`to_csv`].
+pub fn sweep_csv(spec: &SweepSpec, rows: &[Row], files: &[String]) -> String {
+    let mut s = format!("{SWEEP_TITLE}: one row per grid point: the varied names, the verdict (pass or what discarded the point) and the evaluation record's keys (docs/outputs.md); empty: not computed\n# units:");
+    for v in &spec.vary {
+        let _ = write!(s, " {} [{}]", v.name, v.unit());
+    }
+    s.push_str(" verdict [text]");
+    for k in columns(spec, rows) {
+        let _ = write!(s, " {k} [{}]", record_unit(k));
+    }
+    let _ = writeln!(s, "\n# files: {}", files.join(", "));
+    s.push_str(&to_csv(spec, rows));
     s
 }
 
@@ -536,8 +598,13 @@ pub fn bisect(spec: &SweepSpec, rows: &[Row], name: &str, steps: u32) -> Result<
             let (mut lo, mut hi) = (rows[a].values[axis], rows[b].values[axis]);
             let (vlo, vhi) = (rows[a].verdict, rows[b].verdict);
             let mut point = rows[a].values.clone();
+            let integer = spec.vary[axis].is_integer();
             for _ in 0..steps {
-                let mid = 0.5 * (lo + hi);
+                // a whole-number field is bisected over whole values, down to neighbours
+                let mid = if integer { (0.5 * (lo + hi)).floor() } else { 0.5 * (lo + hi) };
+                if integer && (mid <= lo || mid >= hi) {
+                    break;
+                }
                 point[axis] = mid;
                 let v = eval_row(spec, &point)?.verdict;
                 if v == vlo {
@@ -585,9 +652,37 @@ pub fn boundaries_csv(spec: &SweepSpec, b: &[Boundary]) -> String {
     s
 }
 
-/// Write DIR/sweep.csv (and create DIR).
+/// Write DIR/sweep.csv alone (see [`write_outputs`]).
 pub fn write_csv(dir: &Path, spec: &SweepSpec, rows: &[Row]) -> Result<()> {
+    let earlier = out::check_out_folder(dir)?;
+    write_outputs(dir, spec, rows, &earlier, &[])
+}
+
+/// Start a sweep's output folder `dir`: create it, remove the `earlier` sweep's files that
+/// this one does not write again ([`out::check_out_folder`] found them), and write
+/// sweep.csv (atomically) listing itself and `files` (names in `dir`), which the caller
+/// writes next.
+pub fn write_outputs(dir: &Path, spec: &SweepSpec, rows: &[Row], earlier: &[PathBuf], files: &[String]) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create the output folder", e))?;
-    let f = dir.join("sweep.csv");
-    std::fs::write(&f, to_csv(spec, rows)).map_err(|e| Error::io(&f, "cannot write", e))
+    let mut all = vec![SWEEP_FILE.to_string()];
+    all.extend(files.iter().cloned());
+    for f in earlier {
+        let keep = f.file_name().is_some_and(|n| all.iter().any(|a| n == a.as_str()));
+        if !keep {
+            std::fs::remove_file(f).map_err(|e| Error::io(f, "cannot remove the earlier sweep's file", e))?;
+        }
+    }
+    write_atomic(&dir.join(SWEEP_FILE), sweep_csv(spec, rows, &all).as_bytes())
+}
+
+/// Write DIR/boundaries.csv (its `#` title and units lines, then [`boundaries_csv`]).
+pub fn write_boundaries(dir: &Path, spec: &SweepSpec, b: &[Boundary]) -> Result<()> {
+    let mut s = String::from("# gripopt boundaries.csv: where the verdict flips along a bisected name, between the values lo and hi (the other varied names as given)\n# units:");
+    let _ = write!(s, " bisected [text]");
+    for v in &spec.vary {
+        let _ = write!(s, " {} [{}]", v.name, v.unit());
+    }
+    s.push_str(" lo [as bisected] hi [as bisected] verdict_lo [text] verdict_hi [text]\n");
+    s.push_str(&boundaries_csv(spec, b));
+    write_atomic(&dir.join(BOUNDARIES_FILE), s.as_bytes())
 }

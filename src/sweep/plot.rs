@@ -79,28 +79,36 @@ pub fn plot_all(
     bounds: &[Boundary],
 ) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
-    let one_d = spec.vary[0].n > 1 && spec.vary[1..].iter().all(|v| v.n == 1);
-    match if one_d { 1 } else { spec.vary.len() } {
-        1 => {
-            for y in ys {
-                let f = dir.join(format!("line_{}.svg", y.replace('+', "_")));
-                line(&f, spec, rows, y, bounds)?;
-                out.push(f);
-            }
-        }
-        _ => {
-            let kind = if spec.vary.len() == 2 { "map" } else { "slices" };
-            let f = dir.join(format!("{kind}_verdict.svg"));
-            maps(&f, spec, rows, None)?;
+    let names = planned(spec, ys, colours);
+    if is_line(spec) {
+        for (y, name) in ys.iter().zip(&names) {
+            let f = dir.join(name);
+            line(&f, spec, rows, y, bounds)?;
             out.push(f);
-            for c in colours {
-                let f = dir.join(format!("{kind}_{c}.svg"));
-                maps(&f, spec, rows, Some(c.as_str()))?;
-                out.push(f);
-            }
+        }
+    } else {
+        let cs = std::iter::once(None).chain(colours.iter().map(|c| Some(c.as_str())));
+        for (c, name) in cs.zip(&names) {
+            let f = dir.join(name);
+            maps(&f, spec, rows, c)?;
+            out.push(f);
         }
     }
     Ok(out)
+}
+
+/// One varied name with more than one value: line plots (else maps or slices).
+fn is_line(spec: &SweepSpec) -> bool {
+    spec.vary.len() == 1 || (spec.vary[0].n > 1 && spec.vary[1..].iter().all(|v| v.n == 1))
+}
+
+/// The names of the files [`plot_all`] writes, in its order.
+pub fn planned(spec: &SweepSpec, ys: &[String], colours: &[String]) -> Vec<String> {
+    if is_line(spec) {
+        return ys.iter().map(|y| format!("line_{}.svg", y.replace('+', "_"))).collect();
+    }
+    let kind = if spec.vary.len() == 2 { "map" } else { "slices" };
+    std::iter::once(format!("{kind}_verdict.svg")).chain(colours.iter().map(|c| format!("{kind}_{c}.svg"))).collect()
 }
 
 /// Line plot of the `+`-separated keys `ys` against the one varied name; markers coloured by verdict.

@@ -1,0 +1,123 @@
+//! Where a sweep writes: `sweep --out DIR` takes a new or empty folder, or one holding only
+//! an earlier sweep's files, which the new sweep replaces (none left beside the new ones).
+//! An earlier sweep's files are known from its sweep.csv: its first line is gripopt's title
+//! and its `# files:` line lists every file that sweep wrote (sweep.csv is written first,
+//! listing the files planned, so a sweep stopped halfway leaves nothing unlisted). Never
+//! into a run folder, never over a file a sweep did not write (a user's own sweep.csv).
+//!
+//! The units of sweep.csv's columns: the varied names' (their fields' units) and the
+//! evaluation record's keys' ([`record_unit`]).
+
+use crate::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// The sweep's table.
+pub const SWEEP_FILE: &str = "sweep.csv";
+/// The bisected boundaries.
+pub const BOUNDARIES_FILE: &str = "boundaries.csv";
+/// The title of sweep.csv (its first line starts with it).
+pub const SWEEP_TITLE: &str = "# gripopt sweep.csv";
+
+/// Files of a run folder: a sweep never writes into one.
+const RUN_FILES: [&str; 4] = ["run.json", "checkpoint.json", ".lock", "recording"];
+
+/// The files an earlier sweep in `dir` wrote (its sweep.csv's `# files:` line), which the
+/// new one replaces; an error naming what is not a sweep's: a run folder, a file no
+/// sweep.csv lists, a sweep.csv gripopt did not write.
+pub fn check_out_folder(dir: &Path) -> Result<Vec<PathBuf>> {
+    if !dir.exists() {
+        return Ok(vec![]);
+    }
+    let bad = |message: String| Err(Error::RunDir { path: dir.to_path_buf(), message });
+    if !dir.is_dir() {
+        return bad("--out: not a folder".into());
+    }
+    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the output folder", e))?;
+    let mut names: Vec<String> = rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).collect();
+    names.sort();
+    if let Some(f) = names.iter().find(|n| RUN_FILES.contains(&n.as_str())) {
+        return bad(format!(
+            "--out: a gripopt run folder (it holds {f}); a sweep writes into a folder of its own, never into a run's"
+        ));
+    }
+    if names.is_empty() {
+        return Ok(vec![]);
+    }
+    let listed = listed_files(&dir.join(SWEEP_FILE))?;
+    let foreign: Vec<&String> = names.iter().filter(|n| !listed.contains(n) && !n.ends_with(".tmp")).collect();
+    if let Some(first) = foreign.first() {
+        let why = if listed.is_empty() {
+            "it holds no sweep.csv written by gripopt"
+        } else {
+            "not listed in its sweep.csv's `# files:` line"
+        };
+        return Err(Error::RunDir {
+            path: dir.join(first),
+            message: format!("not written by a gripopt sweep ({why}): a sweep never overwrites or leaves beside its own what it did not write; give --out a new or empty folder, or one of an earlier sweep"),
+        });
+    }
+    Ok(names.into_iter().filter(|n| listed.contains(n)).map(|n| dir.join(n)).collect())
+}
+
+/// The files listed by the sweep.csv at `path` (none when it is absent; an error naming it
+/// when it is not a gripopt sweep's).
+fn listed_files(path: &Path) -> Result<Vec<String>> {
+    let text = match std::fs::read(path) {
+        Ok(b) => String::from_utf8_lossy(&b).to_string(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(vec![]),
+        Err(e) => return Err(Error::io(path, "cannot read", e)),
+    };
+    let files = text
+        .lines()
+        .take_while(|l| l.starts_with('#'))
+        .find_map(|l| l.strip_prefix("# files: "))
+        .map(|l| l.split(", ").map(String::from).collect::<Vec<_>>());
+    match files {
+        Some(f) if text.starts_with(SWEEP_TITLE) => Ok(f),
+        _ => Err(Error::RunDir {
+            path: path.to_path_buf(),
+            message: "not written by a gripopt sweep (no `# gripopt sweep.csv` title and `# files:` line): a sweep never overwrites it; give --out a new or empty folder".into(),
+        }),
+    }
+}
+
+/// The unit of a key of the evaluation record as a sweep.csv column (`-`: none; `text`,
+/// `bool`).
+pub fn record_unit(key: &str) -> &'static str {
+    let k = key.rsplit('.').next().unwrap_or(key);
+    // an array's or a finger's element, `name_0`, `name_1`: the name's unit
+    let k = match k.rsplit_once('_') {
+        Some((a, d)) if !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()) => a,
+        _ => k,
+    };
+    match k {
+        "l21" | "b" | "t22" | "l_hand" | "l11" | "l12" | "l22" | "k1" | "k2" | "max_offset" | "x_off" => "m",
+        "object_max_displacement" | "object_max_dx" | "object_max_dy" | "object_final_displacement" => "m",
+        "psi_deg" | "min_margin_deg" | "object_max_tilt_deg" | "object_final_tilt_deg" => "deg",
+        "q11" | "q21" | "q12" | "q22" | "q13" | "theta1" | "theta2" | "theta2_first_contact" => "rad",
+        "object_max_spin" => "rad",
+        "masses" | "m_finger" => "kg",
+        "tau_s_min" | "tau_s0" => "N·m",
+        "f0" | "fmu" | "fhand0_x" | "fhand0_y" | "fhandmu_x" | "fhandmu_y" | "mean_force" | "mean_force_mu" => "N",
+        "mean_force_0" | "min_force_margin" | "static_force_margin" | "f_stab" | "fstar" => "N",
+        "hand_x_end" | "hand_y_end" | "hand0_x" | "hand0_y" => "N",
+        "t_first_contact" | "t_stab" | "t_end" | "cpu_s" => "s",
+        "v_impact" => "m/s",
+        "e_cyl" | "e_trans" | "e_rot" | "e_lim" | "object_peak_e_trans" | "object_peak_e_rot" | "energy" => "J",
+        "max_energy_rise" => "J",
+        "max_qdd_end" => "rad/s^2",
+        "violation" => "stage units",
+        "form_closed" | "knuckle_contact" | "impact_ok" | "fold_ok" | "force_ok" | "moved" | "toppled" | "escaped"
+        | "rim_contact" | "recentres" | "feasible" => "bool",
+        "max_offset_ended_by"
+        | "force_model"
+        | "first_contact_phalanx"
+        | "outcome"
+        | "end"
+        | "reason"
+        | "cause"
+        | "scene"
+        | "verdict" => "text",
+        _ => "-",
+    }
+}
