@@ -8,7 +8,9 @@
 //! end time of a full-resolution trajectory within [`ACROSS_SIMULATORS`]. Designs discarded
 //! before stage 3 still verify exactly; that the sink changes nothing is tests/seams.rs's.
 
-use gripopt::record::{read_index, Resolution};
+use crate::common::{output_text, run_gripopt};
+use gripopt::record::{read_index, AcrossRevisions, Resolution};
+use gripopt::sim::SIMULATOR_REVISION;
 use gripopt::RunFolder;
 use std::path::{Path, PathBuf};
 
@@ -88,6 +90,9 @@ fn designs_recorded_by_5d2a08e_replay_and_verify() {
             assert!(r.compared + r.values_compared > 0, "{name} design {id}: {r:?}");
             if !r.verified {
                 agrees_across_simulators(&r).unwrap_or_else(|e| panic!("{name} design {id}: {e}: {r:?}"));
+                // and replay itself says so: recorded by revision 1 (no stamp), agreeing
+                let a = r.across_revisions.as_ref().unwrap_or_else(|| panic!("{name} design {id}: {r:?}"));
+                assert!(a.agrees() && a.recorded == 1 && a.current == SIMULATOR_REVISION, "{name} design {id}: {a:?}");
             }
             assert_eq!(r.recorded.record.id, id);
             assert_eq!(r.recomputed_feasible, r.recorded.record.feasible, "{name} design {id}");
@@ -103,4 +108,55 @@ fn designs_recorded_by_5d2a08e_replay_and_verify() {
         }
     }
     assert!(full > 0, "a full-resolution trajectory compared");
+}
+
+/// A recording that a re-evaluation by another revision does not reproduce within the
+/// tolerance is not verified: an objective moved by 1 %, or the verdict changed.
+#[test]
+fn a_design_moved_beyond_the_tolerance_is_not_verified_across_revisions() {
+    let dir = copy("centred");
+    let run = RunFolder::open(&dir).unwrap();
+    let ids =
+        read_index(&dir.join("recording")).unwrap().iter().flat_map(|e| e.first_id..=e.last_id).collect::<Vec<_>>();
+    let r = ids
+        .into_iter()
+        .map(|id| run.replay(id).unwrap())
+        .find(|r| r.recorded.record.feasible && !r.verified)
+        .expect("a feasible stage-3 design");
+    assert!(AcrossRevisions::compare(&r.recorded, &r.fresh).agrees());
+    let mut moved = r.recorded.clone();
+    moved.record.objectives.t_stab = moved.record.objectives.t_stab.map(|t| t * 1.01);
+    let a = AcrossRevisions::compare(&moved, &r.fresh);
+    assert!(a.differs.as_deref().is_some_and(|d| d.starts_with("t_stab")), "{a:?}");
+    assert!(a.max_difference > 9e-3 && a.max_difference < 1.1e-2, "{a:?}");
+    let mut flipped = r.recorded.clone();
+    flipped.record.feasible = false;
+    flipped.record.failed_stage = Some(3);
+    let a = AcrossRevisions::compare(&flipped, &r.fresh);
+    assert!(a.differs.as_deref().is_some_and(|d| d.starts_with("the verdict differs")), "{a:?}");
+}
+
+/// `gripopt replay` on a design recorded by 5d2a08e says it agrees across revisions, exit 0;
+/// a design of a run recorded now carries this build's revision and verifies bit for bit.
+#[test]
+fn replay_cli_reports_a_recording_by_another_revision() {
+    let dir = copy("full");
+    let run = RunFolder::open(&dir).unwrap();
+    let id = read_index(&dir.join("recording"))
+        .unwrap()
+        .iter()
+        .flat_map(|e| e.first_id..=e.last_id)
+        .find(|&id| run.replay(id).is_ok_and(|r| !r.verified))
+        .expect("a stage-3 design");
+    let o = run_gripopt(&["replay", dir.to_str().unwrap(), "--design", &id.to_string()]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("verified across simulator revisions (recorded by revision 1, this build is revision"),
+        "{text}"
+    );
+    let o = run_gripopt(&["replay", dir.to_str().unwrap(), "--design", &id.to_string(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["across_revisions"]["agrees"], true, "{v}");
+    assert_eq!(v["across_revisions"]["recorded_revision"], 1, "{v}");
 }

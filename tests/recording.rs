@@ -28,6 +28,7 @@ fn every_design_is_recorded_and_replays_verified() {
     for id in 0..s.evaluations {
         let r = read_design(&d, id).unwrap();
         assert_eq!(r.record.id, id);
+        assert_eq!(r.simulator_revision, gripopt::sim::SIMULATOR_REVISION, "design {id}: the shard's stamp");
         // the recorded record agrees with its trajectory (compact: a subset of the samples)
         let simulated = r.record.trajectory_samples;
         assert!(r.samples.len() as u64 <= simulated && (simulated == 0) == r.samples.is_empty(), "design {id}");
@@ -60,6 +61,7 @@ fn every_design_is_recorded_and_replays_verified() {
     let front_id: u64 =
         pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
     let r = replay(&d, front_id).unwrap();
+    assert!(r.across_revisions.is_none(), "the same revision: compared bit for bit");
     assert!(
         r.verified && r.max_difference == 0.0 && r.compared > 20,
         "{} {} {}",

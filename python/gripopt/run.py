@@ -78,6 +78,9 @@ class Replay:
         recomputed_feasible: the re-evaluation's verdict.
         record: the re-evaluation's record (as ``gripopt evaluate --json``).
         file: the shard the design was read from.
+        agrees_across_revisions: for a recording by another simulator revision (which this
+            one does not reproduce bit for bit), whether the verdict, objectives, violation
+            and trajectory end agree within 1e-3 relative; None for the same revision.
     """
 
     verified: bool
@@ -87,6 +90,7 @@ class Replay:
     recomputed_feasible: bool
     record: dict[str, Any]
     file: Path
+    agrees_across_revisions: bool | None = None
 
 
 class Run:
@@ -166,6 +170,7 @@ class Run:
             recomputed_feasible=r["recomputed_feasible"],
             record=json.loads(r["fresh"]),
             file=Path(r["file"]),
+            agrees_across_revisions=r["agrees_across_revisions"],
         )
 
     def resume(

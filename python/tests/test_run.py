@@ -5,6 +5,7 @@ files read by pandas and `gripopt replay --csv`), runs started and resumed from 
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -55,6 +56,18 @@ def test_a_recorded_design_and_its_replay(cli_run, cli, tmp_path):
     r = run.replay(id)
     assert r.verified and r.max_difference == 0.0 and r.compared == len(want)
     assert r.record["steps"] == d.record["sim_steps"]
+    assert r.agrees_across_revisions is None, "recorded by this simulator revision"
+
+
+def test_a_recording_by_an_older_simulator_agrees_across_revisions(tmp_path):
+    # a run recorded by gripopt 5d2a08e (simulator revision 1), as `gripopt replay` reads it
+    run_dir = tmp_path / "full"
+    shutil.copytree(REPO / "tests" / "fixtures" / "recorded-5d2a08e" / "full", run_dir)
+    run = gripopt.Run(run_dir)
+    simulated = run.population.dropna(subset=["sim_steps"])
+    replays = [run.replay(int(i)) for i in simulated["id"]]
+    assert replays and not any(r.verified for r in replays), "another revision: not bit for bit"
+    assert all(r.agrees_across_revisions for r in replays)
 
 
 def test_optimise_from_python_is_the_cli_run(cli_run, tmp_path):

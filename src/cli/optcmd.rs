@@ -141,15 +141,29 @@ struct ReplayJson<'a> {
     problem_note: Option<&'a str>,
     verdict_agrees: bool,
     max_difference: Option<f64>,
+    /// A recording by another simulator revision: the comparison within the integration
+    /// tolerance (null for the same revision, or when the replay verified bit for bit).
+    across_revisions: Option<AcrossRevisionsJson>,
     compared_samples: usize,
     compared_values: usize,
     file: String,
     replay_s: f64,
 }
 
+/// `replay --json`'s `across_revisions`.
+#[derive(serde::Serialize)]
+struct AcrossRevisionsJson {
+    recorded_revision: u32,
+    current_revision: u32,
+    agrees: bool,
+    max_difference: f64,
+    differs: Option<String>,
+}
+
 /// `gripopt replay`.
 /// Exit code 3 when the recording is not verified, which includes a design with no recorded
-/// trajectory (nothing was compared).
+/// trajectory (nothing was compared); 0 when it is, or when another simulator revision
+/// recorded it and the re-evaluation agrees with it within the integration tolerance.
 pub fn replay(
     dir: &std::path::Path,
     id: u64,
@@ -164,7 +178,8 @@ pub fn replay(
     // verified means something was re-computed and compared: the trajectory, or (recorded
     // without one) the record's stage, reason, violation, objectives and simulation work
     let verified = r.verified && (r.compared > 0 || r.values_compared > 0);
-    let code = if verified { 0 } else { 3 };
+    let across = r.across_revisions.as_ref();
+    let code = if verified || across.is_some_and(|a| a.agrees()) { 0 } else { 3 };
     if let Some(path) = csv {
         crate::cli::scenes::write_samples_csv(path, samples, |v| format!("{v}"))?;
     }
@@ -179,6 +194,13 @@ pub fn replay(
             problem_note: r.problem_note.as_deref(),
             verdict_agrees: r.recomputed_feasible == rec.feasible,
             max_difference: r.max_difference.is_finite().then_some(r.max_difference),
+            across_revisions: across.map(|a| AcrossRevisionsJson {
+                recorded_revision: a.recorded,
+                current_revision: a.current,
+                agrees: a.agrees(),
+                max_difference: a.max_difference,
+                differs: a.differs.clone(),
+            }),
             compared_samples: r.compared,
             compared_values: r.values_compared,
             file: r.recorded.file.display().to_string(),
@@ -207,7 +229,13 @@ pub fn replay(
         samples.len(),
         samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default()
     );
-    if r.compared == 0 && verified {
+    if let Some(a) = across {
+        let (rtol, rec, cur) = (gripopt::sim::ACROSS_REVISIONS_RTOL, a.recorded, a.current);
+        match &a.differs {
+            None => outln!("  verified across simulator revisions (recorded by revision {rec}, this build is revision {cur}): the same verdict, objectives and violation within {rtol:e} relative (largest difference {:e}); trajectories of two revisions are not compared sample by sample", a.max_difference),
+            Some(d) => outln!("  NOT verified: recorded by simulator revision {rec}, this build is revision {cur}, and beyond {rtol:e} relative: {d}"),
+        }
+    } else if r.compared == 0 && verified {
         outln!("  verified (no trajectory recorded for this design): the re-evaluation reproduces the record's stage, reason, violation, objectives and simulation work ({} values)", r.values_compared);
     } else if r.compared == 0 {
         outln!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);

@@ -47,7 +47,7 @@ pub use options::{
 };
 pub use proto::{GraspSeries, SERIES_NAME};
 pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
-pub use replay::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
+pub use replay::{problem_of_generation, read_design, replay, AcrossRevisions, Recorded, Replay, RunProblem};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{

@@ -9,7 +9,7 @@ use super::schema::DesignMessage;
 use super::{RecordOptions, Resolution};
 use crate::eval::{evaluate_into, EvalOptions, Record};
 use crate::params::{Design, Problem};
-use crate::sim::{Sample, Trajectory};
+use crate::sim::{Sample, Trajectory, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
 use crate::{Error, Result};
 use prost::Message;
 use std::path::{Path, PathBuf};
@@ -28,6 +28,9 @@ pub struct Recorded {
     /// SHA-256 of the problem the design was evaluated with, as the shard's metadata says
     /// (absent in shards of a very early gripopt).
     pub problem_sha256: Option<String>,
+    /// The simulator revision that recorded it ([`crate::sim::SIMULATOR_REVISION`]; 1 for a
+    /// shard written before the revision was stamped).
+    pub simulator_revision: u32,
 }
 
 impl Recorded {
@@ -65,6 +68,83 @@ pub struct Replay {
     /// Why the re-simulation cannot verify the recording whatever it gives: the problem
     /// file was edited after the design was recorded (its SHA-256 is not the one recorded).
     pub problem_note: Option<String>,
+    /// For a recording made by another simulator revision that this one does not reproduce
+    /// bit for bit: whether the re-evaluation agrees with it within the integration tolerance.
+    pub across_revisions: Option<AcrossRevisions>,
+}
+
+/// A recording compared with a re-evaluation by another simulator revision: the verdict
+/// (feasibility, failing stage, reason) must be the same, the objectives and the violation
+/// within [`ACROSS_REVISIONS_RTOL`] relative, and a full-resolution trajectory must end at the
+/// same time within it (its samples are not compared: the steps differ).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AcrossRevisions {
+    /// The revision that recorded the design.
+    pub recorded: u32,
+    /// This build's revision.
+    pub current: u32,
+    /// Largest relative difference of the objectives and the violation.
+    pub max_difference: f64,
+    /// What differs beyond the tolerance (None: they agree).
+    pub differs: Option<String>,
+}
+
+impl AcrossRevisions {
+    /// The recording and the re-evaluation agree within the tolerance.
+    pub fn agrees(&self) -> bool {
+        self.differs.is_none()
+    }
+
+    /// Compare `recorded` (by revision `recorded.simulator_revision`) with `fresh`, this
+    /// build's re-evaluation.
+    pub fn compare(recorded: &Recorded, fresh: &Record) -> AcrossRevisions {
+        let rec = &recorded.record;
+        let mut out = AcrossRevisions {
+            recorded: recorded.simulator_revision,
+            current: SIMULATOR_REVISION,
+            max_difference: 0.0,
+            differs: None,
+        };
+        let verdict = |f: bool, s: Option<u8>, r: Option<&str>| (f, s, r.map(str::to_owned));
+        if verdict(rec.feasible, rec.failed_stage, rec.reason.as_deref())
+            != verdict(fresh.verdict.feasible, fresh.verdict.failed_stage, fresh.verdict.reason.as_deref())
+        {
+            out.differs = Some(format!(
+                "the verdict differs (recorded feasible {}, stage {:?}; now feasible {}, stage {:?})",
+                rec.feasible, rec.failed_stage, fresh.verdict.feasible, fresh.verdict.failed_stage
+            ));
+            return out;
+        }
+        let o = fresh.objectives();
+        let r_o = &rec.objectives;
+        // an older gripopt wrote max_offset's −Δ_off sentinel where it was not computed
+        let offset = |m: Option<f64>| m.filter(|m| *m >= 0.0);
+        let mut pairs = vec![
+            ("max_offset", offset(r_o.max_offset), offset(o[0])),
+            ("alpha", r_o.alpha, o[1]),
+            ("mean_force", r_o.mean_force, o[2]),
+            ("t_stab", r_o.t_stab, o[3]),
+            ("violation", rec.violation, fresh.verdict.violation),
+        ];
+        if recorded.resolution == Resolution::Full && !recorded.samples.is_empty() {
+            pairs.push(("trajectory end", recorded.samples.last().map(|s| s.t), fresh.grasp.t_end));
+        }
+        for (what, a, b) in pairs {
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    let d = rel(a, b);
+                    out.max_difference = out.max_difference.max(d);
+                    if d > ACROSS_REVISIONS_RTOL && out.differs.is_none() {
+                        out.differs = Some(format!("{what}: recorded {a}, now {b}"));
+                    }
+                }
+                (None, None) => {}
+                (a, b) if out.differs.is_none() => out.differs = Some(format!("{what}: recorded {a:?}, now {b:?}")),
+                _ => {}
+            }
+        }
+        out
+    }
 }
 
 /// The problem file a run evaluated one generation with, loaded and checked.
@@ -409,7 +489,11 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let samples = samples_from(&series)
         .ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
     let problem_sha256 = meta.metadata.get("problem_sha256").cloned();
-    Ok(Recorded { file: path, record, samples, resolution, problem_sha256 })
+    let simulator_revision = match meta.metadata.get("simulator_revision") {
+        None => 1,
+        Some(v) => v.parse().map_err(|_| bad(format!("metadata `simulator_revision` is {v:?}, not an integer")))?,
+    };
+    Ok(Recorded { file: path, record, samples, resolution, problem_sha256, simulator_revision })
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -455,6 +539,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
             fresh,
             problem_file: run.file,
             problem_note,
+            across_revisions: None,
         });
     }
     let mut traj = Trajectory::default();
@@ -520,6 +605,8 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let verified =
         same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol && problem_note.is_none();
     let maxd = maxd.max(vmaxd);
+    let across_revisions = (!verified && problem_note.is_none() && recorded.simulator_revision != SIMULATOR_REVISION)
+        .then(|| AcrossRevisions::compare(&recorded, &fresh_record));
     Ok(Replay {
         compared: fresh.len().min(recorded.samples.len()),
         values_compared,
@@ -530,5 +617,6 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         fresh: fresh_record,
         problem_file: run.file,
         problem_note,
+        across_revisions,
     })
 }

@@ -477,6 +477,7 @@ fn drive(
 fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::BTreeMap<String, String> {
     let mut meta = std::collections::BTreeMap::new();
     meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
+    meta.insert("simulator_revision".to_string(), crate::sim::SIMULATOR_REVISION.to_string());
     meta.insert("run_id".to_string(), info.run_id.clone());
     meta.insert("problem".to_string(), gp.problem.name.clone());
     meta.insert("problem_sha256".to_string(), info.problem_sha256.clone());

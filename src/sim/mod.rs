@@ -49,7 +49,7 @@ pub use scene::free::{
 };
 pub use scene::offset::{OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};
 pub use scene::{End, Response, Run, Scene};
-pub use settings::{Controls, Integration, Method, Mode};
+pub use settings::{Controls, Integration, Method, Mode, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
 pub use simulate::{diagnostic_grasp, simulate, SceneResult, SceneSpec};
 pub use sink::{EventNote, Point, Sink};
 pub use tracking::{EndValues, GraspLimits, Tracker};

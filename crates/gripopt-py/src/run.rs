@@ -287,6 +287,8 @@ impl PyRunFolder {
         d.set_item("recomputed_feasible", r.recomputed_feasible)?;
         d.set_item("fresh", json(&r.fresh)?)?;
         d.set_item("file", &r.recorded.file)?;
+        // a recording by another simulator revision: agreement within the tolerance
+        d.set_item("agrees_across_revisions", r.across_revisions.as_ref().map(|a| a.agrees()))?;
         Ok(d)
     }
 }
