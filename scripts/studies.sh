@@ -23,7 +23,7 @@ fig4_8r() { sw fig4_8r --stage static --vary r=0.30:0.66:10 --y mean_force_mu+me
 fig4_9()  { sw fig4_9  --stage static --vary p=0.2:1.4:7 --vary r=0.2:1.0:9 --vary l21=0.03:0.07:5 --psi-rule --hold-l-hand --color alpha --color mean_force; }
 fig4_9l() { sw fig4_9l --stage static --vary l21=0.030:0.060:31 --hold-l-hand --y alpha_mu+alpha_0 --y mean_force_mu+mean_force_0; }
 fig4_10() { sw fig4_10 --stage static --vary b=0.045:0.08:8 --vary l21=0.03:0.07:9 --vary l_hand=0.20:0.30:3 --psi-rule --color alpha --color mean_force; }
-fig4_11() { mkdir -p "$R/fig4_11"; echo "== fig4_11"; "$B" simulate "$P" --csv "$R/fig4_11/trajectory.csv" --plot "$R/fig4_11/grasp.svg" --json > "$R/fig4_11/simulate.json"; }
+fig4_11() { mkdir -p "$R/fig4_11"; echo "== fig4_11"; "$B" simulate "$P" --force --csv "$R/fig4_11/trajectory.csv" --plot "$R/fig4_11/grasp.svg" --json > "$R/fig4_11/simulate.json"; }
 fig4_13() { sw fig4_13 --stage dynamic --vary l11=0.010:0.080:15 --bisect l11; }
 # fig 4.13 at the torque that puts gripopt's nominal at the thesis's impact margin (0.5 N·m x 0.338/0.9)
 fig4_13s() { sw fig4_13s --stage dynamic --vary l11=0.010:0.080:29 --vary tau=0.188:0.188:1 --bisect l11; }

@@ -299,6 +299,13 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     assert!(s.rows.iter().all(|r| r.scenarios_out == 3 && r.keeps == (r.p_stay_out.unwrap() >= 0.5)));
     let text = std::fs::read_to_string(one.join(gripopt::run::VERIFY_ROBUST_FILE)).unwrap();
     assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 1 + 2 * front.len());
+    // an edited problem.toml is refused, naming it: the figures would not be the run's
+    let toml = one.join("problem.toml");
+    let text0 = std::fs::read_to_string(&toml).unwrap();
+    std::fs::write(&toml, format!("{text0}\n# edited\n")).unwrap();
+    let e = gripopt::run::verify_robust(&one).unwrap_err().to_string();
+    assert!(e.contains("problem.toml") && e.contains("edited"), "{e}");
+    std::fs::write(&toml, text0).unwrap();
 }
 
 /// The shipped multi-object problem loads, its objects are the shipped single-object files'

@@ -392,3 +392,41 @@ fn item12_every_csv_has_unit_lines_and_documented_columns() {
     }
     assert!(v["free_scene"]["energy"].is_array() && v["free_scene"]["t_first_contact"].is_number(), "{v}");
 }
+
+/// An existing file given to `--csv` / `--plot` is refused (exit 2) and left as it was, a
+/// run's own files included; `--force` replaces it. `export RUN --design` takes the problem
+/// the design's generation was evaluated with and refuses an edited problem.toml.
+#[test]
+fn existing_output_files_and_edited_problems_are_never_taken_silently() {
+    let dir = crate::common::tiny_run("edges-outputs", Path::new(PROBLEM), 8, 1);
+    let d = dir.display().to_string();
+    let run_json = dir.join("run.json");
+    let before = std::fs::read(&run_json).unwrap();
+    for flag in ["--csv", "--plot"] {
+        let o = cli(&["replay", &d, "--design", "0", flag, run_json.to_str().unwrap()]);
+        assert_eq!(code(&o), 2, "{}", stderr(&o));
+        assert!(stderr(&o).contains("the file exists; add --force"), "{}", stderr(&o));
+        assert_eq!(std::fs::read(&run_json).unwrap(), before, "{flag}: run.json untouched");
+    }
+    let mine = dir.join("mine.csv");
+    std::fs::write(&mine, "my data\n").unwrap();
+    let o = cli(&["simulate", PROBLEM, "--csv", mine.to_str().unwrap()]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "my data\n");
+    let o = cli(&["simulate", PROBLEM, "--csv", mine.to_str().unwrap(), "--force"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(std::fs::read_to_string(&mine).unwrap().starts_with("# gripopt"), "replaced by the trajectory");
+    // export: the run's problem, refused once edited
+    let out = dir.join("design-0.json");
+    let o = cli(&["export", &d, "--design", "0", "--out", out.to_str().unwrap()]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let toml = dir.join("problem.toml");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    std::fs::write(&toml, text.replace("w = 5e-3", "w = 8e-3")).unwrap();
+    let out = dir.join("design-0-edited.json");
+    let o = cli(&["export", &d, "--design", "0", "--out", out.to_str().unwrap()]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("problem.toml") && stderr(&o).contains("edited"), "{}", stderr(&o));
+    assert!(!out.exists());
+    std::fs::write(&toml, text).unwrap();
+}

@@ -496,7 +496,7 @@ def free_run(path, seconds, phalanx_friction=True):
 def report(binary, problem, out, centred, free, ev):
     """The side-by-side table of docs/export.md, in Markdown."""
     grasp_csv = out / "grasp.csv"
-    gripopt(binary, "simulate", problem, "--csv", grasp_csv)
+    gripopt(binary, "simulate", problem, "--force", "--csv", grasp_csv)
     rows = read_csv(grasp_csv)
     tight = json.loads(gripopt(binary, "simulate", problem, "--rtol", "1e-10", "--json"))
     gfree = json.loads(gripopt(binary, "simulate", problem, "--scene", "free", "--json"))
@@ -554,7 +554,7 @@ def main(argv):
     chk = Checks()
     ev = json.loads(gripopt(binary, "evaluate", problem, "--json"))
     nc_csv = out / "no-contact.csv"
-    gripopt(binary, "simulate", problem, "--no-contact", "--csv", nc_csv)
+    gripopt(binary, "simulate", problem, "--no-contact", "--force", "--csv", nc_csv)
     rows = read_csv(nc_csv)
     centred = export(binary, problem, out / "nominal-centred.xml", "--scene", "centred")
     free = export(binary, problem, out / "nominal-free.xml", "--scene", "free")

@@ -76,8 +76,18 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
             dir.display()
         ))
     })?;
-    let problem = Problem::load(dir.join("problem.toml"))?;
     let rec = gripopt::record::read_design(dir, id)?;
+    // the problem the design's generation was evaluated with (problem-G.toml after a forced
+    // resume with a changed problem), refused when edited since: the hand would be another
+    let run = gripopt::record::problem_of_generation(dir, rec.record.generation)?;
+    if let Some(why) = run.edited() {
+        return Err(gripopt::Error::Input(format!(
+            "{}: {why}; design {id} was evaluated with the file the run recorded: restore it to export the design",
+            run.file.display()
+        ))
+        .into());
+    }
+    let problem = run.problem;
     let x = rec.design();
     Ok((problem, x, format!("run folder {}, design {id} (recorded in {})", dir.display(), rec.file.display())))
 }

@@ -75,6 +75,9 @@ enum Cmd {
         /// Plot the grasp (joint angles, contact forces, raw and filtered hand force) to this SVG file.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Overwrite the --csv / --plot files if they exist (refused otherwise).
+        #[arg(long)]
+        force: bool,
     },
     /// NSGA-II over the staged pipeline; checkpoints every generation into RUN_DIR.
     Optimise {
@@ -144,6 +147,9 @@ enum Cmd {
         /// with the recording and record it to RUN_DIR/scenario-ID-OBJECT-K.mcap.
         #[arg(long, conflicts_with_all = ["scene", "plot"])]
         scenario: Option<String>,
+        /// Overwrite the --csv / --plot files if they exist (refused otherwise).
+        #[arg(long)]
+        force: bool,
     },
     /// Continue a stopped, killed or finished run.
     Resume {
@@ -284,6 +290,21 @@ fn hooks() -> gripopt::run::RunHooks {
     }
 }
 
+/// Refuse an output file (`--csv`, `--plot`) that exists unless `force`: no command writes
+/// over a file it was not told it may replace (a run's checkpoint, shard or CSV, a user's
+/// own file). A folder is refused too.
+fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Result<()> {
+    let Some(p) = path else { return Ok(()) };
+    let refuse = |why: &str| Err(gripopt::Error::Input(format!("{flag} {}: {why}", out::path(p))).into());
+    if p.is_dir() {
+        return refuse("is a folder, not a file");
+    }
+    if p.exists() && !force {
+        return refuse("the file exists; add --force to overwrite it");
+    }
+    Ok(())
+}
+
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
 pub fn run() -> Result<i32> {
     let cli = Cli::parse();
@@ -293,7 +314,9 @@ pub fn run() -> Result<i32> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
-        Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace, plot } => {
+        Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace, plot, force } => {
+            check_output("--csv", csv.as_deref(), force)?;
+            check_output("--plot", plot.as_deref(), force)?;
             let mut p = load_problem(&problem)?;
             if let Some(sc) = &scene {
                 p = scenes::apply_scene(&p, sc)?;
@@ -355,7 +378,9 @@ pub fn run() -> Result<i32> {
             let s = gripopt::run::optimise_with(&spec, hooks())?;
             optcmd::summary(&s, json)
         }
-        Cmd::Replay { run_dir, design, json, csv, plot, scene, scenario } => {
+        Cmd::Replay { run_dir, design, json, csv, plot, scene, scenario, force } => {
+            check_output("--csv", csv.as_deref(), force)?;
+            check_output("--plot", plot.as_deref(), force)?;
             if let Some(sc) = &scenario {
                 return robust::replay_scenario(&run_dir, design, sc, json, csv.as_deref());
             }

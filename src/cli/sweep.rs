@@ -103,6 +103,13 @@ pub fn run(a: SweepArgs) -> Result<()> {
     // the folder is checked before anything is evaluated (a run folder, a file a sweep did
     // not write: refused); an earlier sweep's files are replaced
     let earlier = sweep::out::check_out_folder(&a.out)?;
+    if spec.problem.robust.is_some() {
+        // said before anything runs: a sweep evaluates the single-object pipeline
+        eprintln!(
+            "note: {} has [robust]: a sweep varies and evaluates the reference [object] and [scene] only; the robust objects and scenarios are not evaluated (docs/robust.md)",
+            crate::cli::out::path(&a.problem)
+        );
+    }
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(t) = a.threads {
         b = b.num_threads(t);

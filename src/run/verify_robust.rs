@@ -115,7 +115,9 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     let folder = RunFolder::open(dir)?;
     let _lock = RunLock::acquire(dir)?;
     let file = dir.join("problem.toml");
-    let p = Problem::load(&file)?;
+    // the problem in force, checked against the hash run.json recorded (a missing run.json or
+    // an edited problem.toml is an error naming the file): the figures are the run's
+    let p = folder.problem()?;
     let r = p
         .robust
         .clone()
