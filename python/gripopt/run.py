@@ -13,6 +13,7 @@ import pandas as pd
 
 from . import _gripopt
 from ._frames import DESIGN_COLUMNS, HISTORY_COLUMNS, SAMPLE_COLUMNS, frame
+from .errors import InputError
 from .problem import Problem
 
 PathLike = Union[str, os.PathLike]
@@ -63,6 +64,19 @@ class RecordedDesign:
     trajectory: pd.DataFrame
     resolution: str
     file: Path
+
+
+def design_id(id: Any) -> int:
+    """A design id as given (an int, or a whole float such as a DataFrame cell holds);
+    anything else, a fraction or a negative number, is an :class:`InputError` naming it."""
+    try:
+        whole = int(id)
+        exact = whole == id
+    except (TypeError, ValueError, OverflowError):
+        exact = False
+    if not exact or isinstance(id, bool) or whole < 0:
+        raise InputError(f"design id {id!r}: a whole number ≥ 0 (the id column of the run's tables)")
+    return whole
 
 
 @dataclass(frozen=True)
@@ -155,13 +169,14 @@ class Run:
     def design(self, id: int) -> RecordedDesign:
         """Design ``id`` as recorded: its ``/designs`` record and grasp trajectory, read
         from the MCAP shard that holds it (one chunk read)."""
-        text, samples, resolution, file = self._folder.design(int(id))
-        return RecordedDesign(int(id), json.loads(text), frame(samples, SAMPLE_COLUMNS), resolution, Path(file))
+        id = design_id(id)
+        text, samples, resolution, file = self._folder.design(id)
+        return RecordedDesign(id, json.loads(text), frame(samples, SAMPLE_COLUMNS), resolution, Path(file))
 
     def replay(self, id: int) -> Replay:
         """Re-simulate design ``id`` from its recorded parameters and compare it with its
         recording."""
-        r = self._folder.replay(int(id))
+        r = self._folder.replay(design_id(id))
         return Replay(
             verified=r["verified"],
             max_difference=r["max_difference"],

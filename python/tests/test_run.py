@@ -57,6 +57,10 @@ def test_a_recorded_design_and_its_replay(cli_run, cli, tmp_path):
     assert r.verified and r.max_difference == 0.0 and r.compared == len(want)
     assert r.record["steps"] == d.record["sim_steps"]
     assert r.agrees_across_revisions is None, "recorded by this simulator revision"
+    assert run.design(float(id)).record["id"] == id, "a whole float (a DataFrame cell) is the id"
+    for bad in (id + 0.5, -1, "x", True):
+        with pytest.raises(gripopt.InputError, match="design id"):
+            run.design(bad)
 
 
 def test_a_recording_by_an_older_simulator_agrees_across_revisions(tmp_path):

@@ -76,6 +76,13 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
             dir.display()
         ))
     })?;
+    if !dir.join("problem.toml").is_file() {
+        return Err(gripopt::Error::Input(format!(
+            "{}: not a run folder (no problem.toml); give a folder written by `gripopt optimise`",
+            dir.display()
+        ))
+        .into());
+    }
     let rec = gripopt::record::read_design(dir, id)?;
     // the problem the design's generation was evaluated with (problem-G.toml after a forced
     // resume with a changed problem), refused when edited since: the hand would be another
