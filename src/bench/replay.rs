@@ -5,7 +5,7 @@ use super::say;
 use crate::optim::{Individual, MooProblem};
 use crate::params::Problem;
 use crate::record::{write_shard, ShardEntry};
-use crate::run::{GripperProblem, TrajectoryKeep};
+use crate::run::GripperProblem;
 use crate::{Error, Result};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
@@ -57,10 +57,10 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     std::fs::write(&run_json, text).map_err(|e| Error::io(&run_json, "cannot write", e))?;
     // the nominal design's real evaluation and recorded grasp, under every id
     let mut gp = GripperProblem::new(p.clone());
-    gp.keep_trajectories = TrajectoryKeep::All;
+    gp.recording = opts;
     let x = p.nominal.to_array().to_vec();
     let eval = gp.evaluate(&x);
-    let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.samples.len());
+    let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.simulated);
     let meta = std::collections::BTreeMap::from([("synthetic".to_string(), "gripopt bench replay".to_string())]);
     let t0 = std::time::Instant::now();
     let shards = n.div_ceil(per_shard);

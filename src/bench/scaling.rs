@@ -103,7 +103,7 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
     let start = Instant::now();
     let mut gp = GripperProblem::new(problem.clone());
     if b.record.enabled {
-        gp.keep_trajectories = b.record.trajectories;
+        gp.recording = b.record;
     }
     let (ideal, r) = gp.hv_points();
     let settings = Nsga2Settings {

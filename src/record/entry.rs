@@ -1,10 +1,10 @@
 //! The recorder's input: one evaluated design ([`DesignEntry`]: its identity, its
-//! evaluation record and trajectory), and the [`Recordable`] trait through which higher
+//! evaluation record and kept trajectory), and the [`Recordable`] trait through which higher
 //! layers hand their own types to the recorder (the run layer implements it for its
 //! individuals), so this layer never names them.
 
+use super::kept::KeptTrajectory;
 use crate::eval::Record;
-use crate::sim::Trajectory;
 
 /// One design as the recorder writes it.
 #[derive(Debug, Clone, Copy)]
@@ -19,8 +19,8 @@ pub struct DesignEntry<'a> {
     pub record: &'a Record,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3].
     pub stage_seconds: [f64; 4],
-    /// The stage-3 trajectory, if kept.
-    pub trajectory: Option<&'a Trajectory>,
+    /// The stage-3 trajectory, if kept (the samples its recording uses).
+    pub trajectory: Option<&'a KeptTrajectory>,
 }
 
 /// Something the recorder can write as one design.

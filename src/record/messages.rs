@@ -61,7 +61,7 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         sim_rhs_evals: r.sim_work().map(|w| w[1]),
         free_scene: r.free_scene.clone(),
         robust: r.robust.clone(),
-        trajectory_samples: i.trajectory.map_or(0, |t| t.samples.len() as u64),
+        trajectory_samples: i.trajectory.map_or(0, |t| t.simulated as u64),
     }
 }
 
@@ -73,18 +73,25 @@ pub fn at_precision(x: f64, res: Resolution) -> f64 {
     }
 }
 
-/// The `/grasp/series` message of design `d` from the selected samples. A design without a
+/// The `/grasp/series` message of design `d` from the selected samples (`kept`, indices into
+/// `samples`) of the `simulated` ones. A design without a
 /// trajectory gets one placeholder sample (t = 0, every value NaN, `simulated_samples` = 0):
 /// a Plot panel redraws only when a path yields at least one value, so an empty message
 /// would leave the previous design's curves on screen after a seek (docs/recording.md).
 /// `mean_force_objective` repeats the design's F̃ (stage 2's static mean contact force, the
 /// objective) on every sample, so the Plot panel draws it as a line beside the simulated forces.
-pub fn series(d: &DesignEntry<'_>, samples: &[Sample], kept: &[usize], opts: &RecordOptions) -> GraspSeries {
+pub fn series(
+    d: &DesignEntry<'_>,
+    samples: &[Sample],
+    kept: &[usize],
+    simulated: usize,
+    opts: &RecordOptions,
+) -> GraspSeries {
     let r = opts.resolution;
     let mut m = GraspSeries {
         design_id: d.id,
         full_resolution: r == Resolution::Full,
-        simulated_samples: samples.len() as u32,
+        simulated_samples: simulated as u32,
         ..Default::default()
     };
     if kept.is_empty() {

@@ -23,6 +23,7 @@
 mod entry;
 mod front;
 mod index;
+mod kept;
 mod layout;
 mod mcapfile;
 mod messages;
@@ -38,6 +39,7 @@ mod writer;
 pub use entry::{DesignEntry, Recordable};
 pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
 pub use index::{read_index, ProblemUse, ShardEntry};
+pub use kept::{scene_samples, KeptTrajectory};
 pub use layout::{
     layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };

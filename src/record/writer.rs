@@ -122,11 +122,13 @@ pub fn write_shard<R: Recordable>(
 fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -> Vec<(Ch, u64, Vec<u8>)> {
     let t0 = messages::window_start_ns(opts.epoch_ns(), d.id);
     let sc = &problem.scene;
-    let samples = d.trajectory.map_or(&[][..], |t| &t.samples[..]);
-    let kept = opts.kept_samples(samples);
+    let (samples, kept, drawn, simulated) = match d.trajectory {
+        Some(t) => (&t.samples[..], &t.series[..], &t.scene[..], t.simulated),
+        None => (&[][..], &[][..], &[][..], 0),
+    };
     let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
-    let mut out =
-        vec![(Ch::Designs, t0, record), (Ch::Series, t0, messages::series(d, samples, &kept, opts).encode_to_vec())];
+    let series = messages::series(d, samples, kept, simulated, opts).encode_to_vec();
+    let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, series)];
     if opts.scene_dt <= 0.0 {
         return out;
     }
@@ -135,23 +137,18 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
     out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, sc))));
     let end = messages::window_end_ns(t0);
-    let Some(last) = samples.len().checked_sub(1) else {
+    if samples.is_empty() {
         out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, d.record.verdict.failed_stage, sc))));
         out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
         return out;
-    };
-    let mut next = 0.0;
-    let mut first = true;
-    for (k, s) in samples.iter().enumerate() {
-        if s.t < next && k != last {
-            continue;
-        }
+    }
+    // the samples drawn: the first, one every `scene_dt` and the last (`scene_samples`)
+    for (j, &k) in drawn.iter().enumerate() {
+        let (s, first) = (&samples[k], j == 0);
         let tn = if first { t0 } else { messages::log_time(t0, s.t) };
         if let Some(m) = messages::scene(d.id, tn, finger.as_ref(), Some(s), first) {
             out.push((Ch::Scene, tn, fx(&m)));
         }
-        first = false;
-        next = s.t + opts.scene_dt;
     }
     out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
     out

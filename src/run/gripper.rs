@@ -8,7 +8,7 @@ use crate::eval::{
 };
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
-use crate::record::{DesignEntry, Recordable};
+use crate::record::{DesignEntry, KeptTrajectory, RecordOptions, Recordable};
 use serde::{Deserialize, Serialize};
 
 pub use crate::record::TrajectoryKeep;
@@ -20,10 +20,10 @@ pub struct GripperInfo {
     pub record: Record,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
     pub stage_seconds: [f64; 4],
-    /// The stage-3 trajectory, kept only until the recorder has written it (never
-    /// checkpointed).
+    /// What the recording uses of the stage-3 trajectory, reduced right after the
+    /// evaluation and kept only until the recorder has written it (never checkpointed).
     #[serde(skip)]
-    pub trajectory: Option<std::sync::Arc<crate::sim::Trajectory>>,
+    pub trajectory: Option<std::sync::Arc<KeptTrajectory>>,
 }
 
 impl GripperInfo {
@@ -54,8 +54,10 @@ pub struct GripperProblem {
     pub problem: Problem,
     /// Pipeline options (stage 3 in pipeline mode).
     pub options: EvalOptions,
-    /// Which trajectories to keep for the recorder.
-    pub keep_trajectories: TrajectoryKeep,
+    /// The run's recording options: which trajectories to keep for the recorder
+    /// (`trajectories`, when `enabled`), reduced to the samples these options record
+    /// ([`KeptTrajectory`]). Nothing is kept by default ([`RecordOptions::none`]).
+    pub recording: RecordOptions,
     /// A robust problem's objects and scenarios (None: one object, nominal inputs).
     pub robust: Option<std::sync::Arc<RobustSetup>>,
     lo: Vec<f64>,
@@ -68,7 +70,7 @@ impl GripperProblem {
         let options = EvalOptions::full(&problem);
         let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
         let robust = RobustSetup::of(&problem).map(std::sync::Arc::new);
-        GripperProblem { problem, options, keep_trajectories: TrajectoryKeep::None, robust, lo, hi }
+        GripperProblem { problem, options, recording: RecordOptions::none(), robust, lo, hi }
     }
 
     /// The batch evaluator a run uses unless its caller gives one: for a robust problem the
@@ -166,8 +168,8 @@ impl MooProblem for GripperProblem {
         };
         (Started::Nominal(ev), hint)
     }
-    /// Stage 3 (the simulation in the problem's scene), keeping the trajectory for the
-    /// recorder as `keep_trajectories` says.
+    /// Stage 3 (the simulation in the problem's scene), keeping what the recorder uses of
+    /// the trajectory as `recording` says.
     fn finish(&self, _x: &[f64], started: Started) -> Evaluated<GripperInfo> {
         let started = match (started, &self.robust) {
             (Started::Nominal(ev), _) => ev,
@@ -182,7 +184,8 @@ impl MooProblem for GripperProblem {
             (Started::Robust(_), None) => unreachable!("a robust start comes from a robust problem"),
         };
         let (scene, opts) = (&self.problem.scene, &self.options);
-        let (ev, traj) = match self.keep_trajectories {
+        let keep = if self.recording.enabled { self.recording.trajectories } else { TrajectoryKeep::None };
+        let (ev, traj) = match keep {
             _ if !opts.dynamics => (started, None),
             TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, &mut ()), None),
             keep => {
@@ -191,7 +194,8 @@ impl MooProblem for GripperProblem {
                 let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) {
                     None
                 } else {
-                    Some(tr)
+                    // the full trajectory is dropped here: only the recorded samples wait
+                    Some(KeptTrajectory::of(&tr, &self.recording))
                 };
                 (ev, tr)
             }

@@ -9,8 +9,10 @@ use crate::{Error, Result};
 /// copy and its JSON tree (measured ≈ 6 KiB; rounded up).
 pub const BYTES_PER_DESIGN: u64 = 16 << 10;
 
-/// Memory per design while its stage-3 trajectory waits for the recorder (bytes; a grasp
-/// is a few hundred to a few thousand accepted steps of 136 bytes).
+/// Memory per design while its stage-3 trajectory waits for the recorder (bytes): what is
+/// kept of it ([`crate::record::KeptTrajectory`]) is a few KB at the default compact
+/// resolution, but every sample (a few hundred to a few thousand accepted steps of 136
+/// bytes) with `--record-full`; the estimate keeps that worst case.
 pub const BYTES_PER_TRAJECTORY: u64 = 512 << 10;
 
 /// Largest design id a recording can hold: design k's messages live at [k s, k s + 1 s) of

@@ -361,7 +361,7 @@ fn drive(
     let options = run_options(&gp, &info.recording);
     let mut gp = gp;
     if info.recording.enabled {
-        gp.keep_trajectories = info.recording.trajectories;
+        gp.recording = info.recording;
     }
     for n in &begin.notes {
         note(n);
