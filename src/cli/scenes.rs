@@ -198,24 +198,7 @@ pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(
     let title = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
     writeln!(w, "{}", csv_head(title, &SAMPLE_COLUMNS))?;
     for s in samples {
-        let v = [
-            s.t,
-            s.q[0],
-            s.q[1],
-            s.qd[0],
-            s.qd[1],
-            s.theta2,
-            s.delta[0],
-            s.delta[1],
-            s.normal[0],
-            s.normal[1],
-            s.friction[0],
-            s.friction[1],
-            s.hand_fy,
-            s.filtered_fy,
-            s.energy,
-            s.energy_excess,
-        ];
+        let v = gripopt::sample_values(s);
         writeln!(w, "{}", v.map(fmt).join(","))?;
     }
     w.flush().with_context(|| format!("cannot write {}", path.display()))?;
@@ -228,9 +211,7 @@ fn write_poses_csv(path: &Path, poses: &[PoseSample]) -> Result<()> {
     let title = "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
     writeln!(w, "{}", csv_head(title, &POSE_COLUMNS))?;
     for p in poses {
-        let [a, b, c, d] = p.fingers;
-        let v =
-            [p.t, p.g[0], p.g[1], p.g[2], p.q[0], p.q[1], p.q[2], p.q[3], p.tilt.to_degrees(), a, b, c, d, p.energy];
+        let v = gripopt::pose_values(p);
         writeln!(w, "{}", v.map(|x| format!("{x:e}")).join(","))?;
     }
     w.flush().with_context(|| format!("cannot write {}", path.display()))?;

@@ -63,3 +63,18 @@ pub struct GenTiming {
     /// How many designs their start called costly (the first ones of `order`).
     pub costly: usize,
 }
+
+impl GenTiming {
+    /// A two-pass evaluation's timing, started at `t0`: the solver's serial parts are filled
+    /// in by the solver.
+    pub fn of_two_passes(
+        t0: std::time::Instant,
+        order_s: f64,
+        (costs, start_costs): (Vec<f64>, Vec<f64>),
+        order: Vec<usize>,
+        costly: usize,
+    ) -> GenTiming {
+        let eval_s = t0.elapsed().as_secs_f64();
+        GenTiming { eval_s, order_s, serial_s: 0.0, hv_s: 0.0, costs, start_costs, order, costly }
+    }
+}

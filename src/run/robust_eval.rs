@@ -119,16 +119,7 @@ impl Evaluator<GripperProblem> for RobustScheduled {
             }
         }
         self.model.refit();
-        let timing = GenTiming {
-            eval_s: t0.elapsed().as_secs_f64(),
-            order_s,
-            serial_s: 0.0,
-            hv_s: 0.0,
-            costs,
-            start_costs,
-            order,
-            costly,
-        };
+        let timing = GenTiming::of_two_passes(t0, order_s, (costs, start_costs), order, costly);
         Evaluations { evaluated, timing }
     }
 }
