@@ -11,6 +11,20 @@ pub fn sha256_hex(data: &[u8]) -> String {
     sha2::Sha256::digest(data).iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// Check a file a command was asked to write (`flag` names the option, e.g. `--out`,
+/// `--csv`): a folder is refused, and a file that exists unless `force` — no command writes
+/// over a file it was not told it may replace (a run's checkpoint or shard, a user's file).
+pub fn check_new_file(flag: &str, path: &Path, force: bool) -> Result<()> {
+    let refuse = |why: &str| Err(Error::Input(format!("{flag} {}: {why}", path.display())));
+    if path.is_dir() {
+        return refuse("is a folder, not a file");
+    }
+    if path.exists() && !force {
+        return refuse("the file exists; add --force to overwrite it");
+    }
+    Ok(())
+}
+
 /// Write `bytes` to `path` atomically: a temporary file in the same folder, fsync, rename,
 /// fsync of the folder. Errors name the file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {

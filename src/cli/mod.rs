@@ -290,19 +290,10 @@ fn hooks() -> gripopt::run::RunHooks {
     }
 }
 
-/// Refuse an output file (`--csv`, `--plot`) that exists unless `force`: no command writes
-/// over a file it was not told it may replace (a run's checkpoint, shard or CSV, a user's
-/// own file). A folder is refused too.
+/// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder
+/// ([`gripopt::check_new_file`], as `export --out`).
 fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Result<()> {
-    let Some(p) = path else { return Ok(()) };
-    let refuse = |why: &str| Err(gripopt::Error::Input(format!("{flag} {}: {why}", out::path(p))).into());
-    if p.is_dir() {
-        return refuse("is a folder, not a file");
-    }
-    if p.exists() && !force {
-        return refuse("the file exists; add --force to overwrite it");
-    }
-    Ok(())
+    Ok(path.map_or(Ok(()), |p| gripopt::check_new_file(flag, p, force))?)
 }
 
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).

@@ -134,12 +134,7 @@ pub fn num(x: f64) -> String {
 /// `path` is a folder; written atomically (a temporary file renamed into place). Errors name
 /// the file.
 pub fn write_file(path: &std::path::Path, text: &str, force: bool) -> Result<()> {
-    if path.is_dir() {
-        return Err(Error::Input(format!("--out {}: is a folder, not a file", path.display())));
-    }
-    if path.exists() && !force {
-        return Err(Error::Input(format!("--out {}: the file exists; add --force to overwrite it", path.display())));
-    }
+    crate::fsutil::check_new_file("--out", path, force)?;
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
     if let Some(d) = dir.filter(|d| !d.is_dir()) {
         return Err(Error::Input(format!("--out {}: the folder {} does not exist", path.display(), d.display())));
