@@ -1,5 +1,6 @@
 //! `gripopt verify`: verify.csv holds one row per Pareto design whose measured motion equals
-//! an independent `gripopt simulate --scene free --json` of the design read from pareto.csv,
+//! an independent `gripopt simulate --scene free --json` of the design read from pareto.csv
+//! (verify itself takes the designs from the checkpoint: an edited pareto.csv changes nothing),
 //! the printed confusion table adds up to the rows and matches the CSV, the CSV does not
 //! depend on the thread count, and bad folders are refused with exit 2, nothing deleted.
 
@@ -169,12 +170,31 @@ fn verify_refuses_bad_folders() {
     }
     // a bad scene
     assert_eq!(run(&["verify", &d, "--scene", "centred"]).status.code(), Some(2));
-    // a missing pareto.csv: refused, the rest of the run kept
+    // the designs come from the checkpoint, not from the CSV views: a pareto.csv edited by
+    // hand (a design's l21 changed) or deleted changes nothing verify.csv says
+    let out = run(&["verify", &d]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let reference = std::fs::read_to_string(dir.join("verify.csv")).unwrap();
+    let pareto = std::fs::read_to_string(dir.join("pareto.csv")).unwrap();
+    let (ph, prow) = table(&dir.join("pareto.csv"));
+    let l21 = &prow[0][col(&ph, "l21")];
+    let edited = pareto.replacen(&format!(",{l21},"), ",0.0432,", 1);
+    assert_ne!(edited, pareto, "the edit took");
+    std::fs::write(dir.join("pareto.csv"), edited).unwrap();
+    let out = run(&["verify", &d]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(dir.join("verify.csv")).unwrap(), reference, "verify took an edited pareto.csv");
     std::fs::remove_file(dir.join("pareto.csv")).unwrap();
+    let out = run(&["verify", &d]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(dir.join("verify.csv")).unwrap(), reference);
+    // a missing checkpoint.json: refused naming it, the rest of the run kept
+    std::fs::remove_file(dir.join("verify.csv")).unwrap();
+    std::fs::rename(dir.join("checkpoint.json"), dir.join("checkpoint.json.away")).unwrap();
     let before: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     let o = run(&["verify", &d]);
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("pareto.csv"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("checkpoint.json"), "{}", String::from_utf8_lossy(&o.stderr));
     for f in before {
         assert!(dir.join(&f).exists(), "{f:?} deleted");
     }

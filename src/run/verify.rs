@@ -6,10 +6,13 @@
 //! [`Confusion`] counts prediction against measurement. The command itself (folder, lock,
 //! files) is `verify_run`.
 
+use super::checkpoint::Checkpoint;
 use super::folder::read_table;
+use super::gripper::GripperInfo;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
+use crate::optim::Individual;
 use crate::params::{Design, DesignParameters, Problem, DESIGN_NAMES};
 use crate::record::keep_poses;
 use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
@@ -30,9 +33,10 @@ pub const VERIFY_SAMPLE_FILE: &str = "verify_sample.csv";
 /// Which designs to verify.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum VerifySource {
-    /// The designs of `pareto.csv`.
+    /// The run's front: the checkpoint's feasible non-dominated designs (those of `pareto.csv`).
     Pareto,
-    /// Every feasible design of `population.csv` and `archive.csv` (by id, once).
+    /// Every feasible design of the checkpoint's population and archive (those of
+    /// `population.csv` and `archive.csv`; by id, once).
     All,
     /// `n` designs drawn from the problem's bounds with seed `seed` that pass stage 2.
     Sample {
@@ -236,23 +240,28 @@ pub fn read_design_rows(path: &Path) -> Result<Vec<DesignRow>> {
     Ok(rows)
 }
 
-/// The run's designs to verify, in id order.
-pub fn run_designs(dir: &Path, all: bool) -> Result<Vec<(u64, Design)>> {
-    let files: &[&str] = if all { &["population.csv", "archive.csv"] } else { &["pareto.csv"] };
+/// The run's designs to verify, taken from its checkpoint (the run's state, not the CSV views
+/// of it, which a user may have edited): with `all` every feasible design of the population
+/// and the archive (population.csv's and archive.csv's feasible rows), otherwise the
+/// population's feasible non-dominated ones (pareto.csv's); each with the generation that
+/// created it, in id order. `path`: the checkpoint's file, named by the error for a design
+/// that has not six values.
+pub fn checkpoint_designs(cp: &Checkpoint<GripperInfo>, all: bool, path: &Path) -> Result<Vec<(u64, u64, Design)>> {
+    let chosen: Vec<&Individual<GripperInfo>> = if all {
+        let archive = cp.archive.iter().flat_map(|a| a.members.iter());
+        cp.state.population.iter().chain(archive).filter(|i| i.eval.cv.is_feasible()).collect()
+    } else {
+        cp.state.feasible_front()
+    };
     let mut m = BTreeMap::new();
-    for f in files {
-        let path = dir.join(f);
-        if !path.is_file() {
-            return Err(Error::RunDir {
-                path,
-                message: "missing: the run has not written its first generation's results".into(),
-            });
-        }
-        for (id, x) in read_design_csv(&path)? {
-            m.entry(id).or_insert(x);
-        }
+    for ind in chosen {
+        let x: &[f64; 6] = ind.x.as_slice().try_into().map_err(|_| Error::Checkpoint {
+            file: path.to_path_buf(),
+            message: format!("design {}: field `x` has {} values, expected 6", ind.id, ind.x.len()),
+        })?;
+        m.entry(ind.id).or_insert((ind.generation, Design::from_array(x)));
     }
-    Ok(m.into_iter().collect())
+    Ok(m.into_iter().map(|(id, (g, x))| (id, g, x)).collect())
 }
 
 /// `n` designs drawn from `p`'s bounds (ChaCha8 with `seed`, in draw order) that pass stages

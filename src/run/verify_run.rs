@@ -6,20 +6,77 @@
 //! run state it checked (the generation, the checkpoint's and the problems' hashes), so
 //! that `gripopt show` can tell when it no longer matches the run.
 
+use super::checkpoint::Checkpoint;
 use super::folder::RunFolder;
+use super::gripper::GripperInfo;
 use super::info::RunInfo;
 use super::lock::RunLock;
 use super::verify::{
-    read_design_rows, run_designs, sample_designs, verify_csv, verify_designs_poses, Confusion, VerifyRow,
-    VerifySource, VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    checkpoint_designs, sample_designs, verify_csv, verify_designs_poses, Confusion, VerifyRow, VerifySource,
+    VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 use super::verify_rec::VerifyRecording;
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind};
 use crate::record::ProblemUse;
 use crate::{Error, Result};
+use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The checkpoint file of a run folder (the state `verify` checks).
+const CHECKPOINT_FILE: &str = "checkpoint.json";
+
+/// The run state a verify checks: the folder's checkpoint, loaded and its checksum verified.
+struct CheckedState {
+    checkpoint: Checkpoint<GripperInfo>,
+    path: PathBuf,
+    sha256: String,
+}
+
+/// The checkpoint's own content checksum (its field `sha256`, which loading verified).
+#[derive(Deserialize)]
+struct ChecksumField {
+    sha256: String,
+}
+
+impl CheckedState {
+    /// Load `dir`'s checkpoint (a missing one is an error naming it).
+    fn load(dir: &Path, info: &RunInfo) -> Result<Self> {
+        let path = dir.join(CHECKPOINT_FILE);
+        if !path.is_file() {
+            let message = match info.completed_generations {
+                0 => "missing: the run has not completed its first generation; nothing to verify yet".to_string(),
+                g => format!("missing, but run.json records {g} completed generations: verify takes the run's designs from its checkpoint; restore checkpoint.json (e.g. from a backup)"),
+            };
+            return Err(Error::RunDir { path, message });
+        }
+        let checkpoint = Checkpoint::load(&path)?;
+        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "cannot read the checkpoint", e))?;
+        let sha256 = serde_json::from_slice::<ChecksumField>(&bytes)
+            .map_err(|source| Error::Json { path: path.clone(), what: "no content checksum `sha256`", source })?
+            .sha256;
+        Ok(CheckedState { checkpoint, path, sha256 })
+    }
+
+    /// Its designs to verify (see [`checkpoint_designs`]).
+    fn designs(&self, all: bool) -> Result<Vec<(u64, u64, Design)>> {
+        checkpoint_designs(&self.checkpoint, all, &self.path)
+    }
+
+    /// The state as verify.csv's `# run:` line names it.
+    fn attribution(&self) -> VerifiedGeneration {
+        VerifiedGeneration { generation: self.checkpoint.state.generation, checkpoint_sha256: self.sha256.clone() }
+    }
+}
+
+/// The run state run.json names (a sample's verify.csv: the run the sample belongs to).
+fn attribution_of(info: &RunInfo) -> VerifiedGeneration {
+    VerifiedGeneration {
+        generation: info.completed_generations,
+        checkpoint_sha256: info.checkpoint_sha256.clone().unwrap_or_else(|| "none".into()),
+    }
+}
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
@@ -29,17 +86,6 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
-}
-
-/// The generation of each design of the run's tables (pareto, population, archive).
-fn generations(dir: &Path) -> Result<BTreeMap<u64, u64>> {
-    let mut m = BTreeMap::new();
-    for f in ["pareto.csv", "population.csv", "archive.csv"] {
-        if dir.join(f).is_file() {
-            m.extend(read_design_rows(&dir.join(f))?.into_iter().map(|r| (r.id, r.generation)));
-        }
-    }
-    Ok(m)
 }
 
 /// Verify run folder `dir`: checks it is a run (run.json, problem.toml), takes its lock,
@@ -77,11 +123,20 @@ pub fn verify(
         folder.problem_of_generation(f.first_generation)?.in_scene(SceneKind::Free, x_off, &file)
     };
     let current = free(files.last().expect("a problem file"))?;
-    let (designs, file) = match source {
-        VerifySource::Pareto => (run_designs(dir, false)?, VERIFY_FILE),
-        VerifySource::All => (run_designs(dir, true)?, VERIFY_FILE),
-        VerifySource::Sample { n, seed } => (sample_designs(&current, n, seed), VERIFY_SAMPLE_FILE),
+    // the run's designs come from its checkpoint (the state verify.csv is attributed to)
+    let checked = match source {
+        VerifySource::Sample { .. } => None,
+        _ => Some(CheckedState::load(dir, &info)?),
     };
+    let from_checkpoint = |all| checked.as_ref().map_or(Ok(vec![]), |c| c.designs(all));
+    let (found, file) = match source {
+        VerifySource::Pareto => (from_checkpoint(false)?, VERIFY_FILE),
+        VerifySource::All => (from_checkpoint(true)?, VERIFY_FILE),
+        VerifySource::Sample { n, seed } => {
+            (sample_designs(&current, n, seed).into_iter().map(|(id, x)| (id, 0, x)).collect(), VERIFY_SAMPLE_FILE)
+        }
+    };
+    let designs: Vec<(u64, Design)> = found.iter().map(|&(id, _, x)| (id, x)).collect();
     if designs.is_empty() {
         let message = match source {
             VerifySource::Sample { n, seed } => format!("--sample {n} --seed {seed}: no drawn design passes stages 0–2 of problem.toml; nothing to verify, nothing written"),
@@ -91,24 +146,20 @@ pub fn verify(
             },
         };
         let path = match source {
-            VerifySource::Pareto => dir.join("pareto.csv"),
-            VerifySource::All => dir.join("population.csv"),
             VerifySource::Sample { .. } => dir.join("problem.toml"),
+            _ => dir.join(CHECKPOINT_FILE),
         };
         return Err(Error::RunDir { path, message });
     }
-    // the designs by the problem file their generation was evaluated with
-    let gens = match source {
-        VerifySource::Sample { .. } => BTreeMap::new(),
-        _ => generations(dir)?,
-    };
+    // the designs by the problem file their generation was evaluated with (a sample: the
+    // current problem)
     let mut groups: BTreeMap<usize, Vec<(u64, Design)>> = BTreeMap::new();
-    for d in &designs {
-        let k = match gens.get(&d.0) {
-            Some(g) => files.iter().rposition(|f| f.first_generation <= *g).unwrap_or(0),
-            None => files.len() - 1,
+    for &(id, g, x) in &found {
+        let k = match source {
+            VerifySource::Sample { .. } => files.len() - 1,
+            _ => files.iter().rposition(|f| f.first_generation <= g).unwrap_or(0),
         };
-        groups.entry(k).or_default().push(*d);
+        groups.entry(k).or_default().push((id, x));
     }
     let mut problems = BTreeMap::new();
     for k in groups.keys() {
@@ -135,7 +186,11 @@ pub fn verify(
     }
     let file = dir.join(file);
     let used: Vec<&ProblemUse> = groups.keys().map(|k| &files[*k]).collect();
-    write_atomic(&file, attributed(&verify_csv(&rows, current.scene.setup.x_off), &info, &used).as_bytes())?;
+    let state = checked.as_ref().map(|c| c.attribution()).unwrap_or_else(|| attribution_of(&info));
+    write_atomic(
+        &file,
+        attributed(&verify_csv(&rows, current.scene.setup.x_off), &info.run_id, &state, &used).as_bytes(),
+    )?;
     let recording = match rec {
         Some(r) => Some(r.write(&current, with_poses)?),
         None => None,
@@ -156,13 +211,13 @@ pub fn verify(
 
 /// verify.csv's text with its `# run:` line after the title: the run state it checked (the
 /// completed generations, the checkpoint's content checksum) and the problem files used.
-fn attributed(csv: &str, info: &RunInfo, used: &[&ProblemUse]) -> String {
+fn attributed(csv: &str, run_id: &str, state: &VerifiedGeneration, used: &[&ProblemUse]) -> String {
     let problems: Vec<String> = used.iter().map(|p| format!("{} {}", p.file, p.sha256)).collect();
     let line = format!(
         "# run: {}, generation {}, checkpoint sha256 {}; problem sha256: {}\n",
-        if info.run_id.is_empty() { "run" } else { &info.run_id },
-        info.completed_generations,
-        info.checkpoint_sha256.as_deref().unwrap_or("none"),
+        if run_id.is_empty() { "run" } else { run_id },
+        state.generation,
+        state.checkpoint_sha256,
         problems.join(", ")
     );
     // the unit of every column, as in every CSV gripopt writes (docs/outputs.md)
