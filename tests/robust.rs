@@ -511,3 +511,35 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
     gripopt::run::resume(&dir.join("cut"), None, false, Some(1)).unwrap();
     assert_eq!(tables(&out), tables(&dir.join("cut")));
 }
+
+/// An object given by `file = "…"` serves `evaluate` (the cylinder is that file's), but a run
+/// refuses it before creating anything, naming the problem file and the field: a run folder
+/// keeps only its problem.toml, so the object file could change under the run unnoticed.
+#[test]
+fn a_run_refuses_an_object_taken_from_another_file() {
+    let dir = tmp("object-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let can = "radius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\n";
+    let object = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/can.toml")).unwrap();
+    std::fs::write(dir.join("can.toml"), &object).unwrap();
+    let text = robust_text("").replacen(can, "file = \"can.toml\"\n", 1);
+    assert!(text.contains("file = \"can.toml\""), "the can is inline in robust_text");
+    let file = dir.join("by-file.toml");
+    std::fs::write(&file, &text).unwrap();
+    let p = Problem::load(&file).unwrap();
+    let inline = robust_problem();
+    let (a, b) = (&p.robust.as_ref().unwrap().objects[1], &inline.robust.as_ref().unwrap().objects[1]);
+    assert_eq!(a.file.as_deref(), Some("can.toml"));
+    assert_eq!(a.object, b.object, "can.toml's [object] is the inline can");
+    let out = dir.join("run");
+    let e = gripopt::run::optimise(&spec(&file, &out, 1)).unwrap_err().to_string();
+    assert!(e.contains("by-file.toml") && e.contains("robust.objects[1].file"), "{e}");
+    assert!(!out.exists(), "a refused run created its folder");
+    let cli = std::process::Command::new(env!("CARGO_BIN_EXE_gripopt"))
+        .args(["optimise", &file.display().to_string(), "--out", &out.display().to_string()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&cli.stderr);
+    assert_eq!(cli.status.code(), Some(2), "{err}");
+    assert!(err.contains("robust.objects[1].file"), "{err}");
+}

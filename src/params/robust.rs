@@ -24,6 +24,9 @@ pub struct ObjectCase {
     /// The grip torque τ the controller applies to this object (N·m; the spring preload is
     /// sized once, at `[hand] tau`).
     pub tau: f64,
+    /// The problem file its cylinder was taken from, as written (None: given inline).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
 }
 
 /// How the scenarios are chosen.
@@ -228,5 +231,26 @@ mod tests {
         assert_eq!(Aggregation::Worst.apply(&v), 4.0);
         assert_eq!(Aggregation::Mean.apply(&v), 2.5);
         assert!(Aggregation::Mean.apply(&[]).is_nan());
+    }
+}
+
+impl super::Problem {
+    /// A run folder keeps only its problem.toml, hashed: a robust object taken from another
+    /// file (`file = "…"`) could change under a run unnoticed (resume, replay and verify would
+    /// read the edited file) and would be missing where the folder is moved. A run's problem
+    /// must therefore give every object inline; the error names `path` and the field.
+    pub fn check_self_contained(&self, path: &std::path::Path) -> crate::Result<()> {
+        let objects = self.robust.iter().flat_map(|r| r.objects.iter().enumerate());
+        for (i, o) in objects {
+            if let Some(f) = &o.file {
+                return Err(crate::Error::InvalidField {
+                    file: path.to_path_buf(),
+                    field: format!("robust.objects[{i}].file"),
+                    value: format!("{f:?}"),
+                    rule: format!("a run (optimise, resume) needs every object inline: a run folder keeps only problem.toml, so an object file could change under the run unnoticed; copy {f}'s [object] values (radius, length, density, grasp_height) into this object instead of `file`"),
+                });
+            }
+        }
+        Ok(())
     }
 }

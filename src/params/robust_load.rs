@@ -206,7 +206,7 @@ impl RawRobust {
                 .check(o.tau)
                 .map_err(|rule| c.fail(&field("tau"), super::limits::num(o.tau), &rule))?;
             let _ = scene;
-            out.push(ObjectCase { name: o.name.clone(), object, tau });
+            out.push(ObjectCase { name: o.name.clone(), object, tau, file: o.file.clone() });
         }
         Ok(out)
     }

@@ -130,6 +130,7 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
 pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
+    problem.check_self_contained(&spec.problem_path)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     // refused before the lock's pid file is written into a folder that is not ours
     Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
@@ -262,6 +263,7 @@ pub fn resume_with(
     let original = info.problem_path.is_absolute().then(|| info.problem_path.clone()).filter(|p| p.exists());
     let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
     let problem = Problem::load(&problem_path)?;
+    problem.check_self_contained(&problem_path)?;
     check_copy(dir, &info, &problem)?;
     if original.is_none() {
         notes.push(format!("{} not found; used the run's copy", info.problem_path.display()));
