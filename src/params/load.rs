@@ -156,6 +156,14 @@ struct RawBounds {
     psi_deg: Vec<f64>,
 }
 
+/// A struct of checked values whose fields have the raw section's names: field `f` is
+/// `c.check("SECTION.f", raw.f)?` (the limit of `SECTION.f`, the error naming it).
+macro_rules! checked {
+    ($c:expr, $section:literal, $raw:expr, $ty:ident { $($f:ident),* $(,)? }) => {
+        $ty { $($f: $c.check(concat!($section, ".", stringify!($f)), $raw.$f)?,)* }
+    };
+}
+
 impl Problem {
     /// Load and validate a problem file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
@@ -221,31 +229,14 @@ impl Problem {
         }
         let scene = SceneParams {
             setup,
-            hand: Hand {
-                tau: c.check("hand.tau", h.tau)?,
-                w: c.check("hand.w", h.w)?,
-                rho_f: c.check("hand.rho_f", h.rho_f)?,
-                r_open: c.check("hand.r_open", h.r_open)?,
-                k_s: c.check("hand.k_s", h.k_s)?,
-                k_stop: c.check("hand.k_stop", h.k_stop)?,
-                c_stop: c.check("hand.c_stop", h.c_stop)?,
-            },
-            object: Object {
-                radius: c.check("object.radius", o.radius)?,
-                length: c.check("object.length", o.length)?,
-                density: c.check("object.density", o.density)?,
-                grasp_height: c.check("object.grasp_height", o.grasp_height)?,
-            },
-            contact: ContactLaw {
-                mu_s: c.check("contact.mu_s", k.mu_s)?,
-                mu_d: c.check("contact.mu_d", k.mu_d)?,
-                v_s: c.check("contact.v_s", k.v_s)?,
-                v_d: c.check("contact.v_d", k.v_d)?,
-                restitution: c.check("contact.restitution", k.restitution)?,
-                k_contact: c.check("contact.k_contact", k.k_contact)?,
-                v_min: c.check("contact.v_min", k.v_min)?,
-                eps_sep: c.check("contact.eps_sep", k.eps_sep)?,
-            },
+            hand: checked!(c, "hand", h, Hand { tau, w, rho_f, r_open, k_s, k_stop, c_stop }),
+            object: checked!(c, "object", o, Object { radius, length, density, grasp_height }),
+            contact: checked!(
+                c,
+                "contact",
+                k,
+                ContactLaw { mu_s, mu_d, v_s, v_d, restitution, k_contact, v_min, eps_sep }
+            ),
             env: Environment {
                 g: c.check("environment.g", en.g)?,
                 g_eq: c.check("environment.g_eq", en.g_eq)?,
