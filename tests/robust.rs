@@ -543,3 +543,38 @@ fn a_run_refuses_an_object_taken_from_another_file() {
     assert_eq!(cli.status.code(), Some(2), "{err}");
     assert!(err.contains("robust.objects[1].file"), "{err}");
 }
+
+/// Stages 0–2 only on a robust problem mean the same everywhere: the reference object's
+/// stages 0–2, no scenario (`gripopt evaluate --static-only`, `gripopt::evaluate` and
+/// `gripopt::evaluate_rows`, which Python's `Problem.evaluate(static_only=True)` calls).
+#[test]
+fn static_only_on_a_robust_problem_is_the_reference_objects_stages_everywhere() {
+    let p = robust_problem();
+    let xs = designs(&p, 3);
+    let params: Vec<_> = xs.iter().map(|x| gripopt::DesignParameters::from_array(&x.to_array())).collect();
+    let rows = gripopt::evaluate_rows(&p, &params, 0, gripopt::Stages::Static, Some(1)).unwrap();
+    let dir = tmp("static-only");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robust.toml");
+    std::fs::write(&file, robust_text("")).unwrap();
+    for (x, row) in xs.iter().zip(&rows) {
+        let rec = gripopt::evaluate(&p, x, gripopt::Stages::Static);
+        assert!(rec.robust.is_none() && rec.free_scene.is_none(), "a static record ran scenarios");
+        assert_eq!(row.row.robust.objects(), Vec::<String>::new(), "evaluate_rows ran scenarios");
+        assert_eq!(
+            (row.row.alpha, row.row.mean_force, row.row.max_offset),
+            (rec.statics.alpha, rec.statics.mean_force, rec.statics.max_offset)
+        );
+        assert_eq!(row.row.t_stab, None);
+        let a = x.to_array();
+        let design = gripopt::DESIGN_NAMES.iter().zip(a).map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(",");
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_gripopt"))
+            .args(["evaluate", &file.display().to_string(), "--static-only", "--json", "--design", &design])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let cli: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(cli["alpha"].as_f64(), rec.statics.alpha);
+        assert!(cli.get("robust").is_none_or(|r| r.is_null()), "the CLI ran scenarios");
+    }
+}

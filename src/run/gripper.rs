@@ -149,7 +149,9 @@ impl MooProblem for GripperProblem {
     /// first generations).
     type Started = Started;
     fn start(&self, x: &[f64]) -> (Started, CostHint) {
-        if let Some(setup) = &self.robust {
+        // stages 0–2 only (`--static-only`, Python's `static_only=True`): a robust problem's
+        // reference object, as `gripopt evaluate --static-only` and `gripopt::evaluate`
+        if let Some(setup) = self.robust.as_ref().filter(|_| self.options.dynamics) {
             let st = robust_start(&design_of(x), setup);
             let hint = robust_hint(x, &st);
             return (Started::Robust(st), hint);
