@@ -126,7 +126,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         ev = eve;
         let response = scene.handle(k, t, &ev, &g1);
         if response.restart {
-            stepper.restart(stepper.h());
+            stepper.restart();
         }
         let Some(ev2) = scene.evaluate(&y) else { break End::Undefined };
         ev = ev2;

@@ -82,20 +82,11 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
         }
     }
 
-    fn restart(&mut self, h: f64) {
-        self.h = h;
-    }
+    /// Nothing to forget: an explicit method keeps no history but its step size.
+    fn restart(&mut self) {}
 
     fn stats(&self) -> Stats {
         self.stats
-    }
-
-    fn h(&self) -> f64 {
-        self.h
-    }
-
-    fn name(&self) -> &'static str {
-        "dopri5"
     }
 }
 

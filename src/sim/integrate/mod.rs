@@ -1,6 +1,7 @@
 //! Adaptive one-step integrators on fixed-size states, one method per file: Radau IIA
 //! order 5 ([`Radau5`], stiff, the default), TR-BDF2 ([`TrBdf2`], stiff) and Dormand–Prince
-//! 5(4) ([`Dopri5`], explicit, for comparison). Each exposes accepted steps with (y, f) at
+//! 5(4) ([`Dopri5`], explicit, for comparison); the S-stage Radau IIA ([`RadauIIA`]) shares
+//! RADAU5's step loop ([`RadauStepper`], `radau_stepper`) with its own coefficients. Each exposes accepted steps with (y, f) at
 //! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
 //! location. The implicit methods share the Jacobian's refresh policy (`jacobian`; the
 //! Jacobian itself is the system's [`Rhs::jacobian`], by default dense forward differences,
@@ -15,6 +16,7 @@ mod lu;
 mod radau;
 mod radau5;
 mod radau_coefficients;
+mod radau_stepper;
 mod reduced;
 mod schur_lu;
 mod trbdf2;
@@ -23,9 +25,10 @@ pub use dense::hermite;
 pub use dopri5::Dopri5;
 pub use jacobian::fd_jacobian;
 pub use lu::{Lu, Scalar};
-pub use radau::RadauIIA;
-pub use radau5::Radau5;
+pub use radau::{RadauIIA, RadauIIAScheme};
+pub use radau5::{Radau5, Radau5Scheme};
 pub use radau_coefficients::RadauCoefficients;
+pub use radau_stepper::{RadauScheme, RadauStepper};
 pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
@@ -195,8 +198,9 @@ pub trait Stepper<const N: usize> {
         f: &SVector<f64, N>,
         h_max: f64,
     ) -> Result<Accepted<N>, StepError>;
-    /// Forget step-size history and Jacobians (after a discontinuity of f).
-    fn restart(&mut self, h: f64);
+    /// Forget step-size history and Jacobians (after a discontinuity of f); the step-size
+    /// proposal stays.
+    fn restart(&mut self);
     /// The method's own continuous output on the last accepted step at `t` (inside it), where
     /// it has one (a collocation method's polynomial); `None`: use [`hermite`].
     fn dense(&self, _t: f64) -> Option<SVector<f64, N>> {
@@ -204,10 +208,6 @@ pub trait Stepper<const N: usize> {
     }
     /// Counters.
     fn stats(&self) -> Stats;
-    /// Current step size proposal.
-    fn h(&self) -> f64;
-    /// Method name.
-    fn name(&self) -> &'static str;
 }
 
 /// The smallest step size.

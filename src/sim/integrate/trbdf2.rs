@@ -50,21 +50,6 @@ impl<const N: usize> TrBdf2<N> {
         }
     }
 
-    fn factor_matrix(&mut self, h: f64) -> bool {
-        if self.lu.is_some() && self.lu_h == h {
-            return true;
-        }
-        let a = SMatrix::<f64, N, N>::identity() - self.jc.jac * (D * h);
-        self.stats.lu += 1;
-        let Some(lu) = Lu::factor(a) else {
-            self.lu = None;
-            return false;
-        };
-        self.lu = Some(lu);
-        self.lu_h = h;
-        true
-    }
-
     /// Solve Y − d h f(Y) = rhs by simplified Newton from `z`; returns (Y, k = f(Y)).
     fn newton<S: Rhs<N>>(
         &mut self,
@@ -117,7 +102,18 @@ impl<const N: usize> NewtonMatrix<N> for TrBdf2<N> {
         self.lu = None;
     }
     fn factor(&mut self, h: f64) -> bool {
-        self.factor_matrix(h)
+        if self.lu.is_some() && self.lu_h == h {
+            return true;
+        }
+        let a = SMatrix::<f64, N, N>::identity() - self.jc.jac * (D * h);
+        self.stats.lu += 1;
+        let Some(lu) = Lu::factor(a) else {
+            self.lu = None;
+            return false;
+        };
+        self.lu = Some(lu);
+        self.lu_h = h;
+        true
     }
 }
 
@@ -174,22 +170,13 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
         }
     }
 
-    fn restart(&mut self, h: f64) {
-        self.h = h;
+    fn restart(&mut self) {
         self.jc.valid = false;
         self.lu = None;
     }
 
     fn stats(&self) -> Stats {
         self.stats
-    }
-
-    fn h(&self) -> f64 {
-        self.h
-    }
-
-    fn name(&self) -> &'static str {
-        "tr-bdf2"
     }
 }
 
