@@ -176,28 +176,28 @@ pub enum StepError {
     RhsFailed,
 }
 
-/// An accepted step.
+/// A point of the solution where a step starts or ends: time, state and f there.
 #[derive(Debug, Clone, Copy)]
-pub struct Accepted<const N: usize> {
-    /// New time.
+pub struct StepPoint<const N: usize> {
+    /// Time.
     pub t: f64,
-    /// New state.
+    /// State.
     pub y: SVector<f64, N>,
-    /// f at the new state.
+    /// f(t, y).
     pub f: SVector<f64, N>,
+}
+
+impl<const N: usize> StepPoint<N> {
+    /// The point (t, y) of `sys`, with f evaluated there; `None` where f is undefined.
+    pub fn at<S: Rhs<N>>(sys: &mut S, t: f64, y: SVector<f64, N>) -> Option<Self> {
+        Some(StepPoint { t, y, f: sys.eval(t, &y)? })
+    }
 }
 
 /// An adaptive one-step method.
 pub trait Stepper<const N: usize> {
-    /// Take one accepted step from (t, y, f) with h ≤ h_max, adapting the step size.
-    fn advance<S: Rhs<N>>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        h_max: f64,
-    ) -> Result<Accepted<N>, StepError>;
+    /// Take one accepted step from `from` with h ≤ h_max, adapting the step size.
+    fn advance<S: Rhs<N>>(&mut self, sys: &mut S, from: &StepPoint<N>, h_max: f64) -> Result<StepPoint<N>, StepError>;
     /// Forget step-size history and Jacobians (after a discontinuity of f); the step-size
     /// proposal stays.
     fn restart(&mut self);
@@ -261,7 +261,7 @@ fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
 #[cfg(test)]
 pub(crate) mod testsys {
     //! Test systems shared by the methods' tests.
-    use super::{Rhs, Stats, Stepper};
+    use super::{Rhs, Stats, StepPoint, Stepper};
     use nalgebra::{SVector, Vector2};
 
     /// The harmonic oscillator y'' = −ω² y.
@@ -275,15 +275,10 @@ pub(crate) mod testsys {
     /// Integrate the oscillator from (1, 0) to `t_end`.
     pub fn run_osc<St: Stepper<2>>(mut st: St, omega: f64, t_end: f64) -> (SVector<f64, 2>, Stats) {
         let mut sys = Osc(omega);
-        let mut t = 0.0;
-        let mut y = Vector2::new(1.0, 0.0);
-        let mut f = sys.eval(0.0, &y).unwrap();
-        while t < t_end {
-            let a = st.advance(&mut sys, t, &y, &f, t_end - t).unwrap();
-            t = a.t;
-            y = a.y;
-            f = a.f;
+        let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(1.0, 0.0)).unwrap();
+        while p.t < t_end {
+            p = st.advance(&mut sys, &p, t_end - p.t).unwrap();
         }
-        (y, st.stats())
+        (p.y, st.stats())
     }
 }

@@ -218,7 +218,7 @@ impl<const N: usize, const S: usize> RadauScheme<N, S> for RadauIIAScheme<N, S> 
 mod tests {
     use super::*;
     use crate::sim::integrate::testsys::Osc;
-    use crate::sim::integrate::{Rhs, Stepper};
+    use crate::sim::integrate::{StepPoint, Stepper};
     use nalgebra::Vector2;
 
     /// Order of convergence on a smooth problem (the harmonic oscillator over a fixed step
@@ -233,15 +233,13 @@ mod tests {
             st.kappa = 1e-14;
             st.max_newton = 60;
             let mut sys = Osc(1.0);
-            let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
-            let mut f = sys.eval(0.0, &y).unwrap();
+            let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(1.0, 0.0)).unwrap();
             let n = (4.0 / h).round() as usize;
             for _ in 0..n {
                 st.h = h;
-                let a = st.advance(&mut sys, t, &y, &f, h).unwrap();
-                (t, y, f) = (a.t, a.y, a.f);
+                p = st.advance(&mut sys, &p, h).unwrap();
             }
-            (y[0] - t.cos()).abs().max((y[1] + t.sin()).abs())
+            (p.y[0] - p.t.cos()).abs().max((p.y[1] + p.t.sin()).abs())
         }
         let (e1, e2) = (fixed::<5>(1.0), fixed::<5>(0.5));
         assert!((e1 / e2).log2() > 8.5, "order-9 ratio {e1:e} / {e2:e}");
@@ -250,21 +248,16 @@ mod tests {
         let run = |order9: bool| {
             let tol = Tol { rtol: 1e-10, atol: Vector2::new(1e-12, 1e-12) };
             let mut sys = Osc(1.0);
-            let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
-            let mut f = sys.eval(0.0, &y).unwrap();
+            let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(1.0, 0.0)).unwrap();
             let mut a9: RadauIIA<2, 5> = RadauIIA::new(tol, 1e-3);
             let mut a5 = crate::sim::integrate::Radau5::new(tol, 1e-3);
-            while t < 10.0 {
-                let a = if order9 {
-                    a9.advance(&mut sys, t, &y, &f, 10.0 - t)
-                } else {
-                    a5.advance(&mut sys, t, &y, &f, 10.0 - t)
-                };
-                let a = a.unwrap();
-                (t, y, f) = (a.t, a.y, a.f);
+            while p.t < 10.0 {
+                let a =
+                    if order9 { a9.advance(&mut sys, &p, 10.0 - p.t) } else { a5.advance(&mut sys, &p, 10.0 - p.t) };
+                p = a.unwrap();
             }
             let steps = if order9 { a9.stats().steps } else { a5.stats().steps };
-            ((y[0] - 10f64.cos()).abs(), steps)
+            ((p.y[0] - 10f64.cos()).abs(), steps)
         };
         let ((err9, n9), (err5, n5)) = (run(true), run(false));
         assert!(err9 < 1e-7 && err5 < 1e-7, "{err9:e} {err5:e}");

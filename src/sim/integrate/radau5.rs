@@ -260,7 +260,7 @@ impl<const N: usize> Radau5Scheme<N> {
 mod tests {
     use super::*;
     use crate::sim::integrate::testsys::Osc;
-    use crate::sim::integrate::{Rhs, Stepper};
+    use crate::sim::integrate::{Rhs, StepPoint, Stepper};
     use nalgebra::Vector2;
 
     /// Hairer's transformation: T T⁻¹ = I and T Λ T⁻¹ = A⁻¹ (independent of the stepper).
@@ -281,13 +281,11 @@ mod tests {
         for rtol in [1e-6, 1e-9] {
             let mut st: Radau5<2> = Radau5::new(Tol { rtol, atol: Vector2::new(rtol, rtol) }, 1e-3);
             let mut sys = Osc(1.0);
-            let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
-            let mut f = sys.eval(0.0, &y).unwrap();
-            while t < 3.0 {
-                let a = st.advance(&mut sys, t, &y, &f, 3.0 - t).unwrap();
-                (t, y, f) = (a.t, a.y, a.f);
+            let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(1.0, 0.0)).unwrap();
+            while p.t < 3.0 {
+                p = st.advance(&mut sys, &p, 3.0 - p.t).unwrap();
             }
-            errs.push(((y[0] - 3f64.cos()).abs(), st.stats().steps));
+            errs.push(((p.y[0] - 3f64.cos()).abs(), st.stats().steps));
         }
         assert!(errs[0].0 < 1e-5, "{errs:?}");
         assert!(errs[1].0 < 1e-8, "{errs:?}");
@@ -304,14 +302,12 @@ mod tests {
         }
         let mut st: Radau5<2> = Radau5::new(Tol { rtol: 1e-8, atol: Vector2::new(1e-10, 1e-10) }, 1e-6);
         let mut sys = Stiff;
-        let (mut t, mut y) = (0.0, Vector2::new(0.0, 1.0));
-        let mut f = sys.eval(0.0, &y).unwrap();
-        while t < 2.0 {
-            let a = st.advance(&mut sys, t, &y, &f, 2.0 - t).unwrap();
-            (t, y, f) = (a.t, a.y, a.f);
+        let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(0.0, 1.0)).unwrap();
+        while p.t < 2.0 {
+            p = st.advance(&mut sys, &p, 2.0 - p.t).unwrap();
         }
-        assert!((y[0] - 2f64.sin()).abs() < 1e-8);
-        assert!((y[1] - (-2f64).exp()).abs() < 1e-8);
+        assert!((p.y[0] - 2f64.sin()).abs() < 1e-8);
+        assert!((p.y[1] - (-2f64).exp()).abs() < 1e-8);
         assert!(st.stats().steps < 500, "{:?}", st.stats());
     }
 }

@@ -9,7 +9,7 @@
 
 use super::jacobian::JacobianCache;
 use super::reduced::Partition;
-use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
+use super::{prepare_attempt, NewtonMatrix, Rhs, Stats, StepError, StepPoint, Stepper, Tol};
 use nalgebra::{SMatrix, SVector};
 
 /// The stage values Z_1..Z_S (or their transforms) of an S-stage method.
@@ -202,11 +202,10 @@ impl<const N: usize, const S: usize, M: RadauScheme<N, S>> Stepper<N> for RadauS
     fn advance<Sy: Rhs<N>>(
         &mut self,
         sys: &mut Sy,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
+        from: &StepPoint<N>,
         h_max: f64,
-    ) -> Result<Accepted<N>, StepError> {
+    ) -> Result<StepPoint<N>, StepError> {
+        let (t, y, f) = (from.t, &from.y, &from.f);
         if !self.partitioned {
             self.scheme.set_partition(sys.newton_partition());
             self.partitioned = true;
@@ -273,7 +272,7 @@ impl<const N: usize, const S: usize, M: RadauScheme<N, S>> Stepper<N> for RadauS
                 }
                 let q = h_new / h;
                 self.h = if !self.jc.slow && (1.0..=1.2).contains(&q) { h } else { h_new };
-                return Ok(Accepted { t: t + h, y: y1, f: fy1 });
+                return Ok(StepPoint { t: t + h, y: y1, f: fy1 });
             }
             self.stats.rejected += 1;
             self.h = if self.stats.steps == 0 { h * 0.1 } else { h / quot };
