@@ -83,20 +83,12 @@ pub trait Rhs<const N: usize> {
     fn eval_accepted(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
         self.eval_piece(t, y)
     }
-    /// The Jacobian ∂f/∂y at (t, y) into `jac`, with f = f(t, y) and `piece` = the piece of
-    /// y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined at a
-    /// state it needs. Default: [`fd_jacobian`], dense forward differences, N evaluations;
-    /// a system whose parts couple sparsely may exploit that.
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        piece: Piece,
-        jac: &mut SMatrix<f64, N, N>,
-        stats: &mut Stats,
-    ) -> bool {
-        fd_jacobian(self, t, y, f, piece, jac, stats)
+    /// The Jacobian ∂f/∂y at the point `at` (t, y and f(t, y)) into `jac`, with `piece` = the
+    /// piece of y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined
+    /// at a state it needs. Default: [`fd_jacobian`], dense forward differences, N
+    /// evaluations; a system whose parts couple sparsely may exploit that.
+    fn jacobian(&mut self, at: &StepPoint<N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
+        fd_jacobian(self, at, piece, jac, stats)
     }
     /// States the Newton solves may eliminate by blocks (see [`Partition`]): a second-order
     /// system's positions, whose rates are velocities. Used by [`Radau5`] wherever the
@@ -229,9 +221,7 @@ trait NewtonMatrix<const N: usize> {
 fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
     m: &mut M,
     sys: &mut S,
-    t: f64,
-    y: &SVector<f64, N>,
-    f: &SVector<f64, N>,
+    from: &StepPoint<N>,
     h_max: f64,
 ) -> Result<Option<f64>, StepError> {
     let (jc, stats, h_prop) = m.parts();
@@ -240,7 +230,7 @@ fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
         return Err(StepError::StepTooSmall);
     }
     if !jc.valid {
-        if !jc.compute(sys, t, y, f, stats) {
+        if !jc.compute(sys, from, stats) {
             return Err(StepError::RhsFailed);
         }
         m.drop_factor();

@@ -212,7 +212,7 @@ impl<const N: usize, const S: usize, M: RadauScheme<N, S>> Stepper<N> for RadauS
         }
         self.jc.start_step(sys, y);
         loop {
-            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
+            let Some(h) = prepare_attempt(self, sys, from, h_max)? else { continue };
             let (z, theta, iters) = match self.newton(sys, t, y, h) {
                 Ok(v) => v,
                 Err(NewtonFail::Diverged) => {

@@ -122,7 +122,7 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
         let (t, y, f) = (from.t, &from.y, &from.f);
         self.jc.start_step(sys, y);
         loop {
-            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
+            let Some(h) = prepare_attempt(self, sys, from, h_max)? else { continue };
             // Stage 2 (trapezoidal rule to t + γh).
             let rhs2 = y + f * (D * h);
             let z0 = y + f * (GAMMA * h);
