@@ -8,7 +8,7 @@ use gripopt::model::{Finger, Kin};
 use gripopt::params::{Design, SceneParams};
 use gripopt::sim::{diagnostic_grasp as simulate_grasp, Controls, DynOutcome, DynamicsResult, Integration, Method};
 use gripopt::sim::{FingerOde, State};
-use gripopt::sim::{Radau5, Rhs, Stepper, Tol};
+use gripopt::sim::{Radau5, Rhs, StepPoint, Stepper, Tol};
 use nalgebra::Vector2;
 
 fn prepare(x: &Design, s: &SceneParams) -> (Finger, StaticsResult) {
@@ -51,17 +51,15 @@ fn energy_is_conserved_without_contact_and_actuation() {
         let f = Finger::new(&nominal(), &s).unwrap();
         let mut ode = FingerOde::new(&f, &s, 0.0, 0.0);
         ode.contacts_enabled = false;
-        let mut y = State::from([f.open.q11, f.open.q21, 30.0, 22.0, 0.0]);
+        let y = State::from([f.open.q11, f.open.q21, 30.0, 22.0, 0.0]);
         let e0 = ode.evaluate(&y).unwrap().energy;
         let ke0 = 0.5 * Vector2::new(30.0, 22.0).dot(&(ode.evaluate(&y).unwrap().m * Vector2::new(30.0, 22.0)));
         let mut st: Radau5<5> = Radau5::new(Tol { rtol: 1e-12, atol: State::from([1e-14; 5]) }, 1e-6);
-        let mut fy = ode.eval(0.0, &y).unwrap();
-        let mut t = 0.0;
+        let mut p = StepPoint::at(&mut ode, 0.0, y).unwrap();
         let mut worst: f64 = 0.0;
-        while t < 0.02 {
-            let a = st.advance(&mut ode, t, &y, &fy, 0.02 - t).unwrap();
-            (t, y, fy) = (a.t, a.y, a.f);
-            let e = ode.evaluate(&y).unwrap().energy;
+        while p.t < 0.02 {
+            p = st.advance(&mut ode, &p, 0.02 - p.t).unwrap();
+            let e = ode.evaluate(&p.y).unwrap().energy;
             worst = worst.max((e - e0).abs());
         }
         assert!(worst / ke0 < 1e-8, "g_eq {g_eq}: |ΔE|/E = {:e}", worst / ke0);

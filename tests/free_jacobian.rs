@@ -6,6 +6,7 @@ use crate::common::{bottle, nominal};
 use gripopt::eval::{stage_kinematics, stage_statics};
 use gripopt::sim::{
     drive, fd_jacobian, free_tolerances, Controls, FreeJacobian, FreeScene, FreeSetup, Integration, Radau5, Rhs, Stats,
+    StepPoint,
 };
 
 /// State layout of the free scene (docs/scenes.md): fingers 0..8, G 8..11, q 11..15,
@@ -28,12 +29,12 @@ fn jacobians_at(t_mid: f64) -> (FreeJacobian, FreeJacobian, Stats, Stats, gripop
     let run = drive(&mut scene, &mut stepper, &opts, &Controls::DIAGNOSTIC, t_mid, &mut ());
     let (t, y) = (run.t, run.y);
     assert!((t - t_mid).abs() < 1e-12, "reached {t}");
-    let f = scene.eval(t, &y).expect("defined");
-    let piece = scene.piece(&y);
+    let at = StepPoint::at(&mut scene, t, y).expect("defined");
+    let (f, piece) = (at.f, scene.piece(&y));
     let (mut jd, mut jb) = (FreeJacobian::zeros(), FreeJacobian::zeros());
     let (mut sd, mut sb) = (Stats::default(), Stats::default());
-    assert!(fd_jacobian(&mut scene, t, &y, &f, piece, &mut jd, &mut sd));
-    assert!(scene.jacobian(t, &y, &f, piece, &mut jb, &mut sb));
+    assert!(fd_jacobian(&mut scene, &at, piece, &mut jd, &mut sd));
+    assert!(scene.jacobian(&at, piece, &mut jb, &mut sb));
     let (mut ya, mut fa) = ([0.0; 21], [0.0; 21]);
     ya.copy_from_slice(y.as_slice());
     fa.copy_from_slice(f.as_slice());

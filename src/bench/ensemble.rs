@@ -90,44 +90,22 @@ pub fn work_precision_ensemble(
                 differ += usize::from(r.outcome != reference.outcome);
             }
             let q = quantile;
-            let row = (
-                q(cpu, 0.5),
-                q(steps, 0.5),
-                q(rhs, 0.5),
-                q(ets.clone(), 0.5),
-                q(ets, 0.9),
-                q(ee.clone(), 0.5),
-                q(ee, 0.9),
-            );
+            let (cpu, steps, rhs) = (q(cpu, 0.5), q(steps, 0.5), q(rhs, 0.5));
+            let (ets_med, ets_p90, ee_med, ee_p90) = (q(ets.clone(), 0.5), q(ets, 0.9), q(ee.clone(), 0.5), q(ee, 0.9));
             summary.push(serde_json::json!({
-                "method": format!("{m:?}"), "rtol": rtol, "cpu_median_s": row.0, "steps_median": row.1, "rhs_median": row.2,
-                "err_t_stab_median": row.3, "err_t_stab_p90": row.4, "err_e_cyl_median": row.5, "err_e_cyl_p90": row.6, "verdicts_differing": differ,
+                "method": format!("{m:?}"), "rtol": rtol, "cpu_median_s": cpu, "steps_median": steps, "rhs_median": rhs,
+                "err_t_stab_median": ets_med, "err_t_stab_p90": ets_p90, "err_e_cyl_median": ee_med, "err_e_cyl_p90": ee_p90, "verdicts_differing": differ,
             }));
+            let n = cases.len();
             writeln!(
                 w,
-                "{m:?},{rtol:e},{},{:e},{},{},{:e},{:e},{:e},{:e},{differ}",
-                cases.len(),
-                row.0,
-                row.1,
-                row.2,
-                row.3,
-                row.4,
-                row.5,
-                row.6
+                "{m:?},{rtol:e},{n},{cpu:e},{steps},{rhs},{ets_med:e},{ets_p90:e},{ee_med:e},{ee_p90:e},{differ}"
             )
             .map_err(io)?;
+            let (method, cpu_ms) = (format!("{m:?}"), cpu * 1e3);
             say!(
                 out,
-                "{:<8} {:>7.0e} {:>8.3}ms {:>7} {:>7} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {differ}",
-                format!("{m:?}"),
-                rtol,
-                row.0 * 1e3,
-                row.1,
-                row.2,
-                row.3,
-                row.4,
-                row.5,
-                row.6
+                "{method:<8} {rtol:>7.0e} {cpu_ms:>8.3}ms {steps:>7} {rhs:>7} {ets_med:>11.2e} {ets_p90:>11.2e} {ee_med:>11.2e} {ee_p90:>11.2e} {differ}"
             );
         }
     }

@@ -13,6 +13,21 @@ pub fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
     }
 }
 
+/// A value in its unit (N, m/s, deg) to 4 decimals, or "—".
+pub fn dec4(v: Option<f64>) -> String {
+    opt(v, 1.0, 4)
+}
+
+/// A value in thousandths of its SI unit (mm, ms, g, mJ) to 4 decimals, or "—".
+pub fn milli(v: Option<f64>) -> String {
+    opt(v, 1e3, 4)
+}
+
+/// An angle in radians shown in degrees to 4 decimals, or "—".
+pub fn degrees(v: Option<f64>) -> String {
+    opt(v, 180.0 / std::f64::consts::PI, 4)
+}
+
 /// "yes", "no", or "—" (not known).
 pub fn yes_no(v: Option<bool>) -> &'static str {
     match v {
@@ -39,8 +54,6 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         return Ok(());
     }
     let (k, r) = (&rec.kinematics, &rec.statics);
-    let d = |v: Option<f64>| opt(v, 180.0 / std::f64::consts::PI, 4);
-    let mm = |v: Option<f64>| opt(v, 1e3, 4);
     outln!(
         "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m)",
         crate::cli::out::shown(&p.name),
@@ -53,14 +66,14 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         x.l_hand()
     );
     outln!("stage 0/1  kinematics");
-    outln!("  l11 {} mm  l22 {} mm  l12 {} mm", mm(k.l11), mm(k.l22), mm(k.l12));
+    outln!("  l11 {} mm  l22 {} mm  l12 {} mm", milli(k.l11), milli(k.l22), milli(k.l12));
     outln!(
         "  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {}  sigma {}",
-        d(k.q11_0),
-        d(k.q21_0),
-        d(k.q12_0),
-        d(k.q22_0),
-        d(k.q13_0),
+        degrees(k.q11_0),
+        degrees(k.q21_0),
+        degrees(k.q12_0),
+        degrees(k.q22_0),
+        degrees(k.q13_0),
         opt(k.gamma, 1.0, 0),
         opt(k.sigma, 1.0, 0)
     );
@@ -73,31 +86,25 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     outln!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
     outln!(
         "  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm",
-        d(r.theta1),
-        d(r.theta2),
-        mm(r.k1),
-        mm(r.k2)
+        degrees(r.theta1),
+        degrees(r.theta2),
+        milli(r.k1),
+        milli(r.k2)
     );
-    outln!(
-        "  f0  {} / {} N   f_mu {} / {} N",
-        opt(r.f0_1, 1.0, 4),
-        opt(r.f0_2, 1.0, 4),
-        opt(r.fmu_1, 1.0, 4),
-        opt(r.fmu_2, 1.0, 4)
-    );
+    outln!("  f0  {} / {} N   f_mu {} / {} N", dec4(r.f0_1), dec4(r.f0_2), dec4(r.fmu_1), dec4(r.fmu_2));
     outln!(
         "  F_hand0 ({}, {}) N   F_hand_mu ({}, {}) N",
-        opt(r.fhand0_x, 1.0, 4),
-        opt(r.fhand0_y, 1.0, 4),
-        opt(r.fhandmu_x, 1.0, 4),
-        opt(r.fhandmu_y, 1.0, 4)
+        dec4(r.fhand0_x),
+        dec4(r.fhand0_y),
+        dec4(r.fhandmu_x),
+        dec4(r.fhandmu_y)
     );
     outln!(
         "  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}",
         opt(r.alpha, 1.0, 5),
-        opt(r.mean_force, 1.0, 4),
+        dec4(r.mean_force),
         yes_no(r.form_closed_0),
-        mm(r.max_offset),
+        milli(r.max_offset),
         r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default()
     );
     if !static_only {
@@ -122,7 +129,7 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
                 "verdict    FEASIBLE  objectives: max_offset {} mm, alpha {}, mean force {} N, t_stab {}",
                 opt(m, 1e3, 3),
                 opt(a, 1.0, 5),
-                opt(f, 1.0, 4),
+                dec4(f),
                 t.map_or("— (not computed)".to_string(), |t| format!("{t:.6} s"))
             );
         }
@@ -138,18 +145,14 @@ pub fn print_dyn(r: &GraspRecord) {
         return;
     }
     print_impact(&r.impact, r.theta2_first_contact);
-    outln!(
-        "  force margin min {} N (static {} N)",
-        opt(r.min_force_margin, 1.0, 4),
-        opt(r.static_force_margin, 1.0, 4)
-    );
+    outln!("  force margin min {} N (static {} N)", dec4(r.min_force_margin), dec4(r.static_force_margin));
     outln!(
         "  t_stab {} ms  forces at t_stab {} / {} N  f* {} / {} N  max|qdd| {} rad/s^2",
         opt(r.t_stab, 1e3, 5),
-        opt(r.f_stab_1, 1.0, 4),
-        opt(r.f_stab_2, 1.0, 4),
-        opt(r.fstar_1, 1.0, 4),
-        opt(r.fstar_2, 1.0, 4),
+        dec4(r.f_stab_1),
+        dec4(r.f_stab_2),
+        dec4(r.fstar_1),
+        dec4(r.fstar_2),
         opt(r.max_qdd_end, 1.0, 3)
     );
     print_work(&r.work);
@@ -159,11 +162,11 @@ pub fn print_dyn(r: &GraspRecord) {
 fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
     outln!(
         "  first contact t {} ms on {}  v_impact {} m/s  m_finger {} g  theta2 {} deg",
-        opt(i.t_first_contact, 1e3, 4),
+        milli(i.t_first_contact),
         i.first_contact_phalanx.map_or("—".into(), |p| format!("{p:?}").to_lowercase()),
-        opt(i.v_impact, 1.0, 4),
-        opt(i.m_finger, 1e3, 4),
-        opt(theta2, 180.0 / std::f64::consts::PI, 4)
+        dec4(i.v_impact),
+        milli(i.m_finger),
+        degrees(theta2)
     );
     outln!(
         "  impact energy E_cyl {} mJ (limit {} mJ)  E_trans {} mJ  E_rot {} mJ",
@@ -197,21 +200,21 @@ pub fn print_free(f: &FreeSceneRecord, x_off: Option<f64>) {
         return;
     };
     if !end.observed() {
-        outln!("  ended early at t {} ms: {end} (nothing observed: no verdict)", opt(f.t_end, 1e3, 4));
+        outln!("  ended early at t {} ms: {end} (nothing observed: no verdict)", milli(f.t_end));
     }
     outln!(
         "  object max displacement {} mm (dx {} mm, dy {} mm)  max tilt {} deg  final {} mm / {} deg",
-        opt(f.object_max_displacement, 1e3, 4),
-        opt(f.object_max_dx, 1e3, 4),
-        opt(f.object_max_dy, 1e3, 4),
-        opt(f.object_max_tilt_deg, 1.0, 4),
-        opt(f.object_final_displacement, 1e3, 4),
-        opt(f.object_final_tilt_deg, 1.0, 4)
+        milli(f.object_max_displacement),
+        milli(f.object_max_dx),
+        milli(f.object_max_dy),
+        dec4(f.object_max_tilt_deg),
+        milli(f.object_final_displacement),
+        dec4(f.object_final_tilt_deg)
     );
     outln!(
         "  peak E_trans {} mJ  E_rot {} mJ during the first contact",
-        opt(f.object_peak_e_trans, 1e3, 4),
-        opt(f.object_peak_e_rot, 1e3, 4)
+        milli(f.object_peak_e_trans),
+        milli(f.object_peak_e_rot)
     );
     outln!(
         "  moved {}  toppled {}  escaped {}  rim_contact {}",

@@ -2,7 +2,7 @@
 //! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
 //! plot), in the same way for every scene.
 
-use crate::cli::report::{opt, print_dyn, print_free, yes_no};
+use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::Watch;
 use anyhow::{bail, Context, Result};
 use gripopt::eval::{Record, SimulationRecord};
@@ -114,7 +114,7 @@ fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
         outln!("centred grasp (the criteria's prediction):");
     }
     print_dyn(g);
-    outln!("  f0 (rigid statics) {} / {} N", opt(r.statics.f0_1, 1.0, 4), opt(r.statics.f0_2, 1.0, 4));
+    outln!("  f0 (rigid statics) {} / {} N", dec4(r.statics.f0_1), dec4(r.statics.f0_2));
     let ok = |v: Option<bool>| match v {
         Some(true) => "ok",
         Some(false) => "VIOLATED",
@@ -124,10 +124,10 @@ fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
     if let Some(h) = &r.offset_scene {
         outln!(
             "  hand force at the end ({}, {}) N (static ({}, {}) N); recentres {}",
-            opt(h.hand_x_end, 1.0, 4),
-            opt(h.hand_y_end, 1.0, 4),
-            opt(h.hand0_x, 1.0, 4),
-            opt(h.hand0_y, 1.0, 4),
+            dec4(h.hand_x_end),
+            dec4(h.hand_y_end),
+            dec4(h.hand0_x),
+            dec4(h.hand0_y),
             yes_no(h.recentres)
         );
     }

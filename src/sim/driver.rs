@@ -4,7 +4,7 @@
 //! or criteria.
 
 use super::events::EventSearch;
-use super::integrate::{hermite, Dopri5, Radau5, Stats, StepError, Stepper, Tol, TrBdf2};
+use super::integrate::{hermite, Dopri5, Radau5, Stats, StepError, StepPoint, Stepper, Tol, TrBdf2};
 use super::result::MAX_EVENTS;
 use super::scene::{End, Run, Scene};
 use super::settings::{Controls, Integration, Method};
@@ -67,7 +67,8 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         if t >= t_max * (1.0 - 1e-15) {
             break End::TimeUp;
         }
-        let acc = match stepper.advance(scene, t, &y, &fy, t_max - t) {
+        let from = StepPoint { t, y, f: fy };
+        let acc = match stepper.advance(scene, &from, t_max - t) {
             Ok(a) => a,
             Err(StepError::StepTooSmall) => break End::StepTooSmall,
             Err(StepError::RhsFailed) => break End::Undefined,
@@ -76,8 +77,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
             break End::Undefined;
         };
         let g1 = scene.event_values(&acc.y, &ev1);
-        let (t0, y0, f0) = (t, y, fy);
-        let interp = |tt: f64| hermite(t0, &y0, &f0, acc.t, &acc.y, &acc.f, tt);
+        let interp = |tt: f64| hermite(from.t, &from.y, &from.f, acc.t, &acc.y, &acc.f, tt);
         let sc: &Sc = scene;
         let best = search.earliest(
             |k| sc.crossing(k),
@@ -86,7 +86,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
                 sc.evaluate(&yt).map(|e| sc.event_values(&yt, &e))
             },
             |k, tt| sc.event_value(k, &interp(tt)),
-            (t0, &g),
+            (from.t, &g),
             (acc.t, &g1),
         );
         // uniform grid samples inside the accepted part of the step
@@ -115,7 +115,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
             continue;
         };
         // ---- process the event at te ----------------------------------------------------
-        sink.event(&EventNote { kind: search.kind(k), t: te, step: [t0, acc.t], memories: scene.memories() });
+        sink.event(&EventNote { kind: search.kind(k), t: te, step: [from.t, acc.t], memories: scene.memories() });
         run.events += 1;
         if run.events > MAX_EVENTS {
             break End::Aborted;
@@ -126,7 +126,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         ev = eve;
         let response = scene.handle(k, t, &ev, &g1);
         if response.restart {
-            stepper.restart(stepper.h());
+            stepper.restart();
         }
         let Some(ev2) = scene.evaluate(&y) else { break End::Undefined };
         ev = ev2;

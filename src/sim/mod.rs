@@ -35,8 +35,8 @@ pub use equilibrium::{finger_equilibrium, Equilibrium};
 pub use events::{hermite_may_cross, locate, Crossing, EventKind, EventSearch, EventValues};
 pub use finger::{ContactState, FingerEval, FingerLinkage, FingerModel, Kink};
 pub use integrate::{
-    fd_jacobian, hermite, Accepted, Dopri5, Lu, Partition, Piece, Radau5, RadauCoefficients, RadauIIA, Rhs, Scalar,
-    Stats, StepError, Stepper, Tol, TrBdf2,
+    fd_jacobian, hermite, Dopri5, Lu, Partition, Piece, Radau5, Radau5Scheme, RadauCoefficients, RadauIIA,
+    RadauIIAScheme, RadauScheme, RadauStepper, Rhs, Scalar, Stats, StepError, StepPoint, Stepper, Tol, TrBdf2,
 };
 pub use memory::{Memory, MemoryChange};
 pub use result::{DynOutcome, DynamicsResult, FirstContact, FreeEnd, PoseSample, Sample, Trajectory, MAX_EVENTS};

@@ -1,7 +1,6 @@
 //! Dormand–Prince 5(4): explicit, for comparison and non-stiff references.
 
-use super::{Accepted, Rhs, Stats, StepError, Stepper, Tol, HMIN};
-use nalgebra::SVector;
+use super::{Rhs, Stats, StepError, StepPoint, Stepper, Tol, HMIN};
 
 /// Explicit Dormand–Prince 5(4) with FSAL and a standard step-size controller.
 #[derive(Debug, Clone)]
@@ -19,14 +18,8 @@ impl<const N: usize> Dopri5<N> {
 }
 
 impl<const N: usize> Stepper<N> for Dopri5<N> {
-    fn advance<S: Rhs<N>>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        h_max: f64,
-    ) -> Result<Accepted<N>, StepError> {
+    fn advance<S: Rhs<N>>(&mut self, sys: &mut S, from: &StepPoint<N>, h_max: f64) -> Result<StepPoint<N>, StepError> {
+        let (t, y, f) = (from.t, &from.y, &from.f);
         loop {
             let h = self.h.min(h_max);
             if h < HMIN {
@@ -75,27 +68,18 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
                 self.stats.steps += 1;
                 let fac = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
                 self.h = h * fac;
-                return Ok(Accepted { t: t + h, y: y1, f: k7 });
+                return Ok(StepPoint { t: t + h, y: y1, f: k7 });
             }
             self.stats.rejected += 1;
             self.h = h * (0.9 * err.powf(-0.2)).clamp(0.1, 0.9);
         }
     }
 
-    fn restart(&mut self, h: f64) {
-        self.h = h;
-    }
+    /// Nothing to forget: an explicit method keeps no history but its step size.
+    fn restart(&mut self) {}
 
     fn stats(&self) -> Stats {
         self.stats
-    }
-
-    fn h(&self) -> f64 {
-        self.h
-    }
-
-    fn name(&self) -> &'static str {
-        "dopri5"
     }
 }
 

@@ -1,6 +1,6 @@
 //! The finite-difference Jacobian shared by the implicit methods and its refresh policy.
 
-use super::{Piece, Rhs, Stats};
+use super::{Piece, Rhs, Stats, StepPoint};
 use nalgebra::{SMatrix, SVector};
 
 /// A finite-difference Jacobian that never straddles a kink of a piecewise-smooth f (see
@@ -66,18 +66,11 @@ impl<const N: usize> JacobianCache<N> {
         self.slow = false;
     }
 
-    /// Compute J at (t, y) with the system's [`Rhs::jacobian`]; false if f is undefined at
+    /// Compute J at the point `at` with the system's [`Rhs::jacobian`]; false if f is undefined at
     /// a perturbed state.
-    pub(super) fn compute<S: Rhs<N>>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        stats: &mut Stats,
-    ) -> bool {
-        self.piece = self.piece_of(sys, y);
-        if !sys.jacobian(t, y, f, self.piece, &mut self.jac, stats) {
+    pub(super) fn compute<S: Rhs<N>>(&mut self, sys: &mut S, at: &StepPoint<N>, stats: &mut Stats) -> bool {
+        self.piece = self.piece_of(sys, &at.y);
+        if !sys.jacobian(at, self.piece, &mut self.jac, stats) {
             return false;
         }
         stats.jac += 1;
@@ -96,13 +89,12 @@ impl<const N: usize> JacobianCache<N> {
 /// [`Rhs::jacobian`]'s default.
 pub fn fd_jacobian<S: Rhs<N> + ?Sized, const N: usize>(
     sys: &mut S,
-    t: f64,
-    y: &SVector<f64, N>,
-    f: &SVector<f64, N>,
+    at: &StepPoint<N>,
     piece: Piece,
     jac: &mut SMatrix<f64, N, N>,
     stats: &mut Stats,
 ) -> bool {
+    let (t, y, f) = (at.t, &at.y, &at.f);
     let sq = f64::EPSILON.sqrt();
     let part = sys.newton_partition();
     let mut yp = *y;
@@ -152,10 +144,10 @@ mod tests {
     fn known_columns_need_no_evaluation() {
         let mut sys = Filtered(0.25);
         let y = SVector::<f64, 3>::new(0.3, -0.7, 0.1);
-        let f = sys.eval(0.0, &y).unwrap();
+        let at = StepPoint::at(&mut sys, 0.0, y).unwrap();
         let mut jac = SMatrix::<f64, 3, 3>::zeros();
         let mut stats = Stats::default();
-        assert!(fd_jacobian(&mut sys, 0.0, &y, &f, Piece::SMOOTH, &mut jac, &mut stats));
+        assert!(fd_jacobian(&mut sys, &at, Piece::SMOOTH, &mut jac, &mut stats));
         assert_eq!(stats.rhs, 2);
         assert_eq!(jac.column(2), SVector::<f64, 3>::new(0.0, 0.0, -4.0));
         let exact = SMatrix::<f64, 3, 3>::new(0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 4.0, 0.0, -4.0);

@@ -29,24 +29,30 @@ impl Scalar for Complex<f64> {
     }
 }
 
+/// Partial pivoting in column k of an m-row matrix: the row p in k..m of the largest
+/// magnitude `mag(p)` (the first of equals); `None` where that is zero or not finite (the
+/// matrix is singular).
+#[inline(always)]
+pub(super) fn pivot_row(k: usize, m: usize, mag: impl Fn(usize) -> f64) -> Option<usize> {
+    let mut p = k;
+    let mut mx = mag(k);
+    for i in k + 1..m {
+        let v = mag(i);
+        if v > mx {
+            mx = v;
+            p = i;
+        }
+    }
+    (mx > 0.0 && mx.is_finite()).then_some(p)
+}
+
 impl<T: Scalar, const N: usize> Lu<T, N> {
     /// Factor `a`; `None` if singular.
     #[inline]
     pub fn factor(mut a: SMatrix<T, N, N>) -> Option<Self> {
         let mut piv = [0usize; N];
         for k in 0..N {
-            let mut p = k;
-            let mut m = a[(k, k)].norm1();
-            for i in k + 1..N {
-                let v = a[(i, k)].norm1();
-                if v > m {
-                    m = v;
-                    p = i;
-                }
-            }
-            if !(m > 0.0) || !m.is_finite() {
-                return None;
-            }
+            let p = pivot_row(k, N, |i| a[(i, k)].norm1())?;
             piv[k] = p;
             if p != k {
                 a.swap_rows(p, k);

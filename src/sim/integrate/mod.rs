@@ -1,6 +1,7 @@
 //! Adaptive one-step integrators on fixed-size states, one method per file: Radau IIA
 //! order 5 ([`Radau5`], stiff, the default), TR-BDF2 ([`TrBdf2`], stiff) and Dormand–Prince
-//! 5(4) ([`Dopri5`], explicit, for comparison). Each exposes accepted steps with (y, f) at
+//! 5(4) ([`Dopri5`], explicit, for comparison); the S-stage Radau IIA ([`RadauIIA`]) shares
+//! RADAU5's step loop ([`RadauStepper`], `radau_stepper`) with its own coefficients. Each exposes accepted steps with (y, f) at
 //! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
 //! location. The implicit methods share the Jacobian's refresh policy (`jacobian`; the
 //! Jacobian itself is the system's [`Rhs::jacobian`], by default dense forward differences,
@@ -15,6 +16,7 @@ mod lu;
 mod radau;
 mod radau5;
 mod radau_coefficients;
+mod radau_stepper;
 mod reduced;
 mod schur_lu;
 mod trbdf2;
@@ -23,9 +25,10 @@ pub use dense::hermite;
 pub use dopri5::Dopri5;
 pub use jacobian::fd_jacobian;
 pub use lu::{Lu, Scalar};
-pub use radau::RadauIIA;
-pub use radau5::Radau5;
+pub use radau::{RadauIIA, RadauIIAScheme};
+pub use radau5::{Radau5, Radau5Scheme};
 pub use radau_coefficients::RadauCoefficients;
+pub use radau_stepper::{RadauScheme, RadauStepper};
 pub use reduced::Partition;
 pub use trbdf2::TrBdf2;
 
@@ -80,20 +83,12 @@ pub trait Rhs<const N: usize> {
     fn eval_accepted(&mut self, t: f64, y: &SVector<f64, N>) -> Option<(SVector<f64, N>, Piece)> {
         self.eval_piece(t, y)
     }
-    /// The Jacobian ∂f/∂y at (t, y) into `jac`, with f = f(t, y) and `piece` = the piece of
-    /// y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined at a
-    /// state it needs. Default: [`fd_jacobian`], dense forward differences, N evaluations;
-    /// a system whose parts couple sparsely may exploit that.
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        piece: Piece,
-        jac: &mut SMatrix<f64, N, N>,
-        stats: &mut Stats,
-    ) -> bool {
-        fd_jacobian(self, t, y, f, piece, jac, stats)
+    /// The Jacobian ∂f/∂y at the point `at` (t, y and f(t, y)) into `jac`, with `piece` = the
+    /// piece of y; work goes to `stats` (`rhs`: full evaluations). False where f is undefined
+    /// at a state it needs. Default: [`fd_jacobian`], dense forward differences, N
+    /// evaluations; a system whose parts couple sparsely may exploit that.
+    fn jacobian(&mut self, at: &StepPoint<N>, piece: Piece, jac: &mut SMatrix<f64, N, N>, stats: &mut Stats) -> bool {
+        fd_jacobian(self, at, piece, jac, stats)
     }
     /// States the Newton solves may eliminate by blocks (see [`Partition`]): a second-order
     /// system's positions, whose rates are velocities. Used by [`Radau5`] wherever the
@@ -173,30 +168,31 @@ pub enum StepError {
     RhsFailed,
 }
 
-/// An accepted step.
+/// A point of the solution where a step starts or ends: time, state and f there.
 #[derive(Debug, Clone, Copy)]
-pub struct Accepted<const N: usize> {
-    /// New time.
+pub struct StepPoint<const N: usize> {
+    /// Time.
     pub t: f64,
-    /// New state.
+    /// State.
     pub y: SVector<f64, N>,
-    /// f at the new state.
+    /// f(t, y).
     pub f: SVector<f64, N>,
+}
+
+impl<const N: usize> StepPoint<N> {
+    /// The point (t, y) of `sys`, with f evaluated there; `None` where f is undefined.
+    pub fn at<S: Rhs<N>>(sys: &mut S, t: f64, y: SVector<f64, N>) -> Option<Self> {
+        Some(StepPoint { t, y, f: sys.eval(t, &y)? })
+    }
 }
 
 /// An adaptive one-step method.
 pub trait Stepper<const N: usize> {
-    /// Take one accepted step from (t, y, f) with h ≤ h_max, adapting the step size.
-    fn advance<S: Rhs<N>>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        h_max: f64,
-    ) -> Result<Accepted<N>, StepError>;
-    /// Forget step-size history and Jacobians (after a discontinuity of f).
-    fn restart(&mut self, h: f64);
+    /// Take one accepted step from `from` with h ≤ h_max, adapting the step size.
+    fn advance<S: Rhs<N>>(&mut self, sys: &mut S, from: &StepPoint<N>, h_max: f64) -> Result<StepPoint<N>, StepError>;
+    /// Forget step-size history and Jacobians (after a discontinuity of f); the step-size
+    /// proposal stays.
+    fn restart(&mut self);
     /// The method's own continuous output on the last accepted step at `t` (inside it), where
     /// it has one (a collocation method's polynomial); `None`: use [`hermite`].
     fn dense(&self, _t: f64) -> Option<SVector<f64, N>> {
@@ -204,10 +200,6 @@ pub trait Stepper<const N: usize> {
     }
     /// Counters.
     fn stats(&self) -> Stats;
-    /// Current step size proposal.
-    fn h(&self) -> f64;
-    /// Method name.
-    fn name(&self) -> &'static str;
 }
 
 /// The smallest step size.
@@ -229,9 +221,7 @@ trait NewtonMatrix<const N: usize> {
 fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
     m: &mut M,
     sys: &mut S,
-    t: f64,
-    y: &SVector<f64, N>,
-    f: &SVector<f64, N>,
+    from: &StepPoint<N>,
     h_max: f64,
 ) -> Result<Option<f64>, StepError> {
     let (jc, stats, h_prop) = m.parts();
@@ -240,7 +230,7 @@ fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
         return Err(StepError::StepTooSmall);
     }
     if !jc.valid {
-        if !jc.compute(sys, t, y, f, stats) {
+        if !jc.compute(sys, from, stats) {
             return Err(StepError::RhsFailed);
         }
         m.drop_factor();
@@ -261,7 +251,7 @@ fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
 #[cfg(test)]
 pub(crate) mod testsys {
     //! Test systems shared by the methods' tests.
-    use super::{Rhs, Stats, Stepper};
+    use super::{Rhs, Stats, StepPoint, Stepper};
     use nalgebra::{SVector, Vector2};
 
     /// The harmonic oscillator y'' = −ω² y.
@@ -275,15 +265,10 @@ pub(crate) mod testsys {
     /// Integrate the oscillator from (1, 0) to `t_end`.
     pub fn run_osc<St: Stepper<2>>(mut st: St, omega: f64, t_end: f64) -> (SVector<f64, 2>, Stats) {
         let mut sys = Osc(omega);
-        let mut t = 0.0;
-        let mut y = Vector2::new(1.0, 0.0);
-        let mut f = sys.eval(0.0, &y).unwrap();
-        while t < t_end {
-            let a = st.advance(&mut sys, t, &y, &f, t_end - t).unwrap();
-            t = a.t;
-            y = a.y;
-            f = a.f;
+        let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(1.0, 0.0)).unwrap();
+        while p.t < t_end {
+            p = st.advance(&mut sys, &p, t_end - p.t).unwrap();
         }
-        (y, st.stats())
+        (p.y, st.stats())
     }
 }

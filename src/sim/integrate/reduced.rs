@@ -548,6 +548,15 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
+    const N: usize = 9;
+
+    /// The random source (seeded) and the layout [`random_jacobian`] draws for: groups {0},
+    /// {1}, {5, 6, 7} and the trailing state 8, with its reduced LU.
+    fn fixture(seed: u64) -> (rand_chacha::ChaCha8Rng, Partition<N>, ReducedLu<N>) {
+        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap().with_trailing(&[8]).unwrap();
+        (rand_chacha::ChaCha8Rng::seed_from_u64(seed), part, ReducedLu::new(part))
+    }
+
     /// A random Jacobian of a second-order shape for `part`-like layouts: positions 0, 1
     /// (rates: velocities 2, 3 plus noise), a 3-group 5..8 with its own block, a trailing
     /// state 8 (depends on everything, nothing depends on it).
@@ -577,10 +586,7 @@ mod tests {
     /// groups, or a state to a trailing one, does not fit.
     #[test]
     fn reduced_solve_equals_dense() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        const N: usize = 9;
-        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap().with_trailing(&[8]).unwrap();
-        let mut lu = ReducedLu::new(part);
+        let (mut rng, part, mut lu) = fixture(3);
         for _ in 0..50 {
             let mut j = random_jacobian(&mut rng);
             assert!(part.fits(&j));
@@ -617,10 +623,7 @@ mod tests {
     /// (to rounding), and differs from the exact one by O(|J_GG|/|c|).
     #[test]
     fn negligible_group_block_is_dropped() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        const N: usize = 9;
-        let part = Partition::<N>::new(&[&[0], &[1], &[5, 6, 7]]).unwrap().with_trailing(&[8]).unwrap();
-        let mut lu = ReducedLu::new(part);
+        let (mut rng, _, mut lu) = fixture(5);
         for _ in 0..20 {
             let mut j = random_jacobian(&mut rng);
             j[(1, 1)] = 0.0;

@@ -2,7 +2,7 @@
 //! pivoting in N×N storage, real ([`RealLu`]) or complex with its real and imaginary parts
 //! stored apart ([`ComplexLu`], so that the inner loops are plain real arithmetic).
 
-use super::lu::Scalar;
+use super::lu::{pivot_row, Scalar};
 use nalgebra::Complex;
 
 /// A scalar of the reduced factorisations (`f64` or `Complex<f64>`) with its dense
@@ -70,18 +70,7 @@ impl<const N: usize> SchurLu<f64, N> for RealLu<N> {
     fn factor(&mut self, m: usize) -> bool {
         let a = &mut self.a;
         for k in 0..m {
-            let mut p = k;
-            let mut mx = a[k][k].abs();
-            for i in k + 1..m {
-                let v = a[i][k].abs();
-                if v > mx {
-                    mx = v;
-                    p = i;
-                }
-            }
-            if !(mx > 0.0 && mx.is_finite()) {
-                return false;
-            }
+            let Some(p) = pivot_row(k, m, |i| a[i][k].abs()) else { return false };
             self.piv[k] = p;
             if p != k {
                 a.swap(p, k);
@@ -181,18 +170,7 @@ impl<const N: usize> SchurLu<Complex<f64>, N> for ComplexLu<N> {
     fn factor(&mut self, m: usize) -> bool {
         let (re, im) = (&mut self.re, &mut self.im);
         for k in 0..m {
-            let mut p = k;
-            let mut mx = re[k][k].abs() + im[k][k].abs();
-            for i in k + 1..m {
-                let v = re[i][k].abs() + im[i][k].abs();
-                if v > mx {
-                    mx = v;
-                    p = i;
-                }
-            }
-            if !(mx > 0.0 && mx.is_finite()) {
-                return false;
-            }
+            let Some(p) = pivot_row(k, m, |i| re[i][k].abs() + im[i][k].abs()) else { return false };
             self.piv[k] = p;
             if p != k {
                 re.swap(p, k);

@@ -3,7 +3,7 @@
 
 use super::jacobian::JacobianCache;
 use super::lu::Lu;
-use super::{prepare_attempt, Accepted, NewtonMatrix, Rhs, Stats, StepError, Stepper, Tol};
+use super::{prepare_attempt, NewtonMatrix, Rhs, Stats, StepError, StepPoint, Stepper, Tol};
 use nalgebra::{SMatrix, SVector};
 
 /// TR-BDF2 (γ = 2 − √2) as an ESDIRK with a simplified Newton iteration, finite-difference
@@ -48,21 +48,6 @@ impl<const N: usize> TrBdf2<N> {
             max_newton: 8,
             refresh_every_step: false,
         }
-    }
-
-    fn factor_matrix(&mut self, h: f64) -> bool {
-        if self.lu.is_some() && self.lu_h == h {
-            return true;
-        }
-        let a = SMatrix::<f64, N, N>::identity() - self.jc.jac * (D * h);
-        self.stats.lu += 1;
-        let Some(lu) = Lu::factor(a) else {
-            self.lu = None;
-            return false;
-        };
-        self.lu = Some(lu);
-        self.lu_h = h;
-        true
     }
 
     /// Solve Y − d h f(Y) = rhs by simplified Newton from `z`; returns (Y, k = f(Y)).
@@ -117,22 +102,27 @@ impl<const N: usize> NewtonMatrix<N> for TrBdf2<N> {
         self.lu = None;
     }
     fn factor(&mut self, h: f64) -> bool {
-        self.factor_matrix(h)
+        if self.lu.is_some() && self.lu_h == h {
+            return true;
+        }
+        let a = SMatrix::<f64, N, N>::identity() - self.jc.jac * (D * h);
+        self.stats.lu += 1;
+        let Some(lu) = Lu::factor(a) else {
+            self.lu = None;
+            return false;
+        };
+        self.lu = Some(lu);
+        self.lu_h = h;
+        true
     }
 }
 
 impl<const N: usize> Stepper<N> for TrBdf2<N> {
-    fn advance<S: Rhs<N>>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &SVector<f64, N>,
-        f: &SVector<f64, N>,
-        h_max: f64,
-    ) -> Result<Accepted<N>, StepError> {
+    fn advance<S: Rhs<N>>(&mut self, sys: &mut S, from: &StepPoint<N>, h_max: f64) -> Result<StepPoint<N>, StepError> {
+        let (t, y, f) = (from.t, &from.y, &from.f);
         self.jc.start_step(sys, y);
         loop {
-            let Some(h) = prepare_attempt(self, sys, t, y, f, h_max)? else { continue };
+            let Some(h) = prepare_attempt(self, sys, from, h_max)? else { continue };
             // Stage 2 (trapezoidal rule to t + γh).
             let rhs2 = y + f * (D * h);
             let z0 = y + f * (GAMMA * h);
@@ -163,7 +153,7 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
                 if self.refresh_every_step {
                     self.jc.valid = false;
                 }
-                return Ok(Accepted { t: t + h, y: y3, f: k3 });
+                return Ok(StepPoint { t: t + h, y: y3, f: k3 });
             }
             self.stats.rejected += 1;
             let fac = if err.is_finite() { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9) } else { 0.25 };
@@ -174,22 +164,13 @@ impl<const N: usize> Stepper<N> for TrBdf2<N> {
         }
     }
 
-    fn restart(&mut self, h: f64) {
-        self.h = h;
+    fn restart(&mut self) {
         self.jc.valid = false;
         self.lu = None;
     }
 
     fn stats(&self) -> Stats {
         self.stats
-    }
-
-    fn h(&self) -> f64 {
-        self.h
-    }
-
-    fn name(&self) -> &'static str {
-        "tr-bdf2"
     }
 }
 
@@ -231,13 +212,11 @@ mod tests {
         }
         let mut st = TrBdf2::new(Tol { rtol: 1e-6, atol: Vector2::new(1e-9, 1e-9) }, 1e-6);
         let mut sys = Stiff;
-        let (mut t, mut y) = (0.0, Vector2::new(0.0, 1.0));
-        let mut f = sys.eval(0.0, &y).unwrap();
-        while t < 1.0 {
-            let a = st.advance(&mut sys, t, &y, &f, 1.0 - t).unwrap();
-            (t, y, f) = (a.t, a.y, a.f);
+        let mut p = StepPoint::at(&mut sys, 0.0, Vector2::new(0.0, 1.0)).unwrap();
+        while p.t < 1.0 {
+            p = st.advance(&mut sys, &p, 1.0 - p.t).unwrap();
         }
-        assert!((y[0] - 1.0f64.cos()).abs() < 1e-5);
+        assert!((p.y[0] - 1.0f64.cos()).abs() < 1e-5);
         assert!(st.stats().steps < 2000, "{:?}", st.stats());
     }
 }

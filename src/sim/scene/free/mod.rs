@@ -22,7 +22,7 @@ use crate::sim::criteria::{impact, Impact};
 use crate::sim::driver;
 use crate::sim::events::{Crossing, EventKind, EventValues};
 use crate::sim::finger::{FingerLinkage, FingerModel};
-use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, Tol};
+use crate::sim::integrate::{fd_jacobian, Partition, Piece, Rhs, Stats, StepPoint, Tol};
 use crate::sim::memory::{Memory, MemoryChange};
 use crate::sim::result::{FreeEnd, PoseSample};
 use crate::sim::settings::{Controls, Integration};
@@ -330,11 +330,11 @@ impl Rhs<NF> for FreeScene<'_> {
             })
             .flatten()
     }
-    fn jacobian(&mut self, t: f64, y: &St, f: &St, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
+    fn jacobian(&mut self, at: &StepPoint<NF>, piece: Piece, jac: &mut FreeJacobian, stats: &mut Stats) -> bool {
         if self.setup.dense_jacobian {
-            fd_jacobian(self, t, y, f, piece, jac, stats)
+            fd_jacobian(self, at, piece, jac, stats)
         } else {
-            self.block_jacobian(y, piece, jac)
+            self.block_jacobian(&at.y, piece, jac)
         }
     }
 }
