@@ -218,6 +218,11 @@ fn show_puts_missing_values_last() {
         assert!(has.windows(2).all(|w| w[0] || !w[1]), "--best {best}: {has:?}");
         assert!(has.iter().any(|h| *h) && !has[has.len() - 1], "--best {best}: {has:?}");
         assert!(designs.iter().any(|x| x["id"].to_string().trim_matches('"') == id), "{v}");
+        // `reason` is JSON text (null for a feasible design), not the CSV's quoted cell; the
+        // columns come in the file's order
+        assert!(designs.iter().all(|x| x["reason"].is_null()), "{v}");
+        let keys: Vec<&String> = designs[0].as_object().unwrap().keys().collect();
+        assert_eq!(keys.len(), gripopt::run::DESIGN_COLUMNS.len() + 1, "{keys:?}");
     }
 }
 

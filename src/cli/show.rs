@@ -38,12 +38,30 @@ fn unit(name: &str) -> &'static str {
     DESIGN_COLUMNS.iter().find(|c| c.0 == name).map_or("", |c| c.1)
 }
 
-/// A design as `show --json` lists it: its row and its replay command.
-#[derive(Serialize)]
+/// A design as `show --json` lists it: its row's columns in the file's order (`reason` as
+/// JSON text, null when none, not the CSV's quoted cell) and its replay command.
 struct Shown<'a> {
-    #[serde(flatten)]
     row: &'a DesignRow,
     replay: String,
+}
+
+impl Serialize for Shown<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::{Error, SerializeMap};
+        let values = match serde_json::to_value(self.row).map_err(S::Error::custom)? {
+            serde_json::Value::Object(values) => values,
+            _ => return Err(S::Error::custom("a design row is a map")),
+        };
+        let mut m = s.serialize_map(None)?;
+        for (column, _) in self.row.text_cells() {
+            match column.as_str() {
+                "reason" => m.serialize_entry(&column, &self.row.reason)?,
+                _ => m.serialize_entry(&column, &values.get(&column))?,
+            }
+        }
+        m.serialize_entry("replay", &self.replay)?;
+        m.end()
+    }
 }
 
 /// A value with its unit (`show --design ID --json`).
