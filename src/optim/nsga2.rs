@@ -39,30 +39,31 @@ pub struct Nsga2Settings {
     pub hv_ref: Vec<f64>,
 }
 
-/// The optimiser state: what a checkpoint stores.
+/// The optimiser state: what a checkpoint stores. The serialised fields are declared in
+/// sorted order (the checkpoint is canonical JSON, written streaming: run::checkpoint_json).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "I: Serialize + DeserializeOwned")]
 pub struct Nsga2State<I> {
-    /// Current population (survivors of the last generation).
-    pub population: Vec<Individual<I>>,
-    /// Front index of each member.
-    pub rank: Vec<usize>,
     /// Crowding distance of each member.
     #[serde(with = "super::serde_f64")]
     pub crowding: Vec<f64>,
+    /// Evaluations so far.
+    pub evaluations: u64,
+    /// Number of feasible members, per generation.
+    pub feasible_history: Vec<usize>,
     /// Completed generations (1 after the initial population).
     pub generation: u64,
+    /// Normalised hypervolume of the feasible non-dominated set, per generation.
+    #[serde(with = "super::serde_f64")]
+    pub hv_history: Vec<f64>,
     /// Total generations to run.
     pub max_generations: u64,
     /// Next design id.
     pub next_id: u64,
-    /// Evaluations so far.
-    pub evaluations: u64,
-    /// Normalised hypervolume of the feasible non-dominated set, per generation.
-    #[serde(with = "super::serde_f64")]
-    pub hv_history: Vec<f64>,
-    /// Number of feasible members, per generation.
-    pub feasible_history: Vec<usize>,
+    /// Current population (survivors of the last generation).
+    pub population: Vec<Individual<I>>,
+    /// Front index of each member.
+    pub rank: Vec<usize>,
     /// Individuals evaluated in the last generation (for recorders; not checkpointed).
     #[serde(skip)]
     pub last_evaluated: Vec<Individual<I>>,
