@@ -8,7 +8,7 @@ use super::evaluator::{Batch, Evaluator, GenTiming};
 use super::operators::{polynomial_mutation, sbx, Operators};
 use super::schedule::Scheduled;
 use super::sort::{rank_and_crowding, survivors_with_attributes};
-use super::{hv::hypervolume, Individual, MooProblem};
+use super::{hv::hypervolume, Evaluated, Individual, MooProblem};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
 use rand::{Rng, SeedableRng};
@@ -336,6 +336,16 @@ impl<E> Nsga2<E> {
     }
 }
 
+/// A population member from an individual just evaluated ([`MooProblem::member_info`]).
+fn member<P: MooProblem>(p: &P, i: &Individual<P::Info>) -> Individual<P::Info> {
+    Individual {
+        id: i.id,
+        generation: i.generation,
+        x: i.x.clone(),
+        eval: Evaluated { f: i.eval.f.clone(), cv: i.eval.cv, info: p.member_info(&i.eval.info) },
+    }
+}
+
 /// Tournament candidates: concatenated random permutations of 0..n (each member takes part
 /// in about the same number of tournaments), `count` entries.
 fn permutation_candidates(rng: &mut ChaCha8Rng, n: usize, count: usize) -> Vec<usize> {
@@ -383,7 +393,8 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         state.next_id = n as u64;
         state.evaluations = n as u64;
         state.generation = 1;
-        let evaluated = pop.clone();
+        let evaluated = pop;
+        let pop: Vec<_> = evaluated.iter().map(|i| member(p, i)).collect();
         let (rank, crowd) = {
             let f: Vec<&[f64]> = pop.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = pop.iter().map(|p| p.eval.cv).collect();
@@ -446,7 +457,7 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         state.evaluations += n as u64;
         state.generation = g;
         let mut merged = std::mem::take(&mut state.population);
-        merged.extend(offspring.iter().cloned());
+        merged.extend(offspring.iter().map(|i| member(p, i)));
         let (keep, rank, crowd) = {
             let f: Vec<&[f64]> = merged.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = merged.iter().map(|p| p.eval.cv).collect();
