@@ -409,9 +409,12 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
     fn next_iter(
         &mut self,
         problem: &mut Problem<P>,
-        state: Nsga2State<P::Info>,
+        mut state: Nsga2State<P::Info>,
     ) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
         let t_start = std::time::Instant::now();
+        // the observers have had the last generation's designs: they are not kept while the
+        // next one evaluates (with a recording's trajectories they are most of the memory)
+        state.last_evaluated = Vec::new();
         let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
         let (lo, hi) = (p.lower(), p.upper());
         let s = &self.settings;
@@ -452,7 +455,6 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         }
         let (offspring, timing) = self.evaluate_all(p, xs, state.next_id, g);
         *problem.counts.entry("evaluations").or_insert(0) += n as u64;
-        let mut state = state;
         state.next_id += n as u64;
         state.evaluations += n as u64;
         state.generation = g;
