@@ -39,3 +39,40 @@ fn a_failed_checkpoint_is_reported_and_nothing_is_persisted_after_it() {
         gripopt::record::read_index(&bad.join("recording")).unwrap().iter().map(|e| e.generation).collect();
     assert_eq!(gens, vec![1, 2]);
 }
+
+/// The checkpoint as the `serde_json::Value` tree gives it (every object's keys sorted), with
+/// the content checksum of that tree: the form checkpoints had when they were built as a tree
+/// (before issue 23 item 3), computed independently of the streaming writer.
+fn checkpoint_as_a_tree(bytes: &[u8]) -> (Vec<u8>, String) {
+    let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    let stored = v.as_object_mut().unwrap().remove("sha256").unwrap();
+    let sum = gripopt::run::sha256_hex(&serde_json::to_vec(&v).unwrap());
+    assert_eq!(stored.as_str(), Some(sum.as_str()), "the stored checksum is the content's");
+    v["sha256"] = serde_json::Value::String(sum.clone());
+    (serde_json::to_vec(&v).unwrap(), sum)
+}
+
+#[test]
+fn checkpoints_are_written_streaming_with_the_bytes_of_a_sorted_tree() {
+    use gripopt::run::{Checkpoint, GripperInfo};
+    let out = tmp("streamed");
+    optimise(&spec(&out, 3, 2)).unwrap();
+    let path = out.join("checkpoint.json");
+    let bytes = std::fs::read(&path).unwrap();
+    let (tree, sum) = checkpoint_as_a_tree(&bytes);
+    assert!(bytes == tree, "the file is the tree's canonical JSON");
+    // what a run wrote comes back byte for byte from what it loads (also true of the
+    // checkpoints of the binary before streaming: GRIPOPT_OLD_CHECKPOINTS, a folder of them)
+    let mut files = vec![path];
+    if let Ok(dir) = std::env::var("GRIPOPT_OLD_CHECKPOINTS") {
+        files.extend(std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()));
+    }
+    for f in files {
+        let bytes = std::fs::read(&f).unwrap();
+        let cp = Checkpoint::<GripperInfo>::load(&f).unwrap();
+        let (again, again_sum) = cp.to_bytes_and_sha256(&f).unwrap();
+        assert!(again == bytes, "{} is rewritten byte for byte", f.display());
+        assert_eq!(again_sum, checkpoint_as_a_tree(&bytes).1);
+    }
+    assert_eq!(sum.len(), 64);
+}

@@ -102,6 +102,12 @@ pub trait MooProblem: Sync {
     fn work(&self, _e: &Evaluated<Self::Info>) -> Option<f64> {
         None
     }
+    /// What a member of the population keeps of its evaluation's info: the population
+    /// outlives the generation that evaluated it, and what only that generation's observers
+    /// use (a recording's trajectory) need not live as long. The default keeps all of it.
+    fn member_info(&self, info: &Self::Info) -> Self::Info {
+        info.clone()
+    }
     /// Number of variables.
     fn n_var(&self) -> usize {
         self.lower().len()

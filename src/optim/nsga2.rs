@@ -8,7 +8,7 @@ use super::evaluator::{Batch, Evaluator, GenTiming};
 use super::operators::{polynomial_mutation, sbx, Operators};
 use super::schedule::Scheduled;
 use super::sort::{rank_and_crowding, survivors_with_attributes};
-use super::{hv::hypervolume, Individual, MooProblem};
+use super::{hv::hypervolume, Evaluated, Individual, MooProblem};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
 use rand::{Rng, SeedableRng};
@@ -39,30 +39,31 @@ pub struct Nsga2Settings {
     pub hv_ref: Vec<f64>,
 }
 
-/// The optimiser state: what a checkpoint stores.
+/// The optimiser state: what a checkpoint stores. The serialised fields are declared in
+/// sorted order (the checkpoint is canonical JSON, written streaming: run::checkpoint_json).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "I: Serialize + DeserializeOwned")]
 pub struct Nsga2State<I> {
-    /// Current population (survivors of the last generation).
-    pub population: Vec<Individual<I>>,
-    /// Front index of each member.
-    pub rank: Vec<usize>,
     /// Crowding distance of each member.
     #[serde(with = "super::serde_f64")]
     pub crowding: Vec<f64>,
+    /// Evaluations so far.
+    pub evaluations: u64,
+    /// Number of feasible members, per generation.
+    pub feasible_history: Vec<usize>,
     /// Completed generations (1 after the initial population).
     pub generation: u64,
+    /// Normalised hypervolume of the feasible non-dominated set, per generation.
+    #[serde(with = "super::serde_f64")]
+    pub hv_history: Vec<f64>,
     /// Total generations to run.
     pub max_generations: u64,
     /// Next design id.
     pub next_id: u64,
-    /// Evaluations so far.
-    pub evaluations: u64,
-    /// Normalised hypervolume of the feasible non-dominated set, per generation.
-    #[serde(with = "super::serde_f64")]
-    pub hv_history: Vec<f64>,
-    /// Number of feasible members, per generation.
-    pub feasible_history: Vec<usize>,
+    /// Current population (survivors of the last generation).
+    pub population: Vec<Individual<I>>,
+    /// Front index of each member.
+    pub rank: Vec<usize>,
     /// Individuals evaluated in the last generation (for recorders; not checkpointed).
     #[serde(skip)]
     pub last_evaluated: Vec<Individual<I>>,
@@ -335,6 +336,16 @@ impl<E> Nsga2<E> {
     }
 }
 
+/// A population member from an individual just evaluated ([`MooProblem::member_info`]).
+fn member<P: MooProblem>(p: &P, i: &Individual<P::Info>) -> Individual<P::Info> {
+    Individual {
+        id: i.id,
+        generation: i.generation,
+        x: i.x.clone(),
+        eval: Evaluated { f: i.eval.f.clone(), cv: i.eval.cv, info: p.member_info(&i.eval.info) },
+    }
+}
+
 /// Tournament candidates: concatenated random permutations of 0..n (each member takes part
 /// in about the same number of tournaments), `count` entries.
 fn permutation_candidates(rng: &mut ChaCha8Rng, n: usize, count: usize) -> Vec<usize> {
@@ -382,7 +393,8 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         state.next_id = n as u64;
         state.evaluations = n as u64;
         state.generation = 1;
-        let evaluated = pop.clone();
+        let evaluated = pop;
+        let pop: Vec<_> = evaluated.iter().map(|i| member(p, i)).collect();
         let (rank, crowd) = {
             let f: Vec<&[f64]> = pop.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = pop.iter().map(|p| p.eval.cv).collect();
@@ -397,9 +409,12 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
     fn next_iter(
         &mut self,
         problem: &mut Problem<P>,
-        state: Nsga2State<P::Info>,
+        mut state: Nsga2State<P::Info>,
     ) -> Result<(Nsga2State<P::Info>, Option<KV>), Error> {
         let t_start = std::time::Instant::now();
+        // the observers have had the last generation's designs: they are not kept while the
+        // next one evaluates (with a recording's trajectories they are most of the memory)
+        state.last_evaluated = Vec::new();
         let p = problem.problem.as_ref().ok_or_else(|| Error::msg("no problem"))?;
         let (lo, hi) = (p.lower(), p.upper());
         let s = &self.settings;
@@ -440,12 +455,11 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         }
         let (offspring, timing) = self.evaluate_all(p, xs, state.next_id, g);
         *problem.counts.entry("evaluations").or_insert(0) += n as u64;
-        let mut state = state;
         state.next_id += n as u64;
         state.evaluations += n as u64;
         state.generation = g;
         let mut merged = std::mem::take(&mut state.population);
-        merged.extend(offspring.iter().cloned());
+        merged.extend(offspring.iter().map(|i| member(p, i)));
         let (keep, rank, crowd) = {
             let f: Vec<&[f64]> = merged.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = merged.iter().map(|p| p.eval.cv).collect();

@@ -15,18 +15,19 @@ use crate::optim::{hypervolume, pareto_ranks, Individual, Nsga2Settings, Nsga2St
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 
 /// Feasible non-dominated designs of a whole run, the hypervolume per generation, and the
-/// discard causes.
+/// discard causes. Its fields are declared in sorted order (it is written streaming into the
+/// checkpoint's canonical JSON: checkpoint_json).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "I: Serialize + DeserializeOwned")]
 pub struct Archive<I = GripperInfo> {
-    /// Members, sorted by id.
-    pub members: Vec<Individual<I>>,
-    /// Normalised hypervolume of the archive after each generation (index 0 = generation 1).
-    #[serde(serialize_with = "crate::optim::serialize", deserialize_with = "crate::optim::deserialize")]
-    pub hv_history: Vec<f64>,
     /// Every design evaluated, counted by what discarded it.
     #[serde(default)]
     pub discards: Discards,
+    /// Normalised hypervolume of the archive after each generation (index 0 = generation 1).
+    #[serde(serialize_with = "crate::optim::serialize", deserialize_with = "crate::optim::deserialize")]
+    pub hv_history: Vec<f64>,
+    /// Members, sorted by id.
+    pub members: Vec<Individual<I>>,
 }
 
 impl<I> Default for Archive<I> {

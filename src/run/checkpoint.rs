@@ -5,6 +5,7 @@
 //! that a hand-edited or damaged checkpoint is refused (unless forced).
 
 use super::archive::Archive;
+use super::checkpoint_json::{self, Canonical};
 use crate::fsutil::write_atomic;
 use crate::optim::{Nsga2Settings, Nsga2State};
 use crate::{Error, Result};
@@ -26,33 +27,34 @@ pub struct ChecksumMismatch {
     pub computed: String,
 }
 
-/// A checkpoint file.
+/// A checkpoint file. Its fields are declared in sorted order: the file is canonical JSON
+/// (every object's keys sorted) written streaming ([`Checkpoint::to_bytes_and_sha256`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "I: Serialize + DeserializeOwned")]
 pub struct Checkpoint<I> {
-    /// Always [`FORMAT`].
-    pub format: String,
-    /// Always [`VERSION`].
-    pub version: u32,
-    /// SHA-256 of the problem file's text.
-    pub problem_hash: String,
-    /// SHA-256 of the canonical JSON of the settings (and run options).
-    pub settings_hash: String,
-    /// Algorithm settings.
-    pub settings: Nsga2Settings,
-    /// Run options that change the outcome besides the algorithm settings.
-    pub options: serde_json::Value,
-    /// Optimiser state after the last completed generation.
-    pub state: Nsga2State<I>,
-    /// Wall time spent so far (s).
-    pub wall_s: f64,
-    /// The run that wrote it (run.json's `run_id`).
-    #[serde(default)]
-    pub run_id: String,
     /// The run's archive after the same generation (None: written without one, e.g. by a
     /// benchmark).
     #[serde(default)]
     pub archive: Option<Archive<I>>,
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Run options that change the outcome besides the algorithm settings.
+    pub options: serde_json::Value,
+    /// SHA-256 of the problem file's text.
+    pub problem_hash: String,
+    /// The run that wrote it (run.json's `run_id`).
+    #[serde(default)]
+    pub run_id: String,
+    /// Algorithm settings.
+    pub settings: Nsga2Settings,
+    /// SHA-256 of the canonical JSON of the settings (and run options).
+    pub settings_hash: String,
+    /// Optimiser state after the last completed generation.
+    pub state: Nsga2State<I>,
+    /// Always [`VERSION`].
+    pub version: u32,
+    /// Wall time spent so far (s).
+    pub wall_s: f64,
 }
 
 impl ChecksumMismatch {
@@ -69,10 +71,14 @@ impl ChecksumMismatch {
 pub use crate::fsutil::sha256_hex;
 
 /// SHA-256 of the canonical JSON (keys sorted, shortest round-trip numbers) of a checkpoint
-/// without its `sha256` field.
+/// read as a tree, without its `sha256` field (streamed into the hash).
 fn content_sha256(v: &serde_json::Value) -> serde_json::Result<String> {
-    Ok(sha256_hex(&serde_json::to_vec(v)?))
+    Ok(checkpoint_json::sha256_of(v, &[])?.0)
 }
+
+/// The structs of a checkpoint whose fields are declared in sorted order: written through,
+/// never buffered (the large ones: the state with its population, the archive).
+const SORTED_STRUCTS: &[&str] = &["Checkpoint", "Nsga2State", "Archive"];
 
 fn short(s: &str) -> &str {
     &s[..s.len().min(12)]
@@ -128,10 +134,12 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     /// The file's bytes and its content checksum (its field `sha256`; errors name `path`).
     pub fn to_bytes_and_sha256(&self, path: &Path) -> Result<(Vec<u8>, String)> {
         let ser = |source| Error::Json { path: path.to_path_buf(), what: "cannot serialise the checkpoint", source };
-        let mut v = serde_json::to_value(self).map_err(ser)?;
-        let sum = content_sha256(&v).map_err(ser)?;
-        v["sha256"] = serde_json::Value::String(sum.clone());
-        Ok((serde_json::to_vec(&v).map_err(ser)?, sum))
+        // streamed twice, never as a tree: the content into its hash, then the file's bytes
+        // with the hash at its sorted place (`,"sha256":"…"`)
+        let (sum, len) = checkpoint_json::sha256_of(self, SORTED_STRUCTS).map_err(ser)?;
+        let mut c = Canonical::new(Vec::with_capacity(len + 12 + sum.len()), SORTED_STRUCTS).with_field("sha256", &sum);
+        self.serialize(&mut c).map_err(ser)?;
+        Ok((c.into_inner(), sum))
     }
 
     /// Load, check the format and the content checksum (a mismatch is an error).

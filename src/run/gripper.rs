@@ -10,26 +10,42 @@ use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, KeptTrajectory, RecordOptions, Recordable};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 pub use crate::record::TrajectoryKeep;
 
 /// What is kept of each evaluated design: its record, and (not deterministic) its timings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GripperInfo {
-    /// The evaluation's record (every output of the design is derived from it).
-    pub record: Record,
+    /// The evaluation's record (every output of the design is derived from it), shared: an
+    /// individual is copied into the population, the archive and the persister's hand-over
+    /// of each generation, its record never (a record is ~1.5 KB; issue 23 item 3).
+    #[serde(with = "shared_record")]
+    pub record: Arc<Record>,
     /// Wall time per stage (s): [unused, stages 0–1, stage 2, stage 3]. Not deterministic.
     pub stage_seconds: [f64; 4],
     /// What the recording uses of the stage-3 trajectory, reduced right after the
     /// evaluation and kept only until the recorder has written it (never checkpointed).
     #[serde(skip)]
-    pub trajectory: Option<std::sync::Arc<KeptTrajectory>>,
+    pub trajectory: Option<Arc<KeptTrajectory>>,
+}
+
+/// Serde of the shared record: as the record itself.
+mod shared_record {
+    use super::{Arc, Record};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+    pub fn serialize<S: Serializer>(r: &Arc<Record>, s: S) -> Result<S::Ok, S::Error> {
+        r.as_ref().serialize(s)
+    }
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Arc<Record>, D::Error> {
+        Record::deserialize(d).map(Arc::new)
+    }
 }
 
 impl GripperInfo {
     /// From a pipeline evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
-        GripperInfo { record: Record::from_eval(ev), stage_seconds: ev.stage_seconds, trajectory: None }
+        GripperInfo { record: Arc::new(Record::from_eval(ev)), stage_seconds: ev.stage_seconds, trajectory: None }
     }
 }
 
@@ -101,7 +117,7 @@ impl GripperProblem {
         let o = record.objectives();
         let ph = self.placeholders();
         let f = (0..4).map(|k| o[k].map(|v| if k == 0 || k == 2 { -v } else { v }).unwrap_or(ph[k])).collect();
-        Evaluated { f, cv, info: GripperInfo { record, stage_seconds: seconds, trajectory: None } }
+        Evaluated { f, cv, info: GripperInfo { record: Arc::new(record), stage_seconds: seconds, trajectory: None } }
     }
 
     /// The finite placeholders of MODEL.md §10 for missing objectives (minimisation form).
@@ -207,12 +223,17 @@ impl MooProblem for GripperProblem {
             Some(d) => Infeasibility { stages_short: 4 - d.stage, violation: d.violation },
         };
         let mut info = GripperInfo::from_eval(&ev);
-        info.trajectory = traj.map(std::sync::Arc::new);
+        info.trajectory = traj.map(Arc::new);
         Evaluated { f: self.minimisation_objectives(&ev), cv, info }
     }
     /// The simulations' right-hand-side evaluations (deterministic; proportional to their
     /// time within a few per cent): the centred scene's, plus for a free-kind problem the
     /// free scene's weighted by `FREE_RHS_WEIGHT`.
+    /// A member of the population keeps its record (shared) and timings, not the recording's
+    /// trajectory: that waits in the generation's evaluated designs until its shard is written.
+    fn member_info(&self, info: &GripperInfo) -> GripperInfo {
+        GripperInfo { record: info.record.clone(), stage_seconds: info.stage_seconds, trajectory: None }
+    }
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
         let r = &e.info.record;
         if let Some(rb) = &r.robust {

@@ -8,6 +8,7 @@
 
 mod archive;
 mod checkpoint;
+mod checkpoint_json;
 mod contents;
 mod folder;
 mod grasp_plot;

@@ -12,7 +12,9 @@
 //! folder is still the one the run locked ([`PersistHooks::guard`]).
 //!
 //! Bounded memory (backpressure): one generation queued for the thread, and at most the
-//! pool's threads + 1 generations handed over but not yet committed. The CSV views are
+//! pool's threads + 1 generations handed over but not yet committed; a generation handed
+//! over shares its designs' records and trajectories with the optimiser, and its checkpoint
+//! waits as its bytes, serialised streaming (never as a JSON tree). The CSV views are
 //! rewritten at most every [`VIEWS_MIN_INTERVAL`], and not when the next generation is
 //! already queued (a later one rewrites them; the archive is still updated), so a persister
 //! that falls behind catches up instead of writing views nobody reads; every generation's
@@ -243,6 +245,8 @@ impl Persister {
     }
 
     /// Hand generation `st.generation` over (blocks while one generation is already queued).
+    /// The copy of the state shares each design's record and trajectory (`Arc`): about 200
+    /// bytes a design, and the trajectories are freed once the shard is written.
     fn submit(&self, st: &Nsga2State<GripperInfo>) -> Result<()> {
         let (m, cv) = &*self.shared;
         if let Some(e) = m.lock().expect("persister lock").error.take() {

@@ -415,7 +415,12 @@ fn drive(
     let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
     let mut solver = Nsga2::with_evaluator(settings, evaluator);
     solver.stop = hooks.stop;
-    let result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));
+    let mut result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));
+    if let Ok((_, st)) = &mut result {
+        // the persister has the last generation's designs (with their trajectories) until
+        // its shard is written; the final outputs need only the population and archive
+        st.last_evaluated = Vec::new();
+    }
     // on success every output of the final state is written below: the persister need
     // not write the last views too
     let ok = result.is_ok();
