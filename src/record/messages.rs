@@ -96,7 +96,7 @@ pub fn series(
     };
     if kept.is_empty() {
         m.t.push(0.0);
-        for c in columns_mut(&mut m) {
+        for c in m.value_columns_mut() {
             c.push(f64::NAN);
         }
         return m;
@@ -124,28 +124,6 @@ pub fn series(
         m.mean_force_objective.push(f_tilde);
     }
     m
-}
-
-/// Every value column of a series (all but `t`).
-fn columns_mut(m: &mut GraspSeries) -> [&mut Vec<f64>; 16] {
-    [
-        &mut m.q11,
-        &mut m.q21,
-        &mut m.q11_dot,
-        &mut m.q21_dot,
-        &mut m.theta2,
-        &mut m.proximal_penetration,
-        &mut m.distal_penetration,
-        &mut m.proximal_normal_force,
-        &mut m.distal_normal_force,
-        &mut m.proximal_friction_force,
-        &mut m.distal_friction_force,
-        &mut m.hand_force,
-        &mut m.filtered_hand_force,
-        &mut m.energy,
-        &mut m.energy_excess,
-        &mut m.mean_force_objective,
-    ]
 }
 
 /// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in
