@@ -4,7 +4,7 @@
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
-use super::schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
+use super::schema::{Derived, DesignMessage, DesignParameters, StageSeconds, Window};
 use crate::sim::Sample;
 
 pub use super::scene::{
@@ -27,7 +27,6 @@ pub fn log_time(t0_ns: u64, t: f64) -> u64 {
 pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> DesignMessage {
     let r = i.record;
     let v = &r.verdict;
-    let o = r.objectives();
     let l = r.lengths();
     DesignMessage {
         id: i.id,
@@ -49,9 +48,8 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         failed_stage: v.failed_stage,
         reason: v.reason.clone(),
         violation: v.violation,
-        // MODEL.md §6.7: a design not form closed at 0 carries max_offset = −Δ_off inside the
-        // optimiser; the record says form_closed = false and leaves max_offset out (as the CSVs)
-        objectives: Objectives { max_offset: o[0].filter(|m| *m >= 0.0), alpha: o[1], mean_force: o[2], t_stab: o[3] },
+        // a design not form closed: form_closed = false, max_offset left out (as the CSVs)
+        objectives: r.reported_objectives(),
         stage_seconds: StageSeconds {
             stages_0_1: i.stage_seconds[1],
             stage_2: i.stage_seconds[2],

@@ -6,6 +6,7 @@
 //! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
 use crate::eval::FreeSceneRecord;
+pub use crate::eval::Objectives;
 pub use crate::params::DesignParameters;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -31,20 +32,6 @@ pub struct Derived {
     pub l22: Option<f64>,
     /// l_hand.
     pub l_hand: f64,
-}
-
-/// Objectives in their natural sense (max_offset only when form closed).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Objectives {
-    /// m.
-    pub max_offset: Option<f64>,
-    /// Force isotropy.
-    pub alpha: Option<f64>,
-    /// N.
-    pub mean_force: Option<f64>,
-    /// s.
-    pub t_stab: Option<f64>,
 }
 
 /// Wall seconds per stage.
@@ -89,7 +76,7 @@ pub struct DesignMessage {
     pub reason: Option<String>,
     /// By how much.
     pub violation: Option<f64>,
-    /// Objectives.
+    /// Objectives (max_offset only when form closed).
     pub objectives: Objectives,
     /// Timings.
     pub stage_seconds: StageSeconds,

@@ -135,7 +135,8 @@ impl DesignRow {
         let r = &ind.eval.info.record;
         let v = &r.verdict;
         let l = r.lengths();
-        let o = r.objectives();
+        // a design not form closed: form_closed = false, max_offset empty (MODEL.md §6.7)
+        let o = r.reported_objectives();
         let w = r.sim_work();
         DesignRow {
             id: ind.id,
@@ -150,14 +151,11 @@ impl DesignRow {
             l12: l.map(|l| l[1]),
             l22: l.map(|l| l[2]),
             l_hand: r.kinematics.l_hand,
-            // MODEL.md §6.7: a design not form closed at 0 has max_offset = −Δ_off internally
-            // (the optimiser's finite placeholder); the file says form_closed = false and
-            // leaves it empty
             form_closed: r.form_closed(),
-            max_offset: o[0].filter(|m| *m >= 0.0),
-            alpha: o[1],
-            mean_force: o[2],
-            t_stab: o[3],
+            max_offset: o.max_offset,
+            alpha: o.alpha,
+            mean_force: o.mean_force,
+            t_stab: o.t_stab,
             sim_steps: w.map(|w| w[0]),
             sim_rhs_evals: w.map(|w| w[1]),
             force_model: r.statics.force_model,
