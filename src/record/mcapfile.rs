@@ -46,6 +46,19 @@ pub(super) fn add_foxglove_schema(w: &mut MemWriter, schema: Option<foxglove::Sc
     w.add_schema(&s.name, &s.encoding, &s.data).map_err(error(tmp))
 }
 
+/// Add a channel for each of `topics`, with the (schema id, message encoding) of the same
+/// index in `schemas`, in order; their channel ids.
+pub(super) fn add_channels(
+    w: &mut MemWriter,
+    topics: &[&str],
+    schemas: &[(u16, &str)],
+    tmp: &Path,
+) -> Result<Vec<u16>> {
+    let none = std::collections::BTreeMap::new();
+    let add = |(topic, (schema, encoding)): (&&str, &(u16, &str))| w.add_channel(*schema, topic, encoding, &none);
+    topics.iter().zip(schemas).map(add).collect::<std::result::Result<_, _>>().map_err(error(tmp))
+}
+
 /// Write every design's messages — (index into `channels`, log time, bytes) — in order,
 /// numbered per channel, each design closing its chunk.
 pub(super) fn write_designs<D, M>(w: &mut MemWriter, channels: &[u16], designs: D, tmp: &Path) -> Result<()>

@@ -9,7 +9,7 @@
 //! `hand` → `object` following the free object's pose), `/scene/static` (ground, palm, the
 //! bottle in the frame `object`, a label) and `/scene` (both fingers). See docs/recording.md.
 
-use super::mcapfile::{add_foxglove_schema, add_json_schema, write_designs};
+use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
@@ -331,7 +331,6 @@ pub fn write_verify(
     meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into());
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
-    let none = BTreeMap::new();
     let verify_schema = add_json_schema(&mut w, "gripopt.Verify", &verify_schema(), &tmp)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
@@ -343,10 +342,7 @@ pub fn write_verify(
         (scene_schema, "protobuf"),
         (series_schema, "json"),
     ];
-    let mut chans = [0u16; 5];
-    for (k, topic) in TOPICS.iter().enumerate() {
-        chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
-    }
+    let chans = add_channels(&mut w, &TOPICS, &schema_of, &tmp)?;
     let designs = entries.iter().enumerate().map(|(k, e)| encode(k as u64, e, problem, opts));
     write_designs(&mut w, &chans, designs, &tmp)?;
     super::mcapfile::finish(w, &tmp, path)

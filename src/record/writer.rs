@@ -2,7 +2,7 @@
 
 use super::entry::{DesignEntry, Recordable};
 use super::index::{write_index, ShardEntry};
-use super::mcapfile::{add_foxglove_schema, add_json_schema, write_designs};
+use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::{messages, proto, schema, RecordOptions};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
@@ -72,7 +72,6 @@ pub fn write_shard<R: Recordable>(
     );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
-    let none = BTreeMap::new();
     let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(), &tmp)?;
     let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
@@ -84,13 +83,10 @@ pub fn write_shard<R: Recordable>(
         (scene_schema, "protobuf"),
         (scene_schema, "protobuf"),
     ];
-    let mut chans = [0u16; 5];
-    for (k, topic) in TOPICS.iter().enumerate() {
-        if k >= Ch::Tf as usize && opts.scene_dt <= 0.0 {
-            continue;
-        }
-        chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
-    }
+    // without scene frames, no channels for them (their ids stay 0: no messages)
+    let topics = if opts.scene_dt <= 0.0 { &TOPICS[..Ch::Tf as usize] } else { &TOPICS[..] };
+    let mut chans = add_channels(&mut w, topics, &schema_of, &tmp)?;
+    chans.resize(TOPICS.len(), 0);
     // encode every design's messages in parallel, then write them in order
     let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> =
         designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
