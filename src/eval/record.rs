@@ -80,6 +80,21 @@ impl Objectives {
     }
 }
 
+/// The derived lengths (m) as the outputs report them: l11, l12, l22 when stages 0–1 built
+/// the finger, and l_hand.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Derived {
+    /// l11.
+    pub l11: Option<f64>,
+    /// l12.
+    pub l12: Option<f64>,
+    /// l22.
+    pub l22: Option<f64>,
+    /// l_hand.
+    pub l_hand: f64,
+}
+
 /// Stages 0–1: the finger built from the design (every value computed before a discard).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -317,6 +332,11 @@ impl Record {
         let k = &self.kinematics;
         let built = self.verdict.failed_stage.is_none_or(|s| s >= 2);
         built.then_some([k.l11?, k.l12?, k.l22?])
+    }
+    /// The derived lengths as the outputs report them ([`Record::lengths`], l_hand).
+    pub fn derived(&self) -> Derived {
+        let l = self.lengths();
+        Derived { l11: l.map(|l| l[0]), l12: l.map(|l| l[1]), l22: l.map(|l| l[2]), l_hand: self.kinematics.l_hand }
     }
     /// Stage 3's grasp work: accepted steps and right-hand-side evaluations.
     /// For a robust design: all its simulations' (centred and free, every scenario run).

@@ -4,7 +4,7 @@
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
-use super::schema::{Derived, DesignMessage, DesignParameters, StageSeconds, Window};
+use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
 use crate::sim::Sample;
 
 pub use super::scene::{
@@ -27,7 +27,6 @@ pub fn log_time(t0_ns: u64, t: f64) -> u64 {
 pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> DesignMessage {
     let r = i.record;
     let v = &r.verdict;
-    let l = r.lengths();
     DesignMessage {
         id: i.id,
         generation: i.generation,
@@ -36,12 +35,7 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         window_start_s: i.id as f64,
         epoch_s,
         parameters: DesignParameters::from_array(&i.parameters),
-        derived: Derived {
-            l11: l.map(|l| l[0]),
-            l12: l.map(|l| l[1]),
-            l22: l.map(|l| l[2]),
-            l_hand: r.kinematics.l_hand,
-        },
+        derived: r.derived(),
         stages_passed: v.failed_stage.unwrap_or(4),
         feasible: v.failed_stage.is_none(),
         form_closed: r.form_closed(),

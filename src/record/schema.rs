@@ -6,7 +6,7 @@
 //! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
 use crate::eval::FreeSceneRecord;
-pub use crate::eval::Objectives;
+pub use crate::eval::{Derived, Objectives};
 pub use crate::params::DesignParameters;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -18,20 +18,6 @@ pub struct Window {
     pub sec: u64,
     /// Nanoseconds.
     pub nsec: u64,
-}
-
-/// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Derived {
-    /// l11.
-    pub l11: Option<f64>,
-    /// l12.
-    pub l12: Option<f64>,
-    /// l22.
-    pub l22: Option<f64>,
-    /// l_hand.
-    pub l_hand: f64,
 }
 
 /// Wall seconds per stage.

@@ -134,7 +134,7 @@ impl DesignRow {
     pub fn of(ind: &Individual<GripperInfo>, rank: Option<usize>) -> Self {
         let r = &ind.eval.info.record;
         let v = &r.verdict;
-        let l = r.lengths();
+        let d = r.derived();
         // a design not form closed: form_closed = false, max_offset empty (MODEL.md §6.7)
         let o = r.reported_objectives();
         let w = r.sim_work();
@@ -147,10 +147,10 @@ impl DesignRow {
             violation: v.violation,
             reason: v.reason.clone(),
             design: DesignParameters::from_array(ind.x.as_slice().try_into().expect("six design variables")),
-            l11: l.map(|l| l[0]),
-            l12: l.map(|l| l[1]),
-            l22: l.map(|l| l[2]),
-            l_hand: r.kinematics.l_hand,
+            l11: d.l11,
+            l12: d.l12,
+            l22: d.l22,
+            l_hand: d.l_hand,
             form_closed: r.form_closed(),
             max_offset: o.max_offset,
             alpha: o.alpha,
