@@ -111,27 +111,26 @@ fn obj(props: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": props, "required": required})
 }
 
-/// The JSON type of every key of the free scene's record.
+/// The JSON type of every key of the free scene's record, asked of the record type itself:
+/// the key set to 0.5, 1, true or [0.5, 0.5] in turn, the first value the type reads is the
+/// key's type (a number, a count, a boolean, an array of numbers; text otherwise).
 fn free_scene_properties() -> Value {
-    // a record with every value set gives every key with its JSON type
-    let full = FreeSceneRecord::full_example();
-    let v = serde_json::to_value(full).expect("records serialise");
-    let props: serde_json::Map<String, Value> = v
-        .as_object()
-        .expect("an object")
-        .iter()
-        .map(|(k, x)| {
-            let t = match x {
-                Value::Bool(_) => json!({"type": "boolean"}),
-                Value::String(_) => json!({"type": "string"}),
-                Value::Number(n) if n.is_u64() => int(),
-                Value::Array(_) => json!({"type": "array", "items": num()}),
-                _ => num(),
-            };
-            (k.clone(), t)
-        })
-        .collect();
-    Value::Object(props)
+    let keys = serde_json::to_value(FreeSceneRecord::default()).expect("records serialise");
+    let reads = |k: &str, v: Value| serde_json::from_value::<FreeSceneRecord>(json!({ k: v })).is_ok();
+    let type_of = |k: &str| {
+        if reads(k, json!(0.5)) {
+            num()
+        } else if reads(k, json!(1)) {
+            int()
+        } else if reads(k, json!(true)) {
+            json!({"type": "boolean"})
+        } else if reads(k, json!([0.5, 0.5])) {
+            json!({"type": "array", "items": num()})
+        } else {
+            json!({"type": "string"})
+        }
+    };
+    keys.as_object().expect("an object").keys().map(|k| (k.clone(), type_of(k))).collect()
 }
 
 /// The robust sub-record (issue 22): one type per key, arrays with typed items.
