@@ -4,8 +4,8 @@
 //! scene (flat keys in JSON, snake_case; `null` = not computed), enums where a value is
 //! one of a set (the scene, how a simulation ended, what discarded the design).
 
+use super::objectives::Objectives;
 use super::record_robust::RobustRecord;
-use super::reported::{Derived, Objectives};
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
 use super::stages::{Cause, Evaluation, PartialGrasp, Reason, StaticsResult};
 use crate::model::SweepFailure;
@@ -47,6 +47,21 @@ pub struct Record {
     /// scenario what happened (absent for a single-object problem).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustRecord>,
+}
+
+/// The derived lengths (m) as the outputs report them: l11, l12, l22 when stages 0–1 built
+/// the finger, and l_hand.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Derived {
+    /// l11.
+    pub l11: Option<f64>,
+    /// l12.
+    pub l12: Option<f64>,
+    /// l22.
+    pub l22: Option<f64>,
+    /// l_hand.
+    pub l_hand: f64,
 }
 
 /// Stages 0–1: the finger built from the design (every value computed before a discard).

@@ -3,7 +3,7 @@
 //! aggregates, and per scenario a compact record (which scenario, its drawn inputs, the
 //! outcome) — enough to replay a failing scenario.
 
-use super::reported::Objectives;
+use super::objectives::Objectives;
 use super::scene_record::fin;
 use super::stages::{Cause, Evaluation};
 use crate::params::Scenario;

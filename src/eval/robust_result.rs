@@ -4,9 +4,9 @@
 //! one design of any problem, robust or not.
 
 use super::binomial::clopper_pearson;
+use super::objectives::Objectives;
 use super::record::{Record, Verdict};
 use super::record_robust::{ObjectRecord, RobustRecord, ScenarioRecord};
-use super::reported::Objectives;
 use super::robust::{evaluate_sequential, RobustSetup, RobustStart};
 use super::scene_record::fin;
 use super::stage3::evaluate;

@@ -1,6 +1,6 @@
-//! The shapes in which every output reports a design's objectives and derived lengths
-//! (the run's CSV rows, `/designs`, the robust record's aggregated and per-object
-//! objectives), taken from the evaluation [`Record`](super::Record).
+//! The four objectives as every output reports them: the run's CSV rows, `/designs`, a
+//! design's [`Record`](super::Record) and the robust record's aggregated and per-object
+//! objectives.
 
 use serde::{Deserialize, Serialize};
 
@@ -34,19 +34,4 @@ impl Objectives {
     pub fn reported(self) -> Self {
         Objectives { max_offset: self.max_offset.filter(|m| *m >= 0.0), ..self }
     }
-}
-
-/// The derived lengths (m) as the outputs report them: l11, l12, l22 when stages 0–1 built
-/// the finger, and l_hand.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Derived {
-    /// l11.
-    pub l11: Option<f64>,
-    /// l12.
-    pub l12: Option<f64>,
-    /// l22.
-    pub l22: Option<f64>,
-    /// l_hand.
-    pub l_hand: f64,
 }
