@@ -14,10 +14,11 @@ use gripopt::sim::SIMULATOR_REVISION;
 use gripopt::RunFolder;
 use std::path::{Path, PathBuf};
 
-/// A copy of fixture `name` under target/ (replay reads; the copy keeps the fixture clean).
-fn copy(name: &str) -> PathBuf {
+/// A copy of fixture `name` under target/ for the test `test` (replay reads; the copy keeps
+/// the fixture clean; one folder per test, as the tests run at the same time).
+fn copy(test: &str, name: &str) -> PathBuf {
     let from = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/recorded-5d2a08e")).join(name);
-    let to = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/recorded-5d2a08e")).join(name);
+    let to = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/recorded-5d2a08e")).join(test).join(name);
     let _ = std::fs::remove_dir_all(&to);
     std::fs::create_dir_all(to.join("recording")).unwrap();
     for dir in ["", "recording"] {
@@ -79,7 +80,7 @@ fn agrees_across_simulators(r: &gripopt::Replay) -> Result<(), String> {
 fn designs_recorded_by_5d2a08e_replay_and_verify() {
     let mut full = 0;
     for name in ["centred", "free", "full"] {
-        let dir = copy(name);
+        let dir = copy("replay_and_verify", name);
         let run = RunFolder::open(&dir).unwrap();
         let ids: Vec<u64> =
             read_index(&dir.join("recording")).unwrap().iter().flat_map(|e| e.first_id..=e.last_id).collect();
@@ -114,7 +115,7 @@ fn designs_recorded_by_5d2a08e_replay_and_verify() {
 /// tolerance is not verified: an objective moved by 1 %, or the verdict changed.
 #[test]
 fn a_design_moved_beyond_the_tolerance_is_not_verified_across_revisions() {
-    let dir = copy("centred");
+    let dir = copy("moved", "centred");
     let run = RunFolder::open(&dir).unwrap();
     let ids =
         read_index(&dir.join("recording")).unwrap().iter().flat_map(|e| e.first_id..=e.last_id).collect::<Vec<_>>();
@@ -140,7 +141,7 @@ fn a_design_moved_beyond_the_tolerance_is_not_verified_across_revisions() {
 /// a design of a run recorded now carries this build's revision and verifies bit for bit.
 #[test]
 fn replay_cli_reports_a_recording_by_another_revision() {
-    let dir = copy("full");
+    let dir = copy("replay_cli", "full");
     let run = RunFolder::open(&dir).unwrap();
     let id = read_index(&dir.join("recording"))
         .unwrap()

@@ -65,7 +65,7 @@ fn aggregations_match_hand_computed_values() {
     let p = robust_problem();
     let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p), None);
     let rb = rec.robust.as_ref().unwrap();
-    let (b, c) = (&rb.objects[0], &rb.objects[1]);
+    let (b, c) = (&rb.objects[0].objectives, &rb.objects[1].objectives);
     let o = rb.objectives;
     // max_offset worst = the smaller, mean_force worst = the smaller, alpha mean
     assert_eq!(o.max_offset.unwrap(), b.max_offset.unwrap().min(c.max_offset.unwrap()));
@@ -81,6 +81,7 @@ fn aggregations_match_hand_computed_values() {
     assert_eq!(b.mean_force.unwrap(), single.statics.unwrap().mean_force);
     // P(stay) is the fraction of the object's scenarios that stayed
     let stays = rb.scenarios.iter().filter(|s| s.object == 0 && s.stays).count();
+    let b = &rb.objects[0];
     assert_eq!(b.stays, stays);
     assert_eq!(b.p_stay.unwrap(), stays as f64 / b.scenarios as f64);
 }

@@ -40,7 +40,19 @@ def evaluate_batch(
     first_id: int = 0,
 ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """:func:`evaluate` with the minimised objectives (n, 4) and gripopt's constrained
-    domination key (n, 2) as well (what :class:`gripopt.pymoo.GripperProblem` needs)."""
+    domination key (n, 2) as well (what :class:`gripopt.pymoo.GripperProblem` needs).
+
+    Args:
+        client: the Dask client.
+        problem: the problem.
+        designs: as for :meth:`gripopt.Problem.evaluate` (a DataFrame with the six design
+            columns, whose index is kept, or an (n, 6) array).
+        static_only: stages 0–2 only.
+        chunk_size: designs per task (a few seconds of work each is a good size: ~1 000
+            designs with the grasp simulation, ~100 000 static only).
+        threads: threads per task (None: all the worker's cores).
+        first_id: the first design's id.
+    """
     d = design_frame(designs)
     x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
     if chunk_size < 1:
@@ -61,31 +73,11 @@ def evaluate_batch(
     return rows, f, key
 
 
-def evaluate(
-    client: Any,
-    problem: Problem,
-    designs: Designs,
-    *,
-    static_only: bool = False,
-    chunk_size: int = 1000,
-    threads: Optional[int] = None,
-    first_id: int = 0,
-) -> pd.DataFrame:
+def evaluate(client: Any, problem: Problem, designs: Designs, **options: Any) -> pd.DataFrame:
     """Evaluate ``designs`` on the cluster of ``client`` (a ``dask.distributed.Client``):
-    the DataFrame :meth:`gripopt.Problem.evaluate` would give, identical to it.
-
-    Args:
-        client: the Dask client.
-        problem: the problem.
-        designs: as for :meth:`gripopt.Problem.evaluate` (a DataFrame with the six design
-            columns, whose index is kept, or an (n, 6) array).
-        static_only: stages 0–2 only.
-        chunk_size: designs per task (a few seconds of work each is a good size: ~1 000
-            designs with the grasp simulation, ~100 000 static only).
-        threads: threads per task (None: all the worker's cores).
-        first_id: the first design's id.
+    the DataFrame :meth:`gripopt.Problem.evaluate` would give, identical to it. The
+    arguments and the keyword options (``static_only``, ``chunk_size``, ``threads``,
+    ``first_id``) are :func:`evaluate_batch`'s.
     """
-    rows, _, _ = evaluate_batch(
-        client, problem, designs, static_only=static_only, chunk_size=chunk_size, threads=threads, first_id=first_id
-    )
+    rows, _, _ = evaluate_batch(client, problem, designs, **options)
     return rows

@@ -18,21 +18,25 @@ class GripoptError(Exception):
         message: gripopt's message (names the file and the field).
         path: the file or folder the error is about, where there is one.
         field: the field of a problem file (e.g. ``object.radius``), where there is one.
-        exit_code: the ``gripopt`` command's exit code for this error (2 bad input, 1 failure).
+        exit_code: the ``gripopt`` command's exit code for this error (2 bad input, 1 failure;
+            when not given, the class's ``default_exit_code``).
     """
+
+    #: The exit code of an error of this class raised without one (1: a failure).
+    default_exit_code = 1
 
     def __init__(
         self,
         message: str,
         path: Optional[str] = None,
         field: Optional[str] = None,
-        exit_code: int = 1,
+        exit_code: Optional[int] = None,
     ) -> None:
         super().__init__(message)
         self.message = message
         self.path = path
         self.field = field
-        self.exit_code = exit_code
+        self.exit_code = self.default_exit_code if exit_code is None else exit_code
 
     def __reduce__(self) -> tuple[Any, ...]:
         # keep the attributes through pickling (errors come back from Dask workers so)
@@ -43,14 +47,7 @@ class InputError(GripoptError, ValueError):
     """Bad input: a problem file, a design, an argument, a folder that cannot be used as
     asked (the command line's exit code 2)."""
 
-    def __init__(
-        self,
-        message: str,
-        path: Optional[str] = None,
-        field: Optional[str] = None,
-        exit_code: int = 2,
-    ) -> None:
-        super().__init__(message, path, field, exit_code)
+    default_exit_code = 2
 
 
 class ProblemError(InputError):

@@ -4,9 +4,11 @@
 //! scene; and the one typed record of an evaluation. Above `sim`, below `optim`/`record`/`run`.
 //!
 //! Files: `stages` (stages 0–2, [`Evaluation`], [`Reason`], [`Cause`]) ← `stage3` (stage
-//! 3, [`evaluate`], [`simulate`]); `record` ([`Record`]) ← `scene_record` (its stage-3 parts).
+//! 3, [`evaluate`], [`simulate`]); `record` ([`Record`]) ← `scene_record` (its stage-3
+//! parts), `objectives` ([`Objectives`], as every output reports them).
 
 mod binomial;
+mod objectives;
 mod record;
 mod record_robust;
 mod robust;
@@ -16,8 +18,9 @@ mod stage3;
 mod stages;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
-pub use record::{KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
-pub use record_robust::{robust_summary, ObjectRecord, RobustObjectives, RobustRecord, ScenarioInputs, ScenarioRecord};
+pub use objectives::Objectives;
+pub use record::{Derived, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord};
 pub use robust::{
     evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,
 };

@@ -4,6 +4,7 @@
 //! scene (flat keys in JSON, snake_case; `null` = not computed), enums where a value is
 //! one of a set (the scene, how a simulation ended, what discarded the design).
 
+use super::objectives::Objectives;
 use super::record_robust::RobustRecord;
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
 use super::stages::{Cause, Evaluation, PartialGrasp, Reason, StaticsResult};
@@ -46,6 +47,21 @@ pub struct Record {
     /// scenario what happened (absent for a single-object problem).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustRecord>,
+}
+
+/// The derived lengths (m) as the outputs report them: l11, l12, l22 when stages 0–1 built
+/// the finger, and l_hand.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Derived {
+    /// l11.
+    pub l11: Option<f64>,
+    /// l12.
+    pub l12: Option<f64>,
+    /// l22.
+    pub l22: Option<f64>,
+    /// l_hand.
+    pub l_hand: f64,
 }
 
 /// Stages 0–1: the finger built from the design (every value computed before a discard).
@@ -271,17 +287,25 @@ impl Record {
     /// closed at 0), α, F̃ (N), t_stab (s); None where not computed.
     pub fn objectives(&self) -> [Option<f64>; 4] {
         if let Some(r) = &self.robust {
-            let o = &r.objectives;
-            return [o.max_offset, o.alpha, o.mean_force, o.t_stab];
+            return r.objectives.to_array();
         }
         let st = &self.statics;
         [st.max_offset, st.alpha, st.mean_force, self.grasp.t_stab]
+    }
+    /// [`Record::objectives`] as the outputs report them ([`Objectives::reported`]).
+    pub fn reported_objectives(&self) -> Objectives {
+        Objectives::from_array(self.objectives()).reported()
     }
     /// The derived lengths l11, l12, l22 when stages 0–1 built the finger.
     pub fn lengths(&self) -> Option<[f64; 3]> {
         let k = &self.kinematics;
         let built = self.verdict.failed_stage.is_none_or(|s| s >= 2);
         built.then_some([k.l11?, k.l12?, k.l22?])
+    }
+    /// The derived lengths as the outputs report them ([`Record::lengths`], l_hand).
+    pub fn derived(&self) -> Derived {
+        let l = self.lengths();
+        Derived { l11: l.map(|l| l[0]), l12: l.map(|l| l[1]), l22: l.map(|l| l[2]), l_hand: self.kinematics.l_hand }
     }
     /// Stage 3's grasp work: accepted steps and right-hand-side evaluations.
     /// For a robust design: all its simulations' (centred and free, every scenario run).

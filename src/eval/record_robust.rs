@@ -3,6 +3,7 @@
 //! aggregates, and per scenario a compact record (which scenario, its drawn inputs, the
 //! outcome) — enough to replay a failing scenario.
 
+use super::objectives::Objectives;
 use super::scene_record::fin;
 use super::stages::{Cause, Evaluation};
 use crate::params::Scenario;
@@ -94,14 +95,10 @@ impl ScenarioRecord {
 pub struct ObjectRecord {
     /// Its name.
     pub name: String,
-    /// Objective 1 on this object (m; stage 2 at its nominal inputs).
-    pub max_offset: Option<f64>,
-    /// α on this object.
-    pub alpha: Option<f64>,
-    /// F̃ on this object (N).
-    pub mean_force: Option<f64>,
-    /// t_stab aggregated over this object's scenarios (s; the problem's aggregation).
-    pub t_stab: Option<f64>,
+    /// The objectives on this object: max_offset, α and F̃ of stage 2 at its nominal
+    /// inputs, t_stab aggregated over its scenarios (the problem's aggregation).
+    #[serde(flatten)]
+    pub objectives: Objectives,
     /// Scenarios run.
     pub scenarios: usize,
     /// Of them, those in which the object stayed.
@@ -118,25 +115,13 @@ pub struct ObjectRecord {
     pub max_displacement: Option<f64>,
 }
 
-/// The aggregated objectives (natural sense), what the optimiser ranks.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct RobustObjectives {
-    /// max_offset (m), aggregated over the objects.
-    pub max_offset: Option<f64>,
-    /// α, aggregated over the objects.
-    pub alpha: Option<f64>,
-    /// F̃ (N), aggregated over the objects.
-    pub mean_force: Option<f64>,
-    /// t_stab (s), aggregated over every scenario run.
-    pub t_stab: Option<f64>,
-}
-
 /// The robust sub-record.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RobustRecord {
-    /// The aggregated objectives.
-    pub objectives: RobustObjectives,
+    /// The objectives aggregated over the objects (t_stab over every scenario run): what
+    /// the optimiser ranks.
+    pub objectives: Objectives,
     /// Per object.
     pub objects: Vec<ObjectRecord>,
     /// Scenarios the design would run without early stop.
@@ -171,10 +156,10 @@ pub fn robust_summary(r: &RobustRecord) -> String {
             o(ob.p_stay_lo, 1.0, 3),
             o(ob.p_stay_hi, 1.0, 3),
             o(ob.max_displacement, 1e3, 3),
-            o(ob.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
-            o(ob.alpha, 1.0, 4),
-            o(ob.mean_force, 1.0, 3),
-            o(ob.t_stab, 1e3, 3)
+            o(ob.objectives.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
+            o(ob.objectives.alpha, 1.0, 4),
+            o(ob.objectives.mean_force, 1.0, 3),
+            o(ob.objectives.t_stab, 1e3, 3)
         ));
     }
     let a = &r.objectives;

@@ -4,8 +4,9 @@
 //! one design of any problem, robust or not.
 
 use super::binomial::clopper_pearson;
+use super::objectives::Objectives;
 use super::record::{Record, Verdict};
-use super::record_robust::{ObjectRecord, RobustObjectives, RobustRecord, ScenarioRecord};
+use super::record_robust::{ObjectRecord, RobustRecord, ScenarioRecord};
 use super::robust::{evaluate_sequential, RobustSetup, RobustStart};
 use super::scene_record::fin;
 use super::stage3::evaluate;
@@ -64,10 +65,12 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         };
         objects.push(ObjectRecord {
             name: spec.objects[o].name.clone(),
-            max_offset: st.map(|s| s.max_offset),
-            alpha: st.and_then(|s| fin(s.alpha)),
-            mean_force: st.map(|s| s.mean_force),
-            t_stab: fin(agg[3].apply(&t)),
+            objectives: Objectives {
+                max_offset: st.map(|s| s.max_offset),
+                alpha: st.and_then(|s| fin(s.alpha)),
+                mean_force: st.map(|s| s.mean_force),
+                t_stab: fin(agg[3].apply(&t)),
+            },
             scenarios: runs,
             stays,
             p_stay: (runs > 0).then(|| stays as f64 / runs as f64),
@@ -80,7 +83,7 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
                 .fold(None, |a, b| Some(a.map_or(b, |a: f64| a.max(b)))),
         });
     }
-    let statics_known = objects.iter().all(|o| o.mean_force.is_some());
+    let statics_known = objects.iter().all(|o| o.objectives.mean_force.is_some());
     let over_objects = |k: usize, v: fn(&ObjectRecord) -> Option<f64>, sign: f64| -> Option<f64> {
         if !statics_known {
             return None;
@@ -91,10 +94,10 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         }
         fin(sign * agg[k].apply(&vals))
     };
-    let objectives = RobustObjectives {
-        max_offset: over_objects(0, |o| o.max_offset, -1.0),
-        alpha: over_objects(1, |o| o.alpha, 1.0),
-        mean_force: over_objects(2, |o| o.mean_force, -1.0),
+    let objectives = Objectives {
+        max_offset: over_objects(0, |o| o.objectives.max_offset, -1.0),
+        alpha: over_objects(1, |o| o.objectives.alpha, 1.0),
+        mean_force: over_objects(2, |o| o.objectives.mean_force, -1.0),
         t_stab: fin(agg[3].apply(&all_t)),
     };
     let sum = |f: fn(&ScenarioRecord) -> [u64; 2]| {

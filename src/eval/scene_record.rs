@@ -290,35 +290,3 @@ impl FreeSceneRecord {
         }
     }
 }
-
-impl FreeSceneRecord {
-    /// A record with every value set (placeholders of each type, not a result): gives
-    /// every key with its JSON type, e.g. for the recording's schema.
-    pub fn full_example() -> Self {
-        let (x, b) = (Some(0.5), Some(true));
-        let i = Impact { m_finger: 0.5, v_impact: 0.5, e_cyl: 0.5, e_trans: 0.5, e_rot: 0.5, e_lim: 0.5 };
-        FreeSceneRecord {
-            object_max_displacement: x,
-            object_max_dx: x,
-            object_max_dy: x,
-            object_max_tilt_deg: x,
-            object_max_tilt_y: x,
-            object_max_spin: x,
-            object_final_displacement: x,
-            object_final_tilt_deg: x,
-            object_peak_e_trans: x,
-            object_peak_e_rot: x,
-            moved: b,
-            toppled: b,
-            escaped: b,
-            rim_contact: b,
-            end: Some(FreeEnd::Observed),
-            t_end: x,
-            impact: ImpactRecord::of(0.5, 1, &i),
-            work: WorkRecord::of(&Stats::default(), 1, 1, 0.5),
-            jac_block_evals: Some(1),
-            energy: Some([0.5; 2]),
-            max_energy_rise: x,
-        }
-    }
-}

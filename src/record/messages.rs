@@ -4,7 +4,7 @@
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
-use super::schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
+use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
 use crate::sim::Sample;
 
 pub use super::scene::{
@@ -27,8 +27,6 @@ pub fn log_time(t0_ns: u64, t: f64) -> u64 {
 pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> DesignMessage {
     let r = i.record;
     let v = &r.verdict;
-    let o = r.objectives();
-    let l = r.lengths();
     DesignMessage {
         id: i.id,
         generation: i.generation,
@@ -37,21 +35,15 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         window_start_s: i.id as f64,
         epoch_s,
         parameters: DesignParameters::from_array(&i.parameters),
-        derived: Derived {
-            l11: l.map(|l| l[0]),
-            l12: l.map(|l| l[1]),
-            l22: l.map(|l| l[2]),
-            l_hand: r.kinematics.l_hand,
-        },
+        derived: r.derived(),
         stages_passed: v.failed_stage.unwrap_or(4),
         feasible: v.failed_stage.is_none(),
         form_closed: r.form_closed(),
         failed_stage: v.failed_stage,
         reason: v.reason.clone(),
         violation: v.violation,
-        // MODEL.md §6.7: a design not form closed at 0 carries max_offset = −Δ_off inside the
-        // optimiser; the record says form_closed = false and leaves max_offset out (as the CSVs)
-        objectives: Objectives { max_offset: o[0].filter(|m| *m >= 0.0), alpha: o[1], mean_force: o[2], t_stab: o[3] },
+        // a design not form closed: form_closed = false, max_offset left out (as the CSVs)
+        objectives: r.reported_objectives(),
         stage_seconds: StageSeconds {
             stages_0_1: i.stage_seconds[1],
             stage_2: i.stage_seconds[2],
@@ -96,7 +88,7 @@ pub fn series(
     };
     if kept.is_empty() {
         m.t.push(0.0);
-        for c in columns_mut(&mut m) {
+        for c in m.value_columns_mut() {
             c.push(f64::NAN);
         }
         return m;
@@ -124,28 +116,6 @@ pub fn series(
         m.mean_force_objective.push(f_tilde);
     }
     m
-}
-
-/// Every value column of a series (all but `t`).
-fn columns_mut(m: &mut GraspSeries) -> [&mut Vec<f64>; 16] {
-    [
-        &mut m.q11,
-        &mut m.q21,
-        &mut m.q11_dot,
-        &mut m.q21_dot,
-        &mut m.theta2,
-        &mut m.proximal_penetration,
-        &mut m.distal_penetration,
-        &mut m.proximal_normal_force,
-        &mut m.distal_normal_force,
-        &mut m.proximal_friction_force,
-        &mut m.distal_friction_force,
-        &mut m.hand_force,
-        &mut m.filtered_hand_force,
-        &mut m.energy,
-        &mut m.energy_excess,
-        &mut m.mean_force_objective,
-    ]
 }
 
 /// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in

@@ -80,6 +80,30 @@ pub struct GraspSeries {
     pub mean_force_objective: Vec<f64>,
 }
 
+impl GraspSeries {
+    /// Every value column (all but `t`), in tag order.
+    pub(crate) fn value_columns_mut(&mut self) -> [&mut Vec<f64>; 16] {
+        [
+            &mut self.q11,
+            &mut self.q21,
+            &mut self.q11_dot,
+            &mut self.q21_dot,
+            &mut self.theta2,
+            &mut self.proximal_penetration,
+            &mut self.distal_penetration,
+            &mut self.proximal_normal_force,
+            &mut self.distal_normal_force,
+            &mut self.proximal_friction_force,
+            &mut self.distal_friction_force,
+            &mut self.hand_force,
+            &mut self.filtered_hand_force,
+            &mut self.energy,
+            &mut self.energy_excess,
+            &mut self.mean_force_objective,
+        ]
+    }
+}
+
 /// (name, number, type, repeated) of every field of [`GraspSeries`], in tag order.
 pub const SERIES_FIELDS: [(&str, i32, Type, bool); 20] = [
     ("design_id", 1, Type::Uint64, false),
@@ -137,27 +161,9 @@ mod tests {
     fn descriptor_matches_the_encoding() {
         // every field gets a distinct value; decode the bytes by hand with the table
         let mut m = GraspSeries { design_id: 7, full_resolution: true, simulated_samples: 3, ..Default::default() };
-        let cols: [&mut Vec<f64>; 17] = [
-            &mut m.t,
-            &mut m.q11,
-            &mut m.q21,
-            &mut m.q11_dot,
-            &mut m.q21_dot,
-            &mut m.theta2,
-            &mut m.proximal_penetration,
-            &mut m.distal_penetration,
-            &mut m.proximal_normal_force,
-            &mut m.distal_normal_force,
-            &mut m.proximal_friction_force,
-            &mut m.distal_friction_force,
-            &mut m.hand_force,
-            &mut m.filtered_hand_force,
-            &mut m.energy,
-            &mut m.energy_excess,
-            &mut m.mean_force_objective,
-        ];
-        for (k, c) in cols.into_iter().enumerate() {
-            c.push(k as f64 + 0.5);
+        m.t.push(0.5);
+        for (k, c) in m.value_columns_mut().into_iter().enumerate() {
+            c.push(k as f64 + 1.5);
         }
         let b = m.encode_to_vec();
         let mut i = 0;

@@ -115,15 +115,13 @@ impl AcrossRevisions {
             ));
             return out;
         }
-        let o = fresh.objectives();
-        let r_o = &rec.objectives;
         // an older gripopt wrote max_offset's −Δ_off sentinel where it was not computed
-        let offset = |m: Option<f64>| m.filter(|m| *m >= 0.0);
+        let (r_o, o) = (rec.objectives.reported(), fresh.reported_objectives());
         let mut pairs = vec![
-            ("max_offset", offset(r_o.max_offset), offset(o[0])),
-            ("alpha", r_o.alpha, o[1]),
-            ("mean_force", r_o.mean_force, o[2]),
-            ("t_stab", r_o.t_stab, o[3]),
+            ("max_offset", r_o.max_offset, o.max_offset),
+            ("alpha", r_o.alpha, o.alpha),
+            ("mean_force", r_o.mean_force, o.mean_force),
+            ("t_stab", r_o.t_stab, o.t_stab),
             ("violation", rec.violation, fresh.verdict.violation),
         ];
         if recorded.resolution == Resolution::Full && !recorded.samples.is_empty() {
@@ -216,11 +214,9 @@ pub fn problem_of_generation(run_dir: &Path, generation: u64) -> Result<RunProbl
 /// numbers). The values: objectives, violation, failing stage, reason, the grasp
 /// simulation's steps and right-hand-side evaluations.
 fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
-    let o = fresh.objectives();
     // the optimiser's negative max_offset placeholder (MODEL.md §6.7) is not a value
-    let fresh_obj = [o[0].filter(|m| *m >= 0.0), o[1], o[2], o[3]];
-    let r = &rec.objectives;
-    let rec_obj = [r.max_offset.filter(|m| *m >= 0.0), r.alpha, r.mean_force, r.t_stab];
+    let fresh_obj = fresh.reported_objectives().to_array();
+    let rec_obj = rec.objectives.reported().to_array();
     let (mut n, mut alike, mut maxd) = (0usize, true, 0.0f64);
     let mut num = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (Some(a), Some(b)) => {

@@ -6,6 +6,7 @@
 //! protobuf (see `proto.rs` and the `foxglove` SDK's schemas).
 
 use crate::eval::FreeSceneRecord;
+pub use crate::eval::{Derived, Objectives};
 pub use crate::params::DesignParameters;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -17,34 +18,6 @@ pub struct Window {
     pub sec: u64,
     /// Nanoseconds.
     pub nsec: u64,
-}
-
-/// Derived lengths (m): l11, l12, l22 when stages 0–1 built the finger.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Derived {
-    /// l11.
-    pub l11: Option<f64>,
-    /// l12.
-    pub l12: Option<f64>,
-    /// l22.
-    pub l22: Option<f64>,
-    /// l_hand.
-    pub l_hand: f64,
-}
-
-/// Objectives in their natural sense (max_offset only when form closed).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Objectives {
-    /// m.
-    pub max_offset: Option<f64>,
-    /// Force isotropy.
-    pub alpha: Option<f64>,
-    /// N.
-    pub mean_force: Option<f64>,
-    /// s.
-    pub t_stab: Option<f64>,
 }
 
 /// Wall seconds per stage.
@@ -89,7 +62,7 @@ pub struct DesignMessage {
     pub reason: Option<String>,
     /// By how much.
     pub violation: Option<f64>,
-    /// Objectives.
+    /// Objectives (max_offset only when form closed).
     pub objectives: Objectives,
     /// Timings.
     pub stage_seconds: StageSeconds,
@@ -138,27 +111,26 @@ fn obj(props: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": props, "required": required})
 }
 
-/// The JSON type of every key of the free scene's record.
+/// The JSON type of every key of the free scene's record, asked of the record type itself:
+/// the key set to 0.5, 1, true or [0.5, 0.5] in turn, the first value the type reads is the
+/// key's type (a number, a count, a boolean, an array of numbers; text otherwise).
 fn free_scene_properties() -> Value {
-    // a record with every value set gives every key with its JSON type
-    let full = FreeSceneRecord::full_example();
-    let v = serde_json::to_value(full).expect("records serialise");
-    let props: serde_json::Map<String, Value> = v
-        .as_object()
-        .expect("an object")
-        .iter()
-        .map(|(k, x)| {
-            let t = match x {
-                Value::Bool(_) => json!({"type": "boolean"}),
-                Value::String(_) => json!({"type": "string"}),
-                Value::Number(n) if n.is_u64() => int(),
-                Value::Array(_) => json!({"type": "array", "items": num()}),
-                _ => num(),
-            };
-            (k.clone(), t)
-        })
-        .collect();
-    Value::Object(props)
+    let keys = serde_json::to_value(FreeSceneRecord::default()).expect("records serialise");
+    let reads = |k: &str, v: Value| serde_json::from_value::<FreeSceneRecord>(json!({ k: v })).is_ok();
+    let type_of = |k: &str| {
+        if reads(k, json!(0.5)) {
+            num()
+        } else if reads(k, json!(1)) {
+            int()
+        } else if reads(k, json!(true)) {
+            json!({"type": "boolean"})
+        } else if reads(k, json!([0.5, 0.5])) {
+            json!({"type": "array", "items": num()})
+        } else {
+            json!({"type": "string"})
+        }
+    };
+    keys.as_object().expect("an object").keys().map(|k| (k.clone(), type_of(k))).collect()
 }
 
 /// The robust sub-record (issue 22): one type per key, arrays with typed items.

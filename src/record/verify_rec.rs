@@ -9,6 +9,7 @@
 //! `hand` → `object` following the free object's pose), `/scene/static` (ground, palm, the
 //! bottle in the frame `object`, a label) and `/scene` (both fingers). See docs/recording.md.
 
+use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
@@ -16,7 +17,7 @@ use crate::sim::PoseSample;
 use crate::Result;
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
-use mcap::records::{MessageHeader, Metadata};
+use mcap::records::Metadata;
 use serde::Serialize;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -330,22 +331,10 @@ pub fn write_verify(
     meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into());
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
-    let none = BTreeMap::new();
-    let verify_schema = w
-        .add_schema("gripopt.Verify", "jsonschema", &serde_json::to_vec(&verify_schema()).expect("schema serialises"))
-        .map_err(mc)?;
-    let mut fox = |s: Option<foxglove::Schema>| -> Result<u16> {
-        let s = s.expect("the SDK's message types have schemas");
-        w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
-    };
-    let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
-    let series_schema = w
-        .add_schema(
-            "gripopt.VerifySeries",
-            "jsonschema",
-            &serde_json::to_vec(&verify_series_schema()).expect("schema serialises"),
-        )
-        .map_err(mc)?;
+    let verify_schema = add_json_schema(&mut w, "gripopt.Verify", &verify_schema(), &tmp)?;
+    let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
+    let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
+    let series_schema = add_json_schema(&mut w, "gripopt.VerifySeries", &verify_series_schema(), &tmp)?;
     let schema_of = [
         (verify_schema, "json"),
         (tf_schema, "protobuf"),
@@ -353,22 +342,9 @@ pub fn write_verify(
         (scene_schema, "protobuf"),
         (series_schema, "json"),
     ];
-    let mut chans = [0u16; 5];
-    for (k, topic) in TOPICS.iter().enumerate() {
-        chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
-    }
-    let mut seq = [0u32; 5];
-    for (k, e) in entries.iter().enumerate() {
-        for (c, t_ns, data) in encode(k as u64, e, problem, opts) {
-            seq[c] += 1;
-            w.write_to_known_channel(
-                &MessageHeader { channel_id: chans[c], sequence: seq[c], log_time: t_ns, publish_time: t_ns },
-                &data,
-            )
-            .map_err(mc)?;
-        }
-        w.flush().map_err(mc)?; // one chunk per design
-    }
+    let chans = add_channels(&mut w, &TOPICS, &schema_of, &tmp)?;
+    let designs = entries.iter().enumerate().map(|(k, e)| encode(k as u64, e, problem, opts));
+    write_designs(&mut w, &chans, designs, &tmp)?;
     super::mcapfile::finish(w, &tmp, path)
 }
 

@@ -2,13 +2,14 @@
 
 use super::entry::{DesignEntry, Recordable};
 use super::index::{write_index, ShardEntry};
+use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::{messages, proto, schema, RecordOptions};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::{Error, Result};
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
-use mcap::records::{MessageHeader, Metadata};
+use mcap::records::Metadata;
 use prost::Message;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -71,16 +72,10 @@ pub fn write_shard<R: Recordable>(
     );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
-    let none = BTreeMap::new();
-    let design_schema = w
-        .add_schema("gripopt.Design", "jsonschema", &serde_json::to_vec(&schema::design()).expect("schema serialises"))
-        .map_err(mc)?;
+    let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(), &tmp)?;
     let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
-    let mut fox = |s: Option<foxglove::Schema>| -> Result<u16> {
-        let s = s.expect("the SDK's message types have schemas");
-        w.add_schema(&s.name, &s.encoding, &s.data).map_err(mc)
-    };
-    let (tf_schema, scene_schema) = (fox(FrameTransforms::get_schema())?, fox(SceneUpdate::get_schema())?);
+    let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
+    let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
     let schema_of = [
         (design_schema, "json"),
         (series_schema, "protobuf"),
@@ -88,29 +83,15 @@ pub fn write_shard<R: Recordable>(
         (scene_schema, "protobuf"),
         (scene_schema, "protobuf"),
     ];
-    let mut chans = [0u16; 5];
-    for (k, topic) in TOPICS.iter().enumerate() {
-        if k >= Ch::Tf as usize && opts.scene_dt <= 0.0 {
-            continue;
-        }
-        chans[k] = w.add_channel(schema_of[k].0, topic, schema_of[k].1, &none).map_err(mc)?;
-    }
+    // without scene frames, no channels for them (their ids stay 0: no messages)
+    let topics = if opts.scene_dt <= 0.0 { &TOPICS[..Ch::Tf as usize] } else { &TOPICS[..] };
+    let mut chans = add_channels(&mut w, topics, &schema_of, &tmp)?;
+    chans.resize(TOPICS.len(), 0);
     // encode every design's messages in parallel, then write them in order
     let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> =
         designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
-    let mut seq = [0u32; 5];
-    for msgs in encoded {
-        for (k, t_ns, data) in msgs {
-            let k = k as usize;
-            seq[k] += 1;
-            w.write_to_known_channel(
-                &MessageHeader { channel_id: chans[k], sequence: seq[k], log_time: t_ns, publish_time: t_ns },
-                &data,
-            )
-            .map_err(mc)?;
-        }
-        w.flush().map_err(mc)?; // one chunk per design
-    }
+    let designs = encoded.into_iter().map(|m| m.into_iter().map(|(k, t_ns, data)| (k as usize, t_ns, data)));
+    write_designs(&mut w, &chans, designs, &tmp)?;
     super::mcapfile::finish(w, &tmp, path)
 }
 

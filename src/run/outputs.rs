@@ -134,8 +134,9 @@ impl DesignRow {
     pub fn of(ind: &Individual<GripperInfo>, rank: Option<usize>) -> Self {
         let r = &ind.eval.info.record;
         let v = &r.verdict;
-        let l = r.lengths();
-        let o = r.objectives();
+        let d = r.derived();
+        // a design not form closed: form_closed = false, max_offset empty (MODEL.md §6.7)
+        let o = r.reported_objectives();
         let w = r.sim_work();
         DesignRow {
             id: ind.id,
@@ -146,18 +147,15 @@ impl DesignRow {
             violation: v.violation,
             reason: v.reason.clone(),
             design: DesignParameters::from_array(ind.x.as_slice().try_into().expect("six design variables")),
-            l11: l.map(|l| l[0]),
-            l12: l.map(|l| l[1]),
-            l22: l.map(|l| l[2]),
-            l_hand: r.kinematics.l_hand,
-            // MODEL.md §6.7: a design not form closed at 0 has max_offset = −Δ_off internally
-            // (the optimiser's finite placeholder); the file says form_closed = false and
-            // leaves it empty
+            l11: d.l11,
+            l12: d.l12,
+            l22: d.l22,
+            l_hand: d.l_hand,
             form_closed: r.form_closed(),
-            max_offset: o[0].filter(|m| *m >= 0.0),
-            alpha: o[1],
-            mean_force: o[2],
-            t_stab: o[3],
+            max_offset: o.max_offset,
+            alpha: o.alpha,
+            mean_force: o.mean_force,
+            t_stab: o.t_stab,
             sim_steps: w.map(|w| w[0]),
             sim_rhs_evals: w.map(|w| w[1]),
             force_model: r.statics.force_model,

@@ -51,10 +51,10 @@ impl RobustColumns {
                 n(o.stays),
                 n(o.scenarios),
                 o.max_displacement,
-                o.max_offset.filter(|m| *m >= 0.0),
-                o.alpha,
-                o.mean_force,
-                o.t_stab,
+                o.objectives.max_offset.filter(|m| *m >= 0.0),
+                o.objectives.alpha,
+                o.objectives.mean_force,
+                o.objectives.t_stab,
             ];
             for (col, v) in OBJECT_COLUMNS.iter().zip(vals) {
                 c.push((format!("{}.{}", o.name, col.0), v));
