@@ -6,7 +6,7 @@ PROBLEM ?= problems/bottle-1l.toml
 OUT     ?= results/bottle-1l
 BIN     := target/release/gripopt
 
-.PHONY: all build test run bench clean venv python
+.PHONY: all build test run bench clean venv python python-test
 
 all: build
 
@@ -38,6 +38,13 @@ venv: $(VENV_STAMP)
 python: $(VENV_STAMP)
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --release --locked --quiet
 
+# The same package for the tests, built with the dev profile (opt-level 2, the test
+# profile's settings): it reuses the dependencies `cargo test` compiled instead of building
+# them again with the release profile's LTO (CI minutes); `make python` installs the
+# release build again.
+python-test: $(VENV_STAMP)
+	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --profile dev --locked --quiet
+
 # The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
 .PHONY: lint
 lint:
@@ -48,7 +55,7 @@ lint:
 # then the independent reader over every MCAP file and shipped layout the tests wrote (after
 # its self-test: it must reject the scene and layout defects it checks for), then the pandas
 # example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
-# (docs/export.md). The Python package: clippy on its crate, its build (make python), its
+# (docs/export.md). The Python package: clippy on its crate, its build (make python-test: dev profile), its
 # pytest suite against the gripopt command (exit code 5, no test collected, fails too) and
 # every block of docs/python.md (tools/check_python_docs.py).
 test: $(VENV_STAMP) lint
@@ -57,7 +64,7 @@ test: $(VENV_STAMP) lint
 	$(VENV)/bin/python tools/test_check_mcap.py
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
 	PYO3_PYTHON=$(abspath $(VENV))/bin/python $(CARGO) clippy --locked -p gripopt-py --all-targets -- -D warnings
-	$(MAKE) python
+	$(MAKE) python-test
 	GRIPOPT=$${CARGO_TARGET_DIR:-target}/debug/gripopt $(VENV)/bin/python -m pytest python/tests -q -p no:cacheprovider; \
 	  rc=$$?; if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
 	MPLBACKEND=Agg $(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
