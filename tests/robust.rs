@@ -300,6 +300,29 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     assert!(s.rows.iter().all(|r| r.scenarios_out == 3 && r.keeps == (r.p_stay_out.unwrap() >= 0.5)));
     let text = std::fs::read_to_string(one.join(gripopt::run::VERIFY_ROBUST_FILE)).unwrap();
     assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 1 + 2 * front.len());
+    // the front and its in-sample P(stay) come from the checkpoint: pareto.csv edited by
+    // hand (every bottle.p_stay set to 0) changes nothing
+    let pareto = one.join("pareto.csv");
+    let kept = std::fs::read_to_string(&pareto).unwrap();
+    let header = kept.lines().find(|l| !l.starts_with('#')).unwrap();
+    let column = header.split(',').position(|c| c == "bottle.p_stay").unwrap();
+    let blanked: Vec<String> = kept
+        .lines()
+        .map(|l| match l.starts_with('#') || l == header {
+            true => l.to_string(),
+            false => {
+                let mut cells: Vec<&str> = l.split(',').collect();
+                cells[column] = "0";
+                cells.join(",")
+            }
+        })
+        .collect();
+    let blanked = blanked.join("\n") + "\n";
+    assert_ne!(blanked, kept, "the edit took");
+    std::fs::write(&pareto, blanked).unwrap();
+    gripopt::run::verify_robust(&one).unwrap();
+    assert_eq!(std::fs::read_to_string(one.join(gripopt::run::VERIFY_ROBUST_FILE)).unwrap(), text);
+    std::fs::write(&pareto, kept).unwrap();
     // an edited problem.toml is refused, naming it: the figures would not be the run's
     let toml = one.join("problem.toml");
     let text0 = std::fs::read_to_string(&toml).unwrap();

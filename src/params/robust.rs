@@ -217,23 +217,6 @@ pub fn describe(d: &Dist) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn quantile_is_the_inverted_empirical_cdf() {
-        let v = [4.0, 1.0, 3.0, 2.0];
-        assert_eq!(Aggregation::Quantile(0.5).apply(&v), 2.0);
-        assert_eq!(Aggregation::Quantile(0.51).apply(&v), 3.0);
-        assert_eq!(Aggregation::Quantile(0.75).apply(&v), 3.0);
-        assert_eq!(Aggregation::Quantile(1.0).apply(&v), 4.0);
-        assert_eq!(Aggregation::Worst.apply(&v), 4.0);
-        assert_eq!(Aggregation::Mean.apply(&v), 2.5);
-        assert!(Aggregation::Mean.apply(&[]).is_nan());
-    }
-}
-
 impl super::Problem {
     /// A run folder keeps only its problem.toml, hashed: a robust object taken from another
     /// file (`file = "…"`) could change under a run unnoticed (resume, replay and verify would
@@ -252,5 +235,22 @@ impl super::Problem {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantile_is_the_inverted_empirical_cdf() {
+        let v = [4.0, 1.0, 3.0, 2.0];
+        assert_eq!(Aggregation::Quantile(0.5).apply(&v), 2.0);
+        assert_eq!(Aggregation::Quantile(0.51).apply(&v), 3.0);
+        assert_eq!(Aggregation::Quantile(0.75).apply(&v), 3.0);
+        assert_eq!(Aggregation::Quantile(1.0).apply(&v), 4.0);
+        assert_eq!(Aggregation::Worst.apply(&v), 4.0);
+        assert_eq!(Aggregation::Mean.apply(&v), 2.5);
+        assert!(Aggregation::Mean.apply(&[]).is_nan());
     }
 }

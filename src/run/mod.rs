@@ -55,9 +55,9 @@ pub use robust_eval::RobustScheduled;
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
-    verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifyRow, VerifySource, VerifySummary,
-    VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,
+    VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{is_robust_run, verify_robust, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE};
-pub use verify_run::{verify, VerifiedGeneration};
+pub use verify_run::verify;

@@ -9,6 +9,7 @@
 use super::checkpoint::Checkpoint;
 use super::folder::read_table;
 use super::gripper::GripperInfo;
+use super::info::RunInfo;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
@@ -20,7 +21,7 @@ use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::ser::SerializeMap;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -262,6 +263,69 @@ pub fn checkpoint_designs(cp: &Checkpoint<GripperInfo>, all: bool, path: &Path) 
         m.entry(ind.id).or_insert((ind.generation, Design::from_array(x)));
     }
     Ok(m.into_iter().map(|(id, (g, x))| (id, g, x)).collect())
+}
+
+/// Which run state a `verify.csv` checked (its `# run:` line).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VerifiedGeneration {
+    /// The completed generations of the run when it was verified.
+    pub generation: u64,
+    /// The checkpoint's content checksum then.
+    pub checkpoint_sha256: String,
+}
+
+/// The checkpoint file of a run folder (the state `verify` checks).
+pub(crate) const CHECKPOINT_FILE: &str = "checkpoint.json";
+
+/// The run state a verify checks: the folder's checkpoint, loaded and its checksum verified.
+pub(crate) struct CheckedState {
+    checkpoint: Checkpoint<GripperInfo>,
+    path: PathBuf,
+    sha256: String,
+}
+
+/// The checkpoint's own content checksum (its field `sha256`, which loading verified).
+#[derive(Deserialize)]
+struct ChecksumField {
+    sha256: String,
+}
+
+impl CheckedState {
+    /// Load `dir`'s checkpoint (a missing one is an error naming it).
+    pub(crate) fn load(dir: &Path, info: &RunInfo) -> Result<Self> {
+        let path = dir.join(CHECKPOINT_FILE);
+        if !path.is_file() {
+            let message = match info.completed_generations {
+                0 => "missing: the run has not completed its first generation; nothing to verify yet".to_string(),
+                g => format!("missing, but run.json records {g} completed generations: verify takes the run's designs from its checkpoint; restore checkpoint.json (e.g. from a backup)"),
+            };
+            return Err(Error::RunDir { path, message });
+        }
+        let checkpoint = Checkpoint::load(&path)?;
+        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "cannot read the checkpoint", e))?;
+        let sha256 = serde_json::from_slice::<ChecksumField>(&bytes)
+            .map_err(|source| Error::Json { path: path.clone(), what: "no content checksum `sha256`", source })?
+            .sha256;
+        Ok(CheckedState { checkpoint, path, sha256 })
+    }
+
+    /// Its designs to verify (see [`checkpoint_designs`]).
+    pub(crate) fn designs(&self, all: bool) -> Result<Vec<(u64, u64, Design)>> {
+        checkpoint_designs(&self.checkpoint, all, &self.path)
+    }
+
+    /// The front as pareto.csv's rows (built from the same individuals pareto.csv is written
+    /// from), in id order.
+    pub(crate) fn front_rows(&self) -> Vec<DesignRow> {
+        let mut front = self.checkpoint.state.feasible_front();
+        front.sort_by_key(|i| i.id);
+        front.into_iter().map(|i| DesignRow::of(i, Some(0))).collect()
+    }
+
+    /// The state as verify.csv's `# run:` line names it.
+    pub(crate) fn attribution(&self) -> VerifiedGeneration {
+        VerifiedGeneration { generation: self.checkpoint.state.generation, checkpoint_sha256: self.sha256.clone() }
+    }
 }
 
 /// `n` designs drawn from `p`'s bounds (ChaCha8 with `seed`, in draw order) that pass stages

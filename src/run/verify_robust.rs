@@ -1,5 +1,5 @@
 //! `gripopt verify RUN_DIR` on a robust run (issue 22): the out-of-sample check. Every design
-//! of the run's front is re-evaluated on a fresh, larger draw of scenarios — the problem's
+//! of the run's front (from its checkpoint) is re-evaluated on a fresh, larger draw of scenarios — the problem's
 //! `verify_scenarios` per object from another ChaCha stream (`STREAM_VERIFY`) than the
 //! optimisation's, every scenario run (no early stop) — and each object's P(stay) is compared
 //! with `p_min`: how many front designs keep it, i.e. whether the optimiser overfitted its K
@@ -8,6 +8,7 @@
 
 use super::folder::RunFolder;
 use super::lock::RunLock;
+use super::verify::{CheckedState, CHECKPOINT_FILE};
 use crate::cells::{line, Floats};
 use crate::eval::{robust_record, robust_start, run_scenario, EvalOptions, RobustSetup, ScenarioRecord};
 use crate::fsutil::write_atomic;
@@ -27,7 +28,7 @@ pub struct RobustVerifyRow {
     pub id: u64,
     /// Object name.
     pub object: String,
-    /// P(stay) over the optimisation's scenarios (from pareto.csv).
+    /// P(stay) over the optimisation's scenarios (the run's record of the design).
     pub p_stay_in: Option<f64>,
     /// Scenarios of it.
     pub scenarios_in: Option<f64>,
@@ -122,11 +123,12 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         .robust
         .clone()
         .ok_or_else(|| Error::RunDir { path: file.clone(), message: "not a robust problem (no [robust])".into() })?;
-    let front = folder.front()?;
+    // the front of the run's state (its checkpoint), not pareto.csv, a view a user may edit
+    let front = CheckedState::load(dir, &folder.info()?)?.front_rows();
     if front.is_empty() {
         return Err(Error::RunDir {
-            path: dir.join("pareto.csv"),
-            message: "no feasible design on the front; nothing to verify, nothing written".into(),
+            path: dir.join(CHECKPOINT_FILE),
+            message: "no feasible design on the run's front; nothing to verify, nothing written".into(),
         });
     }
     let setup = RobustSetup::with_stream(&p, &r, STREAM_VERIFY, r.verify_scenarios, false);

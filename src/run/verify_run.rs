@@ -6,69 +6,20 @@
 //! run state it checked (the generation, the checkpoint's and the problems' hashes), so
 //! that `gripopt show` can tell when it no longer matches the run.
 
-use super::checkpoint::Checkpoint;
 use super::folder::RunFolder;
-use super::gripper::GripperInfo;
 use super::info::RunInfo;
 use super::lock::RunLock;
 use super::verify::{
-    checkpoint_designs, sample_designs, verify_csv, verify_designs_poses, Confusion, VerifyRow, VerifySource,
-    VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    sample_designs, verify_csv, verify_designs_poses, CheckedState, Confusion, VerifiedGeneration, VerifyRow,
+    VerifySource, VerifySummary, CHECKPOINT_FILE, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 use super::verify_rec::VerifyRecording;
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind};
 use crate::record::ProblemUse;
 use crate::{Error, Result};
-use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-
-/// The checkpoint file of a run folder (the state `verify` checks).
-const CHECKPOINT_FILE: &str = "checkpoint.json";
-
-/// The run state a verify checks: the folder's checkpoint, loaded and its checksum verified.
-struct CheckedState {
-    checkpoint: Checkpoint<GripperInfo>,
-    path: PathBuf,
-    sha256: String,
-}
-
-/// The checkpoint's own content checksum (its field `sha256`, which loading verified).
-#[derive(Deserialize)]
-struct ChecksumField {
-    sha256: String,
-}
-
-impl CheckedState {
-    /// Load `dir`'s checkpoint (a missing one is an error naming it).
-    fn load(dir: &Path, info: &RunInfo) -> Result<Self> {
-        let path = dir.join(CHECKPOINT_FILE);
-        if !path.is_file() {
-            let message = match info.completed_generations {
-                0 => "missing: the run has not completed its first generation; nothing to verify yet".to_string(),
-                g => format!("missing, but run.json records {g} completed generations: verify takes the run's designs from its checkpoint; restore checkpoint.json (e.g. from a backup)"),
-            };
-            return Err(Error::RunDir { path, message });
-        }
-        let checkpoint = Checkpoint::load(&path)?;
-        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "cannot read the checkpoint", e))?;
-        let sha256 = serde_json::from_slice::<ChecksumField>(&bytes)
-            .map_err(|source| Error::Json { path: path.clone(), what: "no content checksum `sha256`", source })?
-            .sha256;
-        Ok(CheckedState { checkpoint, path, sha256 })
-    }
-
-    /// Its designs to verify (see [`checkpoint_designs`]).
-    fn designs(&self, all: bool) -> Result<Vec<(u64, u64, Design)>> {
-        checkpoint_designs(&self.checkpoint, all, &self.path)
-    }
-
-    /// The state as verify.csv's `# run:` line names it.
-    fn attribution(&self) -> VerifiedGeneration {
-        VerifiedGeneration { generation: self.checkpoint.state.generation, checkpoint_sha256: self.sha256.clone() }
-    }
-}
+use std::path::Path;
 
 /// The run state run.json names (a sample's verify.csv: the run the sample belongs to).
 fn attribution_of(info: &RunInfo) -> VerifiedGeneration {
@@ -241,15 +192,6 @@ fn verify_unit(column: &str) -> &'static str {
         "free_end" => "text",
         _ => "-",
     }
-}
-
-/// Which run state a `verify.csv` checked (its `# run:` line).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VerifiedGeneration {
-    /// The completed generations of the run when it was verified.
-    pub generation: u64,
-    /// The checkpoint's content checksum then.
-    pub checkpoint_sha256: String,
 }
 
 impl RunFolder {
