@@ -112,17 +112,17 @@ fn verify_without_observation_and_with_nothing_to_verify() {
         );
     }
 
-    // an empty front: refused, naming pareto.csv, nothing written
-    for f in ["verify.csv", "verify.mcap"] {
-        std::fs::remove_file(dir.join(f)).unwrap();
-    }
-    let p = dir.join("pareto.csv");
-    let header = std::fs::read_to_string(&p).unwrap().lines().find(|l| !l.starts_with('#')).unwrap().to_string();
-    std::fs::write(&p, format!("{header}\n")).unwrap();
-    let o = run(&["verify", &d]);
+    // an empty front (a problem no design can meet: stability within 1 ms): refused, naming
+    // the checkpoint the designs come from and why none is feasible, nothing written
+    let problem = dir.parent().unwrap().join("scene-cli-no-front.toml");
+    let text0 = std::fs::read_to_string(BOTTLE).unwrap();
+    assert!(text0.contains("t_max = 0.3 "));
+    std::fs::write(&problem, text0.replacen("t_max = 0.3 ", "t_max = 0.001 ", 1)).unwrap();
+    let none = tiny_run("verify-no-front", &problem, 8, 1);
+    let o = run(&["verify", &none.display().to_string()]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("pareto.csv"), "{}", text(&o));
-    assert!(!dir.join("verify.csv").exists() && !dir.join("verify.mcap").exists());
+    assert!(text(&o).contains("checkpoint.json") && text(&o).contains("nothing to verify"), "{}", text(&o));
+    assert!(!none.join("verify.csv").exists() && !none.join("verify.mcap").exists());
 }
 
 /// An offset-kind run at x_off = 0: `--scene offset:-0` is the run's own scene.
