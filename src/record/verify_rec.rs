@@ -290,9 +290,17 @@ fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions
     out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r)))));
     let end = window_end_ns(t0);
     let Some(last) = e.poses.last() else {
-        if let Some(m) = free_fingers(r.id, t0, None, [0.0; 4], true) {
+        // nothing simulated (the free scene ended at its start, e.g. an open finger inside the
+        // object): the scene at its start, the object standing at x_off, the fingers open, so
+        // that every frame drawn has its transform for the whole window
+        let g = [sc.setup.x_off, sc.object.radius, sc.object.length / 2.0 - sc.object.grasp_height];
+        let q = [1.0, 0.0, 0.0, 0.0];
+        let open = finger.as_ref().map_or([0.0; 4], |f| [f.open.q11, f.open.q21, f.open.q11, f.open.q21]);
+        out.push((1, t0, fx(&free_frames(t0, sc, g, q))));
+        if let Some(m) = free_fingers(r.id, t0, finger.as_ref(), open, true) {
             out.push((3, t0, fx(&m)));
         }
+        out.push((1, end, fx(&free_frames(end, sc, g, q))));
         return out;
     };
     for (j, pose) in e.poses.iter().enumerate() {
