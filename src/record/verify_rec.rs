@@ -281,7 +281,8 @@ fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions
     r.window_start = WindowStart { sec: t0 / 1_000_000_000, nsec: t0 % 1_000_000_000 };
     r.window_start_s = (opts.window_base_s + k) as f64;
     r.epoch_s = opts.epoch_s;
-    r.poses = e.poses.len() as u64;
+    // one pose at least: a design the free scene ended at its start is drawn at its start
+    r.poses = e.poses.len().max(1) as u64;
     let p = &r.parameters;
     let design = Design::from_array(&[p.l21, p.b, p.t22, p.r, p.p, p.psi_deg]);
     let finger = Finger::new(&design, sc).ok();
