@@ -127,14 +127,14 @@ fn dynamics_settles_to_the_compliant_equilibrium() {
     let r = simulate_grasp(&f, &s, &st, &diag(1e-10));
     assert_eq!(r.outcome, DynOutcome::ImpactEnergy, "{:?}", r.outcome);
     assert!((r.t_end - s.criteria.t_max).abs() < 1e-12, "t_end {}", r.t_end);
-    let fmax = st.f0[0].max(st.f0[1]);
+    let fmax = st.grasp.f0[0].max(st.grasp.f0[1]);
     for i in 0..2 {
         assert!((r.f_end[i] - r.fstar[i]).abs() < 1e-6 * r.fstar[i], "f_end {:?} f* {:?}", r.f_end, r.fstar);
-        assert!((r.fstar[i] - st.f0[i]).abs() <= 1e-2 * fmax);
+        assert!((r.fstar[i] - st.grasp.f0[i]).abs() <= 1e-2 * fmax);
     }
     // nominal compliance gaps quoted in MODEL.md §8.9: 0.21 % and 0.05 % of max f⁰
-    close_abs((r.fstar[0] - st.f0[0]).abs() / fmax, 0.0021, 0.0001, "proximal gap");
-    close_abs((r.fstar[1] - st.f0[1]).abs() / fmax, 0.0005, 0.0001, "distal gap");
+    close_abs((r.fstar[0] - st.grasp.f0[0]).abs() / fmax, 0.0021, 0.0001, "proximal gap");
+    close_abs((r.fstar[1] - st.grasp.f0[1]).abs() / fmax, 0.0005, 0.0001, "distal gap");
 }
 
 #[test]
@@ -329,7 +329,7 @@ fn in_plane_gravity_is_consistent() {
     assert!(r.t_stab.is_some(), "{:?}", r.outcome);
     let (f, st) = prepare(&nominal(), &s);
     let st0 = prepare(&nominal(), &scene()).1;
-    assert!((st.f0[0] - st0.f0[0]).abs() > 1e-6, "gravity must change f⁰");
+    assert!((st.grasp.f0[0] - st0.grasp.f0[0]).abs() > 1e-6, "gravity must change f⁰");
     let _ = f;
 }
 

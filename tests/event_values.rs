@@ -57,7 +57,7 @@ fn lone_event_values_equal_the_full_evaluations() {
     // before the first contact, just after it, settling, at rest
     for t_mid in [2e-3, 5.3e-3, 8e-3, 20e-3] {
         let mut scene = CentredScene::new(&k.finger, s, &st, &ctl);
-        assert!(scene.prepare(st.f0, &ctl));
+        assert!(scene.prepare(st.grasp.f0, &ctl));
         let mut stepper = Radau5::new(centred_tolerances(&integ), integ.h0);
         let run = drive(&mut scene, &mut stepper, &integ, &ctl, t_mid, &mut ());
         assert!((run.t - t_mid).abs() < 1e-12, "centred: reached {}", run.t);

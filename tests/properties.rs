@@ -24,24 +24,9 @@ fn check_finite(ev: &Evaluation) -> Result<(), String> {
         }
     }
     if let Some(s) = &ev.statics {
-        for v in [
-            s.tau_s0,
-            s.theta[0],
-            s.theta[1],
-            s.k[0],
-            s.k[1],
-            s.f0[0],
-            s.f0[1],
-            s.fmu[0],
-            s.fmu[1],
-            s.hand0[0],
-            s.hand0[1],
-            s.hand_mu[0],
-            s.hand_mu[1],
-            s.max_offset,
-            s.alpha,
-            s.mean_force,
-        ] {
+        let g = &s.grasp;
+        let grasp = [g.theta, g.k, g.f0, g.fmu, g.hand0, g.hand_mu].into_iter().flatten();
+        for v in [s.tau_s0, s.max_offset, s.alpha, s.mean_force].into_iter().chain(grasp) {
             bad("statics", v)?;
         }
     }

@@ -71,8 +71,8 @@ fn nominal_hand_forces_of_d7() {
     let s = scene();
     let f = Finger::new(&nominal(), &s).unwrap();
     let st = stage_statics(&f, &s).unwrap();
-    close_abs(st.hand0[1], 3.74, 0.005, "F0_hand,y");
-    close_abs(st.hand_mu[1], -11.33, 0.005, "Fmu_hand,y");
+    close_abs(st.grasp.hand0[1], 3.74, 0.005, "F0_hand,y");
+    close_abs(st.grasp.hand_mu[1], -11.33, 0.005, "Fmu_hand,y");
     assert!(st.form_closed_0);
 }
 

@@ -43,7 +43,7 @@ pub fn simulate_order(
     ) -> DynamicsResult {
         let ctl = Controls::DIAGNOSTIC;
         let mut scene = CentredScene::new(f, s, st, &ctl);
-        if !scene.prepare(st.f0, &ctl) {
+        if !scene.prepare(st.grasp.f0, &ctl) {
             return scene.result();
         }
         let run = drive(&mut scene, stepper, integ, &ctl, s.criteria.t_max, &mut ());

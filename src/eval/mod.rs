@@ -31,5 +31,5 @@ pub use stage3::{
 };
 pub use stages::{
     evaluate_statics, stage_kinematics, stage_statics, Cause, Discard, EvalOptions, Evaluation, KinematicsResult,
-    ObjectMotion, Partial, PartialGrasp, Reason, StaticsResult, MISSING_POSE_VIOLATION,
+    ObjectMotion, Partial, Reason, StaticsResult, MISSING_POSE_VIOLATION,
 };

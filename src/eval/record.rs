@@ -7,7 +7,7 @@
 use super::objectives::Objectives;
 use super::record_robust::RobustRecord;
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
-use super::stages::{Cause, Evaluation, PartialGrasp, Reason, StaticsResult};
+use super::stages::{Cause, Evaluation, Reason};
 use crate::model::SweepFailure;
 use crate::params::{DesignParameters, ForceModel, SceneKind};
 use crate::sim::Method;
@@ -241,17 +241,11 @@ impl StaticsRecord {
     fn from_eval(ev: &Evaluation) -> Self {
         let st = ev.statics;
         let spring = st.map(|s| [s.tau_s_min, s.tau_s0]).or(ev.partial.spring);
-        let pg = ev.partial.grasp;
-        // a value of the grasp: from stage 2's result, or from its partial values
-        let grasp = |a: fn(&StaticsResult) -> [f64; 2], b: fn(&PartialGrasp) -> [f64; 2]| {
-            st.as_ref().map(a).or(pg.as_ref().map(b))
-        };
-        let theta = grasp(|s| s.theta, |g| g.theta);
-        let k = grasp(|s| s.k, |g| g.k);
-        let f0 = grasp(|s| s.f0, |g| g.f0);
-        let fmu = grasp(|s| s.fmu, |g| g.fmu);
-        let hand0 = grasp(|s| s.hand0, |g| g.hand0);
-        let hand_mu = grasp(|s| s.hand_mu, |g| g.hand_mu);
+        // the grasp: from stage 2's result, or from the values it computed before a discard
+        let g = st.map(|s| s.grasp).or(ev.partial.grasp);
+        let (theta, k) = (g.map(|g| g.theta), g.map(|g| g.k));
+        let (f0, fmu) = (g.map(|g| g.f0), g.map(|g| g.fmu));
+        let (hand0, hand_mu) = (g.map(|g| g.hand0), g.map(|g| g.hand_mu));
         StaticsRecord {
             tau_s_min: spring.map(|s| s[0]),
             tau_s0: spring.map(|s| s[1]),

@@ -12,7 +12,7 @@
 use super::record_robust::ScenarioRecord;
 use super::stage3::evaluate_dynamics;
 use super::stages::{kinematics_partial, statics_with_spring, Cause, Discard, EvalOptions, Evaluation};
-use crate::model::spring_preload;
+use crate::model::{spring_preload, CentredGrasp, StaticsResult};
 use crate::params::{Design, Problem, Robust, Scenario, SceneParams, STREAM_OPTIMISE};
 use crate::sim::Sink;
 use std::time::Instant;
@@ -92,7 +92,7 @@ pub struct RobustStart {
     /// Stages 0–1 and the first object's stage 2: the flat part of the design's record.
     pub base: Evaluation,
     /// Stage 2 per object (None: stages 0–1 or the spring discarded the design first).
-    pub objects: Vec<Option<Result<crate::model::StaticsResult, Discard>>>,
+    pub objects: Vec<Option<Result<StaticsResult, Discard>>>,
     /// The design's stage 0–2 discard: the stage, the reason (naming the object) and the
     /// violation (summed over the objects that fail).
     pub discard: Option<(u8, String, f64, Option<Cause>)>,
@@ -181,13 +181,7 @@ pub fn run_scenario<K: Sink + ?Sized>(
     // the scenario's statics: the same spring, the scenario's torque and object
     match crate::model::grasp_at(&kin.finger, s, st_o.tau_s0, 0.0) {
         Ok(g) if g.forces[0].f0.iter().all(|f| *f > 0.0) => {
-            let ff = &g.forces[0];
-            let mut st = *st_o;
-            st.theta = [g.cp[0].theta1, g.cp[0].theta2];
-            st.k = [g.cp[0].k1, g.cp[0].k2];
-            (st.f0, st.fmu) = (ff.f0, ff.fmu);
-            st.hand0 = [g.hand0.x, g.hand0.y];
-            st.hand_mu = [g.hand_mu.x, g.hand_mu.y];
+            let st = StaticsResult { grasp: CentredGrasp::of(&g), ..*st_o };
             ev.statics = Some(st);
             ev = evaluate_dynamics(ev, s, opts, sink);
         }

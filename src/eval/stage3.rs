@@ -120,7 +120,7 @@ fn grasp(r: SceneResult) -> DynamicsResult {
 pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
     opts.controls.mode == Mode::Pipeline
         && s.setup.kind == SceneKind::Centred
-        && force_margin(s, r_area(s), nalgebra::Vector2::new(st.hand0[0], st.hand0[1])) < 0.0
+        && force_margin(s, r_area(s), nalgebra::Vector2::new(st.grasp.hand0[0], st.grasp.hand0[1])) < 0.0
 }
 
 /// The discard the centred scene gives in a free-kind stage 3: only the finger's own

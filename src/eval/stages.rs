@@ -5,9 +5,9 @@
 
 use crate::model::isotropy;
 use crate::model::spring_preload;
-pub use crate::model::StaticsResult;
 use crate::model::{closure_matrix, form_closure_test, grasp_at, max_offset, OffsetFailure};
 use crate::model::{singularity_sweep, Sweep, SweepFailure};
+pub use crate::model::{CentredGrasp, StaticsResult};
 use crate::model::{Finger, GeomError};
 use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::{Controls, DynOutcome, DynamicsResult, FreeEnd, FreeResult, Integration, OffsetResult};
@@ -286,39 +286,7 @@ pub struct Partial {
     pub spring: Option<[f64; 2]>,
     /// The centred grasp (closed pose θ, k; f⁰, f^μ; F⁰_hand, F^μ_hand) when stage 2's force
     /// positiveness discarded it.
-    pub grasp: Option<PartialGrasp>,
-}
-
-/// Stage-2 values of a grasp whose forces were not all positive.
-#[derive(Debug, Clone, Copy)]
-pub struct PartialGrasp {
-    /// θ1, θ2 of the closed pose.
-    pub theta: [f64; 2],
-    /// k1, k2.
-    pub k: [f64; 2],
-    /// f⁰ (finger 1).
-    pub f0: [f64; 2],
-    /// f^μ (finger 1).
-    pub fmu: [f64; 2],
-    /// F⁰_hand.
-    pub hand0: [f64; 2],
-    /// F^μ_hand.
-    pub hand_mu: [f64; 2],
-}
-
-impl PartialGrasp {
-    /// The values of finger 1's centred grasp `g`.
-    fn of(g: &crate::model::Grasp) -> Self {
-        let (cp, ff) = (&g.cp[0], &g.forces[0]);
-        PartialGrasp {
-            theta: [cp.theta1, cp.theta2],
-            k: [cp.k1, cp.k2],
-            f0: ff.f0,
-            fmu: ff.fmu,
-            hand0: [g.hand0.x, g.hand0.y],
-            hand_mu: [g.hand_mu.x, g.hand_mu.y],
-        }
-    }
+    pub grasp: Option<CentredGrasp>,
 }
 
 impl Evaluation {
@@ -437,7 +405,7 @@ pub(crate) fn statics_with_spring(
             OffsetFailure::PalmForceNotPositive(g.hand_mu.y)
         };
         let v = ((-fmin).max(g.hand_mu.y) / s.hand.tau).max(0.0);
-        let grasp = PartialGrasp::of(&g);
+        let grasp = CentredGrasp::of(&g);
         return Err((
             d2(Reason::Grasp(why), if v.is_finite() { v } else { MISSING_POSE_VIOLATION }),
             Partial { grasp: Some(grasp), ..spring },
@@ -453,16 +421,10 @@ pub(crate) fn statics_with_spring(
         crate::params::ForceModel::Mobilised => (alpha_mu, mean_force_mu),
         crate::params::ForceModel::Frictionless => (alpha_0, mean_force_0),
     };
-    let pg = PartialGrasp::of(&g);
     Ok(StaticsResult {
         tau_s_min,
         tau_s0,
-        theta: pg.theta,
-        k: pg.k,
-        f0: pg.f0,
-        fmu: pg.fmu,
-        hand0: pg.hand0,
-        hand_mu: pg.hand_mu,
+        grasp: CentredGrasp::of(&g),
         form_closed_0,
         max_offset: scan.max_offset,
         offset_ended_by: scan.ended_by,

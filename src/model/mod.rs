@@ -21,7 +21,7 @@ pub use dynamics::{
 };
 pub use geometry::{Finger, GeomError, MassProps, Pose};
 pub use kinematics::Kin;
-pub use stage2::StaticsResult;
+pub use stage2::{CentredGrasp, StaticsResult};
 pub use statics::{
     birglen_residual, closed_pose, external_force, finger_forces, isotropy, spring_preload, spring_torque,
     tangent_angles, to_world, ClosedPose, ClosedPoseError, FingerForces,

@@ -173,8 +173,8 @@ impl<'a> CentredScene<'a> {
         let ode = FingerOde::new(f, s, st.tau_s0, 0.0);
         let r_area = r_area(s);
         let limits = GraspLimits {
-            static_force_margin: force_margin(s, r_area, V2::new(st.hand0[0], st.hand0[1])),
-            threshold: s.criteria.eta_stab * u_min(s, st.f0),
+            static_force_margin: force_margin(s, r_area, V2::new(st.grasp.hand0[0], st.grasp.hand0[1])),
+            threshold: s.criteria.eta_stab * u_min(s, st.grasp.f0),
             ..GraspLimits::unknown(r_area)
         };
         CentredScene { ode, s, limits, tracker: Tracker::new(ctl.mode == Mode::Pipeline) }
@@ -374,7 +374,7 @@ pub(crate) fn run<K: Sink + ?Sized>(
     sink: &mut K,
 ) -> DynamicsResult {
     let mut scene = CentredScene::new(f, s, st, ctl);
-    if scene.prepare(st.f0, ctl) {
+    if scene.prepare(st.grasp.f0, ctl) {
         driver::simulate(scene, integ, ctl, tolerances(integ), s.criteria.t_max, sink)
     } else {
         scene.result()
