@@ -69,6 +69,10 @@ pub mod math;
 // The face: the few names a library user needs.
 mod facade;
 
+/// The row walker the CSV writers use, for the Python package's DataFrame columns (not a
+/// user's API).
+#[doc(hidden)]
+pub use cells::{walk_row, CellError, Leaf, RowSink};
 pub use error::{Error, Result};
 pub use eval::{Cause, Record, SimulationRecord};
 pub use facade::{

@@ -5,6 +5,10 @@ A table is handed over as a list of columns ``(name, kind, values, missing)``: k
 ``"f64"`` (a float64 array, NaN where missing), ``"i64"`` / ``"bool"`` (an int64 / bool
 array; ``missing``, a bool array, when the field is optional, else None) or ``"str"`` (a
 list of str or None).
+
+Whole-number arguments (seed, threads, pop, generations, first_id, n, id) take an int or a
+NumPy integer; anything else, a bool, or a value out of range is gripopt.errors.InputError
+naming the argument (crates/gripopt-py/src/args.rs).
 """
 
 from typing import Any, Callable, Optional, Union

@@ -14,11 +14,13 @@ share gripopt's one thread pool.
 
 from __future__ import annotations
 
+import operator
 from typing import Any, Optional
 
 import numpy as np
 import pandas as pd
 
+from .errors import InputError
 from .problem import Designs, Problem, design_frame
 
 
@@ -27,6 +29,17 @@ def _chunk(
 ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """One task: the rows, minimised objectives and domination keys of a chunk."""
     return problem._evaluate_batch(x, static_only, threads, first_id)
+
+
+def _chunk_size(n: Any) -> int:
+    """``chunk_size`` as an int ≥ 1 (an int or a NumPy integer, not a bool), else an InputError."""
+    try:
+        k = operator.index(n)
+    except TypeError:
+        k = 0
+    if isinstance(n, bool) or k < 1:
+        raise InputError(f"chunk_size = {n!r}: must be an int of at least 1", field="chunk_size")
+    return k
 
 
 def evaluate_batch(
@@ -55,8 +68,9 @@ def evaluate_batch(
     """
     d = design_frame(designs)
     x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
-    if chunk_size < 1:
-        raise ValueError(f"chunk_size = {chunk_size}: must be at least 1")
+    chunk_size = _chunk_size(chunk_size)
+    # threads and first_id checked here, not on the workers: an empty batch evaluated locally
+    problem._evaluate_batch(x[:0], static_only, threads, first_id)
     starts = range(0, len(x), chunk_size)
     futures = [
         client.submit(_chunk, problem, x[a : a + chunk_size], static_only, threads, first_id + a, pure=False)

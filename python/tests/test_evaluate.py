@@ -143,7 +143,7 @@ def test_bad_designs_are_input_errors(problem):
     with pytest.raises(gripopt.InputError, match="row 2, `b` = NaN is not finite") as e:
         problem.evaluate(x)
     assert e.value.exit_code == 2
-    with pytest.raises(gripopt.InputError, match="--threads"):
+    with pytest.raises(gripopt.InputError, match="threads = 0: must be an int from 1 to 1024"):
         problem.evaluate(x[:2], threads=0)
 
 

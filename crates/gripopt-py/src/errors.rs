@@ -40,16 +40,21 @@ fn file_and_field(e: &Error) -> (Option<String>, Option<String>) {
 
 /// `e` as a Python exception of the package's hierarchy.
 pub fn to_py(e: Error) -> PyErr {
+    let (file, field) = file_and_field(&e);
+    exception(class_of(&e), e.to_string(), file, field, e.exit_code())
+}
+
+/// An exception of class `class` (in `gripopt.errors`) with gripopt's message and attributes.
+fn exception(class: &str, message: String, file: Option<String>, field: Option<String>, code: i32) -> PyErr {
     Python::attach(|py| {
-        let (file, field) = file_and_field(&e);
         let made = (|| -> PyResult<PyErr> {
-            let cls = py.import("gripopt.errors")?.getattr(class_of(&e))?;
-            let v = cls.call1((e.to_string(), file, field, e.exit_code()))?;
+            let cls = py.import("gripopt.errors")?.getattr(class)?;
+            let v = cls.call1((message.as_str(), file, field, code))?;
             Ok(PyErr::from_value(v))
         })();
         // the package is installed with its Python side; without it, a plain RuntimeError
         made.unwrap_or_else(|imp| {
-            let err = pyo3::exceptions::PyRuntimeError::new_err(e.to_string());
+            let err = pyo3::exceptions::PyRuntimeError::new_err(message);
             err.set_cause(py, Some(imp));
             err
         })
@@ -59,6 +64,12 @@ pub fn to_py(e: Error) -> PyErr {
 /// An input error (exit code 2) with `message`, e.g. a design array of the wrong shape.
 pub fn input(message: impl Into<String>) -> PyErr {
     to_py(Error::Input(message.into()))
+}
+
+/// An input error about the function argument `name` (its `field`), with `message`.
+pub fn argument(name: &str, message: String) -> PyErr {
+    let code = Error::Input(String::new()).exit_code();
+    exception("InputError", message, None, Some(name.to_string()), code)
 }
 
 /// `Result<T, gripopt::Error>` → `PyResult<T>`.

@@ -1,16 +1,17 @@
-//! Typed rows as columns, by serde: one column per leaf field of a row type (flattened
-//! structs by their own names, nested ones as `outer.inner`, arrays as `name_0`, `name_1`,
-//! …), so a DataFrame's columns are the row type's fields, whatever fields it gains. `None`
+//! Typed rows as columns: one column per leaf field of a row type, walked by the library's
+//! CSV row walker (`gripopt::walk_row`: flattened structs by their own names, nested ones
+//! as `outer.inner`, arrays as `name_0`, `name_1`, …), so a DataFrame's columns are the row
+//! type's fields and a CSV file's columns, whatever fields it gains. `None`
 //! is a missing value; a column knows whether its field is an `Option`, so that pandas gets
 //! a nullable integer or boolean column for it even where every value is present.
 
+use gripopt::{walk_row, CellError, Leaf, RowSink};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use serde::de::DeserializeOwned;
-use serde::ser::{self, Impossible, Serialize};
+use serde::ser::{self, Serialize};
 use std::collections::HashMap;
-use std::fmt::Display;
 
 /// The values of one column (missing ones hold a filler: NaN, 0, false, None).
 #[derive(Debug)]
@@ -51,8 +52,8 @@ impl Column {
     }
 }
 
-/// A leaf value.
-enum Leaf {
+/// A leaf value as a column holds it.
+enum Value {
     F64(f64),
     I64(i64),
     Bool(bool),
@@ -68,25 +69,12 @@ pub struct Table {
     rows: usize,
     /// The column after the last one written (rows repeat their fields in order).
     cursor: usize,
-    /// The key of the value being written.
+    /// A buffer for the column names of a row's leaves.
     path: String,
 }
 
 /// A row that cannot be a table's (a map key that is not text, an enum with data, bytes).
-#[derive(Debug)]
-pub struct FrameError(String);
-
-impl Display for FrameError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-impl std::error::Error for FrameError {}
-impl ser::Error for FrameError {
-    fn custom<T: Display>(msg: T) -> Self {
-        FrameError(msg.to_string())
-    }
-}
+pub type FrameError = CellError;
 
 impl Table {
     /// The table of `rows`. A column whose values are all missing gets its field's type
@@ -140,9 +128,11 @@ impl Table {
 
     /// Add one row.
     pub fn push<T: Serialize + ?Sized>(&mut self, row: &T) -> Result<(), FrameError> {
-        self.path.clear();
         self.cursor = 0;
-        row.serialize(Ser { t: self, optional: false, raw: false })?;
+        let mut key = std::mem::take(&mut self.path);
+        let walked = walk_row(row, self, &mut key);
+        self.path = key;
+        walked?;
         self.rows += 1;
         for c in &mut self.cols {
             if c.len() < self.rows {
@@ -174,22 +164,18 @@ impl Table {
         Table { cols, rows, ..Table::default() }
     }
 
-    fn put(&mut self, leaf: Leaf, optional: bool) -> Result<(), FrameError> {
+    fn put(&mut self, key: &str, leaf: Value, optional: bool) -> Result<(), FrameError> {
         let k = match self.cols.get(self.cursor) {
-            Some(c) if c.name == self.path => self.cursor,
-            _ => match self.index.get(&self.path) {
+            Some(c) if c.name == key => self.cursor,
+            _ => match self.index.get(key) {
                 Some(&k) => k,
                 None => {
-                    let mut c = Column {
-                        name: self.path.clone(),
-                        values: Values::Unknown,
-                        missing: Vec::new(),
-                        optional: false,
-                    };
+                    let mut c =
+                        Column { name: key.to_string(), values: Values::Unknown, missing: Vec::new(), optional: false };
                     for _ in 0..self.rows {
                         c.push_missing();
                     }
-                    self.index.insert(self.path.clone(), self.cols.len());
+                    self.index.insert(key.to_string(), self.cols.len());
                     self.cols.push(c);
                     self.cols.len() - 1
                 }
@@ -198,28 +184,28 @@ impl Table {
         self.cursor = k + 1;
         let c = &mut self.cols[k];
         if c.len() > self.rows {
-            return Err(FrameError(format!("column `{}` written twice in one row", c.name)));
+            return Err(ser::Error::custom(format_args!("column `{}` written twice in one row", c.name)));
         }
         c.optional |= optional;
-        if let Leaf::Missing = leaf {
+        if let Value::Missing = leaf {
             c.push_missing();
             return Ok(());
         }
         if let Values::Unknown = c.values {
             let n = c.len();
             c.values = match &leaf {
-                Leaf::F64(_) => Values::F64(vec![f64::NAN; n]),
-                Leaf::I64(_) => Values::I64(vec![0; n]),
-                Leaf::Bool(_) => Values::Bool(vec![false; n]),
+                Value::F64(_) => Values::F64(vec![f64::NAN; n]),
+                Value::I64(_) => Values::I64(vec![0; n]),
+                Value::Bool(_) => Values::Bool(vec![false; n]),
                 _ => Values::Text(vec![None; n]),
             };
         }
         match (&mut c.values, leaf) {
-            (Values::F64(v), Leaf::F64(x)) => v.push(x),
-            (Values::I64(v), Leaf::I64(x)) => v.push(x),
-            (Values::Bool(v), Leaf::Bool(x)) => v.push(x),
-            (Values::Text(v), Leaf::Text(x)) => v.push(Some(x)),
-            _ => return Err(FrameError(format!("column `{}`: values of different types", c.name))),
+            (Values::F64(v), Value::F64(x)) => v.push(x),
+            (Values::I64(v), Value::I64(x)) => v.push(x),
+            (Values::Bool(v), Value::Bool(x)) => v.push(x),
+            (Values::Text(v), Value::Text(x)) => v.push(Some(x)),
+            _ => return Err(ser::Error::custom(format_args!("column `{}`: values of different types", c.name))),
         }
         c.missing.push(false);
         Ok(())
@@ -251,347 +237,26 @@ impl Table {
     }
 }
 
-/// The name serde gives gripopt's pre-quoted CSV cells (`reason`): written `"text"`, or
-/// `""` for none.
-const RAW_CELL: &str = "gripopt::RawCell";
-
-/// The serializer of one value at `t.path`.
-struct Ser<'a> {
-    t: &'a mut Table,
-    /// Inside an `Option`.
-    optional: bool,
-    /// A pre-quoted CSV cell.
-    raw: bool,
-}
-
-/// A struct, map or sequence: each field or element at its own key.
-struct Fields<'a> {
-    t: &'a mut Table,
-    /// The key's length before this value's fields were appended.
-    base: usize,
-    /// Elements so far (sequences).
-    n: usize,
-    optional: bool,
-}
-
-impl Fields<'_> {
-    fn field<T: Serialize + ?Sized>(&mut self, name: &str, v: &T) -> Result<(), FrameError> {
-        self.t.path.truncate(self.base);
-        if self.base > 0 {
-            self.t.path.push('.');
-        }
-        self.t.path.push_str(name);
-        self.value(v)
-    }
-    /// The value of the field whose name is already in the key.
-    fn value<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-        v.serialize(Ser { t: self.t, optional: self.optional, raw: false })?;
-        self.t.path.truncate(self.base);
-        Ok(())
-    }
-    fn element<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-        self.t.path.truncate(self.base);
-        let n = self.n;
-        self.n += 1;
-        use std::fmt::Write as _;
-        let _ = write!(self.t.path, "_{n}");
-        v.serialize(Ser { t: self.t, optional: self.optional, raw: false })?;
-        self.t.path.truncate(self.base);
-        Ok(())
-    }
-}
-
-impl<'a> Ser<'a> {
-    fn leaf(self, l: Leaf) -> Result<(), FrameError> {
-        let o = self.optional;
-        self.t.put(l, o)
-    }
-    fn fields(self) -> Fields<'a> {
-        let base = self.t.path.len();
-        Fields { t: self.t, base, n: 0, optional: self.optional }
-    }
-}
-
-macro_rules! ints {
-    ($($f:ident $t:ty),*) => {$(
-        fn $f(self, v: $t) -> Result<(), FrameError> {
-            let x = i64::try_from(v).map_err(|_| FrameError(format!("`{}` = {v}: beyond int64", self.t.path)))?;
-            self.leaf(Leaf::I64(x))
-        }
-    )*};
-}
-
-impl<'a> ser::Serializer for Ser<'a> {
-    type Ok = ();
-    type Error = FrameError;
-    type SerializeSeq = Fields<'a>;
-    type SerializeTuple = Fields<'a>;
-    type SerializeTupleStruct = Fields<'a>;
-    type SerializeTupleVariant = Impossible<(), FrameError>;
-    type SerializeMap = Fields<'a>;
-    type SerializeStruct = Fields<'a>;
-    type SerializeStructVariant = Impossible<(), FrameError>;
-
-    fn serialize_bool(self, v: bool) -> Result<(), FrameError> {
-        self.leaf(Leaf::Bool(v))
-    }
-    ints!(serialize_i8 i8, serialize_i16 i16, serialize_i32 i32, serialize_i64 i64,
-          serialize_u8 u8, serialize_u16 u16, serialize_u32 u32, serialize_u64 u64);
-    fn serialize_f32(self, v: f32) -> Result<(), FrameError> {
-        self.leaf(Leaf::F64(v.into()))
-    }
-    fn serialize_f64(self, v: f64) -> Result<(), FrameError> {
-        self.leaf(Leaf::F64(v))
-    }
-    fn serialize_char(self, v: char) -> Result<(), FrameError> {
-        self.leaf(Leaf::Text(v.to_string()))
-    }
-    fn serialize_str(self, v: &str) -> Result<(), FrameError> {
-        if self.raw {
+impl RowSink for Table {
+    fn leaf(&mut self, key: &str, value: Leaf<'_>, optional: bool) -> Result<(), CellError> {
+        let leaf = match value {
+            Leaf::Bool(v) => Value::Bool(v),
+            Leaf::I64(v) => Value::I64(v),
+            Leaf::U64(v) => Value::I64(
+                i64::try_from(v).map_err(|_| ser::Error::custom(format_args!("`{key}` = {v}: beyond int64")))?,
+            ),
+            Leaf::F64(v) => Value::F64(v),
+            Leaf::Char(c) => Value::Text(c.to_string()),
+            Leaf::Str(v) | Leaf::Variant(v) => Value::Text(v.to_string()),
             // a pre-quoted cell: `"text"`, `""` = none
-            let text = v.strip_prefix('"').and_then(|s| s.strip_suffix('"')).unwrap_or(v);
-            let leaf = if text.is_empty() { Leaf::Missing } else { Leaf::Text(text.to_string()) };
-            return Ser { optional: true, ..self }.leaf(leaf);
-        }
-        self.leaf(Leaf::Text(v.to_string()))
-    }
-    fn serialize_bytes(self, _: &[u8]) -> Result<(), FrameError> {
-        Err(FrameError(format!("`{}`: bytes are not a column", self.t.path)))
-    }
-    fn serialize_none(self) -> Result<(), FrameError> {
-        Ser { optional: true, ..self }.leaf(Leaf::Missing)
-    }
-    fn serialize_some<T: Serialize + ?Sized>(self, v: &T) -> Result<(), FrameError> {
-        v.serialize(Ser { optional: true, ..self })
-    }
-    fn serialize_unit(self) -> Result<(), FrameError> {
-        self.leaf(Leaf::Missing)
-    }
-    fn serialize_unit_struct(self, _: &'static str) -> Result<(), FrameError> {
-        self.leaf(Leaf::Missing)
-    }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, variant: &'static str) -> Result<(), FrameError> {
-        self.leaf(Leaf::Text(variant.to_string()))
-    }
-    fn serialize_newtype_struct<T: Serialize + ?Sized>(self, name: &'static str, v: &T) -> Result<(), FrameError> {
-        v.serialize(Ser { raw: name == RAW_CELL, ..self })
-    }
-    fn serialize_newtype_variant<T: Serialize + ?Sized>(
-        self,
-        _: &'static str,
-        _: u32,
-        variant: &'static str,
-        _: &T,
-    ) -> Result<(), FrameError> {
-        Err(FrameError(format!("`{}`: the enum variant `{variant}` has data", self.t.path)))
-    }
-    fn serialize_seq(self, _: Option<usize>) -> Result<Fields<'a>, FrameError> {
-        Ok(self.fields())
-    }
-    fn serialize_tuple(self, _: usize) -> Result<Fields<'a>, FrameError> {
-        Ok(self.fields())
-    }
-    fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Fields<'a>, FrameError> {
-        Ok(self.fields())
-    }
-    fn serialize_tuple_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        v: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeTupleVariant, FrameError> {
-        Err(FrameError(format!("`{}`: the enum variant `{v}` has data", self.t.path)))
-    }
-    fn serialize_map(self, _: Option<usize>) -> Result<Fields<'a>, FrameError> {
-        Ok(self.fields())
-    }
-    fn serialize_struct(self, _: &'static str, _: usize) -> Result<Fields<'a>, FrameError> {
-        Ok(self.fields())
-    }
-    fn serialize_struct_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        v: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeStructVariant, FrameError> {
-        Err(FrameError(format!("`{}`: the enum variant `{v}` has data", self.t.path)))
-    }
-}
-
-/// serde's three kinds of sequence (`[T]`, tuples, tuple structs): elements `key_0`, `key_1`, …
-macro_rules! elements {
-    ($($trait:ident $method:ident),*) => {$(
-        impl ser::$trait for Fields<'_> {
-            type Ok = ();
-            type Error = FrameError;
-            fn $method<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), FrameError> {
-                self.element(v)
+            Leaf::Raw(v) => {
+                let text = v.strip_prefix('"').and_then(|s| s.strip_suffix('"')).unwrap_or(v);
+                let leaf = if text.is_empty() { Value::Missing } else { Value::Text(text.to_string()) };
+                return self.put(key, leaf, true);
             }
-            fn end(self) -> Result<(), FrameError> {
-                Ok(())
-            }
-        }
-    )*};
-}
-elements!(SerializeSeq serialize_element, SerializeTuple serialize_element, SerializeTupleStruct serialize_field);
-
-impl ser::SerializeStruct for Fields<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, name: &'static str, v: &T) -> Result<(), FrameError> {
-        self.field(name, v)
-    }
-    fn end(self) -> Result<(), FrameError> {
-        Ok(())
-    }
-}
-
-impl ser::SerializeMap for Fields<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    fn serialize_key<T: Serialize + ?Sized>(&mut self, _: &T) -> Result<(), FrameError> {
-        Err(FrameError("a map's key and value apart".into()))
-    }
-    fn serialize_value<T: Serialize + ?Sized>(&mut self, _: &T) -> Result<(), FrameError> {
-        Err(FrameError("a map's key and value apart".into()))
-    }
-    fn serialize_entry<K: Serialize + ?Sized, V: Serialize + ?Sized>(
-        &mut self,
-        k: &K,
-        v: &V,
-    ) -> Result<(), FrameError> {
-        // the key appended to the path in place (no allocation per field)
-        self.t.path.truncate(self.base);
-        if self.base > 0 {
-            self.t.path.push('.');
-        }
-        k.serialize(KeyText(&mut self.t.path))?;
-        self.value(v)
-    }
-    fn end(self) -> Result<(), FrameError> {
-        Ok(())
-    }
-}
-
-/// A map key, appended to a key as text.
-struct KeyText<'a>(&'a mut String);
-
-impl ser::Serializer for KeyText<'_> {
-    type Ok = ();
-    type Error = FrameError;
-    type SerializeSeq = Impossible<(), FrameError>;
-    type SerializeTuple = Impossible<(), FrameError>;
-    type SerializeTupleStruct = Impossible<(), FrameError>;
-    type SerializeTupleVariant = Impossible<(), FrameError>;
-    type SerializeMap = Impossible<(), FrameError>;
-    type SerializeStruct = Impossible<(), FrameError>;
-    type SerializeStructVariant = Impossible<(), FrameError>;
-    fn serialize_str(self, v: &str) -> Result<(), FrameError> {
-        self.0.push_str(v);
-        Ok(())
-    }
-    fn serialize_bool(self, _: bool) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_i8(self, _: i8) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_i16(self, _: i16) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_i32(self, _: i32) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_i64(self, _: i64) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_u8(self, _: u8) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_u16(self, _: u16) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_u32(self, _: u32) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_u64(self, _: u64) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_f32(self, _: f32) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_f64(self, _: f64) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_char(self, v: char) -> Result<(), FrameError> {
-        self.0.push(v);
-        Ok(())
-    }
-    fn serialize_bytes(self, _: &[u8]) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_none(self) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_some<T: Serialize + ?Sized>(self, _: &T) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_unit(self) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_unit_struct(self, _: &'static str) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, v: &'static str) -> Result<(), FrameError> {
-        self.0.push_str(v);
-        Ok(())
-    }
-    fn serialize_newtype_struct<T: Serialize + ?Sized>(self, _: &'static str, v: &T) -> Result<(), FrameError> {
-        v.serialize(self)
-    }
-    fn serialize_newtype_variant<T: Serialize + ?Sized>(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: &T,
-    ) -> Result<(), FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_seq(self, _: Option<usize>) -> Result<Self::SerializeSeq, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_tuple(self, _: usize) -> Result<Self::SerializeTuple, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Self::SerializeTupleStruct, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_tuple_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeTupleVariant, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_map(self, _: Option<usize>) -> Result<Self::SerializeMap, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_struct(self, _: &'static str, _: usize) -> Result<Self::SerializeStruct, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
-    }
-    fn serialize_struct_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Self::SerializeStructVariant, FrameError> {
-        Err(ser::Error::custom("a map key must be text"))
+            Leaf::Missing => Value::Missing,
+        };
+        self.put(key, leaf, optional)
     }
 }
 

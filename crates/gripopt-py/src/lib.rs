@@ -4,6 +4,7 @@
 //! back — handing tables over as typed columns that the Python side turns into pandas
 //! DataFrames. Errors become the exceptions of `gripopt.errors`. docs/python.md.
 
+mod args;
 mod errors;
 mod frame;
 mod problem;

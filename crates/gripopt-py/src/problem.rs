@@ -1,7 +1,8 @@
 //! `_gripopt.Problem`: a problem file, evaluated and simulated through the library's facade
 //! with the GIL released (the Python side, `gripopt.Problem`, makes the DataFrames).
 
-use crate::errors::{input, IntoPy};
+use crate::args;
+use crate::errors::{argument, input, IntoPy};
 use crate::frame::Table;
 use gripopt::{DesignParameters, Integration, Method, Problem, Stages, DESIGN_NAMES};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
@@ -126,10 +127,16 @@ impl PyProblem {
         py: Python<'py>,
         designs: PyReadonlyArray2<'py, f64>,
         static_only: bool,
-        threads: Option<usize>,
-        first_id: u64,
+        #[pyo3(from_py_with = args::threads)] threads: Option<usize>,
+        #[pyo3(from_py_with = args::first_id)] first_id: u64,
     ) -> PyResult<(Bound<'py, PyList>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
         let xs = designs_of(&designs)?;
+        if let Some(last) = xs.len().checked_sub(1) {
+            if first_id.checked_add(last as u64).is_none_or(|id| id > i64::MAX as u64) {
+                let rule = format!("the last of {} designs would have an id beyond {} (int64)", xs.len(), i64::MAX);
+                return Err(argument("first_id", format!("first_id = {first_id}: {rule}")));
+            }
+        }
         let p = &self.problem;
         let (table, f, k) = py
             .detach(|| -> gripopt::Result<_> {
@@ -203,7 +210,12 @@ impl PyProblem {
 
     /// `n` designs (n, 6) drawn uniformly in the bounds from `seed`'s stream (those of
     /// `gripopt bench static --seed`).
-    fn random_designs<'py>(&self, py: Python<'py>, n: usize, seed: u64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn random_designs<'py>(
+        &self,
+        py: Python<'py>,
+        #[pyo3(from_py_with = args::design_count)] n: usize,
+        #[pyo3(from_py_with = args::seed)] seed: u64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let xs = gripopt::random_designs(&self.problem, n, seed);
         let flat: Vec<f64> = xs.iter().flat_map(|d| d.to_array()).collect();
         PyArray1::from_vec(py, flat).reshape([n, 6])

@@ -2,6 +2,7 @@
 //! callback, the stop flag set by ctrl-c or by the callback's exception) and
 //! `_gripopt.RunFolder`, a run folder read back through the library's reader.
 
+use crate::args;
 use crate::errors::{input, to_py, IntoPy};
 use crate::frame::Table;
 use crate::problem::PyProblem;
@@ -178,10 +179,10 @@ pub fn optimise<'py>(
     py: Python<'py>,
     problem: &PyProblem,
     out: PathBuf,
-    pop: usize,
-    generations: u64,
-    seed: u64,
-    threads: Option<usize>,
+    #[pyo3(from_py_with = args::pop)] pop: usize,
+    #[pyo3(from_py_with = args::generations)] generations: u64,
+    #[pyo3(from_py_with = args::seed)] seed: u64,
+    #[pyo3(from_py_with = args::threads)] threads: Option<usize>,
     record: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -201,8 +202,8 @@ pub fn optimise<'py>(
 pub fn resume<'py>(
     py: Python<'py>,
     path: PathBuf,
-    generations: Option<u64>,
-    threads: Option<usize>,
+    #[pyo3(from_py_with = args::generations_or_none)] generations: Option<u64>,
+    #[pyo3(from_py_with = args::threads)] threads: Option<usize>,
     force: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -267,7 +268,11 @@ impl PyRunFolder {
     /// Design `id` as recorded: its `/designs` message (JSON text), its trajectory as
     /// columns, the resolution and the shard.
     #[allow(clippy::type_complexity)]
-    fn design<'py>(&self, py: Python<'py>, id: u64) -> PyResult<(String, Bound<'py, PyList>, String, PathBuf)> {
+    fn design<'py>(
+        &self,
+        py: Python<'py>,
+        #[pyo3(from_py_with = args::design_id)] id: u64,
+    ) -> PyResult<(String, Bound<'py, PyList>, String, PathBuf)> {
         let f = &self.folder;
         let rec = py.detach(|| f.design(id)).py()?;
         let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
@@ -276,7 +281,11 @@ impl PyRunFolder {
         Ok((json(&rec.record)?, traj.into_py(py)?, res.unwrap_or_default(), rec.file))
     }
     /// Re-simulate design `id` and compare it with its recording.
-    fn replay<'py>(&self, py: Python<'py>, id: u64) -> PyResult<Bound<'py, PyDict>> {
+    fn replay<'py>(
+        &self,
+        py: Python<'py>,
+        #[pyo3(from_py_with = args::design_id)] id: u64,
+    ) -> PyResult<Bound<'py, PyDict>> {
         let f = &self.folder;
         let r = py.detach(|| f.replay(id)).py()?;
         let d = PyDict::new(py);
