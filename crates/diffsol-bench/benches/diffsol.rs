@@ -177,8 +177,8 @@ fn simulate(
     atol: f64,
 ) -> anyhow::Result<DsResult> {
     let base = FingerOde::new(f, s, st.tau_s0, 0.0);
-    let eq = compliant_equilibrium(&base, s, st.f0).ok_or_else(|| anyhow::anyhow!("no compliant equilibrium"))?;
-    let threshold = s.criteria.eta_stab * u_min(s, st.f0);
+    let eq = compliant_equilibrium(&base, s, st.grasp.f0).ok_or_else(|| anyhow::anyhow!("no compliant equilibrium"))?;
+    let threshold = s.criteria.eta_stab * u_min(s, st.grasp.f0);
     let mem = Cell::new([Memory::default(); 2]);
     let after_first = Cell::new(false);
     let evals = Cell::new(0u64);
