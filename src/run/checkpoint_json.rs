@@ -301,49 +301,28 @@ impl<'a, 's, W: Write> ser::Serializer for &'a mut Canonical<'s, W> {
     }
 }
 
-impl<W: Write> ser::SerializeSeq for Array<'_, '_, W> {
-    type Ok = ();
-    type Error = Error;
-    fn serialize_element<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<()> {
-        self.element(v)
-    }
-    fn end(self) -> Result<()> {
-        self.close()
-    }
+/// The sequence-like serde traits: each element written after the other, then the close.
+macro_rules! array_serializers {
+    ($($kind:ident::$element:ident),*) => {$(
+        impl<W: Write> ser::$kind for Array<'_, '_, W> {
+            type Ok = ();
+            type Error = Error;
+            fn $element<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<()> {
+                self.element(v)
+            }
+            fn end(self) -> Result<()> {
+                self.close()
+            }
+        }
+    )*};
 }
 
-impl<W: Write> ser::SerializeTuple for Array<'_, '_, W> {
-    type Ok = ();
-    type Error = Error;
-    fn serialize_element<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<()> {
-        self.element(v)
-    }
-    fn end(self) -> Result<()> {
-        self.close()
-    }
-}
-
-impl<W: Write> ser::SerializeTupleStruct for Array<'_, '_, W> {
-    type Ok = ();
-    type Error = Error;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<()> {
-        self.element(v)
-    }
-    fn end(self) -> Result<()> {
-        self.close()
-    }
-}
-
-impl<W: Write> ser::SerializeTupleVariant for Array<'_, '_, W> {
-    type Ok = ();
-    type Error = Error;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<()> {
-        self.element(v)
-    }
-    fn end(self) -> Result<()> {
-        self.close()
-    }
-}
+array_serializers!(
+    SerializeSeq::serialize_element,
+    SerializeTuple::serialize_element,
+    SerializeTupleStruct::serialize_field,
+    SerializeTupleVariant::serialize_field
+);
 
 impl<W: Write> ser::SerializeMap for Object<'_, '_, W> {
     type Ok = ();
