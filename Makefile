@@ -39,31 +39,40 @@ python: $(VENV_STAMP)
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --release --locked --quiet
 
 # The same package for the tests, built with the dev profile (opt-level 2, the test
-# profile's settings): it reuses the dependencies `cargo test` compiled instead of building
-# them again with the release profile's LTO (CI minutes); `make python` installs the
-# release build again.
+# profile's settings): it reuses the dependencies `cargo test $(WORKSPACE)` compiled (the same
+# profile and features) instead of building them again (CI minutes); `make python` installs
+# the release build again.
 python-test: $(VENV_STAMP)
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --profile dev --locked --quiet
 
-# The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings.
-.PHONY: lint
-lint:
-	$(CARGO) fmt --all --check
-	$(CARGO) clippy --all-targets --locked -- -D warnings
+# The crates `make test` builds and checks: the library and binary, and the Python
+# extension (crates/gripopt-py), in one cargo invocation each, so that cargo resolves one set
+# of dependency features for both and compiles every dependency once: maturin's build of the
+# extension (make python-test) then reuses what `cargo test` compiled. (diffsol-bench, a
+# benchmark with diffsol's own dependencies, is built by `make bench` only.) PYO3_PYTHON: the
+# venv's interpreter, the one maturin builds for.
+WORKSPACE := --workspace --exclude gripopt-diffsol-bench
+PYO3_ENV  := PYO3_PYTHON=$(abspath $(VENV))/bin/python
 
-# Correctness tests (unit, integration, property; the test profile is optimised, opt-level 2),
-# then the independent reader over every MCAP file and shipped layout the tests wrote (after
+# The habits CI enforces: rustfmt (rustfmt.toml) and clippy without warnings, on the library,
+# the binary, the tests and the Python extension.
+.PHONY: lint
+lint: $(VENV_STAMP)
+	$(CARGO) fmt --all --check
+	$(PYO3_ENV) $(CARGO) clippy $(WORKSPACE) --all-targets --locked -- -D warnings
+
+# Correctness tests (unit, integration, property, and the extension crate's unit tests; the
+# test profile is optimised, opt-level 2), then the independent reader over every MCAP file and shipped layout the tests wrote (after
 # its self-test: it must reject the scene and layout defects it checks for), then the pandas
 # example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
-# (docs/export.md). The Python package: clippy on its crate, its build (make python-test: dev profile), its
-# pytest suite against the gripopt command (exit code 5, no test collected, fails too) and
+# (docs/export.md). The Python package: its build (make python-test: dev profile, every
+# dependency already compiled by `cargo test`), its pytest suite against the gripopt command (exit code 5, no test collected, fails too) and
 # every block of docs/python.md (tools/check_python_docs.py).
 test: $(VENV_STAMP) lint
 	rm -rf target/mcap-check
-	$(CARGO) test --locked
+	$(PYO3_ENV) $(CARGO) test $(WORKSPACE) --locked
 	$(VENV)/bin/python tools/test_check_mcap.py
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
-	PYO3_PYTHON=$(abspath $(VENV))/bin/python $(CARGO) clippy --locked -p gripopt-py --all-targets -- -D warnings
 	$(MAKE) python-test
 	GRIPOPT=$${CARGO_TARGET_DIR:-target}/debug/gripopt $(VENV)/bin/python -m pytest python/tests -q -p no:cacheprovider; \
 	  rc=$$?; if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc

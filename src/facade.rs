@@ -125,10 +125,11 @@ pub fn evaluate_rows(
 }
 
 /// `n` designs drawn uniformly in `problem`'s bounds from the stream of `seed` (the
-/// designs of `gripopt bench static --seed`), ψ in degrees.
-pub fn random_designs(problem: &Problem, n: usize, seed: u64) -> Vec<DesignParameters> {
+/// designs of `gripopt bench static --seed`), ψ in degrees, drawn as they are taken (the
+/// caller decides where they go, and so how much memory they take).
+pub fn random_designs(problem: &Problem, n: usize, seed: u64) -> impl Iterator<Item = DesignParameters> + '_ {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    (0..n).map(|_| DesignParameters::from_array(&problem.bounds.sample(&mut rng).to_array())).collect()
+    (0..n).map(move |_| DesignParameters::from_array(&problem.bounds.sample(&mut rng).to_array()))
 }
 
 /// A scene as `--scene` spells it: `centred`, `offset:X` or `free[:X]` (the object's
@@ -376,7 +377,7 @@ mod tests {
     #[test]
     fn batch_rows_are_each_designs_record() {
         let p = bottle();
-        let mut xs = random_designs(&p, 60, 3);
+        let mut xs: Vec<_> = random_designs(&p, 60, 3).collect();
         xs.push(DesignParameters::from_array(&p.nominal.to_array()));
         for stages in [Stages::Static, Stages::All] {
             let one = evaluate_rows(&p, &xs, 7, stages, Some(1)).unwrap();

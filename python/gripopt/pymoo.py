@@ -69,7 +69,8 @@ class GripperProblem(_PymooProblem):
 
     Args:
         problem: the :class:`gripopt.Problem`.
-        threads: worker threads per batch (None: all cores).
+        threads: worker threads per batch, or with a client per Dask task (None: all the
+            machine's or the worker's cores).
         client: a ``dask.distributed.Client``: batches are split into chunks of
             ``chunk_size`` designs and evaluated on the cluster (:mod:`gripopt.dask`);
             results are identical to a local evaluation.
@@ -108,7 +109,7 @@ class GripperProblem(_PymooProblem):
         if self.client is not None:
             from .dask import evaluate_batch
 
-            rows, f, key = evaluate_batch(self.client, self.problem, x, chunk_size=self.chunk_size)
+            rows, f, key = evaluate_batch(self.client, self.problem, x, chunk_size=self.chunk_size, threads=self.threads)
         else:
             rows, f, key = self.problem._evaluate_batch(x, threads=self.threads)
         self.last_rows = rows

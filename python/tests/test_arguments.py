@@ -36,6 +36,14 @@ def test_sample_n_and_seed(problem, value, shown):
     assert e.value.exit_code == 2 and e.value.field == "seed"
 
 
+def test_sample_larger_than_memory_is_a_memory_error(problem):
+    """An n within the argument's range whose designs cannot be allocated (48 PB) raises
+    MemoryError naming n, instead of aborting the interpreter."""
+    with pytest.raises(MemoryError, match=r"^n = 1000000000000000: 4\.800e16 bytes"):
+        problem.bounds.sample(10**15, seed=1)
+    assert len(problem.bounds.sample(2, seed=1)) == 2
+
+
 @pytest.mark.parametrize("value, shown", [*BAD, (0, "0"), (1025, "1025")])
 def test_evaluate_threads(problem, value, shown):
     with raises_naming("threads", shown, "1 to 1024"):

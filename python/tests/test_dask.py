@@ -43,6 +43,18 @@ def test_pymoo_through_the_cluster_equals_the_local_run(client, problem):
     def run(**kw):
         return minimize(GripperProblem(problem, **kw), NSGA2(pop_size=12), ("n_gen", 3), seed=4, verbose=False)
 
-    there, here = run(client=client, chunk_size=5), run()
+    there, here = run(client=client, chunk_size=5, threads=1), run()
     assert np.array_equal(there.pop.get("X"), here.pop.get("X"))
     assert np.array_equal(there.pop.get("F"), here.pop.get("F"))
+
+
+def test_pymoo_passes_its_thread_count_to_the_cluster(client, problem):
+    """GripperProblem(threads=...) reaches the Dask tasks: a thread count out of range is an
+    InputError with a client too (it used to be dropped there)."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.optimize import minimize
+
+    from gripopt.pymoo import GripperProblem
+
+    with pytest.raises(gripopt.InputError, match="^threads = 0: must be an int from 1"):
+        minimize(GripperProblem(problem, threads=0, client=client), NSGA2(pop_size=4), ("n_gen", 1), seed=1)

@@ -144,9 +144,15 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
 
     /// Load, check the format and the content checksum (a mismatch is an error).
     pub fn load(path: &Path) -> Result<Self> {
-        let (cp, mismatch) = Self::load_unverified(path)?;
+        Self::load_with_sha256(path).map(|(cp, _)| cp)
+    }
+
+    /// [`Checkpoint::load`], with the content checksum it verified (the file's field
+    /// `sha256`), from the one read of the file.
+    pub fn load_with_sha256(path: &Path) -> Result<(Self, String)> {
+        let (cp, computed, mismatch) = Self::read(path)?;
         match mismatch {
-            None => Ok(cp),
+            None => Ok((cp, computed)),
             Some(m) => Err(m.error(path)),
         }
     }
@@ -154,6 +160,12 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     /// Load and check the format; a checksum mismatch is returned beside the checkpoint
     /// instead of refused (for `resume --force`).
     pub fn load_unverified(path: &Path) -> Result<(Self, Option<ChecksumMismatch>)> {
+        Self::read(path).map(|(cp, _, mismatch)| (cp, mismatch))
+    }
+
+    /// Read `path`: the checkpoint, its content's checksum, and the mismatch with the
+    /// stored one if any.
+    fn read(path: &Path) -> Result<(Self, String, Option<ChecksumMismatch>)> {
         let invalid = |message: String| Error::Checkpoint { file: path.to_path_buf(), message };
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the checkpoint", e))?;
         let head: serde_json::Value = serde_json::from_slice(&bytes).map_err(|source| Error::Json {
@@ -184,7 +196,7 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
             source,
         })?;
         let mismatch = (stored.as_deref() != Some(computed.as_str()))
-            .then(|| ChecksumMismatch { stored: stored.clone(), computed });
+            .then(|| ChecksumMismatch { stored: stored.clone(), computed: computed.clone() });
         let cp: Self = serde_json::from_value(head).map_err(|source| Error::Json {
             path: path.to_path_buf(),
             what: "not a valid gripopt checkpoint",
@@ -201,6 +213,6 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
                 "field `state` is inconsistent (population, ranks, generation and history disagree)".into(),
             ));
         }
-        Ok((cp, mismatch))
+        Ok((cp, computed, mismatch))
     }
 }

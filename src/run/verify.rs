@@ -21,7 +21,7 @@ use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::ser::SerializeMap;
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -284,12 +284,6 @@ pub(crate) struct CheckedState {
     sha256: String,
 }
 
-/// The checkpoint's own content checksum (its field `sha256`, which loading verified).
-#[derive(Deserialize)]
-struct ChecksumField {
-    sha256: String,
-}
-
 impl CheckedState {
     /// Load `dir`'s checkpoint (a missing one is an error naming it).
     pub(crate) fn load(dir: &Path, info: &RunInfo) -> Result<Self> {
@@ -301,11 +295,7 @@ impl CheckedState {
             };
             return Err(Error::RunDir { path, message });
         }
-        let checkpoint = Checkpoint::load(&path)?;
-        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "cannot read the checkpoint", e))?;
-        let sha256 = serde_json::from_slice::<ChecksumField>(&bytes)
-            .map_err(|source| Error::Json { path: path.clone(), what: "no content checksum `sha256`", source })?
-            .sha256;
+        let (checkpoint, sha256) = Checkpoint::load_with_sha256(&path)?;
         Ok(CheckedState { checkpoint, path, sha256 })
     }
 

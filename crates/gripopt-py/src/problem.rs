@@ -6,6 +6,7 @@ use crate::errors::{argument, input, IntoPy};
 use crate::frame::Table;
 use gripopt::{DesignParameters, Integration, Method, Problem, Stages, DESIGN_NAMES};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use std::path::{Path, PathBuf};
@@ -216,8 +217,13 @@ impl PyProblem {
         #[pyo3(from_py_with = args::design_count)] n: usize,
         #[pyo3(from_py_with = args::seed)] seed: u64,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let xs = gripopt::random_designs(&self.problem, n, seed);
-        let flat: Vec<f64> = xs.iter().flat_map(|d| d.to_array()).collect();
+        let mut flat: Vec<f64> = Vec::new();
+        // n is at most isize::MAX / 48 (args::design_count), so n * 6 doubles is a valid
+        // size; whether the memory is there is asked here, not found out by an abort.
+        flat.try_reserve_exact(n * 6).map_err(|_| {
+            PyMemoryError::new_err(format!("n = {n}: {:.3e} bytes of designs do not fit in memory", n as f64 * 48.0))
+        })?;
+        flat.extend(gripopt::random_designs(&self.problem, n, seed).flat_map(|d| d.to_array()));
         PyArray1::from_vec(py, flat).reshape([n, 6])
     }
 }
