@@ -39,11 +39,37 @@ def _column(kind: str, values: Any, missing: Optional[np.ndarray]) -> Any:
     return values
 
 
+#: A robust problem's count columns (docs/robust.md): the library holds their cells as
+#: numbers of the row's robust cells; as counts they are ``Int64`` (<NA>: not simulated).
+ROBUST_COUNTS = ("scenarios_run", "scenarios_saved")
+ROBUST_COUNT_SUFFIXES = (".stays", ".scenarios")
+
+
+def _is_count(name: str, kind: str) -> bool:
+    return kind == "f64" and (name in ROBUST_COUNTS or name.endswith(ROBUST_COUNT_SUFFIXES))
+
+
+def _count(values: Any) -> Any:
+    """A count column given as float64 (NaN: missing) as ``Int64``: exact, every count is
+    a whole number far below 2**53."""
+    v = np.asarray(values, dtype="float64")
+    missing = np.isnan(v)
+    whole = np.where(missing, 0.0, v)
+    if not np.array_equal(whole, np.trunc(whole)):
+        return values  # not counts: left as they are
+    return pd.arrays.IntegerArray(whole.astype("int64"), missing)
+
+
 def frame(columns: Columns, table: ColumnTable, index: Optional[pd.Index] = None) -> pd.DataFrame:
     """A DataFrame of native ``columns``; ``table`` gives the units and meanings put in
-    ``df.attrs["units"]`` and ``df.attrs["meanings"]`` (and the columns of an empty table)."""
+    ``df.attrs["units"]`` and ``df.attrs["meanings"]`` (and the columns of an empty table).
+    A design table's robust count columns are ``Int64``."""
+    counts = table is DESIGN_COLUMNS
     if columns:
-        data = {name: _column(kind, values, missing) for name, kind, values, missing in columns}
+        data = {
+            name: _count(values) if counts and _is_count(name, kind) else _column(kind, values, missing)
+            for name, kind, values, missing in columns
+        }
         df = pd.DataFrame(data, index=index)
     else:
         df = pd.DataFrame({name: pd.Series(dtype="float64") for name, _, _ in table}, index=index)

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .problem import Designs, Problem, design_frame
+from .problem import Designs, Problem, design_array, design_frame
 
 
 def _chunk(
@@ -67,10 +67,16 @@ def evaluate_batch(
         first_id: the first design's id.
     """
     d = design_frame(designs)
-    x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
+    # the whole batch checked here, before any work is sent: every value finite (an error
+    # names the row in the batch, as Problem.evaluate does), then threads and first_id (an
+    # empty batch evaluated locally)
+    x = design_array(d)
     chunk_size = _chunk_size(chunk_size)
-    # threads and first_id checked here, not on the workers: an empty batch evaluated locally
     problem._evaluate_batch(x[:0], static_only, threads, first_id)
+    last = np.iinfo(np.int64).max
+    if len(x) and operator.index(first_id) + len(x) - 1 > last:
+        rule = f"the last of {len(x)} designs would have an id beyond {last} (int64)"
+        raise InputError(f"first_id = {first_id}: {rule}", field="first_id")
     starts = range(0, len(x), chunk_size)
     futures = [
         client.submit(_chunk, problem, x[a : a + chunk_size], static_only, threads, first_id + a, pure=False)

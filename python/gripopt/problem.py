@@ -16,38 +16,102 @@ from ._frames import DESIGN_COLUMNS, DESIGN_NAMES, POSE_COLUMNS, SAMPLE_COLUMNS,
 from .errors import InputError
 
 #: Designs as accepted by :meth:`Problem.evaluate`: a DataFrame with the six named columns
-#: (others are ignored), an (n, 6) array, or one design (a Series, a mapping by name, six
-#: values). ψ is ``psi_deg``, in degrees, everywhere.
-Designs = Union[pd.DataFrame, np.ndarray, Sequence[Sequence[float]], pd.Series, Mapping[str, float], Sequence[float]]
+#: (others are ignored), an (n, 6) array, a sequence of designs each a mapping by name, or
+#: one design (a Series, a mapping by name, six values). ψ is ``psi_deg``, in degrees,
+#: everywhere.
+Designs = Union[
+    pd.DataFrame,
+    np.ndarray,
+    Sequence[Sequence[float]],
+    Sequence[Mapping[str, float]],
+    pd.Series,
+    Mapping[str, float],
+    Sequence[float],
+]
+
+
+def _numeric_column(designs: pd.DataFrame, name: str) -> pd.Series:
+    """Column ``name`` as float64; a cell that is not a number is an :class:`InputError`
+    naming the column and the row."""
+    column = designs[name]
+    try:
+        return column.astype("float64")
+    except (TypeError, ValueError):
+        pass
+    for k, (label, v) in enumerate(column.items()):
+        try:
+            float(v)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"designs: {_row_name(designs.index, k, label)}, `{name}` = {v!r} is not a number",
+                field=name,
+            ) from None
+    raise InputError(f"designs: column `{name}` is not numbers (dtype {column.dtype})", field=name)
+
+
+def _row_name(index: pd.Index, k: int, label: Any) -> str:
+    """Row ``k`` as an error names it: its position, and its index label where the index
+    is not the positions 0, 1, …"""
+    if isinstance(index, pd.RangeIndex) and index.start == 0 and index.step == 1:
+        return f"row {k}"
+    return f"row {k} (index label {label!r})"
 
 
 def design_frame(designs: Designs) -> pd.DataFrame:
     """``designs`` as a DataFrame of the six design columns (float64), one row per design;
-    a DataFrame keeps its index. Raises :class:`InputError` for a missing column or a
-    wrong shape."""
+    a DataFrame keeps its index. Raises :class:`InputError` for a missing column, a cell
+    that is not a number (naming the column and the row) or a wrong shape."""
     names = list(DESIGN_NAMES)
+    if isinstance(designs, (list, tuple)) and designs and all(isinstance(r, (Mapping, pd.Series)) for r in designs):
+        designs = pd.DataFrame([dict(r) for r in designs])
     if isinstance(designs, pd.DataFrame):
         missing = [n for n in names if n not in designs.columns]
         if missing:
             raise InputError(
                 f"designs: missing column(s) {', '.join(missing)} (a design is {', '.join(names)}; "
                 "psi_deg is ψ in degrees)",
+                field="designs",
             )
-        return designs[names].astype("float64")
+        return pd.DataFrame({n: _numeric_column(designs, n).to_numpy() for n in names}, index=designs.index)
     if isinstance(designs, (pd.Series, Mapping)):
         row = pd.Series(designs)
         missing = [n for n in names if n not in row.index]
         if missing:
-            raise InputError(f"design: missing {', '.join(missing)} (psi_deg is ψ in degrees)")
-        return pd.DataFrame([row[names].astype("float64").to_numpy()], columns=names)
-    a = np.asarray(designs, dtype="float64")
+            raise InputError(f"design: missing {', '.join(missing)} (psi_deg is ψ in degrees)", field="design")
+        return design_frame(pd.DataFrame([row[names].to_dict()]))
+    try:
+        a = np.asarray(designs, dtype="float64")
+    except (TypeError, ValueError) as e:
+        raise InputError(
+            f"designs: {type(designs).__name__} is not designs ({e}): give a DataFrame with the columns "
+            f"{', '.join(names)}, an (n, 6) array of numbers, mappings by name, or one design",
+            field="designs",
+        ) from None
     if a.ndim == 1:
         a = a[None, :]
     if a.ndim != 2 or a.shape[1] != 6:
         raise InputError(
-            f"designs: an array of shape {np.shape(designs)}, expected (n, 6) or (6,): {', '.join(names)}"
+            f"designs: an array of shape {np.shape(designs)}, expected (n, 6) or (6,): {', '.join(names)}",
+            field="designs",
         )
     return pd.DataFrame(a, columns=names)
+
+
+def design_array(d: pd.DataFrame) -> np.ndarray:
+    """The designs of :func:`design_frame` as a contiguous (n, 6) float64 array, every
+    value finite: else an :class:`InputError` naming the first bad value's row (its
+    position, and its index label where the index is not 0, 1, …) and column."""
+    x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
+    bad = ~np.isfinite(x)
+    if bad.any():
+        k, i = (int(v) for v in np.argwhere(bad)[0])
+        v = x[k, i]
+        shown = "NaN" if v != v else ("inf" if v > 0 else "-inf")
+        name = DESIGN_NAMES[i]
+        raise InputError(
+            f"designs: {_row_name(d.index, k, d.index[k])}, `{name}` = {shown} is not finite", field=name
+        )
+    return x
 
 
 def _one(design: Designs) -> np.ndarray:
@@ -189,7 +253,7 @@ class Problem:
         """The rows, the minimised objectives (n, 4) and the constrained-domination key
         (n, 2: stages not reached, violation) of ``designs``."""
         d = design_frame(designs)
-        x = np.ascontiguousarray(d.to_numpy(dtype="float64"))
+        x = design_array(d)
         cols, f, key = self._native.evaluate(x, static_only, threads, first_id)
         return frame(cols, DESIGN_COLUMNS, index=d.index), f, key
 

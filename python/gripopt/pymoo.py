@@ -31,12 +31,14 @@ See :func:`constraint_violation`.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, Optional
 
 import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem as _PymooProblem
 
+from .errors import InputError
 from .problem import Problem
 
 #: The objectives' names in ``F``'s order (minimisation form).
@@ -57,10 +59,55 @@ def natural_objectives(F: np.ndarray) -> pd.DataFrame:
     max_offset [m], alpha [-], mean_force [N], t_stab [s]. A feasible design that is not
     form closed at the centred object has max_offset = −Δ_off (``criteria.offset_step``),
     the value gripopt ranks it by (MODEL.md §6.7); its row leaves max_offset empty."""
-    F = np.asarray(F, dtype="float64")
+    try:
+        F = np.asarray(F, dtype="float64")
+    except (TypeError, ValueError) as e:
+        raise InputError(f"F: not an array of numbers ({e})", field="F") from None
+    if F.ndim == 1 and F.shape[0] == len(OBJECTIVES):
+        F = F[None, :]  # one design
+    if F.ndim != 2 or F.shape[1] != len(OBJECTIVES):
+        raise InputError(
+            f"F: an array of shape {F.shape}, expected (n, 4) or (4,): {', '.join(OBJECTIVES)}", field="F"
+        )
     return pd.DataFrame(
         {"max_offset": -F[:, 0], "alpha": F[:, 1], "mean_force": -F[:, 2], "t_stab": F[:, 3]}
     )
+
+
+#: What GripperProblem sets in pymoo's ``Problem`` itself.
+_SET_HERE = ("n_var", "n_obj", "n_ieq_constr", "n_eq_constr", "xl", "xu", "vtype", "vars", "elementwise")
+
+
+def _pymoo_options() -> list[str]:
+    """The keyword options pymoo's ``Problem`` names (not its ``**kwargs``), less those
+    :class:`GripperProblem` sets."""
+    params = inspect.signature(_PymooProblem.__init__).parameters.values()
+    named = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and p.name != "self"]
+    return [n for n in named if n not in _SET_HERE]
+
+
+def _check_options(problem: Any, threads: Any, client: Any, chunk_size: Any, kwargs: dict[str, Any]) -> None:
+    """GripperProblem's arguments, checked before pymoo keeps them: an InputError names
+    the first one at fault."""
+    if not isinstance(problem, Problem):
+        raise InputError(f"problem = {problem!r}: must be a gripopt.Problem", field="problem")
+    allowed = _pymoo_options()
+    for name in kwargs:
+        if name not in allowed:
+            why = (
+                "set by GripperProblem from the gripopt problem"
+                if name in _SET_HERE
+                else "not an option of GripperProblem (problem, threads, client, chunk_size; it evaluates all "
+                "four stages) nor of pymoo's Problem"
+            )
+            raise InputError(f"{name} = {kwargs[name]!r}: {why} (pymoo's: {', '.join(allowed)})", field=name)
+    # threads: checked as Problem.evaluate checks it (an empty batch)
+    problem._evaluate_batch(np.empty((0, 6)), threads=threads)
+    from .dask import _chunk_size
+
+    _chunk_size(chunk_size)
+    if client is not None and not (callable(getattr(client, "submit", None)) and callable(getattr(client, "gather", None))):
+        raise InputError(f"client = {client!r}: must be a dask.distributed Client, or None", field="client")
 
 
 class GripperProblem(_PymooProblem):
@@ -75,7 +122,10 @@ class GripperProblem(_PymooProblem):
             ``chunk_size`` designs and evaluated on the cluster (:mod:`gripopt.dask`);
             results are identical to a local evaluation.
         chunk_size: designs per Dask task.
-        **kwargs: passed to pymoo's ``Problem``.
+        **kwargs: pymoo ``Problem``'s own options (e.g. ``callback``,
+            ``replace_nan_values_by``); any other keyword, or one this class sets itself
+            (``n_var``, ``xl``, …), is an :class:`gripopt.InputError` naming it (pymoo would
+            keep it silently). The evaluation always runs all four stages.
 
     After each evaluation, :attr:`last_rows` holds the batch's rows (a run's
     population.csv columns) for inspection.
@@ -89,6 +139,7 @@ class GripperProblem(_PymooProblem):
         chunk_size: int = 64,
         **kwargs: Any,
     ) -> None:
+        _check_options(problem, threads, client, chunk_size, kwargs)
         b = problem.bounds
         super().__init__(
             n_var=6,

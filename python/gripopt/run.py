@@ -118,10 +118,40 @@ class Run:
 
     def __init__(self, path: PathLike) -> None:
         self._folder = _gripopt.RunFolder(os.fspath(path))
-        #: What the :func:`optimise` / :func:`resume` call that returned this run reported
-        #: (generations, evaluations, front_size, hypervolume, interrupted, wall_s, …);
-        #: None for a run opened from its folder.
-        self.summary: Optional[dict[str, Any]] = None
+        self._summary: Optional[dict[str, Any]] = None
+
+    @property
+    def summary(self) -> Optional[dict[str, Any]]:
+        """What the run did: out, generations (completed), evaluations, front_size,
+        feasible, hypervolume, archive_size, archive_hypervolume, interrupted, wall_s.
+
+        For the run an :func:`optimise` / :func:`resume` call returned, that call's report
+        (``wall_s``: that call's wall time). For a run opened from its folder, the same
+        keys read from the folder at its last checkpoint (run.json, history.csv,
+        pareto.csv, archive.csv; ``wall_s``: over all its processes); None while it has no
+        completed generation.
+        """
+        if self._summary is not None:
+            return self._summary
+        info = self.info
+        done = int(info["completed_generations"])
+        if done == 0:
+            return None
+        history = self.history
+        last = history[history["generation"] == done]
+        hv = lambda column: float(last[column].iloc[-1]) if len(last) else float("nan")  # noqa: E731
+        return {
+            "out": str(self.path),
+            "generations": done,
+            "evaluations": int(info["evaluations"]),
+            "front_size": len(self.front),
+            "feasible": int(last["feasible"].iloc[-1]) if len(last) else None,
+            "hypervolume": hv("hypervolume"),
+            "archive_size": len(self.archive),
+            "archive_hypervolume": hv("archive_hypervolume"),
+            "interrupted": info["status"] == "interrupted",
+            "wall_s": float(info["wall_s"]),
+        }
 
     def __repr__(self) -> str:
         return f"<gripopt.Run {str(self.path)!r}>"
@@ -200,17 +230,35 @@ class Run:
 
 
 def _callback(progress: Optional[ProgressCallback]) -> Optional[Callable[[dict[str, Any]], Any]]:
+    """The callback for the native run; anything but None or a callable is an
+    :class:`InputError` naming ``progress``, before anything is written."""
     if progress is None:
         return None
+    if not callable(progress):
+        raise InputError(
+            f"progress = {progress!r}: must be a callable taking a GenerationReport, or None",
+            field="progress",
+        )
     return lambda report: progress(GenerationReport(**report))
 
 
 def _record(record: Union[bool, Mapping[str, Any]]) -> Optional[str]:
+    """``record`` for the native run: None (the defaults), "none", or a JSON object;
+    anything else is an :class:`InputError` naming ``record``."""
     if record is True:
         return None
     if record is False:
         return "none"
-    return json.dumps(dict(record))
+    if not isinstance(record, Mapping):
+        raise InputError(
+            f"record = {record!r}: must be True, False or a mapping of recording options "
+            '(e.g. {"trajectories": "feasible"})',
+            field="record",
+        )
+    try:
+        return json.dumps(dict(record))
+    except (TypeError, ValueError) as e:
+        raise InputError(f"record = {record!r}: options must be plain values ({e})", field="record") from None
 
 
 def optimise(
@@ -229,8 +277,14 @@ def optimise(
     written as it goes.
 
     Args:
-        problem: a :class:`Problem` or a problem file. A problem given as text starts a
-            run only in a new or empty folder (its text is written there as problem.toml).
+        problem: a :class:`Problem` or a problem file. The run runs exactly the problem's
+            text. Where that text is the current content of the file the problem was loaded
+            from, the run starts from that file and records it as its source (as
+            ``gripopt optimise FILE``: a resume follows the file's edits, refused unless
+            ``force``). Otherwise (a problem given as text, named after a file that does
+            not exist or holds other text, or a file edited since it was loaded: a
+            :class:`GripoptWarning` says so) its text is written into ``out`` as
+            problem.toml, the run's source, which needs ``out`` new or empty.
         out: the run folder (new or empty).
         pop: population size.
         generations: total generations (1 = the initial population).
@@ -250,13 +304,12 @@ def optimise(
         GripoptError: bad input (:class:`InputError`, e.g. a folder that holds a run) or a
             failed run (:class:`RunStoppedError`, resumable).
     """
+    callback, options = _callback(progress), _record(record)
     if not isinstance(problem, Problem):
         problem = Problem.load(problem)
-    summary = _gripopt.optimise(
-        problem._native, os.fspath(out), pop, generations, seed, threads, _record(record), _callback(progress)
-    )
+    summary = _gripopt.optimise(problem._native, os.fspath(out), pop, generations, seed, threads, options, callback)
     run = Run(out)
-    run.summary = dict(summary)
+    run._summary = dict(summary)
     return run
 
 
@@ -280,5 +333,5 @@ def resume(
     """
     summary = _gripopt.resume(os.fspath(path), generations, threads, force, _callback(progress))
     run = Run(path)
-    run.summary = dict(summary)
+    run._summary = dict(summary)
     return run

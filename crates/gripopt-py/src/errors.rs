@@ -38,10 +38,54 @@ fn file_and_field(e: &Error) -> (Option<String>, Option<String>) {
     }
 }
 
+/// The library's command-line flags as the Python arguments that set them: (flag, the
+/// argument as a message names it, the argument `e.field` names).
+const ARGUMENTS: [(&str, &str, &str); 9] = [
+    ("--pop × --generations", "pop × generations", "pop"),
+    ("--pop", "pop", "pop"),
+    ("--generations", "generations", "generations"),
+    ("--threads", "threads", "threads"),
+    ("--record-every", "record[\"every\"]", "record"),
+    ("--record-full", "record[\"resolution\"]", "record"),
+    ("--scene-ms", "record[\"scene_dt\"] (in ms)", "record"),
+    ("--zstd-level", "record[\"zstd_level\"]", "record"),
+    ("--zstd-threads", "record[\"zstd_threads\"]", "record"),
+];
+
+/// Flags named inside the library's messages, as Python spells them.
+const PHRASES: [(&str, &str); 5] = [
+    ("(--record none or designs)", "(record=False, or record={\"trajectories\": \"none\"})"),
+    ("give --record-full too", "give record={…, \"resolution\": \"full\"} too"),
+    ("Use --force", "Use force=True"),
+    ("use --force", "use force=True"),
+    ("with --force", "with force=True"),
+];
+
+/// A message of the library in Python's words: Python has no command line, so a flag is
+/// named as the argument that sets it.
+fn in_python_words(message: &str) -> String {
+    let mut m = message.to_string();
+    for (flag, python) in PHRASES {
+        m = m.replace(flag, python);
+    }
+    if let Some(rest) = m.strip_prefix("--generations ") {
+        m = format!("generations = {rest}");
+    }
+    m
+}
+
 /// `e` as a Python exception of the package's hierarchy.
 pub fn to_py(e: Error) -> PyErr {
+    if let Error::InvalidField { file, field, value, rule } = &e {
+        let flag = ARGUMENTS.iter().find(|a| a.0 == field);
+        if let (true, Some((_, shown, name))) = (file.as_os_str() == "command line", flag) {
+            let value = if field == "--record-full" { "\"full\"" } else { value };
+            let message = format!("argument `{shown}` = {value}: {}", in_python_words(rule));
+            return exception("InputError", message, None, Some(name.to_string()), e.exit_code());
+        }
+    }
     let (file, field) = file_and_field(&e);
-    exception(class_of(&e), e.to_string(), file, field, e.exit_code())
+    exception(class_of(&e), in_python_words(&e.to_string()), file, field, e.exit_code())
 }
 
 /// An exception of class `class` (in `gripopt.errors`) with gripopt's message and attributes.

@@ -56,11 +56,7 @@ impl Progress for PyProgress {
         Ok(())
     }
     fn note(&mut self, message: &str) {
-        let r = Python::attach(|py| -> PyResult<()> {
-            let w = py.import("gripopt.errors")?.getattr("GripoptWarning")?;
-            py.import("warnings")?.call_method1("warn", (message, w, 2))?;
-            Ok(())
-        });
+        let r = Python::attach(|py| warn(py, message));
         if let Err(e) = r {
             self.keep(e);
         }
@@ -144,14 +140,33 @@ fn record_options(record: Option<&str>) -> PyResult<RecordOptions> {
         }
         fields.insert(k, x);
     }
-    serde_json::from_value(v).map_err(|e| bad(e.to_string()))
+    let options: RecordOptions = serde_json::from_value(v).map_err(|e| bad(e.to_string()))?;
+    options.validate().py()?;
+    Ok(options)
 }
 
-/// A problem file for a run: the problem's own, or, for one given as text, its copy
-/// written into `out` (which must then be new or empty).
-fn problem_file(problem: &PyProblem, out: &Path) -> PyResult<PathBuf> {
+/// The problem file a run of `problem` starts from, and records as its source: the file it
+/// was loaded from where that file still holds exactly the problem's text (as `gripopt
+/// optimise FILE`: run.json names the file, a resume follows its edits); otherwise (text,
+/// a name with no such file, a file edited since, or other text named after a file) the
+/// problem's own text written into `out` as problem.toml, which `out` must then be new or
+/// empty for: the run records that copy as its source, never a file whose content it did
+/// not run. The second value is a note for the caller where a file was set aside.
+fn problem_file(problem: &PyProblem, out: &Path) -> PyResult<(PathBuf, Option<String>)> {
+    let text = &problem.problem.source_text;
+    let mut note = None;
     if let Some(p) = &problem.path {
-        return Ok(p.clone());
+        match std::fs::read(p) {
+            Ok(bytes) if bytes == text.as_bytes() => return Ok((p.clone(), None)),
+            Ok(_) => {
+                note = Some(format!(
+                    "{}: the file's content is not the problem's text (edited since the problem was loaded, or the text was only named after it); the run uses the problem's text, written to {} as its source",
+                    p.display(),
+                    out.join(gripopt::run::PROBLEM_FILE).display()
+                ))
+            }
+            Err(_) => {}
+        }
     }
     let empty = match std::fs::read_dir(out) {
         Ok(mut rd) => rd.next().is_none(),
@@ -159,16 +174,58 @@ fn problem_file(problem: &PyProblem, out: &Path) -> PyResult<PathBuf> {
         Err(e) => return Err(to_py(gripopt::Error::io(out, "cannot list the run folder", e))),
     };
     if !empty {
+        let why = match &problem.path {
+            None => "a problem given as text".to_string(),
+            Some(p) => {
+                format!("a problem whose text is not the content of {} (no such file, or another text)", p.display())
+            }
+        };
         return Err(to_py(gripopt::Error::RunDir {
             path: out.to_path_buf(),
-            message: "not empty: a problem given as text starts a run only in a new or empty folder (its text is written there as problem.toml); load it from a file instead".into(),
+            message: format!("not empty: {why} starts a run only in a new or empty folder (its text is written there as problem.toml); load the problem from its file instead"),
         }));
     }
     std::fs::create_dir_all(out).map_err(|e| to_py(gripopt::Error::io(out, "cannot create the run folder", e)))?;
-    let file = out.join("problem.toml");
-    std::fs::write(&file, &problem.problem.source_text)
-        .map_err(|e| to_py(gripopt::Error::io(&file, "cannot write", e)))?;
-    Ok(file)
+    let file = out.join(gripopt::run::PROBLEM_FILE);
+    std::fs::write(&file, text).map_err(|e| to_py(gripopt::Error::io(&file, "cannot write", e)))?;
+    Ok((file, note))
+}
+
+/// A run that stopped before it wrote run.json (a problem refused by the run, say) leaves
+/// nothing of its own in `out`: the problem's copy written for it is taken back, and the
+/// folder if this call created it, so that the same call can be made again.
+fn take_back_copy(file: &Path, out: &Path, created: bool) {
+    if out.join(gripopt::run::RUN_FILE).exists() {
+        return;
+    }
+    let _ = std::fs::remove_file(file);
+    if created {
+        let _ = std::fs::remove_dir(out); // only if empty
+    }
+}
+
+/// After a run from the problem's own file: the file the run read (its copy in `out`)
+/// must be the problem's text; a file replaced between the check and the run's start is
+/// named, so that a run of other text is never returned as the problem's.
+fn check_ran_text(problem: &PyProblem, file: &Path, out: &Path) -> PyResult<()> {
+    let copy = out.join(gripopt::run::PROBLEM_FILE);
+    match std::fs::read(&copy) {
+        Ok(bytes) if bytes == problem.problem.source_text.as_bytes() => Ok(()),
+        _ => Err(to_py(gripopt::Error::RunDir {
+            path: out.to_path_buf(),
+            message: format!(
+                "{} changed while the run started: the run (attributed to that file, as its run.json says) is not of the problem given",
+                file.display()
+            ),
+        })),
+    }
+}
+
+/// A `GripoptWarning` with `message`.
+fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let w = py.import("gripopt.errors")?.getattr("GripoptWarning")?;
+    py.import("warnings")?.call_method1("warn", (message, w, 2))?;
+    Ok(())
 }
 
 /// Start a run of `problem` in `out`: its summary.
@@ -187,12 +244,27 @@ pub fn optimise<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let rec = record_options(record)?;
-    let file = problem_file(problem, &out)?;
-    let mut opt = Optimiser::new(file, &out).pop(pop).generations(generations).seed(seed).record(rec);
+    gripopt::run::check_population(pop, generations, rec.enabled).py()?;
+    let created = !out.exists();
+    let (file, note) = problem_file(problem, &out)?;
+    let copied = problem.path.as_deref() != Some(file.as_path());
+    let mut opt = Optimiser::new(&file, &out).pop(pop).generations(generations).seed(seed).record(rec);
     if let Some(t) = threads {
         opt = opt.threads(t);
     }
-    let s = drive(py, opt, progress, &out)?;
+    let ran = note.map_or(Ok(()), |n| warn(py, &n)).and_then(|()| drive(py, opt, progress, &out));
+    let s = match ran {
+        Ok(s) => s,
+        Err(e) => {
+            if copied {
+                take_back_copy(&file, &out, created);
+            }
+            return Err(e);
+        }
+    };
+    if !copied {
+        check_ran_text(problem, &file, &out)?;
+    }
     summary_dict(py, &s)
 }
 
