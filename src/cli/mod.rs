@@ -260,13 +260,26 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
         let (lo, hi) = (p.bounds.lo[k], p.bounds.hi[k]);
         if !(a[k] >= lo && a[k] <= hi) {
             eprintln!(
-                "warning: {} = {} is outside the problem's bounds [{lo}, {hi}]; evaluating it anyway",
+                "warning: {} = {} is outside the problem's bounds [{}, {}]; evaluating it anyway",
                 gripopt::params::DESIGN_NAMES[k],
-                a[k]
+                compact(a[k]),
+                compact(lo),
+                compact(hi)
             );
         }
     }
     Ok(x)
+}
+
+/// A number in its shorter form, `{}` or `{:e}` (1e300, not 301 digits; 0.05, not 5e-2);
+/// both read back to the same value.
+pub fn compact(v: f64) -> String {
+    let (plain, exp) = (format!("{v}"), format!("{v:e}"));
+    if exp.len() < plain.len() {
+        exp
+    } else {
+        plain
+    }
 }
 
 fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
@@ -291,9 +304,25 @@ fn hooks() -> gripopt::run::RunHooks {
 }
 
 /// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder
-/// ([`gripopt::check_new_file`], as `export --out`).
+/// ([`gripopt::check_new_file`], as `export --out`); `-` (standard output carries the
+/// report), a file in a folder that does not exist, and a `--plot` not named `.svg` (the
+/// plot is SVG): exit 2 before anything runs.
 fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Result<()> {
-    Ok(path.map_or(Ok(()), |p| gripopt::check_new_file(flag, p, force))?)
+    let Some(p) = path else { return Ok(()) };
+    let refuse =
+        |why: String| -> Result<()> { Err(gripopt::Error::Input(format!("{flag} {}: {why}", p.display())).into()) };
+    if p.as_os_str() == "-" {
+        return refuse("standard output carries the report; give a file name".into());
+    }
+    if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
+        return refuse(format!("the folder {} does not exist", d.display()));
+    }
+    gripopt::check_new_file(flag, p, force)?;
+    let svg = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if flag == "--plot" && !svg {
+        return refuse("the plot is written as SVG; give a file name ending in .svg".into());
+    }
+    Ok(())
 }
 
 /// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
@@ -364,6 +393,11 @@ pub fn run() -> Result<i32> {
                 },
                 epoch_s: 0,
             };
+            if out.exists() && !out.is_dir() {
+                // said here: creating the folder would fail with "File exists"
+                let why = format!("--out {}: is a file, not a folder (the run folder to create)", out.display());
+                return Err(gripopt::Error::Input(why).into());
+            }
             let spec =
                 gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, record: rec };
             let s = gripopt::run::optimise_with(&spec, hooks())?;

@@ -114,12 +114,22 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
     }
     if s.interrupted {
         outln!(
-            "interrupted after generation {} ({} evaluations); resume with `gripopt resume {d}`",
+            "interrupted after generation {} ({} evaluation{}); resume with `gripopt resume {d}`",
             s.generations,
-            s.evaluations
+            s.evaluations,
+            if s.evaluations == 1 { "" } else { "s" }
         );
     } else {
-        outln!("finished: {} generations, {} evaluations in {:.1} s; {} feasible designs in the final population, {} on the Pareto front (hypervolume {:.4})", s.generations, s.evaluations, s.wall_s, s.feasible, s.front_size, s.hv);
+        let n = |k: u64, one: &str, many: &str| format!("{k} {}", if k == 1 { one } else { many });
+        outln!(
+            "finished: {}, {} in {:.1} s; {} in the final population, {} on the Pareto front (hypervolume {:.4})",
+            n(s.generations, "generation", "generations"),
+            n(s.evaluations, "evaluation", "evaluations"),
+            s.wall_s,
+            n(s.feasible as u64, "feasible design", "feasible designs"),
+            s.front_size,
+            s.hv
+        );
     }
     if let Some(lines) = s.discards.explain() {
         for l in lines {
@@ -184,7 +194,8 @@ pub fn replay(
         crate::cli::scenes::write_samples_csv(path, samples, |v| format!("{v}"))?;
     }
     if let Some(path) = plot {
-        gripopt::run::grasp_plot(path, &format!("design {id}"), samples)?;
+        let title = format!("design {id}");
+        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, samples)?))?;
     }
     let rec = &r.recorded.record;
     if json {

@@ -6,7 +6,7 @@
 //! with their control characters escaped ([`shown`]).
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
 pub const EXIT_BROKEN_PIPE: i32 = 141;
@@ -55,4 +55,38 @@ pub fn path(p: &Path) -> String {
 /// A text from a file (a problem's name) with its control characters escaped.
 pub fn shown(s: &str) -> String {
     gripopt::run::printable(s)
+}
+
+/// The file `path` with its causes' I/O error, or `e` with `path` named: what a failed
+/// write of an output file reports (the file asked for, not the temporary file beside it).
+fn naming(path: &Path, e: anyhow::Error) -> anyhow::Error {
+    match e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
+        Some(io) => gripopt::Error::io(path, "cannot write", std::io::Error::new(io.kind(), io.to_string())).into(),
+        None => e.context(format!("cannot write {}", path.display())),
+    }
+}
+
+/// Write the output file `path` atomically ([`gripopt::write_atomic`]: a temporary file
+/// beside it, renamed into place): a failed write (a full disk) leaves no partial file that
+/// would block the retry, and its error names `path`.
+pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    gripopt::write_atomic(path, bytes).map_err(|e| naming(path, e.into()))
+}
+
+/// Write the output file `path` through `write`, which writes the file it is given (a
+/// temporary file beside `path`, renamed into place once written and synced): as
+/// [`write_file`] for writers that take a path (the SVG plots).
+pub fn write_file_with(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let tmp: PathBuf = path.with_file_name(format!(".{name}.tmp"));
+    let written = write(&tmp).and_then(|_| {
+        std::fs::File::open(&tmp)?.sync_all()?;
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    });
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(naming(path, e));
+    }
+    Ok(())
 }

@@ -17,7 +17,7 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
                 p.t, g[0], g[1], g[2], q[0], q[1], q[2], q[3]
             ));
         }
-        std::fs::write(path, s)?;
+        crate::cli::out::write_file(path, s.as_bytes())?;
     }
     if json {
         outln!("{}", serde_json::to_string_pretty(&r)?);

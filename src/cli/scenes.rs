@@ -9,7 +9,6 @@ use gripopt::eval::{Record, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
 use gripopt::sim::{Controls, Integration, Method, PoseSample, SceneSpec};
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
 
 /// `centred`, `offset:X` or `free[:X]` (metres) applied to the problem's `[scene]` (checked
@@ -76,7 +75,8 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
         }
     }
     if let Some(path) = o.plot {
-        gripopt::run::grasp_plot(path, &format!("{}: grasp", p.name), &traj.samples)?;
+        let title = format!("{}: grasp", p.name);
+        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, &traj.samples)?))?;
     }
     if o.json {
         let v = SimulateJson { sim: SimulationRecord { record, method: o.method }, replay: o.replay.as_ref() };
@@ -186,36 +186,31 @@ fn csv_head(title: &str, columns: &[(&str, &str)]) -> String {
     format!("# gripopt {title}\n# units: {}\n{}", units.join(" "), names.join(","))
 }
 
-/// Create the CSV file `path` (errors name it).
-fn create(path: &Path) -> Result<std::io::BufWriter<std::fs::File>> {
-    let f = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    Ok(std::io::BufWriter::new(f))
-}
-
-/// The grasp samples as CSV (`fmt` formats each number).
+/// The grasp samples as CSV (`fmt` formats each number), written atomically (errors name
+/// `path`).
 pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(f64) -> String) -> Result<()> {
-    let mut w = create(path)?;
     let title = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
-    writeln!(w, "{}", csv_head(title, &SAMPLE_COLUMNS))?;
+    let mut w = csv_head(title, &SAMPLE_COLUMNS);
     for s in samples {
         let v = gripopt::sample_values(s);
-        writeln!(w, "{}", v.map(fmt).join(","))?;
+        w.push('\n');
+        w.push_str(&v.map(fmt).join(","));
     }
-    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    w.push('\n');
+    crate::cli::out::write_file(path, w.as_bytes())
 }
 
-/// The free scene's poses as CSV.
+/// The free scene's poses as CSV, written atomically.
 fn write_poses_csv(path: &Path, poses: &[PoseSample]) -> Result<()> {
-    let mut w = create(path)?;
     let title = "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
-    writeln!(w, "{}", csv_head(title, &POSE_COLUMNS))?;
+    let mut w = csv_head(title, &POSE_COLUMNS);
     for p in poses {
         let v = gripopt::pose_values(p);
-        writeln!(w, "{}", v.map(|x| format!("{x:e}")).join(","))?;
+        w.push('\n');
+        w.push_str(&v.map(|x| format!("{x:e}")).join(","));
     }
-    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    w.push('\n');
+    crate::cli::out::write_file(path, w.as_bytes())
 }
 
 /// A scene as `--scene` spells it (`centred`, `offset:X`, `free:X`).

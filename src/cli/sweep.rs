@@ -40,9 +40,9 @@ pub struct SweepArgs {
     /// (written to DIR/boundaries.csv).
     #[arg(long)]
     pub bisect: Vec<String>,
-    /// Bisection steps per boundary.
-    #[arg(long, default_value_t = 20)]
-    pub bisect_steps: u32,
+    /// Bisection steps per boundary, 1 to 60 (default 20; only with --bisect).
+    #[arg(long)]
+    pub bisect_steps: Option<u32>,
     /// Worker threads (default: all cores; results do not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -91,8 +91,21 @@ pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
     if a.threads == Some(0) {
         anyhow::bail!("--threads 0: must be at least 1");
     }
-    if a.bisect_steps > 60 {
-        anyhow::bail!("--bisect-steps {}: at most 60", a.bisect_steps);
+    match a.bisect_steps {
+        Some(n) if a.bisect.is_empty() => anyhow::bail!("--bisect-steps {n}: only with --bisect NAME"),
+        Some(n) if !(1..=60).contains(&n) => anyhow::bail!("--bisect-steps {n}: 1 to 60"),
+        _ => {}
+    }
+    // the plotted keys, before anything is evaluated: one the stage computes, and the flag
+    // of the plots this grid draws (line plots for one varied name, else maps)
+    sweep::out::check_plot_keys(&spec, "--y", &a.ys)?;
+    sweep::out::check_plot_keys(&spec, "--color", &a.color)?;
+    let line = sweep::plot::is_line(&spec);
+    if line && !a.color.is_empty() {
+        anyhow::bail!("--color: maps are drawn for 2 or 3 varied names; this grid draws line plots (use --y KEY)");
+    }
+    if !line && !a.ys.is_empty() {
+        anyhow::bail!("--y: line plots are drawn for one varied name; this grid draws maps (use --color KEY)");
     }
     Ok(spec)
 }
@@ -123,7 +136,12 @@ pub fn run(a: SweepArgs) -> Result<()> {
     pb.finish_and_clear();
     let mut bounds = Vec::new();
     for name in &a.bisect {
-        bounds.extend(pool.install(|| sweep::bisect(&spec, &rows, name, a.bisect_steps))?);
+        bounds.extend(pool.install(|| sweep::bisect(&spec, &rows, name, a.bisect_steps.unwrap_or(20)))?);
+    }
+    for (flag, v) in a.ys.iter().map(|v| ("--y", v)).chain(a.color.iter().map(|v| ("--color", v))) {
+        if v.split('+').all(|k| rows.iter().all(|r| r.num(k).is_none())) {
+            eprintln!("warning: {flag} {v}: no point of the sweep has a value (each was discarded before the stage that computes it, or it was not finite); its plot is empty");
+        }
     }
     let ys: Vec<String> = if !a.ys.is_empty() {
         a.ys.clone()
@@ -157,7 +175,12 @@ fn summary(out: &Path, rows: &[sweep::Row], bounds: &[sweep::Boundary], files: &
             None => counts.push((r.verdict, 1)),
         }
     }
-    outln!("{} points: {}", rows.len(), counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", "));
+    outln!(
+        "{} point{}: {}",
+        rows.len(),
+        if rows.len() == 1 { "" } else { "s" },
+        counts.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", ")
+    );
     for b in bounds {
         let o = if b.others.is_empty() { String::new() } else { format!(" at {:?}", b.others) };
         outln!("boundary {}{}: {} at {} | {} at {}", b.name, o, b.verdict_lo, b.lo, b.verdict_hi, b.hi);

@@ -10,19 +10,21 @@ use std::path::PathBuf;
 pub struct VerifyArgs {
     /// Run folder (written by `gripopt optimise`).
     pub run_dir: PathBuf,
-    /// Scene to measure in: free or free:X (object offset X metres; default: the problem's x_off).
-    #[arg(long, default_value = "free")]
-    pub scene: String,
-    /// Every feasible design of population.csv and archive.csv instead of pareto.csv.
+    /// Scene to measure in: free or free:X (object offset X metres; default: the problem's
+    /// x_off). Not for a robust run (its scenarios set the offsets).
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// Every feasible design of population.csv and archive.csv instead of pareto.csv (not
+    /// for a robust run, which verifies its front).
     #[arg(long)]
     pub all: bool,
     /// Worker threads (default: all cores; results do not depend on it).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Record the free scene to MCAP (RUN_DIR/verify.mcap, or verify_sample.mcap with
-    /// --sample; open in Foxglove with RUN_DIR/foxglove-verify-layout.json): all, or none.
-    #[arg(long, value_enum, default_value = "all")]
-    pub record: VerifyRecordArg,
+    /// Record the free scene to MCAP (RUN_DIR/verify.mcap; open in Foxglove with
+    /// RUN_DIR/foxglove-verify-layout.json): all (default), or none. Not for a robust run.
+    #[arg(long, value_enum)]
+    pub record: Option<VerifyRecordArg>,
     /// Study: N designs drawn from the run's problem bounds that pass stage 2 (writes verify_sample.csv).
     #[arg(long, hide = true)]
     pub sample: Option<usize>,
@@ -38,6 +40,80 @@ pub enum VerifyRecordArg {
     All,
     /// Nothing.
     None,
+}
+
+/// Memory per design of `--sample N` (bytes), without a recording: the drawn batch, the
+/// designs, their rows and verify_sample.csv's text (measured ≈ 1 KiB: peak RSS of
+/// `verify RUN --sample 400 --record none` less that of `--sample 100`, over 300; rounded up).
+pub const SAMPLE_BYTES_PER_DESIGN: u64 = 4 << 10;
+
+/// Memory per design that recording a sample adds (bytes) when its free scene lasts
+/// `t_obs` seconds: its poses every 2 ms (`record::DEFAULT_SCENE_DT`) kept until the MCAP
+/// is written, twice (the poses and the framed file), and 4 KiB of messages (bottle-1l,
+/// t_obs 0.1 s: 16.6 KiB; measured as above with `--record all`: 14.4 KiB).
+pub fn sample_bytes_recorded(t_obs: f64) -> u64 {
+    let poses = (t_obs.max(0.0) / gripopt::record::DEFAULT_SCENE_DT).ceil() as u64 + 2;
+    2 * poses * std::mem::size_of::<gripopt::PoseSample>() as u64 + (4 << 10)
+}
+
+/// Memory the system can give (MemAvailable of /proc/meminfo), if known.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Check `--sample N` before anything is drawn (as `optimise` checks `--pop`): at least 1,
+/// and its memory estimate within half of the available memory (64 GiB when unknown);
+/// `recorded_t_obs`: the free scene's duration when the sample is recorded.
+pub fn check_sample(n: usize, recorded_t_obs: Option<f64>) -> Result<()> {
+    let bad = |rule: String| gripopt::Error::InvalidField {
+        file: "command line".into(),
+        field: "--sample".into(),
+        value: n.to_string(),
+        rule,
+    };
+    if n == 0 {
+        return Err(bad("must be at least 1".into()).into());
+    }
+    let per = SAMPLE_BYTES_PER_DESIGN + recorded_t_obs.map_or(0, sample_bytes_recorded);
+    let (avail, known) = available_memory().map_or((64u64 << 30, false), |a| (a, true));
+    let budget = avail / 2;
+    if (n as u128) * per as u128 > budget as u128 {
+        let gib = |b: f64| format!("{:.1} GiB", b / (1u64 << 30) as f64);
+        return Err(bad(format!(
+            "needs about {} of memory ({:.1} KiB per design{}), more than half of the {} {}; at most {} here",
+            gib(n as f64 * per as f64),
+            per as f64 / 1024.0,
+            if recorded_t_obs.is_some() { ", its recorded poses included; --record none needs less" } else { "" },
+            gib(avail as f64),
+            if known { "available" } else { "assumed (memory unknown)" },
+            budget / per
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Refuse the flags a robust run's verify does not apply: it verifies its front on fresh
+/// scenarios (docs/robust.md), so there is no design set, scene or recording to choose
+/// (`--record none` says what happens anyway).
+fn check_robust_flags(a: &VerifyArgs) -> Result<()> {
+    let given = [
+        (a.all, "--all"),
+        (a.scene.is_some(), "--scene"),
+        (a.record == Some(VerifyRecordArg::All), "--record all"),
+        (a.sample.is_some(), "--sample"),
+        (a.seed.is_some(), "--seed"),
+    ];
+    if let Some((_, flag)) = given.iter().find(|g| g.0) {
+        bail!(
+            "{flag}: {} is a robust run: verify re-evaluates its front on fresh scenarios of every object, with the offsets its scenarios draw, and records nothing (docs/robust.md), so this flag does not apply",
+            a.run_dir.display()
+        );
+    }
+    Ok(())
 }
 
 fn x_off_of(scene: &str) -> Result<Option<f64>> {
@@ -61,15 +137,25 @@ fn print_table(c: &Confusion) {
 
 /// Run `gripopt verify`.
 pub fn run(a: VerifyArgs) -> Result<()> {
-    let x_off = x_off_of(&a.scene)?;
+    if gripopt::run::is_robust_run(&a.run_dir) {
+        check_robust_flags(&a)?;
+    }
+    let x_off = x_off_of(a.scene.as_deref().unwrap_or("free"))?;
+    let record = a.record != Some(VerifyRecordArg::None);
     if a.sample.is_some() && a.all {
         bail!("--sample and --all: give one");
     }
     if a.seed.is_some() && a.sample.is_none() {
         bail!("--seed: only with --sample N (the designs of the run are not drawn)");
     }
+    if let Some(n) = a.sample {
+        // the recording's share follows the free scene's duration (a problem.toml that does
+        // not load is the library's error to report, after this check)
+        let problem = gripopt::Problem::load(a.run_dir.join("problem.toml")).ok();
+        let t_obs = problem.map(|p| p.scene.setup.t_obs.min(p.scene.criteria.t_max));
+        check_sample(n, t_obs.filter(|_| record))?;
+    }
     let source = match a.sample {
-        Some(0) => bail!("--sample 0: must be at least 1"),
         Some(n) => VerifySource::Sample { n, seed: a.seed.unwrap_or(1) },
         None if a.all => VerifySource::All,
         None => VerifySource::Pareto,
@@ -93,7 +179,6 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     pb.set_style(
         indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"),
     );
-    let record = a.record == VerifyRecordArg::All;
     let s = pool.install(|| verify(&a.run_dir, source, x_off, record, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
     pb.finish_and_clear();
     let c = s.confusion;

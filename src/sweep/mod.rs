@@ -275,6 +275,13 @@ impl SweepSpec {
         if has(Knob::LHand) && has(design("t22")) {
             return Err(Error::Input("--vary l_hand and --vary t22: l_hand sets t22".into()));
         }
+        if self.hold_l_hand && (has(Knob::LHand) || has(design("t22"))) {
+            let v = if has(Knob::LHand) { "l_hand" } else { "t22" };
+            return Err(Error::Input(format!("--hold-l-hand with --vary {v}: holding l_hand sets t22; give one")));
+        }
+        if self.hold_l_hand && !has(design("l21")) && !has(design("b")) {
+            return Err(Error::Input("--hold-l-hand: keeps l_hand while l21 or b vary, and neither is varied".into()));
+        }
         let total: usize =
             self.vary.iter().map(|v| v.n).try_fold(1usize, |a, n| a.checked_mul(n)).unwrap_or(usize::MAX);
         if total > MAX_POINTS {
@@ -448,7 +455,7 @@ impl Row {
 }
 
 /// Keys of the record that hold fixed-length arrays, with their lengths.
-const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4), ("free_scene.energy", 2)];
+pub(crate) const ARRAY_KEYS: &[(&str, usize)] = &[("masses", 4), ("free_scene.energy", 2)];
 
 /// The evaluation record (the JSON of `gripopt evaluate --json`) as CSV cells, in record
 /// order, numbers as in the JSON; arrays become `key_0`, `key_1`, … (a null one keeps its

@@ -6,8 +6,13 @@
 //! into a run folder, never over a file a sweep did not write (a user's own sweep.csv).
 //!
 //! The units of sweep.csv's columns: the varied names' (their fields' units) and the
-//! evaluation record's keys' ([`record_unit`]).
+//! evaluation record's keys' ([`record_unit`]); the numeric keys a sweep's stage computes,
+//! which `--y` and `--color` may plot ([`plot_keys`]).
 
+use super::{Stage, SweepSpec};
+use crate::cells::{cells, Floats};
+use crate::eval::{Evaluation, FreeSceneRecord, Record};
+use crate::params::SceneKind;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -120,4 +125,62 @@ pub fn record_unit(key: &str) -> &'static str {
         | "verdict" => "text",
         _ => "-",
     }
+}
+
+/// Record keys that are text or yes/no, never a number to plot.
+const TEXT_KEYS: [&str; 4] = ["feasible", "reason", "cause", "scene"];
+
+/// The numeric record keys that `spec`'s stage computes, in record order (arrays as
+/// `key_0`, `key_1`, … as sweep.csv names them): the design and the verdict's stage and
+/// violation always, the kinematics keys from stage 1, the statics keys from stage 2, the
+/// grasp and the problem's scene keys (and x_off) at stage 3.
+pub fn plot_keys(spec: &SweepSpec) -> Vec<String> {
+    let json = |c: Vec<(String, String)>| c.into_iter().map(|(k, _)| k).collect::<Vec<_>>();
+    let mut r = Record::from_eval(&Evaluation::new(spec.design));
+    match spec.problem.scene.setup.kind {
+        SceneKind::Offset => r.offset_scene = Some(Default::default()),
+        SceneKind::Free => r.free_scene = Some(FreeSceneRecord::from_result(None)),
+        SceneKind::Centred => {}
+    }
+    let mut skip: Vec<String> = TEXT_KEYS.iter().map(|k| k.to_string()).collect();
+    if spec.stage != Stage::Dynamic {
+        skip.extend(json(cells(&r.grasp, Floats::Json)));
+        (r.offset_scene, r.free_scene) = (None, None);
+        skip.push("x_off".into());
+    }
+    if spec.stage == Stage::Kinematics {
+        skip.extend(json(cells(&r.statics, Floats::Json)));
+    }
+    let mut keys = vec![];
+    for k in json(cells(&r, Floats::Json)).into_iter().filter(|k| !skip.contains(k)) {
+        match super::ARRAY_KEYS.iter().find(|a| a.0 == k) {
+            Some(&(_, n)) => keys.extend((0..n).map(|i| format!("{k}_{i}"))),
+            None => keys.push(k),
+        }
+    }
+    keys
+}
+
+/// Check the keys of `--y` (`+` joins keys) and `--color` against [`plot_keys`]: an
+/// unknown key, or one `spec`'s stage does not compute, is an error naming it and listing
+/// the keys that stage gives.
+pub fn check_plot_keys(spec: &SweepSpec, flag: &str, values: &[String]) -> Result<()> {
+    let valid = plot_keys(spec);
+    for v in values {
+        for k in v.split('+') {
+            if !valid.iter().any(|x| x == k) {
+                let stage = match spec.stage {
+                    Stage::Kinematics => "kinematics (stages 0-1)",
+                    Stage::Static => "static (stages 0-2)",
+                    Stage::Dynamic => "dynamic (stages 0-3)",
+                };
+                let why = if k.is_empty() { "an empty key".to_string() } else { format!("`{k}` is not a numeric key") };
+                return Err(Error::Input(format!(
+                    "{flag} {v}: {why} of the --stage {stage} record; one of: {}",
+                    valid.join(", ")
+                )));
+            }
+        }
+    }
+    Ok(())
 }

@@ -98,7 +98,7 @@ pub fn plot_all(
 }
 
 /// One varied name with more than one value: line plots (else maps or slices).
-fn is_line(spec: &SweepSpec) -> bool {
+pub fn is_line(spec: &SweepSpec) -> bool {
     spec.vary.len() == 1 || (spec.vary[0].n > 1 && spec.vary[1..].iter().all(|v| v.n == 1))
 }
 
