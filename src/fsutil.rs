@@ -31,7 +31,17 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|s| s.to_str()).unwrap_or("checkpoint")));
     let written = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+        // a new file, never one opened through a link (or a file) left at the temporary
+        // name: that name is removed first (a link, not its target), and create-new fails
+        // on anything that appears there meanwhile
+        if std::fs::symlink_metadata(&tmp).is_ok_and(|m| !m.is_dir()) {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .map_err(|e| Error::io(&tmp, "cannot create", e))?;
         f.write_all(bytes).map_err(|e| Error::io(&tmp, "cannot write", e))?;
         f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
         drop(f);

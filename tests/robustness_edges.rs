@@ -277,20 +277,7 @@ fn item12_verify_csv_names_the_generation_it_checked() {
 fn item12_printed_paths_are_quoted_and_control_characters_escaped() {
     let dir = odd_folder("i12-quoted");
     let d = dir.display().to_string();
-    let o = cli(&[
-        "optimise",
-        PROBLEM,
-        "--out",
-        &d,
-        "--pop",
-        "12",
-        "--generations",
-        "2",
-        "--seed",
-        "16",
-        "--record",
-        "none",
-    ]);
+    let o = cli(&["optimise", PROBLEM, "--out", &d, "--pop", "12", "--generations", "2", "--seed", "16"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let quoted = format!("'{}'", d.replace('\'', r"'\''"));
     assert!(stdout(&o).contains(&format!("gripopt show {quoted}")), "{}", stdout(&o));

@@ -83,10 +83,18 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
         ))
         .into());
     }
-    let rec = gripopt::record::read_design(dir, id)?;
+    // a recorded run: the design's record (any generation's); a run not recorded (`--record
+    // none`, run.json's `recording`): the design as its checkpoint holds it
+    let (generation, x, from) = match unrecorded_design(dir, id)? {
+        Some(found) => found,
+        None => {
+            let rec = gripopt::record::read_design(dir, id)?;
+            (rec.record.generation, rec.design(), format!("recorded in {}", rec.file.display()))
+        }
+    };
     // the problem the design's generation was evaluated with (problem-G.toml after a forced
     // resume with a changed problem), refused when edited since: the hand would be another
-    let run = gripopt::record::problem_of_generation(dir, rec.record.generation)?;
+    let run = gripopt::record::problem_of_generation(dir, generation)?;
     if let Some(why) = run.edited() {
         return Err(gripopt::Error::Input(format!(
             "{}: {why}; design {id} was evaluated with the file the run recorded: restore it to export the design",
@@ -94,9 +102,34 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
         ))
         .into());
     }
-    let problem = run.problem;
-    let x = rec.design();
-    Ok((problem, x, format!("run folder {}, design {id} (recorded in {})", dir.display(), rec.file.display())))
+    Ok((run.problem, x, format!("run folder {}, design {id} ({from})", dir.display())))
+}
+
+/// Design `id` of a run that recorded nothing (None: the run was recorded), from its
+/// checkpoint (population, archive), with its generation; an error when the checkpoint no
+/// longer holds it.
+fn unrecorded_design(dir: &Path, id: u64) -> Result<Option<(u64, Design, String)>> {
+    let folder = gripopt::RunFolder::open(dir)?;
+    if folder.info()?.recording.enabled {
+        return Ok(None);
+    }
+    let Some(t) = folder.checkpoint_tables()? else {
+        return Err(gripopt::Error::Input(format!(
+            "{}: design {id}: the run was not recorded (run.json: started with `--record none`) and has no checkpoint yet; nothing holds the design",
+            dir.display()
+        ))
+        .into());
+    };
+    let Some(row) = t.population.iter().chain(&t.archive).find(|r| r.id == id) else {
+        return Err(gripopt::Error::Input(format!(
+            "{}: design {id} is not in the run's checkpoint (its population and archive of generation {}), and the run was not recorded (run.json: started with `--record none`), so its other designs are not kept",
+            dir.display(),
+            t.generation
+        ))
+        .into());
+    };
+    let from = format!("from its checkpoint, generation {}; the run was not recorded", t.generation);
+    Ok(Some((row.generation, Design::from_array(&row.parameters()), from)))
 }
 
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--force]`.

@@ -44,6 +44,9 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
                 outln!("  not in the recording (the design's scenarios stopped early before it): nothing compared")
             }
         }
+        if let Some(why) = &r.not_recorded {
+            outln!("  {why}");
+        }
         if let Some(m) = &r.recording {
             outln!(
                 "  recorded to {} (open in Foxglove with {})",

@@ -6,7 +6,7 @@
 
 use crate::cli::out::path as quoted;
 use anyhow::{bail, Result};
-use gripopt::run::{DesignRow, RunFolder, RunInfo, RunState, DESIGN_COLUMNS};
+use gripopt::run::{CheckpointTables, DesignRow, RunFolder, RunInfo, RunState, DESIGN_COLUMNS};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -42,7 +42,8 @@ fn unit(name: &str) -> &'static str {
 /// JSON text, null when none, not the CSV's quoted cell) and its replay command.
 struct Shown<'a> {
     row: &'a DesignRow,
-    replay: String,
+    /// None: the run was not recorded (`--record none`), nothing to replay.
+    replay: Option<String>,
 }
 
 impl Serialize for Shown<'_> {
@@ -88,6 +89,12 @@ struct ShowJson<'a> {
     no_feasible_design: Option<Vec<String>>,
     /// What verify.csv checked (null: no verify.csv).
     verify: Option<VerifyJson>,
+    /// What does not agree in the folder: run.json or a CSV view against checkpoint.json
+    /// (the designs shown are the checkpoint's); empty when all agree.
+    warnings: Vec<String>,
+    /// Where the designs come from: checkpoint.json (or the view `file` before the first
+    /// checkpoint).
+    source: &'static str,
     file: &'a str,
     sorted_by: &'a str,
     direction: &'a str,
@@ -130,6 +137,35 @@ fn objective(r: &DesignRow, name: &str) -> Option<f64> {
     }
 }
 
+/// Design `id` and the table it is in: the checkpoint's front, archive or population (or,
+/// before the first checkpoint, the views pareto.csv, archive.csv, population.csv).
+fn find_design(
+    folder: &RunFolder,
+    tables: Option<&CheckpointTables>,
+    id: u64,
+) -> Result<Option<(DesignRow, &'static str)>> {
+    if let Some(t) = tables {
+        let found = [("pareto.csv", &t.front), ("archive.csv", &t.archive), ("population.csv", &t.population)]
+            .into_iter()
+            .find_map(|(f, rows)| rows.iter().find(|r| r.id == id).map(|r| (r.clone(), f)));
+        return Ok(found);
+    }
+    for (f, read) in [
+        ("pareto.csv", RunFolder::front as fn(&RunFolder) -> gripopt::Result<Vec<DesignRow>>),
+        ("archive.csv", RunFolder::archive),
+        ("population.csv", RunFolder::population),
+    ] {
+        // a file not written (yet) is skipped; a damaged one is an error
+        if !folder.dir().join(f).exists() {
+            continue;
+        }
+        if let Some(row) = read(folder)?.into_iter().find(|r| r.id == id) {
+            return Ok(Some((row, f)));
+        }
+    }
+    Ok(None)
+}
+
 /// `gripopt show`.
 pub fn run(a: ShowArgs) -> Result<()> {
     let dir = &a.run_dir;
@@ -140,30 +176,32 @@ pub fn run(a: ShowArgs) -> Result<()> {
     let folder = RunFolder::open(dir)?;
     let file = if a.archive { "archive.csv" } else { "pareto.csv" };
     let run = folder.info()?;
-    let replay = |id: u64| format!("gripopt replay {} --design {id}", quoted(dir));
+    // a run recorded nothing (`--record none`): no design can be replayed
+    let replay = |id: u64| run.recording.enabled.then(|| format!("gripopt replay {} --design {id}", quoted(dir)));
+    let not_recorded = "not recorded (run.json: the run was started with `--record none`), nothing to replay";
+    // the designs of the run's state (its checkpoint), not the views a user may replace
+    let tables = folder.checkpoint_tables()?;
+    let mut warnings: Vec<String> = vec![];
+    if let Some(m) = tables.as_ref().and_then(|t| t.run_json_mismatch.as_ref()) {
+        warnings.push(format!("run.json {m}"));
+    }
+    if tables.is_none() && run.completed_generations > 0 {
+        warnings.push(format!(
+            "checkpoint.json is missing, but run.json records {} completed generations: the designs shown are the views' (pareto.csv, archive.csv), unchecked; restore checkpoint.json (e.g. from a backup)",
+            run.completed_generations
+        ));
+    }
     if let Some(id) = a.design {
-        let mut found = None;
-        for (f, read) in [
-            ("pareto.csv", RunFolder::front as fn(&RunFolder) -> gripopt::Result<Vec<DesignRow>>),
-            ("archive.csv", RunFolder::archive),
-            ("population.csv", RunFolder::population),
-        ] {
-            // a file not written (yet) is skipped; a damaged one is an error
-            if !dir.join(f).exists() {
-                continue;
-            }
-            if let Some(row) = read(&folder)?.into_iter().find(|r| r.id == id) {
-                found = Some((row, f));
-                break;
-            }
-        }
-        let Some((row, f)) = found else {
-            bail!(
-                "--design {id}: not in pareto.csv, archive.csv or population.csv of {} (older designs: `{}`)",
-                quoted(dir),
-                replay(id)
-            )
+        let Some((row, f)) = find_design(&folder, tables.as_ref(), id)? else {
+            let older = match replay(id) {
+                Some(r) => format!("older designs: `{r}`"),
+                None => "older designs are not kept: the run was not recorded".into(),
+            };
+            bail!("--design {id}: not in pareto.csv, archive.csv or population.csv of {} ({older})", quoted(dir))
         };
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
         let cells = row.text_cells();
         if a.json {
             let mut m: BTreeMap<String, serde_json::Value> = BTreeMap::new();
@@ -183,7 +221,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
                 let u = if matches!(u, "-" | "text" | "bool") { String::new() } else { format!(" {u}") };
                 outln!("  {k:<14} {}{u}", if v.is_empty() { "—" } else { v });
             }
-            outln!("  replay: {}", replay(id));
+            outln!("  replay: {}", replay(id).as_deref().unwrap_or(not_recorded));
         }
         return Ok(());
     }
@@ -194,11 +232,19 @@ pub fn run(a: ShowArgs) -> Result<()> {
         |v: &gripopt::run::VerifiedGeneration| run.checkpoint_sha256.as_deref() == Some(&v.checkpoint_sha256);
     let why_none = run.discards.explain();
     // a run killed in its first generation has no table yet
-    let none_yet = run.completed_generations == 0 && !dir.join(file).exists();
-    let mut rows = match (none_yet, a.archive) {
-        (true, _) => vec![],
-        (false, true) => folder.archive()?,
-        (false, false) => folder.front()?,
+    let none_yet = tables.is_none() && run.completed_generations == 0 && !dir.join(file).exists();
+    let mut rows = match (&tables, none_yet, a.archive) {
+        (Some(t), ..) => {
+            let rows = if a.archive { t.archive.clone() } else { t.front.clone() };
+            // a running run's views follow its checkpoints at their own pace
+            if !matches!(state, RunState::Running(_)) {
+                warnings.extend(folder.view_differs(file, &rows, t.generation)?);
+            }
+            rows
+        }
+        (None, true, _) => vec![],
+        (None, false, true) => folder.archive()?,
+        (None, false, false) => folder.front()?,
     };
     rows.sort_by(|x, y| {
         // designs without the value go last, whichever way the objective is better
@@ -229,6 +275,8 @@ pub fn run(a: ShowArgs) -> Result<()> {
             evaluations: run.evaluations,
             no_feasible_design: why_none,
             verify: verified.as_ref().map(|v| VerifyJson { generation: v.generation, current: verify_current(v) }),
+            warnings,
+            source: if tables.is_some() { "checkpoint.json" } else { file },
             file,
             sorted_by: obj,
             direction: if maximise { "maximise" } else { "minimise" },
@@ -239,6 +287,9 @@ pub fn run(a: ShowArgs) -> Result<()> {
         return Ok(());
     }
     outln!("{}: {}", quoted(dir), state_text(state, &run, dir, resumable));
+    for w in &warnings {
+        outln!("warning: {w}");
+    }
     if let Some(v) = &verified {
         if verify_current(v) {
             outln!("verify.csv: generation {}'s front (the run's current state)", v.generation);
@@ -260,11 +311,20 @@ pub fn run(a: ShowArgs) -> Result<()> {
             outln!("{l}");
         }
     }
+    let of = match (&tables, warnings.is_empty()) {
+        (Some(t), false) => {
+            format!("checkpoint.json's {} (generation {})", if a.archive { "archive" } else { "front" }, t.generation)
+        }
+        _ => file.to_string(),
+    };
     outln!(
-        "{} designs of {file}, sorted by {obj} ({}), best first",
+        "{} designs of {of}, sorted by {obj} ({}), best first",
         rows.len(),
         if maximise { "higher is better" } else { "lower is better" }
     );
+    if !run.recording.enabled {
+        outln!("replay: {not_recorded}");
+    }
     let shown = ["id", "max_offset", "alpha", "mean_force", "t_stab", "l21", "b", "t22", "r", "p", "psi_deg"];
     let label = |n: &str| match n {
         "max_offset" => "max_offset mm".to_string(),
@@ -275,7 +335,8 @@ pub fn run(a: ShowArgs) -> Result<()> {
         _ => n.to_string(),
     };
     let line: Vec<String> = shown.iter().map(|n| format!(" {:>13}", label(n))).collect();
-    outln!("{}  replay", line.join(""));
+    let replay_head = if run.recording.enabled { "  replay" } else { "" };
+    outln!("{}{replay_head}", line.join(""));
     for r in &rows {
         let x = r.parameters();
         let values = [None, r.max_offset, r.alpha, r.mean_force, r.t_stab, Some(x[0]), Some(x[1]), Some(x[2])];
@@ -305,7 +366,8 @@ pub fn run(a: ShowArgs) -> Result<()> {
             .map(|o| format!("  {o} {}", r.robust.get(o, "p_stay").map_or("—".into(), |p| format!("{p:.3}"))))
             .collect();
         let p_stay = if p_stay.is_empty() { p_stay } else { format!("  P(stay):{p_stay}") };
-        outln!("{}  {}{p_stay}", cells.join(""), replay(r.id));
+        let replay = replay(r.id).map(|c| format!("  {c}")).unwrap_or_default();
+        outln!("{}{replay}{p_stay}", cells.join(""));
     }
     Ok(())
 }

@@ -392,14 +392,26 @@ struct Msg {
     data: Vec<u8>,
 }
 
+/// Why `run_dir` has no recording folder `dir`: run.json's recording settings say whether
+/// the run recorded anything.
+fn no_recording(run_dir: &Path, dir: &Path) -> String {
+    let run_json = run_dir.join("run.json");
+    let enabled = std::fs::read(&run_json)
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| v["recording"]["enabled"].as_bool());
+    match enabled {
+        Some(false) => "the run was not recorded (run.json: recording off, started with `--record none`): no design can be replayed; `gripopt show` and `gripopt export` take its last designs from the checkpoint".into(),
+        Some(true) => format!("{} is missing, but run.json says the run recorded its designs: restore it (e.g. from a backup)", dir.display()),
+        None => format!("no recording ({} is missing, and {} does not say whether the run recorded)", dir.display(), run_json.display()),
+    }
+}
+
 /// Find design `id` in the recording of `run_dir`.
 pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let dir = run_dir.join("recording");
     if !dir.exists() {
-        return Err(Error::Recording {
-            path: run_dir.to_path_buf(),
-            message: format!("no recording ({} is missing; was the run started with --record none?)", dir.display()),
-        });
+        return Err(Error::Recording { path: run_dir.to_path_buf(), message: no_recording(run_dir, &dir) });
     }
     // the index, or (unreadable, or without the design) the index rebuilt from the shards
     let holds = |index: &[ShardEntry]| index.iter().find(|e| e.first_id <= id && id <= e.last_id).cloned();

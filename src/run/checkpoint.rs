@@ -158,9 +158,13 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     }
 
     /// Load and check the format; a checksum mismatch is returned beside the checkpoint
-    /// instead of refused (for `resume --force`).
-    pub fn load_unverified(path: &Path) -> Result<(Self, Option<ChecksumMismatch>)> {
-        Self::read(path).map(|(cp, _, mismatch)| (cp, mismatch))
+    /// instead of refused (for `resume --force`), with the checksum the file states (its
+    /// field `sha256`; the content's when it has none): the one run.json records of it.
+    pub fn load_unverified(path: &Path) -> Result<(Self, String, Option<ChecksumMismatch>)> {
+        Self::read(path).map(|(cp, computed, mismatch)| {
+            let stated = mismatch.as_ref().and_then(|m| m.stored.clone()).unwrap_or(computed);
+            (cp, stated, mismatch)
+        })
     }
 
     /// Read `path`: the checkpoint, its content's checksum, and the mismatch with the

@@ -50,9 +50,29 @@ fn lock_target(dir: &Path) -> Result<File> {
     f.map_err(|e| Error::io(dir, "cannot open the run folder to lock it", e))
 }
 
-/// The pid written in `dir/.lock`.
+/// The pid written in `dir/.lock` (None when it is not a plain file: a link is not ours).
 fn pid_in(dir: &Path) -> Option<u32> {
-    std::fs::read_to_string(dir.join(LOCK_FILE)).ok()?.trim().parse().ok()
+    let p = dir.join(LOCK_FILE);
+    if !std::fs::symlink_metadata(&p).ok()?.is_file() {
+        return None;
+    }
+    std::fs::read_to_string(p).ok()?.trim().parse().ok()
+}
+
+/// `dir/.lock` is a symbolic link: refused, never written through (a write would land in
+/// the file it points to).
+fn refuse_link(dir: &Path) -> Result<()> {
+    let p = dir.join(LOCK_FILE);
+    match std::fs::symlink_metadata(&p) {
+        Ok(m) if m.file_type().is_symlink() => {
+            let to = std::fs::read_link(&p).map(|t| format!(" (to {})", t.display())).unwrap_or_default();
+            Err(Error::RunDir {
+                path: p,
+                message: format!("a symbolic link{to}: the run folder's lock file is gripopt's own plain file and gripopt never writes through a link; remove the link (`rm` removes the link, not its target) and run the command again"),
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The same file system object (device and inode on Unix).
@@ -77,6 +97,7 @@ impl RunLock {
     /// momentary probe is waited out); [`Error::Locked`] names the pid of the process
     /// holding it.
     pub fn acquire(dir: &Path) -> Result<Self> {
+        refuse_link(dir)?;
         let target = if cfg!(unix) { dir.to_path_buf() } else { dir.join(LOCK_FILE) };
         for attempt in 1..=TRIES {
             let file = lock_target(dir)?;
@@ -99,8 +120,11 @@ impl RunLock {
                 return Err(Error::FolderMoved { path: dir.to_path_buf() });
             }
             let lock = RunLock { file, dir: dir.to_path_buf(), path: dir.join(LOCK_FILE) };
+            // again under the lock; then the pid file replaced by rename, never opened
+            // through whatever is at its path
+            refuse_link(dir)?;
             // the pid is for messages only: the lock holds without it
-            let _ = std::fs::write(&lock.path, format!("{}\n", std::process::id()));
+            let _ = crate::fsutil::write_atomic(&lock.path, format!("{}\n", std::process::id()).as_bytes());
             return Ok(lock);
         }
         Err(Error::Locked { path: dir.to_path_buf(), pid: pid_in(dir) })

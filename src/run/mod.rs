@@ -7,6 +7,7 @@
 //! ([`crate::record`]); neither of them names it.
 
 mod archive;
+mod attribution;
 mod checkpoint;
 mod checkpoint_json;
 mod contents;
@@ -25,6 +26,7 @@ mod replay_scenario;
 mod robust_columns;
 mod robust_eval;
 mod rundir;
+mod tables;
 mod verify;
 mod verify_rec;
 mod verify_robust;
@@ -53,6 +55,7 @@ pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
 pub use robust_eval::RobustScheduled;
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
+pub use tables::CheckpointTables;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
     verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,

@@ -15,9 +15,11 @@
 //! pool's threads + 1 generations handed over but not yet committed; a generation handed
 //! over shares its designs' records and trajectories with the optimiser, and its checkpoint
 //! waits as its bytes, serialised streaming (never as a JSON tree). The CSV views are
-//! rewritten at most every [`VIEWS_MIN_INTERVAL`], and not when the next generation is
-//! already queued (a later one rewrites them; the archive is still updated), so a persister
-//! that falls behind catches up instead of writing views nobody reads; every generation's
+//! rewritten at most every [`VIEWS_MIN_INTERVAL`] (a generation within it skips them; the
+//! archive is still updated) and at least that often while generations come: skipped views
+//! are written by the first generation after the interval, or when it passes with none, so
+//! a persister that falls behind writes the views of its latest generation four times a
+//! second, never one per generation, and never leaves them behind; every generation's
 //! shard, archive and checkpoint are always written, and the views of the last generation
 //! handed over too (also when the run stops early), unless the caller says it writes the
 //! final outputs itself ([`Persister::finish_with`], as `optimise` does after a run that
@@ -70,7 +72,8 @@ pub struct PersistStats {
     pub views_files_s: f64,
     /// The longest file of each views write, summed (the least any pool could take).
     pub views_longest_s: f64,
-    /// Generations whose CSV views were skipped because the next one was already queued.
+    /// Generations whose CSV views were skipped (written less than `VIEWS_MIN_INTERVAL`
+    /// after the previous views; a later write covers them).
     pub views_skipped: u64,
     /// Threads of the persister's pool.
     pub pool_threads: usize,
@@ -336,10 +339,18 @@ struct Pending {
     checkpoint: Option<Result<(Vec<u8>, String)>>,
 }
 
+/// What the persister thread does next.
+enum Next {
+    /// Handle a message.
+    Msg(Msg),
+    /// The views' deadline passed with nothing to handle: write the skipped views now.
+    Views,
+}
+
 /// The next message; generations only while fewer than `max_pending` wait for their
-/// shards and checkpoints (the pool's reports are always taken). None once closed and
-/// nothing is left to do.
-fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<Msg> {
+/// shards and checkpoints (the pool's reports are always taken); [`Next::Views`] when
+/// `views_due` passes first. None once closed and nothing is left to do.
+fn next_msg(shared: &SharedState, pending: usize, max_pending: usize, views_due: Option<Instant>) -> Option<Next> {
     let (m, cv) = &**shared;
     let mut s = m.lock().expect("persister lock");
     loop {
@@ -354,12 +365,21 @@ fn next_msg(shared: &SharedState, pending: usize, max_pending: usize) -> Option<
                 s.queued -= 1;
                 cv.notify_all();
             }
-            return Some(msg);
+            return Some(Next::Msg(msg));
         }
         if s.closed && s.queued == 0 && pending == 0 {
             return None;
         }
-        s = cv.wait(s).expect("persister lock");
+        match views_due {
+            Some(due) => {
+                let now = Instant::now();
+                if now >= due {
+                    return Some(Next::Views);
+                }
+                s = cv.wait_timeout(s, due - now).expect("persister lock").0;
+            }
+            None => s = cv.wait(s).expect("persister lock"),
+        }
     }
 }
 
@@ -375,7 +395,27 @@ fn persist_loop(
     let mut pending: VecDeque<Pending> = VecDeque::new();
     let (mut last_views, mut stale_views): (Option<Instant>, Option<Nsga2State<GripperInfo>>) = (None, None);
     let res = (|| -> Result<()> {
-        while let Some(msg) = next_msg(&shared, pending.len(), max_pending) {
+        // skipped views are written once VIEWS_MIN_INTERVAL has passed since the last write,
+        // by the next generation or, if none comes by then, on their own
+        let views_due = |last: Option<Instant>, stale: bool| last.filter(|_| stale).map(|t| t + VIEWS_MIN_INTERVAL);
+        while let Some(next) =
+            next_msg(&shared, pending.len(), max_pending, views_due(last_views, stale_views.is_some()))
+        {
+            let msg = match next {
+                Next::Msg(msg) => msg,
+                Next::Views => {
+                    if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
+                        hooks.check()?;
+                        let t = Instant::now();
+                        let files = pool.install(|| o.write_views(&st))?;
+                        let mut s = shared.0.lock().expect("persister lock");
+                        s.stats.outputs_s += t.elapsed().as_secs_f64();
+                        s.stats.add_views(t.elapsed().as_secs_f64(), &files);
+                    }
+                    last_views = Some(Instant::now());
+                    continue;
+                }
+            };
             match msg {
                 Msg::Job(mut job) => {
                     let g = job.state.generation;
@@ -394,10 +434,10 @@ fn persist_loop(
                     // the shard's designs (with their trajectories) leave the state here
                     let designs: Vec<Individual<GripperInfo>> = std::mem::take(&mut job.state.last_evaluated);
                     if let Some(o) = &outputs {
-                        // the next generation already waits, or the views were rewritten
-                        // moments ago: a later generation (or the end) rewrites them
-                        let behind = shared.0.lock().expect("persister lock").queued > 0;
-                        if behind || last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
+                        // the views were rewritten moments ago: a later generation (or the
+                        // deadline, or the end) rewrites them; a persister that is behind
+                        // still rewrites them every VIEWS_MIN_INTERVAL
+                        if last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
                             skipped = true;
                             stale_views = Some(job.state.clone());
                         } else {

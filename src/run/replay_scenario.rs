@@ -6,6 +6,7 @@
 //! run's time axis) so the scenario can be watched in Foxglove with the verify layout.
 
 use super::folder::RunFolder;
+use super::lock::RunLock;
 use super::verify::row_of;
 use super::verify_rec::VerifyRecording;
 use crate::eval::{robust_start, run_scenario, EvalOptions, Record, RobustSetup, ScenarioRecord};
@@ -32,8 +33,11 @@ pub struct ScenarioReplay {
     pub verified: Option<bool>,
     /// The scenario's evaluation record (the free kind: the centred grasp and the free scene).
     pub record: Record,
-    /// The recording written (None: not asked).
+    /// The recording written (None: not asked, or nothing to record).
     pub recording: Option<PathBuf>,
+    /// Why nothing was recorded although asked (the scenario never reached the free
+    /// scene: there is no motion of the free object to record).
+    pub not_recorded: Option<String>,
     /// The free object's poses (not serialised).
     #[serde(skip)]
     pub poses: Vec<PoseSample>,
@@ -52,8 +56,13 @@ pub fn parse_scenario(arg: &str) -> Result<(String, usize)> {
 
 /// Replay scenario `k` of object `object` of design `id` of the robust run in `dir`;
 /// `record`: write its MCAP.
+///
+/// With `record`, the run folder's lock is held throughout (a run resumed, or verified, in
+/// it meanwhile is refused, and a replay while one runs is refused: [`Error::Locked`]).
 pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool) -> Result<ScenarioReplay> {
     let folder = RunFolder::open(dir)?;
+    // it writes into the run folder: under its lock, as verify does
+    let _lock = if record { Some(RunLock::acquire(dir)?) } else { None };
     let p = folder.problem()?;
     let file = dir.join("problem.toml");
     let not = |m: String| Error::RunDir { path: file.clone(), message: m };
@@ -80,7 +89,14 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     let recorded =
         rec.record.robust.as_ref().and_then(|r| r.scenarios.iter().find(|s| s.object == o && s.k == k).cloned());
     let verified = recorded.as_ref().map(|r| *r == scenario);
-    let recording = match (record, row_of(id, &design, &ev)) {
+    let row = row_of(id, &design, &ev);
+    let not_recorded = (record && row.is_none()).then(|| {
+        format!(
+            "nothing recorded: the scenario never reached the free scene (it ended with cause `{}`), so there is no motion of the object to record",
+            scenario.cause.map_or("?", |c| c.as_str())
+        )
+    });
+    let recording = match (record, row) {
         (true, Some(row)) => {
             let name = format!("scenario-{id}-{object}-{k}.mcap");
             let what = format!("design {id} scenario {object}:{k}");
@@ -101,6 +117,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
         verified,
         record: Record::from_eval(&ev),
         recording,
+        not_recorded,
         poses,
     })
 }

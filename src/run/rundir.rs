@@ -216,7 +216,7 @@ pub fn resume_with(
         }
     };
     let cp_path = dir.join("checkpoint.json");
-    let (cp, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
+    let (cp, cp_sha256, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
     let mut notes = vec![];
     if let Some(m) = mismatch {
         if !force {
@@ -254,6 +254,17 @@ pub fn resume_with(
         notes.push(format!(
             "forced: an older checkpoint (generation {} of {})",
             cp.state.generation, info.completed_generations
+        ));
+    } else if let Some(why) = super::attribution::run_json_mismatch(&info, cp.state.generation, &cp_sha256, false) {
+        // run.json restored beside a newer checkpoint (or another copy's): resuming would
+        // rewrite it without the resumes and wall time it lost
+        if !force {
+            let message = format!("{why}, or resume with --force to continue from checkpoint.json's generation {} (what run.json lost is not restored)", cp.state.generation);
+            return Err(Error::RunDir { path: run_json, message });
+        }
+        notes.push(format!(
+            "forced: run.json (generation {}) does not match checkpoint.json (generation {})",
+            info.completed_generations, cp.state.generation
         ));
     }
     let Some(archive) = cp.archive.clone() else {
@@ -315,6 +326,9 @@ pub fn resume_with(
     info.status = RunStatus::Running;
     info.completed_generations = at;
     info.evaluations = cp.state.evaluations;
+    // the checkpoint resumed from (after a forced resume from an older one, not the newer
+    // one run.json named)
+    info.checkpoint_sha256 = Some(cp_sha256);
     write_json(&run_json, &info)?;
     write_current(dir, &info, &gp.problem)?;
     let state = cp.state.with_max_generations(total);
@@ -450,7 +464,10 @@ fn drive(
             });
         }
     };
-    let interrupted = matches!(st.get_termination_reason(), Some(argmin::core::TerminationReason::Interrupt));
+    // a stop asked for once every requested generation is done (ctrl-c during a resume
+    // with nothing left to do, or after the last generation) interrupted nothing
+    let interrupted = matches!(st.get_termination_reason(), Some(argmin::core::TerminationReason::Interrupt))
+        && st.generation < st.max_generations;
     info.completed_generations = st.generation;
     info.evaluations = st.evaluations;
     info.wall_s = wall_before + start.elapsed().as_secs_f64();

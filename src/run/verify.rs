@@ -296,6 +296,8 @@ impl CheckedState {
             return Err(Error::RunDir { path, message });
         }
         let (checkpoint, sha256) = Checkpoint::load_with_sha256(&path)?;
+        // run.json names this checkpoint (not an older or newer one restored beside it)
+        super::attribution::check_run_json(dir, info, checkpoint.state.generation, &sha256)?;
         Ok(CheckedState { checkpoint, path, sha256 })
     }
 

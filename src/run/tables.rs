@@ -1,0 +1,78 @@
+//! The run's designs as its state holds them: the front, archive and population of
+//! checkpoint.json, as the rows of the CSV views written from them ([`CheckpointTables`]),
+//! with run.json checked against the checkpoint. The views are rewritten every generation
+//! and a user may copy an older one in, or edit one; `gripopt show` takes the designs from
+//! here and says when a view differs ([`RunFolder::view_differs`]).
+
+use super::attribution::run_json_mismatch;
+use super::checkpoint::Checkpoint;
+use super::folder::{read_table, RunFolder};
+use super::gripper::GripperInfo;
+use super::lock::{LockHolder, RunLock};
+use super::outputs::{final_front, DesignRow};
+use crate::cells::{line, Floats};
+use crate::Result;
+
+/// The designs of a run's checkpoint, as pareto.csv, archive.csv and population.csv write
+/// them (the same rows, in the same order).
+#[derive(Debug, Clone)]
+pub struct CheckpointTables {
+    /// The checkpoint's generation.
+    pub generation: u64,
+    /// pareto.csv's rows: the population's feasible non-dominated designs, by id.
+    pub front: Vec<DesignRow>,
+    /// archive.csv's rows: every feasible non-dominated design of the run, by id.
+    pub archive: Vec<DesignRow>,
+    /// population.csv's rows: the whole population, by rank then id.
+    pub population: Vec<DesignRow>,
+    /// Why run.json does not match the checkpoint (None: it does, or a process runs the run
+    /// and run.json follows its checkpoints).
+    pub run_json_mismatch: Option<String>,
+}
+
+impl RunFolder {
+    /// The designs of the run's checkpoint (None: no checkpoint.json yet), checked against
+    /// run.json. A damaged or edited checkpoint is an error naming it.
+    pub fn checkpoint_tables(&self) -> Result<Option<CheckpointTables>> {
+        let path = self.dir().join("checkpoint.json");
+        if !path.is_file() {
+            return Ok(None);
+        }
+        let info = self.info()?;
+        let (cp, sha256) = Checkpoint::<GripperInfo>::load_with_sha256(&path)?;
+        let st = &cp.state;
+        let running = matches!(RunLock::holder(self.dir())?, LockHolder::Held(_));
+        let front = final_front(st).into_iter().map(|i| DesignRow::of(i, Some(0))).collect();
+        let archive =
+            cp.archive.as_ref().map_or(vec![], |a| a.members.iter().map(|i| DesignRow::of(i, None)).collect());
+        let mut order: Vec<usize> = (0..st.population.len()).collect();
+        order.sort_by_key(|&k| (st.rank[k], st.population[k].id));
+        let population = order.into_iter().map(|k| DesignRow::of(&st.population[k], Some(st.rank[k]))).collect();
+        Ok(Some(CheckpointTables {
+            generation: st.generation,
+            front,
+            archive,
+            population,
+            run_json_mismatch: run_json_mismatch(&info, st.generation, &sha256, running),
+        }))
+    }
+
+    /// Why the view `file` (pareto.csv, archive.csv or population.csv) does not hold `rows`
+    /// (the checkpoint's, [`RunFolder::checkpoint_tables`]) byte for byte (None: it does). A
+    /// missing or damaged view is an error naming it.
+    pub fn view_differs(&self, file: &str, rows: &[DesignRow], generation: u64) -> Result<Option<String>> {
+        let path = self.dir().join(file);
+        // the damaged or truncated file's error, naming the line
+        read_table::<DesignRow>(&path)?;
+        let text = std::fs::read_to_string(&path).map_err(|e| crate::Error::io(&path, "cannot read", e))?;
+        let data: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).skip(1).collect();
+        let expected: Vec<String> = rows.iter().map(|r| line(r, Floats::Display)).collect();
+        let same =
+            data.len() == expected.len() && data.iter().zip(&expected).all(|(a, b)| *a == b.trim_end_matches('\n'));
+        Ok((!same).then(|| {
+            format!(
+                "{file} does not hold the designs of checkpoint.json (generation {generation}): an older, newer or edited copy; shown: the checkpoint's designs (each design's values as the run evaluated them)"
+            )
+        }))
+    }
+}

@@ -1,0 +1,239 @@
+//! Run folders put together by hand (s31 hostile-user pass): run.json restored beside a
+//! newer checkpoint is refused, never taken for the run's state; the CSV views keep up with
+//! a persister that is behind; ctrl-c during a resume with nothing to do leaves a finished
+//! run finished; `show` takes the designs from the checkpoint, not from a view copied in or
+//! edited; a run recorded with `--record none` is shown and exported from its checkpoint; a
+//! `.lock` that is a link is never written through; `replay --scenario` takes the lock.
+
+use crate::robustness::{cli, code, read, stderr, tmp, PROBLEM};
+use gripopt::run::{optimise, resume, resume_with, RunHooks, RunSpec};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+fn out(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// Every file under `dir` (but the lock's pid file) with its bytes.
+fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut m = BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            m.extend(files(&p));
+        } else if e.file_name() != ".lock" {
+            m.insert(p.clone(), std::fs::read(&p).unwrap());
+        }
+    }
+    m
+}
+
+/// A copy of folder `from` at `to` (as `cp -a`).
+fn copy(from: &Path, to: &Path) {
+    let _ = std::fs::remove_dir_all(to);
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let (p, q) = (e.path(), to.join(e.file_name()));
+        if p.is_dir() {
+            copy(&p, &q);
+        } else {
+            std::fs::copy(&p, &q).unwrap();
+        }
+    }
+}
+
+fn spec(out: &Path, generations: u64, record: bool) -> RunSpec {
+    let mut s = crate::common::bottle_spec(out, generations, 5, 1);
+    if !record {
+        s.record = gripopt::record::RecordOptions::none();
+    }
+    s
+}
+
+/// Finding 1: `optimise b5 (5 generations); cp -a b5 w; resume w --generations 10; cp
+/// b5/run.json w/`: `resume` and `verify` refuse, naming run.json and checkpoint.json, and
+/// change no file; `show` says so. A run.json one generation behind a checkpoint of a run
+/// killed between the two writes is the run's own and resumes.
+#[test]
+fn an_older_run_json_beside_a_newer_checkpoint_is_refused() {
+    let (b5, w) = (tmp("trust-b5"), tmp("trust-w"));
+    optimise(&spec(&b5, 5, true)).unwrap();
+    copy(&b5, &w);
+    resume(&w, Some(10), false, Some(1)).unwrap();
+    std::fs::copy(b5.join("run.json"), w.join("run.json")).unwrap();
+    let before = files(&w);
+    let d = w.display().to_string();
+    for args in [vec!["resume", &d, "--generations", "12"], vec!["verify", &d, "--record", "none"]] {
+        let o = cli(&args);
+        let e = stderr(&o);
+        assert_eq!(code(&o), 2, "{args:?}: {e}");
+        assert!(e.contains("run.json") && e.contains("does not match checkpoint.json"), "{args:?}: {e}");
+        assert!(e.contains("generation 10"), "{args:?}: {e}");
+    }
+    assert!(files(&w) == before, "a refused resume or verify changes no file");
+    let s = out(&cli(&["show", &d]));
+    assert!(s.contains("run.json does not match checkpoint.json"), "{s}");
+    // run.json one generation behind, status running (killed between checkpoint 10 and its
+    // run.json): the run's own, resumed
+    let mut v: serde_json::Value = serde_json::from_str(&read(&w.join("run.json"))).unwrap();
+    v["generations"] = 10.into();
+    v["completed_generations"] = 9.into();
+    v["status"] = "running".into();
+    std::fs::write(w.join("run.json"), serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    assert!(!out(&cli(&["show", &d])).contains("does not match"));
+    let r = resume(&w, Some(11), false, Some(1)).unwrap();
+    assert_eq!(r.generations, 11);
+}
+
+/// Finding 2: a persister that is behind (every commit slow, the next generation always
+/// queued) still rewrites the views at least every 250 ms, not only at the end.
+#[test]
+fn the_views_keep_up_with_a_persister_that_is_behind() {
+    use argmin::core::observers::Observe;
+    use gripopt::run::{Archive, Checkpoint, CheckpointSpec, GripperInfo, OutputsObserver, PersistHooks, Persister};
+    let src = tmp("trust-views-src");
+    optimise(&spec(&src, 2, false)).unwrap();
+    let cp = Checkpoint::<GripperInfo>::load(&src.join("checkpoint.json")).unwrap();
+    let dir = tmp("trust-views");
+    std::fs::create_dir_all(&dir).unwrap();
+    let archive = Arc::new(std::sync::Mutex::new(Archive::default()));
+    let outputs = OutputsObserver { out: dir.clone(), settings: cp.settings.clone(), archive };
+    let ckpt = CheckpointSpec {
+        path: dir.join("checkpoint.json"),
+        problem_hash: cp.problem_hash.clone(),
+        settings: cp.settings.clone(),
+        options: cp.options.clone(),
+        wall_before: 0.0,
+        start: std::time::Instant::now(),
+    };
+    let slow = move |_: &gripopt::run::Committed| -> gripopt::Result<()> {
+        std::thread::sleep(std::time::Duration::from_millis(60));
+        Ok(())
+    };
+    let hooks = PersistHooks { on_commit: Some(Box::new(slow)), ..Default::default() };
+    let mut p = Persister::start_with(Some(outputs), None, ckpt, 1, hooks).unwrap();
+    let generations = 30;
+    let mut st = cp.state.clone();
+    let (hv, fe) = (st.hv_history[0], st.feasible_history[0]);
+    for g in 1..=generations {
+        st.generation = g;
+        st.hv_history = vec![hv; g as usize];
+        st.feasible_history = vec![fe; g as usize];
+        p.observe_iter(&st, &argmin::core::KV::new()).unwrap();
+    }
+    // history.csv as the run goes on (before the final views): close to the last generation
+    let history = crate::robustness::rows(&dir.join("history.csv"));
+    let shown = history.len() as u64 - 1;
+    let stats = p.finish_with(false).unwrap();
+    assert!(stats.views_written >= 3, "{stats:?}");
+    assert!(shown + 10 >= generations, "history.csv shows {shown} of {generations} generations; {stats:?}");
+}
+
+/// Finding 3: ctrl-c during a resume of a finished run with nothing left to do: still
+/// finished, not interrupted.
+#[test]
+fn ctrl_c_during_a_resume_with_nothing_to_do_leaves_the_run_finished() {
+    let dir = tmp("trust-noop");
+    optimise(&spec(&dir, 2, false)).unwrap();
+    let hooks = RunHooks { stop: Some(Arc::new(AtomicBool::new(true))), ..Default::default() };
+    let s = resume_with(&dir, None, false, Some(1), hooks).unwrap();
+    assert!(!s.interrupted);
+    let v: serde_json::Value = serde_json::from_str(&read(&dir.join("run.json"))).unwrap();
+    assert_eq!(v["status"], "finished", "{v}");
+}
+
+/// Finding 4: `show` takes the front from the checkpoint: an older pareto.csv copied in, or
+/// a value edited by hand, is not shown as the run's, and `show` says the view differs.
+#[test]
+fn show_takes_the_designs_from_the_checkpoint_not_from_pareto_csv() {
+    let (old, dir) = (tmp("trust-show-old"), tmp("trust-show"));
+    // population 16, seed 5: 3 designs on the front after 5 generations, 5 after 6
+    let sixteen = |d: &Path, g| RunSpec { pop: 16, ..spec(d, g, false) };
+    optimise(&sixteen(&old, 5)).unwrap();
+    optimise(&sixteen(&dir, 6)).unwrap();
+    let d = dir.display().to_string();
+    let json = |args: &[&str]| -> serde_json::Value { serde_json::from_slice(&cli(args).stdout).unwrap() };
+    let truth = json(&["show", &d, "--json"]);
+    let pareto = read(&dir.join("pareto.csv"));
+    // an older pareto.csv copied in
+    std::fs::copy(old.join("pareto.csv"), dir.join("pareto.csv")).unwrap();
+    assert_ne!(read(&dir.join("pareto.csv")), pareto, "the test needs another front");
+    let shown = json(&["show", &d, "--json"]);
+    assert_eq!(shown["designs"], truth["designs"]);
+    assert!(shown["warnings"][0].as_str().unwrap().contains("pareto.csv does not hold"), "{shown}");
+    assert!(out(&cli(&["show", &d])).contains("pareto.csv does not hold the designs of checkpoint.json"));
+    // a value edited by hand: the design's values are the evaluated ones
+    let first = pareto.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap();
+    let id = first.split(',').next().unwrap().to_string();
+    let cells: Vec<&str> = first.split(',').collect();
+    let edited = first.replacen(cells[7], "0.123", 1);
+    std::fs::write(dir.join("pareto.csv"), pareto.replacen(first, &edited, 1)).unwrap();
+    let one = json(&["show", &d, "--design", &id, "--json"]);
+    let original: f64 = cells[7].parse().unwrap();
+    assert_eq!(one["l21"]["value"].as_f64(), Some(original), "{one}");
+    assert_eq!(json(&["show", &d, "--json"])["designs"], truth["designs"]);
+    assert_eq!(truth["warnings"], serde_json::json!([]), "{truth}");
+}
+
+/// Finding 5: a run with `--record none`: `show` offers no replay command, and `export`
+/// writes a design of the checkpoint (the message for one not there says the run was not
+/// recorded).
+#[test]
+fn a_run_without_recording_is_shown_and_exported_from_its_checkpoint() {
+    let dir = tmp("trust-norec");
+    optimise(&spec(&dir, 2, false)).unwrap();
+    let d = dir.display().to_string();
+    let s = out(&cli(&["show", &d]));
+    assert!(!s.contains("gripopt replay") && s.contains("--record none"), "{s}");
+    let v: serde_json::Value = serde_json::from_slice(&cli(&["show", &d, "--json"]).stdout).unwrap();
+    assert!(v["designs"].as_array().unwrap().iter().all(|r| r["replay"].is_null()), "{v}");
+    let folder = gripopt::RunFolder::open(&dir).unwrap();
+    let (pop, archive) = (folder.population().unwrap(), folder.archive().unwrap());
+    let id = pop[0].id.to_string();
+    let o = cli(&["export", &d, "--design", &id, "--format", "json", "--out", "-"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let sheet: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (l21, psi) = (pop[0].design.to_array()[0], pop[0].design.to_array()[5]);
+    let got = (sheet["design"]["l21_mm"].as_f64().unwrap(), sheet["design"]["psi_deg"].as_f64().unwrap());
+    assert!((got.0 - l21 * 1e3).abs() < 1e-9 && (got.1 - psi).abs() < 1e-9, "{got:?} vs {l21} m, {psi}°");
+    // a design the checkpoint no longer holds (generation 1's, replaced)
+    let kept = |i: u64| pop.iter().chain(&archive).any(|r| r.id == i);
+    let gone = (0..24u64).find(|i| !kept(*i)).unwrap().to_string();
+    let o = cli(&["export", &d, "--design", &gone, "--format", "json", "--out", "-"]);
+    assert_eq!(code(&o), 2);
+    assert!(stderr(&o).contains("not recorded") && !stderr(&o).contains("was the run started"), "{}", stderr(&o));
+}
+
+/// Finding 6: a `.lock` that is a symbolic link is refused, and the file it points to is
+/// never written.
+#[test]
+fn a_lock_file_that_is_a_link_is_never_written_through() {
+    let dir = tmp("trust-link");
+    optimise(&spec(&dir, 1, false)).unwrap();
+    let victim = dir.with_extension("victim.txt");
+    std::fs::write(&victim, "precious\n").unwrap();
+    std::os::unix::fs::symlink(&victim, dir.join(".lock")).unwrap();
+    let o = cli(&["resume", &dir.display().to_string(), "--generations", "2"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains(".lock") && stderr(&o).contains("symbolic link"), "{}", stderr(&o));
+    assert_eq!(read(&victim), "precious\n");
+    assert!(std::fs::symlink_metadata(dir.join(".lock")).unwrap().file_type().is_symlink());
+}
+
+/// Finding 7: `replay --scenario` writes into the run folder under its lock: refused while
+/// another process holds it.
+#[test]
+fn replay_of_a_scenario_takes_the_run_folders_lock() {
+    let dir = tmp("trust-scenario-lock");
+    optimise(&spec(&dir, 1, false)).unwrap();
+    let held = gripopt::run::RunLock::acquire(&dir).unwrap();
+    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
+    assert!(matches!(e, gripopt::Error::Locked { .. }), "{e}");
+    drop(held);
+    // without the lock held: the folder's own answer (not a robust run)
+    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
+    assert!(e.contains("not a robust problem"), "{e}");
+    let _ = PROBLEM;
+}
