@@ -166,6 +166,11 @@ pub enum Error {
     },
 }
 
+/// `k` and the noun for it: "1 design", "3 designs".
+pub fn counted(k: u64, one: &str, many: &str) -> String {
+    format!("{k} {}", if k == 1 { one } else { many })
+}
+
 /// `s` as one word of a POSIX shell command line, to be copied from a message: as it is
 /// when it holds only characters no shell treats specially, in single quotes otherwise
 /// (`'` written `'\''`), and as `$'…'` with escapes when it holds control characters (so

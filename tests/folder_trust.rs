@@ -237,3 +237,30 @@ fn replay_of_a_scenario_takes_the_run_folders_lock() {
     assert!(e.contains("not a robust problem"), "{e}");
     let _ = PROBLEM;
 }
+
+/// A library caller's `optimise` into a path that is a file is refused naming it as a file,
+/// and the file is kept (it used to fail with the OS's "File exists").
+#[test]
+fn optimise_into_a_file_is_refused_as_a_file() {
+    let dir = tmp("trust-out-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("not-a-folder");
+    std::fs::write(&file, b"keep").unwrap();
+    let e = optimise(&spec(&file, 1, false)).unwrap_err().to_string();
+    assert!(e.contains("not-a-folder") && e.contains("is a file, not a folder"), "{e}");
+    assert_eq!(std::fs::read(&file).unwrap(), b"keep");
+}
+
+/// `verify --sample N` from the library: an N whose designs cannot fit in memory is refused
+/// before anything is drawn or written (the CLI checks it too, before the lock).
+#[test]
+fn a_library_verify_sample_beyond_memory_is_refused() {
+    let dir = tmp("trust-sample");
+    let run = dir.join("run");
+    optimise(&spec(&run, 1, false)).unwrap();
+    let before = files(&run);
+    let source = gripopt::run::VerifySource::Sample { n: usize::MAX / 2, seed: 1 };
+    let e = gripopt::run::verify(&run, source, None, false, &|_| {}, &|| {}).unwrap_err().to_string();
+    assert!(e.contains("--sample") && e.contains("needs about"), "{e}");
+    assert_eq!(files(&run), before);
+}

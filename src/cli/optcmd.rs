@@ -120,7 +120,7 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
             if s.evaluations == 1 { "" } else { "s" }
         );
     } else {
-        let n = |k: u64, one: &str, many: &str| format!("{k} {}", if k == 1 { one } else { many });
+        let n = gripopt::run::counted;
         outln!(
             "finished: {}, {} in {:.1} s; {} in the final population, {} on the Pareto front (hypervolume {:.4})",
             n(s.generations, "generation", "generations"),

@@ -318,8 +318,8 @@ pub fn run(a: ShowArgs) -> Result<()> {
         _ => file.to_string(),
     };
     outln!(
-        "{} designs of {of}, sorted by {obj} ({}), best first",
-        rows.len(),
+        "{} of {of}, sorted by {obj} ({}), best first",
+        gripopt::run::counted(rows.len() as u64, "design", "designs"),
         if maximise { "higher is better" } else { "lower is better" }
     );
     if !run.recording.enabled {

@@ -2,7 +2,7 @@
 
 use crate::cli::out::path as quoted;
 use anyhow::{bail, Context, Result};
-use gripopt::run::{verify, Confusion, VerifySource};
+use gripopt::run::{check_sample, verify, Confusion, VerifySource};
 use std::path::PathBuf;
 
 /// Arguments of `gripopt verify`.
@@ -40,60 +40,6 @@ pub enum VerifyRecordArg {
     All,
     /// Nothing.
     None,
-}
-
-/// Memory per design of `--sample N` (bytes), without a recording: the drawn batch, the
-/// designs, their rows and verify_sample.csv's text (measured ≈ 1 KiB: peak RSS of
-/// `verify RUN --sample 400 --record none` less that of `--sample 100`, over 300; rounded up).
-pub const SAMPLE_BYTES_PER_DESIGN: u64 = 4 << 10;
-
-/// Memory per design that recording a sample adds (bytes) when its free scene lasts
-/// `t_obs` seconds: its poses every 2 ms (`record::DEFAULT_SCENE_DT`) kept until the MCAP
-/// is written, twice (the poses and the framed file), and 4 KiB of messages (bottle-1l,
-/// t_obs 0.1 s: 16.6 KiB; measured as above with `--record all`: 14.4 KiB).
-pub fn sample_bytes_recorded(t_obs: f64) -> u64 {
-    let poses = (t_obs.max(0.0) / gripopt::record::DEFAULT_SCENE_DT).ceil() as u64 + 2;
-    2 * poses * std::mem::size_of::<gripopt::PoseSample>() as u64 + (4 << 10)
-}
-
-/// Memory the system can give (MemAvailable of /proc/meminfo), if known.
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// Check `--sample N` before anything is drawn (as `optimise` checks `--pop`): at least 1,
-/// and its memory estimate within half of the available memory (64 GiB when unknown);
-/// `recorded_t_obs`: the free scene's duration when the sample is recorded.
-pub fn check_sample(n: usize, recorded_t_obs: Option<f64>) -> Result<()> {
-    let bad = |rule: String| gripopt::Error::InvalidField {
-        file: "command line".into(),
-        field: "--sample".into(),
-        value: n.to_string(),
-        rule,
-    };
-    if n == 0 {
-        return Err(bad("must be at least 1".into()).into());
-    }
-    let per = SAMPLE_BYTES_PER_DESIGN + recorded_t_obs.map_or(0, sample_bytes_recorded);
-    let (avail, known) = available_memory().map_or((64u64 << 30, false), |a| (a, true));
-    let budget = avail / 2;
-    if (n as u128) * per as u128 > budget as u128 {
-        let gib = |b: f64| format!("{:.1} GiB", b / (1u64 << 30) as f64);
-        return Err(bad(format!(
-            "needs about {} of memory ({:.1} KiB per design{}), more than half of the {} {}; at most {} here",
-            gib(n as f64 * per as f64),
-            per as f64 / 1024.0,
-            if recorded_t_obs.is_some() { ", its recorded poses included; --record none needs less" } else { "" },
-            gib(avail as f64),
-            if known { "available" } else { "assumed (memory unknown)" },
-            budget / per
-        ))
-        .into());
-    }
-    Ok(())
 }
 
 /// Refuse the flags a robust run's verify does not apply: it verifies its front on fresh
@@ -153,7 +99,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         // not load is the library's error to report, after this check)
         let problem = gripopt::Problem::load(a.run_dir.join("problem.toml")).ok();
         let t_obs = problem.map(|p| p.scene.setup.t_obs.min(p.scene.criteria.t_max));
-        check_sample(n, t_obs.filter(|_| record))?;
+        check_sample(n, t_obs.filter(|_| record))?; // before the lock (the library checks again)
     }
     let source = match a.sample {
         Some(n) => VerifySource::Sample { n, seed: a.seed.unwrap_or(1) },

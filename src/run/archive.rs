@@ -116,17 +116,21 @@ impl Discards {
         }
         let mut causes: Vec<&DiscardCause> = self.causes.iter().collect();
         causes.sort_by(|a, b| b.count.cmp(&a.count).then(a.stage.cmp(&b.stage)));
-        let mut out = vec![format!("no feasible design: all {} designs evaluated were discarded:", self.evaluated)];
+        let mut out = vec![format!(
+            "no feasible design: {} evaluated {} discarded:",
+            if self.evaluated == 1 { "the one design".to_string() } else { format!("all {} designs", self.evaluated) },
+            if self.evaluated == 1 { "was" } else { "were" }
+        )];
         for c in causes {
             let share = 100.0 * c.count as f64 / self.evaluated as f64;
             let share = if share < 1.0 { "<1".to_string() } else { format!("{share:.0}") };
             let v = c.violation.map_or(String::new(), |v| format!(", violation {v:.4}"));
             let d = c.detail.as_ref().map_or(String::new(), |d| format!(", {d}"));
             out.push(format!(
-                "  {share} % at stage {} by {} ({} designs): {}; closest to passing: design {}{v}{d}",
+                "  {share} % at stage {} by {} ({}): {}; closest to passing: design {}{v}{d}",
                 c.stage,
                 c.cause.replace('_', " "),
-                c.count,
+                crate::error::counted(c.count, "design", "designs"),
                 c.reason,
                 c.closest
             ));

@@ -114,3 +114,48 @@ pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result
     }
     Ok(())
 }
+
+/// Memory per design of `--sample N` (bytes), without a recording: the drawn batch, the
+/// designs, their rows and verify_sample.csv's text (measured ≈ 1 KiB: peak RSS of
+/// `verify RUN --sample 400 --record none` less that of `--sample 100`, over 300; rounded up).
+pub const SAMPLE_BYTES_PER_DESIGN: u64 = 4 << 10;
+
+/// Memory per design that recording a sample adds (bytes) when its free scene lasts
+/// `t_obs` seconds: its poses every 2 ms (`record::DEFAULT_SCENE_DT`) kept until the MCAP
+/// is written, twice (the poses and the framed file), and 4 KiB of messages (bottle-1l,
+/// t_obs 0.1 s: 16.6 KiB; measured as above with `--record all`: 14.4 KiB).
+pub fn sample_bytes_recorded(t_obs: f64) -> u64 {
+    let poses = (t_obs.max(0.0) / crate::record::DEFAULT_SCENE_DT).ceil() as u64 + 2;
+    2 * poses * std::mem::size_of::<crate::sim::PoseSample>() as u64 + (4 << 10)
+}
+
+/// Check `--sample N` before anything is drawn (as `optimise` checks `--pop`): at least 1,
+/// and its memory estimate within half of the available memory (64 GiB when unknown);
+/// `recorded_t_obs`: the free scene's duration when the sample is recorded.
+pub fn check_sample(n: usize, recorded_t_obs: Option<f64>) -> Result<()> {
+    let bad = |rule: String| Error::InvalidField {
+        file: "command line".into(),
+        field: "--sample".into(),
+        value: n.to_string(),
+        rule,
+    };
+    if n == 0 {
+        return Err(bad("must be at least 1".into()));
+    }
+    let per = SAMPLE_BYTES_PER_DESIGN + recorded_t_obs.map_or(0, sample_bytes_recorded);
+    let (avail, known) = available_memory().map_or((64u64 << 30, false), |a| (a, true));
+    let budget = avail / 2;
+    if (n as u128) * per as u128 > budget as u128 {
+        let gib = |b: f64| format!("{:.1} GiB", b / (1u64 << 30) as f64);
+        return Err(bad(format!(
+            "needs about {} of memory ({:.1} KiB per design{}), more than half of the {} {}; at most {} here",
+            gib(n as f64 * per as f64),
+            per as f64 / 1024.0,
+            if recorded_t_obs.is_some() { ", its recorded poses included; --record none needs less" } else { "" },
+            gib(avail as f64),
+            if known { "available" } else { "assumed (memory unknown)" },
+            budget / per
+        )));
+    }
+    Ok(())
+}

@@ -32,7 +32,7 @@ mod verify_rec;
 mod verify_robust;
 mod verify_run;
 
-pub use crate::error::{printable, shell_quote};
+pub use crate::error::{counted, printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
@@ -40,7 +40,8 @@ pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
 pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
-    check_population, check_threads, threads_note, BYTES_PER_DESIGN, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
+    check_population, check_sample, check_threads, sample_bytes_recorded, threads_note, BYTES_PER_DESIGN, MAX_THREADS,
+    MIN_DESIGNS_PER_THREAD, SAMPLE_BYTES_PER_DESIGN,
 };
 pub use lock::{LockHolder, RunLock, LOCK_FILE};
 pub use observers::{GenerationReport, OutputsObserver, Progress};

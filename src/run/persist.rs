@@ -383,6 +383,23 @@ fn next_msg(shared: &SharedState, pending: usize, max_pending: usize, views_due:
     }
 }
 
+/// Write the views of `st`, a generation whose views were skipped, and count their time.
+fn write_skipped_views(
+    st: &Nsga2State<GripperInfo>,
+    o: &OutputsObserver,
+    pool: &rayon::ThreadPool,
+    shared: &SharedState,
+    hooks: &PersistHooks,
+) -> Result<()> {
+    hooks.check()?;
+    let t = Instant::now();
+    let files = pool.install(|| o.write_views(st))?;
+    let mut s = shared.0.lock().expect("persister lock");
+    s.stats.outputs_s += t.elapsed().as_secs_f64();
+    s.stats.add_views(t.elapsed().as_secs_f64(), &files);
+    Ok(())
+}
+
 fn persist_loop(
     outputs: Option<OutputsObserver>,
     recorder: Option<Arc<Mutex<Recorder>>>,
@@ -405,12 +422,7 @@ fn persist_loop(
                 Next::Msg(msg) => msg,
                 Next::Views => {
                     if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
-                        hooks.check()?;
-                        let t = Instant::now();
-                        let files = pool.install(|| o.write_views(&st))?;
-                        let mut s = shared.0.lock().expect("persister lock");
-                        s.stats.outputs_s += t.elapsed().as_secs_f64();
-                        s.stats.add_views(t.elapsed().as_secs_f64(), &files);
+                        write_skipped_views(&st, o, &pool, &shared, &hooks)?;
                     }
                     last_views = Some(Instant::now());
                     continue;
@@ -549,12 +561,7 @@ fn persist_loop(
         // the views of the last generation, if they were skipped
         let final_views = shared.0.lock().expect("persister lock").final_views;
         if let (Some(st), Some(o), true) = (stale_views.take(), &outputs, final_views) {
-            hooks.check()?;
-            let t = Instant::now();
-            let files = pool.install(|| o.write_views(&st))?;
-            let mut s = shared.0.lock().expect("persister lock");
-            s.stats.outputs_s += t.elapsed().as_secs_f64();
-            s.stats.add_views(t.elapsed().as_secs_f64(), &files);
+            write_skipped_views(&st, o, &pool, &shared, &hooks)?;
         }
         Ok(())
     })();

@@ -131,6 +131,12 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
     problem.check_self_contained(&spec.problem_path)?;
+    if spec.out.exists() && !spec.out.is_dir() {
+        return Err(Error::RunDir {
+            path: spec.out.clone(),
+            message: "is a file, not a folder: give a new or empty folder for the run".into(),
+        });
+    }
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     // refused before the lock's pid file is written into a folder that is not ours
     Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;

@@ -69,8 +69,8 @@ impl RobustVerifySummary {
     /// The report `gripopt verify` prints.
     pub fn report(&self) -> String {
         let mut s = format!(
-            "verified {} front designs out of sample ({} fresh scenarios per object, a stream the optimiser never saw) → {}\n",
-            self.designs,
+            "verified {} out of sample ({} fresh scenarios per object, a stream the optimiser never saw) → {}\n",
+            crate::error::counted(self.designs as u64, "front design", "front designs"),
             self.scenarios,
             self.file.display()
         );

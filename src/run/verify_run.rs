@@ -8,6 +8,7 @@
 
 use super::folder::RunFolder;
 use super::info::RunInfo;
+use super::limits::check_sample;
 use super::lock::RunLock;
 use super::verify::{
     sample_designs, verify_csv, verify_designs_poses, CheckedState, Confusion, VerifiedGeneration, VerifyRow,
@@ -84,6 +85,8 @@ pub fn verify(
         VerifySource::Pareto => (from_checkpoint(false)?, VERIFY_FILE),
         VerifySource::All => (from_checkpoint(true)?, VERIFY_FILE),
         VerifySource::Sample { n, seed } => {
+            let setup = &current.scene;
+            check_sample(n, record.then(|| setup.setup.t_obs.min(setup.criteria.t_max)))?;
             (sample_designs(&current, n, seed).into_iter().map(|(id, x)| (id, 0, x)).collect(), VERIFY_SAMPLE_FILE)
         }
     };
@@ -130,8 +133,12 @@ pub fn verify(
         return Err(Error::RunDir {
             path: dir.to_path_buf(),
             message: format!(
-                "all {} designs are discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written",
-                designs.len()
+                "{} discarded at stages 0–2 on re-evaluation; nothing to verify, nothing written",
+                if designs.len() == 1 {
+                    "the one design is".to_string()
+                } else {
+                    format!("all {} designs are", designs.len())
+                }
             ),
         });
     }
