@@ -393,11 +393,6 @@ pub fn run() -> Result<i32> {
                 },
                 epoch_s: 0,
             };
-            if out.exists() && !out.is_dir() {
-                // said here: creating the folder would fail with "File exists"
-                let why = format!("--out {}: is a file, not a folder (the run folder to create)", out.display());
-                return Err(gripopt::Error::Input(why).into());
-            }
             let spec =
                 gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, record: rec };
             let s = gripopt::run::optimise_with(&spec, hooks())?;
