@@ -122,3 +122,22 @@ fn the_documented_limits_are_the_checked_ones() {
         assert!(doc.contains(&row), "docs/problem-files.md lacks the row {row}");
     }
 }
+
+/// A count may be written as a whole float (`1e8`, the way docs/problem-files.md writes the
+/// limit), in every count field alike; a fraction is refused naming the field.
+#[test]
+fn counts_are_whole_numbers_however_written() {
+    let with = |section: &str, key: &str, value: toml::Value| {
+        let mut t: toml::Table = base().parse().unwrap();
+        t.get_mut(section).and_then(|s| s.as_table_mut()).unwrap().insert(key.into(), value);
+        Problem::from_toml_str(&toml::to_string(&t).unwrap(), Path::new("bad.toml"))
+    };
+    let p = with("solver", "max_steps", toml::Value::Float(1e8)).unwrap();
+    assert_eq!(p.solver.max_steps, 100_000_000);
+    let p = with("scene", "ground_points", toml::Value::Float(16.0)).unwrap();
+    assert_eq!(p.scene.setup.ground_points, 16);
+    for (section, key) in [("solver", "max_steps"), ("scene", "ground_points")] {
+        let e = with(section, key, toml::Value::Float(5.5)).unwrap_err().to_string();
+        assert!(e.contains("bad.toml") && e.contains(&format!("{section}.{key}")) && e.contains("whole"), "{e}");
+    }
+}

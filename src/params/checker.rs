@@ -20,6 +20,15 @@ impl Checker<'_> {
             rule,
         })
     }
+    /// `v` checked as [`Checker::check`] does, and as a whole number (a count written `16`,
+    /// `16.0` or `1.6e1`).
+    pub(super) fn whole(&self, field: &str, v: f64) -> Result<f64> {
+        let n = self.check(field, v)?;
+        if n.fract() != 0.0 {
+            return Err(self.fail(field, num(n), "must be a whole number"));
+        }
+        Ok(n)
+    }
     /// The error for `field` holding `value` against `rule`.
     pub(super) fn fail(&self, field: &str, value: String, rule: &str) -> Error {
         Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }

@@ -62,11 +62,21 @@ struct RawFile {
     environment: RawEnv,
     criteria: RawCriteria,
     scene: RawScene,
-    solver: SolverSettings,
+    solver: RawSolver,
     nominal: RawDesign,
     bounds: RawBounds,
     #[serde(default)]
     robust: Option<RawRobust>,
+}
+
+/// `[solver]` as written: `max_steps` a number, so that `1e8` (the limit as the docs write
+/// it) is read like `100000000` and checked as a whole number in its range.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    rtol: f64,
+    atol: f64,
+    max_steps: f64,
 }
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -213,13 +223,7 @@ impl Problem {
             })?,
             x_off: c.check("scene.x_off", sc.x_off)?,
             t_obs: c.check("scene.t_obs", sc.t_obs)?,
-            ground_points: {
-                let n = c.check("scene.ground_points", sc.ground_points)?;
-                if n.fract() != 0.0 {
-                    return Err(c.fail("scene.ground_points", format!("{n}"), "must be a whole number"));
-                }
-                n as usize
-            },
+            ground_points: c.whole("scene.ground_points", sc.ground_points)? as usize,
             ground_k: c.check("scene.ground_k", sc.ground_k)?,
             ground_v_s: c.check("scene.ground_v_s", sc.ground_v_s)?,
             ground_v_d: c.check("scene.ground_v_d", sc.ground_v_d)?,
@@ -297,7 +301,8 @@ impl Problem {
         let s = &raw.solver;
         c.check("solver.rtol", s.rtol)?;
         c.check("solver.atol", s.atol)?;
-        c.check("solver.max_steps", s.max_steps as f64)?;
+        let solver =
+            SolverSettings { rtol: s.rtol, atol: s.atol, max_steps: c.whole("solver.max_steps", s.max_steps)? as u64 };
         let n = &raw.nominal;
         let nominal = Design {
             l21: c.check("nominal.l21", n.l21)?,
@@ -330,7 +335,7 @@ impl Problem {
         Ok(Problem {
             name: raw.name,
             scene,
-            solver: raw.solver,
+            solver,
             nominal,
             bounds: Bounds { lo, hi },
             robust,
