@@ -229,6 +229,33 @@ fn run_folder_designs_export() {
     bad(&["export", r, "--out", "-", "--format", "mjcf"], &["--design"]);
     let not_a_run = scratch("not-a-run");
     bad(&["export", not_a_run.to_str().unwrap(), "--design", "1", "--out", "-", "--format", "mjcf"], &["problem.toml"]);
+    export_never_writes_into_its_run_folder(&dir, &id, &out);
+}
+
+/// `--out` inside the source run folder (a shard it reads, run.json, a new file) is refused
+/// even with --force (exit 2, the path named), leaving the run's files byte for byte;
+/// --force still replaces an earlier export.
+fn export_never_writes_into_its_run_folder(dir: &Path, id: &str, earlier: &Path) {
+    let r = dir.to_str().unwrap();
+    let shard = std::fs::read_dir(dir.join("recording"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "mcap"))
+        .expect("a shard");
+    for (target, format) in [(shard, "json"), (dir.join("run.json"), "json"), (dir.join("checkpoint.json"), "mjcf")] {
+        let before = std::fs::read(&target).unwrap();
+        let t = target.to_str().unwrap();
+        bad(&["export", r, "--design", id, "--out", t, "--format", format, "--force"], &[t, "run folder"]);
+        assert_eq!(std::fs::read(&target).unwrap(), before, "{t} was overwritten by an export");
+    }
+    let inside = dir.join("design.xml");
+    bad(&["export", r, "--design", id, "--out", inside.to_str().unwrap()], &["design.xml", "run folder"]);
+    assert!(!inside.exists(), "an export was written into the run folder");
+    // through a relative path with `..` that resolves into the folder
+    let sneaky = dir.join("recording").join("..").join("run.json");
+    bad(&["export", r, "--design", id, "--out", sneaky.to_str().unwrap(), "--force"], &["run folder"]);
+    let o = run(&["export", r, "--design", id, "--out", earlier.to_str().unwrap(), "--force"]);
+    assert!(o.status.success(), "--force must replace an earlier export: {}", text(&o));
 }
 
 /// The first design id of a run's pareto.csv.

@@ -132,6 +132,36 @@ fn unrecorded_design(dir: &Path, id: u64) -> Result<Option<(u64, Design, String)
     Ok(Some((row.generation, Design::from_array(&row.parameters()), from)))
 }
 
+/// `--out` inside the source run folder `run` (its run.json, checkpoint, problem files, a
+/// shard of recording/: even with --force, which replaces an earlier export, never a run's
+/// file), or in a folder that is a run folder (sweep's rule, [`gripopt::run_folder_file`]):
+/// an input error naming the path and the folder.
+fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
+    let parent = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    // the folder the file would be written in, links resolved (a missing folder is refused
+    // later, naming it)
+    let (Ok(folder), Some(name)) = (parent.canonicalize(), out.file_name()) else {
+        return Ok(());
+    };
+    let target = folder.join(name);
+    let refuse = |why: String| -> Result<()> {
+        Err(gripopt::Error::Input(format!(
+            "--out {}: {why}; an export never writes into a run folder (--force replaces an earlier export, never a run's file): give a path outside it",
+            out.display()
+        ))
+        .into())
+    };
+    if let Some(run) = run.and_then(|r| r.canonicalize().ok()) {
+        if target.starts_with(&run) {
+            return refuse(format!("inside the run folder {} the design is exported from", run.display()));
+        }
+    }
+    if let Some(f) = gripopt::run_folder_file(&folder) {
+        return refuse(format!("in a gripopt run folder ({} holds {f})", folder.display()));
+    }
+    Ok(())
+}
+
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
@@ -167,6 +197,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
         out!("{text}");
         return Ok(());
     }
+    refuse_out_in_run_folder(&a.out, a.source.is_dir().then_some(a.source.as_path()))?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
         FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),
