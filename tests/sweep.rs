@@ -101,17 +101,43 @@ fn derived_l11_sets_p_and_psi_by_the_thesis_rule_and_l_hand_sets_t22() {
     let csv = sweep::to_csv(&s2, &rows2);
     let widths: Vec<usize> = csv.lines().map(|l| l.split(',').count()).collect();
     assert!(widths.iter().all(|&w| w == widths[0]), "{widths:?}");
-    // with psi varied too, the rule does not override it
-    let s = spec(&["l11=0.015:0.030:2", "psi_deg=100:120:2"], Stage::Kinematics);
-    let rows = sweep::run(&s, &|| ()).unwrap();
-    for r in &rows {
-        close_rel(r.num("psi_deg").unwrap(), r.values[1], 1e-12, "psi as varied");
-    }
+    psi_rule_sets_psi_and_is_refused_with_psi_varied();
     // --hold-l-hand: l21 varies, t22 follows so that l_hand stays 0.230
     let mut s = spec(&["l21=0.04:0.05:3"], Stage::Kinematics);
     s.hold_l_hand = true;
     for r in sweep::run(&s, &|| ()).unwrap() {
         close_rel(r.num("l_hand").unwrap(), 0.230, 1e-12, "l_hand held");
+    }
+}
+
+/// `--psi-rule` with p varied gives ψ = 140 − 25.6 p (thesis eq. 4.15) at every point; with
+/// `--vary psi_deg` it (or `--vary l11`, which applies it) is refused, exit 2, naming both,
+/// never one silently ignored.
+fn psi_rule_sets_psi_and_is_refused_with_psi_varied() {
+    let mut s = spec(&["p=0.3:0.5:3"], Stage::Kinematics);
+    s.psi_rule = true;
+    for r in sweep::run(&s, &|| ()).unwrap() {
+        close_rel(r.num("psi_deg").unwrap(), 140.0 - 25.6 * r.values[0], 1e-12, "psi by the rule");
+    }
+    s.vary.push(Vary::parse("psi_deg=100:140:2").unwrap());
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("--psi-rule") && e.contains("psi_deg"), "{e}");
+    let s = spec(&["l11=0.015:0.030:2", "psi_deg=100:120:2"], Stage::Kinematics);
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("l11") && e.contains("psi_deg"), "{e}");
+    let d = out_dir("psi-rule-refused");
+    for args in [vec!["--vary", "p=0.3:0.5:2", "--psi-rule"], vec!["--vary", "l11=0.015:0.030:2"]] {
+        let o = crate::common::run_gripopt(
+            &[
+                &["sweep", crate::common::BOTTLE_FILE],
+                &args[..],
+                &["--vary", "psi_deg=100:140:2", "--out", d.to_str().unwrap()],
+            ]
+            .concat(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("psi_deg") && !d.exists(), "{args:?}: {err}");
     }
 }
 

@@ -244,7 +244,7 @@ pub struct SweepSpec {
     pub stage: Stage,
     /// Keep l_hand of the base design (t22 derived) when l21 or b vary (thesis §4.1.2 holds l_hand fixed).
     pub hold_l_hand: bool,
-    /// Apply ψ = 140 − 25.6 p at every point (thesis eq. 4.15) unless ψ is varied.
+    /// Apply ψ = 140 − 25.6 p at every point (thesis eq. 4.15); not with ψ varied.
     pub psi_rule: bool,
 }
 
@@ -278,6 +278,11 @@ impl SweepSpec {
         if self.hold_l_hand && (has(Knob::LHand) || has(design("t22"))) {
             let v = if has(Knob::LHand) { "l_hand" } else { "t22" };
             return Err(Error::Input(format!("--hold-l-hand with --vary {v}: holding l_hand sets t22; give one")));
+        }
+        if has(design("psi_deg")) && (self.psi_rule || has(Knob::L11)) {
+            let rule = if self.psi_rule { "--psi-rule" } else { "--vary l11 (which applies the rule)" };
+            let why = "the rule psi = 140 - 25.6 p sets psi at every point; give one";
+            return Err(Error::Input(format!("{rule} with --vary psi_deg: {why}")));
         }
         if self.hold_l_hand && !has(design("l21")) && !has(design("b")) {
             return Err(Error::Input("--hold-l-hand: keeps l_hand while l21 or b vary, and neither is varied".into()));
