@@ -162,7 +162,36 @@ fn bisection_finds_a_boundary_the_verdict_flips_across() {
         assert_ne!(bd.verdict_lo, bd.verdict_hi);
     }
     let csv = sweep::boundaries_csv(&s, &b);
-    assert!(csv.starts_with("bisected,lo,hi,verdict_lo,verdict_hi\n"), "{csv}");
+    assert!(csv.starts_with("bisected,psi_deg,lo,hi,verdict_lo,verdict_hi\n"), "{csv}");
+    boundaries_units_pair_with_the_columns();
+}
+
+/// boundaries.csv's units line names the header's columns, one for one and in order (a
+/// script pairs them by position), and each row has the bisected name's cell empty and the
+/// other varied name's grid value.
+fn boundaries_units_pair_with_the_columns() {
+    let s = spec(&["psi_deg=90:160:8", "p=0.3:0.5:2"], Stage::Kinematics);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let b = sweep::bisect(&s, &rows, "psi_deg", 4).unwrap();
+    assert!(!b.is_empty());
+    let d = out_dir("boundaries-units");
+    std::fs::create_dir_all(&d).unwrap();
+    sweep::write_boundaries(&d, &s, &b).unwrap();
+    let t = std::fs::read_to_string(d.join("boundaries.csv")).unwrap();
+    let units = t.lines().find_map(|l| l.strip_prefix("# units: ")).expect("a units line");
+    // "name [unit] name [unit] …": the names outside the brackets
+    let named: Vec<&str> =
+        units.split(']').filter_map(|u| u.split('[').next()).map(str::trim).filter(|n| !n.is_empty()).collect();
+    let mut lines = t.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(named, header, "units line against header:\n{t}");
+    assert!(units.contains("psi_deg [°]") && units.contains("lo [°] hi [°]"), "lo and hi in psi_deg's unit: {units}");
+    for line in lines {
+        let c: Vec<&str> = line.split(',').collect();
+        assert_eq!(c.len(), header.len(), "{line}");
+        assert_eq!((c[0], c[1]), ("psi_deg", ""), "{line}");
+        assert!(["0.3", "0.5"].contains(&c[2]), "p's grid value: {line}");
+    }
 }
 
 #[test]
