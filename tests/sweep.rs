@@ -194,6 +194,31 @@ fn boundaries_units_pair_with_the_columns() {
     }
 }
 
+/// A point discarded at stage 1 reports the same stage 0–1 values (l12, the open pose, γ, σ,
+/// the masses) whatever `--stage` is (MODEL.md §10: every value computed before a discard is
+/// reported): the open pose's q22 = −ψ, and the static sweep's cells.
+#[test]
+fn a_stage_1_discard_reports_its_stage_0_1_values_at_every_stage() {
+    let vary = ["p=0.3:0.5:2", "psi_deg=100:140:2"];
+    let kin = sweep::run(&spec(&vary, Stage::Kinematics), &|| ()).unwrap();
+    let stat = sweep::run(&spec(&vary, Stage::Static), &|| ()).unwrap();
+    let keys = ["l12", "q11_0", "q12_0", "q21_0", "q22_0", "q13_0", "gamma", "sigma", "masses_0", "masses_3"];
+    let mut discarded = 0;
+    for (k, s) in kin.iter().zip(&stat) {
+        assert_eq!(k.verdict, s.verdict);
+        if k.num("failed_stage") != Some(1.0) {
+            continue;
+        }
+        discarded += 1;
+        close_rel(k.num("q22_0").expect("q22_0"), -k.values[1].to_radians(), 1e-12, "open pose q22 = -psi");
+        for key in keys {
+            let (a, b) = (k.num(key), s.num(key));
+            assert!(a.is_some() && a == b, "{key} at {:?}: kinematics {a:?}, static {b:?}", k.values);
+        }
+    }
+    assert!(discarded > 0, "no stage-1 discard: {:?}", kin.iter().map(|r| r.verdict).collect::<Vec<_>>());
+}
+
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let s = spec(&["r=0.3:0.7:3", "b=0.05:0.06:2"], Stage::Static);

@@ -24,7 +24,7 @@ pub mod plot;
 pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
 
 use crate::cells::{cells, Floats};
-use crate::eval::{evaluate, stage_kinematics, Cause, EvalOptions, Evaluation, Record};
+use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
 use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::{Error, Result};
@@ -431,14 +431,8 @@ pub fn verdict(ev: &Evaluation) -> &'static str {
 /// Evaluate one design of one problem through the chosen stages.
 pub fn evaluate_point(p: &Problem, x: &Design, stage: Stage) -> Evaluation {
     match stage {
-        Stage::Kinematics => {
-            let mut ev = Evaluation::new(*x);
-            match stage_kinematics(x, &p.scene) {
-                Ok(k) => ev.kin = Some(k),
-                Err(d) => ev.discard = Some(d),
-            }
-            ev
-        }
+        // with what stage 1 computed before a discard, as the later stages report it
+        Stage::Kinematics => evaluate_kinematics(x, &p.scene),
         Stage::Static => evaluate(x, &p.scene, &EvalOptions::statics_only()),
         Stage::Dynamic => evaluate(x, &p.scene, &EvalOptions::full(p)),
     }
