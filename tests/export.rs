@@ -198,6 +198,44 @@ fn bad_input_is_refused_with_exit_2() {
     assert!(rel(j["lengths"]["l12_mm"].as_f64().unwrap(), 45.419424436) < 1e-9, "{j}");
 }
 
+/// The object's x in an MJCF (its body's `pos`).
+fn object_x(mjcf: &str) -> f64 {
+    let tag = "<body name=\"object\" pos=\"";
+    let at = mjcf.find(tag).expect("the object body") + tag.len();
+    mjcf[at..].split_whitespace().next().unwrap().parse().unwrap()
+}
+
+/// `--scene free` on an offset problem stands the object at the problem's x_off, as replay
+/// does (docs/scenes.md: `free` without X is the run's x_off); `free:X` and `offset:X` put it
+/// at X, `centred` at 0; a bad X is exit 2 naming the flag.
+#[test]
+fn the_scene_flag_follows_replays_rule() {
+    let d = scratch("scene");
+    let problem = d.join("offset.toml");
+    let src = std::fs::read_to_string(BOTTLE).unwrap();
+    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
+    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
+    std::fs::write(&problem, src).unwrap();
+    let p = problem.to_str().unwrap();
+    for (scene, x) in [
+        (None, 0.002),
+        (Some("free"), 0.002),
+        (Some("free:0.001"), 0.001),
+        (Some("offset:-0.003"), -0.003),
+        (Some("centred"), 0.0),
+    ] {
+        let mut args = vec!["export", p, "--out", "-", "--format", "mjcf"];
+        args.extend(scene.iter().flat_map(|s| ["--scene", *s]));
+        let o = run(&args);
+        assert!(o.status.success(), "{scene:?}: {}", text(&o));
+        let m = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(object_x(&m), x, "{scene:?}: the object's x");
+        assert_eq!(m.contains("freejoint"), scene.is_some_and(|s| s.starts_with("free")), "{scene:?}");
+    }
+    bad(&["export", p, "--out", "-", "--format", "mjcf", "--scene", "free:abc"], &["--scene", "free:abc"]);
+    bad(&["export", p, "--out", "-", "--format", "mjcf", "--scene", "free:5"], &["x_off"]);
+}
+
 /// The run of `make test`'s MuJoCo check: a tiny recorded run in target/mjcf-check/run;
 /// its front designs export as `RUN_DIR --design ID`, with the run's source named; bad ids
 /// and folders are exit 2.

@@ -23,10 +23,12 @@ pub struct ExportArgs {
     /// The file to write (`-` for standard output).
     #[arg(long)]
     out: PathBuf,
-    /// The object fixed at (0, R) (centred) or free on the ground (free); default: the
-    /// problem's [scene] (an offset scene's object fixed at x_off, a free one at its x_off).
-    #[arg(long, value_enum)]
-    scene: Option<SceneArg>,
+    /// centred (the object fixed at (0, R)), offset:X (fixed at x = X metres) or free[:X]
+    /// (a free body on the ground at x = X; `free` alone: the problem's or run's x_off, as
+    /// replay); default: the problem's [scene] (an offset scene's object fixed at its x_off,
+    /// a free one at its x_off).
+    #[arg(long)]
+    scene: Option<String>,
     /// Overwrite --out if it exists.
     #[arg(long)]
     force: bool,
@@ -41,15 +43,6 @@ pub enum FormatArg {
     Json,
     /// Build sheet as CSV.
     Csv,
-}
-
-/// Scene of the exported model.
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SceneArg {
-    /// The object fixed at (0, R) (MODEL.md §8).
-    Centred,
-    /// The object a free body on the ground, against the palm (MODEL.md §14).
-    Free,
 }
 
 fn format_of(a: &ExportArgs) -> Result<FormatArg> {
@@ -177,12 +170,16 @@ pub fn run(a: ExportArgs) -> Result<()> {
         let src = format!("problem file {}, {what}", a.source.display());
         (p, x, src)
     };
+    // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)
+    let p = match &a.scene {
+        Some(arg) => super::scenes::apply_scene(&p, arg)?,
+        None => p,
+    };
     let setup = p.scene.setup;
-    let placement = match (a.scene, setup.kind) {
-        (Some(SceneArg::Centred), _) | (None, SceneKind::Centred) => ExportScene::centred(),
-        (None, SceneKind::Offset) => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
-        (Some(SceneArg::Free), k) => ExportScene::free(if k == SceneKind::Free { setup.x_off } else { 0.0 }),
-        (None, SceneKind::Free) => ExportScene::free(setup.x_off),
+    let placement = match setup.kind {
+        SceneKind::Centred => ExportScene::centred(),
+        SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
+        SceneKind::Free => ExportScene::free(setup.x_off),
     };
     if placement.object == ObjectMode::Free && p.scene.env.g_eq != 0.0 {
         bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
