@@ -236,6 +236,20 @@ fn the_scene_flag_follows_replays_rule() {
     bad(&["export", p, "--out", "-", "--format", "mjcf", "--scene", "free:5"], &["x_off"]);
 }
 
+/// A design of a robust problem is exported with the reference [object] only, and a note
+/// on stderr says so (as sweep's); a single-object problem has no note.
+#[test]
+fn a_robust_problems_export_says_it_holds_the_reference_object_only() {
+    let kitchen = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+    assert!(Problem::load(kitchen).unwrap().robust.is_some(), "kitchen.toml is no longer robust: fix the test");
+    let o = run(&["export", kitchen, "--out", "-", "--format", "json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(err.contains("note:") && err.contains("[robust]") && err.contains("reference [object]"), "{err}");
+    let o = run(&["export", BOTTLE, "--out", "-", "--format", "json"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("[robust]"), "{}", text(&o));
+}
+
 /// The run of `make test`'s MuJoCo check: a tiny recorded run in target/mjcf-check/run;
 /// its front designs export as `RUN_DIR --design ID`, with the run's source named; bad ids
 /// and folders are exit 2.

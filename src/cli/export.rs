@@ -170,6 +170,12 @@ pub fn run(a: ExportArgs) -> Result<()> {
         let src = format!("problem file {}, {what}", a.source.display());
         (p, x, src)
     };
+    if p.robust.is_some() {
+        // as sweep says it: the exported hand grips the reference object only
+        eprintln!(
+            "note: {source}: the problem has [robust]: the export holds the reference [object] and [scene] only; the robust objects and scenarios are not in the file (docs/robust.md, docs/export.md)"
+        );
+    }
     // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)
     let p = match &a.scene {
         Some(arg) => super::scenes::apply_scene(&p, arg)?,
