@@ -300,6 +300,12 @@ fn export_never_writes_into_its_run_folder(dir: &Path, id: &str, earlier: &Path)
         bad(&["export", r, "--design", id, "--out", t, "--format", format, "--force"], &[t, "run folder"]);
         assert_eq!(std::fs::read(&target).unwrap(), before, "{t} was overwritten by an export");
     }
+    // from a problem file, into a run's recording/: refused as well
+    let shard = std::fs::read_dir(dir.join("recording")).unwrap().map(|e| e.unwrap().path()).next().unwrap();
+    let before = std::fs::read(&shard).unwrap();
+    let t = shard.to_str().unwrap();
+    bad(&["export", BOTTLE, "--out", t, "--format", "json", "--force"], &[t, "run folder"]);
+    assert_eq!(std::fs::read(&shard).unwrap(), before, "{t} was overwritten by an export");
     let inside = dir.join("design.xml");
     bad(&["export", r, "--design", id, "--out", inside.to_str().unwrap()], &["design.xml", "run folder"]);
     assert!(!inside.exists(), "an export was written into the run folder");

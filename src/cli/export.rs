@@ -127,8 +127,8 @@ fn unrecorded_design(dir: &Path, id: u64) -> Result<Option<(u64, Design, String)
 
 /// `--out` inside the source run folder `run` (its run.json, checkpoint, problem files, a
 /// shard of recording/: even with --force, which replaces an earlier export, never a run's
-/// file), or in a folder that is a run folder (sweep's rule, [`gripopt::run_folder_file`]):
-/// an input error naming the path and the folder.
+/// file), or in a folder that is a run folder (sweep's rule, [`gripopt::run_folder_file`])
+/// or inside one: an input error naming the path and the folder.
 fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     let parent = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     // the folder the file would be written in, links resolved (a missing folder is refused
@@ -151,6 +151,13 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     }
     if let Some(f) = gripopt::run_folder_file(&folder) {
         return refuse(format!("in a gripopt run folder ({} holds {f})", folder.display()));
+    }
+    // a folder inside a run folder (its recording/): an ancestor holding run.json or
+    // checkpoint.json, the marks no other folder has
+    for run in folder.ancestors().skip(1) {
+        if let Some(f) = ["run.json", "checkpoint.json"].into_iter().find(|f| run.join(f).is_file()) {
+            return refuse(format!("inside a gripopt run folder ({} holds {f})", run.display()));
+        }
     }
     Ok(())
 }
