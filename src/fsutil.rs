@@ -11,6 +11,16 @@ pub fn sha256_hex(data: &[u8]) -> String {
     sha2::Sha256::digest(data).iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// The files that make a folder a gripopt run folder: no command writes an output of its
+/// own (a sweep's table, an export) into one.
+pub const RUN_FOLDER_FILES: [&str; 4] = ["run.json", "checkpoint.json", ".lock", "recording"];
+
+/// The first of [`RUN_FOLDER_FILES`] that `dir` holds (None: not a run folder, or not a
+/// folder that can be listed).
+pub fn run_folder_file(dir: &Path) -> Option<&'static str> {
+    RUN_FOLDER_FILES.into_iter().find(|f| std::fs::symlink_metadata(dir.join(f)).is_ok())
+}
+
 /// Check a file a command was asked to write (`flag` names the option, e.g. `--out`,
 /// `--csv`): a folder is refused, and a file that exists unless `force` — no command writes
 /// over a file it was not told it may replace (a run's checkpoint or shard, a user's file).

@@ -198,6 +198,58 @@ fn bad_input_is_refused_with_exit_2() {
     assert!(rel(j["lengths"]["l12_mm"].as_f64().unwrap(), 45.419424436) < 1e-9, "{j}");
 }
 
+/// The object's x in an MJCF (its body's `pos`).
+fn object_x(mjcf: &str) -> f64 {
+    let tag = "<body name=\"object\" pos=\"";
+    let at = mjcf.find(tag).expect("the object body") + tag.len();
+    mjcf[at..].split_whitespace().next().unwrap().parse().unwrap()
+}
+
+/// `--scene free` on an offset problem stands the object at the problem's x_off, as replay
+/// does (docs/scenes.md: `free` without X is the run's x_off); `free:X` and `offset:X` put it
+/// at X, `centred` at 0; a bad X is exit 2 naming the flag.
+#[test]
+fn the_scene_flag_follows_replays_rule() {
+    let d = scratch("scene");
+    let problem = d.join("offset.toml");
+    let src = std::fs::read_to_string(BOTTLE).unwrap();
+    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
+    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
+    std::fs::write(&problem, src).unwrap();
+    let p = problem.to_str().unwrap();
+    for (scene, x) in [
+        (None, 0.002),
+        (Some("free"), 0.002),
+        (Some("free:0.001"), 0.001),
+        (Some("offset:-0.003"), -0.003),
+        (Some("centred"), 0.0),
+    ] {
+        let mut args = vec!["export", p, "--out", "-", "--format", "mjcf"];
+        args.extend(scene.iter().flat_map(|s| ["--scene", *s]));
+        let o = run(&args);
+        assert!(o.status.success(), "{scene:?}: {}", text(&o));
+        let m = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(object_x(&m), x, "{scene:?}: the object's x");
+        assert_eq!(m.contains("freejoint"), scene.is_some_and(|s| s.starts_with("free")), "{scene:?}");
+    }
+    bad(&["export", p, "--out", "-", "--format", "mjcf", "--scene", "free:abc"], &["--scene", "free:abc"]);
+    bad(&["export", p, "--out", "-", "--format", "mjcf", "--scene", "free:5"], &["x_off"]);
+}
+
+/// A design of a robust problem is exported with the reference [object] only, and a note
+/// on stderr says so (as sweep's); a single-object problem has no note.
+#[test]
+fn a_robust_problems_export_says_it_holds_the_reference_object_only() {
+    let kitchen = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+    assert!(Problem::load(kitchen).unwrap().robust.is_some(), "kitchen.toml is no longer robust: fix the test");
+    let o = run(&["export", kitchen, "--out", "-", "--format", "json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(err.contains("note:") && err.contains("[robust]") && err.contains("reference [object]"), "{err}");
+    let o = run(&["export", BOTTLE, "--out", "-", "--format", "json"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("[robust]"), "{}", text(&o));
+}
+
 /// The run of `make test`'s MuJoCo check: a tiny recorded run in target/mjcf-check/run;
 /// its front designs export as `RUN_DIR --design ID`, with the run's source named; bad ids
 /// and folders are exit 2.
@@ -229,6 +281,39 @@ fn run_folder_designs_export() {
     bad(&["export", r, "--out", "-", "--format", "mjcf"], &["--design"]);
     let not_a_run = scratch("not-a-run");
     bad(&["export", not_a_run.to_str().unwrap(), "--design", "1", "--out", "-", "--format", "mjcf"], &["problem.toml"]);
+    export_never_writes_into_its_run_folder(&dir, &id, &out);
+}
+
+/// `--out` inside the source run folder (a shard it reads, run.json, a new file) is refused
+/// even with --force (exit 2, the path named), leaving the run's files byte for byte;
+/// --force still replaces an earlier export.
+fn export_never_writes_into_its_run_folder(dir: &Path, id: &str, earlier: &Path) {
+    let r = dir.to_str().unwrap();
+    let shard = std::fs::read_dir(dir.join("recording"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "mcap"))
+        .expect("a shard");
+    for (target, format) in [(shard, "json"), (dir.join("run.json"), "json"), (dir.join("checkpoint.json"), "mjcf")] {
+        let before = std::fs::read(&target).unwrap();
+        let t = target.to_str().unwrap();
+        bad(&["export", r, "--design", id, "--out", t, "--format", format, "--force"], &[t, "run folder"]);
+        assert_eq!(std::fs::read(&target).unwrap(), before, "{t} was overwritten by an export");
+    }
+    // from a problem file, into a run's recording/: refused as well
+    let shard = std::fs::read_dir(dir.join("recording")).unwrap().map(|e| e.unwrap().path()).next().unwrap();
+    let before = std::fs::read(&shard).unwrap();
+    let t = shard.to_str().unwrap();
+    bad(&["export", BOTTLE, "--out", t, "--format", "json", "--force"], &[t, "run folder"]);
+    assert_eq!(std::fs::read(&shard).unwrap(), before, "{t} was overwritten by an export");
+    let inside = dir.join("design.xml");
+    bad(&["export", r, "--design", id, "--out", inside.to_str().unwrap()], &["design.xml", "run folder"]);
+    assert!(!inside.exists(), "an export was written into the run folder");
+    // through a relative path with `..` that resolves into the folder
+    let sneaky = dir.join("recording").join("..").join("run.json");
+    bad(&["export", r, "--design", id, "--out", sneaky.to_str().unwrap(), "--force"], &["run folder"]);
+    let o = run(&["export", r, "--design", id, "--out", earlier.to_str().unwrap(), "--force"]);
+    assert!(o.status.success(), "--force must replace an earlier export: {}", text(&o));
 }
 
 /// The first design id of a run's pareto.csv.

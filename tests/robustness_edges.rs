@@ -403,14 +403,16 @@ fn existing_output_files_and_edited_problems_are_never_taken_silently() {
     let o = cli(&["simulate", PROBLEM, "--csv", mine.to_str().unwrap(), "--force"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     assert!(std::fs::read_to_string(&mine).unwrap().starts_with("# gripopt"), "replaced by the trajectory");
-    // export: the run's problem, refused once edited
-    let out = dir.join("design-0.json");
+    // export: the run's problem, refused once edited (written beside the run folder: never into it)
+    let out = dir.with_file_name("edges-outputs-design-0.json");
+    let _ = std::fs::remove_file(&out);
     let o = cli(&["export", &d, "--design", "0", "--out", out.to_str().unwrap()]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let toml = dir.join("problem.toml");
     let text = std::fs::read_to_string(&toml).unwrap();
     std::fs::write(&toml, text.replace("w = 5e-3", "w = 8e-3")).unwrap();
-    let out = dir.join("design-0-edited.json");
+    let out = dir.with_file_name("edges-outputs-design-0-edited.json");
+    let _ = std::fs::remove_file(&out);
     let o = cli(&["export", &d, "--design", "0", "--out", out.to_str().unwrap()]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("problem.toml") && stderr(&o).contains("edited"), "{}", stderr(&o));

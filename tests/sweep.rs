@@ -101,17 +101,43 @@ fn derived_l11_sets_p_and_psi_by_the_thesis_rule_and_l_hand_sets_t22() {
     let csv = sweep::to_csv(&s2, &rows2);
     let widths: Vec<usize> = csv.lines().map(|l| l.split(',').count()).collect();
     assert!(widths.iter().all(|&w| w == widths[0]), "{widths:?}");
-    // with psi varied too, the rule does not override it
-    let s = spec(&["l11=0.015:0.030:2", "psi_deg=100:120:2"], Stage::Kinematics);
-    let rows = sweep::run(&s, &|| ()).unwrap();
-    for r in &rows {
-        close_rel(r.num("psi_deg").unwrap(), r.values[1], 1e-12, "psi as varied");
-    }
+    psi_rule_sets_psi_and_is_refused_with_psi_varied();
     // --hold-l-hand: l21 varies, t22 follows so that l_hand stays 0.230
     let mut s = spec(&["l21=0.04:0.05:3"], Stage::Kinematics);
     s.hold_l_hand = true;
     for r in sweep::run(&s, &|| ()).unwrap() {
         close_rel(r.num("l_hand").unwrap(), 0.230, 1e-12, "l_hand held");
+    }
+}
+
+/// `--psi-rule` with p varied gives ψ = 140 − 25.6 p (thesis eq. 4.15) at every point; with
+/// `--vary psi_deg` it (or `--vary l11`, which applies it) is refused, exit 2, naming both,
+/// never one silently ignored.
+fn psi_rule_sets_psi_and_is_refused_with_psi_varied() {
+    let mut s = spec(&["p=0.3:0.5:3"], Stage::Kinematics);
+    s.psi_rule = true;
+    for r in sweep::run(&s, &|| ()).unwrap() {
+        close_rel(r.num("psi_deg").unwrap(), 140.0 - 25.6 * r.values[0], 1e-12, "psi by the rule");
+    }
+    s.vary.push(Vary::parse("psi_deg=100:140:2").unwrap());
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("--psi-rule") && e.contains("psi_deg"), "{e}");
+    let s = spec(&["l11=0.015:0.030:2", "psi_deg=100:120:2"], Stage::Kinematics);
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("l11") && e.contains("psi_deg"), "{e}");
+    let d = out_dir("psi-rule-refused");
+    for args in [vec!["--vary", "p=0.3:0.5:2", "--psi-rule"], vec!["--vary", "l11=0.015:0.030:2"]] {
+        let o = crate::common::run_gripopt(
+            &[
+                &["sweep", crate::common::BOTTLE_FILE],
+                &args[..],
+                &["--vary", "psi_deg=100:140:2", "--out", d.to_str().unwrap()],
+            ]
+            .concat(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("psi_deg") && !d.exists(), "{args:?}: {err}");
     }
 }
 
@@ -136,7 +162,61 @@ fn bisection_finds_a_boundary_the_verdict_flips_across() {
         assert_ne!(bd.verdict_lo, bd.verdict_hi);
     }
     let csv = sweep::boundaries_csv(&s, &b);
-    assert!(csv.starts_with("bisected,lo,hi,verdict_lo,verdict_hi\n"), "{csv}");
+    assert!(csv.starts_with("bisected,psi_deg,lo,hi,verdict_lo,verdict_hi\n"), "{csv}");
+    boundaries_units_pair_with_the_columns();
+}
+
+/// boundaries.csv's units line names the header's columns, one for one and in order (a
+/// script pairs them by position), and each row has the bisected name's cell empty and the
+/// other varied name's grid value.
+fn boundaries_units_pair_with_the_columns() {
+    let s = spec(&["psi_deg=90:160:8", "p=0.3:0.5:2"], Stage::Kinematics);
+    let rows = sweep::run(&s, &|| ()).unwrap();
+    let b = sweep::bisect(&s, &rows, "psi_deg", 4).unwrap();
+    assert!(!b.is_empty());
+    let d = out_dir("boundaries-units");
+    std::fs::create_dir_all(&d).unwrap();
+    sweep::write_boundaries(&d, &s, &b).unwrap();
+    let t = std::fs::read_to_string(d.join("boundaries.csv")).unwrap();
+    let units = t.lines().find_map(|l| l.strip_prefix("# units: ")).expect("a units line");
+    // "name [unit] name [unit] …": the names outside the brackets
+    let named: Vec<&str> =
+        units.split(']').filter_map(|u| u.split('[').next()).map(str::trim).filter(|n| !n.is_empty()).collect();
+    let mut lines = t.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(named, header, "units line against header:\n{t}");
+    assert!(units.contains("psi_deg [°]") && units.contains("lo [°] hi [°]"), "lo and hi in psi_deg's unit: {units}");
+    for line in lines {
+        let c: Vec<&str> = line.split(',').collect();
+        assert_eq!(c.len(), header.len(), "{line}");
+        assert_eq!((c[0], c[1]), ("psi_deg", ""), "{line}");
+        assert!(["0.3", "0.5"].contains(&c[2]), "p's grid value: {line}");
+    }
+}
+
+/// A point discarded at stage 1 reports the same stage 0–1 values (l12, the open pose, γ, σ,
+/// the masses) whatever `--stage` is (MODEL.md §10: every value computed before a discard is
+/// reported): the open pose's q22 = −ψ, and the static sweep's cells.
+#[test]
+fn a_stage_1_discard_reports_its_stage_0_1_values_at_every_stage() {
+    let vary = ["p=0.3:0.5:2", "psi_deg=100:140:2"];
+    let kin = sweep::run(&spec(&vary, Stage::Kinematics), &|| ()).unwrap();
+    let stat = sweep::run(&spec(&vary, Stage::Static), &|| ()).unwrap();
+    let keys = ["l12", "q11_0", "q12_0", "q21_0", "q22_0", "q13_0", "gamma", "sigma", "masses_0", "masses_3"];
+    let mut discarded = 0;
+    for (k, s) in kin.iter().zip(&stat) {
+        assert_eq!(k.verdict, s.verdict);
+        if k.num("failed_stage") != Some(1.0) {
+            continue;
+        }
+        discarded += 1;
+        close_rel(k.num("q22_0").expect("q22_0"), -k.values[1].to_radians(), 1e-12, "open pose q22 = -psi");
+        for key in keys {
+            let (a, b) = (k.num(key), s.num(key));
+            assert!(a.is_some() && a == b, "{key} at {:?}: kinematics {a:?}, static {b:?}", k.values);
+        }
+    }
+    assert!(discarded > 0, "no stage-1 discard: {:?}", kin.iter().map(|r| r.verdict).collect::<Vec<_>>());
 }
 
 #[test]

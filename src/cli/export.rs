@@ -23,10 +23,12 @@ pub struct ExportArgs {
     /// The file to write (`-` for standard output).
     #[arg(long)]
     out: PathBuf,
-    /// The object fixed at (0, R) (centred) or free on the ground (free); default: the
-    /// problem's [scene] (an offset scene's object fixed at x_off, a free one at its x_off).
-    #[arg(long, value_enum)]
-    scene: Option<SceneArg>,
+    /// centred (the object fixed at (0, R)), offset:X (fixed at x = X metres) or free[:X]
+    /// (a free body on the ground at x = X; `free` alone: the problem's or run's x_off, as
+    /// replay); default: the problem's [scene] (an offset scene's object fixed at its x_off,
+    /// a free one at its x_off).
+    #[arg(long)]
+    scene: Option<String>,
     /// Overwrite --out if it exists.
     #[arg(long)]
     force: bool,
@@ -41,15 +43,6 @@ pub enum FormatArg {
     Json,
     /// Build sheet as CSV.
     Csv,
-}
-
-/// Scene of the exported model.
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SceneArg {
-    /// The object fixed at (0, R) (MODEL.md §8).
-    Centred,
-    /// The object a free body on the ground, against the palm (MODEL.md §14).
-    Free,
 }
 
 fn format_of(a: &ExportArgs) -> Result<FormatArg> {
@@ -132,6 +125,43 @@ fn unrecorded_design(dir: &Path, id: u64) -> Result<Option<(u64, Design, String)
     Ok(Some((row.generation, Design::from_array(&row.parameters()), from)))
 }
 
+/// `--out` inside the source run folder `run` (its run.json, checkpoint, problem files, a
+/// shard of recording/: even with --force, which replaces an earlier export, never a run's
+/// file), or in a folder that is a run folder (sweep's rule, [`gripopt::run_folder_file`])
+/// or inside one: an input error naming the path and the folder.
+fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
+    let parent = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    // the folder the file would be written in, links resolved (a missing folder is refused
+    // later, naming it)
+    let (Ok(folder), Some(name)) = (parent.canonicalize(), out.file_name()) else {
+        return Ok(());
+    };
+    let target = folder.join(name);
+    let refuse = |why: String| -> Result<()> {
+        Err(gripopt::Error::Input(format!(
+            "--out {}: {why}; an export never writes into a run folder (--force replaces an earlier export, never a run's file): give a path outside it",
+            out.display()
+        ))
+        .into())
+    };
+    if let Some(run) = run.and_then(|r| r.canonicalize().ok()) {
+        if target.starts_with(&run) {
+            return refuse(format!("inside the run folder {} the design is exported from", run.display()));
+        }
+    }
+    if let Some(f) = gripopt::run_folder_file(&folder) {
+        return refuse(format!("in a gripopt run folder ({} holds {f})", folder.display()));
+    }
+    // a folder inside a run folder (its recording/): an ancestor holding run.json or
+    // checkpoint.json, the marks no other folder has
+    for run in folder.ancestors().skip(1) {
+        if let Some(f) = ["run.json", "checkpoint.json"].into_iter().find(|f| run.join(f).is_file()) {
+            return refuse(format!("inside a gripopt run folder ({} holds {f})", run.display()));
+        }
+    }
+    Ok(())
+}
+
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
@@ -147,12 +177,22 @@ pub fn run(a: ExportArgs) -> Result<()> {
         let src = format!("problem file {}, {what}", a.source.display());
         (p, x, src)
     };
+    if p.robust.is_some() {
+        // as sweep says it: the exported hand grips the reference object only
+        eprintln!(
+            "note: {source}: the problem has [robust]: the export holds the reference [object] and [scene] only; the robust objects and scenarios are not in the file (docs/robust.md, docs/export.md)"
+        );
+    }
+    // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)
+    let p = match &a.scene {
+        Some(arg) => super::scenes::apply_scene(&p, arg)?,
+        None => p,
+    };
     let setup = p.scene.setup;
-    let placement = match (a.scene, setup.kind) {
-        (Some(SceneArg::Centred), _) | (None, SceneKind::Centred) => ExportScene::centred(),
-        (None, SceneKind::Offset) => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
-        (Some(SceneArg::Free), k) => ExportScene::free(if k == SceneKind::Free { setup.x_off } else { 0.0 }),
-        (None, SceneKind::Free) => ExportScene::free(setup.x_off),
+    let placement = match setup.kind {
+        SceneKind::Centred => ExportScene::centred(),
+        SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
+        SceneKind::Free => ExportScene::free(setup.x_off),
     };
     if placement.object == ObjectMode::Free && p.scene.env.g_eq != 0.0 {
         bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
@@ -167,6 +207,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
         out!("{text}");
         return Ok(());
     }
+    refuse_out_in_run_folder(&a.out, a.source.is_dir().then_some(a.source.as_path()))?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
         FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),

@@ -25,7 +25,8 @@ pub struct SweepArgs {
     /// Keep the base design's l_hand when l21 or b vary (t22 derived), as the thesis does.
     #[arg(long)]
     pub hold_l_hand: bool,
-    /// Apply psi = 140 - 25.6 p (thesis eq. 4.15) at every point (implied by --vary l11).
+    /// Apply psi = 140 - 25.6 p (thesis eq. 4.15) at every point (implied by --vary l11); not
+    /// with --vary psi_deg.
     #[arg(long)]
     pub psi_rule: bool,
     /// Maps: also colour by this record key (e.g. max_offset, alpha, t_stab, e_cyl); repeatable.

@@ -30,6 +30,6 @@ pub use stage3::{
     barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,
 };
 pub use stages::{
-    evaluate_statics, stage_kinematics, stage_statics, Cause, Discard, EvalOptions, Evaluation, KinematicsResult,
-    ObjectMotion, Partial, Reason, StaticsResult, MISSING_POSE_VIOLATION,
+    evaluate_kinematics, evaluate_statics, stage_kinematics, stage_statics, Cause, Discard, EvalOptions, Evaluation,
+    KinematicsResult, ObjectMotion, Partial, Reason, StaticsResult, MISSING_POSE_VIOLATION,
 };

@@ -438,24 +438,32 @@ pub(crate) fn statics_with_spring(
     })
 }
 
+/// Stages 0–1 of a design: the evaluation so far, with `kin` set when the design passed
+/// them, and what was computed before a discard (`partial`: the finger of a design the
+/// singularity sweep discarded), as every later stage reports it (MODEL.md §10).
+pub fn evaluate_kinematics(x: &Design, s: &SceneParams) -> Evaluation {
+    let mut ev = Evaluation::new(*x);
+    let t0 = Instant::now();
+    match kinematics_partial(x, s) {
+        Ok(k) => ev.kin = Some(k),
+        Err((d, partial)) => {
+            ev.discard = Some(d);
+            ev.partial = partial;
+        }
+    }
+    ev.stage_seconds[1] = t0.elapsed().as_secs_f64();
+    ev
+}
+
 /// Stages 0–2 of a design (tens of µs): the evaluation so far, with `statics` set when the
 /// design passed them. `evaluate_dynamics` finishes it; the two together are `evaluate`,
 /// bit for bit.
 pub fn evaluate_statics(x: &Design, s: &SceneParams) -> Evaluation {
-    let mut ev = Evaluation::new(*x);
-    let t0 = Instant::now();
-    let kin = match kinematics_partial(x, s) {
-        Ok(k) => k,
-        Err((d, partial)) => {
-            ev.stage_seconds[1] = t0.elapsed().as_secs_f64();
-            ev.discard = Some(d);
-            ev.partial = partial;
-            return ev;
-        }
+    let mut ev = evaluate_kinematics(x, s);
+    let Some(kin) = ev.kin else {
+        return ev;
     };
-    ev.kin = Some(kin);
     let t1 = Instant::now();
-    ev.stage_seconds[1] = (t1 - t0).as_secs_f64();
     let st = statics_partial(&kin.finger, s);
     ev.stage_seconds[2] = t1.elapsed().as_secs_f64();
     match st {

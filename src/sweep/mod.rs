@@ -17,15 +17,18 @@
 //! Results do not depend on the number of threads: every point is evaluated on its own and
 //! rows are written in grid order.
 
+mod boundaries;
 pub mod out;
 pub mod plot;
 
+pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
+
 use crate::cells::{cells, Floats};
-use crate::eval::{evaluate, stage_kinematics, Cause, EvalOptions, Evaluation, Record};
+use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
 use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::{Error, Result};
-use out::{record_unit, BOUNDARIES_FILE, SWEEP_FILE, SWEEP_TITLE};
+use out::{record_unit, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -244,7 +247,7 @@ pub struct SweepSpec {
     pub stage: Stage,
     /// Keep l_hand of the base design (t22 derived) when l21 or b vary (thesis §4.1.2 holds l_hand fixed).
     pub hold_l_hand: bool,
-    /// Apply ψ = 140 − 25.6 p at every point (thesis eq. 4.15) unless ψ is varied.
+    /// Apply ψ = 140 − 25.6 p at every point (thesis eq. 4.15); not with ψ varied.
     pub psi_rule: bool,
 }
 
@@ -278,6 +281,11 @@ impl SweepSpec {
         if self.hold_l_hand && (has(Knob::LHand) || has(design("t22"))) {
             let v = if has(Knob::LHand) { "l_hand" } else { "t22" };
             return Err(Error::Input(format!("--hold-l-hand with --vary {v}: holding l_hand sets t22; give one")));
+        }
+        if has(design("psi_deg")) && (self.psi_rule || has(Knob::L11)) {
+            let rule = if self.psi_rule { "--psi-rule" } else { "--vary l11 (which applies the rule)" };
+            let why = "the rule psi = 140 - 25.6 p sets psi at every point; give one";
+            return Err(Error::Input(format!("{rule} with --vary psi_deg: {why}")));
         }
         if self.hold_l_hand && !has(design("l21")) && !has(design("b")) {
             return Err(Error::Input("--hold-l-hand: keeps l_hand while l21 or b vary, and neither is varied".into()));
@@ -423,14 +431,8 @@ pub fn verdict(ev: &Evaluation) -> &'static str {
 /// Evaluate one design of one problem through the chosen stages.
 pub fn evaluate_point(p: &Problem, x: &Design, stage: Stage) -> Evaluation {
     match stage {
-        Stage::Kinematics => {
-            let mut ev = Evaluation::new(*x);
-            match stage_kinematics(x, &p.scene) {
-                Ok(k) => ev.kin = Some(k),
-                Err(d) => ev.discard = Some(d),
-            }
-            ev
-        }
+        // with what stage 1 computed before a discard, as the later stages report it
+        Stage::Kinematics => evaluate_kinematics(x, &p.scene),
         Stage::Static => evaluate(x, &p.scene, &EvalOptions::statics_only()),
         Stage::Dynamic => evaluate(x, &p.scene, &EvalOptions::full(p)),
     }
@@ -562,103 +564,6 @@ pub fn sweep_csv(spec: &SweepSpec, rows: &[Row], files: &[String]) -> String {
     s
 }
 
-/// A boundary found by bisection: along `name`, between two values whose verdicts differ.
-#[derive(Debug, Clone)]
-pub struct Boundary {
-    /// The bisected name.
-    pub name: String,
-    /// Values of the other varied names (in --vary order, the bisected one omitted).
-    pub others: Vec<f64>,
-    /// Last value with `verdict_lo`.
-    pub lo: f64,
-    /// First value with `verdict_hi`.
-    pub hi: f64,
-    /// Verdict at `lo`.
-    pub verdict_lo: &'static str,
-    /// Verdict at `hi`.
-    pub verdict_hi: &'static str,
-}
-
-/// For every line of the grid along the varied name `name`, every pair of neighbours with
-/// different verdicts is narrowed by `steps` bisections (in parallel).
-pub fn bisect(spec: &SweepSpec, rows: &[Row], name: &str, steps: u32) -> Result<Vec<Boundary>> {
-    let axis = spec.vary.iter().position(|v| v.name == name).ok_or_else(|| {
-        Error::Input(format!(
-            "--bisect {name}: not one of the varied names ({})",
-            spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
-        ))
-    })?;
-    if steps > 60 {
-        return Err(Error::Input(format!("--bisect-steps {steps}: at most 60")));
-    }
-    let stride: usize = spec.vary[..axis].iter().map(|v| v.n).product();
-    let mut pairs = Vec::new();
-    for k in 0..rows.len() {
-        let i = (k / stride) % spec.vary[axis].n;
-        if i + 1 < spec.vary[axis].n && rows[k].verdict != rows[k + stride].verdict {
-            pairs.push((k, k + stride));
-        }
-    }
-    pairs
-        .par_iter()
-        .map(|&(a, b)| {
-            let (mut lo, mut hi) = (rows[a].values[axis], rows[b].values[axis]);
-            let (vlo, vhi) = (rows[a].verdict, rows[b].verdict);
-            let mut point = rows[a].values.clone();
-            let integer = spec.vary[axis].is_integer();
-            for _ in 0..steps {
-                // a whole-number field is bisected over whole values, down to neighbours
-                let mid = if integer { (0.5 * (lo + hi)).floor() } else { 0.5 * (lo + hi) };
-                if integer && (mid <= lo || mid >= hi) {
-                    break;
-                }
-                point[axis] = mid;
-                let v = eval_row(spec, &point)?.verdict;
-                if v == vlo {
-                    lo = mid;
-                } else if v == vhi {
-                    hi = mid;
-                } else {
-                    // a third verdict in between: keep the side next to the lower verdict
-                    hi = mid;
-                }
-            }
-            let mut others = rows[a].values.clone();
-            others.remove(axis);
-            Ok(Boundary { name: name.to_string(), others, lo, hi, verdict_lo: vlo, verdict_hi: vhi })
-        })
-        .collect()
-}
-
-/// boundaries.csv text.
-pub fn boundaries_csv(spec: &SweepSpec, b: &[Boundary]) -> String {
-    let mut s = String::new();
-    for bd in b.iter().take(1) {
-        let others: Vec<&str> = spec.vary.iter().filter(|v| v.name != bd.name).map(|v| v.name.as_str()).collect();
-        let _ = writeln!(
-            s,
-            "bisected,{}{}lo,hi,verdict_lo,verdict_hi",
-            others.join(","),
-            if others.is_empty() { "" } else { "," }
-        );
-    }
-    for bd in b {
-        let o: Vec<String> = bd.others.iter().map(|v| format!("{v}")).collect();
-        let _ = writeln!(
-            s,
-            "{},{}{}{},{},{},{}",
-            bd.name,
-            o.join(","),
-            if o.is_empty() { "" } else { "," },
-            bd.lo,
-            bd.hi,
-            bd.verdict_lo,
-            bd.verdict_hi
-        );
-    }
-    s
-}
-
 /// Write DIR/sweep.csv alone (see [`write_outputs`]).
 pub fn write_csv(dir: &Path, spec: &SweepSpec, rows: &[Row]) -> Result<()> {
     let earlier = out::check_out_folder(dir)?;
@@ -680,16 +585,4 @@ pub fn write_outputs(dir: &Path, spec: &SweepSpec, rows: &[Row], earlier: &[Path
         }
     }
     write_atomic(&dir.join(SWEEP_FILE), sweep_csv(spec, rows, &all).as_bytes())
-}
-
-/// Write DIR/boundaries.csv (its `#` title and units lines, then [`boundaries_csv`]).
-pub fn write_boundaries(dir: &Path, spec: &SweepSpec, b: &[Boundary]) -> Result<()> {
-    let mut s = String::from("# gripopt boundaries.csv: where the verdict flips along a bisected name, between the values lo and hi (the other varied names as given)\n# units:");
-    let _ = write!(s, " bisected [text]");
-    for v in &spec.vary {
-        let _ = write!(s, " {} [{}]", v.name, v.unit());
-    }
-    s.push_str(" lo [as bisected] hi [as bisected] verdict_lo [text] verdict_hi [text]\n");
-    s.push_str(&boundaries_csv(spec, b));
-    write_atomic(&dir.join(BOUNDARIES_FILE), s.as_bytes())
 }

@@ -23,9 +23,6 @@ pub const BOUNDARIES_FILE: &str = "boundaries.csv";
 /// The title of sweep.csv (its first line starts with it).
 pub const SWEEP_TITLE: &str = "# gripopt sweep.csv";
 
-/// Files of a run folder: a sweep never writes into one.
-const RUN_FILES: [&str; 4] = ["run.json", "checkpoint.json", ".lock", "recording"];
-
 /// The files an earlier sweep in `dir` wrote (its sweep.csv's `# files:` line), which the
 /// new one replaces; an error naming what is not a sweep's: a run folder, a file no
 /// sweep.csv lists, a sweep.csv gripopt did not write.
@@ -40,7 +37,7 @@ pub fn check_out_folder(dir: &Path) -> Result<Vec<PathBuf>> {
     let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list the output folder", e))?;
     let mut names: Vec<String> = rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).collect();
     names.sort();
-    if let Some(f) = names.iter().find(|n| RUN_FILES.contains(&n.as_str())) {
+    if let Some(f) = crate::fsutil::run_folder_file(dir) {
         return bad(format!(
             "--out: a gripopt run folder (it holds {f}); a sweep writes into a folder of its own, never into a run's"
         ));
