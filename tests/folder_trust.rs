@@ -264,3 +264,181 @@ fn a_library_verify_sample_beyond_memory_is_refused() {
     assert!(e.contains("--sample") && e.contains("needs about"), "{e}");
     assert_eq!(files(&run), before);
 }
+
+// Hostile pass 32: the recording shards a run folder reads are attributed to the run.
+
+/// A run of 3 recorded generations in `name` (seed `seed`): its folder, the folder as a
+/// string, and a design id of generation 2.
+fn recorded_run(name: &str, seed: u64) -> (PathBuf, String, u64) {
+    let dir = tmp(name);
+    let mut s = spec(&dir, 3, true);
+    s.seed = seed;
+    optimise(&s).unwrap();
+    let g2 = gripopt::record::read_index(&dir.join("recording")).unwrap()[1].clone();
+    assert_eq!(g2.file, "gen-00002.mcap");
+    let d = dir.display().to_string();
+    (dir, d, g2.first_id)
+}
+
+/// Another program's MCAP (a ROS-style `/chatter` recording, no gripopt.run metadata) at
+/// `path`; its bytes.
+fn foreign_mcap(path: &Path) -> Vec<u8> {
+    let mut w = mcap::Writer::new(std::io::Cursor::new(Vec::new())).unwrap();
+    let ch = w.add_channel(0, "/chatter", "json", &BTreeMap::new()).unwrap();
+    for k in 0..5u32 {
+        let t = 1_700_000_000_000_000_000 + u64::from(k) * 1_000_000;
+        let h = mcap::records::MessageHeader { channel_id: ch, sequence: k, log_time: t, publish_time: t };
+        w.write_to_known_channel(&h, br#"{"data":"hello"}"#).unwrap();
+    }
+    w.finish().unwrap();
+    let bytes = w.into_inner().into_inner();
+    std::fs::write(path, &bytes).unwrap();
+    bytes
+}
+
+/// Finding 1: a shard copied from run B into run A, or an index line naming B's shard by a
+/// path out of A's recording folder, is never read as A's design: the library, `replay` and
+/// `export` refuse it (exit 2), naming the file.
+#[test]
+fn a_shard_of_another_run_is_never_read_as_this_runs_design() {
+    let (a, da, id) = recorded_run("trust-shard-a", 5);
+    let (b, _, _) = recorded_run("trust-shard-b", 6);
+    let (ra, rb) = (a.join("recording"), b.join("recording"));
+    let ours = std::fs::read(ra.join("gen-00002.mcap")).unwrap();
+    assert!(gripopt::record::read_design(&a, id).is_ok());
+    let refused = |what: &str, file: &str| {
+        let e = gripopt::record::read_design(&a, id).unwrap_err();
+        assert!(e.is_input() && e.to_string().contains(file) && e.to_string().contains(what), "{e}");
+        for args in [
+            vec!["replay", &da, "--design", &id.to_string()],
+            vec!["export", &da, "--design", &id.to_string(), "--format", "json", "--out", "-"],
+        ] {
+            let o = cli(&args);
+            assert_eq!(code(&o), 2, "{args:?}: {}", stderr(&o));
+            assert!(stderr(&o).contains(file) && stderr(&o).contains(what), "{args:?}: {}", stderr(&o));
+            assert!(o.stdout.is_empty(), "{args:?}: another run's design written");
+        }
+    };
+    std::fs::copy(rb.join("gen-00002.mcap"), ra.join("gen-00002.mcap")).unwrap();
+    refused("written by another run", "gen-00002.mcap");
+    // A's own shard back, and its index line pointing at B's shard (relative and absolute)
+    std::fs::write(ra.join("gen-00002.mcap"), &ours).unwrap();
+    let index = std::fs::read_to_string(ra.join("index.jsonl")).unwrap();
+    let rel = format!("../../{}/recording/gen-00002.mcap", b.file_name().unwrap().to_string_lossy());
+    let abs = rb.join("gen-00002.mcap").display().to_string();
+    for path in [rel, abs] {
+        let edited = index.replace("\"file\":\"gen-00002.mcap\"", &format!("\"file\":{}", serde_json::json!(path)));
+        assert_ne!(edited, index);
+        std::fs::write(ra.join("index.jsonl"), edited).unwrap();
+        refused("never followed", "index.jsonl");
+    }
+    std::fs::write(ra.join("index.jsonl"), index).unwrap();
+    assert!(gripopt::record::read_design(&a, id).is_ok());
+}
+
+/// Finding 2: when `resume` rebuilds a missing index, another program's MCAP lying as a
+/// covered shard is not indexed as the run's: the resume stops (exit 2) naming it, as for
+/// a shard of another run, and changes nothing; with the index intact, the same.
+#[test]
+fn resume_never_indexes_an_mcap_another_program_wrote() {
+    let (dir, d, _) = recorded_run("trust-foreign-covered", 5);
+    let rdir = dir.join("recording");
+    foreign_mcap(&rdir.join("gen-00002.mcap"));
+    for drop_index in [false, true] {
+        if drop_index {
+            std::fs::remove_file(rdir.join("index.jsonl")).unwrap();
+        }
+        let before = files(&dir);
+        let o = cli(&["resume", &d, "--generations", "4"]);
+        assert_eq!(code(&o), 2, "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("gen-00002.mcap") && e.contains("written by another run") && e.contains("gripopt.run"),
+            "{e}"
+        );
+        assert!(files(&dir) == before, "a refused resume changed the folder");
+    }
+}
+
+/// Finding 3: a file of another program named like a shard after the checkpoint is set
+/// aside with a warning, as a shard of another run is, never overwritten.
+#[test]
+fn resume_sets_aside_a_foreign_file_named_like_a_later_shard() {
+    let (dir, d, _) = recorded_run("trust-foreign-later", 5);
+    let rdir = dir.join("recording");
+    let theirs = foreign_mcap(&rdir.join("gen-00004.mcap"));
+    let o = cli(&["resume", &d, "--generations", "4"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(stderr(&o).contains("set aside as gen-00004.mcap.set-aside"), "{}", stderr(&o));
+    assert!(std::fs::read(rdir.join("gen-00004.mcap.set-aside")).unwrap() == theirs, "the user's file was changed");
+    let g4 = gripopt::record::read_index(&rdir).unwrap()[3].clone();
+    assert!(g4.generation == 4 && g4.file == "gen-00004.mcap", "{g4:?}");
+    assert!(gripopt::record::read_design(&dir, g4.first_id).is_ok());
+}
+
+/// `gripopt ARGS…`, killed (and the test failed) if it runs for more than 60 s.
+fn cli_within_a_minute(args: &[&str]) -> std::process::Output {
+    let mut child = std::process::Command::new(crate::robustness::BIN)
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if t0.elapsed().as_secs() > 60 {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("{args:?} still waits after 60 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Finding 10: a folder or a FIFO where a shard should be is refused (exit 2, "not a
+/// regular file", naming it) by `replay` and by a `resume` that rebuilds the index, never
+/// mapped (exit 1) or waited on forever.
+#[test]
+fn a_shard_that_is_not_a_regular_file_is_refused_not_mapped_or_waited_on() {
+    let (dir, d, id) = recorded_run("trust-not-a-file", 5);
+    let shard = dir.join("recording/gen-00002.mcap");
+    let index = std::fs::read(dir.join("recording/index.jsonl")).unwrap();
+    for kind in ["folder", "fifo"] {
+        std::fs::write(dir.join("recording/index.jsonl"), &index).unwrap();
+        std::fs::remove_file(&shard).or_else(|_| std::fs::remove_dir(&shard)).unwrap();
+        if kind == "folder" {
+            std::fs::create_dir(&shard).unwrap();
+        } else {
+            assert!(std::process::Command::new("mkfifo").arg(&shard).status().unwrap().success());
+        }
+        let o = cli_within_a_minute(&["replay", &d, "--design", &id.to_string()]);
+        assert_eq!(code(&o), 2, "{kind}: {}", stderr(&o));
+        assert!(stderr(&o).contains("not a regular file") && stderr(&o).contains("gen-00002.mcap"), "{}", stderr(&o));
+        std::fs::remove_file(dir.join("recording/index.jsonl")).unwrap();
+        let o = cli_within_a_minute(&["resume", &d, "--generations", "4"]);
+        assert_eq!(code(&o), 2, "{kind}: {}", stderr(&o));
+        assert!(stderr(&o).contains("not a regular file") && stderr(&o).contains("gen-00002.mcap"), "{}", stderr(&o));
+    }
+}
+
+/// Finding 5: with the index intact, a covered shard whose metadata record is damaged stops
+/// the resume (exit 2, naming it; nothing changed), as docs/cli.md says.
+#[test]
+fn resume_stops_on_a_covered_shard_with_damaged_metadata_even_when_indexed() {
+    let (dir, d, _) = recorded_run("trust-damaged-meta", 5);
+    let shard = dir.join("recording/gen-00002.mcap");
+    let mut bytes = std::fs::read(&shard).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let meta = summary.metadata_indexes.iter().find(|m| m.name == "gripopt.run").unwrap();
+    // the record's name and contents (after its opcode and length) inverted
+    for b in &mut bytes[meta.offset as usize + 9..(meta.offset + meta.length) as usize] {
+        *b ^= 0xFF;
+    }
+    std::fs::write(&shard, bytes).unwrap();
+    let before = files(&dir);
+    let o = cli(&["resume", &d, "--generations", "4"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("gen-00002.mcap") && stderr(&o).contains("metadata"), "{}", stderr(&o));
+    assert!(files(&dir) == before, "a refused resume changed the folder");
+}

@@ -2,15 +2,16 @@
 //! themselves where it is missing, unreadable, corrupt or incomplete (whatever the damage:
 //! it is read as bytes, and every line is checked against its shard), every shard the
 //! checkpoint covers is checked against what wrote it (its generation, and the run that
-//! wrote it), and nothing the checkpoint covers is ever deleted. Shards of generations
+//! wrote it: an MCAP without a `gripopt.run` metadata record is another program's, never
+//! this run's), and nothing the checkpoint covers is ever deleted. Shards of generations
 //! after the checkpoint (left by a generation that was being recorded when the run stopped)
 //! are removed when they are provably this run's (their metadata names it); one that
-//! cannot be read, or that another run wrote, is set aside (renamed, never deleted).
-//! gripopt's temporary files (`*.tmp`) are removed. A covered shard that must be re-indexed
-//! but cannot be read, or that another run wrote, stops the recovery before anything is
-//! changed (its designs would silently leave the index, or be taken for this run's); a
-//! covered generation without a shard is reported, and stays visible as a gap in the
-//! index's ids.
+//! cannot be read, is not a regular file, or that another run or program wrote, is set
+//! aside (renamed, never deleted). gripopt's temporary files (`*.tmp`) are removed. A
+//! covered shard whose summary or metadata cannot be read (listed in the index or not), or
+//! that another run or program wrote, stops the recovery before anything is changed (its
+//! designs would silently leave the index, or be taken for this run's); a covered
+//! generation without a shard is reported, and stays visible as a gap in the index's ids.
 //!
 //! A shard's index line is rebuilt from the MCAP file alone (mapped, only its summary and
 //! metadata read), without decoding any message payload: the generation, the first and last
@@ -66,7 +67,7 @@ impl Recovery {
             out.push(format!("{}: {gens} no shard ({files}): those designs are not in the recording; restore the file(s) and resume again to index them", dir.display()));
         }
         for f in &self.set_aside {
-            out.push(format!("{}: {f} is not this run's shard (unreadable, or written by another run) and lies after the checkpoint: set aside as {f}.set-aside", dir.display()));
+            out.push(format!("{}: {f} is not this run's shard (unreadable, not a regular file, or written by another run or program) and lies after the checkpoint: set aside as {f}.set-aside", dir.display()));
         }
         out
     }
@@ -77,18 +78,55 @@ pub fn shard_generation(name: &str) -> Option<u64> {
     name.strip_prefix("gen-")?.strip_suffix(".mcap")?.parse().ok()
 }
 
-fn mmap(path: &Path) -> Result<memmap2::Mmap> {
+/// Map the shard `path` for reading; refused (naming it, [`Error::Recording`]) when it is not
+/// a regular file (a folder, or a FIFO whose open would wait for a writer forever).
+pub(super) fn map_shard(path: &Path) -> Result<memmap2::Mmap> {
+    let kind = std::fs::metadata(path).map_err(|e| Error::io(path, "cannot read the shard", e))?;
+    if !kind.is_file() {
+        return Err(Error::Recording {
+            path: path.to_path_buf(),
+            message: "not a regular file (a folder, pipe or device where a recording shard should be)".into(),
+        });
+    }
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, "cannot open the shard", e))?;
     // SAFETY: shards are written to a temporary name and renamed when complete; nothing
     // writes to a shard after that, so the mapping does not change under us.
     unsafe { memmap2::Mmap::map(&f) }.map_err(|e| Error::io(path, "cannot map the shard", e))
 }
 
+/// Whether `file` (an index line's) is a plain file name, one that stays inside
+/// `recording/` (no folder, no `..`, not absolute).
+pub(super) fn is_plain_name(file: &str) -> bool {
+    let mut parts = Path::new(file).components();
+    matches!((parts.next(), parts.next()), (Some(std::path::Component::Normal(_)), None))
+}
+
+/// Whether a shard read as `e` is not run `run_id`'s: it has no `gripopt.run` metadata
+/// record (`gripopt` false: another program's MCAP), or its run id (none: empty, as in
+/// recordings of a gripopt before issue 24) is not `run_id`. None: not checked.
+fn foreign(run_id: Option<&str>, e: &ShardEntry, gripopt: bool) -> bool {
+    !gripopt || run_id.is_some_and(|ours| e.run_id.as_deref().unwrap_or_default() != ours)
+}
+
+/// Who wrote a shard read as `e` (for a refusal): its run id, or no gripopt metadata.
+fn origin(e: &ShardEntry, gripopt: bool) -> String {
+    if gripopt {
+        format!("run id {}", e.run_id.as_deref().filter(|r| !r.is_empty()).unwrap_or("none"))
+    } else {
+        "another program's MCAP: no gripopt.run metadata record".into()
+    }
+}
+
 /// Rebuild the index line of one shard from the file (see the module doc).
 pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
+    read_shard(path).map(|(e, _)| e)
+}
+
+/// [`index_entry_from_shard`], and whether the file has a `gripopt.run` metadata record.
+fn read_shard(path: &Path) -> Result<(ShardEntry, bool)> {
     let file = path.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string();
     let bad = |message: String| Error::Recording { path: path.to_path_buf(), message };
-    let buf = mmap(path)?;
+    let buf = map_shard(path)?;
     let summary = mcap::Summary::read(&buf)
         .map_err(|source| Error::DamagedRecording {
             path: path.to_path_buf(),
@@ -97,13 +135,14 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         })?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
     let (mut generation, mut first, mut last, mut count, mut epoch_s) = (None, None, None, None, 0u64);
-    let (mut run_id, mut problem_sha256) = (None, None);
+    let (mut run_id, mut problem_sha256, mut gripopt) = (None, None, false);
     for mi in summary.metadata_indexes.iter().filter(|m| m.name == "gripopt.run") {
         let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording {
             path: path.to_path_buf(),
             what: "cannot read the metadata record".into(),
             source: source.into(),
         })?;
+        gripopt = true;
         let num = |k: &str| m.metadata.get(k).and_then(|g| g.parse::<u64>().ok());
         generation = num("generation");
         first = num("first_id");
@@ -128,7 +167,7 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         .unwrap_or(summary.chunk_indexes.len() as u64);
     let bytes = buf.len() as u64;
     let id_at = |t: u64| (t / 1_000_000_000).saturating_sub(epoch_s);
-    Ok(ShardEntry {
+    let entry = ShardEntry {
         generation,
         file,
         first_id: first.unwrap_or(id_at(start)),
@@ -137,7 +176,8 @@ pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
         bytes,
         run_id,
         problem_sha256,
-    })
+    };
+    Ok((entry, gripopt))
 }
 
 /// What is wrong with a shard, without its path (the caller names it).
@@ -176,12 +216,13 @@ pub fn index_or_rebuilt(dir: &Path) -> Result<Vec<ShardEntry>> {
 }
 
 /// The index of the recording folder `dir` rebuilt in memory from its shards (unreadable
-/// shards left out; nothing is written), sorted by generation.
+/// shards and MCAPs without a `gripopt.run` metadata record left out; nothing is written),
+/// sorted by generation.
 pub fn rebuilt_index(dir: &Path) -> Result<Vec<ShardEntry>> {
     let mut out = vec![];
     for n in names(dir)? {
         if shard_generation(&n).is_some() {
-            if let Ok(e) = index_entry_from_shard(&dir.join(&n)) {
+            if let Ok((e, true)) = read_shard(&dir.join(&n)) {
                 out.push(e);
             }
         }
@@ -203,16 +244,18 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
 /// files, set aside later shards that are not provably this run's. Writes nothing else;
 /// the caller writes the returned index.
 ///
-/// A shard of a covered generation that another run wrote (its metadata's `run_id`), or
-/// whose index line must be rebuilt but which cannot be read, is an error
-/// ([`Error::Recording`], naming the shard), returned before anything is changed. A covered
-/// generation with no shard at all (moved away) is reported in [`Recovery::missing`].
+/// A shard of a covered generation that another run wrote (its metadata's `run_id`; an MCAP
+/// without a `gripopt.run` metadata record is another program's), or whose summary and
+/// metadata cannot be read (damaged, truncated, not a regular file), whether it is listed
+/// or not, is an error ([`Error::Recording`], naming the shard), returned before anything
+/// is changed. A covered generation with no shard at all (moved away) is reported in
+/// [`Recovery::missing`]. Only the summary and the metadata record of each shard are read:
+/// damage inside a design's chunk is found when that design is read.
 pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<Recovery> {
     let mut listed = readable_lines(&dir.join("index.jsonl"));
     let mut out = Recovery::default();
     let names = names(dir)?;
     listed.retain(|e| names.contains(&e.file) && shard_generation(&e.file) == Some(e.generation));
-    let foreign = |e: &ShardEntry| matches!((run_id, e.run_id.as_deref()), (Some(a), Some(b)) if a != b);
     // first every shard (reading only), so that an error leaves the folder untouched
     let (mut remove, mut aside) = (vec![], vec![]);
     for n in &names {
@@ -222,35 +265,40 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
         }
         let Some(g) = shard_generation(n) else { continue };
         let p = dir.join(n);
-        let read = index_entry_from_shard(&p);
+        let read = read_shard(&p);
         if g > completed {
             match read {
-                Ok(e) if !foreign(&e) => remove.push(n.clone()),
+                Ok((e, gripopt)) if !foreign(run_id, &e, gripopt) => remove.push(n.clone()),
                 _ => aside.push(n.clone()),
             }
             continue;
         }
+        let line = listed.iter().find(|l| &l.file == n);
         let refuse = |why: String| {
+            let need = if line.is_some() {
+                "a shard the checkpoint covers must be readable to resume"
+            } else {
+                "the index cannot be rebuilt without it"
+            };
             Error::Recording {
-            path: p.clone(),
-            message: format!("{why}; the index cannot be rebuilt without it (generation {g} is covered by the checkpoint): restore the file, or move it away to resume without its designs"),
-        }
+                path: p.clone(),
+                message: format!("{why}; {need} (generation {g} is covered by the checkpoint): restore the file, or move it away to resume without its designs"),
+            }
         };
         match read {
-            Ok(e) if foreign(&e) => {
+            Ok((e, gripopt)) if foreign(run_id, &e, gripopt) => {
                 return Err(Error::Recording {
                     path: p.clone(),
-                    message: format!("written by another run (run id {}, this run's {}): it is not this run's generation {g}; restore this run's shard, or move it away to resume without its designs", e.run_id.as_deref().unwrap_or("?"), run_id.unwrap_or("?")),
+                    message: format!("written by another run ({}; this run's id {}): it is not this run's generation {g}; restore this run's shard, or move it away to resume without its designs", origin(&e, gripopt), run_id.filter(|r| !r.is_empty()).unwrap_or("none")),
                 })
             }
-            Ok(e) if e.generation != g => {
+            Ok((e, _)) if e.generation != g => {
                 return Err(refuse(format!(
                     "its metadata names generation {}, its file name generation {g}",
                     e.generation
                 )))
             }
-            Ok(e) => {
-                let line = listed.iter().find(|l| &l.file == n);
+            Ok((e, _)) => {
                 let same = line.is_some_and(|l| {
                     (l.first_id, l.last_id, l.designs, l.bytes) == (e.first_id, e.last_id, e.designs, e.bytes)
                 });
@@ -259,13 +307,7 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
                 }
                 out.index.push(e);
             }
-            Err(err) => match listed.iter().find(|l| &l.file == n) {
-                // listed with its size: kept (a read names the damage when it is read)
-                Some(l) if std::fs::metadata(&p).map(|m| m.len()).ok() == Some(l.bytes) && !foreign(l) => {
-                    out.index.push(l.clone())
-                }
-                _ => return Err(refuse(format!("cannot read its metadata ({})", detail(&err)))),
-            },
+            Err(err) => return Err(refuse(format!("cannot read its summary and metadata ({})", detail(&err)))),
         }
     }
     out.index.sort_by_key(|e| e.generation);

@@ -253,11 +253,13 @@ fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
     (n, alike, maxd)
 }
 
-fn mmap(path: &Path) -> Result<memmap2::Mmap> {
-    let f = std::fs::File::open(path).map_err(|e| Error::io(path, "cannot open", e))?;
-    // SAFETY: shards are written to a temporary name and renamed when complete; nothing
-    // writes to a shard after that, so the mapping does not change under us.
-    unsafe { memmap2::Mmap::map(&f) }.map_err(|e| Error::io(path, "cannot map", e))
+/// The run id run.json of `run_dir` records (None: no run.json, or not readable as JSON,
+/// where the caller's own read of run.json names the damage; empty in run folders of a
+/// gripopt before issue 24).
+fn recorded_run_id(run_dir: &Path) -> Option<String> {
+    let bytes = std::fs::read(run_dir.join("run.json")).ok()?;
+    let v = serde_json::from_slice::<serde_json::Value>(&bytes).ok()?;
+    Some(v.get("run_id").and_then(|r| r.as_str()).unwrap_or_default().to_string())
 }
 
 /// Why design `id` is in none of `index`'s shards: the recorded id ranges, and where `id`
@@ -432,8 +434,14 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     };
     let entry = entry
         .ok_or_else(|| Error::Recording { path: dir.join("index.jsonl"), message: not_indexed(&dir, &index, id) })?;
+    if !super::recover::is_plain_name(&entry.file) {
+        return Err(Error::Recording {
+            path: dir.join("index.jsonl"),
+            message: format!("the line of generation {} names the shard {:?}, not a file name inside {}: a path out of the recording folder is never followed; move index.jsonl away (a resume rebuilds it from the shards)", entry.generation, entry.file, dir.display()),
+        });
+    }
     let path = dir.join(&entry.file);
-    let buf = mmap(&path)?;
+    let buf = super::recover::map_shard(&path)?;
     let bad = |message: String| Error::Recording { path: path.clone(), message };
     let mc = |what: String| {
         |source: mcap::McapError| Error::DamagedRecording { path: path.clone(), what, source: source.into() }
@@ -450,6 +458,14 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
         .and_then(|mi| {
             mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into()))
         })?;
+    // attributed: a shard of another run (copied in) is never read as this run's design
+    if let Some(ours) = recorded_run_id(run_dir) {
+        let theirs = meta.metadata.get("run_id").map(String::as_str).unwrap_or_default();
+        if theirs != ours {
+            let name = |r: &str| if r.is_empty() { "none".to_string() } else { r.to_string() };
+            return Err(bad(format!("written by another run (run id {}; this run's id {}, run.json): it is not this run's generation {}; restore this run's shard", name(theirs), name(&ours), entry.generation)));
+        }
+    }
     let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| {
         bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into())
     })?;
