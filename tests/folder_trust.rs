@@ -358,6 +358,8 @@ fn resume_never_indexes_an_mcap_another_program_wrote() {
         );
         assert!(files(&dir) == before, "a refused resume changed the folder");
     }
+    // the foreign file out of the folders tools/check_mcap.py reads
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Finding 3: a file of another program named like a shard after the checkpoint is set
@@ -420,6 +422,8 @@ fn a_shard_that_is_not_a_regular_file_is_refused_not_mapped_or_waited_on() {
         assert_eq!(code(&o), 2, "{kind}: {}", stderr(&o));
         assert!(stderr(&o).contains("not a regular file") && stderr(&o).contains("gen-00002.mcap"), "{}", stderr(&o));
     }
+    // a FIFO would block tools/check_mcap.py, which reads every *.mcap the tests leave
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Finding 5: with the index intact, a covered shard whose metadata record is damaged stops
@@ -441,4 +445,6 @@ fn resume_stops_on_a_covered_shard_with_damaged_metadata_even_when_indexed() {
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("gen-00002.mcap") && stderr(&o).contains("metadata"), "{}", stderr(&o));
     assert!(files(&dir) == before, "a refused resume changed the folder");
+    // the damaged shard out of the folders tools/check_mcap.py reads
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -487,6 +487,10 @@ def main(folders):
     ok = bad = 0
     infos = []
     for p in files:
+        if not p.is_file():  # a folder or a FIFO named *.mcap: never opened (a FIFO would block)
+            print(f"FAIL {p}: not a regular file")
+            bad += 1
+            continue
         try:
             n, chunks, info = check(p)
             infos.append(info)

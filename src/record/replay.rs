@@ -180,6 +180,9 @@ struct RunJson {
     problem_sha256: String,
     #[serde(default)]
     problems: Vec<ProblemUse>,
+    /// The run's id (empty in run folders of a gripopt before issue 24).
+    #[serde(default)]
+    run_id: String,
 }
 
 fn run_json(run_dir: &Path) -> Result<RunJson> {
@@ -257,9 +260,7 @@ fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
 /// where the caller's own read of run.json names the damage; empty in run folders of a
 /// gripopt before issue 24).
 fn recorded_run_id(run_dir: &Path) -> Option<String> {
-    let bytes = std::fs::read(run_dir.join("run.json")).ok()?;
-    let v = serde_json::from_slice::<serde_json::Value>(&bytes).ok()?;
-    Some(v.get("run_id").and_then(|r| r.as_str()).unwrap_or_default().to_string())
+    run_json(run_dir).ok().map(|r| r.run_id)
 }
 
 /// Why design `id` is in none of `index`'s shards: the recorded id ranges, and where `id`
