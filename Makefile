@@ -38,7 +38,7 @@ venv: $(VENV_STAMP)
 python: $(VENV_STAMP)
 	VIRTUAL_ENV=$(abspath $(VENV)) $(VENV)/bin/maturin develop --release --locked --quiet
 
-# The same package for the tests, built with the dev profile (opt-level 2, the test
+# The same package for the tests, built with the dev profile (opt-level 1, the test
 # profile's settings): it reuses the dependencies `cargo test $(WORKSPACE)` compiled (the same
 # profile and features) instead of building them again (CI minutes); `make python` installs
 # the release build again.
@@ -62,7 +62,7 @@ lint: $(VENV_STAMP)
 	$(PYO3_ENV) $(CARGO) clippy $(WORKSPACE) --all-targets --locked -- -D warnings
 
 # Correctness tests (unit, integration, property, and the extension crate's unit tests; the
-# test profile is optimised, opt-level 2), then the independent reader over every MCAP file and shipped layout the tests wrote (after
+# test profile is optimised, opt-level 1), then the independent reader over every MCAP file and shipped layout the tests wrote (after
 # its self-test: it must reject the scene and layout defects it checks for), then the pandas
 # example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
 # (docs/export.md). The Python package: its build (make python-test: dev profile, every
