@@ -519,6 +519,18 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
         let p: f64 = first[col(&format!("{o}.p_stay"))].parse().unwrap();
         assert!(line.contains(&format!(" {o} {p:.3}")), "{o}: {line}");
     }
+    // show --json gives every column's unit, each object's as docs/robust.md lists them
+    let json =
+        std::process::Command::new(env!("CARGO_BIN_EXE_gripopt")).arg("show").arg(&out).arg("--json").output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    for c in &pareto[0] {
+        assert!(v["units"][c].is_string(), "no unit for {c}: {}", v["units"]);
+    }
+    for o in ["bottle-full", "bottle-half", "can", "small-bottle"] {
+        for (c, u) in [("max_displacement", "m"), ("mean_force", "N"), ("t_stab", "s"), ("p_stay", "-")] {
+            assert_eq!(v["units"][format!("{o}.{c}")], u, "{o}.{c}");
+        }
+    }
     // the shipped problem's run: the same bytes at 1 thread and after a crash and a resume
     let again = |name: &str, threads: usize| RunSpec {
         problem_path: problem.clone(),

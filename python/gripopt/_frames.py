@@ -73,9 +73,28 @@ def frame(columns: Columns, table: ColumnTable, index: Optional[pd.Index] = None
         df = pd.DataFrame(data, index=index)
     else:
         df = pd.DataFrame({name: pd.Series(dtype="float64") for name, _, _ in table}, index=index)
+    if counts:
+        known = {name for name, _, _ in table}
+        table = tuple(table) + robust_columns([c for c in df.columns if c not in known])
     df.attrs["units"] = {c: units_of(table).get(c, "") for c in df.columns}
     df.attrs["meanings"] = {c: meanings_of(table).get(c, "") for c in df.columns}
     return df
+
+
+def robust_columns(names: Sequence[str]) -> tuple[tuple[str, str, str], ...]:
+    """The unit and meaning of each robust column among ``names`` (docs/robust.md): the
+    design-level ones, and each object's ``NAME.column`` (the object named in its meaning)."""
+    design = {name: (unit, meaning) for name, unit, meaning in _gripopt.ROBUST_COLUMNS}
+    per_object = {name: (unit, meaning) for name, unit, meaning in _gripopt.OBJECT_COLUMNS}
+    found = []
+    for c in names:
+        if c in design:
+            found.append((c, *design[c]))
+        elif "." in c and c.rsplit(".", 1)[1] in per_object:
+            obj, col = c.rsplit(".", 1)
+            unit, meaning = per_object[col]
+            found.append((c, unit, f"{obj}: {meaning}"))
+    return tuple(found)
 
 
 DESIGN_NAMES: tuple[str, ...] = tuple(_gripopt.DESIGN_NAMES)

@@ -129,3 +129,20 @@ def test_robust_counts_are_int64():
         assert rows[f"{o['name']}.scenarios"].iloc[0] == o["scenarios"]
     # the probability columns stay float64
     assert rows[[c for c in rows.columns if c.endswith(".p_stay")]].dtypes.eq("float64").all()
+
+
+def test_robust_columns_carry_units_and_meanings():
+    from conftest import REPO
+
+    kitchen = gripopt.Problem.load(REPO / "problems" / "kitchen.toml")
+    rows = kitchen.evaluate(kitchen.nominal)
+    units, meanings = rows.attrs["units"], rows.attrs["meanings"]
+    missing = [c for c in rows.columns if not units.get(c) or not meanings.get(c)]
+    assert not missing, missing
+    # docs/robust.md: per object, the displacement in m, the mean force in N, t_stab in s
+    objects = {c.rsplit(".", 1)[0] for c in rows.columns if c.endswith(".p_stay")}
+    assert len(objects) == 4, objects
+    for o in objects:
+        assert (units[f"{o}.max_displacement"], units[f"{o}.mean_force"], units[f"{o}.t_stab"]) == ("m", "N", "s")
+        assert units[f"{o}.p_stay"] == "-" and meanings[f"{o}.p_stay"].startswith(f"{o}: ")
+    assert units["scenarios_run"] == "-"  # the design-level robust columns too

@@ -35,7 +35,7 @@ pub struct ShowArgs {
 }
 
 fn unit(name: &str) -> &'static str {
-    DESIGN_COLUMNS.iter().find(|c| c.0 == name).map_or("", |c| c.1)
+    DESIGN_COLUMNS.iter().find(|c| c.0 == name).map(|c| c.1).or_else(|| gripopt::run::robust_unit(name)).unwrap_or("")
 }
 
 /// A design as `show --json` lists it: its row's columns in the file's order (`reason` as
@@ -98,7 +98,8 @@ struct ShowJson<'a> {
     file: &'a str,
     sorted_by: &'a str,
     direction: &'a str,
-    units: BTreeMap<&'static str, &'static str>,
+    /// Every column's unit, a robust run's per-object columns included.
+    units: BTreeMap<String, &'static str>,
     designs: Vec<Shown<'a>>,
 }
 
@@ -280,7 +281,11 @@ pub fn run(a: ShowArgs) -> Result<()> {
             file,
             sorted_by: obj,
             direction: if maximise { "maximise" } else { "minimise" },
-            units: DESIGN_COLUMNS.iter().map(|c| (c.0, c.1)).collect(),
+            units: DESIGN_COLUMNS
+                .iter()
+                .map(|c| (c.0.to_string(), c.1))
+                .chain(rows.first().map(|r| r.robust.columns()).unwrap_or_default())
+                .collect(),
             designs: rows.iter().map(|r| Shown { row: r, replay: replay(r.id) }).collect(),
         };
         outln!("{}", serde_json::to_string_pretty(&v)?);

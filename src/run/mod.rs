@@ -53,7 +53,7 @@ pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persist
 pub use plots::{hypervolume, pareto_matrix};
 pub use problems::PROBLEM_FILE;
 pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
-pub use robust_columns::{RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
+pub use robust_columns::{robust_unit, RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
 pub use robust_eval::RobustScheduled;
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use tables::CheckpointTables;

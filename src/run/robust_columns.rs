@@ -84,15 +84,15 @@ impl RobustColumns {
 
     /// The columns with units and meanings (for a CSV's `#` header).
     pub fn columns(&self) -> Vec<(String, &'static str)> {
-        self.0
-            .iter()
-            .map(|(k, _)| {
-                let base = k.rsplit('.').next().unwrap_or(k);
-                let unit = ROBUST_COLUMNS.iter().chain(&OBJECT_COLUMNS).find(|c| c.0 == base).map_or("-", |c| c.1);
-                (k.clone(), unit)
-            })
-            .collect()
+        self.0.iter().map(|(k, _)| (k.clone(), robust_unit(k).unwrap_or("-"))).collect()
     }
+}
+
+/// The unit of robust column `name`: a design-level one, or an object's `NAME.column`
+/// (None: not a robust column).
+pub fn robust_unit(name: &str) -> Option<&'static str> {
+    let base = name.rsplit('.').next().unwrap_or(name);
+    ROBUST_COLUMNS.iter().chain(&OBJECT_COLUMNS).find(|c| c.0 == base).map(|c| c.1)
 }
 
 impl Serialize for RobustColumns {

@@ -29,6 +29,9 @@ fn _gripopt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("HISTORY_COLUMNS", columns(&gripopt::HISTORY_COLUMNS))?;
     m.add("SAMPLE_COLUMNS", columns(&gripopt::SAMPLE_COLUMNS))?;
     m.add("POSE_COLUMNS", columns(&gripopt::POSE_COLUMNS))?;
+    // a robust problem's design-table columns: these, then each object's `NAME.column`
+    m.add("ROBUST_COLUMNS", gripopt::run::ROBUST_COLUMNS.to_vec())?;
+    m.add("OBJECT_COLUMNS", gripopt::run::OBJECT_COLUMNS.to_vec())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
