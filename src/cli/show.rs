@@ -296,11 +296,12 @@ pub fn run(a: ShowArgs) -> Result<()> {
         outln!("warning: {w}");
     }
     if let Some(v) = &verified {
+        let file = folder.verify_file().unwrap_or("verify.csv");
         if verify_current(v) {
-            outln!("verify.csv: generation {}'s front (the run's current state)", v.generation);
+            outln!("{file}: generation {}'s front (the run's current state)", v.generation);
         } else {
             outln!(
-                "verify.csv: generation {}'s front; the run has changed since (now {} generations): run `gripopt verify {}` again",
+                "{file}: generation {}'s front; the run has changed since (now {} generations): run `gripopt verify {}` again",
                 v.generation,
                 run.completed_generations,
                 quoted(dir)

@@ -15,7 +15,7 @@ use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
 use crate::optim::Individual;
 use crate::params::{Design, DesignParameters, Problem, DESIGN_NAMES};
-use crate::record::keep_poses;
+use crate::record::{keep_poses, ProblemUse};
 use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
@@ -272,6 +272,20 @@ pub struct VerifiedGeneration {
     pub generation: u64,
     /// The checkpoint's content checksum then.
     pub checkpoint_sha256: String,
+}
+
+/// The `# run:` line of verify.csv and verify_robust.csv: the run state a verification
+/// checked (the completed generations, the checkpoint's content checksum) and the problem
+/// files used; [`RunFolder::verified_generation`] reads it back.
+pub(super) fn run_line(run_id: &str, state: &VerifiedGeneration, used: &[&ProblemUse]) -> String {
+    let problems: Vec<String> = used.iter().map(|p| format!("{} {}", p.file, p.sha256)).collect();
+    format!(
+        "# run: {}, generation {}, checkpoint sha256 {}; problem sha256: {}\n",
+        if run_id.is_empty() { "run" } else { run_id },
+        state.generation,
+        state.checkpoint_sha256,
+        problems.join(", ")
+    )
 }
 
 /// The checkpoint file of a run folder (the state `verify` checks).

@@ -8,11 +8,12 @@
 
 use super::folder::RunFolder;
 use super::lock::RunLock;
-use super::verify::{CheckedState, CHECKPOINT_FILE};
+use super::verify::{run_line, CheckedState, CHECKPOINT_FILE};
 use crate::cells::{line, Floats};
 use crate::eval::{robust_record, robust_start, run_scenario, EvalOptions, RobustSetup, ScenarioRecord};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, STREAM_VERIFY};
+use crate::record::ProblemUse;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -124,7 +125,9 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         .clone()
         .ok_or_else(|| Error::RunDir { path: file.clone(), message: "not a robust problem (no [robust])".into() })?;
     // the front of the run's state (its checkpoint), not pareto.csv, a view a user may edit
-    let front = CheckedState::load(dir, &folder.info()?)?.front_rows();
+    let info = folder.info()?;
+    let checked = CheckedState::load(dir, &info)?;
+    let front = checked.front_rows();
     if front.is_empty() {
         return Err(Error::RunDir {
             path: dir.join(CHECKPOINT_FILE),
@@ -173,11 +176,15 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         }
         keep_all += usize::from(all);
     }
+    let files = info.problem_files();
+    let in_force: Vec<&ProblemUse> = files.iter().filter(|f| f.file == "problem.toml").collect();
     let mut csv = format!(
-        "# gripopt verify_robust.csv: the front re-evaluated out of sample ({} fresh scenarios per object, stream {STREAM_VERIFY}; p_min {}, Clopper-Pearson {} %)\n# units: p_stay_* [-] scenarios_* [-] stays_out [-] max_displacement_out [m] keeps [bool]\n",
+        "# gripopt verify_robust.csv: the front re-evaluated out of sample ({} fresh scenarios per object, stream {STREAM_VERIFY}; p_min {}, Clopper-Pearson {} %)\n{}# units: p_stay_* [-] scenarios_* [-] stays_out [-] max_displacement_out [m] keeps [bool]\n",
         setup.k,
         r.p_min,
-        r.confidence * 100.0
+        r.confidence * 100.0,
+        // which run state it checked, as verify.csv says it (show tells when it is stale)
+        run_line(&info.run_id, &checked.attribution(), &in_force),
     );
     csv.push_str("id,object,p_stay_in,scenarios_in,p_stay_out,p_stay_out_lo,p_stay_out_hi,stays_out,scenarios_out,max_displacement_out,keeps\n");
     for row in &rows {

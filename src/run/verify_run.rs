@@ -11,10 +11,11 @@ use super::info::RunInfo;
 use super::limits::check_sample;
 use super::lock::RunLock;
 use super::verify::{
-    sample_designs, verify_csv, verify_designs_poses, CheckedState, Confusion, VerifiedGeneration, VerifyRow,
+    run_line, sample_designs, verify_csv, verify_designs_poses, CheckedState, Confusion, VerifiedGeneration, VerifyRow,
     VerifySource, VerifySummary, CHECKPOINT_FILE, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 use super::verify_rec::VerifyRecording;
+use super::verify_robust::VERIFY_ROBUST_FILE;
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneKind};
 use crate::record::ProblemUse;
@@ -170,14 +171,7 @@ pub fn verify(
 /// verify.csv's text with its `# run:` line after the title: the run state it checked (the
 /// completed generations, the checkpoint's content checksum) and the problem files used.
 fn attributed(csv: &str, run_id: &str, state: &VerifiedGeneration, used: &[&ProblemUse]) -> String {
-    let problems: Vec<String> = used.iter().map(|p| format!("{} {}", p.file, p.sha256)).collect();
-    let line = format!(
-        "# run: {}, generation {}, checkpoint sha256 {}; problem sha256: {}\n",
-        if run_id.is_empty() { "run" } else { run_id },
-        state.generation,
-        state.checkpoint_sha256,
-        problems.join(", ")
-    );
+    let line = run_line(run_id, state, used);
     // the unit of every column, as in every CSV gripopt writes (docs/outputs.md)
     let header = csv.lines().find(|l| !l.starts_with('#')).unwrap_or_default();
     let units: Vec<String> = header.split(',').map(|c| format!("{c} [{}]", verify_unit(c))).collect();
@@ -202,15 +196,17 @@ fn verify_unit(column: &str) -> &'static str {
 }
 
 impl RunFolder {
-    /// The run state the folder's `verify.csv` checked (None: no verify.csv, or one
+    /// The verification file the folder holds: verify.csv, or a robust run's
+    /// verify_robust.csv (None: not verified).
+    pub fn verify_file(&self) -> Option<&'static str> {
+        [VERIFY_FILE, VERIFY_ROBUST_FILE].into_iter().find(|f| self.dir().join(f).is_file())
+    }
+    /// The run state the folder's `verify.csv` (or `verify_robust.csv`) checked (None: no verify.csv, or one
     /// written by a gripopt before issue 24, without a `# run:` line).
     pub fn verified_generation(&self) -> Result<Option<VerifiedGeneration>> {
-        let p = self.dir().join(VERIFY_FILE);
-        let text = match std::fs::read_to_string(&p) {
-            Ok(t) => t,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(Error::io(p, "cannot read", e)),
-        };
+        let Some(file) = self.verify_file() else { return Ok(None) };
+        let p = self.dir().join(file);
+        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read", e))?;
         let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
             return Ok(None);
         };
