@@ -640,3 +640,57 @@ fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
         }
     }
 }
+
+/// Every file under `dir` (recursively) with its content, sorted by path.
+fn folder_bytes(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = vec![];
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(folder_bytes(&p));
+        } else {
+            out.push((p.clone(), std::fs::read(&p).unwrap()));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// `resume --force` may change the problem but not its robust objects (names, order, count)
+/// nor whether it is robust: every table has one fixed set of `NAME.*` columns, so such a
+/// resume is refused (exit 2, naming the file and `robust.objects`), the folder unchanged.
+#[test]
+fn a_forced_resume_refuses_another_robust_object_list() {
+    let dir = tmp("forced-objects");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robust.toml");
+    let text = robust_text("");
+    std::fs::write(&file, &text).unwrap();
+    let run = dir.join("run");
+    gripopt::run::optimise(&RunSpec { generations: 1, ..spec(&file, &run, 1) }).unwrap();
+    let before = folder_bytes(&run);
+    let can = "[[robust.objects]]\nname = \"can\"\nradius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\ntau = 0.5\n";
+    assert!(text.contains(can));
+    let bottle = "[[robust.objects]]\nname = \"bottle\"\nradius = 0.040\nlength = 0.200\ndensity = 1000.0\ngrasp_height = 0.050\ntau = 0.5\n";
+    let swapped = text.replacen(bottle, "", 1).replacen(can, &format!("{can}{bottle}"), 1);
+    let renamed = text.replacen("name = \"can\"", "name = \"tin\"", 1);
+    let plain = std::fs::read_to_string(BOTTLE).unwrap();
+    let (r, f) = (run.display().to_string(), file.display().to_string());
+    for (case, changed) in
+        [("removed", text.replacen(can, "", 1)), ("swapped", swapped), ("renamed", renamed), ("not robust", plain)]
+    {
+        std::fs::write(&file, &changed).unwrap();
+        let o = crate::robustness::cli(&["resume", &r, "--generations", "2", "--force", "--threads", "1"]);
+        let e = crate::robustness::stderr(&o);
+        assert_eq!(crate::robustness::code(&o), 2, "{case}: {e}");
+        assert!(e.contains(&f) && e.contains("robust.objects") && e.contains("new run"), "{case}: {e}");
+        assert!(folder_bytes(&run) == before, "{case}: the refused resume changed the run folder");
+        let e = gripopt::run::resume(&run, Some(2), true, Some(1)).unwrap_err().to_string();
+        assert!(e.contains("robust.objects"), "{case}: the library refuses alike: {e}");
+        assert!(folder_bytes(&run) == before, "{case}: the library's refusal changed the run folder");
+    }
+    // the same objects with another p_min: a forced resume takes it
+    std::fs::write(&file, text.replacen("p_min = 0.5", "p_min = 0.4", 1)).unwrap();
+    gripopt::run::resume(&run, Some(2), true, Some(1)).unwrap();
+    assert!(run.join("problem-1.toml").is_file(), "the earlier problem kept");
+}

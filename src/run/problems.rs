@@ -107,3 +107,32 @@ pub(crate) fn write_current(dir: &Path, info: &RunInfo, problem: &Problem) -> Re
         _ => write_atomic(&dir.join(PROBLEM_FILE), problem.source_text.as_bytes()),
     }
 }
+
+/// A problem's robust object names, in order (None: not a robust problem).
+fn robust_objects(problem: &Problem) -> Option<Vec<&str>> {
+    problem.robust.as_ref().map(|r| r.objects.iter().map(|o| o.name.as_str()).collect())
+}
+
+/// A forced resume may change the problem, but not its robust objects (names, order, count)
+/// nor whether it is robust: every table of the run (pareto.csv, population.csv,
+/// archive.csv) has one fixed set of per-object `NAME.*` columns, and a row of another
+/// object list would put one object's values under another's name. `old` is the problem
+/// the checkpoint's generation was evaluated with, `new` the one in `new_path`.
+pub(crate) fn check_same_objects(old: &Problem, new: &Problem, new_path: &Path) -> Result<()> {
+    let (was, now) = (robust_objects(old), robust_objects(new));
+    if was == now {
+        return Ok(());
+    }
+    let list = |o: &Option<Vec<&str>>| match o {
+        Some(names) => format!("robust objects [{}]", names.join(", ")),
+        None => "not robust (no [robust])".to_string(),
+    };
+    Err(Error::RunDir {
+        path: new_path.to_path_buf(),
+        message: format!(
+            "field `robust.objects`: the run was {}, the file now is {}; even with --force a resume cannot change the objects (names, order or count) or whether the problem is robust, because every table of the run has one fixed set of per-object columns. Start a new run (`gripopt optimise PROBLEM --out NEW_DIR`) for the new objects; nothing was changed",
+            list(&was),
+            list(&now)
+        ),
+    })
+}

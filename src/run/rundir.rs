@@ -17,7 +17,7 @@ use super::lock::RunLock;
 use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
-use super::problems::{check_copy, switch, write_current};
+use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{ProblemUse, RecordOptions, Recorder};
@@ -296,6 +296,9 @@ pub fn resume_with(
             );
             return Err(Error::RunDir { path: problem_path, message });
         }
+        // the problem the checkpoint's generation was evaluated with
+        let before = crate::record::problem_of_generation(dir, cp.state.generation.max(1))?;
+        check_same_objects(&before.problem, &problem, &problem_path)?;
         notes.insert(0, format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]));
     }
     let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json {
