@@ -602,3 +602,36 @@ fn static_only_on_a_robust_problem_is_the_reference_objects_stages_everywhere() 
         assert!(cli.get("robust").is_none_or(|r| r.is_null()), "the CLI ran scenarios");
     }
 }
+
+/// A design that passes stage 2 on every object but is not form closed at the centred
+/// reference object (MODEL.md §6.7): its record's max_offset is null everywhere, the robust
+/// aggregate and the object's own value too (hostile pass 32b: the −Δ_off placeholder leaked
+/// there), while the optimiser still ranks it at −Δ_off (f = +Δ_off in minimisation form).
+#[test]
+fn a_design_not_form_closed_has_no_robust_max_offset() {
+    let p = robust_problem();
+    let setup = RobustSetup::of(&p).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let x = (0..20_000)
+        .map(|_| p.bounds.sample(&mut rng))
+        .find(|x| {
+            let flat = evaluate_record(&p, x, &EvalOptions::statics_only(), None);
+            flat.statics.form_closed == Some(false) && gripopt::eval::robust_start(x, &setup).passed()
+        })
+        .expect("a design passing stage 2 that is not form closed");
+    let e = GripperProblem::new(p.clone()).evaluate(&x.to_array());
+    let r = &e.info.record;
+    assert_eq!((r.statics.form_closed, r.statics.max_offset), (Some(false), None));
+    let rb = r.robust.as_ref().unwrap();
+    assert!(rb.objects.iter().all(|o| o.objectives.mean_force.is_some()), "stage 2 passed on every object");
+    assert_eq!(rb.objects[0].objectives.max_offset, None, "the reference object is not form closed");
+    assert!(rb.objects.iter().all(|o| o.objectives.max_offset.is_none_or(|m| m >= 0.0)), "{:?}", rb.objects);
+    // "worst" of the objects: one without a max_offset has none aggregated
+    assert_eq!(rb.objectives.max_offset, None);
+    assert_eq!(r.objectives()[0], None);
+    let json = serde_json::to_value(&**r).unwrap();
+    assert!(json["robust"]["objectives"]["max_offset"].is_null(), "{}", json["robust"]["objectives"]);
+    assert!(json["robust"]["objects"][0]["max_offset"].is_null());
+    // what NSGA-II ranks is unchanged: −Δ_off, negated
+    assert_eq!(e.f[0], p.scene.criteria.offset_step);
+}
