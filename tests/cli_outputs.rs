@@ -3,7 +3,8 @@
 //! limit) leaves no partial file behind and names the file, plotted sweep keys a stage does
 //! not compute are refused, a robust run's `verify` refuses the flags it cannot honour, and
 //! the smaller points (numbers in warnings, `--plot x.png`, `--csv -`, a missing folder,
-//! `optimise --out FILE`, `--bisect-steps 0`, `--hold-l-hand` with `--vary l_hand`).
+//! `optimise --out FILE`, `--bisect-steps 0`, `--hold-l-hand` with `--vary l_hand`); and
+//! `bench`'s count flags at 0 and its note on a robust problem.
 
 use crate::common::{output_text as text, run_gripopt as run, BOTTLE_FILE as BOTTLE, GRIPOPT_BIN};
 use std::path::{Path, PathBuf};
@@ -215,4 +216,32 @@ fn a_robust_runs_verify_refuses_flags_it_cannot_honour() {
         assert_eq!(o.status.code(), Some(2), "{flags:?}: {t}");
         assert!(t.contains(flags[0]) && t.contains("robust run"), "{flags:?}: {t}");
     }
+}
+
+/// `bench`'s count flags refuse 0 naming the flag (exit 2; `bench nsga --reps 0` ran 3,
+/// `bench static --n 0` printed "NaN %"), and on a robust problem the one-design benchmarks
+/// say they run the reference object only (here before a bad `--design` stops them).
+#[test]
+fn bench_refuses_zero_counts_and_notes_a_robust_problem() {
+    let kitchen = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+    let out = scratch("bench-zero");
+    let o = out.to_str().unwrap();
+    for (args, flag) in [
+        (&["bench", "nsga", "--reps", "0"][..], "--reps 0:"),
+        (&["bench", "static", BOTTLE, "--n", "0"], "--n 0:"),
+        (&["bench", "work-precision", BOTTLE, "--reps", "0", "--out", o], "--reps 0:"),
+        (&["bench", "free", BOTTLE, "--reps", "0", "--out", o], "--reps 0:"),
+    ] {
+        let r = run(args);
+        let t = text(&r);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {t}");
+        assert!(t.contains(flag) && t.contains("at least 1") && !t.contains("NaN"), "{args:?}: {t}");
+    }
+    for bench in ["work-precision", "free"] {
+        let r = run(&["bench", bench, kitchen, "--design", "l21=nonsense", "--out", o]);
+        let t = text(&r);
+        assert_eq!(r.status.code(), Some(2), "{bench}: {t}");
+        assert!(t.contains("[robust]") && t.contains("reference [object]"), "{bench}: {t}");
+    }
+    assert!(!out.join("work_precision.csv").exists() && !out.join("free_work_precision.csv").exists());
 }

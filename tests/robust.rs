@@ -10,10 +10,10 @@ use gripopt::run::{GripperProblem, RobustScheduled, RunSpec};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 
-const BOTTLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+pub(crate) const BOTTLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
 
 /// A small robust problem: the 1 l bottle and the can, K = 2, p_min 0.5.
-fn robust_text(extra: &str) -> String {
+pub(crate) fn robust_text(extra: &str) -> String {
     let base = std::fs::read_to_string(BOTTLE).unwrap().replace("kind = \"centred\"", "kind = \"free\"");
     format!(
         "{base}\n[robust]\nsampling = \"random\"\nscenarios = 2\nseed = 7\np_min = 0.5\nconfidence = 0.95\nearly_stop = true\nverify_scenarios = 3\naggregate = {{ max_offset = \"worst\", alpha = \"mean\", mean_force = \"worst\", t_stab = 0.75 }}\n\
@@ -23,11 +23,11 @@ fn robust_text(extra: &str) -> String {
     )
 }
 
-fn robust_problem() -> Problem {
+pub(crate) fn robust_problem() -> Problem {
     Problem::from_toml_str(&robust_text(""), Path::new("robust-test.toml")).unwrap()
 }
 
-fn tmp(name: &str) -> PathBuf {
+pub(crate) fn tmp(name: &str) -> PathBuf {
     let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/robust-tests")).join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(d.parent().unwrap()).unwrap();
@@ -243,7 +243,7 @@ fn the_robust_evaluator_is_thread_count_independent() {
     }
 }
 
-fn spec(problem: &Path, out: &Path, threads: usize) -> RunSpec {
+pub(crate) fn spec(problem: &Path, out: &Path, threads: usize) -> RunSpec {
     RunSpec {
         problem_path: problem.to_path_buf(),
         out: out.to_path_buf(),
@@ -639,58 +639,4 @@ fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
             std::fs::copy(&p, &q).unwrap();
         }
     }
-}
-
-/// Every file under `dir` (recursively) with its content, sorted by path.
-fn folder_bytes(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = vec![];
-    for e in std::fs::read_dir(dir).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            out.extend(folder_bytes(&p));
-        } else {
-            out.push((p.clone(), std::fs::read(&p).unwrap()));
-        }
-    }
-    out.sort();
-    out
-}
-
-/// `resume --force` may change the problem but not its robust objects (names, order, count)
-/// nor whether it is robust: every table has one fixed set of `NAME.*` columns, so such a
-/// resume is refused (exit 2, naming the file and `robust.objects`), the folder unchanged.
-#[test]
-fn a_forced_resume_refuses_another_robust_object_list() {
-    let dir = tmp("forced-objects");
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("robust.toml");
-    let text = robust_text("");
-    std::fs::write(&file, &text).unwrap();
-    let run = dir.join("run");
-    gripopt::run::optimise(&RunSpec { generations: 1, ..spec(&file, &run, 1) }).unwrap();
-    let before = folder_bytes(&run);
-    let can = "[[robust.objects]]\nname = \"can\"\nradius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\ntau = 0.5\n";
-    assert!(text.contains(can));
-    let bottle = "[[robust.objects]]\nname = \"bottle\"\nradius = 0.040\nlength = 0.200\ndensity = 1000.0\ngrasp_height = 0.050\ntau = 0.5\n";
-    let swapped = text.replacen(bottle, "", 1).replacen(can, &format!("{can}{bottle}"), 1);
-    let renamed = text.replacen("name = \"can\"", "name = \"tin\"", 1);
-    let plain = std::fs::read_to_string(BOTTLE).unwrap();
-    let (r, f) = (run.display().to_string(), file.display().to_string());
-    for (case, changed) in
-        [("removed", text.replacen(can, "", 1)), ("swapped", swapped), ("renamed", renamed), ("not robust", plain)]
-    {
-        std::fs::write(&file, &changed).unwrap();
-        let o = crate::robustness::cli(&["resume", &r, "--generations", "2", "--force", "--threads", "1"]);
-        let e = crate::robustness::stderr(&o);
-        assert_eq!(crate::robustness::code(&o), 2, "{case}: {e}");
-        assert!(e.contains(&f) && e.contains("robust.objects") && e.contains("new run"), "{case}: {e}");
-        assert!(folder_bytes(&run) == before, "{case}: the refused resume changed the run folder");
-        let e = gripopt::run::resume(&run, Some(2), true, Some(1)).unwrap_err().to_string();
-        assert!(e.contains("robust.objects"), "{case}: the library refuses alike: {e}");
-        assert!(folder_bytes(&run) == before, "{case}: the library's refusal changed the run folder");
-    }
-    // the same objects with another p_min: a forced resume takes it
-    std::fs::write(&file, text.replacen("p_min = 0.5", "p_min = 0.4", 1)).unwrap();
-    gripopt::run::resume(&run, Some(2), true, Some(1)).unwrap();
-    assert!(run.join("problem-1.toml").is_file(), "the earlier problem kept");
 }

@@ -27,6 +27,7 @@ mod recording;
 mod recording_scene;
 mod replay_scene;
 mod robust;
+mod robust_runs;
 mod robustness;
 mod robustness_cli;
 mod robustness_edges;

@@ -21,12 +21,33 @@ pub struct DesignTable {
 }
 
 impl DesignTable {
-    /// The problem and the design.
-    fn load(&self) -> Result<(gripopt::params::Problem, gripopt::params::Design)> {
+    /// The problem and the design; for a robust problem a note that `bench` (its name)
+    /// evaluates the reference object only.
+    fn load(&self, bench: &str) -> Result<(gripopt::params::Problem, gripopt::params::Design)> {
         let p = super::load_problem(&self.problem)?;
+        robust_note(&p, &self.problem, bench);
         let x = super::design_of(&p, &self.design)?;
         Ok((p, x))
     }
+}
+
+/// As sweep and export say it: on a problem with [robust], a benchmark of one design's
+/// grasp runs the reference [object] and [scene] only (its verdict is not the robust one).
+fn robust_note(p: &gripopt::params::Problem, path: &std::path::Path, bench: &str) {
+    if p.robust.is_some() {
+        eprintln!(
+            "note: {} has [robust]: bench {bench} evaluates the reference [object] and [scene] only; the robust objects and scenarios are not evaluated, and its verdict is not the robust one (`gripopt evaluate`, docs/robust.md)",
+            super::out::path(path)
+        );
+    }
+}
+
+/// A count flag that must be at least 1: refused with its name and value (exit 2).
+fn at_least_one(flag: &str, v: usize) -> Result<()> {
+    if v < 1 {
+        anyhow::bail!("{flag} {v}: must be at least 1");
+    }
+    Ok(())
 }
 
 /// Benchmarks.
@@ -47,7 +68,7 @@ pub enum BenchCmd {
     /// Non-dominated sort + crowding on random sets, and the optimiser's own overhead per
     /// generation on ZDT1 (everything but evaluation).
     Nsga {
-        /// Repetitions per size.
+        /// Repetitions per size (at least 3 are run).
         #[arg(long, default_value_t = 30)]
         reps: usize,
     },
@@ -182,9 +203,15 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
     let out: gripopt::bench::Out = if json { &mut stderr } else { &mut stdout };
     let summary = match b {
         BenchCmd::Static { problem, n, seed } => {
-            gripopt::bench::static_pipeline(&super::load_problem(&problem)?, &problem, n, seed, out)?
+            at_least_one("--n", n)?;
+            let p = super::load_problem(&problem)?;
+            robust_note(&p, &problem, "static");
+            gripopt::bench::static_pipeline(&p, &problem, n, seed, out)?
         }
-        BenchCmd::Nsga { reps } => gripopt::bench::nsga(reps, out)?,
+        BenchCmd::Nsga { reps } => {
+            at_least_one("--reps", reps)?;
+            gripopt::bench::nsga(reps, out)?
+        }
         BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
             gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
@@ -229,15 +256,18 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         BenchCmd::WorkPrecision { target, sample: Some(n), seed, atol, .. } => {
             gripopt::bench::check_atol(atol)?;
             let p = super::load_problem(&target.problem)?;
+            robust_note(&p, &target.problem, "work-precision");
             gripopt::bench::work_precision_ensemble(&p, &target.problem, n, seed, &target.out, atol, out)?
         }
         BenchCmd::WorkPrecision { target, reps, atol, rtols, .. } => {
+            at_least_one("--reps", reps)?;
             gripopt::bench::check_atol(atol)?;
-            let (p, x) = target.load()?;
+            let (p, x) = target.load("work-precision")?;
             gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: target.out, reps, atol, rtols }, out)?
         }
         BenchCmd::Free { target, reps, atol, rtols, no_dense } => {
-            let (p, x) = target.load()?;
+            at_least_one("--reps", reps)?;
+            let (p, x) = target.load("free")?;
             let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
             gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out)?
         }

@@ -24,7 +24,7 @@ pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInpu
 pub use robust::{
     evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,
 };
-pub use robust_result::{evaluate_record, robust_record};
+pub use robust_result::{evaluate_record, robust_record, robust_record_ranked};
 pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
 pub use stage3::{
     barely_moves, evaluate, evaluate_dynamics, evaluate_full, evaluate_into, simulate, stage3_ends_at_once,

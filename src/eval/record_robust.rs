@@ -96,7 +96,8 @@ pub struct ObjectRecord {
     /// Its name.
     pub name: String,
     /// The objectives on this object: max_offset, α and F̃ of stage 2 at its nominal
-    /// inputs, t_stab aggregated over its scenarios (the problem's aggregation).
+    /// inputs (max_offset None if not form closed at 0), t_stab aggregated over its
+    /// scenarios (the problem's aggregation).
     #[serde(flatten)]
     pub objectives: Objectives,
     /// Scenarios run.
@@ -120,7 +121,8 @@ pub struct ObjectRecord {
 #[serde(default)]
 pub struct RobustRecord {
     /// The objectives aggregated over the objects (t_stab over every scenario run): what
-    /// the optimiser ranks.
+    /// the optimiser ranks; max_offset None where the aggregate is negative (an object not
+    /// form closed at 0, which the optimiser ranks at −Δ_off, MODEL.md §6.7).
     pub objectives: Objectives,
     /// Per object.
     pub objects: Vec<ObjectRecord>,
@@ -136,6 +138,19 @@ pub struct RobustRecord {
     pub steps: [u64; 2],
     /// Every scenario run, in the order run.
     pub scenarios: Vec<ScenarioRecord>,
+}
+
+impl RobustRecord {
+    /// This record with max_offset None wherever it is negative: an older gripopt wrote the
+    /// −Δ_off placeholder of a design not form closed here (aggregated and per object).
+    pub fn without_offset_placeholder(&self) -> Self {
+        let mut r = self.clone();
+        r.objectives = r.objectives.reported();
+        for o in &mut r.objects {
+            o.objectives = o.objectives.reported();
+        }
+        r
+    }
 }
 
 /// The robust part of `gripopt evaluate`'s report: per object its static objectives,
@@ -156,7 +171,7 @@ pub fn robust_summary(r: &RobustRecord) -> String {
             o(ob.p_stay_lo, 1.0, 3),
             o(ob.p_stay_hi, 1.0, 3),
             o(ob.max_displacement, 1e3, 3),
-            o(ob.objectives.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
+            o(ob.objectives.max_offset, 1e3, 2),
             o(ob.objectives.alpha, 1.0, 4),
             o(ob.objectives.mean_force, 1.0, 3),
             o(ob.objectives.t_stab, 1e3, 3)
@@ -165,7 +180,7 @@ pub fn robust_summary(r: &RobustRecord) -> String {
     let a = &r.objectives;
     out.push_str(&format!(
         "  aggregated     max_offset {} mm  alpha {}  mean force {} N  t_stab {} ms\n",
-        o(a.max_offset.filter(|m| *m >= 0.0), 1e3, 2),
+        o(a.max_offset, 1e3, 2),
         o(a.alpha, 1.0, 4),
         o(a.mean_force, 1.0, 3),
         o(a.t_stab, 1e3, 3)

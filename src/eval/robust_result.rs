@@ -38,6 +38,17 @@ pub fn evaluate_record(p: &Problem, x: &Design, opts: &EvalOptions, setup: Optio
 /// The record of a robust design: the flat part from stages 0–1 and the first object's stage
 /// 2, the robust sub-record, and the verdict over all objects and scenarios.
 pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<ScenarioRecord>) -> Record {
+    robust_record_ranked(setup, start, scen).0
+}
+
+/// [`robust_record`] and the aggregated max_offset the optimiser ranks (m): an object not
+/// form closed at 0 counts as −Δ_off there (MODEL.md §6.7), a placeholder the record never
+/// carries (its max_offset, the object's and the aggregate where negative, is None).
+pub fn robust_record_ranked(
+    setup: &RobustSetup,
+    start: &RobustStart,
+    scen: Vec<ScenarioRecord>,
+) -> (Record, Option<f64>) {
     let spec = &setup.spec;
     let mut rec = Record::from_eval(&start.base);
     let n = setup.objects();
@@ -45,6 +56,7 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
     let agg = &spec.aggregate;
     let mut objects = Vec::with_capacity(n);
     let mut all_t = vec![];
+    let mut raw_offsets = Vec::with_capacity(n);
     for o in 0..n {
         let st = match &start.objects[o] {
             Some(Ok(st)) => Some(st),
@@ -55,6 +67,7 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         let runs = mine.len();
         let t: Vec<f64> = mine.iter().filter_map(|r| r.t_stab).collect();
         all_t.extend(&t);
+        raw_offsets.push(st.map(|s| s.max_offset));
         let (lo, hi) = clopper_pearson(stays as u64, runs as u64, spec.confidence);
         let meets = if runs - stays > fmax {
             Some(false)
@@ -66,7 +79,7 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         objects.push(ObjectRecord {
             name: spec.objects[o].name.clone(),
             objectives: Objectives {
-                max_offset: st.map(|s| s.max_offset),
+                max_offset: st.map(|s| s.max_offset).filter(|m| *m >= 0.0),
                 alpha: st.and_then(|s| fin(s.alpha)),
                 mean_force: st.map(|s| s.mean_force),
                 t_stab: fin(agg[3].apply(&t)),
@@ -84,20 +97,22 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         });
     }
     let statics_known = objects.iter().all(|o| o.objectives.mean_force.is_some());
-    let over_objects = |k: usize, v: fn(&ObjectRecord) -> Option<f64>, sign: f64| -> Option<f64> {
+    let over_objects = |k: usize, vals: Vec<Option<f64>>, sign: f64| -> Option<f64> {
         if !statics_known {
             return None;
         }
-        let vals: Vec<f64> = objects.iter().map(|o| sign * v(o).unwrap_or(f64::NAN)).collect();
+        let vals: Vec<f64> = vals.iter().map(|v| sign * v.unwrap_or(f64::NAN)).collect();
         if vals.iter().any(|x| !x.is_finite()) {
             return None;
         }
         fin(sign * agg[k].apply(&vals))
     };
+    let of = |v: fn(&ObjectRecord) -> Option<f64>| objects.iter().map(v).collect::<Vec<_>>();
+    let ranked_offset = over_objects(0, raw_offsets, -1.0);
     let objectives = Objectives {
-        max_offset: over_objects(0, |o| o.objectives.max_offset, -1.0),
-        alpha: over_objects(1, |o| o.objectives.alpha, 1.0),
-        mean_force: over_objects(2, |o| o.objectives.mean_force, -1.0),
+        max_offset: ranked_offset.filter(|m| *m >= 0.0),
+        alpha: over_objects(1, of(|o| o.objectives.alpha), 1.0),
+        mean_force: over_objects(2, of(|o| o.objectives.mean_force), -1.0),
         t_stab: fin(agg[3].apply(&all_t)),
     };
     let sum = |f: fn(&ScenarioRecord) -> [u64; 2]| {
@@ -122,7 +137,7 @@ pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<Scenari
         (rec.scene, rec.x_off) = (Some(SceneKind::Free), None);
     }
     rec.robust = Some(rr);
-    rec
+    (rec, ranked_offset)
 }
 
 /// Feasible iff every object passed stage 2 and meets P(stay) ≥ p_min over its scenarios;

@@ -553,7 +553,9 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
         let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
         let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
-        let verified = alike && vmaxd == 0.0 && recorded.record.robust == fresh.robust && problem_note.is_none();
+        // an older gripopt wrote the −Δ_off placeholder for max_offset in the robust record
+        let recorded_robust = recorded.record.robust.as_ref().map(|r| r.without_offset_placeholder());
+        let verified = alike && vmaxd == 0.0 && recorded_robust == fresh.robust && problem_note.is_none();
         return Ok(Replay {
             compared: 0,
             values_compared,

@@ -3,7 +3,7 @@
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
 use crate::eval::{
-    evaluate_dynamics, evaluate_statics, fold, robust_record, robust_start, run_scenario, stage3_ends_at_once,
+    evaluate_dynamics, evaluate_statics, fold, robust_record_ranked, robust_start, run_scenario, stage3_ends_at_once,
     EvalOptions, Evaluation, Record, RobustSetup, RobustStart,
 };
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
@@ -108,13 +108,15 @@ impl GripperProblem {
     ) -> Evaluated<GripperInfo> {
         let mut seconds = start.base.stage_seconds;
         seconds[3] = 0.0;
-        let record = robust_record(setup, start, scen);
+        let (record, ranked_offset) = robust_record_ranked(setup, start, scen);
         let v = &record.verdict;
         let cv = match v.failed_stage {
             None => Infeasibility::FEASIBLE,
             Some(stage) => Infeasibility { stages_short: 4 - stage, violation: v.violation.unwrap_or(1e3) },
         };
-        let o = record.objectives();
+        // the record's max_offset is None where not form closed; the ranking keeps −Δ_off
+        let mut o = record.objectives();
+        o[0] = ranked_offset;
         let ph = self.placeholders();
         let f = (0..4).map(|k| o[k].map(|v| if k == 0 || k == 2 { -v } else { v }).unwrap_or(ph[k])).collect();
         Evaluated { f, cv, info: GripperInfo { record: Arc::new(record), stage_seconds: seconds, trajectory: None } }
