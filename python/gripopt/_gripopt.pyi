@@ -25,6 +25,9 @@ DESIGN_COLUMNS: list[ColumnInfo]
 HISTORY_COLUMNS: list[ColumnInfo]
 SAMPLE_COLUMNS: list[ColumnInfo]
 POSE_COLUMNS: list[ColumnInfo]
+# a robust problem's design-table columns, then each object's `NAME.column` (docs/robust.md)
+ROBUST_COLUMNS: list[ColumnInfo]
+OBJECT_COLUMNS: list[ColumnInfo]
 
 class Problem:
     """A loaded, validated problem file."""

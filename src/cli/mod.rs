@@ -194,7 +194,7 @@ enum Cmd {
     },
     /// Parameter study: evaluate a grid of 1-3 varied names, write DIR/sweep.csv and plots.
     Sweep(sweep::SweepArgs),
-    /// Re-simulate a run's designs in the free scene and compare with the criteria's prediction (RUN_DIR/verify.csv); a robust run's front out of sample (RUN_DIR/verify_robust.csv).
+    /// Re-simulate a run's designs in the free scene and compare with the criteria's prediction (RUN_DIR/verify.csv); a robust run's front on fresh scenarios (RUN_DIR/verify_robust.csv).
     Verify(verify::VerifyArgs),
     /// A design to MuJoCo (MJCF) or to a build sheet (JSON/CSV) for CAD (docs/export.md).
     Export(export::ExportArgs),
