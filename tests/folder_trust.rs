@@ -30,20 +30,6 @@ fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     m
 }
 
-/// A copy of folder `from` at `to` (as `cp -a`).
-fn copy(from: &Path, to: &Path) {
-    let _ = std::fs::remove_dir_all(to);
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let (p, q) = (e.path(), to.join(e.file_name()));
-        if p.is_dir() {
-            copy(&p, &q);
-        } else {
-            std::fs::copy(&p, &q).unwrap();
-        }
-    }
-}
-
 fn spec(out: &Path, generations: u64, record: bool) -> RunSpec {
     let mut s = crate::common::bottle_spec(out, generations, 5, 1);
     if !record {
@@ -60,7 +46,7 @@ fn spec(out: &Path, generations: u64, record: bool) -> RunSpec {
 fn an_older_run_json_beside_a_newer_checkpoint_is_refused() {
     let (b5, w) = (tmp("trust-b5"), tmp("trust-w"));
     optimise(&spec(&b5, 5, true)).unwrap();
-    copy(&b5, &w);
+    crate::common::copy_dir(&b5, &w);
     resume(&w, Some(10), false, Some(1)).unwrap();
     std::fs::copy(b5.join("run.json"), w.join("run.json")).unwrap();
     let before = files(&w);

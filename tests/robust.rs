@@ -536,7 +536,7 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
     assert_eq!(v["verify"]["current"], true);
     let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_gripopt")).args(args).output().unwrap();
     let moved = dir.join("moved");
-    copy_dir(&out, &moved);
+    crate::common::copy_dir(&out, &moved);
     let m = moved.display().to_string();
     assert!(run(&["resume", &m, "--generations", "3"]).status.success());
     let v: serde_json::Value = serde_json::from_slice(&run(&["show", &m, "--json"]).stdout).unwrap();
@@ -624,19 +624,5 @@ fn static_only_on_a_robust_problem_is_the_reference_objects_stages_everywhere() 
         let cli: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         assert_eq!(cli["alpha"].as_f64(), rec.statics.alpha);
         assert!(cli.get("robust").is_none_or(|r| r.is_null()), "the CLI ran scenarios");
-    }
-}
-
-/// A copy of folder `from` at `to`.
-fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
-    let _ = std::fs::remove_dir_all(to);
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let (p, q) = (e.path(), to.join(e.file_name()));
-        if p.is_dir() {
-            copy_dir(&p, &q);
-        } else if e.file_name() != ".lock" {
-            std::fs::copy(&p, &q).unwrap();
-        }
     }
 }
