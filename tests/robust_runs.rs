@@ -93,3 +93,24 @@ fn a_design_not_form_closed_has_no_robust_max_offset() {
     // what NSGA-II ranks is unchanged: −Δ_off, negated
     assert_eq!(e.f[0], p.scene.criteria.offset_step);
 }
+
+/// `verify` on a robust run without a feasible design says why, as for a single-object run
+/// (docs/cli.md: the discard causes), not only that there is nothing to verify.
+#[test]
+fn verify_of_a_robust_run_without_a_feasible_design_lists_the_discards() {
+    let dir = tmp("verify-none-feasible");
+    let _ = std::fs::remove_dir_all(&dir);
+    let kitchen = Path::new(BOTTLE).with_file_name("kitchen.toml");
+    let run = |args: &[&str]| crate::robustness::cli(args);
+    let d = dir.display().to_string();
+    let k = kitchen.display().to_string();
+    let o = run(&["optimise", &k, "--out", &d, "--pop", "8", "--generations", "1", "--seed", "1", "--threads", "1"]);
+    assert_eq!(crate::robustness::code(&o), 0, "{}", crate::robustness::stderr(&o));
+    let shown: serde_json::Value = serde_json::from_slice(&run(&["show", &d, "--json"]).stdout).unwrap();
+    assert!(shown["no_feasible_design"].is_array(), "the run has a feasible design: {shown}");
+    let o = run(&["verify", &d]);
+    let e = crate::robustness::stderr(&o);
+    assert_eq!(crate::robustness::code(&o), 2, "{e}");
+    assert!(e.contains("nothing written") && e.contains("were discarded") && e.contains("at stage"), "{e}");
+    assert!(!dir.join("verify_robust.csv").exists());
+}

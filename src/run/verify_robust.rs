@@ -129,10 +129,12 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     let checked = CheckedState::load(dir, &info)?;
     let front = checked.front_rows();
     if front.is_empty() {
-        return Err(Error::RunDir {
-            path: dir.join(CHECKPOINT_FILE),
-            message: "no feasible design on the run's front; nothing to verify, nothing written".into(),
-        });
+        // why, as verify says it for a single-object run (the run's discard counts)
+        let message = match info.discards.explain() {
+            Some(why) => format!("nothing to verify, nothing written; {}", why.join("\n")),
+            None => "no feasible design on the run's front; nothing to verify, nothing written".into(),
+        };
+        return Err(Error::RunDir { path: dir.join(CHECKPOINT_FILE), message });
     }
     let setup = RobustSetup::with_stream(&p, &r, STREAM_VERIFY, r.verify_scenarios, false);
     let opts = EvalOptions::full(&p);
