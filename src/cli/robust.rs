@@ -29,17 +29,19 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
             "  inputs: x_off {:.3} mm, height offset {:.3} mm, phalanx friction x{:.3}, ground friction x{:.3}, restitution {:.3}, fill x{:.3}, torque x{:.4}",
             i.x_off * 1e3, i.height_offset * 1e3, i.mu_phalanx, i.mu_ground, i.restitution, i.fill, i.tau
         );
-        let mm = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.4} mm", v * 1e3));
-        outln!(
-            "  outcome: {} (max displacement {}, max tilt {}, t_stab {})",
-            if s.stays { "stays".to_string() } else { format!("fails: {}", s.cause.map_or("?", |c| c.as_str())) },
-            mm(s.max_displacement),
-            s.max_tilt_deg.map_or("—".into(), |v| format!("{v:.4}°")),
-            s.t_stab.map_or("—".into(), |v| format!("{:.3} ms", v * 1e3))
-        );
+        outln!("  outcome: {}", outcome(s));
         match r.verified {
             Some(true) => outln!("  verified: the re-simulation equals the recorded scenario, bit for bit"),
-            Some(false) => outln!("  NOT verified: the recording says {:?}", r.recorded),
+            Some(false) => match &r.recorded {
+                Some(rec) if rec.inputs != s.inputs => {
+                    outln!(
+                        "  NOT verified: the recording drew other inputs for this scenario; it says {}",
+                        outcome(rec)
+                    )
+                }
+                Some(rec) => outln!("  NOT verified: the recording says {} (`--json`: every value)", outcome(rec)),
+                None => outln!("  NOT verified: nothing recorded to compare"),
+            },
             None => {
                 outln!("  not in the recording (the design's scenarios stopped early before it): nothing compared")
             }
@@ -56,4 +58,16 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
         }
     }
     Ok(if r.verified == Some(false) { 3 } else { 0 })
+}
+
+/// A scenario's outcome in words: stays or why not, and what was measured.
+fn outcome(s: &gripopt::eval::ScenarioRecord) -> String {
+    let mm = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.4} mm", v * 1e3));
+    format!(
+        "{} (max displacement {}, max tilt {}, t_stab {})",
+        if s.stays { "stays".to_string() } else { format!("fails: {}", s.cause.map_or("?", |c| c.as_str())) },
+        mm(s.max_displacement),
+        s.max_tilt_deg.map_or("—".into(), |v| format!("{v:.4}°")),
+        s.t_stab.map_or("—".into(), |v| format!("{:.3} ms", v * 1e3))
+    )
 }

@@ -216,7 +216,10 @@ pub fn run(a: ShowArgs) -> Result<()> {
             m.insert("replay".into(), replay(id).into());
             outln!("{}", serde_json::to_string_pretty(&m)?);
         } else {
-            outln!("design {id} (from {f})");
+            // before the first checkpoint the views themselves; then the checkpoint, which
+            // they show
+            let from = if tables.is_some() { format!("the checkpoint, as in {f}") } else { f.to_string() };
+            outln!("design {id} (from {from})");
             for (k, v) in &cells {
                 let u = unit(k);
                 let u = if matches!(u, "-" | "text" | "bool") { String::new() } else { format!(" {u}") };
