@@ -64,8 +64,11 @@ fn available_memory() -> Option<u64> {
 fn gib(b: f64) -> String {
     if b >= (1u64 << 30) as f64 {
         format!("{:.1} GiB", b / (1u64 << 30) as f64)
-    } else {
+    } else if b >= (1u64 << 20) as f64 {
         format!("{:.0} MiB", b / (1u64 << 20) as f64)
+    } else {
+        // a design's share (a few kB without trajectories), never "0 MiB"
+        format!("{:.0} kiB", (b / 1024.0).max(1.0))
     }
 }
 
@@ -158,4 +161,16 @@ pub fn check_sample(n: usize, recorded_t_obs: Option<f64>) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// A design's few kilobytes read as kiB, not "0 MiB" (the moo-test --pop message).
+    #[test]
+    fn memory_sizes_read_in_their_own_unit() {
+        assert_eq!(super::gib(16_384.0), "16 kiB");
+        assert_eq!(super::gib(10.0), "1 kiB");
+        assert_eq!(super::gib(3.0 * (1u64 << 20) as f64), "3 MiB");
+        assert_eq!(super::gib(1.5 * (1u64 << 30) as f64), "1.5 GiB");
+    }
 }
