@@ -123,6 +123,31 @@ pub fn optimise(spec: &RunSpec) -> Result<RunSummary> {
     optimise_with(spec, RunHooks::default())
 }
 
+/// The problem file's path as run.json keeps it, for `resume` to find it from anywhere:
+/// absolute, without `.` and `..`. A `..` is removed as written where that names the same
+/// file (symbolic links in the path kept as the user gave them); after a symbolic link a `..`
+/// leads where the link's target is, not where its removal would, so there the path is the
+/// file system's ([`std::fs::canonicalize`]). Run folders of an earlier gripopt keep theirs
+/// as written (absolute, `..` included): the file system resolves it on resume as before.
+fn recorded_problem_path(given: &Path) -> PathBuf {
+    let Ok(absolute) = std::path::absolute(given) else { return given.to_path_buf() };
+    let mut lexical = PathBuf::new();
+    for part in absolute.components() {
+        match part {
+            std::path::Component::ParentDir => {
+                lexical.pop();
+            }
+            std::path::Component::CurDir => {}
+            part => lexical.push(part),
+        }
+    }
+    let resolved = |p: &Path| std::fs::canonicalize(p).ok();
+    if lexical == absolute || resolved(&lexical).is_some_and(|l| Some(l) == resolved(&absolute)) {
+        return lexical;
+    }
+    resolved(&absolute).unwrap_or(absolute)
+}
+
 /// [`optimise`] with the caller's progress, stop flag or evaluator.
 ///
 /// run.json is written first (under the folder's lock), so that every other file of the
@@ -153,7 +178,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
         gripopt_version: env!("CARGO_PKG_VERSION").into(),
         run_id: new_run_id(&spec.out),
         problem_name: gp.problem.name.clone(),
-        problem_path: std::path::absolute(&spec.problem_path).unwrap_or_else(|_| spec.problem_path.clone()),
+        problem_path: recorded_problem_path(&spec.problem_path),
         problems: vec![ProblemUse { first_generation: 1, file: "problem.toml".into(), sha256: problem_sha256.clone() }],
         problem_sha256,
         settings: settings.clone(),
