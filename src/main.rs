@@ -1,9 +1,12 @@
 //! `gripopt` command-line interface: a thin layer over the library.
 //!
 //! Exit codes (README, docs/cli.md): 0 done; 1 the run failed; 2 bad input (a file, field,
-//! flag or folder that cannot be used as asked); 3 `replay` did not verify the recording;
+//! flag or folder that cannot be used as asked); 3 a check did not pass (`replay` did not
+//! verify the recording, `moo-test`'s hypervolume median lies outside the reference band);
 //! 130 interrupted by ctrl-c after the checkpoint of the current generation (resumable);
 //! 141 the output pipe was closed by its reader (quietly, like a program ended by SIGPIPE).
+//! With `--json`, a failed command also prints one object `{"error": …, "exit_code": N}`
+//! on stdout.
 //! A standard output that cannot be written (a full disk) is exit 1 with one line, never a
 //! panic; no control character of a message reaches the terminal raw.
 
@@ -14,39 +17,6 @@ mod cli;
 
 use cli::out::EXIT_BROKEN_PIPE;
 use std::io::Write as _;
-
-/// The error and its causes on one line, each cause once: the library's errors name their
-/// file and often repeat their source's text, which anyhow's `{:#}` would print twice.
-fn message(e: &anyhow::Error) -> String {
-    let mut msg = String::new();
-    for cause in e.chain() {
-        let s = cause.to_string();
-        let s = s.trim();
-        if !msg.contains(s) {
-            if !msg.is_empty() {
-                msg.push_str(": ");
-            }
-            msg.push_str(s);
-        }
-    }
-    gripopt::run::printable(&msg)
-}
-
-/// Exit code of an error: the library's classification where it is a library error, a
-/// closed pipe quietly, 1 for other I/O failures, 2 for the CLI's own checks of its flags.
-fn exit_code(e: &anyhow::Error) -> i32 {
-    let io = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>());
-    if io.is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) {
-        return EXIT_BROKEN_PIPE;
-    }
-    if let Some(g) = e.chain().find_map(|c| c.downcast_ref::<gripopt::Error>()) {
-        return g.exit_code();
-    }
-    if io.is_some() {
-        return 1;
-    }
-    2
-}
 
 /// Fix glibc's mmap threshold at 1 MiB. glibc raises it to the size of every large block
 /// freed (up to 32 MiB; the trim threshold follows), after which large buffers — a shard's
@@ -88,19 +58,5 @@ fn main() {
         }
         default_hook(info);
     }));
-    let result = cli::run();
-    // what is still buffered (a last line without its line break) is written before the exit
-    if let Err(e) = std::io::stdout().flush() {
-        cli::out::failed(&e);
-    }
-    match result {
-        Ok(code) => std::process::exit(code),
-        Err(e) => {
-            let code = exit_code(&e);
-            if code != EXIT_BROKEN_PIPE {
-                eprintln!("error: {}", message(&e));
-            }
-            std::process::exit(code);
-        }
-    }
+    std::process::exit(cli::run());
 }

@@ -172,7 +172,8 @@ enum Cmd {
     /// A run's front sorted by an objective, with units and each design's replay command.
     Show(show::ShowArgs),
     /// Validate the optimiser on standard problems (ZDT1-3, DTLZ2, BNH, TNK, OSY, C2DTLZ2):
-    /// hypervolume and IGD of the final feasible non-dominated set.
+    /// hypervolume and IGD of the final feasible non-dominated set; exit 3 when a problem's
+    /// hypervolume median lies outside the reference band.
     MooTest {
         /// Problem name, or `all`.
         name: String,
@@ -325,10 +326,60 @@ fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Resu
     Ok(())
 }
 
-/// Entry point: the process exit code (0 done, 3 replay not verified, 130 interrupted).
-pub fn run() -> Result<i32> {
-    let cli = Cli::parse();
-    match cli.cmd {
+impl Cmd {
+    /// Whether the command was asked for `--json` (its failure is then a JSON object on
+    /// stdout too, [`out::report_error`]).
+    fn json(&self) -> bool {
+        match self {
+            Cmd::Evaluate { json, .. }
+            | Cmd::Simulate { json, .. }
+            | Cmd::Optimise { json, .. }
+            | Cmd::Replay { json, .. }
+            | Cmd::Resume { json, .. }
+            | Cmd::MooTest { json, .. }
+            | Cmd::Bench { json, .. } => *json,
+            Cmd::Show(a) => a.json,
+            Cmd::Sweep(_) | Cmd::Verify(_) | Cmd::Export(_) => false,
+        }
+    }
+}
+
+/// Whether `--json` is among the arguments (before a `--`): a usage error clap reports
+/// before the command is known is then a JSON object on stdout too.
+fn json_asked() -> bool {
+    std::env::args_os().skip(1).take_while(|a| a != "--").any(|a| a == "--json")
+}
+
+/// Entry point: the process exit code (0 done, 3 a check did not pass, 130 interrupted;
+/// an error's code, [`out::report_error`]), with stdout flushed.
+pub fn run() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // a usage error (not --help or --version) with --json: its first line as JSON
+            if e.use_stderr() && json_asked() {
+                let text = e.to_string();
+                let first = text.lines().next().unwrap_or_default();
+                out::error_json(first.strip_prefix("error: ").unwrap_or(first), e.exit_code());
+            }
+            e.exit()
+        }
+    };
+    let json = cli.cmd.json();
+    let result = dispatch(cli.cmd);
+    // what is still buffered (a last line without its line break) is written before the exit
+    if let Err(e) = std::io::Write::flush(&mut std::io::stdout()) {
+        out::failed(&e);
+    }
+    match result {
+        Ok(code) => code,
+        Err(e) => out::report_error(&e, json),
+    }
+}
+
+/// Run the command: its exit code, or its error.
+fn dispatch(cmd: Cmd) -> Result<i32> {
+    match cmd {
         Cmd::Evaluate { problem, design, json, static_only } => {
             let p = load_problem(&problem)?;
             let x = design_of(&p, &design)?;
@@ -426,7 +477,7 @@ pub fn run() -> Result<i32> {
                 anyhow::bail!("--generations 0: must be at least 1");
             }
             gripopt::run::check_population(pop.max(4), generations.unwrap_or(250), false)?;
-            optcmd::moo_test(&name, seed, seeds, json, pop, generations).map(|_| 0)
+            optcmd::moo_test(&name, seed, seeds, json, pop, generations)
         }
         Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),
         Cmd::Sweep(a) => sweep::run(a).map(|_| 0),

@@ -1,9 +1,13 @@
 //! `gripopt moo-test`, `optimise`, `resume`.
 
+use crate::cli::out::EXIT_CHECK_FAILED;
 use anyhow::{bail, Context, Result};
 use gripopt::optim::{run_test, TestProblem};
 
-/// `gripopt moo-test NAME --seed S | --seeds A-B [--json]`.
+/// `gripopt moo-test NAME --seed S | --seeds A-B [--json]`: the exit code is
+/// [`EXIT_CHECK_FAILED`] when a problem's hypervolume median over the seeds lies outside the
+/// reference band (the text line says OUTSIDE; with `--json` a line on stderr says so), 0
+/// when every median is inside.
 pub fn moo_test(
     name: &str,
     seed: Option<u64>,
@@ -11,7 +15,7 @@ pub fn moo_test(
     json: bool,
     pop: usize,
     generations: Option<u64>,
-) -> Result<()> {
+) -> Result<i32> {
     let probs: Vec<TestProblem> = if name.eq_ignore_ascii_case("all") {
         TestProblem::ALL.to_vec()
     } else {
@@ -36,6 +40,7 @@ pub fn moo_test(
         (None, None) => vec![1],
         (Some(_), Some(_)) => bail!("give --seed or --seeds, not both"),
     };
+    let mut code = 0;
     for p in probs {
         let pb = indicatif::ProgressBar::new(seed_list.len() as u64);
         pb.set_style(indicatif::ProgressStyle::with_template("{msg} [{bar:25}] {pos}/{len} seeds").expect("template"));
@@ -53,25 +58,45 @@ pub fn moo_test(
             pb.inc(1);
         }
         pb.finish_and_clear();
-        if !json {
-            let mut hv: Vec<f64> = runs.iter().map(|r| r.hv).collect();
-            hv.sort_by(f64::total_cmp);
-            let med = hv[hv.len() / 2];
-            let (rm, lo, hi) = p.hv_band();
-            let igd_med = {
-                let mut v: Vec<f64> = runs.iter().map(|r| r.igd).collect();
-                v.sort_by(f64::total_cmp);
-                v[v.len() / 2]
-            };
-            let wall: f64 = runs.iter().map(|r| r.wall_s).sum::<f64>() / runs.len() as f64;
-            let verdict = if med >= lo && med <= hi { "inside" } else { "OUTSIDE" };
-            outln!(
-                "{:<8} seeds {:>2}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
-                p.name(), runs.len(), med, hv[0], hv[hv.len() - 1], rm, lo, hi, igd_med, runs[0].evaluations, wall
-            );
+        let hv = median_and_range(runs.iter().map(|r| r.hv).collect());
+        let (rm, lo, hi) = p.hv_band();
+        let inside = hv.median >= lo && hv.median <= hi;
+        if !inside {
+            code = EXIT_CHECK_FAILED;
         }
+        if json {
+            if !inside {
+                eprintln!(
+                    "{}: hypervolume median {} over {} is OUTSIDE the reference band [{lo}, {hi}] (exit {EXIT_CHECK_FAILED})",
+                    p.name(),
+                    hv.median,
+                    gripopt::run::counted(runs.len() as u64, "seed", "seeds")
+                );
+            }
+            continue;
+        }
+        let igd_med = median_and_range(runs.iter().map(|r| r.igd).collect()).median;
+        let wall: f64 = runs.iter().map(|r| r.wall_s).sum::<f64>() / runs.len() as f64;
+        let verdict = if inside { "inside" } else { "OUTSIDE" };
+        outln!(
+            "{:<8} seeds {:>2}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
+            p.name(), runs.len(), hv.median, hv.min, hv.max, rm, lo, hi, igd_med, runs[0].evaluations, wall
+        );
     }
-    Ok(())
+    Ok(code)
+}
+
+/// The median (the upper middle value of an even count), least and greatest of a non-empty
+/// list of values.
+struct MedianRange {
+    median: f64,
+    min: f64,
+    max: f64,
+}
+
+fn median_and_range(mut v: Vec<f64>) -> MedianRange {
+    v.sort_by(f64::total_cmp);
+    MedianRange { median: v[v.len() / 2], min: v[0], max: v[v.len() - 1] }
 }
 
 /// `optimise --json` / `resume --json`: the run's summary.
@@ -189,7 +214,7 @@ pub fn replay(
     // without one) the record's stage, reason, violation, objectives and simulation work
     let verified = r.verified && (r.compared > 0 || r.values_compared > 0);
     let across = r.across_revisions.as_ref();
-    let code = if verified || across.is_some_and(|a| a.agrees()) { 0 } else { 3 };
+    let code = if verified || across.is_some_and(|a| a.agrees()) { 0 } else { EXIT_CHECK_FAILED };
     if let Some(path) = csv {
         crate::cli::scenes::write_samples_csv(path, samples, |v| format!("{v}"))?;
     }

@@ -3,13 +3,86 @@
 //! closed pipe) ends the program at once with one clean line, never a panic: exit 1 and
 //! `error: cannot write to standard output: …`, or for a pipe closed by its reader exit 141
 //! without a message. And the text of the terminal: paths as shell words ([`path`]), names
-//! with their control characters escaped ([`shown`]).
+//! with their control characters escaped ([`shown`]). A command's error ends here too
+//! ([`report_error`]): one line `error: …` on stderr, its exit code, and with `--json` one
+//! JSON object on stdout.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
 pub const EXIT_BROKEN_PIPE: i32 = 141;
+
+/// Exit code of a check that did not pass: `replay` did not verify the recording,
+/// `moo-test`'s hypervolume median lies outside the reference band.
+pub const EXIT_CHECK_FAILED: i32 = 3;
+
+/// The error and its causes on one line, each cause once: the library's errors name their
+/// file and often repeat their source's text, which anyhow's `{:#}` would print twice.
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let s = cause.to_string();
+        let s = s.trim();
+        if !msg.contains(s) {
+            if !msg.is_empty() {
+                msg.push_str(": ");
+            }
+            msg.push_str(s);
+        }
+    }
+    gripopt::run::printable(&msg)
+}
+
+/// Exit code of an error: the library's classification where it is a library error, a
+/// closed pipe quietly, 1 for other I/O failures, 2 for the CLI's own checks of its flags.
+pub fn error_exit_code(e: &anyhow::Error) -> i32 {
+    let io = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>());
+    if io.is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) {
+        return EXIT_BROKEN_PIPE;
+    }
+    if let Some(g) = e.chain().find_map(|c| c.downcast_ref::<gripopt::Error>()) {
+        return g.exit_code();
+    }
+    if io.is_some() {
+        return 1;
+    }
+    2
+}
+
+/// What a failed command prints with `--json`: one object on stdout, the error's stderr
+/// line without its `error: ` and the process's exit code.
+#[derive(serde::Serialize)]
+struct ErrorJson<'a> {
+    error: &'a str,
+    exit_code: i32,
+}
+
+/// Print one JSON object `{"error": message, "exit_code": code}` on stdout (a script that
+/// parses stdout reads the failure, not an empty string). A write that fails is left
+/// unreported: the error is on stderr already.
+pub fn error_json(message: &str, exit_code: i32) {
+    let v = ErrorJson { error: message, exit_code };
+    if let Ok(text) = serde_json::to_string(&v) {
+        let mut o = std::io::stdout().lock();
+        let _ = writeln!(o, "{text}").and_then(|_| o.flush());
+    }
+}
+
+/// Report a command's error and give its exit code: one line `error: …` on stderr and,
+/// with `--json`, [`error_json`] on stdout; a closed output pipe quietly (exit 141).
+pub fn report_error(e: &anyhow::Error, json: bool) -> i32 {
+    let code = error_exit_code(e);
+    if code == EXIT_BROKEN_PIPE {
+        return code;
+    }
+    let message = error_message(e);
+    eprintln!("error: {message}");
+    if json {
+        error_json(&message, code);
+    }
+    code
+}
 
 /// End the program after a failed write to standard output.
 pub fn failed(e: &std::io::Error) -> ! {

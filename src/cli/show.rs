@@ -31,7 +31,7 @@ pub struct ShowArgs {
     limit: usize,
     /// One JSON object: the run's status and the designs, with units.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 fn unit(name: &str) -> &'static str {
