@@ -1,0 +1,184 @@
+//! Session 33: what a script sees. `moo-test` exits 3 when a hypervolume median lies outside
+//! the reference band (0 inside), with and without `--json`; a command that fails with
+//! `--json` prints one JSON object `{"error", "exit_code"}` on stdout (its stderr line and
+//! exit code unchanged); run.json keeps the problem file's path absolute and normalised, and
+//! a run folder with the older un-normalised form still resumes and still notices a changed
+//! problem file.
+
+use crate::common::{output_text as text, run_gripopt as run, BOTTLE_FILE as BOTTLE, GRIPOPT_BIN};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh scratch folder for test `name`.
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/cli-exit")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Reference NSGA-II hypervolume bands [min, max] over seeds 1..11 (the numbers,
+/// docs/benchmarks.md "Optimiser validation"), written here independently of the library.
+const BNH_BAND: (f64, f64) = (6458.39, 6462.71);
+const ZDT1_BAND: (f64, f64) = (0.86919, 0.86992);
+
+#[test]
+fn moo_test_exits_3_when_the_median_lies_outside_the_reference_band() {
+    // inside: BNH at the reference settings, seeds 1-3 (the median of three runs)
+    for json in [false, true] {
+        let mut args = vec!["moo-test", "bnh", "--seeds", "1-3"];
+        if json {
+            args.push("--json");
+        }
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", text(&o));
+        if json {
+            let mut hv: Vec<f64> = stdout(&o)
+                .lines()
+                .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["hv"].as_f64().unwrap())
+                .collect();
+            assert_eq!(hv.len(), 3, "{}", text(&o));
+            hv.sort_by(f64::total_cmp);
+            assert!(hv[1] >= BNH_BAND.0 && hv[1] <= BNH_BAND.1, "median {} outside {BNH_BAND:?}", hv[1]);
+            assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+        } else {
+            assert!(stdout(&o).contains(": inside;"), "{}", text(&o));
+        }
+    }
+    // outside: a population of 8 for 2 generations is nowhere near ZDT1's front
+    for json in [false, true] {
+        let mut args = vec!["moo-test", "zdt1", "--pop", "8", "--generations", "2", "--seed", "1"];
+        if json {
+            args.push("--json");
+        }
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {}", text(&o));
+        if json {
+            // stdout stays one object per run (the per-run stream scripts read); the verdict
+            // is on stderr
+            let lines: Vec<serde_json::Value> = stdout(&o).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+            assert_eq!(lines.len(), 1, "{}", text(&o));
+            assert!(lines[0]["hv"].as_f64().unwrap() < ZDT1_BAND.0, "{}", text(&o));
+            assert!(stderr(&o).contains("ZDT1") && stderr(&o).contains("OUTSIDE"), "{}", stderr(&o));
+        } else {
+            assert!(stdout(&o).contains(": OUTSIDE;"), "{}", text(&o));
+        }
+    }
+}
+
+/// `o` failed with `code`, its stderr one line `error: MESSAGE` and its stdout exactly one
+/// JSON object `{"error": MESSAGE, "exit_code": code}`; MESSAGE contains `needle`.
+fn assert_json_failure(o: &Output, code: i32, needle: &str) {
+    assert_eq!(o.status.code(), Some(code), "{}", text(o));
+    let out = stdout(o);
+    assert_eq!(out.lines().count(), 1, "stdout: {out}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    assert_eq!(v.as_object().unwrap().len(), 2, "{v}");
+    assert_eq!(v["exit_code"], code, "{v}");
+    let message = v["error"].as_str().unwrap();
+    assert!(message.contains(needle), "{v}");
+    let e = stderr(o);
+    assert!(e.lines().any(|l| l == format!("error: {message}")), "stderr: {e}");
+}
+
+#[test]
+fn a_failed_command_with_json_prints_one_json_object_on_stdout() {
+    let d = scratch("json-failures");
+    // evaluate: a problem file that does not exist (bad input, exit 2)
+    let missing = d.join("missing.toml").display().to_string();
+    assert_json_failure(&run(&["evaluate", &missing, "--json"]), 2, "missing.toml");
+    // without --json stdout stays empty (the error is on stderr only)
+    let o = run(&["evaluate", &missing]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(o.stdout.is_empty() && stderr(&o).starts_with("error: "), "{}", text(&o));
+    // show: a folder that is not a run (exit 2)
+    let ds = d.display().to_string();
+    assert_json_failure(&run(&["show", &ds, "--json"]), 2, "run.json");
+    // simulate --csv: a write that fails (a file-size limit as a full disk; exit 1)
+    let o = Command::new("sh")
+        .current_dir(&d)
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 8; exec \"$0\" \"$@\"")
+        .arg(GRIPOPT_BIN)
+        .args(["simulate", BOTTLE, "--json", "--csv", "t.csv"])
+        .output()
+        .unwrap();
+    assert_json_failure(&o, 1, "t.csv");
+    // a usage error clap reports (exit 2), --json among the arguments
+    assert_json_failure(&run(&["evaluate", BOTTLE, "--json", "--desing", "x"]), 2, "--desing");
+    // a check that did not pass is not an error: moo-test's per-run lines, no error object
+    let o = run(&["moo-test", "zdt1", "--pop", "8", "--generations", "2", "--json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(!stdout(&o).contains("\"error\""), "{}", text(&o));
+}
+
+/// run.json's `problem_path`.
+fn recorded_path(run_dir: &Path) -> String {
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run_dir.join("run.json")).unwrap()).unwrap();
+    info["problem_path"].as_str().unwrap().to_string()
+}
+
+/// Set run.json's `problem_path` to `p` (what an older gripopt wrote).
+fn set_recorded_path(run_dir: &Path, p: &str) {
+    let file = run_dir.join("run.json");
+    let mut info: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    info["problem_path"] = p.into();
+    std::fs::write(&file, serde_json::to_string_pretty(&info).unwrap()).unwrap();
+}
+
+/// `gripopt optimise PROBLEM` (a relative path, from `cwd`) into `out`: 4 designs, 1 generation.
+fn tiny_optimise(cwd: &Path, problem: &str, out: &Path) -> Output {
+    let o = Command::new(GRIPOPT_BIN)
+        .current_dir(cwd)
+        .args(["optimise", problem, "--out"])
+        .arg(out)
+        .args(["--pop", "4", "--generations", "1", "--record", "none", "--threads", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    o
+}
+
+#[test]
+fn run_json_keeps_the_problem_path_absolute_and_normalised() {
+    let d = scratch("problem-path");
+    let root = std::fs::canonicalize(env!("CARGO_MANIFEST_DIR")).unwrap();
+    // `./problems/../problems/bottle-1l.toml` from the repository: the `..` removed
+    let out = d.join("plain");
+    tiny_optimise(&root, "./problems/../problems/bottle-1l.toml", &out);
+    assert_eq!(recorded_path(&out), root.join("problems/bottle-1l.toml").display().to_string());
+
+    // `link/../p.toml` where link -> real/sub: the file opened is real/p.toml, not the
+    // `p.toml` beside link that removing `..` as written would name
+    let d = std::fs::canonicalize(&d).unwrap();
+    std::fs::create_dir_all(d.join("real/sub")).unwrap();
+    std::fs::copy(BOTTLE, d.join("real/p.toml")).unwrap();
+    std::fs::write(d.join("p.toml"), "not the problem the run used\n").unwrap();
+    std::os::unix::fs::symlink(d.join("real/sub"), d.join("link")).unwrap();
+    let out = d.join("linked");
+    tiny_optimise(&d, "link/../p.toml", &out);
+    assert_eq!(recorded_path(&out), d.join("real/p.toml").display().to_string());
+
+    // a run folder of an earlier gripopt: absolute, `..` kept; it resumes from that file
+    let old = d.join("real/sub/../p.toml").display().to_string();
+    set_recorded_path(&out, &old);
+    let o = run(&["resume", &out.display().to_string(), "--generations", "2"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(!text(&o).contains("not found"), "the run's copy was used: {}", text(&o));
+    assert_eq!(recorded_path(&out), old, "resume keeps run.json's path as it was");
+    // and a changed problem file is still noticed there
+    let edited = std::fs::read_to_string(d.join("real/p.toml")).unwrap().replace("bottle", "bottle, edited");
+    std::fs::write(d.join("real/p.toml"), edited).unwrap();
+    let o = run(&["resume", &out.display().to_string(), "--generations", "3"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("changed since the run started"), "{}", text(&o));
+}
