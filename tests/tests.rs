@@ -12,6 +12,7 @@ mod constraints;
 mod dynamics;
 mod event_values;
 mod export;
+mod export_object;
 mod folder_trust;
 mod force_model;
 mod free_jacobian;
