@@ -246,3 +246,37 @@ fn a_robust_runs_design_exports_on_an_object() {
     assert_eq!(o.status.code(), Some(2), "{t}");
     assert!(t.contains("--object tin") && t.contains("bottle-full, bottle-half, can, small-bottle"), "{t}");
 }
+
+/// A design that holds the can but not the 1 l bottle: its export on the can says it passes
+/// stages 0–2 there and that the robust design is discarded (on the bottle), as the robust
+/// evaluation's own stage-2 result says; on the bottle it is discarded.
+#[test]
+fn an_object_export_says_when_the_robust_design_fails_on_another_object() {
+    use gripopt::eval::{robust_start, RobustSetup};
+    use gripopt::export::{ExportScene, ExportedDesign};
+    use gripopt::params::Problem;
+    use rand::SeedableRng;
+    let p = Problem::load(KITCHEN).unwrap();
+    let setup = RobustSetup::of(&p).unwrap();
+    let can = setup.spec.objects.iter().position(|o| o.name == "can").unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+    let x = (0..20_000)
+        .map(|_| p.bounds.sample(&mut rng))
+        .find(|x| {
+            let s = robust_start(x, &setup);
+            matches!(s.objects[0], Some(Err(_))) && matches!(s.objects[can], Some(Ok(_)))
+        })
+        .expect("a design holding the can but not the bottle");
+    let free = ExportScene::free(0.0);
+    let on_can = ExportedDesign::on_object(&x, &setup, can, free, "t").unwrap().statics_discard.unwrap();
+    assert!(
+        on_can.starts_with(
+            "passes stages 0-2 on object can; the robust design is discarded at stage 2 (object bottle-full:"
+        ),
+        "{on_can}"
+    );
+    let on_bottle = ExportedDesign::on_object(&x, &setup, 0, free, "t").unwrap().statics_discard.unwrap();
+    assert!(on_bottle.starts_with("discarded at stage 2 on object bottle-full:"), "{on_bottle}");
+    let e = ExportedDesign::on_object(&x, &setup, 9, free, "t").unwrap_err();
+    assert!(e.is_input(), "{e}");
+}
