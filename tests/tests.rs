@@ -13,6 +13,7 @@ mod constraints;
 mod dynamics;
 mod event_values;
 mod export;
+mod export_object;
 mod folder_trust;
 mod force_model;
 mod free_jacobian;

@@ -28,7 +28,9 @@ Exports the problem's nominal design (centred and free scenes, build sheet) with
 7. a run's front design (CHECK_DIR/run, written by tests/export.rs, its first pareto.csv
    id) exported as `RUN_DIR --design ID`: its first contact as in 4, against `gripopt
    evaluate` of its parameters; in both scenes, and the nominal free scene, it simulates
-   0.2 s with the file as it is: no MuJoCo warning, finite state, loop closed.
+   0.2 s with the file as it is: no MuJoCo warning, finite state, loop closed;
+8. `--object can` of kitchen.toml (beside PROBLEM): the object body's mass and cylinder are
+   the can's of kitchen.toml (read with tomllib), and it simulates as in 7.
 
 --report prints the side-by-side table of docs/export.md (gripopt and MuJoCo on the design).
 Prints one line per check and 'mjcf: N passed, N failed'; exits non-zero on any failure.
@@ -40,6 +42,7 @@ import math
 import pathlib
 import subprocess
 import sys
+import tomllib
 
 import mujoco
 import numpy as np
@@ -447,6 +450,28 @@ def check_front(chk, binary, run_dir, out):
     return files
 
 
+def check_object(chk, binary, problem, out):
+    """`--object can` of kitchen.toml (beside PROBLEM): MuJoCo's object body has the can's
+    mass rho pi R^2 L and cylinder, read from kitchen.toml with tomllib, not the reference
+    object's; returns the exported file (simulated with the others)."""
+    kitchen = pathlib.Path(problem).with_name("kitchen.toml")
+    with open(kitchen, "rb") as f:
+        spec = tomllib.load(f)
+    can = next(o for o in spec["robust"]["objects"] if o["name"] == "can")
+    ref = spec["object"]
+    mass = lambda o: o["density"] * math.pi * o["radius"] ** 2 * o["length"]  # noqa: E731
+    path = export(binary, kitchen, out / "kitchen-can.xml", "--object", "can")
+    m, _ = load(path)
+    body = m.body("object")
+    got, size = float(m.body_mass[body.id]), m.geom("object").size
+    rel = abs(got - mass(can)) / mass(can)
+    ok = rel <= 1e-12 and abs(size[0] - can["radius"]) <= 1e-15 and abs(size[1] - can["length"] / 2) <= 1e-15
+    chk("--object can", ok and abs(got - mass(ref)) > 0.1,
+        f"object body mass {got:.10f} kg vs kitchen.toml's can {mass(can):.10f} kg (relative {rel:.1e}; reference object {mass(ref):.4f} kg), "
+        f"cylinder R {size[0]} m, L/2 {size[1]} m")
+    return path
+
+
 # ------------------------------------------------------------------- docs/export.md table
 def phalanx_forces(m, d):
     """Normal force on each of finger 1's phalanges (N)."""
@@ -577,6 +602,10 @@ def main(argv):
         runs += check_front(chk, binary, run_dir, out)
     except Exception as e:  # noqa: BLE001
         chk("front design", False, f"{run_dir} (written by tests/export.rs): {type(e).__name__}: {e}")
+    try:
+        runs.append(check_object(chk, binary, problem, out))
+    except Exception as e:  # noqa: BLE001
+        chk("--object can", False, f"{type(e).__name__}: {e}")
     chk.run("simulate", lambda: check_runs(chk, runs))
     if "--report" in flags:
         report(binary, problem, out, centred, free, ev)

@@ -3,6 +3,7 @@
 //! files; this resolves the design and the scene (docs/export.md).
 
 use anyhow::{bail, Context, Result};
+use gripopt::eval::RobustSetup;
 use gripopt::export::{write_file, ExportScene, ExportedDesign, ObjectMode};
 use gripopt::params::{Design, Problem, SceneKind};
 use std::path::{Path, PathBuf};
@@ -29,6 +30,10 @@ pub struct ExportArgs {
     /// a free one at its x_off).
     #[arg(long)]
     scene: Option<String>,
+    /// Robust problem or run only: export the design on this object of [[robust.objects]]
+    /// (its cylinder, mass and grip torque) instead of the reference [object].
+    #[arg(long, value_name = "NAME")]
+    object: Option<String>,
     /// Overwrite --out if it exists.
     #[arg(long)]
     force: bool,
@@ -162,7 +167,34 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--force]`.
+/// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
+fn object_names(p: &Problem) -> String {
+    p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+}
+
+/// The index of `--object NAME` in the robust objects of `p` (None without --object); an
+/// input error naming the flag when `p` has no [robust] or no object of that name.
+fn robust_object(p: &Problem, name: Option<&str>, source: &str) -> Result<Option<usize>> {
+    let Some(name) = name else {
+        return Ok(None);
+    };
+    let Some(r) = &p.robust else {
+        return Err(gripopt::Error::Input(format!(
+            "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which the export holds without --object; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
+        ))
+        .into());
+    };
+    match r.objects.iter().position(|o| o.name == name) {
+        Some(o) => Ok(Some(o)),
+        None => Err(gripopt::Error::Input(format!(
+            "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
+            object_names(p)
+        ))
+        .into()),
+    }
+}
+
+/// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--object NAME] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
     let (p, x, source) = if a.source.is_dir() {
@@ -177,10 +209,12 @@ pub fn run(a: ExportArgs) -> Result<()> {
         let src = format!("problem file {}, {what}", a.source.display());
         (p, x, src)
     };
-    if p.robust.is_some() {
+    let object = robust_object(&p, a.object.as_deref(), &source)?;
+    if p.robust.is_some() && object.is_none() {
         // as sweep says it: the exported hand grips the reference object only
         eprintln!(
-            "note: {source}: the problem has [robust]: the export holds the reference [object] and [scene] only; the robust objects and scenarios are not in the file (docs/robust.md, docs/export.md)"
+            "note: {source}: the problem has [robust]: the export holds the reference [object] and [scene] only, not the robust objects or scenarios; --object NAME exports the design on one of its objects ({}) (docs/robust.md, docs/export.md)",
+            object_names(&p)
         );
     }
     // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)
@@ -197,7 +231,16 @@ pub fn run(a: ExportArgs) -> Result<()> {
     if placement.object == ObjectMode::Free && p.scene.env.g_eq != 0.0 {
         bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
     }
-    let e = ExportedDesign::new(&x, &p.scene, placement, &source)?;
+    let e = match (object, RobustSetup::of(&p)) {
+        // the robust evaluation's own per-object scene (its cylinder and grip torque) in the
+        // scene asked for; the spring sized at [hand] tau, as there
+        (Some(o), Some(setup)) => {
+            let source = format!("{source}, robust object {}", setup.spec.objects[o].name);
+            ExportedDesign::on_object(&x, &setup, o, placement, &source)?
+        }
+        _ => ExportedDesign::new(&x, &p.scene, placement, &source)?,
+    };
+    let source = &e.source;
     let text = match format {
         FormatArg::Mjcf => e.mjcf(),
         FormatArg::Json => e.build_sheet().to_json(),

@@ -13,6 +13,7 @@ pub use mjcf::{mjcf, MujocoSettings, MUJOCO};
 pub use sheet::{build_sheet, BuildSheet, SheetRow};
 pub use xml::XmlWriter;
 
+use crate::eval::{robust_start, RobustSetup};
 use crate::model::{spring_preload, Finger};
 use crate::params::{Design, SceneParams};
 use crate::{Error, Result};
@@ -82,19 +83,53 @@ impl ExportedDesign {
     /// open pose, cannot be assembled, or its spring preload is undefined, or when the
     /// placement is not finite.
     pub fn new(x: &Design, s: &SceneParams, placement: ExportScene, source: &str) -> Result<Self> {
+        let ev = crate::eval::evaluate_statics(x, s);
+        let statics_discard = ev.discard.map(|d| format!("discarded at stage {}: {}", d.stage, d.reason));
+        Self::build(x, s, s, placement, source, statics_discard)
+    }
+
+    /// Design `x` of a robust problem on its object `o` (`--object`, docs/export.md): the
+    /// object's nominal scene as the robust evaluation builds it
+    /// ([`RobustSetup::object_scenes`]: its cylinder and its grip torque τ), the spring sized
+    /// once at the problem's `[hand] tau` as there (a spring is hardware), and the object's
+    /// own stage 0–2 verdict from the robust evaluation's [`robust_start`].
+    pub fn on_object(x: &Design, setup: &RobustSetup, o: usize, placement: ExportScene, source: &str) -> Result<Self> {
+        let Some(scene) = setup.object_scenes.get(o) else {
+            return Err(Error::Input(format!("{source}: the problem has no robust object {o}")));
+        };
+        let name = &setup.spec.objects[o].name;
+        let start = robust_start(x, setup);
+        let statics_discard = match (&start.discard, &start.objects[o]) {
+            (Some((stage, reason, ..)), _) if *stage < 2 => Some(format!("discarded at stage {stage}: {reason}")),
+            (_, Some(Err(d))) => Some(format!("discarded at stage 2 on object {name}: {}", d.reason)),
+            (Some((stage, reason, ..)), _) => Some(format!(
+                "passes stages 0-2 on object {name}; the robust design is discarded at stage {stage} ({reason})"
+            )),
+            (None, _) => None,
+        };
+        Self::build(x, scene, &setup.base, placement, source, statics_discard)
+    }
+
+    /// The finger of `x` in scene `s`, its spring sized in `spring_scene` (its `[hand] tau`).
+    fn build(
+        x: &Design,
+        s: &SceneParams,
+        spring_scene: &SceneParams,
+        placement: ExportScene,
+        source: &str,
+        statics_discard: Option<String>,
+    ) -> Result<Self> {
         if !placement.x_off.is_finite() {
             return Err(Error::Input(format!("export: object offset x_off = {} is not finite", placement.x_off)));
         }
         let finger = Finger::new(x, s).map_err(|g| {
             Error::Input(format!("{source}: the design cannot be exported: {} (MODEL.md §3)", g.reason()))
         })?;
-        let (tau_s_min, tau_s0) = spring_preload(&finger, s).ok_or_else(|| {
+        let (tau_s_min, tau_s0) = spring_preload(&finger, spring_scene).ok_or_else(|| {
             Error::Input(format!(
                 "{source}: the design cannot be exported: spring preload undefined (singular open pose)"
             ))
         })?;
-        let ev = crate::eval::evaluate_statics(x, s);
-        let statics_discard = ev.discard.map(|d| format!("discarded at stage {}: {}", d.stage, d.reason));
         Ok(ExportedDesign {
             design: *x,
             scene: s.clone(),
