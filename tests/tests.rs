@@ -38,6 +38,7 @@ mod scene_cli;
 mod scenes;
 mod seams;
 mod statics;
+mod stiffness_switch;
 mod sweep;
 mod verify;
 mod verify_record;

@@ -71,7 +71,7 @@ pub fn work_precision_ensemble(
         "E_cyl p90"
     );
     let mut summary = vec![];
-    for m in [Method::Radau5, Method::Dopri5, Method::TrBdf2] {
+    for m in [Method::Radau5, Method::Auto, Method::Dopri5, Method::TrBdf2] {
         for rtol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
             if m == Method::TrBdf2 && rtol < 1e-7 {
                 continue;

@@ -10,7 +10,7 @@ use crate::eval::StaticsResult;
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
-use crate::sim::{simulate, Controls, FreeEnd, FreeResult, FreeSetup, Integration, SceneSpec};
+use crate::sim::{simulate, Controls, FreeEnd, FreeResult, FreeSetup, Integration, Method, SceneSpec};
 use crate::{Error, Result};
 use std::path::Path;
 
@@ -156,14 +156,17 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
         "           dense Jacobian at the same rtol differs by {:.1e} (largest relative difference of the six outputs)",
         e.iter().cloned().fold(0.0, f64::max)
     );
-    let jacs: &[(&'static str, bool)] =
-        if free.dense { &[("blocks", false), ("dense", true)] } else { &[("blocks", false)] };
+    // (label, dense Jacobian, method): RADAU5 with each Jacobian, and the stiffness-switching
+    // method with the block Jacobian
+    let all: &[(&'static str, bool, Method)] =
+        &[("blocks", false, Method::Radau5), ("auto", false, Method::Auto), ("dense", true, Method::Radau5)];
+    let jacs = if free.dense { all } else { &all[..2] };
     let pb = progress((jacs.len() * b.rtols.len()) as u64, "bench free [{bar:30}] {pos}/{len} {msg}");
     let mut rows = vec![];
-    for &(label, dense) in jacs {
+    for &(label, dense, method) in jacs {
         for &rtol in &b.rtols {
             pb.set_message(format!("{label} rtol {rtol:e}"));
-            let o = opts(rtol);
+            let o = opts(rtol).with_method(method);
             let mut reps = 0;
             let (x, tmin, tmed) = time_it(
                 || {
@@ -261,15 +264,16 @@ fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
 /// the SVG file `path`.
 fn plot_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
     let pts: Vec<&FreeRow> = rows.iter().filter(|r| r.err_max.is_finite() && r.err_max > 0.0).collect();
-    let series: Vec<(String, Vec<(f64, f64)>)> = ["blocks", "dense"]
-        .iter()
-        .map(|&label| {
-            (
-                format!("Radau IIA, {label} Jacobian"),
-                pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect(),
-            )
-        })
-        .collect();
+    let series: Vec<(String, Vec<(f64, f64)>)> =
+        [("blocks", "Radau IIA, blocks"), ("auto", "auto (DP5 / Radau IIA), blocks"), ("dense", "Radau IIA, dense")]
+            .iter()
+            .map(|&(label, name)| {
+                (
+                    format!("{name} Jacobian"),
+                    pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect(),
+                )
+            })
+            .collect();
     super::table::work_precision_chart(
         path,
         "work-precision: the free scene (nominal design, to t_obs)",

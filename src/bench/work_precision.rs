@@ -179,7 +179,7 @@ impl Reference {
     /// of `wp`, each point timed for ~1 s or `wp.reps` runs.
     pub fn own_rows(&self, wp: &WorkPrecision) -> Vec<Row> {
         let (f, s, st) = (&self.finger, &self.scene, &self.statics);
-        let methods = [Method::Radau5, Method::TrBdf2, Method::Dopri5];
+        let methods = [Method::Radau5, Method::TrBdf2, Method::Dopri5, Method::Auto];
         let pb = progress((methods.len() * wp.rtols.len()) as u64, "work-precision [{bar:30}] {pos}/{len} {msg}");
         let mut rows = vec![];
         for m in methods {
@@ -202,6 +202,7 @@ fn label(m: Method) -> &'static str {
         Method::Radau5 => "Radau5",
         Method::TrBdf2 => "TrBdf2",
         Method::Dopri5 => "Dopri5",
+        Method::Auto => "Auto",
     }
 }
 

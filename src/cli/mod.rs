@@ -231,6 +231,8 @@ pub enum MethodArg {
     TrBdf2,
     /// Dormand–Prince 5(4) (explicit; comparison only).
     Dopri5,
+    /// Dormand–Prince 5(4), switching to RADAU5 where stiff (automatic).
+    Auto,
 }
 
 impl MethodArg {
@@ -239,6 +241,7 @@ impl MethodArg {
             MethodArg::Radau5 => gripopt::sim::Method::Radau5,
             MethodArg::TrBdf2 => gripopt::sim::Method::TrBdf2,
             MethodArg::Dopri5 => gripopt::sim::Method::Dopri5,
+            MethodArg::Auto => gripopt::sim::Method::Auto,
         }
     }
 }

@@ -4,7 +4,7 @@
 //! or criteria.
 
 use super::events::EventSearch;
-use super::integrate::{hermite, Dopri5, Radau5, Stats, StepError, StepPoint, Stepper, Tol, TrBdf2};
+use super::integrate::{hermite, Dopri5, Radau5, Stats, StepError, StepPoint, Stepper, Switching, Tol, TrBdf2};
 use super::result::MAX_EVENTS;
 use super::scene::{End, Run, Scene};
 use super::settings::{Controls, Integration, Method};
@@ -25,6 +25,7 @@ pub fn simulate<const N: usize, const E: usize, Sc: Scene<N, E>, K: Sink + ?Size
         Method::Radau5 => drive(&mut scene, &mut Radau5::<N>::new(tol, integ.h0), integ, ctl, t_end, sink),
         Method::TrBdf2 => drive(&mut scene, &mut TrBdf2::new(tol, integ.h0), integ, ctl, t_end, sink),
         Method::Dopri5 => drive(&mut scene, &mut Dopri5::new(tol, integ.h0), integ, ctl, t_end, sink),
+        Method::Auto => drive(&mut scene, &mut Switching::new(tol, integ.h0), integ, ctl, t_end, sink),
     };
     scene.finish(&run)
 }
@@ -77,7 +78,13 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
             break End::Undefined;
         };
         let g1 = scene.event_values(&acc.y, &ev1);
-        let interp = |tt: f64| hermite(from.t, &from.y, &from.f, acc.t, &acc.y, &acc.f, tt);
+        let own = stepper.dense_for_events();
+        let st: &St = stepper;
+        let interp = |tt: f64| {
+            own.then(|| st.dense(tt))
+                .flatten()
+                .unwrap_or_else(|| hermite(from.t, &from.y, &from.f, acc.t, &acc.y, &acc.f, tt))
+        };
         let sc: &Sc = scene;
         let best = search.earliest(
             |k| sc.crossing(k),

@@ -28,6 +28,9 @@ pub enum Method {
     TrBdf2,
     /// Dormand–Prince 5(4) (explicit; for comparison only).
     Dopri5,
+    /// Dormand–Prince 5(4) where its steps are held by accuracy, RADAU5 where they would be
+    /// held by stability (automatic stiffness switching).
+    Auto,
 }
 
 impl Method {
@@ -36,7 +39,7 @@ impl Method {
     pub fn first_step(self) -> f64 {
         match self {
             Method::Radau5 | Method::TrBdf2 => 1e-5,
-            Method::Dopri5 => 1e-6,
+            Method::Dopri5 | Method::Auto => 1e-6,
         }
     }
     /// The command-line spelling (`radau5`, `trbdf2`, `dopri5`).
@@ -45,6 +48,7 @@ impl Method {
             Method::Radau5 => "radau5",
             Method::TrBdf2 => "trbdf2",
             Method::Dopri5 => "dopri5",
+            Method::Auto => "auto",
         }
     }
 }

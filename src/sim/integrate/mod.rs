@@ -19,6 +19,7 @@ mod radau_coefficients;
 mod radau_stepper;
 mod reduced;
 mod schur_lu;
+mod switching;
 mod trbdf2;
 
 pub use dense::hermite;
@@ -30,6 +31,7 @@ pub use radau5::{Radau5, Radau5Scheme};
 pub use radau_coefficients::RadauCoefficients;
 pub use radau_stepper::{RadauScheme, RadauStepper};
 pub use reduced::Partition;
+pub use switching::Switching;
 pub use trbdf2::TrBdf2;
 
 use jacobian::JacobianCache;
@@ -197,6 +199,12 @@ pub trait Stepper<const N: usize> {
     /// it has one (a collocation method's polynomial); `None`: use [`hermite`].
     fn dense(&self, _t: f64) -> Option<SVector<f64, N>> {
         None
+    }
+    /// Should a driver locate events (and take states inside a step) on [`Stepper::dense`]
+    /// rather than on the cubic Hermite? Default: no (RADAU5 keeps the Hermite, which its
+    /// tolerances were tuned with; docs/benchmarks.md).
+    fn dense_for_events(&self) -> bool {
+        false
     }
     /// Counters.
     fn stats(&self) -> Stats;

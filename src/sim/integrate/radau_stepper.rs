@@ -55,7 +55,7 @@ pub struct RadauStepper<const N: usize, const S: usize, M> {
     tol: Tol<N>,
     /// The step-size proposal.
     pub(super) h: f64,
-    jc: JacobianCache<N>,
+    pub(super) jc: JacobianCache<N>,
     /// The system's partition was asked for (at the first step).
     partitioned: bool,
     stats: Stats,
