@@ -8,7 +8,7 @@
 #   * a one-thread `gripopt optimise PROBLEM --pop 128 --generations 10 --seed 1` with recording
 #     on: the whole process, every thread.
 # Usage: scripts/bench-instructions.sh   (`make bench-instructions`; BIN, PROBLEM, POP,
-# GENERATIONS override; SKIP_OPTIMISE=1 leaves the optimisation out.) Writes its callgrind
+# GENERATIONS, AUTO_RTOL override; SKIP_OPTIMISE=1 leaves the optimisation out.) Writes its callgrind
 # files to target/bench-instructions/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,6 +16,7 @@ BIN=${BIN:-target/release/gripopt}
 PROBLEM=${PROBLEM:-problems/bottle-1l.toml}
 POP=${POP:-128}
 GENERATIONS=${GENERATIONS:-10}
+AUTO_RTOL=${AUTO_RTOL:-1e-7}
 CENTRED_FN=${CENTRED_FN:-gripopt::sim::scene::centred::run}
 FREE_FN=${FREE_FN:-gripopt::sim::scene::free::run}
 OUT=target/bench-instructions
@@ -42,6 +43,12 @@ free=$(inclusive "$OUT/simulate-free.cg" "$FREE_FN")
 printf '%-58s %14s\n' "instructions (callgrind, $BIN)" "count"
 printf '%-58s %14s\n' "nominal centred grasp ($CENTRED_FN)" "$(mega "$centred")"
 printf '%-58s %14s\n' "nominal free scene to t_obs ($FREE_FN)" "$(mega "$free")"
+# the same with the stiffness-switching method at the rtol where it is at least as accurate
+# as RADAU5 at the default 1e-6 over the work-precision ensemble (docs/benchmarks.md)
+valgrind --tool=callgrind --callgrind-out-file="$OUT/simulate-free-auto.cg" "$BIN" simulate "$PROBLEM" --scene free \
+    --method auto --rtol "$AUTO_RTOL" --json > "$OUT/simulate-free-auto.json" 2> "$OUT/simulate-free-auto.log"
+printf '%-58s %14s\n' "  the same, --method auto --rtol $AUTO_RTOL: centred grasp" "$(mega "$(inclusive "$OUT/simulate-free-auto.cg" "$CENTRED_FN")")"
+printf '%-58s %14s\n' "  the same, --method auto --rtol $AUTO_RTOL: free scene" "$(mega "$(inclusive "$OUT/simulate-free-auto.cg" "$FREE_FN")")"
 if [ "${SKIP_OPTIMISE:-0}" != 1 ]; then
     run=$(mktemp -d)
     valgrind --tool=callgrind --callgrind-out-file="$OUT/optimise.cg" "$BIN" optimise "$PROBLEM" --out "$run/run" \
