@@ -37,6 +37,7 @@ mod robustness_folders;
 mod scene_cli;
 mod scenes;
 mod seams;
+mod solver_method;
 mod statics;
 mod stiffness_switch;
 mod sweep;

@@ -47,6 +47,8 @@ class Problem:
     @property
     def upper(self) -> npt.NDArray[np.float64]: ...
     @property
+    def method(self) -> str: ...
+    @property
     def nominal(self) -> npt.NDArray[np.float64]: ...
     def evaluate(
         self,
@@ -63,7 +65,7 @@ class Problem:
         design: npt.NDArray[np.float64],
         scene: Optional[str] = None,
         rtol: Optional[float] = None,
-        method: str = "radau5",
+        method: Optional[str] = None,
     ) -> tuple[str, list[Column], list[Column]]:
         """The record's JSON text, the grasp samples, the free scene's poses."""
     def random_designs(self, n: int, seed: int) -> npt.NDArray[np.float64]: ...

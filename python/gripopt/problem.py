@@ -209,6 +209,13 @@ class Problem:
         return Bounds(pd.Series(self._native.lower, index=n), pd.Series(self._native.upper, index=n), self._native)
 
     @property
+    def method(self) -> str:
+        """The integration method of its grasp simulations, ``[solver] method``:
+        ``"radau5"`` (also when the file leaves it out), ``"auto"``, ``"trbdf2"`` or
+        ``"dopri5"`` (docs/problem-files.md)."""
+        return self._native.method
+
+    @property
     def nominal(self) -> pd.Series:
         """The nominal design (a Series by design name; ψ as psi_deg, degrees)."""
         return pd.Series(self._native.nominal, index=list(DESIGN_NAMES), name="nominal")
@@ -268,7 +275,7 @@ class Problem:
         design: Optional[Designs] = None,
         scene: Optional[str] = None,
         rtol: Optional[float] = None,
-        method: str = "radau5",
+        method: Optional[str] = None,
     ) -> Simulation:
         """Simulate one design (default: the nominal) in a scene, as ``gripopt simulate``.
 
@@ -277,7 +284,8 @@ class Problem:
             scene: ``"centred"``, ``"offset:0.002"`` (object offset in metres), ``"free"``
                 or ``"free:0.002"``; None: the problem's ``[scene]``.
             rtol: relative tolerance (None: the problem's ``solver.rtol``).
-            method: ``"radau5"`` (default), ``"trbdf2"`` or ``"dopri5"``.
+            method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` or ``"dopri5"``; None: the
+                problem's ``[solver] method`` (:attr:`method`; ``"radau5"`` when absent).
 
         Raises:
             InputError: the design is discarded before its grasp (stages 0–2), or a bad scene.

@@ -53,9 +53,9 @@ enum Cmd {
         /// Relative tolerance (default: the problem's solver.rtol).
         #[arg(long)]
         rtol: Option<f64>,
-        /// Integration method.
-        #[arg(long, value_enum, default_value = "radau5")]
-        method: MethodArg,
+        /// Integration method (default: the problem's solver.method, radau5 when absent).
+        #[arg(long, value_enum)]
+        method: Option<MethodArg>,
         /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).
         #[arg(long)]
         scene: Option<String>,
@@ -222,12 +222,13 @@ pub enum RecordArg {
     None,
 }
 
-/// Integration method choice.
+/// Integration method choice, spelled as in a problem file's `solver.method`.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum MethodArg {
-    /// Radau IIA order 5 (stiff, default).
+    /// Radau IIA order 5 (stiff; a problem's default).
     Radau5,
     /// TR-BDF2 (stiff, order 2).
+    #[value(name = "trbdf2", alias = "tr-bdf2")]
     TrBdf2,
     /// Dormand–Prince 5(4) (explicit; comparison only).
     Dopri5,
@@ -399,7 +400,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             let rtol = check_rtol(rtol)?;
             let o = scenes::SimulateOpts {
                 rtol,
-                method: method.to_method(),
+                method: method.map(MethodArg::to_method),
                 contacts: !no_contact,
                 trace,
                 json,

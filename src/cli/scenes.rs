@@ -29,8 +29,8 @@ pub fn apply_scene(p: &Problem, arg: &str) -> Result<Problem> {
 pub struct SimulateOpts<'a> {
     /// Relative tolerance (default: the problem's).
     pub rtol: Option<f64>,
-    /// Integration method.
-    pub method: Method,
+    /// Integration method (None: the problem's `solver.method`).
+    pub method: Option<Method>,
     /// Contacts with the object (centred scene; false: the linkage alone).
     pub contacts: bool,
     /// Print every located event to stderr.
@@ -54,8 +54,9 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
     if !o.contacts && kind != SceneKind::Centred {
         bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
     }
+    let method = o.method.unwrap_or(p.solver.method);
     let integ =
-        Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(o.method);
+        Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
     let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
     let spec = SceneSpec::of(&p.scene.setup);
     // the samples only for a CSV or a plot; progress on stderr when it takes long
@@ -79,11 +80,11 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
         crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, &traj.samples)?))?;
     }
     if o.json {
-        let v = SimulateJson { sim: SimulationRecord { record, method: o.method }, replay: o.replay.as_ref() };
+        let v = SimulateJson { sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    print_simulation(p, &record, o.method, integ.rtol);
+    print_simulation(p, &record, method, integ.rtol);
     if o.csv.is_some() {
         let n = if kind == SceneKind::Free { poses.len() } else { traj.samples.len() };
         outln!("trajectory: {n} samples written to {}", o.csv.map(crate::cli::out::path).unwrap_or_default());
@@ -290,16 +291,8 @@ pub fn replay_in_scene(
         verified: None,
         note,
     };
-    let o = SimulateOpts {
-        rtol: None,
-        method: Method::Radau5,
-        contacts: true,
-        trace: false,
-        json,
-        csv,
-        plot,
-        replay: Some(replay),
-    };
+    let o =
+        SimulateOpts { rtol: None, method: None, contacts: true, trace: false, json, csv, plot, replay: Some(replay) };
     simulate_in_scene(&p, &x, &o)
         .with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;
     Ok(Some(0))

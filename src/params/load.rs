@@ -1,11 +1,12 @@
 //! Problem files: TOML with the sections `[hand]`, `[object]`, `[contact]`,
 //! `[environment]`, `[criteria]`, `[scene]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
-//! required and unknown keys are rejected: there are no silent defaults. Errors name the
-//! file and the field.
+//! required but `solver.method` (absent: RADAU5, the method of every problem written before
+//! the key existed) and unknown keys are rejected. Errors name the file and the field.
 
 use super::checker::Checker;
 use super::design::{Bounds, Design, DESIGN_NAMES};
 use super::limits::{MAX_FILE_BYTES, MAX_R_SING};
+use super::method::Method;
 use super::robust::Robust;
 use super::robust_load::RawRobust;
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
@@ -26,6 +27,10 @@ pub struct SolverSettings {
     pub atol: f64,
     /// Maximum number of accepted + rejected steps before a discard.
     pub max_steps: u64,
+    /// Integration method (`solver.method`; absent: RADAU5). Left out when serialised as
+    /// RADAU5, so that a problem without the key serialises as it did before the key.
+    #[serde(default, skip_serializing_if = "Method::is_default")]
+    pub method: Method,
 }
 
 /// A loaded and validated problem.
@@ -77,6 +82,9 @@ struct RawSolver {
     rtol: f64,
     atol: f64,
     max_steps: f64,
+    /// Optional: absent is RADAU5 (files written before the key existed keep their results).
+    #[serde(default)]
+    method: Option<String>,
 }
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -301,8 +309,22 @@ impl Problem {
         let s = &raw.solver;
         c.check("solver.rtol", s.rtol)?;
         c.check("solver.atol", s.atol)?;
-        let solver =
-            SolverSettings { rtol: s.rtol, atol: s.atol, max_steps: c.whole("solver.max_steps", s.max_steps)? as u64 };
+        let method = match s.method.as_deref() {
+            None => Method::Radau5,
+            Some(m) => Method::parse(m).ok_or_else(|| {
+                c.fail(
+                    "solver.method",
+                    format!("{m:?}"),
+                    &format!("must be {} (docs/problem-files.md)", Method::accepted()),
+                )
+            })?,
+        };
+        let solver = SolverSettings {
+            rtol: s.rtol,
+            atol: s.atol,
+            max_steps: c.whole("solver.max_steps", s.max_steps)? as u64,
+            method,
+        };
         let n = &raw.nominal;
         let nominal = Design {
             l21: c.check("nominal.l21", n.l21)?,

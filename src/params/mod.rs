@@ -1,12 +1,13 @@
 //! Parameters: the problem file turned into typed values — the scene constants by section
 //! ([`Hand`], [`Object`], [`ContactLaw`], [`Environment`], [`Criteria`]), the solver
-//! settings, the nominal [`Design`] and the [`Bounds`]. The lowest layer: it depends on
-//! nothing of gripopt but `math` and `error`.
+//! settings (with the integration [`Method`]), the nominal [`Design`] and the [`Bounds`].
+//! The lowest layer: it depends on nothing of gripopt but `math` and `error`.
 
 mod checker;
 mod design;
 mod limits;
 mod load;
+mod method;
 mod robust;
 mod robust_load;
 mod scene;
@@ -17,6 +18,7 @@ pub use design::{Bounds, Design, DesignParameters, DESIGN_NAMES};
 pub(crate) use limits::num as fmt_num;
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
+pub use method::Method;
 pub use robust::{
     corner_count, describe, Aggregation, ObjectCase, Robust, Sampling, Scenario, STREAM_OPTIMISE, STREAM_VERIFY,
 };

@@ -549,7 +549,14 @@ fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::
     meta
 }
 
-/// Run options hashed into checkpoints: pipeline settings and recording.
+/// Run options hashed into checkpoints: pipeline settings and recording. The integration
+/// method is stated only when it is not RADAU5, the default (a run of a problem without
+/// `solver.method` writes the options it wrote before the key existed).
 fn run_options(gp: &GripperProblem, rec: &RecordOptions) -> serde_json::Value {
-    serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": gp.problem.solver.rtol, "atol": gp.problem.solver.atol, "max_steps": gp.problem.solver.max_steps, "recording": rec })
+    let s = &gp.problem.solver;
+    let mut v = serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": s.rtol, "atol": s.atol, "max_steps": s.max_steps, "recording": rec });
+    if !s.method.is_default() {
+        v["method"] = serde_json::json!(s.method);
+    }
+    v
 }

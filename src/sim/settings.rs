@@ -3,6 +3,7 @@
 //! contacts, the uniform sampling grid). Plain structs passed explicitly (rapier's
 //! `IntegrationParameters`); recording and tracing are the caller's [`Sink`](super::Sink).
 
+pub use crate::params::Method;
 use crate::params::SolverSettings;
 use serde::{Deserialize, Serialize};
 
@@ -17,41 +18,6 @@ pub const SIMULATOR_REVISION: u32 = 2;
 /// revisions: issue 23 moved t_stab by at most 1.85e-4 relative over the work-precision
 /// ensemble (a threshold crossing moved by one oscillation; docs/benchmarks.md).
 pub const ACROSS_REVISIONS_RTOL: f64 = 1e-3;
-
-/// Integration method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
-    Radau5,
-    /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
-    TrBdf2,
-    /// Dormand–Prince 5(4) (explicit; for comparison only).
-    Dopri5,
-    /// Dormand–Prince 5(4) where its steps are held by accuracy, RADAU5 where they would be
-    /// held by stability (automatic stiffness switching).
-    Auto,
-}
-
-impl Method {
-    /// The method's first step size (s): the implicit methods start at 10 µs, the explicit
-    /// one at 1 µs (a stiff contact would reject a longer first step several times).
-    pub fn first_step(self) -> f64 {
-        match self {
-            Method::Radau5 | Method::TrBdf2 => 1e-5,
-            Method::Dopri5 | Method::Auto => 1e-6,
-        }
-    }
-    /// The command-line spelling (`radau5`, `trbdf2`, `dopri5`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Method::Radau5 => "radau5",
-            Method::TrBdf2 => "trbdf2",
-            Method::Dopri5 => "dopri5",
-            Method::Auto => "auto",
-        }
-    }
-}
 
 /// The numerics of a simulation (built from the problem's `[solver]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -74,9 +40,10 @@ impl Integration {
     pub fn new(rtol: f64, atol: f64, max_steps: u64) -> Self {
         Integration { rtol, atol, max_steps, method: Method::Radau5, h0: Method::Radau5.first_step() }
     }
-    /// The problem's `[solver]` settings with Radau IIA.
+    /// The problem's `[solver]` settings: its tolerances, budget and method, from the
+    /// method's first step.
     pub fn from_solver(s: &SolverSettings) -> Self {
-        Self::new(s.rtol, s.atol, s.max_steps)
+        Self::new(s.rtol, s.atol, s.max_steps).with_method(s.method)
     }
     /// The same settings with method `m` and its first step.
     pub fn with_method(self, m: Method) -> Self {

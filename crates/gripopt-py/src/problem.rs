@@ -112,6 +112,11 @@ impl PyProblem {
     fn upper<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.problem.bounds.hi)
     }
+    /// The integration method of its grasp simulations (`solver.method`: radau5 when absent).
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.problem.solver.method.as_str()
+    }
     /// The nominal design (ψ in degrees).
     #[getter]
     fn nominal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -170,7 +175,7 @@ impl PyProblem {
     /// Simulate one design in a scene (None: the problem's) in diagnostic mode, as
     /// `gripopt simulate --json --csv` does: the record's JSON text, the grasp samples and
     /// (free scene) the object's poses as columns.
-    #[pyo3(signature = (design, scene=None, rtol=None, method="radau5"))]
+    #[pyo3(signature = (design, scene=None, rtol=None, method=None))]
     #[allow(clippy::type_complexity)]
     fn simulate<'py>(
         &self,
@@ -178,16 +183,17 @@ impl PyProblem {
         design: PyReadonlyArray1<'py, f64>,
         scene: Option<&str>,
         rtol: Option<f64>,
-        method: &str,
+        method: Option<&str>,
     ) -> PyResult<(String, Bound<'py, PyList>, Bound<'py, PyList>)> {
         let x = design_of(&design)?.design();
         let p = &self.problem;
         let scene = scene.map(gripopt::parse_scene).transpose().py()?;
+        // None: the problem's solver.method
         let method = match method {
-            "radau5" => Method::Radau5,
-            "trbdf2" => Method::TrBdf2,
-            "dopri5" => Method::Dopri5,
-            m => return Err(input(format!("method `{m}`: must be radau5, trbdf2 or dopri5"))),
+            None => p.solver.method,
+            Some(m) => {
+                Method::parse(m).ok_or_else(|| input(format!("method `{m}`: must be {}", Method::accepted())))?
+            }
         };
         if let Some(r) = rtol {
             gripopt::params::limit("solver.rtol").check(r).map_err(|rule| {
