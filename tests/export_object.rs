@@ -173,29 +173,41 @@ fn without_source(xml: &str) -> String {
     xml.lines().filter(|l| !l.contains("source: ")).collect::<Vec<_>>().join("\n")
 }
 
+/// kitchen.toml's robust setup, the can's index and the first design drawn (seed `seed`)
+/// that passes stages 0–2 on the 1 l bottle (object 0) and not on the can, or
+/// (`holds_bottle` false) the other way round.
+fn kitchen_design(
+    seed: u64,
+    holds_bottle: bool,
+    what: &str,
+) -> (gripopt::eval::RobustSetup, usize, gripopt::params::Design) {
+    use gripopt::eval::{robust_start, RobustSetup};
+    use rand::SeedableRng;
+    let p = gripopt::params::Problem::load(KITCHEN).unwrap();
+    let setup = RobustSetup::of(&p).unwrap();
+    let can = setup.spec.objects.iter().position(|o| o.name == "can").unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let x = (0..20_000)
+        .map(|_| p.bounds.sample(&mut rng))
+        .find(|x| {
+            let s = robust_start(x, &setup);
+            let (bottle, on_can) = (matches!(s.objects[0], Some(Ok(_))), matches!(s.objects[can], Some(Ok(_))));
+            bottle == holds_bottle && on_can != holds_bottle
+        })
+        .expect(what);
+    (setup, can, x)
+}
+
 /// `--object can` is the single-object export of a problem whose `[object]` is the can (the
 /// grip torque and the hand's τ both 0.5 N·m): the same file but for its source line, for
 /// the nominal design and for a design that holds the bottle but is discarded at stage 2 on
 /// the can (its header then says so, as the single-object pipeline does for that problem).
 #[test]
 fn an_object_export_equals_the_export_of_that_object_as_reference() {
-    use gripopt::eval::{robust_start, RobustSetup};
-    use gripopt::params::Problem;
-    use rand::SeedableRng;
     let d = scratch("as-reference");
     let single = kitchen_with_can_as_reference(&d);
     let single = single.to_str().unwrap();
-    let p = Problem::load(KITCHEN).unwrap();
-    let setup = RobustSetup::of(&p).unwrap();
-    let can = setup.spec.objects.iter().position(|o| o.name == "can").unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let split = (0..20_000)
-        .map(|_| p.bounds.sample(&mut rng))
-        .find(|x| {
-            let s = robust_start(x, &setup);
-            matches!(s.objects[0], Some(Ok(_))) && matches!(s.objects[can], Some(Err(_)))
-        })
-        .expect("a design holding the bottle but not the can");
+    let (_, _, split) = kitchen_design(3, true, "a design holding the bottle but not the can");
     let a = split.to_array();
     let names = ["l21", "b", "t22", "r", "p", "psi_deg"];
     let split = names.iter().zip(a).map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(",");
@@ -252,21 +264,8 @@ fn a_robust_runs_design_exports_on_an_object() {
 /// evaluation's own stage-2 result says; on the bottle it is discarded.
 #[test]
 fn an_object_export_says_when_the_robust_design_fails_on_another_object() {
-    use gripopt::eval::{robust_start, RobustSetup};
     use gripopt::export::{ExportScene, ExportedDesign};
-    use gripopt::params::Problem;
-    use rand::SeedableRng;
-    let p = Problem::load(KITCHEN).unwrap();
-    let setup = RobustSetup::of(&p).unwrap();
-    let can = setup.spec.objects.iter().position(|o| o.name == "can").unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
-    let x = (0..20_000)
-        .map(|_| p.bounds.sample(&mut rng))
-        .find(|x| {
-            let s = robust_start(x, &setup);
-            matches!(s.objects[0], Some(Err(_))) && matches!(s.objects[can], Some(Ok(_)))
-        })
-        .expect("a design holding the can but not the bottle");
+    let (setup, can, x) = kitchen_design(4, false, "a design holding the can but not the bottle");
     let free = ExportScene::free(0.0);
     let on_can = ExportedDesign::on_object(&x, &setup, can, free, "t").unwrap().statics_discard.unwrap();
     assert!(

@@ -118,9 +118,10 @@ fn free_block_jacobian_equals_dense() {
     }
 }
 
-/// `gripopt bench free --json`: at rtol 1e-5 the block and the dense Jacobian both land
-/// within 1e-3 of the rtol-1e-10 reference on every output, with the reference's verdict,
-/// and the block rows make fewer full evaluations; bad rtols are refused.
+/// `gripopt bench free --json`: at rtol 1e-5 the block and the dense Jacobian and the
+/// switching method all land within 1e-3 of the rtol-1e-10 reference on every output, with
+/// the reference's verdict; the block rows make fewer full evaluations than the dense, the
+/// switching method fewer Jacobians; bad rtols are refused.
 #[test]
 fn bench_free_rows() {
     let bin = env!("CARGO_BIN_EXE_gripopt");
@@ -134,13 +135,18 @@ fn bench_free_rows() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 2, "{v}");
+    let labels: Vec<(&str, &str)> =
+        rows.iter().map(|r| (r["method"].as_str().unwrap(), r["jacobian"].as_str().unwrap())).collect();
+    assert_eq!(labels, [("radau5", "blocks"), ("auto", "blocks"), ("radau5", "dense")], "{v}");
     for r in rows {
         assert!(r["err_max"].as_f64().unwrap() < 1e-3, "{r}");
         assert_eq!(r["verdict_same"], true, "{r}");
     }
-    assert!(rows[0]["rhs"].as_u64().unwrap() < rows[1]["rhs"].as_u64().unwrap(), "{v}");
-    assert_eq!(rows[1]["jac_block_evals"], 0);
+    let (blocks, auto, dense) = (&rows[0], &rows[1], &rows[2]);
+    assert!(blocks["rhs"].as_u64().unwrap() < dense["rhs"].as_u64().unwrap(), "{v}");
+    assert_eq!(dense["jac_block_evals"], 0);
+    // the switching method leaves the fingers' approach to the explicit method
+    assert!(auto["jac"].as_u64().unwrap() < blocks["jac"].as_u64().unwrap(), "{v}");
     assert!(dir.join("free_work_precision.csv").exists() && dir.join("free_work_precision.svg").exists());
     let _ = std::fs::remove_dir_all(&dir);
     let bad = std::process::Command::new(bin).args(["bench", "free", problem, "--rtols", "2"]).output().unwrap();

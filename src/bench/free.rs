@@ -42,6 +42,8 @@ impl Default for FreeBench {
 pub struct FreeRow {
     /// "blocks" or "dense".
     pub jacobian: &'static str,
+    /// The integration method ("radau5", or "auto": the stiffness-switching method).
+    pub method: &'static str,
     /// Relative tolerance.
     pub rtol: f64,
     /// Minimum CPU time per simulation, s.
@@ -156,16 +158,16 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
         "           dense Jacobian at the same rtol differs by {:.1e} (largest relative difference of the six outputs)",
         e.iter().cloned().fold(0.0, f64::max)
     );
-    // (label, dense Jacobian, method): RADAU5 with each Jacobian, and the stiffness-switching
+    // (Jacobian, dense, method): RADAU5 with each Jacobian, and the stiffness-switching
     // method with the block Jacobian
     let all: &[(&'static str, bool, Method)] =
-        &[("blocks", false, Method::Radau5), ("auto", false, Method::Auto), ("dense", true, Method::Radau5)];
+        &[("blocks", false, Method::Radau5), ("blocks", false, Method::Auto), ("dense", true, Method::Radau5)];
     let jacs = if free.dense { all } else { &all[..2] };
     let pb = progress((jacs.len() * b.rtols.len()) as u64, "bench free [{bar:30}] {pos}/{len} {msg}");
     let mut rows = vec![];
     for &(label, dense, method) in jacs {
         for &rtol in &b.rtols {
-            pb.set_message(format!("{label} rtol {rtol:e}"));
+            pb.set_message(format!("{} {label} rtol {rtol:e}", method.as_str()));
             let o = opts(rtol).with_method(method);
             let mut reps = 0;
             let (x, tmin, tmed) = time_it(
@@ -179,6 +181,7 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
             let e = errors(&x, r);
             rows.push(FreeRow {
                 jacobian: label,
+                method: method.as_str(),
                 rtol,
                 cpu_min: tmin,
                 cpu_med: tmed,
@@ -222,19 +225,19 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
 
 /// Writes the table to `out`.
 fn print_rows(rows: &[FreeRow], out: Out) -> Result<()> {
-    say!(out, "{:<7} {:>6} {:>10} {:>10} {:>6} {:>5} {:>7} {:>5} {:>7} {:>5} {:>4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} verdict", "jac", "rtol", "cpu min", "cpu med", "steps", "rej", "rhs", "jac", "blk ev", "lu", "ev", "e(disp)", "e(tilt)", "e(final)", "e(Etr)", "e(Erot)", "e(t_fc)");
+    say!(out, "{:<7} {:<7} {:>6} {:>10} {:>10} {:>6} {:>5} {:>7} {:>5} {:>7} {:>5} {:>4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} verdict", "method", "jac", "rtol", "cpu min", "cpu med", "steps", "rej", "rhs", "jac", "blk ev", "lu", "ev", "e(disp)", "e(tilt)", "e(final)", "e(Etr)", "e(Erot)", "e(t_fc)");
     for r in rows {
-        say!(out, "{:<7} {:>6.0e} {:>8.2}ms {:>8.2}ms {:>6} {:>5} {:>7} {:>5} {:>7} {:>5} {:>4} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {}", r.jacobian, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rejected, r.rhs, r.jac, r.jac_block_evals, r.lu, r.events, r.err_max_disp, r.err_max_tilt, r.err_final_disp, r.err_peak_e_trans, r.err_peak_e_rot, r.err_t_first, if r.verdict_same { "same" } else { "DIFFERS" });
+        say!(out, "{:<7} {:<7} {:>6.0e} {:>8.2}ms {:>8.2}ms {:>6} {:>5} {:>7} {:>5} {:>7} {:>5} {:>4} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {:>9.1e} {}", r.method, r.jacobian, r.rtol, r.cpu_min * 1e3, r.cpu_med * 1e3, r.steps, r.rejected, r.rhs, r.jac, r.jac_block_evals, r.lu, r.events, r.err_max_disp, r.err_max_tilt, r.err_final_disp, r.err_peak_e_trans, r.err_peak_e_rot, r.err_t_first, if r.verdict_same { "same" } else { "DIFFERS" });
     }
     Ok(())
 }
 
 /// Writes the rows as CSV to `path` (its folder created if need be).
 fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
-    let header = "jacobian,rtol,cpu_min_s,cpu_median_s,reps,steps,rejected,rhs_evals,jacobians,jac_block_evals,lu,events,err_max_displacement,err_max_tilt,err_final_displacement,err_peak_e_trans,err_peak_e_rot,err_t_first_contact,err_max,same_verdict";
+    let header = "jacobian,rtol,cpu_min_s,cpu_median_s,reps,steps,rejected,rhs_evals,jacobians,jac_block_evals,lu,events,err_max_displacement,err_max_tilt,err_final_displacement,err_peak_e_trans,err_peak_e_rot,err_t_first_contact,err_max,same_verdict,method";
     let lines = rows.iter().map(|r| {
         format!(
-            "{},{:e},{:e},{:e},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
+            "{},{:e},{:e},{:e},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
             r.jacobian,
             r.rtol,
             r.cpu_min,
@@ -254,26 +257,28 @@ fn write_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
             r.err_peak_e_rot,
             r.err_t_first,
             r.err_max,
-            r.verdict_same
+            r.verdict_same,
+            r.method
         )
     });
     super::table::write_csv_lines(path, header, lines)
 }
 
-/// Plots median CPU time against the largest relative error, one line per Jacobian, to
+/// Plots median CPU time against the largest relative error, one line per method and Jacobian, to
 /// the SVG file `path`.
 fn plot_rows(rows: &[FreeRow], path: &Path) -> Result<()> {
     let pts: Vec<&FreeRow> = rows.iter().filter(|r| r.err_max.is_finite() && r.err_max > 0.0).collect();
-    let series: Vec<(String, Vec<(f64, f64)>)> =
-        [("blocks", "Radau IIA, blocks"), ("auto", "auto (DP5 / Radau IIA), blocks"), ("dense", "Radau IIA, dense")]
-            .iter()
-            .map(|&(label, name)| {
-                (
-                    format!("{name} Jacobian"),
-                    pts.iter().filter(|r| r.jacobian == label).map(|r| (r.err_max, r.cpu_med)).collect(),
-                )
-            })
-            .collect();
+    let series: Vec<(String, Vec<(f64, f64)>)> = [
+        ("radau5", "blocks", "Radau IIA, block Jacobian"),
+        ("auto", "blocks", "auto (Dormand–Prince / Radau IIA), block Jacobian"),
+        ("radau5", "dense", "Radau IIA, dense Jacobian"),
+    ]
+    .iter()
+    .map(|&(method, jacobian, name)| {
+        let of = |r: &&&FreeRow| r.method == method && r.jacobian == jacobian;
+        (name.to_string(), pts.iter().filter(of).map(|r| (r.err_max, r.cpu_med)).collect())
+    })
+    .collect();
     super::table::work_precision_chart(
         path,
         "work-precision: the free scene (nominal design, to t_obs)",
