@@ -74,7 +74,7 @@ mod facade;
 #[doc(hidden)]
 pub use cells::{walk_row, CellError, Leaf, RowSink};
 pub use error::{Error, Result};
-pub use eval::{Cause, Record, SimulationRecord};
+pub use eval::{Cause, EvaluationRecord, Record, SimulationRecord};
 pub use facade::{
     evaluate, evaluate_batch, evaluate_rows, parse_scene, pose_values, random_designs, sample_values, simulate,
     EvaluatedRow, Optimiser, Simulation, Stages, POSE_COLUMNS, SAMPLE_COLUMNS,

@@ -18,6 +18,7 @@ mod folder_trust;
 mod force_model;
 mod free_jacobian;
 mod free_stage;
+mod hostile33;
 mod kinematics;
 mod nominal;
 mod optimiser;

@@ -82,6 +82,25 @@ def test_the_full_record_equals_the_cli_json(problem, cli_json):
                 assert same_float(lib[key], cli[key]) or lib[key] == cli[key], key
 
 
+
+def test_the_record_of_an_auto_problem_names_its_method(problem, cli_json, tmp_path):
+    """`[solver] method = "auto"`: Problem.record, as `gripopt evaluate --json`, says which
+    method did the simulation's work (`method`); stages 0-2 and a file without the key
+    (radau5) have no such key (docs/cli.md, Hostile pass 33)."""
+    path = tmp_path / "auto.toml"
+    path.write_text(problem.toml.replace("\n[solver]\n", '\n[solver]\nmethod = "auto"\n', 1))
+    auto = gripopt.Problem.load(path)
+    for flag in ([], ["--static-only"]):
+        cli = cli_json("evaluate", path, "--json", *flag)
+        lib = auto.record(static_only=bool(flag))
+        for r in (cli, lib):
+            r.pop("cpu_s", None)  # wall-clock seconds
+        assert lib.keys() == cli.keys()
+        assert lib.get("method") == (None if flag else "auto")
+        for key in cli:
+            assert same_float(lib[key], cli[key]) or lib[key] == cli[key], key
+    assert "method" not in problem.record()
+
 def test_results_do_not_depend_on_threads_or_batching(problem):
     d = problem.bounds.sample(300, seed=7)
     one = problem.evaluate(d, static_only=True, threads=1)

@@ -242,7 +242,8 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     let ev = evaluate(design, s, &opts);
     say!(
         out,
-        "whole staged evaluation (stages 0-3, pipeline mode, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        "whole staged evaluation (stages 0-3, pipeline mode, method {}, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        problem.solver.method,
         problem.solver.rtol,
         ts[0] * 1e3,
         ts[ts.len() / 2] * 1e3,
@@ -253,6 +254,8 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
     say!(out, "wrote {} and {}", csv.display(), svg.display());
     Ok(serde_json::json!({
         "bench": "work-precision", "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
-        "whole_evaluation_ms": { "min": ts[0] * 1e3, "median": ts[ts.len() / 2] * 1e3, "rtol": problem.solver.rtol },
+        "whole_evaluation_ms": {
+            "min": ts[0] * 1e3, "median": ts[ts.len() / 2] * 1e3, "rtol": problem.solver.rtol, "method": problem.solver.method,
+        },
     }))
 }

@@ -50,12 +50,13 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         }
     };
     if json {
-        outln!("{}", serde_json::to_string_pretty(&rec)?);
+        let v = gripopt::EvaluationRecord::new(&rec, p.solver.method, opts.dynamics);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
     let (k, r) = (&rec.kinematics, &rec.statics);
     outln!(
-        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m)",
+        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m){}",
         crate::cli::out::shown(&p.name),
         x.l21,
         x.b,
@@ -63,7 +64,13 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         x.r,
         x.p,
         x.psi.to_degrees(),
-        x.l_hand()
+        x.l_hand(),
+        // the method of the grasp simulation, where it is not the default (RADAU5)
+        if static_only || p.solver.method.is_default() {
+            String::new()
+        } else {
+            format!("  method {}", p.solver.method)
+        }
     );
     outln!("stage 0/1  kinematics");
     outln!("  l11 {} mm  l22 {} mm  l12 {} mm", milli(k.l11), milli(k.l22), milli(k.l12));

@@ -19,7 +19,7 @@ mod stages;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
 pub use objectives::Objectives;
-pub use record::{Derived, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use record::{Derived, EvaluationRecord, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
 pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord};
 pub use robust::{
     evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,

@@ -181,6 +181,29 @@ pub struct SimulationRecord {
     pub method: Method,
 }
 
+/// The record of `gripopt evaluate --json` (and of the Python package's `Problem.record`):
+/// the evaluation record and, where its grasp simulation uses another method than RADAU5
+/// (a problem's `solver.method = "auto"`, `"trbdf2"`, `"dopri5"`), that method, so that the
+/// work counters (`steps`, `jac_evals`, …) say which method did the work. A problem without
+/// `solver.method` (or with `"radau5"`), and stages 0–2 only, give the record alone, as before
+/// the key existed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EvaluationRecord<'a> {
+    /// The evaluation record.
+    #[serde(flatten)]
+    pub record: &'a Record,
+    /// The integration method of the grasp simulation, where it is not RADAU5.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<Method>,
+}
+
+impl<'a> EvaluationRecord<'a> {
+    /// `record` of an evaluation with `method`, through stage 3 (`dynamics`) or not.
+    pub fn new(record: &'a Record, method: Method, dynamics: bool) -> Self {
+        EvaluationRecord { record, method: (dynamics && !method.is_default()).then_some(method) }
+    }
+}
+
 impl Record {
     /// The record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {

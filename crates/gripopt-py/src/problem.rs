@@ -169,7 +169,7 @@ impl PyProblem {
         let x = design_of(&design)?.design();
         let p = &self.problem;
         let r = py.detach(|| gripopt::evaluate(p, &x, stages(static_only)));
-        json(&r)
+        json(&gripopt::EvaluationRecord::new(&r, p.solver.method, !static_only))
     }
 
     /// Simulate one design in a scene (None: the problem's) in diagnostic mode, as
