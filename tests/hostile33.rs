@@ -2,7 +2,7 @@
 //! additions (`solver.method`, `export --object`, `--json` failures) ran into. Each test
 //! fails without its fix.
 
-use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
+use crate::common::{output_text, run_gripopt, untimed, BOTTLE_FILE};
 use gripopt::params::Problem;
 use gripopt::Stages;
 use std::path::{Path, PathBuf};
@@ -23,22 +23,6 @@ fn with_method(file: &str, dir: &Path, name: &str, method: &str) -> String {
     let path = dir.join(name);
     std::fs::write(&path, text.replacen("\n[solver]\n", &format!("\n[solver]\nmethod = \"{method}\"\n"), 1)).unwrap();
     path.display().to_string()
-}
-
-/// A JSON value without its CPU times (the only values that differ between two runs).
-fn untimed(mut v: serde_json::Value) -> serde_json::Value {
-    fn strip(v: &mut serde_json::Value) {
-        match v {
-            serde_json::Value::Object(m) => {
-                m.remove("cpu_s");
-                m.values_mut().for_each(strip);
-            }
-            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
-            _ => {}
-        }
-    }
-    strip(&mut v);
-    v
 }
 
 fn evaluate_json(args: &[&str]) -> serde_json::Value {

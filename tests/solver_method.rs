@@ -3,7 +3,7 @@
 //! same records as before the key existed), an unknown value refused naming the file and the
 //! field, and a run whose problem file's method was edited refused on resume.
 
-use crate::common::{nominal, output_text, run_gripopt, BOTTLE_FILE};
+use crate::common::{nominal, output_text, run_gripopt, untimed, BOTTLE_FILE};
 use gripopt::eval::{evaluate, EvalOptions, Record};
 use gripopt::params::Problem;
 use gripopt::sim::{Controls, Integration, Method};
@@ -31,20 +31,8 @@ fn bottle_with(dir: &Path, name: &str, rtol: &str, method: Option<&str>) -> Path
 }
 
 /// The record as JSON without its CPU times (the only values that differ between two runs).
-fn untimed(r: &Record) -> serde_json::Value {
-    fn strip(v: &mut serde_json::Value) {
-        match v {
-            serde_json::Value::Object(m) => {
-                m.remove("cpu_s");
-                m.values_mut().for_each(strip);
-            }
-            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
-            _ => {}
-        }
-    }
-    let mut v = serde_json::to_value(r).unwrap();
-    strip(&mut v);
-    v
+fn untimed_record(r: &Record) -> serde_json::Value {
+    untimed(serde_json::to_value(r).unwrap())
 }
 
 /// The nominal design's pipeline record under `p`'s own settings, and under them with the
@@ -72,8 +60,8 @@ fn method_auto_evaluates_with_the_switching_method() {
     assert_eq!((auto.solver.method, radau.solver.method), (Method::Auto, Method::Radau5));
     let (a, a_explicit) = records(&auto, Method::Auto);
     let (r, r_explicit) = records(&radau, Method::Radau5);
-    assert_eq!(untimed(&a), untimed(&a_explicit), "the problem's method is the one integrated");
-    assert_eq!(untimed(&r), untimed(&r_explicit));
+    assert_eq!(untimed_record(&a), untimed_record(&a_explicit), "the problem's method is the one integrated");
+    assert_eq!(untimed_record(&r), untimed_record(&r_explicit));
     let (wa, wr) = (&a.grasp.work, &r.grasp.work);
     assert!(wa.steps != wr.steps && wa.rhs_evals != wr.rhs_evals, "auto {wa:?}\nradau5 {wr:?}");
     assert!(wa.jac_evals < wr.jac_evals, "auto computes fewer Jacobians: {wa:?} vs {wr:?}");
@@ -91,7 +79,7 @@ fn method_auto_evaluates_with_the_switching_method() {
     let o = run_gripopt(&["evaluate", &file, "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
     let cli: Record = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(untimed(&cli), untimed(&a));
+    assert_eq!(untimed_record(&cli), untimed_record(&a));
     let method_of = |extra: &[&str]| {
         let o = run_gripopt(&[&["simulate", file.as_str(), "--json"], extra].concat());
         assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
@@ -116,7 +104,7 @@ fn an_absent_method_is_radau5() {
     assert_eq!(absent.solver.method, Method::Radau5);
     let (a, _) = records(&absent, Method::Radau5);
     let (n, _) = records(&named, Method::Radau5);
-    assert_eq!(untimed(&a), untimed(&n));
+    assert_eq!(untimed_record(&a), untimed_record(&n));
     let v = serde_json::to_value(absent.solver).unwrap();
     assert_eq!(v, serde_json::json!({ "rtol": 1e-6, "atol": 1e-9, "max_steps": 200000 }));
     let v = serde_json::to_value(Problem::load(bottle_with(&d, "auto.toml", "1e-7", Some("auto"))).unwrap().solver);
