@@ -74,3 +74,54 @@ fn auto_free_scene_matches_the_reference() {
     assert!(d < 1e-4 && tilt < 1e-3, "displacement {d:e}, tilt {tilt:e}");
     assert!(auto.stats.jac > 0, "RADAU5 took over on the ground contacts");
 }
+
+/// MODEL.md §13's hard cases with the switching method: a 100× stiffer contact, an impact
+/// at zero velocity at R = R_open, the finger closing on nothing
+/// into the parallel singularity, and a tiny step budget each end as RADAU5 at a tight
+/// tolerance says, with finite values and bounded work.
+#[test]
+fn hard_cases_end_as_the_reference_says() {
+    use crate::common::scene;
+    use gripopt::sim::DynOutcome;
+    let run = |x: &Design, s: &gripopt::params::SceneParams, o: &Integration, ctl: &Controls| {
+        let k = stage_kinematics(x, s).unwrap();
+        let st = stage_statics(&k.finger, s).unwrap();
+        *simulate(&k.finger, s, &st, &SceneSpec::Centred, o, ctl, &mut ()).grasp().expect("a grasp")
+    };
+    let auto = |rtol: f64| Integration::new(rtol, rtol * 1e-3, 2_000_000).with_method(Method::Auto);
+    let reference = Integration::new(1e-10, 1e-13, 2_000_000);
+    let d = Controls::DIAGNOSTIC;
+    // stiff contact: the same verdict and t_stab in bounded work (the explicit method takes
+    // the 10× faster contact oscillation in ~1 000 steps; RADAU5 at 1e-10 takes 14 566)
+    let mut s = scene();
+    s.contact.k_contact = 5.3e10;
+    let (a, r) = (run(&nominal(), &s, &auto(1e-7), &d), run(&nominal(), &s, &reference, &d));
+    assert_eq!(a.outcome, r.outcome);
+    assert!(rel(a.t_stab, r.t_stab) < 3e-4 && a.stats.steps < 20_000, "{:?}", a.stats);
+    // R = R_open: contact at 0⁺, a gentle impact
+    let mut s = scene();
+    s.object.radius = s.hand.r_open;
+    let x = Design { t22: 0.05, ..nominal() };
+    let (a, r) = (run(&x, &s, &auto(1e-7), &d), run(&x, &s, &reference, &d));
+    assert_eq!((a.outcome, a.impact_ok), (r.outcome, r.impact_ok));
+    assert!(a.first.expect("first contact").t < 1e-4);
+    // closing on nothing into the singularity: the abort, at the reference's time
+    let mut s = scene();
+    s.criteria.t_max = 0.05;
+    let x = Design::from_array(&[
+        0.04549204603835802,
+        0.05890255558786177,
+        0.0307206768455294,
+        0.6474382809963541,
+        0.6134575256373511,
+        126.19868905695499,
+    ]);
+    let free = Controls { contacts: false, ..Controls::DIAGNOSTIC };
+    let (a, r) = (run(&x, &s, &auto(1e-7), &free), run(&x, &s, &reference, &free));
+    assert_eq!((a.outcome, r.outcome), (DynOutcome::Singular, DynOutcome::Singular));
+    assert!((a.t_end / r.t_end - 1.0).abs() < 1e-6, "{} against {}", a.t_end, r.t_end);
+    // a budget of 50 steps ends in a clean discard
+    let tiny = Integration::new(1e-8, 1e-11, 50).with_method(Method::Auto);
+    let a = run(&nominal(), &scene(), &tiny, &d);
+    assert_eq!(a.outcome, DynOutcome::StepBudget);
+}
