@@ -147,8 +147,8 @@ pub enum BenchCmd {
         rtols: Vec<f64>,
     },
     /// The free scene (MODEL.md §14) of one design: CPU time, steps and evaluations against
-    /// the error of its outputs, per rtol, with the block and the dense Jacobian; writes
-    /// free_work_precision.csv and .svg.
+    /// the error of its outputs, per rtol: RADAU5 with the block and the dense Jacobian, and
+    /// the stiffness-switching method (auto); writes free_work_precision.csv and .svg.
     Free {
         #[command(flatten)]
         target: DesignTable,
@@ -161,7 +161,7 @@ pub enum BenchCmd {
         /// Relative tolerances, comma-separated.
         #[arg(long, value_delimiter = ',', default_values_t = gripopt::bench::FREE_RTOLS)]
         rtols: Vec<f64>,
-        /// Only the block Jacobian (no dense rows).
+        /// Leave out the dense-Jacobian rows (RADAU5 and auto with the block Jacobian only).
         #[arg(long)]
         no_dense: bool,
     },
