@@ -117,7 +117,7 @@ pub enum Leaf<'v> {
     Char(char),
     /// Text.
     Str(&'v str),
-    /// A pre-quoted CSV cell ([`RawCell`]): `"text"`, `""` = none.
+    /// A pre-quoted CSV cell (a `RawCell`): `"text"`, `""` = none.
     Raw(&'v str),
     /// A unit enum variant's name.
     Variant(&'static str),

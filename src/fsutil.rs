@@ -15,7 +15,7 @@ pub fn sha256_hex(data: &[u8]) -> String {
 /// own (a sweep's table, an export) into one.
 pub const RUN_FOLDER_FILES: [&str; 4] = ["run.json", "checkpoint.json", ".lock", "recording"];
 
-/// The first of [`RUN_FOLDER_FILES`] that `dir` holds (None: not a run folder, or not a
+/// The first of `RUN_FOLDER_FILES` that `dir` holds (None: not a run folder, or not a
 /// folder that can be listed).
 pub fn run_folder_file(dir: &Path) -> Option<&'static str> {
     RUN_FOLDER_FILES.into_iter().find(|f| std::fs::symlink_metadata(dir.join(f)).is_ok())

@@ -43,7 +43,7 @@ fn reduce4(jd: &Matrix2<f64>, v: Vector4<f64>) -> Vector2<f64> {
     Vector2::new(v[0] + jd[(0, 0)] * v[1] + jd[(1, 0)] * v[3], v[2] + jd[(0, 1)] * v[1] + jd[(1, 1)] * v[3])
 }
 
-/// Reduced M and c at pose `p` with active rates `qa_dot` (see [`reduced_parts`]).
+/// Reduced M and c at pose `p` with active rates `qa_dot` (see `reduced_parts`).
 #[inline]
 pub fn reduced(f: &Finger, p: &Pose, k: &Kin, qa_dot: Vector2<f64>) -> Reduced {
     let cs12 = (p.x11.dot(&p.x12), crate::math::cross(p.x11, p.x12));

@@ -117,7 +117,7 @@ pub struct Scenario {
     /// The stream it was drawn from (0: optimisation, 1: verify).
     pub stream: u64,
     /// x_off (m), height_offset (m), mu_phalanx, mu_ground (factors), restitution, fill,
-    /// tau (factors), in the order of [`INPUTS`].
+    /// tau (factors), in the order of [`INPUTS`](super::INPUTS).
     pub values: [f64; 7],
 }
 

@@ -207,7 +207,7 @@ fn names(dir: &Path) -> Result<Vec<String>> {
 
 /// The index of the recording folder `dir` for a reader: `index.jsonl` when it can be read
 /// and every line parses; otherwise (missing, unreadable, damaged: whatever the damage)
-/// [`rebuilt_index`].
+/// the index rebuilt from the shards themselves.
 pub fn index_or_rebuilt(dir: &Path) -> Result<Vec<ShardEntry>> {
     match super::index::read_index(dir) {
         Ok(index) => Ok(index),

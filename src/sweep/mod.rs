@@ -533,7 +533,7 @@ fn columns<'a>(spec: &SweepSpec, rows: &'a [Row]) -> Vec<&'a str> {
 }
 
 /// The CSV table (header and rows, without the `#` lines): varied names, `verdict`, then
-/// every record key ([`columns`]).
+/// every record key (`columns`).
 pub fn to_csv(spec: &SweepSpec, rows: &[Row]) -> String {
     let mut s = String::new();
     let names: Vec<&str> = spec.vary.iter().map(|v| v.name.as_str()).collect();

@@ -22,7 +22,7 @@ pub trait RadauScheme<const N: usize, const S: usize> {
     /// Take the system's partition for the Newton solves (asked at the first step).
     fn set_partition(&mut self, part: Option<Partition<N>>);
     /// Factor the transformed Newton matrices (γ/h − J and the (α + iβ)/h − J) for step `h`
-    /// from the Jacobian `jac` (`version`: its [`JacobianCache`] count), counting in
+    /// from the Jacobian `jac` (`version`: its `JacobianCache` count), counting in
     /// `stats.lu`; true at once if already factored for `h`, false if singular.
     fn factor(&mut self, jac: &SMatrix<f64, N, N>, version: u64, h: f64, stats: &mut Stats) -> bool;
     /// Forget the factorisations (the Jacobian changed).
