@@ -1,8 +1,9 @@
 //! Automatic stiffness switching: Dormand–Prince 5(4) where its steps are held by
 //! accuracy, RADAU5 where they would be held by stability (LSODA's idea with Hairer's
 //! stiffness test). The explicit method watches h·|λ| at its accepted steps (`h_lambda`);
-//! after [`STIFF_STEPS`] steps of the last [`STIFF_WINDOW`] at or beyond the edge of its
-//! stability region it hands over to RADAU5 at its step size. RADAU5 watches h·ρ(J) (ρ
+//! after [`STIFF_STEPS`] steps with h·|λ| > [`STIFF_H_LAMBDA`] (just inside the edge of its
+//! stability region) within a block of [`STIFF_WINDOW`] accepted steps it hands over to
+//! RADAU5 at its step size. RADAU5 watches h·ρ(J) (ρ
 //! bounded by Gelfand's formula on its Jacobian); after [`NONSTIFF_STEPS`] accepted steps
 //! in a row well inside the explicit method's region it hands back.
 
@@ -12,9 +13,10 @@ use nalgebra::{SMatrix, SVector};
 /// h·|λ| from which a Dormand–Prince step counts as held by stability (Hairer uses 3.25
 /// for a real λ; an oscillatory λ meets the region's edge at ~3).
 const STIFF_H_LAMBDA: f64 = 2.5;
-/// Explicit steps at the stability edge, of the last [`STIFF_WINDOW`], that switch to RADAU5.
+/// Explicit steps near the stability edge, within one block of [`STIFF_WINDOW`], that switch
+/// to RADAU5.
 const STIFF_STEPS: u32 = 15;
-/// The window of explicit steps the stiffness count looks at.
+/// The block of explicit steps the stiffness count looks at (counts restart after each).
 const STIFF_WINDOW: u32 = 20;
 /// h·ρ(J) below which a RADAU5 step could as well be explicit.
 const NONSTIFF_H_RHO: f64 = 1.5;
