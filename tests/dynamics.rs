@@ -366,14 +366,7 @@ fn singular_trajectory_aborts_cleanly_and_budget_guards_hold() {
 fn free_closing_into_the_parallel_singularity_aborts_cleanly() {
     let mut s = scene();
     s.criteria.t_max = 0.05;
-    let x = Design::from_array(&[
-        0.04549204603835802,
-        0.05890255558786177,
-        0.0307206768455294,
-        0.6474382809963541,
-        0.6134575256373511,
-        126.19868905695499,
-    ]);
+    let x = crate::common::singular_closing_design();
     let (f, st) = prepare(&x, &s);
     for rtol in [1e-6, 1e-9] {
         let ctl = Controls { contacts: false, ..Controls::DIAGNOSTIC };

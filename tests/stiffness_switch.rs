@@ -108,14 +108,7 @@ fn hard_cases_end_as_the_reference_says() {
     // closing on nothing into the singularity: the abort, at the reference's time
     let mut s = scene();
     s.criteria.t_max = 0.05;
-    let x = Design::from_array(&[
-        0.04549204603835802,
-        0.05890255558786177,
-        0.0307206768455294,
-        0.6474382809963541,
-        0.6134575256373511,
-        126.19868905695499,
-    ]);
+    let x = crate::common::singular_closing_design();
     let free = Controls { contacts: false, ..Controls::DIAGNOSTIC };
     let (a, r) = (run(&x, &s, &auto(1e-7), &free), run(&x, &s, &reference, &free));
     assert_eq!((a.outcome, r.outcome), (DynOutcome::Singular, DynOutcome::Singular));

@@ -160,3 +160,16 @@ pub fn untimed(mut v: serde_json::Value) -> serde_json::Value {
     strip(&mut v);
     v
 }
+
+/// A design (found by searching the box, seed 3) whose finger, closing on nothing, drives the
+/// five-bar into its parallel singularity (MODEL.md §13 item 1).
+pub fn singular_closing_design() -> Design {
+    Design::from_array(&[
+        0.04549204603835802,
+        0.05890255558786177,
+        0.0307206768455294,
+        0.6474382809963541,
+        0.6134575256373511,
+        126.19868905695499,
+    ])
+}
