@@ -1,7 +1,7 @@
 //! The library's one error type. Every variant names the file (or flag) it is about and
 //! keeps its source error; the CLI adds context with anyhow and maps errors to exit codes.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Every error the library returns.
 #[derive(Debug, thiserror::Error)]
@@ -249,6 +249,36 @@ impl Error {
         }
     }
 
+    /// The file or folder the error is about, where it names one (the problem file of an
+    /// invalid field, `command line` for a flag). A moved run folder
+    /// ([`Error::FolderMoved`]) names none: its path is where the folder was.
+    pub fn file(&self) -> Option<&Path> {
+        match self {
+            Error::Io { path, .. }
+            | Error::Json { path, .. }
+            | Error::Mcap { path, .. }
+            | Error::DamagedRecording { path, .. }
+            | Error::RunDir { path, .. }
+            | Error::Locked { path, .. }
+            | Error::Recording { path, .. }
+            | Error::Plot { path, .. }
+            | Error::Stopped { path, .. }
+            | Error::StoppedBeforeCheckpoint { path, .. } => Some(path),
+            Error::ProblemParse { file, .. } | Error::Checkpoint { file, .. } | Error::InvalidField { file, .. } => {
+                Some(file)
+            }
+            _ => None,
+        }
+    }
+
+    /// The field (dotted problem-file name, or the flag) the error is about, where it names one.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            Error::InvalidField { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+
     /// The process exit code this error ends the CLI with (see docs/exit-codes in the README):
     /// 2 for bad input, 1 for a failed run.
     pub fn exit_code(&self) -> i32 {
@@ -358,4 +388,26 @@ pub(crate) fn one_line(text: &str) -> String {
         s = s.chars().take(299).collect::<String>() + "…";
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn file_and_field_are_those_the_error_names() {
+        let invalid = Error::InvalidField {
+            file: "p.toml".into(),
+            field: "hand.tau".into(),
+            value: "-1".into(),
+            rule: "must be > 0".into(),
+        };
+        assert_eq!((invalid.file(), invalid.field()), (Some(Path::new("p.toml")), Some("hand.tau")));
+        let io = Error::io("run/a.csv", "cannot write", std::io::Error::other("full"));
+        assert_eq!((io.file(), io.field()), (Some(Path::new("run/a.csv")), None));
+        let checkpoint = Error::Checkpoint { file: "c.json".into(), message: "bad".into() };
+        assert_eq!(checkpoint.file(), Some(Path::new("c.json")));
+        assert_eq!((Error::Input("--design".into()).file(), Error::Input(String::new()).field()), (None, None));
+        assert_eq!(Error::FolderMoved { path: "run".into() }.file(), None);
+    }
 }

@@ -18,26 +18,6 @@ fn class_of(e: &Error) -> &'static str {
     }
 }
 
-/// The file (or folder) and the field an error is about, where it names them.
-fn file_and_field(e: &Error) -> (Option<String>, Option<String>) {
-    let shown = |p: &std::path::Path| Some(p.display().to_string());
-    match e {
-        Error::Io { path, .. }
-        | Error::Json { path, .. }
-        | Error::Mcap { path, .. }
-        | Error::DamagedRecording { path, .. }
-        | Error::RunDir { path, .. }
-        | Error::Locked { path, .. }
-        | Error::Recording { path, .. }
-        | Error::Plot { path, .. }
-        | Error::Stopped { path, .. }
-        | Error::StoppedBeforeCheckpoint { path, .. } => (shown(path), None),
-        Error::ProblemParse { file, .. } | Error::Checkpoint { file, .. } => (shown(file), None),
-        Error::InvalidField { file, field, .. } => (shown(file), Some(field.clone())),
-        _ => (None, None),
-    }
-}
-
 /// The library's command-line flags as the Python arguments that set them: (flag, the
 /// argument as a message names it, the argument `e.field` names).
 const ARGUMENTS: [(&str, &str, &str); 9] = [
@@ -84,7 +64,8 @@ pub fn to_py(e: Error) -> PyErr {
             return exception("InputError", message, None, Some(name.to_string()), e.exit_code());
         }
     }
-    let (file, field) = file_and_field(&e);
+    let file = e.file().map(|p| p.display().to_string());
+    let field = e.field().map(String::from);
     exception(class_of(&e), in_python_words(&e.to_string()), file, field, e.exit_code())
 }
 

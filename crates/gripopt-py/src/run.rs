@@ -14,6 +14,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+/// A Python dict of `"key" => value` pairs, in that order (each value converted by PyO3;
+/// a failed conversion returns its error from the enclosing function).
+macro_rules! py_dict {
+    ($py:expr, { $($key:literal => $value:expr),+ $(,)? }) => {{
+        let d = PyDict::new($py);
+        $(d.set_item($key, $value)?;)+
+        d
+    }};
+}
+
 /// How often the waiting thread lets Python run its signal handlers (ctrl-c).
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
@@ -40,13 +50,14 @@ impl Progress for PyProgress {
     fn generation(&mut self, g: &GenerationReport) -> Result<(), String> {
         let Some(cb) = &self.callback else { return Ok(()) };
         let r = Python::attach(|py| -> PyResult<()> {
-            let d = PyDict::new(py);
-            d.set_item("generation", g.generation)?;
-            d.set_item("max_generations", g.max_generations)?;
-            d.set_item("evaluations", g.evaluations)?;
-            d.set_item("population", g.population)?;
-            d.set_item("feasible", g.feasible)?;
-            d.set_item("hypervolume", g.hypervolume)?;
+            let d = py_dict!(py, {
+                "generation" => g.generation,
+                "max_generations" => g.max_generations,
+                "evaluations" => g.evaluations,
+                "population" => g.population,
+                "feasible" => g.feasible,
+                "hypervolume" => g.hypervolume,
+            });
             cb.call1(py, (d,))?;
             Ok(())
         });
@@ -107,18 +118,18 @@ fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path
 
 /// The summary as a dict.
 fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("out", &s.out)?;
-    d.set_item("generations", s.generations)?;
-    d.set_item("evaluations", s.evaluations)?;
-    d.set_item("front_size", s.front_size)?;
-    d.set_item("feasible", s.feasible)?;
-    d.set_item("hypervolume", s.hv)?;
-    d.set_item("archive_size", s.archive_size)?;
-    d.set_item("archive_hypervolume", s.archive_hv)?;
-    d.set_item("interrupted", s.interrupted)?;
-    d.set_item("wall_s", s.wall_s)?;
-    Ok(d)
+    Ok(py_dict!(py, {
+        "out" => &s.out,
+        "generations" => s.generations,
+        "evaluations" => s.evaluations,
+        "front_size" => s.front_size,
+        "feasible" => s.feasible,
+        "hypervolume" => s.hv,
+        "archive_size" => s.archive_size,
+        "archive_hypervolume" => s.archive_hv,
+        "interrupted" => s.interrupted,
+        "wall_s" => s.wall_s,
+    }))
 }
 
 /// Recording options: None = the defaults, "none" = nothing recorded, else a JSON object
@@ -360,16 +371,16 @@ impl PyRunFolder {
     ) -> PyResult<Bound<'py, PyDict>> {
         let f = &self.folder;
         let r = py.detach(|| f.replay(id)).py()?;
-        let d = PyDict::new(py);
-        d.set_item("verified", r.verified)?;
-        d.set_item("max_difference", r.max_difference)?;
-        d.set_item("compared", r.compared)?;
-        d.set_item("values_compared", r.values_compared)?;
-        d.set_item("recomputed_feasible", r.recomputed_feasible)?;
-        d.set_item("fresh", json(&r.fresh)?)?;
-        d.set_item("file", &r.recorded.file)?;
-        // a recording by another simulator revision: agreement within the tolerance
-        d.set_item("agrees_across_revisions", r.across_revisions.as_ref().map(|a| a.agrees()))?;
-        Ok(d)
+        Ok(py_dict!(py, {
+            "verified" => r.verified,
+            "max_difference" => r.max_difference,
+            "compared" => r.compared,
+            "values_compared" => r.values_compared,
+            "recomputed_feasible" => r.recomputed_feasible,
+            "fresh" => json(&r.fresh)?,
+            "file" => &r.recorded.file,
+            // a recording by another simulator revision: agreement within the tolerance
+            "agrees_across_revisions" => r.across_revisions.as_ref().map(|a| a.agrees()),
+        }))
     }
 }
