@@ -35,6 +35,7 @@ mod robustness;
 mod robustness_cli;
 mod robustness_edges;
 mod robustness_folders;
+mod s34_small;
 mod scene_cli;
 mod scenes;
 mod seams;

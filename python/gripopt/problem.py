@@ -284,7 +284,8 @@ class Problem:
             scene: ``"centred"``, ``"offset:0.002"`` (object offset in metres), ``"free"``
                 or ``"free:0.002"``; None: the problem's ``[scene]``.
             rtol: relative tolerance (None: the problem's ``solver.rtol``).
-            method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` or ``"dopri5"``; None: the
+            method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` (alias ``"tr-bdf2"``) or
+                ``"dopri5"``, the names ``gripopt simulate --method`` takes; None: the
                 problem's ``[solver] method`` (:attr:`method`; ``"radau5"`` when absent).
 
         Raises:

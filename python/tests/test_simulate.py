@@ -81,3 +81,21 @@ def test_the_problems_solver_method_is_the_default(problem, cli_json, tmp_path):
     assert same_record(untimed(radau.record), untimed(problem.simulate().record))
     with pytest.raises(gripopt.ProblemError, match="solver.method"):
         gripopt.Problem.from_toml(text.replace('"auto"', '"euler"'))
+
+
+def test_method_names_are_the_command_lines(problem, cli_json):
+    """`method=` takes what `gripopt simulate --method` takes, the alias `tr-bdf2` too (the
+    same record as the CLI's with that spelling); a bad name's error lists them all. An auto
+    record counts its switches and explicit steps; a single method's has no such keys."""
+    alias = problem.simulate(method="tr-bdf2")
+    assert alias.record["method"] == "trbdf2"
+    assert same_record(untimed(alias.record), untimed(problem.simulate(method="trbdf2").record))
+    cli = cli_json("simulate", "problems/bottle-1l.toml", "--method", "tr-bdf2", "--json")
+    assert same_record(untimed(alias.record), untimed(cli))
+    with pytest.raises(gripopt.InputError) as e:
+        problem.simulate(method="tr_bdf2")
+    for name in ['"radau5"', '"auto"', '"trbdf2"', '"tr-bdf2"', '"dopri5"']:
+        assert name in str(e.value), (name, str(e.value))
+    assert "switches" not in alias.record and "explicit_steps" not in alias.record
+    auto = problem.simulate(method="auto").record
+    assert auto["switches"] >= 1 and 0 < auto["explicit_steps"] <= auto["steps"]

@@ -184,10 +184,15 @@ fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
     );
 }
 
-/// A simulation's work on one line.
+/// A simulation's work on one line (the switching method's: how many steps were explicit
+/// and how often it switched).
 fn print_work(w: &WorkRecord) {
+    let switching = match (w.explicit_steps, w.switches) {
+        (Some(e), Some(k)) => format!(" (Dormand-Prince {e}, RADAU5 the rest; {k} switches)"),
+        _ => String::new(),
+    };
     outln!(
-        "  steps {} rejected {} rhs {} events {} cpu {} ms",
+        "  steps {}{switching} rejected {} rhs {} events {} cpu {} ms",
         w.steps.unwrap_or(0),
         w.rejected_steps.unwrap_or(0),
         w.rhs_evals.unwrap_or(0),

@@ -83,6 +83,14 @@ pub struct WorkRecord {
     pub events: Option<u32>,
     /// Wall seconds of the simulation.
     pub cpu_s: Option<f64>,
+    /// Switches between Dormand–Prince and RADAU5, both ways (method `auto` only: the key is
+    /// absent for every other method).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub switches: Option<u64>,
+    /// Accepted steps Dormand–Prince took (part of `steps`; RADAU5 took the rest; method
+    /// `auto` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub explicit_steps: Option<u64>,
 }
 
 impl WorkRecord {
@@ -97,6 +105,8 @@ impl WorkRecord {
             newton_failures: Some(st.newton_fail),
             events: Some(events),
             cpu_s: Some(cpu_s),
+            switches: st.switches,
+            explicit_steps: st.explicit_steps,
         }
     }
 }

@@ -42,13 +42,32 @@ impl Method {
             Method::Auto => "auto",
         }
     }
-    /// The method spelled `s` ([`Method::as_str`]), or None.
+    /// Other accepted spellings of a method (as `gripopt simulate --method` takes them):
+    /// `tr-bdf2` for `trbdf2`.
+    pub const ALIASES: [(&'static str, Method); 1] = [("tr-bdf2", Method::TrBdf2)];
+
+    /// The method spelled `s` ([`Method::as_str`] or one of [`Method::ALIASES`]), or None.
     pub fn parse(s: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.as_str() == s)
+        Method::ALL
+            .into_iter()
+            .find(|m| m.as_str() == s)
+            .or_else(|| Method::ALIASES.iter().find(|a| a.0 == s).map(|a| a.1))
     }
-    /// The accepted spellings as a sentence: `"radau5", "auto", "trbdf2" or "dopri5"`.
+    /// The accepted spellings as a sentence: `"radau5", "auto", "trbdf2" (or "tr-bdf2") or
+    /// "dopri5"`.
     pub fn accepted() -> String {
-        let q: Vec<String> = Method::ALL.iter().map(|m| format!("{:?}", m.as_str())).collect();
+        let q: Vec<String> = Method::ALL
+            .iter()
+            .map(|m| {
+                let aliases: Vec<String> =
+                    Method::ALIASES.iter().filter(|a| a.1 == *m).map(|a| format!("{:?}", a.0)).collect();
+                if aliases.is_empty() {
+                    format!("{:?}", m.as_str())
+                } else {
+                    format!("{:?} (or {})", m.as_str(), aliases.join(", "))
+                }
+            })
+            .collect();
         format!("{} or {}", q[..q.len() - 1].join(", "), q[q.len() - 1])
     }
     /// Whether this is the default, RADAU5 (what a problem file without `solver.method` gets;
@@ -61,5 +80,21 @@ impl Method {
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.as_str())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_spelling_parses_and_the_sentence_lists_them() {
+        for m in Method::ALL {
+            assert_eq!(Method::parse(m.as_str()), Some(m));
+        }
+        assert_eq!(Method::parse("tr-bdf2"), Some(Method::TrBdf2));
+        assert_eq!(Method::parse("euler"), None);
+        assert_eq!(Method::parse("TRBDF2"), None, "spellings are lower case, as on the command line");
+        assert_eq!(Method::accepted(), r#""radau5", "auto", "trbdf2" (or "tr-bdf2") or "dopri5""#);
     }
 }

@@ -8,6 +8,7 @@
 use crate::eval::FreeSceneRecord;
 pub use crate::eval::{Derived, Objectives};
 pub use crate::params::DesignParameters;
+use crate::params::Method;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
@@ -111,11 +112,16 @@ fn obj(props: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": props, "required": required})
 }
 
-/// The JSON type of every key of the free scene's record, asked of the record type itself:
-/// the key set to 0.5, 1, true or [0.5, 0.5] in turn, the first value the type reads is the
-/// key's type (a number, a count, a boolean, an array of numbers; text otherwise).
-fn free_scene_properties() -> Value {
-    let keys = serde_json::to_value(FreeSceneRecord::default()).expect("records serialise");
+/// The JSON type of every key of the free scene's record with `method`'s work counters
+/// (the switching method's two more: `switches`, `explicit_steps`), asked of the record type
+/// itself: the key set to 0.5, 1, true or [0.5, 0.5] in turn, the first value the type reads
+/// is the key's type (a number, a count, a boolean, an array of numbers; text otherwise).
+fn free_scene_properties(method: Method) -> Value {
+    let mut every = FreeSceneRecord::default();
+    if method == Method::Auto {
+        (every.work.switches, every.work.explicit_steps) = (Some(0), Some(0));
+    }
+    let keys = serde_json::to_value(every).expect("records serialise");
     let reads = |k: &str, v: Value| serde_json::from_value::<FreeSceneRecord>(json!({ k: v })).is_ok();
     let type_of = |k: &str| {
         if reads(k, json!(0.5)) {
@@ -167,8 +173,10 @@ fn robust_schema() -> Value {
     })
 }
 
-/// `gripopt.Design` on `/designs`.
-pub fn design() -> Value {
+/// `gripopt.Design` on `/designs`, of a problem integrated with `method` (the free scene's
+/// keys of the switching method's work are listed only for it: the schema of every other
+/// method's recording is as before).
+pub fn design(method: Method) -> Value {
     let mut s = obj(
         json!({
             "id": int(),
@@ -192,7 +200,7 @@ pub fn design() -> Value {
             "free_scene": {
                 "type": "object",
                 "description": "free scene only (MODEL.md §14.4): the object's measured motion, the keys of `evaluate --json` for the free scene (keys not computed, e.g. the verdict flags where the free scene did not run to t_obs, are left out)",
-                "properties": free_scene_properties()
+                "properties": free_scene_properties(method)
             },
             "robust": robust_schema(),
             "trajectory_samples": int()
@@ -215,4 +223,22 @@ pub fn design() -> Value {
     );
     s["title"] = "gripopt.Design".into();
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The switching method's work counters are listed for its recordings only (a RADAU5
+    /// recording's schema is as before), as counts.
+    #[test]
+    fn the_switching_counters_are_in_the_auto_schema_only() {
+        let keys = |m: Method| design(m)["properties"]["free_scene"]["properties"].clone();
+        let (radau, auto) = (keys(Method::Radau5), keys(Method::Auto));
+        for k in ["switches", "explicit_steps"] {
+            assert!(radau.get(k).is_none(), "{k} in {radau}");
+            assert_eq!(auto[k], int(), "{k}");
+        }
+        assert_eq!(radau["steps"], int());
+    }
 }

@@ -72,7 +72,7 @@ pub fn write_shard<R: Recordable>(
     );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
-    let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(), &tmp)?;
+    let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(problem.solver.method), &tmp)?;
     let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;

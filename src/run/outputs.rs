@@ -13,7 +13,7 @@
 
 use super::archive::Archive;
 use super::gripper::{GripperInfo, GripperProblem};
-use super::robust_columns::RobustColumns;
+use super::robust_columns::{float_cell, line_with_floats, RobustColumns};
 use crate::cells::{line, Floats, RawCell};
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
@@ -118,11 +118,34 @@ impl DesignRow {
     /// Each column with its value as text (as in the file, `reason` unquoted; empty: not
     /// computed).
     pub fn text_cells(&self) -> Vec<(String, String)> {
-        let mut c = crate::cells::cells(self, Floats::Display);
+        let mut c = self.csv_cells();
         if let Some(r) = c.iter_mut().find(|(k, _)| k == "reason") {
             r.1 = self.reason.clone().unwrap_or_default();
         }
         c
+    }
+
+    /// Each column with its cell as written (`reason` quoted): a robust problem's measured
+    /// values always with a decimal point (`0.0`, not `0`: pandas reads the column as
+    /// floats even where every value is whole); the other columns as [`line`] writes them.
+    fn csv_cells(&self) -> Vec<(String, String)> {
+        let mut c = crate::cells::cells(self, Floats::Display);
+        if !self.robust.0.is_empty() {
+            for (k, v) in &mut c {
+                if self.robust.is_float(k) {
+                    float_cell(v);
+                }
+            }
+        }
+        c
+    }
+
+    /// The row's line of pareto.csv, archive.csv or population.csv, with its line break.
+    pub fn csv_line(&self) -> String {
+        if self.robust.0.is_empty() {
+            return line(self, Floats::Display);
+        }
+        line_with_floats(self, |k| self.robust.is_float(k))
     }
 
     /// The design as evaluated (l21, b, t22, r, p, ψ°).
@@ -229,7 +252,7 @@ fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> Strin
 
 /// One row of [`DESIGN_COLUMNS`].
 fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>) {
-    s.push_str(&line(&DesignRow::of(ind, rank), Floats::Display));
+    s.push_str(&DesignRow::of(ind, rank).csv_line());
 }
 
 /// The population's feasible non-dominated designs, sorted by id.
@@ -376,6 +399,56 @@ mod tests {
             .deserialize()
             .collect::<std::result::Result<_, _>>()
             .unwrap();
+        assert_eq!(back, vec![row.clone()]);
+        assert_eq!(row.csv_line(), line(&row, Floats::Display), "a single-object problem's row as before");
+    }
+
+    /// A robust row's measured values are written with a decimal point (pandas reads a column
+    /// of `0` as int64), its counts as whole numbers; the line reads back as the row.
+    #[test]
+    fn robust_measured_values_are_float_literals() {
+        let cells = [
+            ("scenarios_run", Some(8.0)),
+            ("scenarios_saved", Some(0.0)),
+            ("bottle.p_stay", Some(0.0)),
+            ("bottle.p_stay_lo", Some(0.0)),
+            ("bottle.p_stay_hi", Some(0.25)),
+            ("bottle.stays", Some(0.0)),
+            ("bottle.scenarios", Some(8.0)),
+            ("bottle.max_displacement", Some(1.0)),
+            ("bottle.max_offset", None),
+        ];
+        let robust = RobustColumns(cells.iter().map(|(k, v)| (k.to_string(), *v)).collect());
+        let row = DesignRow {
+            id: 3,
+            generation: 0,
+            rank: None,
+            feasible: false,
+            failed_stage: Some(4),
+            violation: Some(1.0),
+            reason: Some("p".into()),
+            design: DesignParameters::from_array(&[0.05, 0.06, 0.035, 0.5, 0.4, 130.0]),
+            l11: Some(0.0),
+            l12: None,
+            l22: None,
+            l_hand: 0.23,
+            form_closed: None,
+            max_offset: None,
+            alpha: None,
+            mean_force: None,
+            t_stab: None,
+            sim_steps: None,
+            sim_rhs_evals: None,
+            force_model: None,
+            robust,
+        };
+        let line = row.csv_line();
+        assert!(line.ends_with(",8,0,0.0,0.0,0.25,0,8,1.0,\n"), "{line}");
+        assert!(line.contains(",1,\"p\",") && line.contains(",0,,,0.23,"), "other columns as before: {line}");
+        let header: Vec<String> = crate::cells::header(&row);
+        let text = format!("{}\n{line}", header.join(","));
+        let back: Vec<DesignRow> =
+            csv::Reader::from_reader(text.as_bytes()).deserialize().collect::<std::result::Result<_, _>>().unwrap();
         assert_eq!(back, vec![row]);
     }
 }

@@ -82,10 +82,42 @@ impl RobustColumns {
         names
     }
 
+    /// Whether `key` is one of these columns holding a measured value, not a count: an
+    /// object's `p_stay`, `p_stay_lo`, `p_stay_hi`, `max_displacement` and objectives (the
+    /// CSV writes them with a decimal point, see [`float_cell`]).
+    pub fn is_float(&self, key: &str) -> bool {
+        const COUNTS: [&str; 4] = ["scenarios_run", "scenarios_saved", "stays", "scenarios"];
+        let base = key.rsplit('.').next().unwrap_or(key);
+        !COUNTS.contains(&base) && self.0.iter().any(|(k, _)| k == key)
+    }
+
     /// The columns with units and meanings (for a CSV's `#` header).
     pub fn columns(&self) -> Vec<(String, &'static str)> {
         self.0.iter().map(|(k, _)| (k.clone(), robust_unit(k).unwrap_or("-"))).collect()
     }
+}
+
+/// A float's CSV cell (Rust's `{}`: `0`, `1`, `0.25`, `NaN`) with a decimal point where it
+/// has none (`0.0`, `1.0`), so that a column of whole values still reads as floats (pandas'
+/// `read_csv` types a column of `0` as int64). Empty and non-finite cells stay as they are.
+pub fn float_cell(cell: &mut String) {
+    if !cell.is_empty() && cell.bytes().all(|b| b.is_ascii_digit() || b == b'-') {
+        cell.push_str(".0");
+    }
+}
+
+/// One CSV line of `row` (as `cells::line` writes it) with the cells of the columns that
+/// `is_float` names written by [`float_cell`].
+pub(crate) fn line_with_floats<T: Serialize + ?Sized>(row: &T, is_float: impl Fn(&str) -> bool) -> String {
+    let mut cells = crate::cells::cells(row, crate::cells::Floats::Display);
+    for (k, v) in &mut cells {
+        if is_float(k) {
+            float_cell(v);
+        }
+    }
+    let mut s = cells.into_iter().map(|(_, c)| c).collect::<Vec<_>>().join(",");
+    s.push('\n');
+    s
 }
 
 /// The unit of robust column `name`: a design-level one, or an object's `NAME.column`

@@ -10,7 +10,6 @@ use super::folder::{read_table, RunFolder};
 use super::gripper::GripperInfo;
 use super::lock::{LockHolder, RunLock};
 use super::outputs::{final_front, DesignRow};
-use crate::cells::{line, Floats};
 use crate::Result;
 
 /// The designs of a run's checkpoint, as pareto.csv, archive.csv and population.csv write
@@ -66,7 +65,7 @@ impl RunFolder {
         read_table::<DesignRow>(&path)?;
         let text = std::fs::read_to_string(&path).map_err(|e| crate::Error::io(&path, "cannot read", e))?;
         let data: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).skip(1).collect();
-        let expected: Vec<String> = rows.iter().map(|r| line(r, Floats::Display)).collect();
+        let expected: Vec<String> = rows.iter().map(DesignRow::csv_line).collect();
         let same =
             data.len() == expected.len() && data.iter().zip(&expected).all(|(a, b)| *a == b.trim_end_matches('\n'));
         Ok((!same).then(|| {

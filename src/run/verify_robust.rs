@@ -8,8 +8,8 @@
 
 use super::folder::RunFolder;
 use super::lock::RunLock;
+use super::robust_columns::line_with_floats;
 use super::verify::{run_line, CheckedState, CHECKPOINT_FILE};
-use crate::cells::{line, Floats};
 use crate::eval::{robust_record, robust_start, run_scenario, EvalOptions, RobustSetup, ScenarioRecord};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, STREAM_VERIFY};
@@ -190,7 +190,8 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     );
     csv.push_str("id,object,p_stay_in,scenarios_in,p_stay_out,p_stay_out_lo,p_stay_out_hi,stays_out,scenarios_out,max_displacement_out,keeps\n");
     for row in &rows {
-        csv.push_str(&line(row, Floats::Display));
+        // P(stay) and the displacement as floats even where every value is whole
+        csv.push_str(&line_with_floats(row, |k| k.starts_with("p_stay") || k == "max_displacement_out"));
     }
     let out = dir.join(VERIFY_ROBUST_FILE);
     write_atomic(&out, csv.as_bytes())?;

@@ -166,6 +166,8 @@ impl<const N: usize> Stepper<N> for Switching<N> {
             lu: a.lu + b.lu,
             newton: a.newton + b.newton,
             newton_fail: a.newton_fail + b.newton_fail,
+            switches: Some(u64::from(self.switches.0) + u64::from(self.switches.1)),
+            explicit_steps: Some(a.steps),
         }
     }
 }
@@ -220,6 +222,10 @@ mod tests {
         assert!(d.steps > 24_000, "{d:?}");
         assert!(a.steps * 10 < d.steps, "{a:?} against {d:?}");
         assert!(a.jac > 0 && a.lu > 0, "the implicit method ran: {a:?}");
+        assert_eq!(a.switches, Some(2), "{a:?}");
+        let explicit = a.explicit_steps.expect("the switching method counts its explicit steps");
+        assert!(explicit > 0 && explicit < a.steps, "{a:?}");
+        assert_eq!((d.switches, d.explicit_steps), (None, None), "a single method counts no switches");
     }
 
     #[test]
