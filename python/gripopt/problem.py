@@ -167,6 +167,16 @@ class Problem:
     __slots__ = ("_native",)
 
     def __init__(self, native: Any) -> None:
+        if not isinstance(native, _gripopt.Problem):
+            hint = (
+                f"; load a file with gripopt.Problem.load({native!r})"
+                if isinstance(native, (str, os.PathLike))
+                else ""
+            )
+            raise TypeError(
+                "gripopt.Problem(...) wraps a loaded problem: use Problem.load(path) or "
+                f"Problem.from_toml(text), not Problem({type(native).__name__}){hint}"
+            )
         self._native = native
 
     @classmethod

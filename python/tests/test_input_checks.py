@@ -146,3 +146,13 @@ def test_robust_columns_carry_units_and_meanings():
         assert (units[f"{o}.max_displacement"], units[f"{o}.mean_force"], units[f"{o}.t_stab"]) == ("m", "N", "s")
         assert units[f"{o}.p_stay"] == "-" and meanings[f"{o}.p_stay"].startswith(f"{o}: ")
     assert units["scenarios_run"] == "-"  # the design-level robust columns too
+
+
+def test_problem_of_a_path_is_a_type_error_naming_load(tmp_path):
+    # hostile pass 34: Problem("file.toml") was accepted and failed at its first use with
+    # AttributeError: 'str' object has no attribute 'method'
+    for given in ["problems/bottle-1l.toml", tmp_path / "p.toml"]:
+        with pytest.raises(TypeError, match=r"Problem\.load\("):
+            gripopt.Problem(given)
+    with pytest.raises(TypeError, match="not Problem\\(int\\)"):
+        gripopt.Problem(3)

@@ -290,7 +290,9 @@ pub fn compact(v: f64) -> String {
 fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
     if let Some(v) = r {
         // the same range as the problem file's solver.rtol
-        gripopt::params::limit("solver.rtol").check(v).map_err(|rule| anyhow::anyhow!("--rtol {v}: {rule}"))?;
+        gripopt::params::limit("solver.rtol")
+            .check(v)
+            .map_err(|rule| anyhow::anyhow!("--rtol {}: {rule}", gripopt::params::fmt_num(v)))?;
     }
     Ok(r)
 }
@@ -360,11 +362,9 @@ pub fn run() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            // a usage error (not --help or --version) with --json: its first line as JSON
+            // a usage error (not --help or --version) with --json: its message as JSON
             if e.use_stderr() && json_asked() {
-                let text = e.to_string();
-                let first = text.lines().next().unwrap_or_default();
-                out::error_json(first.strip_prefix("error: ").unwrap_or(first), e.exit_code());
+                out::error_json(&out::usage_message(&e.to_string()), e.exit_code());
             }
             e.exit()
         }

@@ -4,6 +4,10 @@ use crate::cli::out::EXIT_CHECK_FAILED;
 use anyhow::{bail, Context, Result};
 use gripopt::optim::{run_test, TestProblem};
 
+/// The most seeds one `moo-test --seeds A-B` runs (each is a whole NSGA-II run; the list is
+/// held in memory).
+const MAX_SEEDS: u64 = 100_000;
+
 /// `gripopt moo-test NAME --seed S | --seeds A-B [--json]`: the exit code is
 /// [`EXIT_CHECK_FAILED`] when a problem's hypervolume median over the seeds lies outside the
 /// reference band (the text line says OUTSIDE; with `--json` a line on stderr says so), 0
@@ -34,6 +38,12 @@ pub fn moo_test(
             let b: u64 = b.trim().parse().with_context(|| format!("--seeds `{r}`: `{b}` is not a whole number"))?;
             if a > b {
                 bail!("--seeds `{r}`: empty range");
+            }
+            if b - a >= MAX_SEEDS {
+                bail!(
+                    "--seeds `{r}`: {} seeds, at most {MAX_SEEDS} (each seed is a whole NSGA-II run)",
+                    (b - a).saturating_add(1)
+                );
             }
             (a..=b).collect()
         }
@@ -78,9 +88,10 @@ pub fn moo_test(
         let igd_med = median_and_range(runs.iter().map(|r| r.igd).collect()).median;
         let wall: f64 = runs.iter().map(|r| r.wall_s).sum::<f64>() / runs.len() as f64;
         let verdict = if inside { "inside" } else { "OUTSIDE" };
+        let seeds = gripopt::run::counted(runs.len() as u64, "seed", "seeds");
         outln!(
-            "{:<8} seeds {:>2}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
-            p.name(), runs.len(), hv.median, hv.min, hv.max, rm, lo, hi, igd_med, runs[0].evaluations, wall
+            "{:<8} {seeds:>8}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
+            p.name(), hv.median, hv.min, hv.max, rm, lo, hi, igd_med, runs[0].evaluations, wall
         );
     }
     Ok(code)

@@ -34,6 +34,30 @@ pub fn error_message(e: &anyhow::Error) -> String {
     gripopt::run::printable(&msg)
 }
 
+/// The message of clap's rendered usage error `text` on one line: its lines before the
+/// usage block, without the `error: ` prefix: a list's indented items after its colon,
+/// separated by ", ", other lines (clap's tips) after "; " (e.g. "the following required
+/// arguments were not provided: --out <OUT>, <PROBLEM>").
+pub fn usage_message(text: &str) -> String {
+    let lines = text.lines().take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"));
+    let mut joined = String::new();
+    let mut item = false;
+    for raw in lines.filter(|l| !l.trim().is_empty()) {
+        // clap indents the items of a list (missing arguments, possible values)
+        let indented = raw.starts_with(' ');
+        if !joined.is_empty() {
+            joined.push_str(match (joined.ends_with(':'), item && indented) {
+                (true, _) => " ",
+                (false, true) => ", ",
+                _ => "; ",
+            });
+        }
+        joined.push_str(raw.trim());
+        item = indented;
+    }
+    joined.strip_prefix("error: ").unwrap_or(&joined).to_string()
+}
+
 /// Exit code of an error: the library's classification where it is a library error, a
 /// closed pipe quietly, 1 for other I/O failures, 2 for the CLI's own checks of its flags.
 pub fn error_exit_code(e: &anyhow::Error) -> i32 {

@@ -188,7 +188,9 @@ fn print_impact(i: &ImpactRecord, theta2: Option<f64>) {
 /// and how often it switched).
 fn print_work(w: &WorkRecord) {
     let switching = match (w.explicit_steps, w.switches) {
-        (Some(e), Some(k)) => format!(" (Dormand-Prince {e}, RADAU5 the rest; {k} switches)"),
+        (Some(e), Some(k)) => {
+            format!(" (Dormand-Prince {e}, RADAU5 the rest; {k} switch{})", if k == 1 { "" } else { "es" })
+        }
         _ => String::new(),
     };
     outln!(

@@ -104,27 +104,36 @@ impl Limit {
             return Err("must be a finite number".into());
         }
         let below = if self.lo_open { v <= self.lo } else { v < self.lo };
+        let unit = self.unit_suffix();
         if below {
-            return Err(format!("must be {} {}", if self.lo_open { ">" } else { ">=" }, num(self.lo)));
-        }
-        if v > self.hi {
+            let op = if self.lo_open { ">" } else { ">=" };
             return Err(format!(
-                "must be <= {} {} (the admissible range is {})",
-                num(self.hi),
-                self.unit,
+                "must be {op} {}{unit} (the admissible range is {}{unit})",
+                num(self.lo),
                 self.range()
             ));
         }
+        if v > self.hi {
+            return Err(format!("must be <= {}{unit} (the admissible range is {}{unit})", num(self.hi), self.range()));
+        }
         Ok(v)
     }
-    /// The range as text: `(0, 100]`, `[1e-12, 0.1]`.
+    /// The range as text: `(0, 100]`, `[1e-12, 0.1]` (docs/problem-files.md's column).
     pub fn range(&self) -> String {
         format!("{}{}, {}]", if self.lo_open { "(" } else { "[" }, num(self.lo), num(self.hi))
+    }
+    /// ` unit` for a message, or nothing for a dimensionless quantity (unit `-`).
+    fn unit_suffix(&self) -> String {
+        if self.unit == "-" {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        }
     }
 }
 
 /// A limit as people write it: `1e-12`, `0.05`, `25000`, `1e8`.
-pub(crate) fn num(v: f64) -> String {
+pub fn num(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
         format!("{v:e}")
     } else {

@@ -15,7 +15,7 @@ mod scene_kind;
 mod uncertainty;
 
 pub use design::{Bounds, Design, DesignParameters, DESIGN_NAMES};
-pub(crate) use limits::num as fmt_num;
+pub use limits::num as fmt_num;
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
 pub use method::Method;

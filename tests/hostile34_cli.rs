@@ -1,0 +1,67 @@
+//! Hostile pass 34 (docs/cli.md "Hostile pass 34"): the command-line defects a new user ran
+//! into that the CLI itself answers. Each test fails without its fix.
+
+use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
+
+fn json_stdout(o: &std::process::Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", output_text(o)))
+}
+
+/// A seed range too long to hold was an allocation failure (SIGABRT, exit 134, no JSON):
+/// now exit 2 with the JSON error naming the flag and the limit.
+#[test]
+fn a_huge_seed_range_is_bad_input_not_an_abort() {
+    let o =
+        run_gripopt(&["moo-test", "zdt1", "--seeds", "1-10000000000", "--pop", "4", "--generations", "1", "--json"]);
+    assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+    let e = json_stdout(&o)["error"].as_str().unwrap().to_string();
+    assert!(e.contains("--seeds") && e.contains("at most 100000"), "{e}");
+}
+
+/// The text report counts the seeds it ran ("1 seed", "2 seeds"), not "seeds  1".
+#[test]
+fn moo_test_says_how_many_seeds_it_ran() {
+    let text = |seeds: &str| {
+        let o = run_gripopt(&["moo-test", "zdt1", "--seeds", seeds, "--pop", "8", "--generations", "2"]);
+        output_text(&o)
+    };
+    assert!(text("3-3").contains(" 1 seed: HV median"), "{}", text("3-3"));
+    assert!(text("3-4").contains(" 2 seeds: HV median"), "{}", text("3-4"));
+}
+
+/// A usage error under `--json` kept only clap's first line ("the following required
+/// arguments were not provided:"), not which argument.
+#[test]
+fn a_json_usage_error_names_what_is_missing_or_wrong() {
+    let error = |args: &[&str]| {
+        let o = run_gripopt(args);
+        assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+        json_stdout(&o)["error"].as_str().unwrap().to_string()
+    };
+    assert_eq!(error(&["moo-test", "--json"]), "the following required arguments were not provided: <NAME>");
+    assert_eq!(
+        error(&["optimise", "--json"]),
+        "the following required arguments were not provided: --out <OUT>, <PROBLEM>"
+    );
+    let bad = error(&["simulate", BOTTLE_FILE, "--json", "--method", "foo"]);
+    assert!(bad.contains("'foo'") && bad.contains("--method") && bad.contains("auto"), "{bad}");
+}
+
+/// Range errors name the admissible range on both sides and write no unit for a
+/// dimensionless quantity (was "must be <= 0.1 - (…)" and, below, no range at all).
+#[test]
+fn range_errors_give_the_range_and_a_unit_only_where_there_is_one() {
+    let stderr = |args: &[&str]| {
+        let o = run_gripopt(args);
+        assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let high = stderr(&["simulate", BOTTLE_FILE, "--rtol", "0.2"]);
+    assert!(high.contains("--rtol 0.2: must be <= 0.1 (the admissible range is [1e-12, 0.1])"), "{high}");
+    let low = stderr(&["simulate", BOTTLE_FILE, "--rtol", "1e-13"]);
+    assert!(low.contains("--rtol 1e-13: must be >= 1e-12 (the admissible range is [1e-12, 0.1])"), "{low}");
+    let tau = gripopt::params::limit("hand.tau").check(500.0).unwrap_err();
+    assert_eq!(tau, "must be <= 100 N·m (the admissible range is (0, 100] N·m)");
+    let mu = gripopt::params::limit("contact.mu_s").check(0.0).unwrap_err();
+    assert_eq!(mu, "must be > 0 (the admissible range is (0, 5])");
+}
