@@ -441,6 +441,10 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
         1,
     );
     let mut small = small.replacen("p_min = 0.85", "p_min = 0.5", 1);
+    // the stiffness-switching integrator: the same pipeline at about half the test's time
+    // (the default integrator's robust run and its verify: a_robust_run_resumes_exactly_and_verifies_out_of_sample)
+    assert!(small.contains("\n[solver]\n"), "kitchen.toml has a [solver] section");
+    small = small.replacen("\n[solver]\n", "\n[solver]\nmethod = \"auto\"\n", 1);
     // bounds around a front design of the study (docs/robust.md), so that 16 designs find a front
     for (from, to) in [
         ("l21 = [0.030, 0.070]", "l21 = [0.046, 0.050]"),
