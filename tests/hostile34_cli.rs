@@ -65,3 +65,26 @@ fn range_errors_give_the_range_and_a_unit_only_where_there_is_one() {
     let mu = gripopt::params::limit("contact.mu_s").check(0.0).unwrap_err();
     assert_eq!(mu, "must be > 0 (the admissible range is (0, 5])");
 }
+
+/// TR-BDF2 below atol 1e-12 collapsed its steps (1e-15: "step size underflow" at t = 0) or ran
+/// for millions of steps (1e-13, the offset scene): the problem file refuses it, naming
+/// `solver.atol` and the method; 1e-12 is taken.
+#[test]
+fn tr_bdf2_needs_an_atol_its_error_estimate_can_meet() {
+    let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-cli"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    for (atol, code) in [("1e-13", 2), ("1e-12", 0)] {
+        let file = dir.join(format!("trbdf2-{atol}.toml"));
+        let solver = "\n[solver]\nmethod = \"trbdf2\"\n";
+        let edited = text.replacen("\n[solver]\n", solver, 1).replacen("atol = 1e-9", &format!("atol = {atol}"), 1);
+        assert!(edited.contains(&format!("atol = {atol}")), "bottle-1l.toml's atol is 1e-9");
+        std::fs::write(&file, edited).unwrap();
+        let o = run_gripopt(&["evaluate", file.to_str().unwrap(), "--static-only"]);
+        assert_eq!(o.status.code(), Some(code), "{atol}: {}", output_text(&o));
+        if code == 2 {
+            let e = output_text(&o);
+            assert!(e.contains("solver.atol") && e.contains(">= 1e-12") && e.contains("trbdf2"), "{e}");
+        }
+    }
+}

@@ -319,6 +319,7 @@ impl Problem {
                 )
             })?,
         };
+        method.check_atol(s.atol).map_err(|rule| c.fail("solver.atol", super::limits::num(s.atol), &rule))?;
         let solver = SolverSettings {
             rtol: s.rtol,
             atol: s.atol,

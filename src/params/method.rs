@@ -70,6 +70,27 @@ impl Method {
             .collect();
         format!("{} or {}", q[..q.len() - 1].join(", "), q[q.len() - 1])
     }
+    /// The least absolute tolerance the method takes: 1e-12 for TR-BDF2, whose order-2 error
+    /// estimate meets rounding below it (hostile pass 34: at 1e-13 the offset scene took
+    /// millions of steps, at 1e-15 its steps collapsed at t = 0); `solver.atol`'s own floor,
+    /// 1e-15, for the others.
+    pub fn min_atol(self) -> f64 {
+        match self {
+            Method::TrBdf2 => 1e-12,
+            Method::Radau5 | Method::Dopri5 | Method::Auto => 1e-15,
+        }
+    }
+    /// `Err(rule)` where `atol` lies below [`Method::min_atol`].
+    pub fn check_atol(self, atol: f64) -> Result<(), String> {
+        if atol >= self.min_atol() {
+            return Ok(());
+        }
+        Err(format!(
+            "must be >= {:e} with method \"{}\" (its error estimate meets rounding below it)",
+            self.min_atol(),
+            self.as_str()
+        ))
+    }
     /// Whether this is the default, RADAU5 (what a problem file without `solver.method` gets;
     /// such a problem serialises without the key, as it did before the key existed).
     pub fn is_default(&self) -> bool {
@@ -96,5 +117,15 @@ mod tests {
         assert_eq!(Method::parse("euler"), None);
         assert_eq!(Method::parse("TRBDF2"), None, "spellings are lower case, as on the command line");
         assert_eq!(Method::accepted(), r#""radau5", "auto", "trbdf2" (or "tr-bdf2") or "dopri5""#);
+    }
+
+    #[test]
+    fn only_tr_bdf2_refuses_an_atol_above_the_file_floor() {
+        assert!(Method::TrBdf2.check_atol(1e-12).is_ok());
+        let rule = Method::TrBdf2.check_atol(1e-13).unwrap_err();
+        assert!(rule.contains(">= 1e-12") && rule.contains("trbdf2"), "{rule}");
+        for m in [Method::Radau5, Method::Dopri5, Method::Auto] {
+            assert!(m.check_atol(1e-15).is_ok(), "{m}");
+        }
     }
 }

@@ -206,6 +206,9 @@ impl PyProblem {
             })?;
         }
         let s = &p.solver;
+        method.check_atol(s.atol).map_err(|rule| {
+            input(format!("method `{method}`: the problem's solver.atol {}: {rule}", gripopt::params::fmt_num(s.atol)))
+        })?;
         let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
         let sim = py.detach(|| gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC)).py()?;
         let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
