@@ -194,21 +194,70 @@ pub fn run_scenario<K: Sink + ?Sized>(
     (ScenarioRecord::of(sc, &ev), ev)
 }
 
-/// The scenarios of a design in their order, each from `get(o, k)`, stopping after the
-/// one that makes some object's constraint impossible when `setup.early_stop` is set.
+/// What decides a robust design's stage 3, scanning its scenarios in their order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Decided {
+    /// The solver aborted the scenario at this position (in the order run): the design is a
+    /// solver-failure discard, as the single-object pipeline's aborted simulation.
+    Aborted(usize),
+    /// The scenario at this position gave its object more failures than P(stay) ≥ p_min
+    /// allows over K.
+    PStay(usize),
+}
+
+/// The sequential stopping rule: fed a design's scenarios in their order, it says when the
+/// verdict is known — at the first aborted scenario (its object's motion was never measured,
+/// so it is not counted as a failure) or at the first measured failure that makes some
+/// object's constraint impossible.
+#[derive(Debug, Clone)]
+pub struct StopRule {
+    fmax: usize,
+    fails: Vec<usize>,
+    seen: usize,
+}
+
+impl StopRule {
+    /// The rule for the designs of `setup`.
+    pub fn new(setup: &RobustSetup) -> Self {
+        StopRule { fmax: setup.failures_allowed(), fails: vec![0; setup.objects()], seen: 0 }
+    }
+
+    /// The next scenario; Some once this one decides the verdict.
+    pub fn push(&mut self, r: &ScenarioRecord) -> Option<Decided> {
+        let j = self.seen;
+        self.seen += 1;
+        if r.aborted() {
+            return Some(Decided::Aborted(j));
+        }
+        if !r.stays {
+            self.fails[r.object] += 1;
+            if self.fails[r.object] > self.fmax {
+                return Some(Decided::PStay(j));
+            }
+        }
+        None
+    }
+}
+
+/// What decides the verdict of a design with scenarios `scen` (in their order), if anything
+/// does: the first event of [`StopRule`].
+pub fn decided(setup: &RobustSetup, scen: &[ScenarioRecord]) -> Option<Decided> {
+    let mut rule = StopRule::new(setup);
+    scen.iter().find_map(|r| rule.push(r))
+}
+
+/// The scenarios of a design in their order, each from `get(o, k)`, stopping after the one
+/// that decides the verdict ([`StopRule`]: an aborted scenario, or one that makes some
+/// object's constraint impossible) when `setup.early_stop` is set.
 pub fn fold(setup: &RobustSetup, mut get: impl FnMut(usize, usize) -> ScenarioRecord) -> Vec<ScenarioRecord> {
-    let fmax = setup.failures_allowed();
-    let mut fails = vec![0usize; setup.objects()];
+    let mut rule = StopRule::new(setup);
     let mut out = Vec::with_capacity(setup.planned());
     for (o, k) in setup.sequence() {
         let r = get(o, k);
-        let failed = !r.stays;
+        let decided = rule.push(&r).is_some();
         out.push(r);
-        if failed {
-            fails[o] += 1;
-            if setup.early_stop && fails[o] > fmax {
-                break;
-            }
+        if decided && setup.early_stop {
+            break;
         }
     }
     out
@@ -216,8 +265,9 @@ pub fn fold(setup: &RobustSetup, mut get: impl FnMut(usize, usize) -> ScenarioRe
 
 /// The last position in the sequence a design can still need, knowing only some of its
 /// scenarios (`done(j)`: Some(stays) when position j has run): the first position whose
-/// object already has more failures than allowed among the known positions up to it. The
-/// true stop can only be earlier, so no position after this bound is needed.
+/// object already has more failures than allowed among the known positions up to it (an
+/// aborted scenario counted as a failure). The true stop ([`StopRule`]: it also stops at an
+/// aborted scenario) can only be earlier, so no position after this bound is needed.
 pub fn needed_bound(setup: &RobustSetup, done: impl Fn(usize) -> Option<bool>) -> usize {
     let last = setup.planned().saturating_sub(1);
     if !setup.early_stop {
