@@ -10,11 +10,11 @@
 //! longer be met: the result depends on that order only, never on which thread ran what.
 
 use super::record_robust::ScenarioRecord;
-use super::stage3::evaluate_dynamics;
+use super::stage3::{evaluate_dynamics, stage3};
 use super::stages::{kinematics_partial, statics_with_spring, Cause, Discard, EvalOptions, Evaluation};
 use crate::model::{spring_preload, CentredGrasp, StaticsResult};
 use crate::params::{Design, Problem, Robust, Scenario, SceneParams, STREAM_OPTIMISE};
-use crate::sim::Sink;
+use crate::sim::{Controls, Integration, SceneSpec, Sink};
 use std::time::Instant;
 
 /// What a robust evaluation needs of its problem, computed once: the objects' nominal scenes
@@ -78,6 +78,11 @@ impl RobustSetup {
     /// Scenarios in all.
     pub fn planned(&self) -> usize {
         self.k * self.objects()
+    }
+
+    /// The index of the object named `name` (None: no such object).
+    pub fn object_index(&self, name: &str) -> Option<usize> {
+        self.spec.objects.iter().position(|o| o.name == name)
     }
 
     /// Failures an object may have while P̂ ≥ p_min holds over K scenarios.
@@ -159,6 +164,31 @@ pub fn start(x: &Design, setup: &RobustSetup) -> RobustStart {
     }
     let objects = objects.into_iter().map(|r| r.map(|r| r.map_err(|(d, _)| d))).collect();
     RobustStart { base, objects, discard }
+}
+
+/// The diagnostic simulation of `x` on object `o` of `setup` in `spec` (`simulate --object`),
+/// as [`super::simulate`] does on the reference object: stages 0–2 as the robust evaluation
+/// has them on that object (its cylinder and grip torque, the spring sized at `[hand] tau`),
+/// then stage 3 in the object's nominal scene.
+pub fn simulate_object<K: Sink + ?Sized>(
+    x: &Design,
+    setup: &RobustSetup,
+    o: usize,
+    spec: &SceneSpec,
+    integ: &Integration,
+    ctl: &Controls,
+    sink: &mut K,
+) -> Evaluation {
+    let st = start(x, setup);
+    let mut ev = Evaluation::new(*x);
+    (ev.kin, ev.stage_seconds) = (st.base.kin, st.base.stage_seconds);
+    match st.objects.get(o) {
+        Some(Some(Ok(statics))) => ev.statics = Some(*statics),
+        Some(Some(Err(d))) => ev.discard = Some(*d),
+        // stages 0–1 or the spring discarded the design, whatever the object
+        _ => return st.base,
+    }
+    stage3(ev, &setup.object_scenes[o], spec, integ, ctl, true, sink)
 }
 
 /// Scenario k of object o of a design that passed stages 0–2: stage 3 of the free kind in the
