@@ -59,6 +59,10 @@ enum Cmd {
         /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).
         #[arg(long)]
         scene: Option<String>,
+        /// A robust problem's object ([[robust.objects]] name) to grasp instead of the
+        /// reference [object]: its cylinder and grip torque, the spring sized at [hand] tau.
+        #[arg(long)]
+        object: Option<String>,
         /// Print the stage-3 keys as one JSON object.
         #[arg(long)]
         json: bool,
@@ -389,12 +393,21 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             let x = design_of(&p, &design)?;
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
-        Cmd::Simulate { problem, design, rtol, scene, method, json, csv, no_contact, trace, plot, force } => {
+        Cmd::Simulate { problem, design, rtol, scene, object, method, json, csv, no_contact, trace, plot, force } => {
             check_output("--csv", csv.as_deref(), force)?;
             check_output("--plot", plot.as_deref(), force)?;
             let mut p = load_problem(&problem)?;
             if let Some(sc) = &scene {
                 p = scenes::apply_scene(&p, sc)?;
+            }
+            let object = object.as_deref().map(|name| scenes::PickedObject::of(&p, name, &problem)).transpose()?;
+            if p.robust.is_some() && object.is_none() {
+                // as export and sweep say it; stderr, so that --json stays one JSON object
+                eprintln!(
+                    "note: {} has [robust]: simulate runs the reference [object] only, not the robust objects or scenarios; --object NAME simulates the design on one of its objects ({}) (docs/robust.md)",
+                    problem.display(),
+                    scenes::object_names(&p)
+                );
             }
             let x = design_of(&p, &design)?;
             let rtol = check_rtol(rtol)?;
@@ -408,7 +421,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
                 plot: plot.as_deref(),
                 replay: None,
             };
-            scenes::simulate_in_scene(&p, &x, &o)
+            scenes::simulate_on(&p, &x, object.as_ref(), &o)
                 .with_context(|| format!("simulating {}", problem.display()))
                 .map(|_| 0)
         }

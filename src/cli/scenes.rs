@@ -5,7 +5,7 @@
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::Watch;
 use anyhow::{bail, Context, Result};
-use gripopt::eval::{Record, SimulationRecord};
+use gripopt::eval::{Record, RobustSetup, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
 use gripopt::sim::{Controls, Integration, Method, PoseSample, SceneSpec};
 use serde::Serialize;
@@ -45,8 +45,57 @@ pub struct SimulateOpts<'a> {
     pub replay: Option<ReplayInScene>,
 }
 
+/// One of a robust problem's objects, picked by `simulate --object NAME`: the problem's
+/// robust setup and the object's index in it.
+pub struct PickedObject {
+    /// The problem's robust setup (the object's nominal scene, the spring's sizing scene).
+    pub setup: RobustSetup,
+    /// The object's index.
+    pub index: usize,
+}
+
+impl PickedObject {
+    /// `--object NAME` of problem `p` (from `source`): an input error naming the flag when `p`
+    /// has no [robust] or no object of that name.
+    pub fn of(p: &Problem, name: &str, source: &Path) -> Result<Self> {
+        let source = source.display();
+        let Some(setup) = RobustSetup::of(p) else {
+            return Err(gripopt::Error::Input(format!(
+                "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which simulate runs without --object; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
+            ))
+            .into());
+        };
+        match setup.object_index(name) {
+            Some(index) => Ok(PickedObject { setup, index }),
+            None => Err(gripopt::Error::Input(format!(
+                "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
+                object_names(p)
+            ))
+            .into()),
+        }
+    }
+
+    /// The object's name.
+    pub fn name(&self) -> &str {
+        &self.setup.spec.objects[self.index].name
+    }
+}
+
+/// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
+pub fn object_names(p: &Problem) -> String {
+    p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+}
+
 /// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
 pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
+    simulate_on(p, x, None, o)
+}
+
+/// `gripopt simulate [--object NAME]`: the diagnostic simulation of design `x` in the
+/// problem's scene, on the reference `[object]` or on one of the robust objects (`object`:
+/// its cylinder and grip torque, the spring sized at `[hand] tau`, as the robust evaluation's
+/// stage 2 has them).
+pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &SimulateOpts<'_>) -> Result<()> {
     let kind = p.scene.setup.kind;
     if o.plot.is_some() && kind == SceneKind::Free {
         bail!("--plot: the free scene is not plotted (use --csv for its poses)");
@@ -61,7 +110,10 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
     let spec = SceneSpec::of(&p.scene.setup);
     // the samples only for a CSV or a plot; progress on stderr when it takes long
     let mut watch = Watch::new(o.csv.is_some() || o.plot.is_some(), o.trace);
-    let ev = gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch);
+    let ev = match object {
+        Some(ob) => gripopt::eval::simulate_object(x, &ob.setup, ob.index, &spec, &integ, &ctl, &mut watch),
+        None => gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch),
+    };
     let (traj, poses) = (std::mem::take(&mut watch.traj), std::mem::take(&mut watch.poses));
     drop(watch);
     if ev.scene.is_none() {
@@ -80,11 +132,12 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
         crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, &traj.samples)?))?;
     }
     if o.json {
-        let v = SimulateJson { sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
+        let object = object.map(PickedObject::name);
+        let v = SimulateJson { object, sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    print_simulation(p, &record, method, integ.rtol);
+    print_simulation(p, object.map(PickedObject::name), &record, method, integ.rtol);
     if o.csv.is_some() {
         let n = if kind == SceneKind::Free { poses.len() } else { traj.samples.len() };
         outln!("trajectory: {n} samples written to {}", o.csv.map(crate::cli::out::path).unwrap_or_default());
@@ -95,6 +148,9 @@ pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Resul
 /// `simulate --json`: the simulation's record, and for `replay --scene` where it came from.
 #[derive(Serialize)]
 struct SimulateJson<'a> {
+    /// `--object NAME`: the robust object simulated (absent: the reference `[object]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    object: Option<&'a str>,
     #[serde(flatten)]
     sim: SimulationRecord,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
@@ -102,11 +158,12 @@ struct SimulateJson<'a> {
 }
 
 /// The text report of a simulation.
-fn print_simulation(p: &Problem, r: &Record, method: Method, rtol: f64) {
+fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Method, rtol: f64) {
     let kind = r.scene.unwrap_or_default();
     let x_off = r.x_off.unwrap_or(0.0);
+    let object = object.map_or(String::new(), |o| format!("  object {}", crate::cli::out::shown(o)));
     outln!(
-        "problem {}  scene {kind}  x_off {x_off} m  method {}  rtol {rtol:e}",
+        "problem {}{object}  scene {kind}  x_off {x_off} m  method {}  rtol {rtol:e}",
         crate::cli::out::shown(&p.name),
         method.as_str()
     );

@@ -20,9 +20,10 @@ mod stages;
 pub use binomial::{binomial_cdf, clopper_pearson};
 pub use objectives::Objectives;
 pub use record::{Derived, EvaluationRecord, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
-pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord};
+pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord, SolverAbort};
 pub use robust::{
-    evaluate_sequential, fold, needed_bound, run_scenario, start as robust_start, RobustSetup, RobustStart,
+    decided, evaluate_sequential, fold, needed_bound, run_scenario, simulate_object, start as robust_start, Decided,
+    RobustSetup, RobustStart, StopRule,
 };
 pub use robust_result::{evaluate_record, robust_record, robust_record_ranked};
 pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};

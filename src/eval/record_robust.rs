@@ -67,6 +67,21 @@ pub struct ScenarioRecord {
     pub rhs_evals: [u64; 2],
     /// Accepted steps of both.
     pub steps: [u64; 2],
+    /// The solver's own account when it aborted the scenario's simulation (cause `aborted` or
+    /// `free_scene_aborted`): what the design's discard quotes. Not written: the record's
+    /// `cause` gives the class, the design's reason the text.
+    #[serde(skip)]
+    pub abort: Option<SolverAbort>,
+}
+
+/// A scenario whose simulation the solver aborted (step budget, step size, events; a free
+/// scene that ended before t_obs): the object's motion was never measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverAbort {
+    /// The solver's message (as the single-object discard's reason words it).
+    pub message: String,
+    /// The single-object discard's violation of the same failure.
+    pub violation: f64,
 }
 
 impl ScenarioRecord {
@@ -85,8 +100,23 @@ impl ScenarioRecord {
             max_tilt_deg: f.and_then(|f| fin(f.object_max_tilt_deg)),
             rhs_evals: [d.map_or(0, |d| d.rhs_evals), f.map_or(0, |f| f.rhs_evals)],
             steps: [d.map_or(0, |d| d.stats.steps), f.map_or(0, |f| f.stats.steps)],
+            abort: ev
+                .discard
+                .filter(|d| is_abort(d.reason.cause()))
+                .map(|d| SolverAbort { message: d.reason.to_string(), violation: d.violation }),
         }
     }
+
+    /// The solver aborted this scenario's simulation: it says nothing of whether the object
+    /// stays.
+    pub fn aborted(&self) -> bool {
+        is_abort(self.cause)
+    }
+}
+
+/// A cause that means the simulation was aborted, not a measured outcome.
+fn is_abort(c: Option<Cause>) -> bool {
+    matches!(c, Some(Cause::Aborted | Cause::FreeSceneAborted))
 }
 
 /// One object of a robust design.

@@ -10,11 +10,11 @@
 //! longer be met: the result depends on that order only, never on which thread ran what.
 
 use super::record_robust::ScenarioRecord;
-use super::stage3::evaluate_dynamics;
+use super::stage3::{evaluate_dynamics, stage3};
 use super::stages::{kinematics_partial, statics_with_spring, Cause, Discard, EvalOptions, Evaluation};
 use crate::model::{spring_preload, CentredGrasp, StaticsResult};
 use crate::params::{Design, Problem, Robust, Scenario, SceneParams, STREAM_OPTIMISE};
-use crate::sim::Sink;
+use crate::sim::{Controls, Integration, SceneSpec, Sink};
 use std::time::Instant;
 
 /// What a robust evaluation needs of its problem, computed once: the objects' nominal scenes
@@ -78,6 +78,11 @@ impl RobustSetup {
     /// Scenarios in all.
     pub fn planned(&self) -> usize {
         self.k * self.objects()
+    }
+
+    /// The index of the object named `name` (None: no such object).
+    pub fn object_index(&self, name: &str) -> Option<usize> {
+        self.spec.objects.iter().position(|o| o.name == name)
     }
 
     /// Failures an object may have while P̂ ≥ p_min holds over K scenarios.
@@ -161,6 +166,31 @@ pub fn start(x: &Design, setup: &RobustSetup) -> RobustStart {
     RobustStart { base, objects, discard }
 }
 
+/// The diagnostic simulation of `x` on object `o` of `setup` in `spec` (`simulate --object`),
+/// as [`super::simulate`] does on the reference object: stages 0–2 as the robust evaluation
+/// has them on that object (its cylinder and grip torque, the spring sized at `[hand] tau`),
+/// then stage 3 in the object's nominal scene.
+pub fn simulate_object<K: Sink + ?Sized>(
+    x: &Design,
+    setup: &RobustSetup,
+    o: usize,
+    spec: &SceneSpec,
+    integ: &Integration,
+    ctl: &Controls,
+    sink: &mut K,
+) -> Evaluation {
+    let st = start(x, setup);
+    let mut ev = Evaluation::new(*x);
+    (ev.kin, ev.stage_seconds) = (st.base.kin, st.base.stage_seconds);
+    match st.objects.get(o) {
+        Some(Some(Ok(statics))) => ev.statics = Some(*statics),
+        Some(Some(Err(d))) => ev.discard = Some(*d),
+        // stages 0–1 or the spring discarded the design, whatever the object
+        _ => return st.base,
+    }
+    stage3(ev, &setup.object_scenes[o], spec, integ, ctl, true, sink)
+}
+
 /// Scenario k of object o of a design that passed stages 0–2: stage 3 of the free kind in the
 /// scenario's scene (its samples to `sink`), as a compact record, and the evaluation.
 pub fn run_scenario<K: Sink + ?Sized>(
@@ -194,21 +224,70 @@ pub fn run_scenario<K: Sink + ?Sized>(
     (ScenarioRecord::of(sc, &ev), ev)
 }
 
-/// The scenarios of a design in their order, each from `get(o, k)`, stopping after the
-/// one that makes some object's constraint impossible when `setup.early_stop` is set.
+/// What decides a robust design's stage 3, scanning its scenarios in their order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Decided {
+    /// The solver aborted the scenario at this position (in the order run): the design is a
+    /// solver-failure discard, as the single-object pipeline's aborted simulation.
+    Aborted(usize),
+    /// The scenario at this position gave its object more failures than P(stay) ≥ p_min
+    /// allows over K.
+    PStay(usize),
+}
+
+/// The sequential stopping rule: fed a design's scenarios in their order, it says when the
+/// verdict is known — at the first aborted scenario (its object's motion was never measured,
+/// so it is not counted as a failure) or at the first measured failure that makes some
+/// object's constraint impossible.
+#[derive(Debug, Clone)]
+pub struct StopRule {
+    fmax: usize,
+    fails: Vec<usize>,
+    seen: usize,
+}
+
+impl StopRule {
+    /// The rule for the designs of `setup`.
+    pub fn new(setup: &RobustSetup) -> Self {
+        StopRule { fmax: setup.failures_allowed(), fails: vec![0; setup.objects()], seen: 0 }
+    }
+
+    /// The next scenario; Some once this one decides the verdict.
+    pub fn push(&mut self, r: &ScenarioRecord) -> Option<Decided> {
+        let j = self.seen;
+        self.seen += 1;
+        if r.aborted() {
+            return Some(Decided::Aborted(j));
+        }
+        if !r.stays {
+            self.fails[r.object] += 1;
+            if self.fails[r.object] > self.fmax {
+                return Some(Decided::PStay(j));
+            }
+        }
+        None
+    }
+}
+
+/// What decides the verdict of a design with scenarios `scen` (in their order), if anything
+/// does: the first event of [`StopRule`].
+pub fn decided(setup: &RobustSetup, scen: &[ScenarioRecord]) -> Option<Decided> {
+    let mut rule = StopRule::new(setup);
+    scen.iter().find_map(|r| rule.push(r))
+}
+
+/// The scenarios of a design in their order, each from `get(o, k)`, stopping after the one
+/// that decides the verdict ([`StopRule`]: an aborted scenario, or one that makes some
+/// object's constraint impossible) when `setup.early_stop` is set.
 pub fn fold(setup: &RobustSetup, mut get: impl FnMut(usize, usize) -> ScenarioRecord) -> Vec<ScenarioRecord> {
-    let fmax = setup.failures_allowed();
-    let mut fails = vec![0usize; setup.objects()];
+    let mut rule = StopRule::new(setup);
     let mut out = Vec::with_capacity(setup.planned());
     for (o, k) in setup.sequence() {
         let r = get(o, k);
-        let failed = !r.stays;
+        let decided = rule.push(&r).is_some();
         out.push(r);
-        if failed {
-            fails[o] += 1;
-            if setup.early_stop && fails[o] > fmax {
-                break;
-            }
+        if decided && setup.early_stop {
+            break;
         }
     }
     out
@@ -216,8 +295,9 @@ pub fn fold(setup: &RobustSetup, mut get: impl FnMut(usize, usize) -> ScenarioRe
 
 /// The last position in the sequence a design can still need, knowing only some of its
 /// scenarios (`done(j)`: Some(stays) when position j has run): the first position whose
-/// object already has more failures than allowed among the known positions up to it. The
-/// true stop can only be earlier, so no position after this bound is needed.
+/// object already has more failures than allowed among the known positions up to it (an
+/// aborted scenario counted as a failure). The true stop ([`StopRule`]: it also stops at an
+/// aborted scenario) can only be earlier, so no position after this bound is needed.
 pub fn needed_bound(setup: &RobustSetup, done: impl Fn(usize) -> Option<bool>) -> usize {
     let last = setup.planned().saturating_sub(1);
     if !setup.early_stop {

@@ -7,7 +7,7 @@ use super::binomial::clopper_pearson;
 use super::objectives::Objectives;
 use super::record::{Record, Verdict};
 use super::record_robust::{ObjectRecord, RobustRecord, ScenarioRecord};
-use super::robust::{evaluate_sequential, RobustSetup, RobustStart};
+use super::robust::{decided, evaluate_sequential, Decided, RobustSetup, RobustStart};
 use super::scene_record::fin;
 use super::stage3::evaluate;
 use super::stages::{Cause, EvalOptions};
@@ -140,9 +140,13 @@ pub fn robust_record_ranked(
     (rec, ranked_offset)
 }
 
-/// Feasible iff every object passed stage 2 and meets P(stay) ≥ p_min over its scenarios;
-/// otherwise stage 2's discard (the first failing object's reason, the violations summed) or
-/// stage 3's: violation Σ_o max(0, p_min − P̂_o) over the scenarios run.
+/// Feasible iff every object passed stage 2, no scenario's simulation was aborted and every
+/// object meets P(stay) ≥ p_min over its scenarios; otherwise stage 2's discard (the first
+/// failing object's reason, the violations summed) or stage 3's: the first aborted scenario
+/// in the order run, unless a measured failure made an object's constraint impossible before
+/// it (the single-object discard's cause and violation, the reason naming the object and the
+/// scenario), else the P(stay) failure, violation Σ_o max(0, p_min − P̂_o) over the
+/// scenarios run.
 fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdict {
     if let Some((stage, reason, violation, cause)) = &start.discard {
         return Verdict {
@@ -152,6 +156,9 @@ fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdi
             violation: Some(*violation),
             cause: *cause,
         };
+    }
+    if let Some(Decided::Aborted(j)) = decided(setup, &rr.scenarios) {
+        return aborted_verdict(setup, rr, j);
     }
     let spec = &setup.spec;
     let failing: Vec<&ObjectRecord> = rr.objects.iter().filter(|o| o.meets_p_min == Some(false)).collect();
@@ -178,4 +185,22 @@ fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdi
         violation: Some(violation),
         cause: Some(Cause::PStay),
     }
+}
+
+/// The discard of a design whose scenario at position `j` (in the order run) the solver
+/// aborted: as the single-object pipeline's (stage 3, its cause and violation), the reason
+/// naming the object, the scenario and the solver's message.
+fn aborted_verdict(setup: &RobustSetup, rr: &RobustRecord, j: usize) -> Verdict {
+    let r = &rr.scenarios[j];
+    let name = &setup.spec.objects[r.object].name;
+    // a record read back has no message: its cause's word, and stage 3's violation of one
+    let (message, violation) = match &r.abort {
+        Some(a) => (a.message.clone(), a.violation),
+        None => (r.cause.map_or("aborted", |c| c.as_str()).to_string(), 1e3),
+    };
+    let mut reason = format!("object {name}: scenario {}: {message}", r.k);
+    if rr.scenarios_saved > 0 {
+        reason.push_str(&format!("; stopped early after {} of {} scenarios", rr.scenarios_run, rr.scenarios_planned));
+    }
+    Verdict { feasible: false, failed_stage: Some(3), reason: Some(reason), violation: Some(violation), cause: r.cause }
 }

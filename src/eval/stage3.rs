@@ -71,7 +71,7 @@ pub fn simulate<K: Sink + ?Sized>(
 
 /// Stage 3 in `spec` (`measure_always`: the free scene runs even when the finger's own
 /// criteria discard the design).
-fn stage3<K: Sink + ?Sized>(
+pub(super) fn stage3<K: Sink + ?Sized>(
     mut ev: Evaluation,
     s: &SceneParams,
     spec: &SceneSpec,
