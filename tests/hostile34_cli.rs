@@ -88,3 +88,18 @@ fn tr_bdf2_needs_an_atol_its_error_estimate_can_meet() {
         }
     }
 }
+
+/// `simulate --method trbdf2` on a problem written for RADAU5 at atol 1e-13 is refused as
+/// the file would be (exit 2, naming the flag, solver.atol and the floor).
+#[test]
+fn simulate_method_tr_bdf2_checks_the_files_atol() {
+    let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-cli"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap().replacen("atol = 1e-9", "atol = 1e-13", 1);
+    let file = dir.join("radau5-1e-13.toml");
+    std::fs::write(&file, text).unwrap();
+    let o = run_gripopt(&["simulate", file.to_str().unwrap(), "--method", "trbdf2"]);
+    let e = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--method trbdf2") && e.contains("solver.atol 1e-13") && e.contains(">= 1e-12"), "{e}");
+}

@@ -104,6 +104,10 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
         bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
     }
     let method = o.method.unwrap_or(p.solver.method);
+    if let Err(rule) = method.check_atol(p.solver.atol) {
+        let atol = gripopt::params::fmt_num(p.solver.atol);
+        bail!("--method {method}: the problem's solver.atol {atol}: {rule}");
+    }
     let integ =
         Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
     let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
