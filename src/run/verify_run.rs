@@ -206,7 +206,8 @@ impl RunFolder {
     pub fn verified_generation(&self) -> Result<Option<VerifiedGeneration>> {
         let Some(file) = self.verify_file() else { return Ok(None) };
         let p = self.dir().join(file);
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read", e))?;
+        let text = crate::fsutil::read_regular_string(&p, crate::fsutil::caps::TABLE)
+            .map_err(|e| Error::io(&p, "cannot read", e))?;
         let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
             return Ok(None);
         };
