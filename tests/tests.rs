@@ -19,6 +19,7 @@ mod force_model;
 mod free_jacobian;
 mod free_stage;
 mod hostile33;
+mod hostile34_files;
 mod kinematics;
 mod nominal;
 mod optimiser;
