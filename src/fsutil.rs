@@ -31,12 +31,19 @@ pub fn check_new_file(flag: &str, path: &Path, force: bool) -> Result<()> {
     check_output_file(flag, path, force, &[])
 }
 
-/// [`check_new_file`] for a command that reads `inputs` (its problem file): an output that
-/// is one of them (the same file: the same path, a link to it, or a hard link) is refused
+/// [`check_new_file`] for a command that reads `inputs` (its problem file, a run folder):
+/// an output that is one of them (the same file: the same path, a link to it, or a hard
+/// link), or for an input that is a folder any file inside it (links resolved), is refused
 /// even with `force`, which replaces an earlier output and nothing else. A dangling link
 /// counts as an existing file (`force` replaces the link, never anything it named).
 pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path]) -> Result<()> {
     let refuse = |why: String| Err(Error::Input(format!("{flag} {}: {why}", path.display())));
+    if let Some(folder) = inputs.iter().filter(|i| i.is_dir()).find(|i| inside(path, i)) {
+        return refuse(format!(
+            "is inside the folder {} the command reads: an output never goes into it, --force included; give a path outside it",
+            folder.display()
+        ));
+    }
     let Ok(link) = std::fs::symlink_metadata(path) else {
         return Ok(()); // nothing there (or a folder that cannot be searched: the write names it)
     };
@@ -77,6 +84,16 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
         }
         #[cfg(not(unix))]
         (Ok(_), Ok(_)) => matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y),
+        _ => false,
+    }
+}
+
+/// Whether the file `path` (existing or not) lies inside the folder `folder`, links of both
+/// resolved (false when either cannot be resolved: the write names what is wrong).
+fn inside(path: &Path, folder: &Path) -> bool {
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    match (parent.canonicalize(), path.file_name(), folder.canonicalize()) {
+        (Ok(parent), Some(name), Ok(folder)) => parent.join(name).starts_with(folder),
         _ => false,
     }
 }
@@ -214,6 +231,57 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn an_output_is_never_an_input_nor_inside_an_input_folder() {
+        let d = std::env::temp_dir().join(format!("gripopt-fsutil-inputs-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(d.join("run/recording")).unwrap();
+        let (input, run) = (d.join("problem.toml"), d.join("run"));
+        std::fs::write(&input, "x").unwrap();
+        std::fs::hard_link(&input, d.join("hard.toml")).unwrap();
+        std::fs::write(run.join("run.json"), "{}").unwrap();
+        let check = |out: &std::path::Path| super::check_output_file("--csv", out, true, &[&input, &run]);
+        for out in [input.clone(), d.join("hard.toml"), d.join("./problem.toml"), run.join("run.json")] {
+            let e = check(&out).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("--csv {}: is ", out.display())), "{e}");
+        }
+        // a new file inside the run folder (through a `..` too), and one in a sub-folder
+        for out in [run.join("new.csv"), run.join("recording/../x.csv"), run.join("recording/x.csv")] {
+            assert!(check(&out).unwrap_err().to_string().contains("inside the folder"), "{}", out.display());
+        }
+        // beside the inputs: a new file, and an earlier output replaced with force
+        assert!(check(&d.join("out.csv")).is_ok());
+        std::fs::write(d.join("out.csv"), "earlier").unwrap();
+        assert!(check(&d.join("out.csv")).is_ok());
+        assert!(super::check_new_file("--csv", &d.join("out.csv"), false).is_err());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn only_a_regular_file_is_read_and_within_its_cap() {
+        let d = std::env::temp_dir().join(format!("gripopt-fsutil-read-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        let f = d.join("a.json");
+        std::fs::write(&f, b"12345").unwrap();
+        assert_eq!(super::read_regular(&f, 5).unwrap(), b"12345");
+        let e = super::read_regular(&f, 4).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidData, "{e}");
+        let e = super::read_regular(&d, 1 << 20).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{e}");
+        assert!(e.to_string().contains("not a regular file (a folder"), "{e}");
+        #[cfg(unix)]
+        {
+            // a link to /dev/zero: refused before it is opened (never read without end)
+            std::os::unix::fs::symlink("/dev/zero", d.join("zero")).unwrap();
+            let e = super::read_regular(&d.join("zero"), 1 << 20).unwrap_err();
+            assert!(e.to_string().contains("not a regular file (a device"), "{e}");
+        }
+        let e = super::read_regular(&d.join("missing"), 1).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
     #[test]
     fn a_failed_write_leaves_the_target_and_no_temporary_file() {
         let d = std::env::temp_dir().join(format!("gripopt-fsutil-{}", std::process::id()));

@@ -251,10 +251,9 @@ pub fn run(a: ExportArgs) -> Result<()> {
         return Ok(());
     }
     refuse_out_in_run_folder(&a.out, a.source.is_dir().then_some(a.source.as_path()))?;
-    // never over the problem file exported from (or a device, pipe or socket), --force
-    // included
-    let inputs: &[&Path] = if a.source.is_dir() { &[] } else { &[a.source.as_path()] };
-    gripopt::check_output_file("--out", &a.out, a.force, inputs)?;
+    // never over (or into) the problem file or run folder exported from, nor over a
+    // device, pipe or socket, --force included
+    gripopt::check_output_file("--out", &a.out, a.force, &[a.source.as_path()])?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
         FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),
