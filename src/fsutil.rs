@@ -33,14 +33,17 @@ pub fn check_new_file(flag: &str, path: &Path, force: bool) -> Result<()> {
 
 /// [`check_new_file`] for a command that reads `inputs` (its problem file, a run folder):
 /// an output that is one of them (the same file: the same path, a link to it, or a hard
-/// link), or for an input that is a folder any file inside it (links resolved), is refused
-/// even with `force`, which replaces an earlier output and nothing else. A dangling link
-/// counts as an existing file (`force` replaces the link, never anything it named).
+/// link), or for an input that is a folder an existing file inside it (links resolved: the
+/// run's run.json, checkpoint, shards, problem copies, …), is refused even with `force`,
+/// which replaces an earlier output and nothing else; a new file may be written inside the
+/// folder. A dangling link counts as an existing file (`force` replaces the link, never
+/// anything it named).
 pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path]) -> Result<()> {
     let refuse = |why: String| Err(Error::Input(format!("{flag} {}: {why}", path.display())));
-    if let Some(folder) = inputs.iter().filter(|i| i.is_dir()).find(|i| inside(path, i)) {
+    let exists = std::fs::symlink_metadata(path).is_ok();
+    if let Some(folder) = inputs.iter().filter(|i| exists && i.is_dir()).find(|i| inside(path, i)) {
         return refuse(format!(
-            "is inside the folder {} the command reads: an output never goes into it, --force included; give a path outside it",
+            "is a file of the folder {} the command reads (its own file, or one the user put there): an output never replaces it, --force included; give a new file name",
             folder.display()
         ));
     }
@@ -245,10 +248,13 @@ mod tests {
             let e = check(&out).unwrap_err().to_string();
             assert!(e.starts_with(&format!("--csv {}: is ", out.display())), "{e}");
         }
-        // a new file inside the run folder (through a `..` too), and one in a sub-folder
-        for out in [run.join("new.csv"), run.join("recording/../x.csv"), run.join("recording/x.csv")] {
-            assert!(check(&out).unwrap_err().to_string().contains("inside the folder"), "{}", out.display());
+        // an existing file inside the run folder (through a `..` too, or in a sub-folder) is
+        // refused; a new one may be written there
+        std::fs::write(run.join("recording/index.jsonl"), "").unwrap();
+        for out in [run.join("recording/../run.json"), run.join("recording/index.jsonl")] {
+            assert!(check(&out).unwrap_err().to_string().contains("is a file of the folder"), "{}", out.display());
         }
+        assert!(check(&run.join("new.csv")).is_ok());
         // beside the inputs: a new file, and an earlier output replaced with force
         assert!(check(&d.join("out.csv")).is_ok());
         std::fs::write(d.join("out.csv"), "earlier").unwrap();

@@ -224,3 +224,34 @@ fn replay_refuses_an_edited_problem_file() {
         assert!(!output_text(&o).contains("verified"), "{args:?}: a verdict: {}", output_text(&o));
     }
 }
+
+/// `simulate P --csv P --force` overwrote its own problem file, and `replay RUN --csv
+/// RUN/run.json --force` the run's run.json. Now both are refused (exit 2, the file left as
+/// it was); a new file inside the run folder is still written.
+///
+/// Needs `check_output` in src/cli/mod.rs to pass the command's inputs to
+/// `gripopt::check_output_file` (the problem file for simulate, the run folder for replay):
+/// the lead's change; un-ignore it with that change.
+#[test]
+#[ignore = "needs check_output in src/cli/mod.rs to pass the command's inputs (hostile pass 34)"]
+fn simulate_and_replay_never_write_over_their_inputs() {
+    let d = scratch("inputs");
+    let own = d.join("own.toml");
+    std::fs::copy(BOTTLE_FILE, &own).unwrap();
+    let before = std::fs::read(&own).unwrap();
+    let o = run_limited(&d, &["simulate", own.to_str().unwrap(), "--csv", own.to_str().unwrap(), "--force"]);
+    refused(&o, "--csv", &own, "is the command's input");
+    assert_eq!(std::fs::read(&own).unwrap(), before, "the problem file was overwritten");
+    let run = run_folder("inputs-run");
+    let (r, run_json) = (run.to_str().unwrap(), run.join("run.json"));
+    let before = std::fs::read(&run_json).unwrap();
+    for flag in ["--csv", "--plot"] {
+        let o = run_limited(&d, &["replay", r, "--design", "3", flag, run_json.to_str().unwrap(), "--force"]);
+        refused(&o, flag, &run_json, "is a file of the folder");
+    }
+    assert_eq!(std::fs::read(&run_json).unwrap(), before, "run.json was overwritten");
+    let new = run.join("design-3.csv");
+    let o = run_limited(&d, &["replay", r, "--design", "3", "--csv", new.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    assert!(new.is_file());
+}
