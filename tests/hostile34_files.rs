@@ -161,7 +161,8 @@ fn replace(run: &Path, file: &str, what: &str, big: u64) -> bool {
 
 /// A run folder's file that is not a regular file hung `resume` (checkpoint.json a pipe,
 /// holding the folder's lock), filled the memory (a link to /dev/zero) or hung `show`
-/// (run.json), and `show` called a checkpoint.json that is a folder or pipe missing. Now each
+/// (run.json), and `show` and `verify` called a checkpoint.json that is a folder or pipe
+/// missing (`export` a run folder whose problem.toml is a folder not a run folder). Now each
 /// command ends with exit 2 naming the file and saying "not a regular file"; a file far
 /// larger than gripopt writes is refused before it is read; a recording index that cannot
 /// be read is rebuilt from the shards (replay of design 3 verifies).
@@ -171,11 +172,18 @@ fn run_folder_files_are_read_only_when_regular_files() {
     let dir = base.parent().unwrap();
     let case = dir.join("case");
     let r = case.to_str().unwrap();
-    let cases: [(&str, &str, &[&str], &str); 7] = [
+    let cases: [(&str, &str, &[&str], &str); 9] = [
         ("checkpoint.json", "pipe", &["resume", r], "not a regular file (a named pipe"),
         ("checkpoint.json", "pipe", &["show", r], "not a regular file (a named pipe"),
         ("checkpoint.json", "zero", &["resume", r], "not a regular file (a device"),
         ("checkpoint.json", "folder", &["show", r], "not a regular file (a folder"),
+        ("checkpoint.json", "pipe", &["verify", r], "not a regular file (a named pipe"),
+        (
+            "problem.toml",
+            "folder",
+            &["export", r, "--design", "3", "--format", "json", "--out", "-"],
+            "not a regular file (a folder",
+        ),
         ("run.json", "zero", &["show", r], "not a regular file (a device"),
         ("run.json", "pipe", &["show", r], "not a regular file (a named pipe"),
         ("run.json", "big", &["show", r], "larger than 67108864 bytes"),

@@ -74,7 +74,8 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
             dir.display()
         ))
     })?;
-    if !dir.join("problem.toml").is_file() {
+    // absent; anything else there (a pipe, a folder) is refused by its read, naming it
+    if std::fs::symlink_metadata(dir.join("problem.toml")).is_err() {
         return Err(gripopt::Error::Input(format!(
             "{}: not a run folder (no problem.toml); give a folder written by `gripopt optimise`",
             dir.display()

@@ -59,7 +59,8 @@ pub fn verify(
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
     }
     for f in ["run.json", "problem.toml"] {
-        if !dir.join(f).is_file() {
+        // absent; anything else there (a pipe, a folder) is refused by its read, naming it
+        if std::fs::symlink_metadata(dir.join(f)).is_err() {
             return Err(Error::RunDir {
                 path: dir.to_path_buf(),
                 message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
