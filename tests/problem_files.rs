@@ -102,13 +102,21 @@ fn bounds_need_exactly_two_numbers_and_sweep_step_a_floor() {
     assert!(e.contains("criteria.r_sing") && e.contains("at most 100"), "{e}");
 }
 
-/// A problem file is read with a size cap: `/dev/zero` is refused instead of read forever.
+/// A problem file is read only when it is a regular file, with a size cap: `/dev/zero` is
+/// refused before it is opened (hostile pass 34), a file over 1 MiB before it is parsed.
 #[test]
 fn endless_or_huge_files_are_refused() {
     if std::path::Path::new("/dev/zero").exists() {
         let e = Problem::load("/dev/zero").unwrap_err().to_string();
-        assert!(e.contains("/dev/zero") && e.contains("bytes"), "{e}");
+        assert!(e.contains("/dev/zero") && e.contains("not a regular file (a device"), "{e}");
     }
+    let d = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/problem-files-huge"));
+    std::fs::create_dir_all(&d).unwrap();
+    let huge = d.join("huge.toml");
+    std::fs::File::create(&huge).unwrap().set_len(gripopt::params::MAX_FILE_BYTES + 1).unwrap();
+    let e = Problem::load(&huge).unwrap_err().to_string();
+    assert!(e.contains("huge.toml") && e.contains("bytes"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
 }
 
 /// docs/problem-files.md lists every limit exactly as the code checks it.

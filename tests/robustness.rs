@@ -274,19 +274,20 @@ fn exit_codes_follow_the_documented_table() {
     let text = String::from_utf8_lossy(&r.stdout).to_string();
     assert_eq!(code(&r), 0, "{text}");
     assert!(text.contains("verified (no trajectory recorded"), "{text}");
-    // 3: the problem changed after the run (the torque): the front design no longer verifies
+    // 2: the problem changed after the run (the torque): refused as bad input, naming the
+    // file, nothing re-evaluated (hostile pass 34; it was exit 3 "NOT verified" before)
     let p = dir.join("problem.toml");
     let t0 = std::fs::read_to_string(&p).unwrap();
     let tau = t0.lines().find(|l| l.trim_start().starts_with("tau")).unwrap().to_string();
     std::fs::write(&p, t0.replacen(&tau, "tau = 0.45", 1)).unwrap();
     let r = cli(&["replay", &d, "--design", feasible_id]);
-    let text = String::from_utf8_lossy(&r.stdout).to_string();
-    assert_eq!(code(&r), 3, "{text}");
-    assert!(text.contains("NOT verified") && !text.contains("  verified"), "{text}");
+    assert_eq!(code(&r), 2, "{}", stderr(&r));
+    assert!(stderr(&r).contains("problem.toml: edited after the run"), "{}", stderr(&r));
+    assert!(r.stdout.is_empty(), "{}", String::from_utf8_lossy(&r.stdout));
     let r = cli(&["replay", &d, "--design", feasible_id, "--json"]);
-    assert_eq!(code(&r), 3);
+    assert_eq!(code(&r), 2);
     let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
-    assert_eq!(v["verified"], false);
+    assert_eq!(v["exit_code"], 2, "{v}");
     // 130: interrupted by ctrl-c, after the checkpoint of the current generation
     let dir = tmp("sigint");
     let d = dir.display().to_string();

@@ -235,12 +235,12 @@ fn item4_a_forced_resume_keeps_each_generations_problem() {
         let r = gripopt::record::replay(&dir, e.first_id).unwrap();
         assert!(r.verified, "generation {}: design {} replays with its own problem", e.generation, e.first_id);
     }
-    // problem.toml edited by hand: replay says so, verify refuses (naming the file)
+    // problem.toml edited by hand: replay and verify refuse it (naming the file)
     std::fs::write(dir.join("problem.toml"), b.replacen("tau = 0.55", "tau = 0.6", 1)).unwrap();
     let last = idx.last().unwrap().first_id.to_string();
     let o = cli(&["replay", &d, "--design", &last]);
-    assert_eq!(code(&o), 3, "{}", stderr(&o));
-    assert!(stdout(&o).contains("problem.toml") && stdout(&o).contains("edited"), "{}", stdout(&o));
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("problem.toml") && stderr(&o).contains("edited"), "{}", stderr(&o));
     let o = cli(&["verify", &d, "--record", "none"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("problem.toml"), "{}", stderr(&o));

@@ -166,16 +166,17 @@ fn replay_minus_zero_is_the_recorded_scene() {
         assert_eq!((o.status.code(), j["verified"].as_bool()), (Some(0), Some(true)), "design {id}: {j}");
         assert!(j["compared_values"].as_u64().unwrap() >= 3, "design {id}: {j}");
     }
-    // ... and a run whose problem was changed afterwards does not (exit 3)
+    // ... and a run whose problem was changed afterwards is refused, naming the file (exit 2;
+    // exit 3 "not verified" before hostile pass 34)
     let p = dir.join("problem.toml");
     let text0 = std::fs::read_to_string(&p).unwrap();
     let tau_line = text0.lines().find(|l| l.trim_start().starts_with("tau")).unwrap().to_string();
     std::fs::write(&p, text0.replacen(&tau_line, "tau = 0.45", 1)).unwrap();
-    let changed = ids.iter().any(|id| {
+    for id in &ids {
         let o = run(&["replay", &d, "--design", id, "--json"]);
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        o.status.code() == Some(3) && j["verified"] == false
-    });
-    assert!(changed, "a changed actuator torque must show in some design's replay");
+        assert_eq!((o.status.code(), &j["exit_code"]), (Some(2), &serde_json::json!(2)), "design {id}: {j}");
+        assert!(j["error"].as_str().is_some_and(|e| e.contains("problem.toml: edited after the run")), "{j}");
+    }
     let _ = std::fs::remove_dir_all(&base);
 }

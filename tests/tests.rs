@@ -20,6 +20,7 @@ mod free_jacobian;
 mod free_stage;
 mod hostile33;
 mod hostile34_cli;
+mod hostile34_files;
 mod hostile34_robust;
 mod kinematics;
 mod nominal;

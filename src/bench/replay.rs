@@ -36,7 +36,7 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     let per_shard = b.per_shard.max(1);
     if out.exists() {
         // never delete a folder this benchmark did not write (a real run, say)
-        let synthetic = std::fs::read_to_string(out.join("run.json"))
+        let synthetic = crate::fsutil::read_regular_string(&out.join("run.json"), crate::fsutil::caps::RUN_JSON)
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .is_some_and(|v| v["synthetic"] == true);

@@ -74,7 +74,8 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
             dir.display()
         ))
     })?;
-    if !dir.join("problem.toml").is_file() {
+    // absent; anything else there (a pipe, a folder) is refused by its read, naming it
+    if std::fs::symlink_metadata(dir.join("problem.toml")).is_err() {
         return Err(gripopt::Error::Input(format!(
             "{}: not a run folder (no problem.toml); give a folder written by `gripopt optimise`",
             dir.display()
@@ -251,6 +252,9 @@ pub fn run(a: ExportArgs) -> Result<()> {
         return Ok(());
     }
     refuse_out_in_run_folder(&a.out, a.source.is_dir().then_some(a.source.as_path()))?;
+    // never over (or into) the problem file or run folder exported from, nor over a
+    // device, pipe or socket, --force included
+    gripopt::check_output_file("--out", &a.out, a.force, &[a.source.as_path()])?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
         FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),

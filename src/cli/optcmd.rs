@@ -276,7 +276,9 @@ pub fn replay(
         samples.len(),
         samples.last().map(|s| format!(", t = 0 … {:.3} ms", s.t * 1e3)).unwrap_or_default()
     );
-    if let Some(a) = across {
+    if r.problem_note.is_some() {
+        // its one verdict, printed above: the comparison is moot
+    } else if let Some(a) = across {
         let (rtol, rec, cur) = (gripopt::sim::ACROSS_REVISIONS_RTOL, a.recorded, a.current);
         match &a.differs {
             None => outln!("  verified across simulator revisions (recorded by revision {rec}, this build is revision {cur}): the same verdict, objectives and violation within {rtol:e} relative (largest difference {:e}); trajectories of two revisions are not compared sample by sample", a.max_difference),

@@ -355,7 +355,7 @@ fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()
 /// objects of its own cannot make a cycle).
 fn object_of_file(path: &std::path::Path) -> std::result::Result<Object, String> {
     use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file = crate::fsutil::open_regular(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut text = String::new();
     file.take(super::limits::MAX_FILE_BYTES)
         .read_to_string(&mut text)

@@ -57,7 +57,8 @@ impl ProblemUse {
 /// Read `index.jsonl` of a recording folder (errors name the file and line).
 pub fn read_index(dir: &Path) -> Result<Vec<ShardEntry>> {
     let p = dir.join("index.jsonl");
-    let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read the recording index", e))?;
+    let text = crate::fsutil::read_regular_string(&p, crate::fsutil::caps::INDEX)
+        .map_err(|e| Error::io(&p, "cannot read the recording index", e))?;
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())

@@ -193,7 +193,7 @@ fn detail(e: &Error) -> String {
 /// The lines of `index.jsonl` that parse, whatever else the file holds (bytes that are not
 /// UTF-8, a cut line, garbage); none when it cannot be read at all.
 fn readable_lines(path: &Path) -> Vec<ShardEntry> {
-    let bytes = std::fs::read(path).unwrap_or_default();
+    let bytes = crate::fsutil::read_regular(path, crate::fsutil::caps::INDEX).unwrap_or_default();
     String::from_utf8_lossy(&bytes).lines().filter_map(|l| serde_json::from_str::<ShardEntry>(l).ok()).collect()
 }
 

@@ -66,7 +66,8 @@ pub struct Replay {
     /// evaluated with, run.json's `problems`).
     pub problem_file: PathBuf,
     /// Why the re-simulation cannot verify the recording whatever it gives: the problem
-    /// file was edited after the design was recorded (its SHA-256 is not the one recorded).
+    /// file (the one run.json records) is not the one the design's shard names. A problem
+    /// file edited since the run is refused instead ([`replay`]).
     pub problem_note: Option<String>,
     /// For a recording made by another simulator revision that this one does not reproduce
     /// bit for bit: whether the re-evaluation agrees with it within the integration tolerance.
@@ -187,7 +188,8 @@ struct RunJson {
 
 fn run_json(run_dir: &Path) -> Result<RunJson> {
     let path = run_dir.join("run.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, "cannot read", e))?;
+    let text = crate::fsutil::read_regular_string(&path, crate::fsutil::caps::RUN_JSON)
+        .map_err(|e| Error::io(&path, "cannot read", e))?;
     serde_json::from_str::<RunJson>(&text).map_err(|source| Error::Json {
         path,
         what: "invalid run.json (fields `recording`, `problem_sha256`, `problems`)",
@@ -399,7 +401,7 @@ struct Msg {
 /// the run recorded anything.
 fn no_recording(run_dir: &Path, dir: &Path) -> String {
     let run_json = run_dir.join("run.json");
-    let enabled = std::fs::read(&run_json)
+    let enabled = crate::fsutil::read_regular(&run_json, crate::fsutil::caps::RUN_JSON)
         .ok()
         .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
         .and_then(|v| v["recording"]["enabled"].as_bool());
@@ -532,20 +534,29 @@ fn rel(a: f64, b: f64) -> f64 {
 /// Replay design `id`: read it, re-simulate it with the run's problem of its generation
 /// (`problem.toml`, or after a forced resume with another problem the earlier
 /// `problem-G.toml`, as run.json's `problems` say) and the run's recording options, and
-/// compare. A problem file edited since (its hash is not the one the run or the shard
-/// recorded) is used, but the replay is then not verified ([`Replay::problem_note`]).
+/// compare. A problem file edited since the run used it (its hash is not the one run.json
+/// recorded) is refused, naming it, before anything is evaluated (as `resume` refuses it);
+/// one that the run recorded but the design's shard does not name is used, and the replay
+/// is then not verified ([`Replay::problem_note`]).
 pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let recorded = read_design(run_dir, id)?;
     let run = problem_of_generation(run_dir, recorded.record.generation)?;
+    if let Some(why) = run.edited() {
+        return Err(Error::RunDir {
+            path: run.file,
+            message: format!(
+                "{why}: restore it to replay design {id} (a replay re-evaluates with the problem the run used)"
+            ),
+        });
+    }
     let opts = run_json(run_dir)?.recording;
-    let problem_note = run.edited().map(|why| format!("{}: {why}", run.file.display())).or_else(|| {
-        let shard = recorded.problem_sha256.as_deref().filter(|s| *s != run.sha256)?;
-        Some(format!(
+    let problem_note = recorded.problem_sha256.as_deref().filter(|s| *s != run.sha256).map(|shard| {
+        format!(
             "{} (sha256 {}) is not the problem design {id} was recorded with (sha256 {}, its shard says)",
             run.file.display(),
             &run.sha256[..12],
             &shard[..shard.len().min(12)]
-        ))
+        )
     });
     let problem = run.problem.clone();
     let design = recorded.design();

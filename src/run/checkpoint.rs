@@ -171,7 +171,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     /// stored one if any.
     fn read(path: &Path) -> Result<(Self, String, Option<ChecksumMismatch>)> {
         let invalid = |message: String| Error::Checkpoint { file: path.to_path_buf(), message };
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, "cannot read the checkpoint", e))?;
+        let bytes = crate::fsutil::read_regular(path, crate::fsutil::caps::CHECKPOINT)
+            .map_err(|e| Error::io(path, "cannot read the checkpoint", e))?;
         let head: serde_json::Value = serde_json::from_slice(&bytes).map_err(|source| Error::Json {
             path: path.to_path_buf(),
             what: "not a valid gripopt checkpoint: not JSON; the file may be truncated",

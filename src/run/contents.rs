@@ -206,7 +206,7 @@ impl Scan {
     /// `n` beside run.json `i` (of a run with no checkpoint) is provably that run's file.
     fn proven(&self, n: &str, i: &RunInfo) -> bool {
         let p = self.dir.join(n);
-        let text = || std::fs::read_to_string(&p).unwrap_or_default();
+        let text = || crate::fsutil::read_regular_string(&p, crate::fsutil::caps::TABLE).unwrap_or_default();
         match n {
             "problem.toml" => crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256,
             LAYOUT_FILE => {

@@ -128,7 +128,7 @@ impl RunFolder {
 /// unreadable file, one without a header, a row cut short or a last line without its line
 /// break (the files are written whole) is an error naming the file and line.
 pub fn read_table<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
-    let text = std::fs::read(path)
+    let text = crate::fsutil::read_regular(path, crate::fsutil::caps::TABLE)
         .map_err(|e| Error::io(path, "cannot read (is this a run folder with a completed generation?)", e))?;
     let bad = |line: u64, what: String| Error::RunDir {
         path: path.to_path_buf(),

@@ -95,7 +95,8 @@ impl RunInfo {
     /// Read `RUN_DIR/run.json` (errors name the file).
     pub fn load(dir: &Path) -> Result<RunInfo> {
         let p = dir.join(RUN_FILE);
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read (is this a run folder?)", e))?;
+        let text = crate::fsutil::read_regular_string(&p, crate::fsutil::caps::RUN_JSON)
+            .map_err(|e| Error::io(&p, "cannot read (is this a run folder?)", e))?;
         serde_json::from_str(&text).map_err(|source| Error::Json { path: p, what: "invalid run.json", source })
     }
 

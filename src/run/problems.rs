@@ -18,7 +18,7 @@ pub const PROBLEM_FILE: &str = "problem.toml";
 /// The SHA-256 of a run folder's file `name` (None: no such file).
 fn hash_of(dir: &Path, name: &str) -> Result<Option<String>> {
     let p = dir.join(name);
-    match std::fs::read(&p) {
+    match crate::fsutil::read_regular(&p, crate::params::MAX_FILE_BYTES) {
         Ok(b) => Ok(Some(sha256_hex(&b))),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
         Err(e) => Err(Error::io(p, "cannot read the run's problem file", e)),
@@ -67,7 +67,7 @@ pub(crate) fn switch(dir: &Path, info: &mut RunInfo, at: u64, problem: &Problem)
         let last = list.last_mut().expect("a non-empty list");
         if last.file == PROBLEM_FILE {
             let kept = format!("problem-{}.toml", last.first_generation);
-            let bytes = std::fs::read(dir.join(PROBLEM_FILE))
+            let bytes = crate::fsutil::read_regular(&dir.join(PROBLEM_FILE), crate::params::MAX_FILE_BYTES)
                 .map_err(|e| Error::io(dir.join(PROBLEM_FILE), "cannot read the run's problem to keep it", e))?;
             if sha256_hex(&bytes) != last.sha256 {
                 return Err(Error::RunDir {

@@ -31,10 +31,13 @@ pub struct CheckpointTables {
 
 impl RunFolder {
     /// The designs of the run's checkpoint (None: no checkpoint.json yet), checked against
-    /// run.json. A damaged or edited checkpoint is an error naming it.
+    /// run.json. A damaged or edited checkpoint, or one that is not a regular file, is an
+    /// error naming it.
     pub fn checkpoint_tables(&self) -> Result<Option<CheckpointTables>> {
         let path = self.dir().join("checkpoint.json");
-        if !path.is_file() {
+        // absent: None; anything else there (a folder, a pipe, a device) is read, and refused
+        // naming what it is, never taken for a missing checkpoint
+        if std::fs::symlink_metadata(&path).is_err() {
             return Ok(None);
         }
         let info = self.info()?;
@@ -63,7 +66,8 @@ impl RunFolder {
         let path = self.dir().join(file);
         // the damaged or truncated file's error, naming the line
         read_table::<DesignRow>(&path)?;
-        let text = std::fs::read_to_string(&path).map_err(|e| crate::Error::io(&path, "cannot read", e))?;
+        let text = crate::fsutil::read_regular_string(&path, crate::fsutil::caps::TABLE)
+            .map_err(|e| crate::Error::io(&path, "cannot read", e))?;
         let data: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).skip(1).collect();
         let expected: Vec<String> = rows.iter().map(DesignRow::csv_line).collect();
         let same =

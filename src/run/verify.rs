@@ -302,7 +302,8 @@ impl CheckedState {
     /// Load `dir`'s checkpoint (a missing one is an error naming it).
     pub(crate) fn load(dir: &Path, info: &RunInfo) -> Result<Self> {
         let path = dir.join(CHECKPOINT_FILE);
-        if !path.is_file() {
+        // absent; anything else there (a pipe, a folder) is refused by the read, naming it
+        if std::fs::symlink_metadata(&path).is_err() {
             let message = match info.completed_generations {
                 0 => "missing: the run has not completed its first generation; nothing to verify yet".to_string(),
                 g => format!("missing, but run.json records {g} completed generations: verify takes the run's designs from its checkpoint; restore checkpoint.json (e.g. from a backup)"),

@@ -37,7 +37,8 @@ impl VerifyRecording {
     /// (`run.json` → `recording.epoch_s`; 0 = 1970 when the run has none).
     pub fn new(dir: &Path, source: &VerifySource) -> Result<Self> {
         let run_json = dir.join("run.json");
-        let text = std::fs::read_to_string(&run_json).map_err(|e| Error::io(&run_json, "cannot read", e))?;
+        let text = crate::fsutil::read_regular_string(&run_json, crate::fsutil::caps::RUN_JSON)
+            .map_err(|e| Error::io(&run_json, "cannot read", e))?;
         let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json {
             path: run_json.clone(),
             what: "invalid run.json",

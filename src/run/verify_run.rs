@@ -59,7 +59,8 @@ pub fn verify(
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
     }
     for f in ["run.json", "problem.toml"] {
-        if !dir.join(f).is_file() {
+        // absent; anything else there (a pipe, a folder) is refused by its read, naming it
+        if std::fs::symlink_metadata(dir.join(f)).is_err() {
             return Err(Error::RunDir {
                 path: dir.to_path_buf(),
                 message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
@@ -206,7 +207,8 @@ impl RunFolder {
     pub fn verified_generation(&self) -> Result<Option<VerifiedGeneration>> {
         let Some(file) = self.verify_file() else { return Ok(None) };
         let p = self.dir().join(file);
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, "cannot read", e))?;
+        let text = crate::fsutil::read_regular_string(&p, crate::fsutil::caps::TABLE)
+            .map_err(|e| Error::io(&p, "cannot read", e))?;
         let Some(line) = text.lines().take_while(|l| l.starts_with('#')).find(|l| l.starts_with("# run:")) else {
             return Ok(None);
         };

@@ -64,7 +64,7 @@ pub fn check_out_folder(dir: &Path) -> Result<Vec<PathBuf>> {
 /// The files listed by the sweep.csv at `path` (none when it is absent; an error naming it
 /// when it is not a gripopt sweep's).
 fn listed_files(path: &Path) -> Result<Vec<String>> {
-    let text = match std::fs::read(path) {
+    let text = match crate::fsutil::read_regular(path, crate::fsutil::caps::TABLE) {
         Ok(b) => String::from_utf8_lossy(&b).to_string(),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(vec![]),
         Err(e) => return Err(Error::io(path, "cannot read", e)),

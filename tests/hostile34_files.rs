@@ -1,0 +1,265 @@
+//! Hostile pass 34, files (docs/cli.md "Hostile pass 34"): `--force` replaced a pipe, a
+//! device or the command's own input file; a run folder's file that is not a regular file
+//! (a pipe, a link to /dev/zero, a folder) hung a command or filled the memory; `replay`
+//! re-evaluated with an edited problem.toml and printed two verdicts. Each test fails
+//! without its fix. Pipes are made only under target/hostile34 (skipped where `mkfifo` is
+//! unavailable); /dev/zero is only ever read, through a link, by a process limited to
+//! 2 GiB of memory.
+
+use crate::common::{output_text, BOTTLE_FILE, GRIPOPT_BIN};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const KITCHEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A named pipe at `path` (false: `mkfifo` is not available here; the caller skips).
+fn fifo(path: &Path) -> bool {
+    let made = Command::new("mkfifo").arg(path).status().is_ok_and(|s| s.success());
+    if !made {
+        eprintln!("skipped: mkfifo is not available");
+    }
+    made
+}
+
+/// Run gripopt with `args`, its memory limited to 2 GiB and its time to 120 s (killed then:
+/// the test fails, it does not hang); stdout and stderr through files in `dir`.
+fn run_limited(dir: &Path, args: &[&str]) -> Output {
+    let (out, err) = (dir.join(".stdout"), dir.join(".stderr"));
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 2097152; exec \"$0\" \"$@\"")
+        .arg(GRIPOPT_BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).unwrap())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("gripopt {args:?} did not end in 120 s (killed): {}", std::fs::read_to_string(&err).unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    Output { status, stdout: std::fs::read(&out).unwrap(), stderr: std::fs::read(&err).unwrap() }
+}
+
+fn is_fifo(path: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+fn is_link(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink())
+}
+
+/// Exit 2 naming `flag`, `path` and `why`.
+fn refused(o: &Output, flag: &str, path: &Path, why: &str) {
+    let text = output_text(o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains(&format!("{flag} {}", path.display())), "{text}");
+    assert!(text.contains(why), "{text}");
+}
+
+/// `--force` replaced whatever stood at the output path: a named pipe, a link to a device,
+/// the export's own problem file (named as itself, or through a link). Now each is refused
+/// (exit 2, naming the flag and the path) and left as it was; `--force` still replaces an
+/// earlier export, and a dangling link (it names nothing) needs `--force` as a file does.
+#[test]
+fn force_replaces_an_earlier_output_and_nothing_else() {
+    let d = scratch("force");
+    let export = |source: &Path, out: &Path, force: bool| {
+        let (source, out) = (source.to_str().unwrap(), out.to_str().unwrap());
+        let mut args = vec!["export", source, "--format", "json", "--out", out];
+        if force {
+            args.push("--force");
+        }
+        run_limited(&d, &args)
+    };
+    // the export's own problem file, and a link to it
+    let own = d.join("own.toml");
+    std::fs::copy(KITCHEN, &own).unwrap();
+    let before = std::fs::read(&own).unwrap();
+    refused(&export(&own, &own, true), "--out", &own, "is the command's input");
+    let link = d.join("link.json");
+    std::os::unix::fs::symlink("own.toml", &link).unwrap();
+    refused(&export(&own, &link, true), "--out", &link, "is the command's input");
+    assert_eq!(std::fs::read(&own).unwrap(), before, "the problem file was overwritten");
+    assert!(is_link(&link), "the link was replaced");
+    // a link to a device (never written: the link would have been replaced, not followed)
+    let zero = d.join("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    refused(&export(&own, &zero, true), "--out", &zero, "not a regular file (a device)");
+    assert!(is_link(&zero), "the link to the device was replaced");
+    // an earlier export is replaced with --force (and refused without)
+    let sheet = d.join("sheet.json");
+    assert_eq!(export(&own, &sheet, false).status.code(), Some(0));
+    refused(&export(&own, &sheet, false), "--out", &sheet, "add --force");
+    let o = export(&own, &sheet, true);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    // a dangling link: an existing name, replaced (the link, not what it names) with --force
+    let dangling = d.join("dangling.json");
+    std::os::unix::fs::symlink("nowhere.json", &dangling).unwrap();
+    refused(&export(&own, &dangling, false), "--out", &dangling, "add --force");
+    assert_eq!(export(&own, &dangling, true).status.code(), Some(0));
+    assert!(!is_link(&dangling) && dangling.is_file() && !d.join("nowhere.json").exists());
+    // a named pipe: export --out and simulate --csv / --plot
+    let pipe = d.join("pipe.csv");
+    if !fifo(&pipe) {
+        return;
+    }
+    refused(&export(&own, &pipe, true), "--out", &pipe, "not a regular file (a named pipe)");
+    let p = pipe.to_str().unwrap();
+    let o = run_limited(&d, &["simulate", BOTTLE_FILE, "--csv", p, "--force"]);
+    refused(&o, "--csv", &pipe, "not a regular file (a named pipe)");
+    assert!(is_fifo(&pipe), "the pipe was replaced");
+}
+
+/// A recorded run of bottle-1l (pop 8, 2 generations, seed 16) in `target/hostile34/NAME`.
+fn run_folder(name: &str) -> PathBuf {
+    let d = scratch(name).join("run");
+    let spec = gripopt::run::RunSpec {
+        problem_path: BOTTLE_FILE.into(),
+        out: d.clone(),
+        pop: 8,
+        generations: 2,
+        seed: 16,
+        threads: Some(1),
+        record: gripopt::record::RecordOptions::default(),
+    };
+    gripopt::run::optimise(&spec).unwrap();
+    d
+}
+
+/// `file` of the run folder `run` replaced by `what` (`pipe`, `zero`: a link to /dev/zero,
+/// `folder`, or a sparse regular file of `big` bytes); false when a pipe cannot be made.
+fn replace(run: &Path, file: &str, what: &str, big: u64) -> bool {
+    let p = run.join(file);
+    std::fs::remove_file(&p).unwrap();
+    match what {
+        "pipe" => return fifo(&p),
+        "zero" => std::os::unix::fs::symlink("/dev/zero", &p).unwrap(),
+        "folder" => std::fs::create_dir(&p).unwrap(),
+        _ => std::fs::File::create(&p).unwrap().set_len(big).unwrap(),
+    }
+    true
+}
+
+/// A run folder's file that is not a regular file hung `resume` (checkpoint.json a pipe,
+/// holding the folder's lock), filled the memory (a link to /dev/zero) or hung `show`
+/// (run.json), and `show` and `verify` called a checkpoint.json that is a folder or pipe
+/// missing (`export` a run folder whose problem.toml is a folder not a run folder). Now each
+/// command ends with exit 2 naming the file and saying "not a regular file"; a file far
+/// larger than gripopt writes is refused before it is read; a recording index that cannot
+/// be read is rebuilt from the shards (replay of design 3 verifies).
+#[test]
+fn run_folder_files_are_read_only_when_regular_files() {
+    let base = run_folder("folder");
+    let dir = base.parent().unwrap();
+    let case = dir.join("case");
+    let r = case.to_str().unwrap();
+    let cases: [(&str, &str, &[&str], &str); 9] = [
+        ("checkpoint.json", "pipe", &["resume", r], "not a regular file (a named pipe"),
+        ("checkpoint.json", "pipe", &["show", r], "not a regular file (a named pipe"),
+        ("checkpoint.json", "zero", &["resume", r], "not a regular file (a device"),
+        ("checkpoint.json", "folder", &["show", r], "not a regular file (a folder"),
+        ("checkpoint.json", "pipe", &["verify", r], "not a regular file (a named pipe"),
+        (
+            "problem.toml",
+            "folder",
+            &["export", r, "--design", "3", "--format", "json", "--out", "-"],
+            "not a regular file (a folder",
+        ),
+        ("run.json", "zero", &["show", r], "not a regular file (a device"),
+        ("run.json", "pipe", &["show", r], "not a regular file (a named pipe"),
+        ("run.json", "big", &["show", r], "larger than 67108864 bytes"),
+    ];
+    for (file, what, args, why) in cases {
+        crate::common::copy_dir(&base, &case);
+        if !replace(&case, file, what, (64 << 20) + 1) {
+            return;
+        }
+        let o = run_limited(dir, args);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{file} {what}, {args:?}: {text}");
+        assert!(text.contains(&format!("{file}: ")) && text.contains(why), "{file} {what}, {args:?}: {text}");
+        assert!(!text.contains("missing"), "{file} {what}, {args:?}: {text}");
+    }
+    // the recording index: read from the shards instead
+    for what in ["zero", "pipe"] {
+        crate::common::copy_dir(&base, &case);
+        if !replace(&case, "recording/index.jsonl", what, 0) {
+            return;
+        }
+        let o = run_limited(dir, &["replay", r, "--design", "3"]);
+        assert_eq!(o.status.code(), Some(0), "index.jsonl {what}: {}", output_text(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("verified"), "{}", output_text(&o));
+    }
+}
+
+/// `replay` after the run's problem.toml was edited re-evaluated the design with the edited
+/// problem, exited 3 and printed two verdicts, the second contradicting the first. Now it
+/// is refused as `resume` refuses it: exit 2, one message naming the file, nothing
+/// evaluated (nothing on stdout).
+#[test]
+fn replay_refuses_an_edited_problem_file() {
+    let run = run_folder("edited");
+    let problem = run.join("problem.toml");
+    let mut text = std::fs::read_to_string(&problem).unwrap();
+    text.push_str("# edited by hand\n");
+    std::fs::write(&problem, text).unwrap();
+    let r = run.to_str().unwrap();
+    let dir = run.parent().unwrap();
+    for args in [&["replay", r, "--design", "3"][..], &["replay", r, "--design", "3", "--json"], &["resume", r]] {
+        let o = run_limited(dir, args);
+        let err = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", output_text(&o));
+        assert!(err.contains(&format!("{}: edited after the run", problem.display())), "{args:?}: {err}");
+        assert!(!output_text(&o).contains("verified"), "{args:?}: a verdict: {}", output_text(&o));
+    }
+}
+
+/// `simulate P --csv P --force` overwrote its own problem file, and `replay RUN --csv
+/// RUN/run.json --force` the run's run.json. Now both are refused (exit 2, the file left as
+/// it was); a new file inside the run folder is still written.
+///
+/// Needs `check_output` in src/cli/mod.rs to pass the command's inputs to
+/// `gripopt::check_output_file` (the problem file for simulate, the run folder for replay):
+/// the lead's change; un-ignore it with that change.
+#[test]
+#[ignore = "needs check_output in src/cli/mod.rs to pass the command's inputs (hostile pass 34)"]
+fn simulate_and_replay_never_write_over_their_inputs() {
+    let d = scratch("inputs");
+    let own = d.join("own.toml");
+    std::fs::copy(BOTTLE_FILE, &own).unwrap();
+    let before = std::fs::read(&own).unwrap();
+    let o = run_limited(&d, &["simulate", own.to_str().unwrap(), "--csv", own.to_str().unwrap(), "--force"]);
+    refused(&o, "--csv", &own, "is the command's input");
+    assert_eq!(std::fs::read(&own).unwrap(), before, "the problem file was overwritten");
+    let run = run_folder("inputs-run");
+    let (r, run_json) = (run.to_str().unwrap(), run.join("run.json"));
+    let before = std::fs::read(&run_json).unwrap();
+    for flag in ["--csv", "--plot"] {
+        let o = run_limited(&d, &["replay", r, "--design", "3", flag, run_json.to_str().unwrap(), "--force"]);
+        refused(&o, flag, &run_json, "is a file of the folder");
+    }
+    assert_eq!(std::fs::read(&run_json).unwrap(), before, "run.json was overwritten");
+    let new = run.join("design-3.csv");
+    let o = run_limited(&d, &["replay", r, "--design", "3", "--csv", new.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    assert!(new.is_file());
+}
