@@ -236,12 +236,7 @@ fn replay_refuses_an_edited_problem_file() {
 /// `simulate P --csv P --force` overwrote its own problem file, and `replay RUN --csv
 /// RUN/run.json --force` the run's run.json. Now both are refused (exit 2, the file left as
 /// it was); a new file inside the run folder is still written.
-///
-/// Needs `check_output` in src/cli/mod.rs to pass the command's inputs to
-/// `gripopt::check_output_file` (the problem file for simulate, the run folder for replay):
-/// the lead's change; un-ignore it with that change.
 #[test]
-#[ignore = "needs check_output in src/cli/mod.rs to pass the command's inputs (hostile pass 34)"]
 fn simulate_and_replay_never_write_over_their_inputs() {
     let d = scratch("inputs");
     let own = d.join("own.toml");

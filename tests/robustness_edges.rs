@@ -392,7 +392,7 @@ fn existing_output_files_and_edited_problems_are_never_taken_silently() {
     for flag in ["--csv", "--plot"] {
         let o = cli(&["replay", &d, "--design", "0", flag, run_json.to_str().unwrap()]);
         assert_eq!(code(&o), 2, "{}", stderr(&o));
-        assert!(stderr(&o).contains("the file exists; add --force"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("is a file of the folder"), "{}", stderr(&o));
         assert_eq!(std::fs::read(&run_json).unwrap(), before, "{flag}: run.json untouched");
     }
     let mine = dir.join("mine.csv");

@@ -314,11 +314,12 @@ fn hooks() -> gripopt::run::RunHooks {
     }
 }
 
-/// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder
-/// ([`gripopt::check_new_file`], as `export --out`); `-` (standard output carries the
+/// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder, a
+/// pipe or device, one of the command's `inputs` or an existing file inside an input folder
+/// even with `force` ([`gripopt::check_output_file`], as `export --out`); `-` (standard output carries the
 /// report), a file in a folder that does not exist, and a `--plot` not named `.svg` (the
 /// plot is SVG): exit 2 before anything runs.
-fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Result<()> {
+fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool, inputs: &[&std::path::Path]) -> Result<()> {
     let Some(p) = path else { return Ok(()) };
     let refuse =
         |why: String| -> Result<()> { Err(gripopt::Error::Input(format!("{flag} {}: {why}", p.display())).into()) };
@@ -328,7 +329,7 @@ fn check_output(flag: &str, path: Option<&std::path::Path>, force: bool) -> Resu
     if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return refuse(format!("the folder {} does not exist", d.display()));
     }
-    gripopt::check_new_file(flag, p, force)?;
+    gripopt::check_output_file(flag, p, force, inputs)?;
     let svg = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
     if flag == "--plot" && !svg {
         return refuse("the plot is written as SVG; give a file name ending in .svg".into());
@@ -394,8 +395,8 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             report::evaluate(&p, &x, json, static_only).map(|_| 0)
         }
         Cmd::Simulate { problem, design, rtol, scene, object, method, json, csv, no_contact, trace, plot, force } => {
-            check_output("--csv", csv.as_deref(), force)?;
-            check_output("--plot", plot.as_deref(), force)?;
+            check_output("--csv", csv.as_deref(), force, &[&problem])?;
+            check_output("--plot", plot.as_deref(), force, &[&problem])?;
             let mut p = load_problem(&problem)?;
             if let Some(sc) = &scene {
                 p = scenes::apply_scene(&p, sc)?;
@@ -467,8 +468,8 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             optcmd::summary(&s, json)
         }
         Cmd::Replay { run_dir, design, json, csv, plot, scene, scenario, force } => {
-            check_output("--csv", csv.as_deref(), force)?;
-            check_output("--plot", plot.as_deref(), force)?;
+            check_output("--csv", csv.as_deref(), force, &[&run_dir])?;
+            check_output("--plot", plot.as_deref(), force, &[&run_dir])?;
             if let Some(sc) = &scenario {
                 return robust::replay_scenario(&run_dir, design, sc, json, csv.as_deref());
             }
