@@ -168,33 +168,6 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
-fn object_names(p: &Problem) -> String {
-    p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
-}
-
-/// The index of `--object NAME` in the robust objects of `p` (None without --object); an
-/// input error naming the flag when `p` has no [robust] or no object of that name.
-fn robust_object(p: &Problem, name: Option<&str>, source: &str) -> Result<Option<usize>> {
-    let Some(name) = name else {
-        return Ok(None);
-    };
-    let Some(r) = &p.robust else {
-        return Err(gripopt::Error::Input(format!(
-            "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which the export holds without --object; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
-        ))
-        .into());
-    };
-    match r.objects.iter().position(|o| o.name == name) {
-        Some(o) => Ok(Some(o)),
-        None => Err(gripopt::Error::Input(format!(
-            "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
-            object_names(p)
-        ))
-        .into()),
-    }
-}
-
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--object NAME] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
@@ -210,12 +183,13 @@ pub fn run(a: ExportArgs) -> Result<()> {
         let src = format!("problem file {}, {what}", a.source.display());
         (p, x, src)
     };
-    let object = robust_object(&p, a.object.as_deref(), &source)?;
+    let without = "the export holds without --object";
+    let object = a.object.as_deref().map(|name| super::robust::object_index(&p, name, &source, without)).transpose()?;
     if p.robust.is_some() && object.is_none() {
         // as sweep says it: the exported hand grips the reference object only
         eprintln!(
             "note: {source}: the problem has [robust]: the export holds the reference [object] and [scene] only, not the robust objects or scenarios; --object NAME exports the design on one of its objects ({}) (docs/robust.md, docs/export.md)",
-            object_names(&p)
+            super::robust::object_names(&p)
         );
     }
     // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)

@@ -407,7 +407,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
                 eprintln!(
                     "note: {} has [robust]: simulate runs the reference [object] only, not the robust objects or scenarios; --object NAME simulates the design on one of its objects ({}) (docs/robust.md)",
                     problem.display(),
-                    scenes::object_names(&p)
+                    robust::object_names(&p)
                 );
             }
             let x = design_of(&p, &design)?;

@@ -71,3 +71,28 @@ fn outcome(s: &gripopt::eval::ScenarioRecord) -> String {
         s.t_stab.map_or("—".into(), |v| format!("{:.3} ms", v * 1e3))
     )
 }
+
+/// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
+pub fn object_names(p: &gripopt::params::Problem) -> String {
+    p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+}
+
+/// The index of `--object NAME` among the robust objects of `p` (read from `source`); an
+/// input error naming the flag when `p` has no [robust] (`without`: what the command does
+/// with the problem's one `[object]` instead) or no object of that name. `export --object`
+/// and `simulate --object`.
+pub fn object_index(p: &gripopt::params::Problem, name: &str, source: &str, without: &str) -> Result<usize> {
+    let Some(r) = &p.robust else {
+        return Err(gripopt::Error::Input(format!(
+            "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which {without}; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
+        ))
+        .into());
+    };
+    r.objects.iter().position(|o| o.name == name).ok_or_else(|| {
+        gripopt::Error::Input(format!(
+            "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
+            object_names(p)
+        ))
+        .into()
+    })
+}

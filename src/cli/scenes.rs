@@ -58,32 +58,16 @@ impl PickedObject {
     /// `--object NAME` of problem `p` (from `source`): an input error naming the flag when `p`
     /// has no [robust] or no object of that name.
     pub fn of(p: &Problem, name: &str, source: &Path) -> Result<Self> {
-        let source = source.display();
-        let Some(setup) = RobustSetup::of(p) else {
-            return Err(gripopt::Error::Input(format!(
-                "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which simulate runs without --object; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
-            ))
-            .into());
-        };
-        match setup.object_index(name) {
-            Some(index) => Ok(PickedObject { setup, index }),
-            None => Err(gripopt::Error::Input(format!(
-                "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
-                object_names(p)
-            ))
-            .into()),
-        }
+        let without = "simulate runs without --object";
+        let index = super::robust::object_index(p, name, &source.display().to_string(), without)?;
+        let setup = RobustSetup::of(p).ok_or_else(|| anyhow::anyhow!("--object {name}: no robust setup"))?;
+        Ok(PickedObject { setup, index })
     }
 
     /// The object's name.
     pub fn name(&self) -> &str {
         &self.setup.spec.objects[self.index].name
     }
-}
-
-/// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
-pub fn object_names(p: &Problem) -> String {
-    p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
 }
 
 /// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.

@@ -80,11 +80,6 @@ impl RobustSetup {
         self.k * self.objects()
     }
 
-    /// The index of the object named `name` (None: no such object).
-    pub fn object_index(&self, name: &str) -> Option<usize> {
-        self.spec.objects.iter().position(|o| o.name == name)
-    }
-
     /// Failures an object may have while P̂ ≥ p_min holds over K scenarios.
     pub fn failures_allowed(&self) -> usize {
         self.spec.failures_allowed(self.k)
