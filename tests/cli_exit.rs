@@ -112,8 +112,15 @@ fn a_failed_command_with_json_prints_one_json_object_on_stdout() {
         .output()
         .unwrap();
     assert_json_failure(&o, 1, "t.csv");
-    // a usage error clap reports (exit 2), --json among the arguments
-    assert_json_failure(&run(&["evaluate", BOTTLE, "--json", "--desing", "x"]), 2, "--desing");
+    // a usage error clap reports (exit 2), --json among the arguments: clap's stderr as it
+    // prints it, the JSON object its whole message on one line (first line, then the tip)
+    let o = run(&["evaluate", BOTTLE, "--json", "--desing", "x"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap_or_else(|e| panic!("{e}: {}", text(&o)));
+    let (message, first) = (v["error"].as_str().unwrap(), stderr(&o).lines().next().unwrap().to_string());
+    assert_eq!((v["exit_code"].as_i64(), v.as_object().unwrap().len()), (Some(2), 2), "{v}");
+    assert!(message.starts_with(first.trim_start_matches("error: ")), "{message} / {first}");
+    assert!(message.contains("'--desing'") && message.contains("tip: a similar argument exists: '--design'"), "{v}");
     // a check that did not pass is not an error: moo-test's per-run lines, no error object
     let o = run(&["moo-test", "zdt1", "--pop", "8", "--generations", "2", "--json"]);
     assert_eq!(o.status.code(), Some(3), "{}", text(&o));

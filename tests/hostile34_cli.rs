@@ -103,3 +103,26 @@ fn simulate_method_tr_bdf2_checks_the_files_atol() {
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("--method trbdf2") && e.contains("solver.atol 1e-13") && e.contains(">= 1e-12"), "{e}");
 }
+
+/// "aborted: step budget exhausted" did not say which setting ran out: the text report names
+/// `solver.max_steps` and its value; the record's reason (`--json`, which replay compares)
+/// stays the simulator's.
+#[test]
+fn a_step_budget_discard_names_solver_max_steps_in_the_text() {
+    let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-cli"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let file = dir.join("max-steps-50.toml");
+    let edited = text.replacen("max_steps = 200000", "max_steps = 50", 1);
+    assert!(edited.contains("max_steps = 50"), "bottle-1l.toml's max_steps is 200000");
+    std::fs::write(&file, edited).unwrap();
+    let f = file.to_str().unwrap();
+    let o = run_gripopt(&["simulate", f]);
+    let said = output_text(&o);
+    assert!(
+        said.contains("step budget exhausted (solver.max_steps = 50; the problem file's [solver] raises it)"),
+        "{said}"
+    );
+    let v = json_stdout(&run_gripopt(&["simulate", f, "--json"]));
+    assert_eq!(v["reason"], "aborted: step budget exhausted", "{v}");
+}

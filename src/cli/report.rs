@@ -126,6 +126,7 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     let v = &rec.verdict;
     match (&v.failed_stage, &v.reason) {
         (Some(s), Some(why)) => {
+            let why = with_hint(why, p);
             outln!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
         }
         _ => {
@@ -142,6 +143,15 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         }
     }
     Ok(())
+}
+
+/// A discard's reason for the text report, with the setting behind it where that is one
+/// of the problem's: a step budget names `solver.max_steps` and its value (the record's
+/// reason, which replay compares, stays as it is).
+pub fn with_hint(why: &str, p: &Problem) -> String {
+    let budget = "step budget exhausted";
+    let hint = format!("{budget} (solver.max_steps = {}; the problem file's [solver] raises it)", p.solver.max_steps);
+    why.replacen(budget, &hint, 1)
 }
 
 /// The grasp's lines.

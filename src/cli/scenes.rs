@@ -182,7 +182,7 @@ fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Metho
     }
     match &r.verdict.reason {
         None => outln!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),
-        Some(why) => outln!("verdict    DISCARDED at stage 3: {why}"),
+        Some(why) => outln!("verdict    DISCARDED at stage 3: {}", crate::cli::report::with_hint(why, p)),
     }
 }
 
