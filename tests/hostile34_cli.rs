@@ -126,3 +126,24 @@ fn a_step_budget_discard_names_solver_max_steps_in_the_text() {
     let v = json_stdout(&run_gripopt(&["simulate", f, "--json"]));
     assert_eq!(v["reason"], "aborted: step budget exhausted", "{v}");
 }
+
+/// `export --format mjcf --out hand.json` wrote XML under a `.json` name: a format that an
+/// extension contradicts is refused naming both; a name whose extension says nothing, or
+/// agrees, is written.
+#[test]
+fn export_refuses_a_format_its_file_name_contradicts() {
+    let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-cli/export"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = |name: &str| dir.join(name).display().to_string();
+    let o = run_gripopt(&["export", BOTTLE_FILE, "--format", "mjcf", "--out", &out("hand.json")]);
+    let e = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("hand.json") && e.contains("says json") && e.contains("--format is mjcf"), "{e}");
+    assert!(!dir.join("hand.json").exists());
+    for (format, name) in [("mjcf", "hand.xml"), ("mjcf", "hand.model"), ("json", "sheet.json"), ("csv", "sheet.csv")] {
+        let o = run_gripopt(&["export", BOTTLE_FILE, "--format", format, "--out", &out(name)]);
+        assert_eq!(o.status.code(), Some(0), "{format} {name}: {}", output_text(&o));
+        assert!(dir.join(name).exists(), "{name}");
+    }
+}

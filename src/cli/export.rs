@@ -51,16 +51,48 @@ pub enum FormatArg {
 }
 
 fn format_of(a: &ExportArgs) -> Result<FormatArg> {
-    if let Some(f) = a.format {
-        return Ok(f);
+    match (a.format, format_named_by(&a.out)) {
+        (Some(f), _) | (None, Some(f)) => Ok(f),
+        (None, None) => {
+            bail!("--out {}: give --format mjcf|json|csv (the extension does not say which)", a.out.display())
+        }
     }
-    let ext = a.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    Ok(match ext.as_deref() {
-        Some("xml") | Some("mjcf") => FormatArg::Mjcf,
-        Some("json") => FormatArg::Json,
-        Some("csv") => FormatArg::Csv,
-        _ => bail!("--out {}: give --format mjcf|json|csv (the extension does not say which)", a.out.display()),
-    })
+}
+
+/// Refuse an `--out` whose extension names another format than `format` (`hand.json` with
+/// `--format mjcf`): a file a tool would open as the wrong kind. Checked after the refusals
+/// that protect a run folder and the inputs, which say more.
+fn check_extension(a: &ExportArgs, format: FormatArg) -> Result<()> {
+    let Some(named) = format_named_by(&a.out) else { return Ok(()) };
+    if named != format {
+        bail!(
+            "--out {}: the extension says {} but --format is {}; name the file after its format",
+            a.out.display(),
+            format_name(named),
+            format_name(format)
+        );
+    }
+    Ok(())
+}
+
+/// The format a file name's extension names (`.xml`/`.mjcf`, `.json`, `.csv`), if any.
+fn format_named_by(out: &Path) -> Option<FormatArg> {
+    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("xml") | Some("mjcf") => Some(FormatArg::Mjcf),
+        Some("json") => Some(FormatArg::Json),
+        Some("csv") => Some(FormatArg::Csv),
+        _ => None,
+    }
+}
+
+/// The format's name as `--format` spells it.
+fn format_name(f: FormatArg) -> &'static str {
+    match f {
+        FormatArg::Mjcf => "mjcf",
+        FormatArg::Json => "json",
+        FormatArg::Csv => "csv",
+    }
 }
 
 /// The design and problem of a run folder's design `id`, with a source text.
@@ -229,6 +261,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
     // never over (or into) the problem file or run folder exported from, nor over a
     // device, pipe or socket, --force included
     gripopt::check_output_file("--out", &a.out, a.force, &[a.source.as_path()])?;
+    check_extension(&a, format)?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
         FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),
