@@ -47,6 +47,12 @@ pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path])
             folder.display()
         ));
     }
+    if let Some((run, mark)) = exists.then(|| run_folder_around(path)).flatten() {
+        return refuse(format!(
+            "is a file of the gripopt run folder {} (it holds {mark}): an output never replaces a run's file, --force included; give a new file name",
+            run.display()
+        ));
+    }
     let Ok(link) = std::fs::symlink_metadata(path) else {
         return Ok(()); // nothing there (or a folder that cannot be searched: the write names it)
     };
@@ -74,6 +80,20 @@ pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path])
         return refuse("the file exists; add --force to overwrite it".into());
     }
     Ok(())
+}
+
+/// The run folder the file `path` (existing or not) would lie in, links resolved: its
+/// folder when that holds one of [`RUN_FOLDER_FILES`], or an ancestor holding run.json or
+/// checkpoint.json (a file of its recording/), with the mark found; None outside any.
+pub fn run_folder_around(path: &Path) -> Option<(std::path::PathBuf, &'static str)> {
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let folder = parent.canonicalize().ok()?;
+    if let Some(mark) = run_folder_file(&folder) {
+        return Some((folder, mark));
+    }
+    folder.ancestors().skip(1).find_map(|run| {
+        ["run.json", "checkpoint.json"].into_iter().find(|f| run.join(f).is_file()).map(|f| (run.to_path_buf(), f))
+    })
 }
 
 /// Whether `a` and `b` are the same file (device and inode, links followed); false when

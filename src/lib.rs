@@ -79,7 +79,7 @@ pub use facade::{
     evaluate, evaluate_batch, evaluate_rows, parse_scene, pose_values, random_designs, sample_values, simulate,
     EvaluatedRow, Optimiser, Simulation, Stages, POSE_COLUMNS, SAMPLE_COLUMNS,
 };
-pub use fsutil::{check_new_file, check_output_file, run_folder_file, write_atomic};
+pub use fsutil::{check_new_file, check_output_file, run_folder_around, run_folder_file, write_atomic};
 pub use optim::{Batch, Evaluations, Evaluator, Infeasibility};
 pub use params::{Bounds, Design, DesignParameters, Problem, SceneKind, DESIGN_NAMES};
 pub use record::{DesignMessage, RecordOptions, Recorded, Replay, Resolution, TrajectoryKeep};

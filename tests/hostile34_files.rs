@@ -258,3 +258,51 @@ fn simulate_and_replay_never_write_over_their_inputs() {
     assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
     assert!(new.is_file());
 }
+
+/// A second pass found `--force` still replacing the files of a run folder that was not the
+/// command's input (`simulate P --csv OTHER_RUN/pareto.csv --force`, through a link to the
+/// folder too, and `replay` into another run), and a robust problem's object file
+/// (`file = "can2.toml"`, then `--csv can2.toml --force`), which broke the problem. Both
+/// are refused now, the files unchanged; a new file beside a run's is still written.
+#[test]
+fn force_never_replaces_a_run_folders_file_or_an_object_file() {
+    let d = scratch("run-files");
+    let run = crate::common::tiny_run("hostile34-other-run", Path::new(BOTTLE_FILE), 8, 1);
+    let link = d.join("link-to-run");
+    std::os::unix::fs::symlink(&run, &link).unwrap();
+    let before: Vec<Vec<u8>> =
+        ["pareto.csv", "population.csv", "history.csv"].iter().map(|f| std::fs::read(run.join(f)).unwrap()).collect();
+    for target in [run.join("pareto.csv"), link.join("history.csv")] {
+        let o = run_limited(&d, &["simulate", BOTTLE_FILE, "--csv", target.to_str().unwrap(), "--force"]);
+        refused(&o, "--csv", &target, "is a file of the gripopt run folder");
+    }
+    let other = crate::common::tiny_run("hostile34-replayed-run", Path::new(BOTTLE_FILE), 8, 1);
+    let target = run.join("population.csv");
+    let args = ["replay", other.to_str().unwrap(), "--design", "1", "--csv", target.to_str().unwrap(), "--force"];
+    refused(&run_limited(&d, &args), "--csv", &target, "is a file of the gripopt run folder");
+    let after: Vec<Vec<u8>> =
+        ["pareto.csv", "population.csv", "history.csv"].iter().map(|f| std::fs::read(run.join(f)).unwrap()).collect();
+    assert!(before == after, "a run's tables changed");
+    let fresh = run.join("mine.csv");
+    let o = run_limited(&d, &["simulate", BOTTLE_FILE, "--csv", fresh.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+
+    // a robust problem whose can comes from a file beside it
+    let kitchen = std::fs::read_to_string(KITCHEN).unwrap();
+    let inline = "name = \"can\"             # as can.toml: a 330 ml can, 0.34 kg\nradius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\n";
+    assert!(kitchen.contains(inline), "kitchen.toml's can is inline");
+    let problem = d.join("k-file.toml");
+    std::fs::write(&problem, kitchen.replacen(inline, "name = \"can\"\nfile = \"can2.toml\"\n", 1)).unwrap();
+    let can = d.join("can2.toml");
+    std::fs::copy(Path::new(KITCHEN).with_file_name("can.toml"), &can).unwrap();
+    let can_text = std::fs::read(&can).unwrap();
+    let p = problem.to_str().unwrap();
+    let o = run_limited(&d, &["simulate", p, "--object", "can", "--csv", can.to_str().unwrap(), "--force"]);
+    refused(&o, "--csv", &can, "is the command's input");
+    let o = run_limited(
+        &d,
+        &["export", p, "--object", "can", "--format", "json", "--out", can.to_str().unwrap(), "--force"],
+    );
+    refused(&o, "--out", &can, "is the command's input");
+    assert_eq!(std::fs::read(&can).unwrap(), can_text, "the object file is unchanged");
+}

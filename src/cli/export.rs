@@ -187,15 +187,9 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
             return refuse(format!("inside the run folder {} the design is exported from", run.display()));
         }
     }
-    if let Some(f) = gripopt::run_folder_file(&folder) {
-        return refuse(format!("in a gripopt run folder ({} holds {f})", folder.display()));
-    }
-    // a folder inside a run folder (its recording/): an ancestor holding run.json or
-    // checkpoint.json, the marks no other folder has
-    for run in folder.ancestors().skip(1) {
-        if let Some(f) = ["run.json", "checkpoint.json"].into_iter().find(|f| run.join(f).is_file()) {
-            return refuse(format!("inside a gripopt run folder ({} holds {f})", run.display()));
-        }
+    // the folder itself a run folder (sweep's rule), or inside one (its recording/)
+    if let Some((run, f)) = gripopt::run_folder_around(out) {
+        return refuse(format!("in a gripopt run folder ({} holds {f})", run.display()));
     }
     Ok(())
 }
@@ -260,7 +254,9 @@ pub fn run(a: ExportArgs) -> Result<()> {
     refuse_out_in_run_folder(&a.out, a.source.is_dir().then_some(a.source.as_path()))?;
     // never over (or into) the problem file or run folder exported from, nor over a
     // device, pipe or socket, --force included
-    gripopt::check_output_file("--out", &a.out, a.force, &[a.source.as_path()])?;
+    let objects = if a.source.is_dir() { vec![] } else { p.object_files(&a.source) };
+    let inputs: Vec<&Path> = std::iter::once(a.source.as_path()).chain(objects.iter().map(|f| f.as_path())).collect();
+    gripopt::check_output_file("--out", &a.out, a.force, &inputs)?;
     check_extension(&a, format)?;
     write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {

@@ -398,6 +398,11 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             check_output("--csv", csv.as_deref(), force, &[&problem])?;
             check_output("--plot", plot.as_deref(), force, &[&problem])?;
             let mut p = load_problem(&problem)?;
+            // the robust objects' files are inputs too
+            let objects = p.object_files(&problem);
+            let inputs: Vec<&std::path::Path> = objects.iter().map(|f| f.as_path()).collect();
+            check_output("--csv", csv.as_deref(), force, &inputs)?;
+            check_output("--plot", plot.as_deref(), force, &inputs)?;
             if let Some(sc) = &scene {
                 p = scenes::apply_scene(&p, sc)?;
             }

@@ -183,6 +183,14 @@ macro_rules! checked {
 }
 
 impl Problem {
+    /// The files the problem read besides itself: the robust objects' `file = "…"`, each
+    /// resolved against the folder of `problem_path` (the file it was loaded from), as the
+    /// loader reads them. Outputs must never replace them (`gripopt::check_output_file`).
+    pub fn object_files(&self, problem_path: &Path) -> Vec<std::path::PathBuf> {
+        let folder = problem_path.parent().unwrap_or(Path::new("."));
+        self.robust.iter().flat_map(|r| &r.objects).filter_map(|o| o.file.as_ref()).map(|f| folder.join(f)).collect()
+    }
+
     /// Load and validate a problem file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
