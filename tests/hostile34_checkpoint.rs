@@ -8,13 +8,15 @@ use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// A finished run of bottle-1l (population 8, 2 generations, seed 1) in a fresh folder `name`.
-fn run_folder(name: &str) -> PathBuf {
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-checkpoint")).join(name);
+const BASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-checkpoint");
+
+/// A finished run of `problem` (population 8, 2 generations, seed 1) in a fresh folder `name`.
+fn run_folder(name: &str, problem: &Path) -> PathBuf {
+    let dir = Path::new(BASE).join(name);
     let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
+    std::fs::create_dir_all(BASE).unwrap();
     let spec = gripopt::run::RunSpec {
-        problem_path: BOTTLE_FILE.into(),
+        problem_path: problem.to_path_buf(),
         out: dir.clone(),
         pop: 8,
         generations: 2,
@@ -40,10 +42,16 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     files
 }
 
-/// The error of `resume --force` on run folder `name` after `edit` of its checkpoint.json,
-/// asserting exit 2 and that the folder (the edited checkpoint included) is left as it was.
+/// The error of `resume --force` on a run of bottle-1l in folder `name` after `edit` of its
+/// checkpoint.json, asserting exit 2 and that the folder (the edited checkpoint included) is
+/// left as it was.
 fn forced_resume_error(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> String {
-    let dir = run_folder(name);
+    forced_resume_error_of(name, Path::new(BOTTLE_FILE), edit)
+}
+
+/// [`forced_resume_error`] on a run of `problem`.
+fn forced_resume_error_of(name: &str, problem: &Path, edit: impl FnOnce(&mut serde_json::Value)) -> String {
+    let dir = run_folder(name, problem);
     let cp = dir.join("checkpoint.json");
     let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(&cp).unwrap()).unwrap();
     edit(&mut v);
@@ -64,6 +72,22 @@ fn an_edited_method_is_named_with_both_values() {
     let e = forced_resume_error("method", |v| v["options"]["method"] = "auto".into());
     assert!(e.contains(r#"options.method "auto" differs from the run's "radau5" ("#), "{e}");
     assert!(e.contains("bottle-1l.toml"), "names the problem file the run's method comes from: {e}");
+}
+
+/// `options.method` removed from a run whose problem file says `method = "auto"`: named as
+/// missing, with the file's method.
+#[test]
+fn a_removed_method_is_named_as_missing() {
+    std::fs::create_dir_all(BASE).unwrap();
+    let file = Path::new(BASE).join("auto.toml");
+    let text =
+        std::fs::read_to_string(BOTTLE_FILE).unwrap().replacen("\n[solver]\n", "\n[solver]\nmethod = \"auto\"\n", 1);
+    std::fs::write(&file, text).unwrap();
+    let e = forced_resume_error_of("method-removed", &file, |v| {
+        assert_eq!(v["options"]["method"], "auto", "the run's options state its method");
+        v["options"].as_object_mut().unwrap().remove("method");
+    });
+    assert!(e.contains(&format!(r#"options.method is missing (the run's is "auto", {})"#, file.display())), "{e}");
 }
 
 /// `options.rtol` edited or `options.atol` removed: each named, with the problem file's value.

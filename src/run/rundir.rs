@@ -585,17 +585,13 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
             _ => file.clone(),
         };
         let expected = run_options(&problem.solver, &info.recording);
-        // a missing `method` is RADAU5 (the default): name the method on both sides
-        let with_method = |o: &serde_json::Value, m: crate::params::Method| {
-            let mut o = o.clone();
-            if let Some(map) = o.as_object_mut() {
-                map.entry("method").or_insert_with(|| serde_json::json!(m));
-            }
-            o
-        };
-        let (ours, theirs) =
-            (with_method(&cp.options, Default::default()), with_method(&expected, problem.solver.method));
-        let mut options = field_differences("options", &ours, &theirs, &source);
+        // the run's options leave out the default method (RADAU5): name it beside a
+        // checkpoint's `method`
+        let mut named = expected.clone();
+        if let (Some(_), Some(map)) = (cp.options.get("method"), named.as_object_mut()) {
+            map.entry("method").or_insert_with(|| serde_json::json!(problem.solver.method));
+        }
+        let mut options = field_differences("options", &cp.options, &named, &source);
         if options.is_empty() {
             options = field_differences("options", &cp.options, &expected, &source);
         }
