@@ -19,6 +19,7 @@ mod force_model;
 mod free_jacobian;
 mod free_stage;
 mod hostile33;
+mod hostile34_checkpoint;
 mod hostile34_cli;
 mod hostile34_files;
 mod hostile34_robust;

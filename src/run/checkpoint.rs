@@ -84,6 +84,37 @@ fn short(s: &str) -> &str {
     &s[..s.len().min(12)]
 }
 
+/// Each field of a checkpoint's object `name` (`ours`) whose value differs from the run's
+/// (`theirs`), with both values and where the run's value comes from (`source(field)`):
+/// nested objects are compared field by field, so that a message names the innermost field.
+pub(crate) fn field_differences(
+    name: &str,
+    ours: &serde_json::Value,
+    theirs: &serde_json::Value,
+    source: &dyn Fn(&str) -> String,
+) -> Vec<String> {
+    use serde_json::Value;
+    let (Value::Object(a), Value::Object(b)) = (ours, theirs) else {
+        return if ours == theirs {
+            vec![]
+        } else {
+            vec![format!("{name} {ours} differs from the run's {theirs} ({})", source(name))]
+        };
+    };
+    let mut out = vec![];
+    let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+    for k in keys {
+        let field = format!("{name}.{k}");
+        match (a.get(k), b.get(k)) {
+            (Some(x), Some(y)) => out.extend(field_differences(&field, x, y, source)),
+            (None, Some(y)) => out.push(format!("{field} is missing (the run's is {y}, {})", source(&field))),
+            (Some(x), None) => out.push(format!("{field} {x} is not among the run's fields ({})", source(&field))),
+            (None, None) => {}
+        }
+    }
+    out
+}
+
 /// Hash of settings and options (canonical JSON).
 pub fn settings_hash(settings: &Nsga2Settings, options: &serde_json::Value) -> String {
     let v = serde_json::json!({ "settings": settings, "options": options });

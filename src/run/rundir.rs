@@ -9,7 +9,7 @@
 //! population with discard stages and reasons), `pareto_matrix.svg`, `hypervolume.svg`.
 
 use super::archive::{Archive, Discards};
-use super::checkpoint::{settings_hash, sha256_hex, Checkpoint};
+use super::checkpoint::{field_differences, settings_hash, sha256_hex, Checkpoint};
 use super::contents::Scan;
 use super::gripper::{GripperInfo, GripperProblem};
 use super::info::{new_run_id, write_json, Resume, RunInfo, RunStatus, RUN_FILE};
@@ -19,7 +19,7 @@ use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
-use crate::params::Problem;
+use crate::params::{Problem, SolverSettings};
 use crate::record::{ProblemUse, RecordOptions, Recorder};
 use crate::{Error, Result};
 use argmin::core::State;
@@ -259,21 +259,23 @@ pub fn resume_with(
             &m.computed[..12]
         ));
     }
-    let modified = |what: &str| Error::RunDir {
+    let modified = |found: Vec<String>| Error::RunDir {
         path: cp_path.clone(),
-        message: format!("{what} differ from {} (the run folder was modified); refusing to resume", run_json.display()),
+        message: format!("{}: the run folder was modified; refusing to resume", found.join("; ")),
     };
     if cp.settings != info.settings || cp.settings_hash != settings_hash(&cp.settings, &cp.options) {
-        return Err(modified("settings"));
+        return Err(modified(settings_differences(&cp, &info, dir)));
     }
     if !info.run_id.is_empty() && cp.run_id != info.run_id {
-        return Err(Error::Checkpoint {
-            file: cp_path.clone(),
-            message: format!(
+        let message = if cp.run_id.is_empty() {
+            format!("field `run_id` is missing or empty (run.json's `run_id` is {}): it names the run that wrote the checkpoint; restore this run's checkpoint.json", info.run_id)
+        } else {
+            format!(
                 "written by another run (run id {:?}; run.json's is {}): restore this run's checkpoint.json",
                 cp.run_id, info.run_id
-            ),
-        });
+            )
+        };
+        return Err(Error::Checkpoint { file: cp_path.clone(), message });
     }
     if cp.state.generation < info.completed_generations {
         if !force {
@@ -302,7 +304,7 @@ pub fn resume_with(
         return Err(Error::Checkpoint { file: cp_path, message: "holds no archive (field `archive`)".into() });
     };
     // the problem: the file the run started with, or the run's copy if it is gone
-    let original = info.problem_path.is_absolute().then(|| info.problem_path.clone()).filter(|p| p.exists());
+    let original = original_problem(&info);
     let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
     let problem = Problem::load(&problem_path)?;
     problem.check_self_contained(&problem_path)?;
@@ -332,7 +334,9 @@ pub fn resume_with(
         source,
     })?;
     if cp.options.get("recording") != Some(&recording) {
-        return Err(modified("recording options"));
+        let null = serde_json::Value::Null;
+        let ours = cp.options.get("recording").unwrap_or(&null);
+        return Err(modified(field_differences("options.recording", ours, &recording, &|_| RUN_FILE.into())));
     }
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
@@ -408,7 +412,7 @@ fn drive(
     let mut info = info;
     info.threads = pool.current_num_threads();
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
-    let options = run_options(&gp, &info.recording);
+    let options = run_options(&gp.problem.solver, &info.recording);
     let mut gp = gp;
     if info.recording.enabled {
         gp.recording = info.recording;
@@ -552,11 +556,53 @@ fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::
 /// Run options hashed into checkpoints: pipeline settings and recording. The integration
 /// method is stated only when it is not RADAU5, the default (a run of a problem without
 /// `solver.method` writes the options it wrote before the key existed).
-fn run_options(gp: &GripperProblem, rec: &RecordOptions) -> serde_json::Value {
-    let s = &gp.problem.solver;
+fn run_options(s: &SolverSettings, rec: &RecordOptions) -> serde_json::Value {
     let mut v = serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": s.rtol, "atol": s.atol, "max_steps": s.max_steps, "recording": rec });
     if !s.method.is_default() {
         v["method"] = serde_json::json!(s.method);
     }
     v
+}
+
+/// The problem file a run started with, when it is still there (else the run uses its copy).
+fn original_problem(info: &RunInfo) -> Option<PathBuf> {
+    info.problem_path.is_absolute().then(|| info.problem_path.clone()).filter(|p| p.exists())
+}
+
+/// Why a checkpoint's `settings` or `options` are not the run's: each field that differs,
+/// with the checkpoint's value and the run's (run.json's settings and recording, the
+/// problem file's `[solver]` table), or, when none does, its `settings_hash`.
+fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path) -> Vec<String> {
+    let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
+    let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
+    let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
+    if let Ok(problem) = Problem::load(&problem_path) {
+        let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
+        let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
+        let source = |f: &str| match f {
+            f if f.starts_with("options.recording") => RUN_FILE.to_string(),
+            "options.pipeline" => "this gripopt".to_string(),
+            _ => file.clone(),
+        };
+        let expected = run_options(&problem.solver, &info.recording);
+        // the run's options leave out the default method (RADAU5): name it beside a
+        // checkpoint's `method`
+        let mut named = expected.clone();
+        if let (Some(_), Some(map)) = (cp.options.get("method"), named.as_object_mut()) {
+            map.entry("method").or_insert_with(|| serde_json::json!(problem.solver.method));
+        }
+        let mut options = field_differences("options", &cp.options, &named, &source);
+        if options.is_empty() {
+            options = field_differences("options", &cp.options, &expected, &source);
+        }
+        found.extend(options);
+    }
+    if found.is_empty() {
+        let hash = settings_hash(&cp.settings, &cp.options);
+        found.push(format!(
+            "field `settings_hash` {:?} is not the hash of its fields `settings` and `options` ({:?})",
+            cp.settings_hash, hash
+        ));
+    }
+    found
 }
