@@ -96,6 +96,27 @@ pub fn run_folder_around(path: &Path) -> Option<(std::path::PathBuf, &'static st
     })
 }
 
+/// Refuse, before any work, files a command rewrites in a folder (a run's views at every
+/// generation, verify's table) where something other than a regular file stands: a folder,
+/// pipe or device there would fail the write's rename only after the work, and again on
+/// every retry. Absent files and regular files (links to them) pass.
+pub fn check_rewritable(dir: &Path, files: &[&str]) -> Result<()> {
+    for f in files {
+        let path = dir.join(f);
+        let Ok(m) = std::fs::metadata(&path) else { continue };
+        if !m.is_file() {
+            return Err(Error::RunDir {
+                path,
+                message: format!(
+                    "not a regular file ({}): gripopt rewrites this file as the command runs; move it away (nothing was done)",
+                    file_kind(&m)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Whether `a` and `b` are the same file (device and inode, links followed); false when
 /// either cannot be read.
 pub fn same_file(a: &Path, b: &Path) -> bool {

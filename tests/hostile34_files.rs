@@ -306,3 +306,32 @@ fn force_never_replaces_a_run_folders_file_or_an_object_file() {
     refused(&o, "--out", &can, "is the command's input");
     assert_eq!(std::fs::read(&can).unwrap(), can_text, "the object file is unchanged");
 }
+
+/// A folder where a run's view stands (pareto.csv) made `resume` evaluate a whole generation
+/// and then fail on the rename, again on every retry (history.csv already a generation
+/// ahead of the checkpoint); a folder at verify.csv failed `verify` after all its work. Both
+/// are refused before any work now, the folder as it was.
+#[test]
+fn a_folder_where_a_rewritten_file_goes_is_refused_before_any_work() {
+    let d = scratch("rewritten");
+    let run = crate::common::tiny_run("hostile34-rewritten", Path::new(BOTTLE_FILE), 8, 1);
+    let r = run.to_str().unwrap();
+    let checkpoint = std::fs::read(run.join("checkpoint.json")).unwrap();
+    let history = std::fs::read(run.join("history.csv")).unwrap();
+    std::fs::remove_file(run.join("pareto.csv")).unwrap();
+    std::fs::create_dir(run.join("pareto.csv")).unwrap();
+    let o = run_limited(&d, &["resume", r, "--generations", "2"]);
+    let e = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("pareto.csv") && e.contains("not a regular file (a folder)") && e.contains("nothing was done"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(run.join("checkpoint.json")).unwrap(), checkpoint, "checkpoint unchanged");
+    assert_eq!(std::fs::read(run.join("history.csv")).unwrap(), history, "history not extended");
+    std::fs::create_dir(run.join("verify.csv")).unwrap();
+    let o = run_limited(&d, &["verify", r]);
+    let e = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("verify.csv") && e.contains("not a regular file (a folder)"), "{e}");
+}

@@ -395,7 +395,14 @@ fn existing_output_files_and_edited_problems_are_never_taken_silently() {
         assert!(stderr(&o).contains("is a file of the folder"), "{}", stderr(&o));
         assert_eq!(std::fs::read(&run_json).unwrap(), before, "{flag}: run.json untouched");
     }
-    let mine = dir.join("mine.csv");
+    // a file of the run folder is never replaced, --force included (hostile pass 34), even
+    // one the user put there; beside the folder, --force replaces the user's file
+    let inside = dir.join("mine.csv");
+    std::fs::write(&inside, "my data\n").unwrap();
+    let o = cli(&["simulate", PROBLEM, "--csv", inside.to_str().unwrap(), "--force"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&inside).unwrap(), "my data\n");
+    let mine = dir.with_file_name("edges-outputs-mine.csv");
     std::fs::write(&mine, "my data\n").unwrap();
     let o = cli(&["simulate", PROBLEM, "--csv", mine.to_str().unwrap()]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));

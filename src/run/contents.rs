@@ -14,7 +14,7 @@ use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).
-const VIEWS: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
+const VIEWS: [&str; 5] = super::outputs::VIEW_FILES;
 
 /// What a run folder holds, as far as `optimise` and `resume` care.
 pub(crate) struct Scan {

@@ -272,7 +272,7 @@ pub fn write_tables(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive)
 /// archive, population, history.
 pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<[f64; 5]> {
     use rayon::prelude::*;
-    const FILES: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
+    const FILES: [&str; 5] = VIEW_FILES;
     let front = final_front(st);
     // a robust problem's columns, named by its objects (every row of a run has the same)
     let robust = st.population.first().map(|p| RobustColumns::of(&p.eval.info.record)).unwrap_or_default();
@@ -346,6 +346,14 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
     }
     Ok(times)
 }
+
+/// The tables a run rewrites at every generation, in the order they are written.
+pub const VIEW_FILES: [&str; 5] = ["pareto.csv", "pareto_timings.csv", "archive.csv", "population.csv", "history.csv"];
+
+/// Every file a run rewrites at every generation: the tables and the two plots
+/// ([`crate::fsutil::check_rewritable`] checks them before a run or resume does any work).
+pub const REWRITTEN_FILES: [&str; 7] =
+    [VIEW_FILES[0], VIEW_FILES[1], VIEW_FILES[2], VIEW_FILES[3], VIEW_FILES[4], "pareto_matrix.svg", "hypervolume.svg"];
 
 /// Write every result file of the final state `st` into the run folder `out`: the tables
 /// and the plots.

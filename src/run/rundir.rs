@@ -232,6 +232,7 @@ pub fn resume_with(
         return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder (is it a run folder?)".into() });
     }
     let lock = RunLock::acquire(dir)?;
+    crate::fsutil::check_rewritable(dir, &super::outputs::REWRITTEN_FILES)?;
     let scan = Scan::of(dir)?;
     if !scan.checkpoint {
         return Err(scan.no_checkpoint());

@@ -92,6 +92,8 @@ pub fn verify(
             (sample_designs(&current, n, seed).into_iter().map(|(id, x)| (id, 0, x)).collect(), VERIFY_SAMPLE_FILE)
         }
     };
+    // a folder or pipe where the table goes would fail its write only after the work
+    crate::fsutil::check_rewritable(dir, &[file])?;
     let designs: Vec<(u64, Design)> = found.iter().map(|&(id, _, x)| (id, x)).collect();
     if designs.is_empty() {
         let message = match source {
