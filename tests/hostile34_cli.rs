@@ -147,3 +147,16 @@ fn export_refuses_a_format_its_file_name_contradicts() {
         assert!(dir.join(name).exists(), "{name}");
     }
 }
+
+/// `--object ''` read `--object : kitchen.toml: no such robust object`: a name that reads as
+/// nothing (empty, blanks) is quoted; a plain one is not.
+#[test]
+fn an_object_name_that_reads_as_nothing_is_quoted() {
+    let kitchen = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+    for (name, shown) in [("", "--object \"\":"), ("can ", "--object \"can \":"), ("mug", "--object mug:")] {
+        let o = run_gripopt(&["simulate", kitchen, "--object", name]);
+        let e = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains(shown) && e.contains("no such robust object"), "{name:?}: {e}");
+    }
+}

@@ -82,13 +82,20 @@ pub fn object_names(p: &gripopt::params::Problem) -> String {
 /// with the problem's one `[object]` instead) or no object of that name. `export --object`
 /// and `simulate --object`.
 pub fn object_index(p: &gripopt::params::Problem, name: &str, source: &str, without: &str) -> Result<usize> {
-    let Some(r) = &p.robust else {
+    let found = p.robust.as_ref().and_then(|r| r.objects.iter().position(|o| o.name == name));
+    // a name that reads as nothing (empty, blanks, control characters) quoted
+    let name = if name.trim().is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
+        format!("\"{}\"", crate::cli::out::shown(name))
+    } else {
+        name.to_string()
+    };
+    if p.robust.is_none() {
         return Err(gripopt::Error::Input(format!(
             "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which {without}; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
         ))
         .into());
-    };
-    r.objects.iter().position(|o| o.name == name).ok_or_else(|| {
+    }
+    found.ok_or_else(|| {
         gripopt::Error::Input(format!(
             "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
             object_names(p)
