@@ -83,7 +83,7 @@ pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path])
 }
 
 /// The run folder the file `path` (existing or not) would lie in, links resolved: its
-/// folder when that holds one of [`RUN_FOLDER_FILES`], or an ancestor holding run.json or
+/// folder when that holds one of `RUN_FOLDER_FILES`, or an ancestor holding run.json or
 /// checkpoint.json (a file of its recording/), with the mark found; None outside any.
 pub fn run_folder_around(path: &Path) -> Option<(std::path::PathBuf, &'static str)> {
     let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));

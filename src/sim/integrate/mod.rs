@@ -117,11 +117,11 @@ pub struct Stats {
     pub newton: u64,
     /// Step attempts rejected because Newton failed (part of `rejected`).
     pub newton_fail: u64,
-    /// Switches between the explicit and the implicit method, both ways ([`Switching`]
+    /// Switches between the explicit and the implicit method, both ways (`Switching`
     /// only; None for a single method).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub switches: Option<u64>,
-    /// Accepted steps taken by the explicit method (part of `steps`; [`Switching`] only).
+    /// Accepted steps taken by the explicit method (part of `steps`; `Switching` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub explicit_steps: Option<u64>,
 }
