@@ -259,16 +259,7 @@ fn run_folder_designs_export() {
     std::fs::create_dir_all(&base).unwrap();
     let dir = base.join("run");
     let _ = std::fs::remove_dir_all(&dir);
-    let spec = gripopt::run::RunSpec {
-        problem_path: PathBuf::from(BOTTLE),
-        out: dir.clone(),
-        pop: 8,
-        generations: 2,
-        seed: 16,
-        threads: Some(1),
-        record: gripopt::record::RecordOptions::default(),
-    };
-    gripopt::run::optimise(&spec).unwrap();
+    crate::common::tiny_run_in(dir.clone(), Path::new(BOTTLE), 8, 2);
     let id = front_id(&dir);
     let r = dir.to_str().unwrap();
     let out = scratch("run").join("front.xml");

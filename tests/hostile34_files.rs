@@ -131,18 +131,7 @@ fn force_replaces_an_earlier_output_and_nothing_else() {
 
 /// A recorded run of bottle-1l (pop 8, 2 generations, seed 16) in `target/hostile34/NAME`.
 fn run_folder(name: &str) -> PathBuf {
-    let d = scratch(name).join("run");
-    let spec = gripopt::run::RunSpec {
-        problem_path: BOTTLE_FILE.into(),
-        out: d.clone(),
-        pop: 8,
-        generations: 2,
-        seed: 16,
-        threads: Some(1),
-        record: gripopt::record::RecordOptions::default(),
-    };
-    gripopt::run::optimise(&spec).unwrap();
-    d
+    crate::common::tiny_run_in(scratch(name).join("run"), Path::new(BOTTLE_FILE), 8, 2)
 }
 
 /// `file` of the run folder `run` replaced by `what` (`pipe`, `zero`: a link to /dev/zero,

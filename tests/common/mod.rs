@@ -43,7 +43,16 @@ pub fn random_design<R: rand::Rng>(rng: &mut R) -> Design {
 /// has 4 designs on its front) in `target/mcap-check/NAME` (or `$GRIPOPT_MCAP_CHECK_DIR`),
 /// so that `make test` checks its recording with the independent reader.
 pub fn tiny_run(name: &str, problem: &std::path::Path, pop: usize, generations: u64) -> std::path::PathBuf {
-    let d = check_dir(name);
+    tiny_run_in(check_dir(name), problem, pop, generations)
+}
+
+/// [`tiny_run`] written to the folder `d` (which must not hold a run).
+pub fn tiny_run_in(
+    d: std::path::PathBuf,
+    problem: &std::path::Path,
+    pop: usize,
+    generations: u64,
+) -> std::path::PathBuf {
     let spec = gripopt::run::RunSpec {
         problem_path: problem.to_path_buf(),
         out: d.clone(),
