@@ -21,6 +21,7 @@ mod free_stage;
 mod hostile33;
 mod hostile34_cli;
 mod hostile34_files;
+mod hostile34_replay;
 mod hostile34_robust;
 mod kinematics;
 mod nominal;
