@@ -22,6 +22,7 @@ mod hostile33;
 mod hostile34_checkpoint;
 mod hostile34_cli;
 mod hostile34_files;
+mod hostile34_replay;
 mod hostile34_robust;
 mod kinematics;
 mod nominal;

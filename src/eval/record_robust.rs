@@ -112,6 +112,13 @@ impl ScenarioRecord {
     pub fn aborted(&self) -> bool {
         is_abort(self.cause)
     }
+
+    /// This record as a recording reads it back: without the solver's account (`abort`,
+    /// not written; its class is `cause`, its text the design's reason). What a replay
+    /// compares a re-evaluation with the recording as.
+    pub fn as_written(&self) -> Self {
+        ScenarioRecord { abort: None, ..self.clone() }
+    }
 }
 
 /// A cause that means the simulation was aborted, not a measured outcome.
@@ -180,6 +187,11 @@ impl RobustRecord {
             o.objectives = o.objectives.reported();
         }
         r
+    }
+
+    /// This record as a recording reads it back: every scenario [`ScenarioRecord::as_written`].
+    pub fn as_written(&self) -> Self {
+        RobustRecord { scenarios: self.scenarios.iter().map(ScenarioRecord::as_written).collect(), ..self.clone() }
     }
 }
 

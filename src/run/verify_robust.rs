@@ -45,8 +45,39 @@ pub struct RobustVerifyRow {
     pub scenarios_out: usize,
     /// Worst displacement of the free object over the fresh draw (m).
     pub max_displacement_out: Option<f64>,
-    /// The fresh draw's P(stay) ≥ p_min.
+    /// The fresh draw's P(stay) ≥ p_min, and the solver aborted none of its scenarios (an
+    /// aborted scenario measured nothing: see [`RobustVerifySummary::aborted`]).
     pub keeps: bool,
+}
+
+/// A front design on one object whose fresh draw had scenarios the solver aborted (step
+/// budget, step-size underflow, a free scene that ended before t_obs): whether the object
+/// stays in them is unknown, so the design does not keep P(stay) ≥ p_min on the object, as
+/// the optimisation's verdict makes such a design a solver-failure discard (docs/robust.md).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AbortedOutOfSample {
+    /// Design id.
+    pub id: u64,
+    /// Object name.
+    pub object: String,
+    /// Scenarios of the fresh draw the solver aborted.
+    pub aborted: usize,
+    /// Scenarios of the fresh draw.
+    pub scenarios: usize,
+    /// The first of them (index within the object).
+    pub first_k: usize,
+    /// The solver's message for it.
+    pub message: String,
+}
+
+impl AbortedOutOfSample {
+    /// Says what was aborted and why the design does not keep (one line, no newline).
+    pub fn line(&self) -> String {
+        format!(
+            "design {} on {}: {} of {} fresh scenarios aborted by the solver (first: scenario {}: {}): whether the object stays is unknown, so it does not keep",
+            self.id, self.object, self.aborted, self.scenarios, self.first_k, self.message
+        )
+    }
 }
 
 /// What `verify` found on a robust run.
@@ -64,6 +95,8 @@ pub struct RobustVerifySummary {
     pub p_min: f64,
     /// Scenarios per object out of sample.
     pub scenarios: usize,
+    /// The rows whose fresh draw had scenarios the solver aborted (they do not keep).
+    pub aborted: Vec<AbortedOutOfSample>,
 }
 
 impl RobustVerifySummary {
@@ -79,6 +112,9 @@ impl RobustVerifySummary {
             "  {} of {} keep P(stay) >= p_min {} on every object\n",
             self.keep_all, self.designs, self.p_min
         ));
+        for a in &self.aborted {
+            s.push_str(&format!("  {}\n", a.line()));
+        }
         let mut objects: Vec<&str> = vec![];
         for r in &self.rows {
             if !objects.contains(&r.object.as_str()) {
@@ -153,14 +189,29 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         .collect();
     let mut rows = vec![];
     let mut keep_all = 0;
+    let mut aborted = vec![];
     for (d, row) in front.iter().enumerate() {
         let scen: Vec<ScenarioRecord> =
             tasks.iter().zip(&done).filter(|((td, _), _)| *td == d).map(|(_, s)| s.clone()).collect();
         let rec = robust_record(&setup, &starts[d], scen);
         let rb = rec.robust.as_ref().expect("a robust record");
         let mut all = starts[d].passed();
-        for o in &rb.objects {
-            let keeps = o.p_stay.is_some_and(|p| p >= r.p_min);
+        for (oi, o) in rb.objects.iter().enumerate() {
+            let gone: Vec<&ScenarioRecord> = rb.scenarios.iter().filter(|s| s.object == oi && s.aborted()).collect();
+            if let Some(first) = gone.first() {
+                aborted.push(AbortedOutOfSample {
+                    id: row.id,
+                    object: o.name.clone(),
+                    aborted: gone.len(),
+                    scenarios: o.scenarios,
+                    first_k: first.k,
+                    message: first.abort.as_ref().map_or_else(
+                        || first.cause.map_or("aborted", |c| c.as_str()).to_string(),
+                        |a| a.message.clone(),
+                    ),
+                });
+            }
+            let keeps = gone.is_empty() && o.p_stay.is_some_and(|p| p >= r.p_min);
             all &= keeps;
             rows.push(RobustVerifyRow {
                 id: row.id,
@@ -188,6 +239,10 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         // which run state it checked, as verify.csv says it (show tells when it is stale)
         run_line(&info.run_id, &checked.attribution(), &in_force),
     );
+    // a trace of the aborted scenarios (only where there are: other files are unchanged)
+    for a in &aborted {
+        csv.push_str(&format!("# aborted: {}\n", a.line()));
+    }
     csv.push_str("id,object,p_stay_in,scenarios_in,p_stay_out,p_stay_out_lo,p_stay_out_hi,stays_out,scenarios_out,max_displacement_out,keeps\n");
     for row in &rows {
         // P(stay) and the displacement as floats even where every value is whole
@@ -195,5 +250,13 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     }
     let out = dir.join(VERIFY_ROBUST_FILE);
     write_atomic(&out, csv.as_bytes())?;
-    Ok(RobustVerifySummary { file: out, designs: front.len(), keep_all, p_min: r.p_min, scenarios: setup.k, rows })
+    Ok(RobustVerifySummary {
+        file: out,
+        designs: front.len(),
+        keep_all,
+        p_min: r.p_min,
+        scenarios: setup.k,
+        rows,
+        aborted,
+    })
 }
