@@ -63,5 +63,7 @@ pub use verify::{
     VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
-pub use verify_robust::{is_robust_run, verify_robust, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE};
+pub use verify_robust::{
+    is_robust_run, verify_robust, AbortedOutOfSample, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE,
+};
 pub use verify_run::verify;
