@@ -152,6 +152,8 @@ pub fn is_robust_run(dir: &Path) -> bool {
 pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     let folder = RunFolder::open(dir)?;
     let _lock = RunLock::acquire(dir)?;
+    // a folder or pipe where the table goes would fail its write only after the work
+    crate::fsutil::check_rewritable(dir, &[VERIFY_ROBUST_FILE])?;
     let file = dir.join("problem.toml");
     // the problem in force, checked against the hash run.json recorded (a missing run.json or
     // an edited problem.toml is an error naming the file): the figures are the run's
