@@ -160,3 +160,13 @@ fn an_object_name_that_reads_as_nothing_is_quoted() {
         assert!(e.contains(shown) && e.contains("no such robust object"), "{name:?}: {e}");
     }
 }
+
+/// `--json=yes` (a flag given a value) printed clap's refusal on stderr only: it asked for
+/// JSON, so the refusal is the JSON object too.
+#[test]
+fn a_json_flag_given_a_value_still_gets_a_json_refusal() {
+    let o = run_gripopt(&["evaluate", BOTTLE_FILE, "--json=yes"]);
+    assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+    let e = json_stdout(&o)["error"].as_str().unwrap().to_string();
+    assert!(e.contains("--json"), "{e}");
+}

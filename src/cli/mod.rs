@@ -358,7 +358,12 @@ impl Cmd {
 /// Whether `--json` is among the arguments (before a `--`): a usage error clap reports
 /// before the command is known is then a JSON object on stdout too.
 fn json_asked() -> bool {
-    std::env::args_os().skip(1).take_while(|a| a != "--").any(|a| a == "--json")
+    // `--json`, or `--json=VALUE` (a flag takes no value: clap refuses it, and the refusal
+    // is then a JSON object too)
+    std::env::args_os()
+        .skip(1)
+        .take_while(|a| a != "--")
+        .any(|a| a == "--json" || a.to_str().is_some_and(|a| a.starts_with("--json=")))
 }
 
 /// Entry point: the process exit code (0 done, 3 a check did not pass, 130 interrupted;
