@@ -324,3 +324,29 @@ fn a_folder_where_a_rewritten_file_goes_is_refused_before_any_work() {
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("verify.csv") && e.contains("not a regular file (a folder)"), "{e}");
 }
+
+/// `show` said nothing (`"verify": null`, no warning) of a named pipe or folder where
+/// verify.csv stands: it now shows the run with a warning naming the file.
+#[test]
+fn show_warns_of_a_verify_csv_it_cannot_read() {
+    let d = scratch("show-verify");
+    let run = crate::common::tiny_run("hostile34-show-verify", Path::new(BOTTLE_FILE), 8, 1);
+    let csv = run.join("verify.csv");
+    let _ = std::fs::remove_file(&csv);
+    if !fifo(&csv) {
+        return;
+    }
+    let r = run.to_str().unwrap();
+    let o = run_limited(&d, &["show", r]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("warning: not read:") && text.contains("verify.csv") && text.contains("named pipe"),
+        "{text}"
+    );
+    let o = run_limited(&d, &["show", r, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let warned = v["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("verify.csv"));
+    assert!(warned && v["verify"].is_null(), "{v}");
+    assert!(is_fifo(&csv), "left as it was");
+}

@@ -231,7 +231,12 @@ pub fn run(a: ShowArgs) -> Result<()> {
     }
     let state = folder.state()?;
     let resumable = folder.resumable()?;
-    let verified = folder.verified_generation()?;
+    // a verify.csv that cannot be read (a pipe, a folder, a damaged `# run:` line) is a
+    // warning: the run itself is shown
+    let verified = folder.verified_generation().unwrap_or_else(|e| {
+        warnings.push(format!("not read: {e}"));
+        None
+    });
     let verify_current =
         |v: &gripopt::run::VerifiedGeneration| run.checkpoint_sha256.as_deref() == Some(&v.checkpoint_sha256);
     let why_none = run.discards.explain();

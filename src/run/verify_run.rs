@@ -202,7 +202,8 @@ impl RunFolder {
     /// The verification file the folder holds: verify.csv, or a robust run's
     /// verify_robust.csv (None: not verified).
     pub fn verify_file(&self) -> Option<&'static str> {
-        [VERIFY_FILE, VERIFY_ROBUST_FILE].into_iter().find(|f| self.dir().join(f).is_file())
+        // whatever stands there: a pipe or folder is then refused by the read, naming it
+        [VERIFY_FILE, VERIFY_ROBUST_FILE].into_iter().find(|f| std::fs::symlink_metadata(self.dir().join(f)).is_ok())
     }
     /// The run state the folder's `verify.csv` (or `verify_robust.csv`) checked (None: no verify.csv, or one
     /// written by a gripopt before issue 24, without a `# run:` line).
