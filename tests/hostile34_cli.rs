@@ -170,3 +170,27 @@ fn a_json_flag_given_a_value_still_gets_a_json_refusal() {
     let e = json_stdout(&o)["error"].as_str().unwrap().to_string();
     assert!(e.contains("--json"), "{e}");
 }
+
+/// The discard summaries of `optimise` and `show` ("12 % at stage 3 by aborted (1 design):
+/// aborted: step budget exhausted; …") name `solver.max_steps` as `evaluate` does; `--json`
+/// keeps the run's own text.
+#[test]
+fn discard_summaries_name_solver_max_steps() {
+    let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34-cli/summaries"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("max-steps-60.toml");
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap().replacen("max_steps = 200000", "max_steps = 60", 1);
+    std::fs::write(&file, text).unwrap();
+    let run = dir.join("run").display().to_string();
+    let args = ["optimise", file.to_str().unwrap(), "--out", &run, "--pop", "8", "--generations", "1", "--seed", "1"];
+    let hint = "step budget exhausted (solver.max_steps = 60; the problem file's [solver] raises it)";
+    let o = run_gripopt(&[&args[..], &["--record", "none"]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    assert!(output_text(&o).contains(hint), "{}", output_text(&o));
+    let o = run_gripopt(&["show", &run]);
+    assert!(output_text(&o).contains(hint), "{}", output_text(&o));
+    let v = json_stdout(&run_gripopt(&["show", &run, "--json"]));
+    let lines = v["no_feasible_design"].as_array().expect("no feasible design at max_steps 60");
+    assert!(lines.iter().any(|l| l.as_str().unwrap().contains("step budget exhausted;")), "{v}");
+}

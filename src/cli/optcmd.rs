@@ -168,8 +168,11 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
         );
     }
     if let Some(lines) = s.discards.explain() {
+        // the run's step budget, for an aborted simulation's line
+        let max_steps =
+            gripopt::run::RunFolder::open(&s.out).and_then(|f| f.problem()).ok().map(|p| p.solver.max_steps);
         for l in lines {
-            outln!("{l}");
+            outln!("{}", crate::cli::report::with_steps_hint(&l, max_steps));
         }
         outln!("every value of a design: `gripopt show {d} --design ID`");
     }

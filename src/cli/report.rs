@@ -149,9 +149,21 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
 /// of the problem's: a step budget names `solver.max_steps` and its value (the record's
 /// reason, which replay compares, stays as it is).
 pub fn with_hint(why: &str, p: &Problem) -> String {
+    with_steps_hint(why, Some(p.solver.max_steps))
+}
+
+/// [`with_hint`] with the step budget `max_steps` (None: unknown, the text as it is): the
+/// discard summaries of optimise, resume and show, where the run's problem is read back.
+pub fn with_steps_hint(why: &str, max_steps: Option<u64>) -> String {
     let budget = "step budget exhausted";
-    let hint = format!("{budget} (solver.max_steps = {}; the problem file's [solver] raises it)", p.solver.max_steps);
-    why.replacen(budget, &hint, 1)
+    match max_steps {
+        Some(m) => why.replacen(
+            budget,
+            &format!("{budget} (solver.max_steps = {m}; the problem file's [solver] raises it)"),
+            1,
+        ),
+        None => why.to_string(),
+    }
 }
 
 /// The grasp's lines.

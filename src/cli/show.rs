@@ -321,8 +321,10 @@ pub fn run(a: ShowArgs) -> Result<()> {
         return Ok(());
     }
     if rows.is_empty() {
+        // the run's step budget, for an aborted simulation's line
+        let max_steps = folder.problem().ok().map(|p| p.solver.max_steps);
         for l in why_none.iter().flatten() {
-            outln!("{l}");
+            outln!("{}", crate::cli::report::with_steps_hint(l, max_steps));
         }
     }
     let of = match (&tables, warnings.is_empty()) {
