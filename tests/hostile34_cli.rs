@@ -194,3 +194,13 @@ fn discard_summaries_name_solver_max_steps() {
     let lines = v["no_feasible_design"].as_array().expect("no feasible design at max_steps 60");
     assert!(lines.iter().any(|l| l.as_str().unwrap().contains("step budget exhausted;")), "{v}");
 }
+
+/// `simulate --json --rtol R` did not carry R: it does, and a run at the problem's rtol
+/// prints the record as before (no `rtol` key).
+#[test]
+fn simulate_json_names_an_rtol_set_on_the_command_line() {
+    let v = json_stdout(&run_gripopt(&["simulate", BOTTLE_FILE, "--json", "--rtol", "1e-5"]));
+    assert_eq!(v["rtol"].as_f64(), Some(1e-5), "{v}");
+    let v = json_stdout(&run_gripopt(&["simulate", BOTTLE_FILE, "--json"]));
+    assert!(v.get("rtol").is_none(), "{v}");
+}

@@ -121,7 +121,8 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
     }
     if o.json {
         let object = object.map(PickedObject::name);
-        let v = SimulateJson { object, sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
+        let v =
+            SimulateJson { object, rtol: o.rtol, sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -139,6 +140,9 @@ struct SimulateJson<'a> {
     /// `--object NAME`: the robust object simulated (absent: the reference `[object]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     object: Option<&'a str>,
+    /// `--rtol R`: the relative tolerance it ran with (absent: the problem's `solver.rtol`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rtol: Option<f64>,
     #[serde(flatten)]
     sim: SimulationRecord,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
