@@ -66,8 +66,9 @@ pub(crate) fn header<T: Serialize + ?Sized>(row: &T) -> Vec<String> {
     cells(row, Floats::Display).into_iter().map(|(k, _)| k).collect()
 }
 
-fn quoted(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
+/// A text cell, quoted CSV-style (RFC 4180) where it holds a comma, a quote or a line break.
+pub(crate) fn quoted(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
         s.to_string()

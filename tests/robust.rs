@@ -243,6 +243,31 @@ fn the_robust_evaluator_is_thread_count_independent() {
     }
 }
 
+/// The batch evaluator stops running a design's scenarios once one of them was aborted by
+/// the solver (the stopping rule's verdict is then known: a solver-failure discard), as it
+/// does after too many measured failures: with a one-step budget every scenario aborts, so
+/// each design runs its first scenario only (f_max = 1 here: counted as a failure, the abort
+/// used to leave two more positions to run). Its evaluations equal the sequential ones.
+#[test]
+fn the_robust_evaluator_runs_nothing_after_an_aborted_scenario() {
+    let text = robust_text("").replace("max_steps = 200000", "max_steps = 1");
+    let p = Problem::from_toml_str(&text, Path::new("one-step.toml")).unwrap();
+    let gp = GripperProblem::new(p.clone());
+    let xs: Vec<Vec<f64>> = designs(&p, 3).iter().map(|d| d.to_array().to_vec()).collect();
+    let batch = Batch { xs: &xs, first_id: 0, generation: 1 };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let mut ev = RobustScheduled::default();
+    let got = pool.install(|| ev.evaluate(&gp, &batch).evaluated);
+    let planned = RobustSetup::of(&p).unwrap().planned() as u64;
+    assert_eq!(ev.tasks(), (3, 3 * (planned - 1)), "one scenario per design, the rest skipped");
+    for (x, a) in xs.iter().zip(&got) {
+        let b = gp.evaluate(x);
+        assert_eq!((&a.f, &a.cv, &a.info.record), (&b.f, &b.cv, &b.info.record));
+        let r = a.info.record.robust.as_ref().unwrap();
+        assert_eq!((r.scenarios_run, r.scenarios[0].cause.map(|c| c.as_str())), (1, Some("aborted")));
+    }
+}
+
 pub(crate) fn spec(problem: &Path, out: &Path, threads: usize) -> RunSpec {
     RunSpec {
         problem_path: problem.to_path_buf(),

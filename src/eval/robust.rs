@@ -289,11 +289,12 @@ pub fn fold(setup: &RobustSetup, mut get: impl FnMut(usize, usize) -> ScenarioRe
 }
 
 /// The last position in the sequence a design can still need, knowing only some of its
-/// scenarios (`done(j)`: Some(stays) when position j has run): the first position whose
-/// object already has more failures than allowed among the known positions up to it (an
-/// aborted scenario counted as a failure). The true stop ([`StopRule`]: it also stops at an
-/// aborted scenario) can only be earlier, so no position after this bound is needed.
-pub fn needed_bound(setup: &RobustSetup, done: impl Fn(usize) -> Option<bool>) -> usize {
+/// scenarios (`done[j]`: the record of position j once it has run): the first known position
+/// that [`StopRule`] stops at whatever the unknown positions before it hold — an aborted
+/// scenario, or one whose object already has more measured failures than allowed among the
+/// known positions up to it. The true stop can only be earlier (unknown positions before it
+/// may stop the rule too), so no position after this bound is needed.
+pub fn needed_bound(setup: &RobustSetup, done: &[Option<ScenarioRecord>]) -> usize {
     let last = setup.planned().saturating_sub(1);
     if !setup.early_stop {
         return last;
@@ -301,7 +302,11 @@ pub fn needed_bound(setup: &RobustSetup, done: impl Fn(usize) -> Option<bool>) -
     let fmax = setup.failures_allowed();
     let mut fails = vec![0usize; setup.objects()];
     for (j, (o, _)) in setup.sequence().enumerate() {
-        if done(j) == Some(false) {
+        let Some(r) = done.get(j).and_then(Option::as_ref) else { continue };
+        if r.aborted() {
+            return j;
+        }
+        if !r.stays {
             fails[o] += 1;
             if fails[o] > fmax {
                 return j;

@@ -5,6 +5,7 @@
 //! (`section,name,value,unit,description`).
 
 use super::{num, ExportedDesign, ObjectMode};
+use crate::cells::quoted;
 use crate::math::V2;
 use crate::model::{closed_pose, to_world, Finger, Pose};
 use serde::ser::{Serialize, SerializeMap, Serializer};
@@ -159,14 +160,6 @@ pub fn build_sheet(x: &ExportedDesign) -> BuildSheet {
     BuildSheet { source: x.source.clone(), statics_discard: x.statics_discard.clone(), rows: r.0 }
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 impl BuildSheet {
     /// The key of a row in JSON: `name_unit` (units spelt in ASCII), or `name` without unit.
     pub fn key(row: &SheetRow) -> String {
@@ -190,10 +183,10 @@ impl BuildSheet {
             o.push_str(&format!(
                 "{},{},{},{},{}\n",
                 r.section,
-                csv_field(&r.name),
+                quoted(&r.name),
                 num(r.value),
-                csv_field(r.unit),
-                csv_field(&r.description)
+                quoted(r.unit),
+                quoted(&r.description)
             ));
         }
         o

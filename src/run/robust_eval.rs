@@ -85,7 +85,7 @@ impl Evaluator<GripperProblem> for RobustScheduled {
             let mut g = progress[d].lock().expect("progress");
             g.done[j] = Some(rec);
             g.seconds += clock.elapsed().as_secs_f64();
-            let bound = needed_bound(&setup, |i| g.done[i].as_ref().map(|r| r.stays));
+            let bound = needed_bound(&setup, &g.done);
             g.bound = g.bound.min(bound);
         });
         let mut costs = Vec::with_capacity(xs.len());
