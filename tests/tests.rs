@@ -41,6 +41,7 @@ mod robustness_cli;
 mod robustness_edges;
 mod robustness_folders;
 mod s34_small;
+mod s35_csv;
 mod scene_cli;
 mod scenes;
 mod seams;

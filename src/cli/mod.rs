@@ -8,6 +8,7 @@ use std::path::PathBuf;
 #[macro_use]
 pub(crate) mod out;
 mod bench;
+mod csv_stream;
 mod export;
 mod optcmd;
 mod progress;

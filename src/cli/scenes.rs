@@ -2,12 +2,14 @@
 //! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
 //! plot), in the same way for every scene.
 
+use crate::cli::csv_stream::CsvStream;
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
-use crate::cli::watch::Watch;
+use crate::cli::watch::{Streamed, Watch};
 use anyhow::{bail, Context, Result};
 use gripopt::eval::{Record, RobustSetup, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
-use gripopt::sim::{Controls, Integration, Method, PoseSample, SceneSpec};
+use gripopt::sim::{Controls, Integration, Method, SceneSpec};
+use gripopt::{Column, POSE_COLUMNS, SAMPLE_COLUMNS};
 use serde::Serialize;
 use std::path::Path;
 
@@ -96,25 +98,25 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
         Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
     let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
     let spec = SceneSpec::of(&p.scene.setup);
-    // the samples only for a CSV or a plot; progress on stderr when it takes long
-    let mut watch = Watch::new(o.csv.is_some() || o.plot.is_some(), o.trace);
+    // the samples kept only for a plot, streamed to the CSV; progress on stderr when it takes long
+    let mut watch = Watch::new(o.plot.is_some(), o.trace);
+    watch.csv = match (o.csv, kind) {
+        (None, _) => None,
+        (Some(path), SceneKind::Free) => Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?)),
+        (Some(path), _) => Some(Streamed::Samples(CsvStream::create(path, SAMPLES_TITLE, &SAMPLE_COLUMNS)?)),
+    };
     let ev = match object {
         Some(ob) => gripopt::eval::simulate_object(x, &ob.setup, ob.index, &spec, &integ, &ctl, &mut watch),
         None => gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch),
     };
-    let (traj, poses) = (std::mem::take(&mut watch.traj), std::mem::take(&mut watch.poses));
+    let (traj, csv) = (std::mem::take(&mut watch.traj), watch.csv.take());
     drop(watch);
     if ev.scene.is_none() {
         let d = ev.discard.expect("a design without statics was discarded");
         bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
     }
     let record = Record::from_eval(&ev);
-    if let Some(path) = o.csv {
-        match kind {
-            SceneKind::Free => write_poses_csv(path, &poses)?,
-            _ => write_samples_csv(path, &traj.samples, |v| format!("{v:e}"))?,
-        }
-    }
+    let rows = csv.map(|c| c.into_stream().finish()).transpose()?;
     if let Some(path) = o.plot {
         let title = format!("{}: grasp", p.name);
         crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, &traj.samples)?))?;
@@ -127,9 +129,8 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
         return Ok(());
     }
     print_simulation(p, object.map(PickedObject::name), &record, method, integ.rtol);
-    if o.csv.is_some() {
-        let n = if kind == SceneKind::Free { poses.len() } else { traj.samples.len() };
-        outln!("trajectory: {n} samples written to {}", o.csv.map(crate::cli::out::path).unwrap_or_default());
+    if let (Some(n), Some(path)) = (rows, o.csv) {
+        outln!("trajectory: {n} samples written to {}", crate::cli::out::path(path));
     }
     Ok(())
 }
@@ -190,48 +191,13 @@ fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Metho
     }
 }
 
-/// Columns of a grasp trajectory CSV (`simulate --csv` in the centred and offset scenes,
-/// `replay --csv`): name and unit.
-pub const SAMPLE_COLUMNS: [(&str, &str); 16] = [
-    ("t", "s"),
-    ("q11", "rad"),
-    ("q21", "rad"),
-    ("q11_dot", "rad/s"),
-    ("q21_dot", "rad/s"),
-    ("theta2", "rad"),
-    ("delta_1", "m"),
-    ("delta_2", "m"),
-    ("fn_1", "N"),
-    ("fn_2", "N"),
-    ("ft_1", "N"),
-    ("ft_2", "N"),
-    ("hand_fy", "N"),
-    ("filtered_fy", "N"),
-    ("energy", "J"),
-    ("energy_excess", "J"),
-];
-
-/// Columns of the free scene's pose CSV (`simulate --scene free --csv`): name and unit.
-pub const POSE_COLUMNS: [(&str, &str); 14] = [
-    ("t", "s"),
-    ("gx", "m"),
-    ("gy", "m"),
-    ("gz", "m"),
-    ("qw", "-"),
-    ("qx", "-"),
-    ("qy", "-"),
-    ("qz", "-"),
-    ("tilt_deg", "deg"),
-    ("q11_1", "rad"),
-    ("q21_1", "rad"),
-    ("q11_2", "rad"),
-    ("q21_2", "rad"),
-    ("energy", "J"),
-];
+const SAMPLES_TITLE: &str = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
+const POSES_TITLE: &str =
+    "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
 
 /// The `#` title and units lines and the header of a CSV with `columns`.
-fn csv_head(title: &str, columns: &[(&str, &str)]) -> String {
-    let units: Vec<String> = columns.iter().map(|(n, u)| format!("{n} [{u}]")).collect();
+fn csv_head(title: &str, columns: &[Column]) -> String {
+    let units: Vec<String> = columns.iter().map(|(n, u, _)| format!("{n} [{u}]")).collect();
     let names: Vec<&str> = columns.iter().map(|c| c.0).collect();
     format!("# gripopt {title}\n# units: {}\n{}", units.join(" "), names.join(","))
 }
@@ -239,25 +205,11 @@ fn csv_head(title: &str, columns: &[(&str, &str)]) -> String {
 /// The grasp samples as CSV (`fmt` formats each number), written atomically (errors name
 /// `path`).
 pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(f64) -> String) -> Result<()> {
-    let title = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
-    let mut w = csv_head(title, &SAMPLE_COLUMNS);
+    let mut w = csv_head(SAMPLES_TITLE, &SAMPLE_COLUMNS);
     for s in samples {
         let v = gripopt::sample_values(s);
         w.push('\n');
         w.push_str(&v.map(fmt).join(","));
-    }
-    w.push('\n');
-    crate::cli::out::write_file(path, w.as_bytes())
-}
-
-/// The free scene's poses as CSV, written atomically.
-fn write_poses_csv(path: &Path, poses: &[PoseSample]) -> Result<()> {
-    let title = "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
-    let mut w = csv_head(title, &POSE_COLUMNS);
-    for p in poses {
-        let v = gripopt::pose_values(p);
-        w.push('\n');
-        w.push_str(&v.map(|x| format!("{x:e}")).join(","));
     }
     w.push('\n');
     crate::cli::out::write_file(path, w.as_bytes())

@@ -5,6 +5,7 @@
 //! steps, seconds; on a terminal one line rewritten), so a long one (e.g. a tiny
 //! `contact.v_s` with a large `solver.max_steps`) is never silent: ctrl-c stops it.
 
+use crate::cli::csv_stream::CsvStream;
 use gripopt::sim::{EventNote, Point, PoseSample, Sample, Sink, Trajectory};
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
@@ -13,6 +14,24 @@ use std::time::{Duration, Instant};
 pub const FIRST: Duration = Duration::from_secs(2);
 /// How often after that.
 pub const EVERY: Duration = Duration::from_secs(5);
+
+/// A CSV fed by the simulation: the grasp samples or the free scene's poses (steps and
+/// events, not the grid).
+pub enum Streamed {
+    /// `simulate --csv` in the centred and offset scenes.
+    Samples(CsvStream),
+    /// `simulate --scene free --csv`.
+    Poses(CsvStream),
+}
+
+impl Streamed {
+    /// The stream, whichever it is.
+    pub fn into_stream(self) -> CsvStream {
+        match self {
+            Streamed::Samples(s) | Streamed::Poses(s) => s,
+        }
+    }
+}
 
 /// Samples, trace and progress of one simulation.
 pub struct Watch {
@@ -24,6 +43,8 @@ pub struct Watch {
     pub traj: Trajectory,
     /// The free scene's poses kept.
     pub poses: Vec<PoseSample>,
+    /// The CSV the samples (or the free scene's poses) stream to, as they come.
+    pub csv: Option<Streamed>,
     start: Instant,
     next: Duration,
     samples: u64,
@@ -39,6 +60,7 @@ impl Watch {
             trace,
             traj: Trajectory::default(),
             poses: vec![],
+            csv: None,
             start: Instant::now(),
             next: FIRST,
             samples: 0,
@@ -87,6 +109,9 @@ impl Sink for Watch {
             self.traj.finger(at, s);
         }
         if at != Point::Grid {
+            if let Some(Streamed::Samples(c)) = self.csv.as_mut() {
+                c.row(&gripopt::sample_values(s));
+            }
             self.tick(s.t);
         }
     }
@@ -95,6 +120,9 @@ impl Sink for Watch {
             self.poses.pose(at, s);
         }
         if at != Point::Grid {
+            if let Some(Streamed::Poses(c)) = self.csv.as_mut() {
+                c.row(&gripopt::pose_values(s));
+            }
             self.tick(s.t);
         }
     }

@@ -1,0 +1,101 @@
+//! `simulate --csv` streams its rows to the file while the simulation runs (no trajectory
+//! held in memory): the file holds exactly the library's trajectory, appears only when
+//! complete, and nothing is left behind when the simulation fails or is interrupted.
+
+use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
+use gripopt::params::{Problem, SceneKind};
+use gripopt::sim::{Controls, Integration};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s35-csv")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn names(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+/// The numbers of a CSV's data rows (after the `#` lines and the header).
+fn rows(p: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(p).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    lines.next().expect("a header");
+    lines.map(|l| l.split(',').map(|c| c.parse().unwrap()).collect()).collect()
+}
+
+/// The streamed CSV of the centred and the free scene holds, row for row, the samples the
+/// library's own `simulate` keeps in memory (parsed back from `{:e}`, exact for f64).
+#[test]
+fn the_streamed_csv_is_the_librarys_trajectory() {
+    let d = scratch("same");
+    let p = Problem::load(Path::new(BOTTLE_FILE)).unwrap();
+    let integ = Integration::from_solver(&p.solver);
+    for (scene, kind) in [("centred", SceneKind::Centred), ("free", SceneKind::Free)] {
+        let csv = d.join(format!("{scene}.csv"));
+        let o = run_gripopt(&["simulate", BOTTLE_FILE, "--scene", scene, "--csv", csv.to_str().unwrap()]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(0), "{text}");
+        let sim = gripopt::simulate(&p, &p.nominal, Some((kind, None)), &integ, &Controls::DIAGNOSTIC).unwrap();
+        let want: Vec<Vec<f64>> = if kind == SceneKind::Free {
+            sim.poses.iter().map(|s| gripopt::pose_values(s).to_vec()).collect()
+        } else {
+            sim.trajectory.samples.iter().map(|s| gripopt::sample_values(s).to_vec()).collect()
+        };
+        let got = rows(&csv);
+        assert!(want.len() > 100, "{scene}: {} samples", want.len());
+        assert_eq!(got, want, "{scene}");
+        assert!(text.contains(&format!("trajectory: {} samples written to", want.len())), "{text}");
+        assert_eq!(names(&d).iter().filter(|n| n.ends_with(".tmp")).count(), 0, "{:?}", names(&d));
+    }
+}
+
+/// A design that never reaches its scene writes no CSV and leaves no temporary file.
+#[test]
+fn a_discarded_design_leaves_nothing() {
+    let d = scratch("discarded");
+    let csv = d.join("t.csv");
+    // stage 1: no closed pose on the object
+    let design = "l21=0.02,b=0.09,t22=0.035,r=0.5,p=0.4,psi_deg=130";
+    let o = run_gripopt(&["simulate", BOTTLE_FILE, "--design", design, "--csv", csv.to_str().unwrap()]);
+    assert_ne!(o.status.code(), Some(0), "{}", output_text(&o));
+    assert!(output_text(&o).contains("discarded"), "{}", output_text(&o));
+    assert!(names(&d).is_empty(), "left behind: {:?}", names(&d));
+}
+
+/// ctrl-c during a long `simulate --csv` ends it (exit 130) without a CSV or its temporary
+/// file.
+#[test]
+fn ctrl_c_leaves_no_csv() {
+    let d = scratch("ctrl-c");
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let line = |key: &str| text.lines().find(|l| l.starts_with(&format!("{key} "))).unwrap().to_string();
+    let slow = text.replacen(&line("v_s"), "v_s = 1e-10", 1).replacen(&line("max_steps"), "max_steps = 50000000", 1);
+    let p = d.join("slow.toml");
+    std::fs::write(&p, slow).unwrap();
+    let csv = d.join("t.csv");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gripopt"))
+        .args(["simulate", p.to_str().unwrap(), "--csv", csv.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let tmp = d.join(".t.csv.tmp");
+    let t0 = Instant::now();
+    // rows are being written (the temporary file grows), and the run is still going
+    while std::fs::metadata(&tmp).map_or(0, |m| m.len()) < 64 << 10 {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no rows streamed: {:?}", names(&d));
+        assert!(child.try_wait().unwrap().is_none(), "ended early");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    assert_eq!(names(&d), vec!["slow.toml".to_string()]);
+}
