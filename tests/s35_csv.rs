@@ -99,3 +99,21 @@ fn ctrl_c_leaves_no_csv() {
     assert_eq!(status.code(), Some(130), "{status:?}");
     assert_eq!(names(&d), vec!["slow.toml".to_string()]);
 }
+
+/// A link left at an output's temporary name (`.NAME.tmp`) is never written through: the
+/// plot and the CSV are written, the link's target is untouched.
+#[test]
+fn a_link_at_the_temporary_name_is_not_followed() {
+    let d = scratch("tmp-link");
+    let victim = d.join("victim.txt");
+    std::fs::write(&victim, "mine").unwrap();
+    for (flag, file) in [("--plot", "p.svg"), ("--csv", "t.csv")] {
+        std::os::unix::fs::symlink(&victim, d.join(format!(".{file}.tmp"))).unwrap();
+        let out = d.join(file);
+        let o = run_gripopt(&["simulate", BOTTLE_FILE, flag, out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "mine", "{flag}");
+        assert!(std::fs::metadata(&out).unwrap().len() > 1000, "{flag}");
+    }
+    assert_eq!(names(&d), vec!["p.svg", "t.csv", "victim.txt"]);
+}
