@@ -122,6 +122,10 @@ fn out_of_bounds_warnings_print_numbers_compactly() {
     assert!(err.contains("l21 = 1e300 is outside"), "{err}");
     assert!(err.contains("psi_deg = 1e-300 is outside"), "{err}");
     assert!(err.lines().all(|l| l.len() < 200), "{err}");
+    // the report too: the design and its lengths in scientific notation, not 300 digits
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(out.contains("design l21=1e300 "), "{out}");
+    assert!(out.lines().all(|l| l.len() < 200), "{out}");
 }
 
 #[test]

@@ -3,11 +3,14 @@
 
 use anyhow::Result;
 use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, WorkRecord};
-use gripopt::params::{Design, Problem};
+use gripopt::params::{fmt_num, Design, Problem};
 
 /// A value scaled, to `prec` decimals, or "—".
 pub fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
     match v {
+        // an absurd value (a design far outside its bounds) in scientific notation, not
+        // hundreds of digits
+        Some(x) if (x * scale).abs() >= 1e9 => format!("{:.*e}", prec, x * scale),
         Some(x) => format!("{:.*}", prec, x * scale),
         None => "—".into(),
     }
@@ -56,15 +59,15 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     }
     let (k, r) = (&rec.kinematics, &rec.statics);
     outln!(
-        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {:.4} m){}",
+        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {} m){}",
         crate::cli::out::shown(&p.name),
-        x.l21,
-        x.b,
-        x.t22,
-        x.r,
-        x.p,
+        fmt_num(x.l21),
+        fmt_num(x.b),
+        fmt_num(x.t22),
+        fmt_num(x.r),
+        fmt_num(x.p),
         x.psi.to_degrees(),
-        x.l_hand(),
+        dec4(Some(x.l_hand())),
         // the method of the grasp simulation, where it is not the default (RADAU5)
         if static_only || p.solver.method.is_default() {
             String::new()

@@ -554,15 +554,33 @@ fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::
     meta
 }
 
-/// Run options hashed into checkpoints: pipeline settings and recording. The integration
-/// method is stated only when it is not RADAU5, the default (a run of a problem without
-/// `solver.method` writes the options it wrote before the key existed).
+/// Run options hashed into checkpoints (its `options`): pipeline settings and recording.
+/// The integration method is stated only when it is not RADAU5, the default (a run of a
+/// problem without `solver.method` writes the options it wrote before the key existed).
+#[derive(serde::Serialize)]
+struct RunOptions<'a> {
+    pipeline: &'static str,
+    rtol: f64,
+    atol: f64,
+    max_steps: u64,
+    recording: &'a RecordOptions,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    method: Option<crate::params::Method>,
+}
+
+/// The run's [`RunOptions`] as the checkpoint holds them (a JSON value: a checkpoint's own
+/// `options` are compared field by field with these).
 fn run_options(s: &SolverSettings, rec: &RecordOptions) -> serde_json::Value {
-    let mut v = serde_json::json!({ "pipeline": "stages 0-3, stage 3 in pipeline mode", "rtol": s.rtol, "atol": s.atol, "max_steps": s.max_steps, "recording": rec });
-    if !s.method.is_default() {
-        v["method"] = serde_json::json!(s.method);
-    }
-    v
+    let o = RunOptions {
+        pipeline: "stages 0-3, stage 3 in pipeline mode",
+        rtol: s.rtol,
+        atol: s.atol,
+        max_steps: s.max_steps,
+        recording: rec,
+        method: (!s.method.is_default()).then_some(s.method),
+    };
+    // numbers, strings and plain structs: serialising cannot fail
+    serde_json::to_value(o).expect("run options serialise")
 }
 
 /// The problem file a run started with, when it is still there (else the run uses its copy).
