@@ -87,17 +87,23 @@ test: $(VENV_STAMP) lint
 POP ?= 60
 GENERATIONS ?= 25
 SEED ?= 1
-run: build
+# Move an earlier run folder $(1) aside (never deleted), unless a running gripopt holds it
+# (its .lock, taken with flock where there is one): the canned recipe of `run` and `kitchen`.
+define move_aside
 	@mkdir -p results
-	@if [ -e $(OUT) ]; then \
-	  keep=$(OUT).$$(date +%Y%m%d-%H%M%S); \
-	  if command -v flock >/dev/null 2>&1; then flock -n -E 75 $(OUT) mv $(OUT) $$keep; rc=$$?; \
-	  elif $(BIN) show $(OUT) --json 2>/dev/null | grep -q '"status": "running"'; then rc=75; \
-	  else mv $(OUT) $$keep; rc=$$?; fi; \
-	  if [ $$rc = 75 ]; then echo "$(OUT) is in use by a running gripopt (pid $$(cat $(OUT)/.lock 2>/dev/null || echo unknown)): not moved; wait for it to end, or give another OUT=..." >&2; exit 1; fi; \
+	@if [ -e $(1) ]; then \
+	  keep=$(1).$$(date +%Y%m%d-%H%M%S); \
+	  if command -v flock >/dev/null 2>&1; then flock -n -E 75 $(1) mv $(1) $$keep; rc=$$?; \
+	  elif $(BIN) show $(1) --json 2>/dev/null | grep -q '"status": "running"'; then rc=75; \
+	  else mv $(1) $$keep; rc=$$?; fi; \
+	  if [ $$rc = 75 ]; then echo "$(1) is in use by a running gripopt (pid $$(cat $(1)/.lock 2>/dev/null || echo unknown)): not moved; wait for it to end, or give another output folder" >&2; exit 1; fi; \
 	  if [ $$rc != 0 ]; then exit $$rc; fi; \
-	  echo "$(OUT) held an earlier run: moved it to $$keep (nothing is deleted)"; \
+	  echo "$(1) held an earlier run: moved it to $$keep (nothing is deleted)"; \
 	fi
+endef
+
+run: build
+	$(call move_aside,$(OUT))
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
@@ -114,8 +120,7 @@ KITCHEN_POP ?= 40
 KITCHEN_GENERATIONS ?= 15
 .PHONY: kitchen
 kitchen: build
-	@mkdir -p results
-	@if [ -e $(KITCHEN_OUT) ]; then keep=$(KITCHEN_OUT).$$(date +%Y%m%d-%H%M%S); echo "$(KITCHEN_OUT) holds an earlier run: moving it to $$keep (nothing is deleted)"; mv $(KITCHEN_OUT) $$keep; fi
+	$(call move_aside,$(KITCHEN_OUT))
 	$(BIN) optimise $(KITCHEN_PROBLEM) --out $(KITCHEN_OUT) --pop $(KITCHEN_POP) --generations $(KITCHEN_GENERATIONS) --seed $(SEED)
 	$(BIN) verify $(KITCHEN_OUT)
 	@echo "Robust front: $(KITCHEN_OUT)/pareto.csv (per object NAME.p_stay, …); out of sample: $(KITCHEN_OUT)/verify_robust.csv; show it: $(BIN) show $(KITCHEN_OUT)"

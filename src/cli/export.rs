@@ -18,7 +18,7 @@ pub struct ExportArgs {
     #[arg(long)]
     design: Option<String>,
     /// mjcf (MuJoCo model), json or csv (build sheet); default: from the --out extension
-    /// (.xml, .json, .csv).
+    /// (.xml or .mjcf, .json, .csv).
     #[arg(long, value_enum)]
     format: Option<FormatArg>,
     /// The file to write (`-` for standard output).

@@ -64,7 +64,8 @@ enum Cmd {
         /// reference [object]: its cylinder and grip torque, the spring sized at [hand] tau.
         #[arg(long)]
         object: Option<String>,
-        /// Print the stage-3 keys as one JSON object.
+        /// Print the evaluation record (stages 0–3, verdict, scene, method) as one JSON
+        /// object (docs/outputs.md).
         #[arg(long)]
         json: bool,
         /// Write the trajectory (accepted steps and events) to this CSV file.

@@ -230,7 +230,12 @@ pub fn replay(
     let across = r.across_revisions.as_ref();
     let code = if verified || across.is_some_and(|a| a.agrees()) { 0 } else { EXIT_CHECK_FAILED };
     if let Some(path) = csv {
-        crate::cli::scenes::write_samples_csv(path, samples, |v| format!("{v}"))?;
+        let kept = match r.recorded.resolution {
+            gripopt::Resolution::Compact => "the compact subset, values at f32 precision",
+            gripopt::Resolution::Full => "every recorded sample at full precision",
+        };
+        let title = format!("trajectory: finger 1 of design {id} as recorded ({kept}; docs/recording.md)");
+        crate::cli::scenes::write_samples_csv(path, &title, samples, |v| format!("{v}"))?;
     }
     if let Some(path) = plot {
         let title = format!("design {id}");

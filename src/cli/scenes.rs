@@ -202,10 +202,15 @@ fn csv_head(title: &str, columns: &[Column]) -> String {
     format!("# gripopt {title}\n# units: {}\n{}", units.join(" "), names.join(","))
 }
 
-/// The grasp samples as CSV (`fmt` formats each number), written atomically (errors name
+/// Recorded grasp samples as CSV under the `#` line `title` (`fmt` formats each number), written atomically (errors name
 /// `path`).
-pub fn write_samples_csv(path: &Path, samples: &[gripopt::sim::Sample], fmt: fn(f64) -> String) -> Result<()> {
-    let mut w = csv_head(SAMPLES_TITLE, &SAMPLE_COLUMNS);
+pub fn write_samples_csv(
+    path: &Path,
+    title: &str,
+    samples: &[gripopt::sim::Sample],
+    fmt: fn(f64) -> String,
+) -> Result<()> {
+    let mut w = csv_head(title, &SAMPLE_COLUMNS);
     for s in samples {
         let v = gripopt::sample_values(s);
         w.push('\n');

@@ -13,7 +13,8 @@ pub struct SweepArgs {
     /// A varied name and its grid, NAME=LO:HI:N (1 to 3 times; the first varies fastest).
     /// NAME: a design variable (l21, b, t22, r, p, psi_deg), a derived one (l11: p = l11/l21
     /// and psi = 140 - 25.6 p; l22: r = l22/l11; l_hand: t22 = (l_hand - b - 2 l21)/2), or a
-    /// numeric problem-file field (tau, density, grasp_height, radius, restitution, hand.w, scene.x_off …).
+    /// numeric problem-file field (tau, density, grasp_height, radius, restitution, hand.w, scene.x_off …),
+    /// or mu_scale (the phalanx friction coefficients scaled; stage 3 only).
     #[arg(long = "vary", required = true)]
     pub vary: Vec<String>,
     /// Base design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).

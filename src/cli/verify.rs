@@ -14,8 +14,8 @@ pub struct VerifyArgs {
     /// x_off). Not for a robust run (its scenarios set the offsets).
     #[arg(long)]
     pub scene: Option<String>,
-    /// Every feasible design of population.csv and archive.csv instead of pareto.csv (not
-    /// for a robust run, which verifies its front).
+    /// Every feasible design of the run's population and archive (from its checkpoint)
+    /// instead of its front (not for a robust run, which verifies its front).
     #[arg(long)]
     pub all: bool,
     /// Worker threads (default: all cores; results do not depend on it).

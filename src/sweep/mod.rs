@@ -6,8 +6,8 @@
 //!
 //! Names (see [`Knob`]):
 //! * design variables `l21`, `b`, `t22`, `r`, `p`, `psi_deg` (ψ in degrees);
-//! * derived (thesis §4.1.2–4.2.2): `l11` sets p = l11/l21 and, unless `psi_deg` is varied
-//!   too, ψ = 140 − 25.6 p (eq. 4.15); `l22` sets r = l22/l11; `l_hand` sets
+//! * derived (thesis §4.1.2–4.2.2): `l11` sets p = l11/l21 and ψ = 140 − 25.6 p
+//!   (eq. 4.15; varying `psi_deg` as well is refused); `l22` sets r = l22/l11; `l_hand` sets
 //!   t22 = (l_hand − b − 2 l21)/2 (b and l21 as set at that point);
 //! * `mu_scale`: a factor on the phalanx friction μ_s and μ_d of the simulated grasp
 //!   together (stage 3 only; 0 allowed);
@@ -57,7 +57,7 @@ pub enum Stage {
 pub enum Knob {
     /// Design variable by index into [`DESIGN_NAMES`].
     Design(usize),
-    /// l11 (m): p = l11/l21, and ψ = 140 − 25.6 p unless ψ is varied.
+    /// l11 (m): p = l11/l21 and ψ = 140 − 25.6 p (not with ψ varied).
     L11,
     /// l22 (m): r = l22/l11.
     L22,
