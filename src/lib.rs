@@ -28,7 +28,7 @@
 //! (finger geometry, kinematics, statics, closure) → [`sim`] (integrators, events, the
 //! driver, scenes) → [`eval`] (the staged pipeline and its record) → [`optim`] (pure
 //! NSGA-II) → [`record`] (MCAP) → [`run`] (run folders, checkpoints, the gripper problem)
-//! → [`sweep`], [`bench`](mod@bench) (beside run); the CLI sits on top.
+//! → [`sweep`] (beside run) → [`bench`](mod@bench) (above run); the CLI sits on top.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: a NaN must fail every physical check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

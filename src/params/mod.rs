@@ -1,7 +1,7 @@
 //! Parameters: the problem file turned into typed values — the scene constants by section
 //! ([`Hand`], [`Object`], [`ContactLaw`], [`Environment`], [`Criteria`]), the solver
 //! settings (with the integration [`Method`]), the nominal [`Design`] and the [`Bounds`].
-//! The lowest layer: it depends on nothing of gripopt but `math` and `error`.
+//! The lowest layer: it depends on nothing of gripopt but `math`, `error` and `fsutil`.
 
 mod checker;
 mod design;
