@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Instruction counts of the simulator (valgrind's callgrind: deterministic, so repeatable on
-# a noisy machine; see docs/benchmarks.md "Simulator instruction counts"):
+# a noisy machine; see docs/benchmarks.md "Simulator speed (issue 23)"):
 #   * the nominal centred grasp and the nominal free scene to t_obs: one
 #     `gripopt simulate PROBLEM --scene free --json`, which runs both (the centred grasp in
 #     diagnostic mode without recording, as stage 3 runs it); each is the inclusive count of

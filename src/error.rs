@@ -279,7 +279,7 @@ impl Error {
         }
     }
 
-    /// The process exit code this error ends the CLI with (see docs/exit-codes in the README):
+    /// The process exit code this error ends the CLI with (README.md, "Exit codes and limits"):
     /// 2 for bad input, 1 for a failed run.
     pub fn exit_code(&self) -> i32 {
         if self.is_input() {

@@ -42,7 +42,8 @@ impl Stages {
 
 /// Evaluate `design` through `stages` of `problem`'s pipeline: its record (the JSON of
 /// `gripopt evaluate --json`; for a robust problem with all stages, the robust evaluation
-/// over every object and scenario, docs/robust.md).
+/// over its objects and scenarios until each object's chance constraint is decided —
+/// early stop — docs/robust.md).
 pub fn evaluate(problem: &Problem, design: &Design, stages: Stages) -> Record {
     crate::eval::evaluate_record(problem, design, &stages.options(problem), None)
 }

@@ -1,12 +1,12 @@
 //! Limits of a run's size: a population (and run length) that fits in memory and in the
 //! recording's id space, checked before anything is allocated, with the estimate in the
-//! error (docs/limits.md).
+//! error (docs/cli.md, "Limits of the command-line flags").
 
 use crate::{Error, Result};
 
 /// Memory per design of the population, without trajectories (bytes): parents, offspring,
 /// the merged population while sorting, the last evaluated generation, the checkpoint's
-/// copy and its JSON tree (measured ≈ 6 KiB; rounded up).
+/// serialisation (measured ≈ 6 KiB when it was still built as a JSON tree; rounded up).
 pub const BYTES_PER_DESIGN: u64 = 16 << 10;
 
 /// Memory per design while its stage-3 trajectory waits for the recorder (bytes): what is
