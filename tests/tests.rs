@@ -42,6 +42,7 @@ mod robustness_edges;
 mod robustness_folders;
 mod s34_small;
 mod s35_csv;
+mod s35_physics;
 mod scene_cli;
 mod scenes;
 mod seams;

@@ -54,6 +54,7 @@ pub fn robust_record_ranked(
     let n = setup.objects();
     let fmax = setup.failures_allowed();
     let agg = &spec.aggregate;
+    let t_max = setup.base.criteria.t_max;
     let mut objects = Vec::with_capacity(n);
     let mut all_t = vec![];
     let mut raw_offsets = Vec::with_capacity(n);
@@ -65,7 +66,9 @@ pub fn robust_record_ranked(
         let mine: Vec<&ScenarioRecord> = scen.iter().filter(|r| r.object == o).collect();
         let stays = mine.iter().filter(|r| r.stays).count();
         let runs = mine.len();
-        let t: Vec<f64> = mine.iter().filter_map(|r| r.t_stab).collect();
+        // a scenario that did not stabilise (or had no grasp to simulate) counts at t_max,
+        // MODEL.md §10's value of a missing t_stab: never better than one that settled
+        let t: Vec<f64> = mine.iter().map(|r| r.t_stab.unwrap_or(t_max)).collect();
         all_t.extend(&t);
         raw_offsets.push(st.map(|s| s.max_offset));
         let (lo, hi) = clopper_pearson(stays as u64, runs as u64, spec.confidence);

@@ -294,6 +294,14 @@ impl Problem {
                 },
             },
         };
+        // the hand grasps the object's side, as each robust object must (robust_load)
+        if scene.object.grasp_height >= scene.object.length {
+            return Err(c.fail(
+                "object.grasp_height",
+                format!("{}", scene.object.grasp_height),
+                &format!("must be below the object's top (object.length {})", scene.object.length),
+            ));
+        }
         if cr.r_sing.len() > MAX_R_SING {
             return Err(c.fail(
                 "criteria.r_sing",

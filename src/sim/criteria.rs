@@ -20,13 +20,17 @@ pub struct Impact {
     pub e_lim: f64,
 }
 
-/// Energy limits (E_lim,trans, E_lim,rot) of eqs. 3.27, 3.29.
+/// Energy limits (E_lim,trans, E_lim,rot) of eqs. 3.27, 3.29. E_lim,rot is the rise of the
+/// centre of mass tilting about the base edge, m g [(L/2)(cos θ − 1) + R sin θ], at
+/// θ = min(θ_max, θ_tip), θ_tip = atan(2R/L): beyond θ_tip the rise falls (the object tips
+/// over by itself), so the energy to tilt it past θ_max is the barrier at θ_tip
+/// (docs/model.md; eq. 3.29 literally turns negative above 2 θ_tip).
 pub fn impact_limits(s: &SceneParams) -> (f64, f64) {
     let mc = s.object.mass();
     let trans = s.env.mu_g * mc * s.env.g * s.criteria.dx_max;
-    let rot = mc
-        * s.env.g
-        * ((s.object.length / 2.0) * (s.criteria.theta_max.cos() - 1.0) + s.object.radius * s.criteria.theta_max.sin());
+    let (half, r) = (s.object.length / 2.0, s.object.radius);
+    let theta = s.criteria.theta_max.min((r / half).atan());
+    let rot = mc * s.env.g * (half * (theta.cos() - 1.0) + r * theta.sin());
     (trans, rot)
 }
 
@@ -91,5 +95,28 @@ mod tests {
         let (lt, lr) = impact_limits(&s);
         assert!((lt - 3.9448e-3).abs() < 1e-7, "{lt}");
         assert!((lr - 6.7345e-3).abs() < 1e-7, "{lr}");
+    }
+
+    /// E_lim,rot is the tilt barrier up to θ_max: it grows with θ_max up to the tipping
+    /// angle atan(2R/L) and stays at m g (√(R² + L²/4) − L/2) beyond it (eq. 3.29 itself
+    /// falls and turns negative there: −0.59 J at 90° for the 1 l bottle).
+    #[test]
+    fn the_rotation_limit_is_the_barrier_up_to_theta_max() {
+        let mut s = crate::params::Problem::from_toml_str(
+            &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap(),
+            std::path::Path::new("bottle-1l.toml"),
+        )
+        .unwrap()
+        .scene;
+        let (r, half) = (s.object.radius, s.object.length / 2.0);
+        let barrier = s.object.mass() * s.env.g * ((r * r + half * half).sqrt() - half);
+        let mut last = 0.0;
+        for deg in 1..=90 {
+            s.criteria.theta_max = f64::from(deg).to_radians();
+            let lr = impact_limits(&s).1;
+            assert!(lr >= last && lr <= barrier * (1.0 + 1e-12), "{deg}°: {lr} after {last}, barrier {barrier}");
+            last = lr;
+        }
+        assert!((last - barrier).abs() < 1e-12 * barrier, "{last} {barrier}");
     }
 }

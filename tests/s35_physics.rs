@@ -1,0 +1,87 @@
+//! Session 35's physics fixes, against independent values: a robust design's t_stab counts a
+//! scenario that never stabilised at t_max (MODEL.md §10's value of a missing t_stab), so a
+//! design that never settles cannot score better than one that settles slowly.
+
+use crate::common::{output_text, run_gripopt};
+use serde_json::Value;
+use std::path::PathBuf;
+
+const KITCHEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s35-physics")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// kitchen.toml's scene with one robust object (the 1 l bottle), its phalanx friction drawn
+/// from `mu` (a list), every scenario run, t_stab aggregated by `t_stab`.
+fn robust_bottle(dir: &std::path::Path, mu: &str, t_stab: &str) -> String {
+    let text = std::fs::read_to_string(KITCHEN).unwrap();
+    let head = &text[..text.find("\n[robust]").unwrap() + 1];
+    let robust = format!(
+        "[robust]\nsampling = \"random\"\nscenarios = 8\nseed = 1\np_min = 0.25\nconfidence = 0.95\nearly_stop = false\n\
+         verify_scenarios = 8\naggregate = {{ max_offset = \"worst\", alpha = \"worst\", mean_force = \"worst\", t_stab = {t_stab} }}\n\n\
+         [[robust.objects]]\nname = \"bottle\"\nradius = 0.040\nlength = 0.200\ndensity = 1000.0\ngrasp_height = 0.050\ntau = 0.5\n\n\
+         [robust.uncertainty]\nmu_phalanx = {{ list = [{mu}] }}\n"
+    );
+    let p = dir.join(format!("mu-{}-{}.toml", mu.replace([',', ' '], "_"), t_stab.replace('"', "")));
+    std::fs::write(&p, format!("{head}{robust}")).unwrap();
+    p.display().to_string()
+}
+
+fn evaluate(path: &str) -> Value {
+    let o = run_gripopt(&["evaluate", path, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// With friction ×4 in some scenarios the nominal grasp never stabilises there (no t_stab):
+/// "worst" is then t_max, and "mean" is the mean with t_max in their place — recomputed here
+/// from the per-scenario records.
+#[test]
+fn a_scenario_that_never_stabilises_counts_at_t_max() {
+    let d = scratch("t-max");
+    let t_max = 0.3;
+    for agg in ["\"worst\"", "\"mean\""] {
+        let r = evaluate(&robust_bottle(&d, "1.0, 4.0", agg));
+        let rr = &r["robust"];
+        let scen = rr["scenarios"].as_array().unwrap();
+        assert_eq!(scen.len(), 8);
+        let t: Vec<Option<f64>> = scen.iter().map(|s| s["t_stab"].as_f64()).collect();
+        assert!(t.iter().any(Option::is_none), "some scenario never stabilises: {t:?}");
+        assert!(t.iter().any(Option::is_some), "some scenario stabilises: {t:?}");
+        let filled: Vec<f64> = t.iter().map(|v| v.unwrap_or(t_max)).collect();
+        let want = if agg == "\"worst\"" { t_max } else { filled.iter().sum::<f64>() / filled.len() as f64 };
+        let got = rr["objectives"]["t_stab"].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-15 * want, "{agg}: {got} against {want} from {t:?}");
+        assert_eq!(rr["objects"][0]["t_stab"].as_f64(), Some(got), "{agg}: the one object's");
+    }
+    // friction ×2 everywhere settles slowly but settles: its worst t_stab is below t_max,
+    // so the design that never settles (above) is the worse one
+    let slow = evaluate(&robust_bottle(&d, "2.0", "\"worst\""));
+    let t = slow["robust"]["objectives"]["t_stab"].as_f64().unwrap();
+    assert!(t < t_max, "{t}");
+}
+
+/// A hand plane above the object's top (the fingers would close on thin air, yet the centred
+/// scene rated it feasible) is refused in a single-object file, as it is for a robust object.
+#[test]
+fn a_hand_above_the_object_is_refused() {
+    let d = scratch("above");
+    let text = std::fs::read_to_string(crate::common::BOTTLE_FILE).unwrap();
+    let line = text.lines().find(|l| l.starts_with("grasp_height ")).unwrap();
+    for (h, ok) in [("0.25", false), ("0.2", false), ("0.19", true)] {
+        let p = d.join(format!("h{h}.toml"));
+        std::fs::write(&p, text.replacen(line, &format!("grasp_height = {h}"), 1)).unwrap();
+        let o = run_gripopt(&["evaluate", p.to_str().unwrap(), "--static-only"]);
+        let t = output_text(&o);
+        if ok {
+            assert_eq!(o.status.code(), Some(0), "{h}: {t}");
+        } else {
+            assert_eq!(o.status.code(), Some(2), "{h}: {t}");
+            assert!(t.contains("object.grasp_height") && t.contains("below the object's top"), "{t}");
+        }
+    }
+}
