@@ -117,3 +117,20 @@ fn a_link_at_the_temporary_name_is_not_followed() {
     }
     assert_eq!(names(&d), vec!["p.svg", "t.csv", "victim.txt"]);
 }
+
+/// The free scene's first pose is the state as the scene begins, its ground points pre-sunk
+/// and in contact: its energy is the record's E(0), ground springs included (the first row
+/// used to leave out their 4.4 µJ).
+#[test]
+fn the_free_scenes_first_pose_has_the_records_initial_energy() {
+    let d = scratch("first-pose");
+    let csv = d.join("free.csv");
+    let o = run_gripopt(&["simulate", BOTTLE_FILE, "--scene", "free", "--json", "--csv", csv.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let e0 = v["free_scene"]["energy"][0].as_f64().unwrap();
+    let first = &rows(&csv)[0];
+    let energy = first[gripopt::POSE_COLUMNS.iter().position(|c| c.0 == "energy").unwrap()];
+    assert_eq!(first[0], 0.0);
+    assert!((energy - e0).abs() <= 1e-12 * e0, "first row {energy} J, record {e0} J");
+}

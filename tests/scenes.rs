@@ -183,16 +183,20 @@ fn free_heavy_object_limit() {
 }
 
 /// §14.5.2 and §14.5.7 on the nominal grasp: the object's x motion and tilt stay at
-/// rounding level (the scene is mirror-symmetric), and the total energy never rises.
+/// rounding level (the scene is mirror-symmetric), and the total energy never rises — at
+/// 1e-7 and at the problem's own tolerances (1e-6, 1e-9: the spin was 3.0e-12 there while
+/// the first step started from a derivative without the pre-sunk ground contacts).
 #[test]
 fn free_symmetry_and_energy() {
     let s = bottle().scene;
-    let r = free(&s, FreeSetup::default(), &SimOptions::new(1e-7, 1e-10, 400_000), None);
-    assert!(r.first_contact_t.is_some(), "{r:?}");
-    assert!(r.object_max_dx <= 1e-12, "x motion {}", r.object_max_dx);
-    assert!(r.object_max_tilt_y <= 1e-12, "tilt about y {}", r.object_max_tilt_y);
-    assert!(r.object_max_spin <= 1e-12, "spin {}", r.object_max_spin);
-    let scale = r.energy[0].abs().max(1e-3);
-    assert!(r.max_energy_rise <= 1e-6 * scale, "energy rose by {} (E0 {})", r.max_energy_rise, r.energy[0]);
-    assert!(r.energy[1] < r.energy[0]);
+    for (rtol, atol) in [(1e-7, 1e-10), (1e-6, 1e-9)] {
+        let r = free(&s, FreeSetup::default(), &SimOptions::new(rtol, atol, 400_000), None);
+        assert!(r.first_contact_t.is_some(), "{r:?}");
+        assert!(r.object_max_dx <= 1e-12, "{rtol}: x motion {}", r.object_max_dx);
+        assert!(r.object_max_tilt_y <= 1e-12, "{rtol}: tilt about y {}", r.object_max_tilt_y);
+        assert!(r.object_max_spin <= 1e-12, "{rtol}: spin {}", r.object_max_spin);
+        let scale = r.energy[0].abs().max(1e-3);
+        assert!(r.max_energy_rise <= 1e-6 * scale, "energy rose by {} (E0 {})", r.max_energy_rise, r.energy[0]);
+        assert!(r.energy[1] < r.energy[0]);
+    }
 }

@@ -53,6 +53,15 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         run.stats = stepper.stats();
         return run;
     }
+    // `begin` may set contact memories (the free scene's ground points, pre-sunk at rest, are
+    // in contact from the start): the initial derivative, event values and sample are those
+    // of the state as it begins, as after an event's response
+    let Some(ev0) = scene.evaluate(&y) else {
+        run.stats = stepper.stats();
+        return run;
+    };
+    ev = ev0;
+    g = scene.event_values(&y, &ev);
     let mut fy = scene.derivative(&y, &ev);
     let mut search = EventSearch::new(scene.events());
     let record = sink.wants_samples();
