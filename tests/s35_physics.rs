@@ -85,3 +85,32 @@ fn a_hand_above_the_object_is_refused() {
         }
     }
 }
+
+/// A free scene that never started (the open finger already in the object at t = 0: the
+/// nominal at x_off = 5 mm, where the object's edge reaches past the open finger) measured
+/// nothing: its displacement, tilt, energies and rim contact are null, not zeros that read
+/// as "the object did not move" in a sweep or a CSV.
+#[test]
+fn a_free_scene_that_never_started_measured_nothing() {
+    let o = run_gripopt(&["simulate", crate::common::BOTTLE_FILE, "--scene", "free:0.005", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let f = &v["free_scene"];
+    assert_eq!(f["end"], "open finger penetrates the object at t = 0", "{f}");
+    assert_eq!(f["steps"], 0);
+    for k in [
+        "object_max_displacement",
+        "object_max_tilt_deg",
+        "object_final_displacement",
+        "object_peak_e_trans",
+        "object_peak_e_rot",
+        "rim_contact",
+        "max_energy_rise",
+    ] {
+        assert!(f[k].is_null(), "{k}: {}", f[k]);
+    }
+    // a scene that ran keeps its measured values
+    let o = run_gripopt(&["simulate", crate::common::BOTTLE_FILE, "--scene", "free", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["free_scene"]["object_max_displacement"].as_f64().is_some_and(|d| d > 1e-4), "{}", v["free_scene"]);
+}

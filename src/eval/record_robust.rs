@@ -88,7 +88,8 @@ impl ScenarioRecord {
     /// The record of scenario `sc` evaluated as `ev`.
     pub fn of(sc: &Scenario, ev: &Evaluation) -> Self {
         let d = ev.dynamics.as_ref();
-        let f = ev.free.as_ref();
+        // a free scene that never started (an open finger in the object at t = 0) measured nothing
+        let f = ev.free.as_ref().filter(|f| f.end.ran());
         ScenarioRecord {
             object: sc.object,
             k: sc.k,

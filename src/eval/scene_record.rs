@@ -271,32 +271,34 @@ impl FreeSceneRecord {
     pub fn from_result(r: Option<&FreeResult>) -> Self {
         let Some(r) = r else { return Self::default() };
         let seen = |v: bool| r.end.observed().then_some(v);
+        // measured values of a scene that never started are not zeros but unknown
+        let ran = |v: f64| r.end.ran().then_some(v);
         let impact = match (r.first_contact_t, r.first_contact_phalanx, &r.first_impact) {
             (Some(t), Some(ph), Some(i)) => ImpactRecord::of(t, ph, i),
             _ => ImpactRecord::default(),
         };
         FreeSceneRecord {
-            object_max_displacement: Some(r.object_max_displacement),
-            object_max_dx: Some(r.object_max_dx),
-            object_max_dy: Some(r.object_max_dy),
-            object_max_tilt_deg: Some(r.object_max_tilt_deg),
-            object_max_tilt_y: Some(r.object_max_tilt_y),
-            object_max_spin: Some(r.object_max_spin),
-            object_final_displacement: Some(r.object_final_displacement),
-            object_final_tilt_deg: Some(r.object_final_tilt_deg),
-            object_peak_e_trans: Some(r.object_peak_e_trans),
-            object_peak_e_rot: Some(r.object_peak_e_rot),
+            object_max_displacement: ran(r.object_max_displacement),
+            object_max_dx: ran(r.object_max_dx),
+            object_max_dy: ran(r.object_max_dy),
+            object_max_tilt_deg: ran(r.object_max_tilt_deg),
+            object_max_tilt_y: ran(r.object_max_tilt_y),
+            object_max_spin: ran(r.object_max_spin),
+            object_final_displacement: ran(r.object_final_displacement),
+            object_final_tilt_deg: ran(r.object_final_tilt_deg),
+            object_peak_e_trans: ran(r.object_peak_e_trans),
+            object_peak_e_rot: ran(r.object_peak_e_rot),
             moved: seen(r.moved),
             toppled: seen(r.toppled),
             escaped: seen(r.escaped),
-            rim_contact: Some(r.rim_contact),
+            rim_contact: r.end.ran().then_some(r.rim_contact),
             end: Some(r.end),
             t_end: Some(r.t_end),
             impact,
             work: WorkRecord::of(&r.stats, r.rhs_evals, r.events, r.cpu_s),
             jac_block_evals: Some(r.jac_block_evals),
             energy: r.energy.iter().all(|e| e.is_finite()).then_some(r.energy),
-            max_energy_rise: Some(r.max_energy_rise),
+            max_energy_rise: ran(r.max_energy_rise),
         }
     }
 }

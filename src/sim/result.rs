@@ -111,6 +111,12 @@ impl FreeEnd {
     pub fn observed(self) -> bool {
         self == FreeEnd::Observed
     }
+
+    /// The scene ran at all: it did not end before its first step (an open finger in the
+    /// object at t = 0), so its measured values (displacement, tilt, energies) mean something.
+    pub fn ran(self) -> bool {
+        self != FreeEnd::InitialPenetration
+    }
 }
 
 /// The first contact onset and its impact criterion (§9.1–9.2).
