@@ -114,3 +114,20 @@ fn a_free_scene_that_never_started_measured_nothing() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["free_scene"]["object_max_displacement"].as_f64().is_some_and(|d| d > 1e-4), "{}", v["free_scene"]);
 }
+
+/// The offset scene that found no static grasp at its offset never reached an end state:
+/// whether the hand force recentres the object is unknown (null), not "no"; where it ran,
+/// the flag is the sign test of MODEL.md §14 (hand force against the offset).
+#[test]
+fn an_offset_scene_that_never_ran_does_not_say_it_fails_to_recentre() {
+    let sim = |scene: &str| {
+        let o = run_gripopt(&["simulate", crate::common::BOTTLE_FILE, "--scene", scene, "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+        serde_json::from_slice::<Value>(&o.stdout).unwrap()["offset_scene"].clone()
+    };
+    let beyond = sim("offset:0.0045");
+    assert!(beyond["hand_x_end"].is_null() && beyond["recentres"].is_null(), "{beyond}");
+    let ran = sim("offset:0.002");
+    let hx = ran["hand_x_end"].as_f64().unwrap();
+    assert_eq!(ran["recentres"].as_bool(), Some(hx * 0.002 < 0.0), "{ran}");
+}

@@ -208,7 +208,8 @@ impl OffsetSceneRecord {
             hand_y_end: fin(o.hand_end[1]),
             hand0_x: fin(o.hand0[0]),
             hand0_y: fin(o.hand0[1]),
-            recentres: Some(o.hand_end[0] * o.x_off < 0.0),
+            // unknown (null) when the scene never reached an end state, not "false"
+            recentres: fin(o.hand_end[0]).map(|h| h * o.x_off < 0.0),
         }
     }
 }
