@@ -307,6 +307,23 @@ fn a_shard_of_another_run_is_never_read_as_this_runs_design() {
     };
     std::fs::copy(rb.join("gen-00002.mcap"), ra.join("gen-00002.mcap")).unwrap();
     refused("written by another run", "gen-00002.mcap");
+    // without a readable run.json (missing, cut short, no run id) the shard is not
+    // attributed: the library refuses too, naming run.json, as replay and export do
+    let run_json = std::fs::read(a.join("run.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_slice(&run_json).unwrap();
+    v["run_id"] = serde_json::Value::Null;
+    let null_id = serde_json::to_string_pretty(&v).unwrap();
+    for damaged in [None, Some(run_json[..100].to_vec()), Some(null_id.into_bytes())] {
+        match damaged {
+            None => std::fs::remove_file(a.join("run.json")).unwrap(),
+            Some(bytes) => std::fs::write(a.join("run.json"), bytes).unwrap(),
+        }
+        let e = gripopt::record::read_design(&a, id).unwrap_err();
+        assert!(e.is_input() && e.to_string().contains("run.json"), "{e}");
+        let e = gripopt::run::RunFolder::open(&a).unwrap().design(id).unwrap_err();
+        assert!(e.to_string().contains("run.json"), "{e}");
+    }
+    std::fs::write(a.join("run.json"), &run_json).unwrap();
     // A's own shard back, and its index line pointing at B's shard (relative and absolute)
     std::fs::write(ra.join("gen-00002.mcap"), &ours).unwrap();
     let index = std::fs::read_to_string(ra.join("index.jsonl")).unwrap();

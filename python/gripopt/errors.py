@@ -57,7 +57,9 @@ class ProblemError(InputError):
 
 class RunFolderError(InputError):
     """A run folder that cannot be used as asked: it holds no run or already one, its
-    checkpoint or run.json is damaged, its inputs changed."""
+    checkpoint, run.json or a table is damaged, its inputs changed (an edited
+    problem.toml), or it now holds another run than the one a :class:`~gripopt.Run` was
+    opened on."""
 
 
 class RunLockedError(RunFolderError):

@@ -161,7 +161,8 @@ class Problem:
     """A gripper design problem (a problem file, checked where it is loaded).
 
     Load one with :meth:`load` (a file) or :meth:`from_toml` (its text). Problems pickle
-    (as their TOML text), so they travel to Dask workers.
+    (as their TOML text, a robust problem's ``file = "…"`` objects with their cylinders as
+    loaded: the object files are not read again), so they travel to Dask workers.
     """
 
     __slots__ = ("_native",)
@@ -186,11 +187,18 @@ class Problem:
 
     @classmethod
     def from_toml(cls, text: str, path: Optional[Union[str, os.PathLike]] = None) -> "Problem":
-        """Parse and validate problem text; ``path``, if given, is the file errors name."""
+        """Parse and validate problem text; ``path``, if given, is the file errors name.
+
+        A robust object given by ``file = "can.toml"`` is read relative to ``path``'s
+        folder, or without ``path`` relative to the current working directory (as the
+        text would be read from a file there)."""
         return cls(_gripopt.Problem.from_toml(text, None if path is None else os.fspath(path)))
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (Problem.from_toml, (self.toml, self.path))
+        # the text, and a robust problem's `file = "…"` objects as loaded (inline): an
+        # unpickled problem never reads the object files again (another working directory,
+        # another machine, or the files edited since give the same problem)
+        return (_unpickled, (self.toml, self._native.inlined_toml, self.path))
 
     def __repr__(self) -> str:
         where = f" from {self.path}" if self.path else ""
@@ -307,3 +315,8 @@ class Problem:
         grasp = frame(samples, SAMPLE_COLUMNS)
         trajectory = frame(poses, POSE_COLUMNS) if record.get("scene") == "free" else grasp
         return Simulation(record, trajectory, grasp)
+
+
+def _unpickled(text: str, inlined: Optional[str], path: Optional[Path]) -> Problem:
+    """The problem a pickle carried (:meth:`Problem.__reduce__`)."""
+    return Problem(_gripopt.Problem.unpickled(text, inlined, None if path is None else os.fspath(path)))

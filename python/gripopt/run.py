@@ -112,6 +112,10 @@ class Run:
     or running: its tables are rewritten whole every generation and read afresh at each
     access).
 
+    A ``Run`` reads the run its folder held when it was opened (run.json's ``run_id``):
+    once the folder holds another run (replaced by a copy of another run folder, say) or
+    none, every read raises :class:`RunFolderError`; open the folder again to read it.
+
     Tables carry their units in ``df.attrs["units"]`` and meanings in
     ``df.attrs["meanings"]`` (docs/outputs.md).
     """
@@ -168,12 +172,17 @@ class Run:
 
     @property
     def status(self) -> str:
-        """``"running"``, ``"finished"`` or ``"interrupted"``."""
-        return str(self.info["status"])
+        """What the run is doing, as ``gripopt show`` says it: ``"running"`` (a process
+        runs it), ``"stopped"`` (killed or crashed while running: no process holds the
+        folder; resumable from its last checkpoint), ``"interrupted"`` (ctrl-c or an
+        error, resumable) or ``"finished"``."""
+        return str(self._folder.state())
 
     @property
     def problem(self) -> Problem:
-        """The run's problem (its copy in the folder)."""
+        """The run's problem in force (its copy in the folder, problem.toml), checked
+        against the hash run.json recorded: a copy edited since the run used it raises
+        :class:`RunFolderError` naming it (as ``gripopt replay`` and ``verify`` refuse it)."""
         return Problem(self._folder.problem())
 
     @property
@@ -225,7 +234,9 @@ class Run:
         force: bool = False,
         progress: Optional[ProgressCallback] = None,
     ) -> "Run":
-        """Continue this run: :func:`resume` on its folder."""
+        """Continue this run: :func:`resume` on its folder (:class:`RunFolderError` where the
+        folder no longer holds this run)."""
+        self._folder.info()
         return resume(self.path, generations=generations, threads=threads, force=force, progress=progress)
 
 

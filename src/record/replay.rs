@@ -258,11 +258,21 @@ fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
     (n, alike, maxd)
 }
 
-/// The run id run.json of `run_dir` records (None: no run.json, or not readable as JSON,
-/// where the caller's own read of run.json names the damage; empty in run folders of a
-/// gripopt before issue 24).
-fn recorded_run_id(run_dir: &Path) -> Option<String> {
-    run_json(run_dir).ok().map(|r| r.run_id)
+/// The run id run.json of `run_dir` records (empty in run folders of a gripopt before
+/// issue 24), which a shard must carry to be read as this run's. A run.json that is
+/// missing or cannot be read is an error naming it (a shard is never attributed without
+/// it, so that a shard of another run copied in is never read as design `id` of this one).
+fn recorded_run_id(run_dir: &Path, id: u64) -> Result<String> {
+    let why = match run_json(run_dir) {
+        Ok(r) => return Ok(r.run_id),
+        Err(Error::Io { source, .. }) => format!("cannot be read ({source})"),
+        Err(Error::Json { source, .. }) => format!("is not a valid run.json ({source})"),
+        Err(e) => e.to_string(),
+    };
+    Err(Error::RunDir {
+        path: run_dir.join("run.json"),
+        message: format!("{why}: without the run id it records, design {id}'s shard cannot be told to be this run's (a shard of another run is never read as this run's design); restore run.json (e.g. from a backup)"),
+    })
 }
 
 /// Why design `id` is in none of `index`'s shards: the recorded id ranges, and where `id`
@@ -462,12 +472,11 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
             mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into()))
         })?;
     // attributed: a shard of another run (copied in) is never read as this run's design
-    if let Some(ours) = recorded_run_id(run_dir) {
-        let theirs = meta.metadata.get("run_id").map(String::as_str).unwrap_or_default();
-        if theirs != ours {
-            let name = |r: &str| if r.is_empty() { "none".to_string() } else { r.to_string() };
-            return Err(bad(format!("written by another run (run id {}; this run's id {}, run.json): it is not this run's generation {}; restore this run's shard", name(theirs), name(&ours), entry.generation)));
-        }
+    let ours = recorded_run_id(run_dir, id)?;
+    let theirs = meta.metadata.get("run_id").map(String::as_str).unwrap_or_default();
+    if theirs != ours {
+        let name = |r: &str| if r.is_empty() { "none".to_string() } else { r.to_string() };
+        return Err(bad(format!("written by another run (run id {}; this run's id {}, run.json): it is not this run's generation {}; restore this run's shard", name(theirs), name(&ours), entry.generation)));
     }
     let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| {
         bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into())

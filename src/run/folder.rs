@@ -7,18 +7,23 @@
 
 use super::info::{RunInfo, RunStatus};
 use super::lock::{LockHolder, RunLock};
-use super::outputs::{DesignRow, HistoryRow};
+use super::outputs::{DesignRow, HistoryRow, DESIGN_COLUMNS, HISTORY_COLUMNS};
+use super::robust_columns::{OBJECT_COLUMNS, ROBUST_COLUMNS};
 use crate::params::Problem;
 use crate::record::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
 use crate::{Error, Result};
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 /// A run folder written by `optimise`/`resume` (it may be running: its files are rewritten
 /// whole, atomically, every generation).
 #[derive(Debug, Clone)]
 pub struct RunFolder {
     dir: PathBuf,
+    /// Opened with [`RunFolder::open_pinned`]: the run id of the run it reads (set when
+    /// run.json is first read), which every read checks.
+    pinned: Option<OnceLock<String>>,
 }
 
 /// What a run is doing, from run.json and the folder's lock.
@@ -54,7 +59,63 @@ impl RunFolder {
         if !dir.is_dir() {
             return Err(Error::RunDir { path: dir.to_path_buf(), message: "not a folder".into() });
         }
-        Ok(RunFolder { dir: dir.to_path_buf() })
+        Ok(RunFolder { dir: dir.to_path_buf(), pinned: None })
+    }
+    /// The run folder `dir`, pinned to the run it holds: the run id run.json records now
+    /// (or, where it cannot be read yet, when it is first read). Every later read checks
+    /// that run.json still records that run, before and after it reads, and is an error
+    /// naming the folder where it holds another run or none (the folder replaced by a copy
+    /// of another run, say): what is read is always the opened run's.
+    pub fn open_pinned(dir: impl AsRef<Path>) -> Result<Self> {
+        let mut f = Self::open(dir)?;
+        f.pinned = Some(OnceLock::new());
+        f.check_run()?;
+        Ok(f)
+    }
+    /// The run id run.json records now (empty for a run of a gripopt before issue 24);
+    /// None where run.json is missing, unreadable or without a text `run_id`.
+    fn current_run_id(&self) -> Option<String> {
+        let path = self.dir.join(super::RUN_FILE);
+        let bytes = crate::fsutil::read_regular(&path, crate::fsutil::caps::RUN_JSON).ok()?;
+        let v: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
+        match v.get("run_id") {
+            None => Some(String::new()),
+            Some(id) => id.as_str().map(String::from),
+        }
+    }
+    /// For a folder opened with [`RunFolder::open_pinned`]: an error when it no longer holds
+    /// the run it was opened on (run.json records another run id, or cannot be read).
+    pub fn check_run(&self) -> Result<()> {
+        let Some(pin) = &self.pinned else { return Ok(()) };
+        let now = self.current_run_id();
+        let ours = match (pin.get(), &now) {
+            (Some(ours), _) => ours,
+            (None, Some(id)) => pin.get_or_init(|| id.clone()),
+            // nothing pinned yet, nothing to pin: the read itself names the missing run.json
+            (None, None) => return Ok(()),
+        };
+        if now.as_ref() == Some(ours) {
+            return Ok(());
+        }
+        let shown = |id: &str| if id.is_empty() { "none".to_string() } else { id.to_string() };
+        let holds = match now {
+            Some(id) => format!("another run (run id {}, run.json)", shown(&id)),
+            None => "another run or none (run.json is missing or unreadable)".to_string(),
+        };
+        Err(Error::RunDir {
+            path: self.dir.clone(),
+            message: format!(
+                "the folder now holds {holds}, not the run it was opened on (run id {}): nothing of it is read as that run's; open the folder again to read the run it holds",
+                shown(ours)
+            ),
+        })
+    }
+    /// `read`, with the folder's run checked before and after (a pinned folder).
+    fn of_run<T>(&self, read: impl FnOnce() -> Result<T>) -> Result<T> {
+        self.check_run()?;
+        let r = read();
+        self.check_run()?;
+        r
     }
     /// The folder.
     pub fn dir(&self) -> &Path {
@@ -62,72 +123,135 @@ impl RunFolder {
     }
     /// `run.json`: settings, status, generations, resumes.
     pub fn info(&self) -> Result<RunInfo> {
-        RunInfo::load(&self.dir)
+        self.of_run(|| RunInfo::load(&self.dir))
     }
     /// What the run is doing: run.json's status, told apart by the folder's lock (a run
     /// that says running but whose folder no process holds was killed).
     pub fn state(&self) -> Result<RunState> {
-        let info = self.info()?;
-        Ok(match (info.status, RunLock::holder(&self.dir)?) {
-            (RunStatus::Running, LockHolder::Held(pid)) => RunState::Running(pid),
-            (RunStatus::Running, LockHolder::Free) => RunState::Stopped,
-            (RunStatus::Interrupted, _) => RunState::Interrupted,
-            (RunStatus::Finished, _) => RunState::Finished,
+        self.of_run(|| {
+            let info = RunInfo::load(&self.dir)?;
+            Ok(match (info.status, RunLock::holder(&self.dir)?) {
+                (RunStatus::Running, LockHolder::Held(pid)) => RunState::Running(pid),
+                (RunStatus::Running, LockHolder::Free) => RunState::Stopped,
+                (RunStatus::Interrupted, _) => RunState::Interrupted,
+                (RunStatus::Finished, _) => RunState::Finished,
+            })
         })
     }
     /// The run can be resumed: it has a checkpoint and no process holds it.
     pub fn resumable(&self) -> Result<bool> {
-        Ok(self.dir.join("checkpoint.json").is_file() && RunLock::holder(&self.dir)? == LockHolder::Free)
+        self.of_run(
+            || Ok(self.dir.join("checkpoint.json").is_file() && RunLock::holder(&self.dir)? == LockHolder::Free),
+        )
     }
     /// The run's problem in force (`problem.toml`), checked against the hash run.json
     /// recorded: an edited copy is an error naming it.
     pub fn problem(&self) -> Result<Problem> {
-        let g = self.info()?.problem_files().last().map_or(1, |p| p.first_generation);
-        self.problem_of_generation(g)
+        self.problem_in_force().map(|(p, _)| p)
+    }
+    /// [`RunFolder::problem`] with its file.
+    pub fn problem_in_force(&self) -> Result<(Problem, PathBuf)> {
+        self.of_run(|| {
+            let g = RunInfo::load(&self.dir)?.problem_files().last().map_or(1, |p| p.first_generation);
+            self.checked_problem(g)
+        })
     }
     /// The problem generation `g` was evaluated with (after a forced resume with another
     /// problem, the earlier `problem-G.toml` for the generations before it), checked
     /// against the hash run.json recorded: an edited file is an error naming it.
     pub fn problem_of_generation(&self, g: u64) -> Result<Problem> {
+        self.of_run(|| self.checked_problem(g)).map(|(p, _)| p)
+    }
+    fn checked_problem(&self, g: u64) -> Result<(Problem, PathBuf)> {
         let p: RunProblem = problem_of_generation(&self.dir, g)?;
         match p.edited() {
             Some(why) => Err(Error::RunDir {
                 path: p.file,
                 message: format!("{why}: restore it (replay and verify need the problem the run used)"),
             }),
-            None => Ok(p.problem),
+            None => Ok((p.problem, p.file)),
         }
     }
     /// pareto.csv: the population's feasible non-dominated designs.
     pub fn front(&self) -> Result<Vec<DesignRow>> {
-        read_table(&self.dir.join("pareto.csv"))
+        self.of_run(|| read_design_table(&self.dir.join("pareto.csv")))
     }
     /// archive.csv: every feasible non-dominated design of the run.
     pub fn archive(&self) -> Result<Vec<DesignRow>> {
-        read_table(&self.dir.join("archive.csv"))
+        self.of_run(|| read_design_table(&self.dir.join("archive.csv")))
     }
     /// population.csv: the whole population.
     pub fn population(&self) -> Result<Vec<DesignRow>> {
-        read_table(&self.dir.join("population.csv"))
+        self.of_run(|| read_design_table(&self.dir.join("population.csv")))
     }
     /// history.csv: one row per generation.
     pub fn history(&self) -> Result<Vec<HistoryRow>> {
-        read_table(&self.dir.join("history.csv"))
+        self.of_run(|| read_history(&self.dir.join("history.csv")))
     }
     /// Design `id` as recorded: its `/designs` record and trajectory (one chunk read).
     pub fn design(&self, id: u64) -> Result<Recorded> {
-        read_design(&self.dir, id)
+        self.of_run(|| read_design(&self.dir, id))
     }
     /// Re-simulate design `id` and compare it with its recording.
     pub fn replay(&self, id: u64) -> Result<Replay> {
-        replay(&self.dir, id)
+        self.of_run(|| replay(&self.dir, id))
     }
+}
+
+/// The rows of pareto.csv, archive.csv or population.csv ([`read_table`]), whose header
+/// must be the documented one: the columns of [`DESIGN_COLUMNS`] in order, then only a
+/// robust problem's (`scenarios_run`, `scenarios_saved`, each object's `NAME.column`).
+pub fn read_design_table(path: &Path) -> Result<Vec<DesignRow>> {
+    read_table_with_header(path, |h| {
+        let fixed = DESIGN_COLUMNS.map(|c| c.0);
+        if h.len() < fixed.len() || h.iter().zip(fixed).any(|(a, b)| *a != b) {
+            return Err(format!("expected the columns {}", fixed.join(",")));
+        }
+        let robust = |c: &str| {
+            ROBUST_COLUMNS.iter().any(|r| r.0 == c)
+                || c.rsplit_once('.').is_some_and(|(o, col)| !o.is_empty() && OBJECT_COLUMNS.iter().any(|r| r.0 == col))
+        };
+        match h.iter().skip(fixed.len()).find(|c| !robust(c)) {
+            Some(c) => Err(format!(
+                "column `{c}` is not one of a design table (after {}, only a robust problem's columns)",
+                fixed.join(",")
+            )),
+            None => Ok(()),
+        }
+    })
+}
+
+/// The rows of history.csv ([`read_table`]), whose header must be [`HISTORY_COLUMNS`].
+pub fn read_history(path: &Path) -> Result<Vec<HistoryRow>> {
+    read_table_with_header(path, |h| {
+        let names = HISTORY_COLUMNS.map(|c| c.0);
+        (h.len() == names.len() && h.iter().zip(names).all(|(a, b)| *a == b))
+            .then_some(())
+            .ok_or_else(|| format!("expected the columns {}", names.join(",")))
+    })
+}
+
+/// A check of a table's column names: why they are not the documented ones.
+type HeaderCheck<'a> = &'a dyn Fn(&[&str]) -> std::result::Result<(), String>;
+
+/// [`read_table`] with the header (its column names) checked by `header` first: a header
+/// that is not the documented one is an error naming the file, never read as a table of
+/// no rows.
+fn read_table_with_header<T: DeserializeOwned>(
+    path: &Path,
+    header: impl Fn(&[&str]) -> std::result::Result<(), String>,
+) -> Result<Vec<T>> {
+    read_checked_table(path, Some(&header))
 }
 
 /// The rows of one of the run's CSV tables (`#` lines are comments). A missing or
 /// unreadable file, one without a header, a row cut short or a last line without its line
 /// break (the files are written whole) is an error naming the file and line.
 pub fn read_table<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    read_checked_table(path, None)
+}
+
+fn read_checked_table<T: DeserializeOwned>(path: &Path, header: Option<HeaderCheck<'_>>) -> Result<Vec<T>> {
     let text = crate::fsutil::read_regular(path, crate::fsutil::caps::TABLE)
         .map_err(|e| Error::io(path, "cannot read (is this a run folder with a completed generation?)", e))?;
     let bad = |line: u64, what: String| Error::RunDir {
@@ -140,6 +264,16 @@ pub fn read_table<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
     let header_ok = r.headers().map(|h| !h.is_empty()).unwrap_or(false);
     if !header_ok {
         return Err(Error::RunDir { path: path.to_path_buf(), message: "empty: no header line".into() });
+    }
+    if let (Some(check), Ok(h)) = (header, r.headers()) {
+        let names: Vec<&str> = h.iter().collect();
+        check(&names).map_err(|why| Error::RunDir {
+            path: path.to_path_buf(),
+            message: format!(
+                "the header line is not a gripopt table's ({why}; found {}): the file is damaged or not gripopt's",
+                names.join(",")
+            ),
+        })?;
     }
     let rows = r.deserialize().collect::<std::result::Result<Vec<T>, csv::Error>>().map_err(|e| {
         let line = e.position().map_or(0, |p| p.line());

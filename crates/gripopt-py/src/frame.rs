@@ -95,6 +95,32 @@ impl Table {
         Ok(t)
     }
 
+    /// The table of `rows`, or where there are none the columns of `template` (a row of
+    /// the same table) with no values: an empty table has the columns and types a table
+    /// with rows has, never a default set.
+    pub fn of_or_like<'a, T: Serialize + DeserializeOwned + 'a>(
+        rows: &'a [T],
+        template: impl FnOnce() -> Option<T>,
+    ) -> Result<Self, FrameError> {
+        if !rows.is_empty() {
+            return Self::of(rows);
+        }
+        let Some(row) = template() else { return Ok(Table::default()) };
+        let mut t = Self::of([&row])?;
+        for c in &mut t.cols {
+            c.missing.clear();
+            match &mut c.values {
+                Values::Unknown => {}
+                Values::F64(v) => v.clear(),
+                Values::I64(v) => v.clear(),
+                Values::Bool(v) => v.clear(),
+                Values::Text(v) => v.clear(),
+            }
+        }
+        t.rows = 0;
+        Ok(t)
+    }
+
     /// The type of each column that has no value yet, asked of the row type: the field
     /// of `template` set to 0.5, 1, true or "x" in turn, the first that `T` deserialises
     /// from is the field's type (a float, an integer, a boolean; text otherwise).

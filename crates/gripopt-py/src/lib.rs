@@ -6,6 +6,7 @@
 
 mod args;
 mod errors;
+mod fork;
 mod frame;
 mod problem;
 mod run;
@@ -20,6 +21,7 @@ fn columns(cols: &[gripopt::Column]) -> Vec<(&'static str, &'static str, &'stati
 /// The native module.
 #[pymodule]
 fn _gripopt(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    fork::note_import();
     m.add_class::<problem::PyProblem>()?;
     m.add_class::<run::PyRunFolder>()?;
     m.add_function(wrap_pyfunction!(run::optimise, m)?)?;

@@ -60,12 +60,70 @@ fn stages(static_only: bool) -> Stages {
     }
 }
 
+/// The rows as columns; no row: the columns and types of one (the nominal design's, its
+/// stages 0-2, with a robust problem's columns where `stages` simulates), with no values:
+/// an empty batch has the columns of any other, a robust problem's `NAME.*` included.
+fn rows_table(p: &Problem, rows: &[gripopt::EvaluatedRow], stages: Stages) -> gripopt::Result<Table> {
+    let table = if rows.is_empty() {
+        let nominal = [DesignParameters::from_array(&p.nominal.to_array())];
+        let template = gripopt::evaluate_rows(p, &nominal, 0, Stages::Static, Some(1))?;
+        Table::of_or_like(&[], || {
+            let mut row = template.into_iter().next()?.row;
+            if let (Some(robust), Stages::All) = (&p.robust, stages) {
+                let design = gripopt::run::ROBUST_COLUMNS.iter().map(|c| (c.0.to_string(), None));
+                let objects = robust.objects.iter().flat_map(|o| {
+                    gripopt::run::OBJECT_COLUMNS.iter().map(move |c| (format!("{}.{}", o.name, c.0), None))
+                });
+                row.robust = gripopt::run::RobustColumns(design.chain(objects).collect());
+            }
+            Some(row)
+        })
+    } else {
+        Table::of(rows.iter().map(|r| &r.row))
+    };
+    table.map_err(|e| gripopt::Error::Input(format!("a row as columns: {e}")))
+}
+
 fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
     serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
 }
 
+/// The object tables of `[[robust.objects]]` in a problem's TOML (parsed as written).
+fn object_tables(doc: &mut toml::Table) -> Option<&mut Vec<toml::Value>> {
+    doc.get_mut("robust")?.as_table_mut()?.get_mut("objects")?.as_array_mut()
+}
+
+/// `text` parsed as a TOML table (it parsed when the problem was loaded).
+fn toml_table(text: &str) -> PyResult<toml::Table> {
+    text.parse::<toml::Table>().map_err(|e| input(format!("problem text: {e}")))
+}
+
 impl PyProblem {
-    /// The problem of a run folder or a file.
+    /// The problem's text with each robust object given by `file = "…"` written inline, its
+    /// cylinder as loaded (None: no object is given by a file). A problem made from it
+    /// holds the same objects wherever and whenever it is made: the object files are not
+    /// read again (they may be elsewhere, or edited since).
+    fn inlined_text(&self) -> PyResult<Option<String>> {
+        let Some(robust) = &self.problem.robust else { return Ok(None) };
+        if robust.objects.iter().all(|o| o.file.is_none()) {
+            return Ok(None);
+        }
+        let mut doc = toml_table(&self.problem.source_text)?;
+        let tables = object_tables(&mut doc).ok_or_else(|| input("problem text: no [[robust.objects]]"))?;
+        for (case, t) in robust.objects.iter().zip(tables.iter_mut()) {
+            let Some(t) = t.as_table_mut().filter(|_| case.file.is_some()) else { continue };
+            t.remove("file");
+            let o = &case.object;
+            for (key, v) in
+                [("radius", o.radius), ("length", o.length), ("density", o.density), ("grasp_height", o.grasp_height)]
+            {
+                t.insert(key.into(), toml::Value::Float(v));
+            }
+        }
+        toml::to_string(&doc).map(Some).map_err(|e| input(format!("problem text: {e}")))
+    }
+
+    /// The problem of a file.
     pub fn from_file(path: &Path) -> PyResult<Self> {
         Ok(PyProblem { problem: Problem::load(path).py()?, path: Some(path.to_path_buf()) })
     }
@@ -85,6 +143,32 @@ impl PyProblem {
     fn from_toml(text: &str, path: Option<PathBuf>) -> PyResult<Self> {
         let shown = path.clone().unwrap_or_else(|| PathBuf::from(TEXT));
         Ok(PyProblem { problem: Problem::from_toml_str(text, &shown).py()?, path })
+    }
+
+    /// What a pickle carries besides the text: the text with each robust object given by
+    /// `file = "…"` written inline (None: no such object).
+    #[getter]
+    fn inlined_toml(&self) -> PyResult<Option<String>> {
+        self.inlined_text()
+    }
+
+    /// The problem a pickle carried: `text` itself, or (`inlined` given) the problem of the
+    /// inlined text with `text` as its own, each object's `file` as `text` names it: the
+    /// object files are not read.
+    #[staticmethod]
+    #[pyo3(signature = (text, inlined, path=None))]
+    fn unpickled(text: &str, inlined: Option<&str>, path: Option<PathBuf>) -> PyResult<Self> {
+        let Some(inlined) = inlined else { return Self::from_toml(text, path) };
+        let shown = path.clone().unwrap_or_else(|| PathBuf::from(TEXT));
+        let mut problem = Problem::from_toml_str(inlined, &shown).py()?;
+        let mut doc = toml_table(text)?;
+        if let (Some(robust), Some(tables)) = (problem.robust.as_mut(), object_tables(&mut doc)) {
+            for (case, t) in robust.objects.iter_mut().zip(tables.iter()) {
+                case.file = t.get("file").and_then(|f| f.as_str()).map(String::from);
+            }
+        }
+        problem.source_text = text.to_string();
+        Ok(PyProblem { problem, path })
     }
 
     /// The problem's name.
@@ -145,16 +229,17 @@ impl PyProblem {
         }
         let p = &self.problem;
         let (table, f, k) = py
-            .detach(|| -> gripopt::Result<_> {
-                let rows = gripopt::evaluate_rows(p, &xs, first_id, stages(static_only), threads)?;
-                let table = Table::of(rows.iter().map(|r| &r.row))
-                    .map_err(|e| gripopt::Error::Input(format!("a row as columns: {e}")))?;
-                let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
-                for r in &rows {
-                    f.extend(r.minimised);
-                    k.extend([f64::from(r.infeasibility.stages_short), r.infeasibility.violation]);
-                }
-                Ok((table, f, k))
+            .detach(|| {
+                crate::fork::fork_safe(|| -> gripopt::Result<_> {
+                    let rows = gripopt::evaluate_rows(p, &xs, first_id, stages(static_only), threads)?;
+                    let table = rows_table(p, &rows, stages(static_only))?;
+                    let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
+                    for r in &rows {
+                        f.extend(r.minimised);
+                        k.extend([f64::from(r.infeasibility.stages_short), r.infeasibility.violation]);
+                    }
+                    Ok((table, f, k))
+                })
             })
             .py()?;
         let n = xs.len();
@@ -168,7 +253,7 @@ impl PyProblem {
     fn record(&self, py: Python<'_>, design: PyReadonlyArray1<'_, f64>, static_only: bool) -> PyResult<String> {
         let x = design_of(&design)?.design();
         let p = &self.problem;
-        let r = py.detach(|| gripopt::evaluate(p, &x, stages(static_only)));
+        let r = py.detach(|| crate::fork::fork_safe(|| gripopt::evaluate(p, &x, stages(static_only))));
         json(&gripopt::EvaluationRecord::new(&r, p.solver.method, !static_only))
     }
 
@@ -210,7 +295,11 @@ impl PyProblem {
             input(format!("method `{method}`: the problem's solver.atol {}: {rule}", gripopt::params::fmt_num(s.atol)))
         })?;
         let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
-        let sim = py.detach(|| gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC)).py()?;
+        let sim = py
+            .detach(|| {
+                crate::fork::fork_safe(|| gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC))
+            })
+            .py()?;
         let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
         let traj = Table::of_numbers(&names, sim.trajectory.samples.iter().map(gripopt::sample_values));
         let names = gripopt::POSE_COLUMNS.map(|c| c.0);

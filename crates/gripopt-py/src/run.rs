@@ -6,6 +6,7 @@ use crate::args;
 use crate::errors::{input, to_py, IntoPy};
 use crate::frame::Table;
 use crate::problem::PyProblem;
+use gripopt::run::{DesignRow, HistoryRow};
 use gripopt::{GenerationReport, Optimiser, Progress, RecordOptions, RunFolder, RunSummary};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -86,7 +87,7 @@ fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path
     let mut interrupt: Option<PyErr> = None;
     let joined = py.detach(|| {
         std::thread::scope(|s| {
-            let run = s.spawn(move || opt.run());
+            let run = s.spawn(move || crate::fork::fork_safe(|| opt.run()));
             while !run.is_finished() {
                 std::thread::sleep(SIGNAL_POLL);
                 if interrupt.is_none() {
@@ -301,28 +302,49 @@ pub fn resume<'py>(
     summary_dict(py, &s)
 }
 
-/// A run folder, read through the library.
+/// A run folder, read through the library, pinned to the run it held when opened
+/// ([`RunFolder::open_pinned`]): a folder replaced by another run is an error, never read
+/// as the opened run's.
 #[pyclass(name = "RunFolder", module = "gripopt._gripopt", frozen)]
 pub struct PyRunFolder {
     folder: RunFolder,
+}
+
+/// Why the view `file` (of table `name`) does not hold the designs of the run's checkpoint,
+/// and the checkpoint's rows of the table (None: it does, there is no checkpoint yet, or a
+/// process runs the run).
+fn view_differs(f: &RunFolder, name: &str, file: &str) -> gripopt::Result<Option<(String, Vec<DesignRow>)>> {
+    if matches!(f.state()?, gripopt::run::RunState::Running(_)) {
+        return Ok(None);
+    }
+    let Some(t) = f.checkpoint_tables()? else { return Ok(None) };
+    let rows = match name {
+        "front" => t.front,
+        "archive" => t.archive,
+        _ => t.population,
+    };
+    Ok(f.view_differs(file, &rows, t.generation)?.map(|why| (why, rows)))
 }
 
 fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
     serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
 }
 
+/// `rows` as columns; none: the columns of `template()` (a row of the same table), with
+/// no values.
 fn columns<'py, T: serde::Serialize + serde::de::DeserializeOwned>(
     py: Python<'py>,
     rows: &[T],
+    template: impl FnOnce() -> Option<T>,
 ) -> PyResult<Bound<'py, PyList>> {
-    Table::of(rows).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?.into_py(py)
+    Table::of_or_like(rows, template).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?.into_py(py)
 }
 
 #[pymethods]
 impl PyRunFolder {
     #[new]
     fn new(path: PathBuf) -> PyResult<Self> {
-        Ok(PyRunFolder { folder: RunFolder::open(path).py()? })
+        Ok(PyRunFolder { folder: RunFolder::open_pinned(path).py()? })
     }
     /// The folder.
     #[getter]
@@ -333,20 +355,51 @@ impl PyRunFolder {
     fn info(&self) -> PyResult<String> {
         json(&self.folder.info().py()?)
     }
-    /// The run's problem (its copy in the folder).
+    /// The run's problem in force (its copy in the folder), checked against the hash
+    /// run.json recorded: an edited copy is an error naming it (as replay and verify).
     fn problem(&self) -> PyResult<PyProblem> {
-        PyProblem::from_file(&self.folder.dir().join("problem.toml"))
+        let (problem, file) = self.folder.problem_in_force().py()?;
+        Ok(PyProblem { problem, path: Some(file) })
     }
-    /// A table as columns: `front`, `population`, `archive` or `history`.
+    /// What the run is doing, as `gripopt show` says it: running, stopped (killed or
+    /// crashed: run.json says running but no process holds the folder), interrupted,
+    /// finished.
+    fn state(&self) -> PyResult<&'static str> {
+        Ok(self.folder.state().py()?.word())
+    }
+    /// A table as columns: `front`, `population`, `archive` or `history`. A design table
+    /// that does not hold the designs of the run's checkpoint (an older copy, or edited by
+    /// hand) gives the checkpoint's designs, with a `GripoptWarning` saying so, as `gripopt
+    /// show` does (not while a process runs the run: its views follow its checkpoints).
     fn table<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyList>> {
         let f = &self.folder;
-        match name {
-            "front" => columns(py, &f.front().py()?),
-            "population" => columns(py, &f.population().py()?),
-            "archive" => columns(py, &f.archive().py()?),
-            "history" => columns(py, &f.history().py()?),
-            _ => Err(input(format!("table `{name}`: must be front, population, archive or history"))),
-        }
+        let (rows, file) = match name {
+            "front" => (f.front().py()?, "pareto.csv"),
+            "population" => (f.population().py()?, "population.csv"),
+            "archive" => (f.archive().py()?, "archive.csv"),
+            "history" => {
+                let template = HistoryRow {
+                    generation: 0,
+                    evaluations: 0,
+                    feasible: 0,
+                    hypervolume: 0.0,
+                    archive_hypervolume: None,
+                };
+                return columns(py, &f.history().py()?, || Some(template));
+            }
+            _ => return Err(input(format!("table `{name}`: must be front, population, archive or history"))),
+        };
+        let rows = match py.detach(|| view_differs(f, name, file)).py()? {
+            Some((why, checkpoint_rows)) => {
+                warn(py, &format!("{}: {why}", f.dir().display()))?;
+                checkpoint_rows
+            }
+            None => rows,
+        };
+        // an empty front or archive has the columns of the population's rows (a robust
+        // problem's included)
+        let template = || f.population().ok().and_then(|p| p.into_iter().next());
+        columns(py, &rows, template)
     }
     /// Design `id` as recorded: its `/designs` message (JSON text), its trajectory as
     /// columns, the resolution and the shard.
@@ -370,7 +423,7 @@ impl PyRunFolder {
         #[pyo3(from_py_with = args::design_id)] id: u64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let f = &self.folder;
-        let r = py.detach(|| f.replay(id)).py()?;
+        let r = py.detach(|| crate::fork::fork_safe(|| f.replay(id))).py()?;
         Ok(py_dict!(py, {
             "verified" => r.verified,
             "max_difference" => r.max_difference,
