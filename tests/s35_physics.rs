@@ -131,3 +131,20 @@ fn an_offset_scene_that_never_ran_does_not_say_it_fails_to_recentre() {
     let hx = ran["hand_x_end"].as_f64().unwrap();
     assert_eq!(ran["recentres"].as_bool(), Some(hx * 0.002 < 0.0), "{ran}");
 }
+
+/// A free scene observed for less time than the fingers take to reach the object says so,
+/// instead of "does not barely move (max displacement 0.000 mm …); escaped".
+#[test]
+fn an_observation_shorter_than_the_approach_says_no_finger_reached_the_object() {
+    let d = scratch("t-obs");
+    let text = std::fs::read_to_string(crate::common::BOTTLE_FILE).unwrap();
+    let line = text.lines().find(|l| l.starts_with("t_obs ")).unwrap();
+    let p = d.join("short.toml");
+    std::fs::write(&p, text.replacen(line, "t_obs = 0.004", 1)).unwrap();
+    let o = run_gripopt(&["simulate", p.to_str().unwrap(), "--scene", "free", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["free_scene"]["t_first_contact"].is_null(), "{}", v["free_scene"]);
+    let reason = v["reason"].as_str().unwrap();
+    assert!(reason.contains("no finger reached the object by t_obs"), "{reason}");
+    assert!(!reason.contains("does not barely move"), "{reason}");
+}

@@ -167,6 +167,7 @@ fn measured_discard(r: &FreeResult, s: &SceneParams) -> Option<Discard> {
         theta_max_deg: c.theta_max.to_degrees(),
         toppled: r.toppled,
         escaped: r.escaped,
+        untouched: r.first_contact_t.is_none(),
     };
     let ratio = (m.displacement / m.dx_max).max(m.tilt_deg / m.theta_max_deg) - 1.0;
     let v = ratio.max(0.0) + if m.escaped { 1.0 } else { 0.0 };

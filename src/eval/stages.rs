@@ -185,10 +185,18 @@ pub struct ObjectMotion {
     pub toppled: bool,
     /// No phalanx in contact at t_obs.
     pub escaped: bool,
+    /// No finger touched the object by t_obs (t_obs shorter than the fingers' approach).
+    pub untouched: bool,
 }
 
 impl fmt::Display for ObjectMotion {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.untouched {
+            return write!(
+                f,
+                "free scene: no finger reached the object by t_obs, so nothing held it (scene.t_obs is shorter than the fingers' approach)"
+            );
+        }
         write!(
             f,
             "free scene: the object does not barely move (max displacement {:.3} mm, limit {:.3} mm; max tilt {:.3}°, limit {:.3}°)",
