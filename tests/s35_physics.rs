@@ -148,3 +148,27 @@ fn an_observation_shorter_than_the_approach_says_no_finger_reached_the_object() 
     assert!(reason.contains("no finger reached the object by t_obs"), "{reason}");
     assert!(!reason.contains("does not barely move"), "{reason}");
 }
+
+/// A robust draw whose offset the open hand cannot clear (kitchen.toml with x_off drawn from
+/// ±6 mm) is a measured failure counted against P(stay) — cause `initial_penetration`, the
+/// design a P(stay) discard with a violation below 1e3 — not a solver failure that stops
+/// the design at violation 1e3.
+#[test]
+fn a_draw_the_open_hand_cannot_clear_is_a_p_stay_failure() {
+    let d = scratch("x-off");
+    let text = std::fs::read_to_string(KITCHEN).unwrap();
+    let wide = text.replacen("x_off = { uniform = [-0.002, 0.002] }", "x_off = { uniform = [-0.006, 0.006] }", 1);
+    assert_ne!(wide, text);
+    let p = d.join("wide.toml");
+    std::fs::write(&p, wide).unwrap();
+    let r = evaluate(p.to_str().unwrap());
+    let scen = r["robust"]["scenarios"].as_array().unwrap();
+    let pen: Vec<&Value> = scen.iter().filter(|s| s["cause"] == "initial_penetration").collect();
+    assert!(!pen.is_empty(), "some draw penetrates: {scen:?}");
+    for s in &pen {
+        assert_eq!(s["stays"], false);
+        assert!(s["max_displacement"].is_null(), "{s}");
+    }
+    assert_eq!(r["cause"], "p_stay", "{}", r["reason"]);
+    assert!(r["violation"].as_f64().unwrap() < 1e3, "{}", r["violation"]);
+}

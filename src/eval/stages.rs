@@ -81,7 +81,7 @@ pub enum Cause {
     SingularDynamic,
     /// The simulation was aborted (events, step budget, step size).
     Aborted,
-    /// The open finger penetrates the object.
+    /// The open finger penetrates the object at t = 0 (offset or free scene).
     InitialPenetration,
     /// No compliant equilibrium.
     NoEquilibrium,
@@ -165,6 +165,9 @@ impl Reason {
                 D::NoEquilibrium => Cause::NoEquilibrium,
             },
             Reason::ObjectMoved(_) => Cause::ObjectMoved,
+            // the open finger in the object at t = 0 is geometry, not a solver failure: the
+            // hand cannot be placed around the object there (as in the offset scene)
+            Reason::FreeSceneEnded(FreeEnd::InitialPenetration) => Cause::InitialPenetration,
             Reason::FreeSceneEnded(_) => Cause::FreeSceneAborted,
         })
     }
