@@ -51,7 +51,7 @@ fn json_of(args: &[&str]) -> Value {
 }
 
 /// With `[solver] max_steps = 1` every simulation is aborted. The robust kitchen said
-/// "object bottle-full: stays (barely moves) in 0 of 2 scenarios (P(stay) 0.000 < p_min …)",
+/// "object bottle-full: stays (finger criteria met, object barely moves) in 0 of 2 scenarios (P(stay) 0.000 < p_min …)",
 /// cause p_stay; now it is the single-object problem's solver failure: cause `aborted`,
 /// stage 3, the same violation, the reason naming the object, the scenario and the solver's
 /// own message. The per-scenario records stay as they were; the stopping rule stops at the
@@ -147,7 +147,12 @@ fn a_measured_kitchen_evaluation_keeps_its_p_stay_verdict() {
     let runs = |o: usize| scen.iter().filter(|s| s["object"] == o).count();
     let stays = |o: usize| scen.iter().filter(|s| s["object"] == o && s["stays"] == true).count();
     let reason = r["reason"].as_str().unwrap();
-    let want = format!("object {}: stays (barely moves) in {} of {} scenarios", names[o], stays(o), runs(o));
+    let want = format!(
+        "object {}: stays (finger criteria met, object barely moves) in {} of {} scenarios",
+        names[o],
+        stays(o),
+        runs(o)
+    );
     assert!(reason.starts_with(&want), "{reason} / {want}");
     let violation: f64 =
         (0..4).filter(|&o| runs(o) > 0).map(|o| (p_min - stays(o) as f64 / runs(o) as f64).max(0.0)).sum();

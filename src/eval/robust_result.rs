@@ -168,7 +168,7 @@ fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdi
     let Some(first) = failing.first() else { return Verdict { feasible: true, ..Verdict::default() } };
     let violation: f64 = rr.objects.iter().filter_map(|o| o.p_stay).map(|p| (spec.p_min - p).max(0.0)).sum();
     let mut reason = format!(
-        "object {}: stays (barely moves) in {} of {} scenarios (P(stay) {:.3} < p_min {}; Clopper–Pearson {}%: [{:.3}, {:.3}])",
+        "object {}: stays (finger criteria met, object barely moves) in {} of {} scenarios (P(stay) {:.3} < p_min {}; Clopper–Pearson {}%: [{:.3}, {:.3}])",
         first.name,
         first.stays,
         first.scenarios,
