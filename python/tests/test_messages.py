@@ -114,7 +114,11 @@ def test_a_runs_notes_are_warnings_at_the_callers_line(tmp_path):
     with pytest.warns(gripopt.GripoptWarning, match="designs per thread") as w:
         run = gripopt.optimise(BOTTLE, tmp_path / "run", pop=4, generations=1, threads=2, record=False)
     assert w[0].filename == __file__, [(x.filename, x.lineno) for x in w]
-    # summary["out"] is a Path, from the call and from the folder
+    assert run.summary["generations"] == 1
+
+
+def test_summary_out_is_a_path_from_the_call_and_from_the_folder(tmp_path):
+    run = gripopt.optimise(BOTTLE, tmp_path / "run", pop=4, generations=1, threads=1, record=False)
     assert isinstance(run.summary["out"], Path)
     again = gripopt.Run(tmp_path / "run").summary
     assert isinstance(again["out"], Path) and again["out"] == run.summary["out"]
