@@ -54,6 +54,8 @@ class Problem:
     @property
     def method(self) -> str: ...
     @property
+    def robust_objects(self) -> Optional[list[str]]: ...
+    @property
     def nominal(self) -> npt.NDArray[np.float64]: ...
     def evaluate(
         self,
@@ -71,6 +73,7 @@ class Problem:
         scene: Optional[str] = None,
         rtol: Optional[float] = None,
         method: Optional[str] = None,
+        object: Optional[str] = None,
     ) -> tuple[str, list[Column], list[Column]]:
         """The record's JSON text, the grasp samples, the free scene's poses."""
     def random_designs(self, n: int, seed: int) -> npt.NDArray[np.float64]: ...

@@ -15,20 +15,21 @@ share gripopt's one thread pool.
 from __future__ import annotations
 
 import operator
-from typing import Any, Optional
+import os
+from typing import Any, Optional, Union
 
 import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .problem import Designs, Problem, design_array, design_frame
+from .problem import Designs, Problem, _warn_outside, design_array, design_frame
 
 
 def _chunk(
     problem: Problem, x: np.ndarray, static_only: bool, threads: Optional[int], first_id: int
 ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """One task: the rows, minimised objectives and domination keys of a chunk."""
-    return problem._evaluate_batch(x, static_only, threads, first_id)
+    return problem._evaluate_batch(x, static_only, threads, first_id, warn_outside=False)
 
 
 def _chunk_size(n: Any) -> int:
@@ -42,9 +43,22 @@ def _chunk_size(n: Any) -> int:
     return k
 
 
+def _problem(problem: Any) -> Problem:
+    """``problem`` as a :class:`Problem`: a problem file's path is loaded (as
+    :func:`gripopt.optimise` takes it); anything else is a TypeError."""
+    if isinstance(problem, Problem):
+        return problem
+    if isinstance(problem, (str, os.PathLike)):
+        return Problem.load(problem)
+    raise TypeError(
+        f"problem: a gripopt.Problem or a problem file's path, not a {type(problem).__name__} "
+        "(load one with gripopt.Problem.load(path))"
+    )
+
+
 def evaluate_batch(
     client: Any,
-    problem: Problem,
+    problem: Union[Problem, str, os.PathLike],
     designs: Designs,
     *,
     static_only: bool = False,
@@ -57,7 +71,7 @@ def evaluate_batch(
 
     Args:
         client: the Dask client.
-        problem: the problem.
+        problem: the problem, or a problem file's path (loaded here).
         designs: as for :meth:`gripopt.Problem.evaluate` (a DataFrame with the six design
             columns, whose index is kept, or an (n, 6) array).
         static_only: stages 0–2 only.
@@ -66,6 +80,7 @@ def evaluate_batch(
         threads: threads per task (None: all the worker's cores).
         first_id: the first design's id.
     """
+    problem = _problem(problem)
     d = design_frame(designs)
     # the whole batch checked here, before any work is sent: every value finite (an error
     # names the row in the batch, as Problem.evaluate does), then threads and first_id (an
@@ -73,6 +88,7 @@ def evaluate_batch(
     x = design_array(d)
     chunk_size = _chunk_size(chunk_size)
     problem._evaluate_batch(x[:0], static_only, threads, first_id)
+    _warn_outside(x, problem._native.lower, problem._native.upper)
     last = np.iinfo(np.int64).max
     if len(x) and operator.index(first_id) + len(x) - 1 > last:
         rule = f"the last of {len(x)} designs would have an id beyond {last} (int64)"
@@ -84,7 +100,7 @@ def evaluate_batch(
     ]
     parts = client.gather(futures)
     if not parts:
-        return problem._evaluate_batch(x, static_only, threads, first_id)
+        return problem._evaluate_batch(x, static_only, threads, first_id, warn_outside=False)
     rows = pd.concat([p[0] for p in parts], ignore_index=True)
     rows.index = d.index
     rows.attrs = parts[0][0].attrs
@@ -93,7 +109,9 @@ def evaluate_batch(
     return rows, f, key
 
 
-def evaluate(client: Any, problem: Problem, designs: Designs, **options: Any) -> pd.DataFrame:
+def evaluate(
+    client: Any, problem: Union[Problem, str, os.PathLike], designs: Designs, **options: Any
+) -> pd.DataFrame:
     """Evaluate ``designs`` on the cluster of ``client`` (a ``dask.distributed.Client``):
     the DataFrame :meth:`gripopt.Problem.evaluate` would give, identical to it. The
     arguments and the keyword options (``static_only``, ``chunk_size``, ``threads``,

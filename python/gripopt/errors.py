@@ -8,6 +8,9 @@ command would have ended with (2: bad input, 1: a failed run).
 
 from __future__ import annotations
 
+import os
+import sys
+import warnings
 from typing import Any, Optional
 
 
@@ -78,6 +81,18 @@ class RunStoppedError(GripoptError):
 
 class GripoptWarning(UserWarning):
     """A note of a run: a recording recovered, the thread count, a resume forced."""
+
+
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def _warn(message: str) -> None:
+    """A :class:`GripoptWarning` with ``message``, reported at the caller's line: the first
+    frame outside the package (the native module's warnings included), never ``sys:1``."""
+    level, frame = 1, sys._getframe(0)
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(message, GripoptWarning, stacklevel=level)
 
 
 __all__ = [

@@ -13,7 +13,7 @@ import pandas as pd
 
 from . import _gripopt
 from ._frames import DESIGN_COLUMNS, DESIGN_NAMES, POSE_COLUMNS, SAMPLE_COLUMNS, frame
-from .errors import InputError
+from .errors import InputError, _warn
 
 #: Designs as accepted by :meth:`Problem.evaluate`: a DataFrame with the six named columns
 #: (others are ignored), an (n, 6) array, a sequence of designs each a mapping by name, or
@@ -30,10 +30,27 @@ Designs = Union[
 ]
 
 
+def _flag(name: str, value: Any) -> bool:
+    """The yes/no argument ``name``: a bool (or a NumPy bool); anything else (``"no"``, 0,
+    None) is an :class:`InputError` naming the argument."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InputError(f"{name} = {value!r}: must be True or False, not a {type(value).__name__}", field=name)
+
+
+def _refuse_complex(dtype: Any, name: str) -> None:
+    """Complex numbers are not designs (their imaginary part would be dropped)."""
+    if np.dtype(dtype).kind == "c":
+        raise InputError(f"{name}: complex numbers (dtype {dtype}); a design's values are real", field=name)
+
+
 def _numeric_column(designs: pd.DataFrame, name: str) -> pd.Series:
     """Column ``name`` as float64; a cell that is not a number is an :class:`InputError`
     naming the column and the row."""
     column = designs[name]
+    _refuse_complex(column.dtype, name)
+    if column.dtype == object and any(isinstance(v, (complex, np.complexfloating)) for v in column):
+        raise InputError(f"designs: column `{name}` holds complex numbers; a design's values are real", field=name)
     try:
         return column.astype("float64")
     except (TypeError, ValueError):
@@ -72,6 +89,12 @@ def design_frame(designs: Designs) -> pd.DataFrame:
                 "psi_deg is ψ in degrees)",
                 field="designs",
             )
+        twice = [n for n in names if list(designs.columns).count(n) > 1]
+        if twice:
+            raise InputError(
+                f"designs: column(s) {', '.join(twice)} given more than once; a design has one of each",
+                field=twice[0],
+            )
         return pd.DataFrame({n: _numeric_column(designs, n).to_numpy() for n in names}, index=designs.index)
     if isinstance(designs, (pd.Series, Mapping)):
         row = pd.Series(designs)
@@ -79,6 +102,11 @@ def design_frame(designs: Designs) -> pd.DataFrame:
         if missing:
             raise InputError(f"design: missing {', '.join(missing)} (psi_deg is ψ in degrees)", field="design")
         return design_frame(pd.DataFrame([row[names].to_dict()]))
+    try:
+        kind = np.asarray(designs).dtype
+    except (TypeError, ValueError):
+        kind = np.dtype(object)  # ragged: refused below
+    _refuse_complex(kind, "designs")
     try:
         a = np.asarray(designs, dtype="float64")
     except (TypeError, ValueError) as e:
@@ -112,6 +140,26 @@ def design_array(d: pd.DataFrame) -> np.ndarray:
             f"designs: {_row_name(d.index, k, d.index[k])}, `{name}` = {shown} is not finite", field=name
         )
     return x
+
+
+def _warn_outside(x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+    """One :class:`GripoptWarning` where designs (rows of ``x``) lie outside the bounds,
+    naming each column outside and how many rows: they are evaluated all the same (the
+    bounds are the optimiser's search box, not validity), as ``gripopt evaluate`` warns."""
+    outside = (x < lower) | (x > upper)
+    if not outside.any():
+        return
+    rows = int(outside.any(axis=1).sum())
+    columns = "; ".join(
+        f"{name}: {int(outside[:, i].sum())} outside [{lower[i]:g}, {upper[i]:g}]"
+        for i, name in enumerate(DESIGN_NAMES)
+        if outside[:, i].any()
+    )
+    hint = " (psi_deg is ψ in degrees)" if outside[:, DESIGN_NAMES.index("psi_deg")].any() else ""
+    _warn(
+        f"designs: {rows} of {len(x)} row(s) outside the problem's bounds ({columns}){hint}; "
+        "evaluating them anyway"
+    )
 
 
 def _one(design: Designs) -> np.ndarray:
@@ -274,18 +322,25 @@ class Problem:
         static_only: bool = False,
         threads: Optional[int] = None,
         first_id: int = 0,
+        warn_outside: bool = True,
     ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
         """The rows, the minimised objectives (n, 4) and the constrained-domination key
-        (n, 2: stages not reached, violation) of ``designs``."""
+        (n, 2: stages not reached, violation) of ``designs`` (``warn_outside``: warn of
+        designs outside the bounds; a Dask chunk does not, its batch did)."""
+        static_only = _flag("static_only", static_only)
         d = design_frame(designs)
         x = design_array(d)
+        if warn_outside:
+            _warn_outside(x, self._native.lower, self._native.upper)
         cols, f, key = self._native.evaluate(x, static_only, threads, first_id)
         return frame(cols, DESIGN_COLUMNS, index=d.index), f, key
 
     def record(self, design: Optional[Designs] = None, static_only: bool = False) -> dict[str, Any]:
         """The full evaluation record of one design (default: the nominal) as a dict: the
         JSON of ``gripopt evaluate --json`` (docs/outputs.md), values not computed None."""
+        static_only = _flag("static_only", static_only)
         x = self._native.nominal if design is None else _one(design)
+        _warn_outside(x[None, :], self._native.lower, self._native.upper)
         return json.loads(self._native.record(x, static_only))
 
     def simulate(
@@ -294,6 +349,7 @@ class Problem:
         scene: Optional[str] = None,
         rtol: Optional[float] = None,
         method: Optional[str] = None,
+        object: Optional[str] = None,
     ) -> Simulation:
         """Simulate one design (default: the nominal) in a scene, as ``gripopt simulate``.
 
@@ -305,13 +361,33 @@ class Problem:
             method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` (alias ``"tr-bdf2"``) or
                 ``"dopri5"``, the names ``gripopt simulate --method`` takes; None: the
                 problem's ``[solver] method`` (:attr:`method`; ``"radau5"`` when absent).
+            object: a robust problem's object by name (its ``[[robust.objects]]``
+                ``name``), as ``gripopt simulate --object NAME``: the design on that object
+                (its cylinder and grip torque, the spring sized at ``[hand] tau``), in its
+                nominal scene; the record then has ``"object": NAME``. None: the reference
+                ``[object]`` (on a robust problem with a :class:`GripoptWarning` saying so).
 
         Raises:
             InputError: the design is discarded before its grasp (stages 0–2), or a bad scene.
         """
         x = self._native.nominal if design is None else _one(design)
-        text, samples, poses = self._native.simulate(x, scene, rtol, method)
+        real = (int, float, np.floating, np.integer)
+        if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, real)):
+            raise InputError(f"rtol = {rtol!r}: must be a number (a relative tolerance) or None", field="rtol")
+        if object is not None and not isinstance(object, str):
+            raise InputError(f"object = {object!r}: must be a robust object's name (a str) or None", field="object")
+        objects = self._native.robust_objects
+        if object is None and objects:
+            _warn(
+                f"{self.path or self.name}: the problem has [robust]: simulate() simulates the reference [object] "
+                f"only, not the robust objects or scenarios; object=NAME simulates the design on one of its "
+                f"objects ({', '.join(objects)})"
+            )
+        _warn_outside(x[None, :], self._native.lower, self._native.upper)
+        text, samples, poses = self._native.simulate(x, scene, None if rtol is None else float(rtol), method, object)
         record = json.loads(text)
+        if object is not None:
+            record = {"object": object, **record}
         grasp = frame(samples, SAMPLE_COLUMNS)
         trajectory = frame(poses, POSE_COLUMNS) if record.get("scene") == "free" else grasp
         return Simulation(record, trajectory, grasp)

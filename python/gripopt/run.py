@@ -126,8 +126,9 @@ class Run:
 
     @property
     def summary(self) -> Optional[dict[str, Any]]:
-        """What the run did: out, generations (completed), evaluations, front_size,
-        feasible, hypervolume, archive_size, archive_hypervolume, interrupted, wall_s.
+        """What the run did: out (the run folder, a :class:`pathlib.Path`), generations
+        (completed), evaluations, front_size, feasible, hypervolume, archive_size,
+        archive_hypervolume, interrupted, wall_s.
 
         For the run an :func:`optimise` / :func:`resume` call returned, that call's report
         (``wall_s``: that call's wall time). For a run opened from its folder, the same
@@ -145,7 +146,7 @@ class Run:
         last = history[history["generation"] == done]
         hv = lambda column: float(last[column].iloc[-1]) if len(last) else float("nan")  # noqa: E731
         return {
-            "out": str(self.path),
+            "out": self.path,
             "generations": done,
             "evaluations": int(info["evaluations"]),
             "front_size": len(self.front),
@@ -272,6 +273,14 @@ def _record(record: Union[bool, Mapping[str, Any]]) -> Optional[str]:
         raise InputError(f"record = {record!r}: options must be plain values ({e})", field="record") from None
 
 
+def _summary(native: Mapping[str, Any]) -> dict[str, Any]:
+    """A native run's summary, ``out`` a :class:`pathlib.Path` (as :attr:`Run.summary`
+    read from a folder gives it)."""
+    summary = dict(native)
+    summary["out"] = Path(summary["out"])
+    return summary
+
+
 def optimise(
     problem: Union[Problem, PathLike],
     out: PathLike,
@@ -320,7 +329,7 @@ def optimise(
         problem = Problem.load(problem)
     summary = _gripopt.optimise(problem._native, os.fspath(out), pop, generations, seed, threads, options, callback)
     run = Run(out)
-    run._summary = dict(summary)
+    run._summary = _summary(summary)
     return run
 
 
@@ -344,5 +353,5 @@ def resume(
     """
     summary = _gripopt.resume(os.fspath(path), generations, threads, force, _callback(progress))
     run = Run(path)
-    run._summary = dict(summary)
+    run._summary = _summary(summary)
     return run

@@ -57,7 +57,7 @@ def test_bad_scenes_and_discarded_designs_are_input_errors(problem):
     discarded = problem.evaluate(problem.bounds.sample(50, seed=1), static_only=True).query("failed_stage == 1")
     with pytest.raises(gripopt.InputError, match="discarded at stage 1"):
         problem.simulate(discarded.iloc[0])
-    with pytest.raises(gripopt.ProblemError, match="rtol") as e:
+    with pytest.raises(gripopt.InputError, match="rtol") as e:
         problem.simulate(rtol=2.0)
     assert e.value.field == "rtol"
     with pytest.raises(gripopt.InputError, match="method"):

@@ -69,6 +69,21 @@ pub fn to_py(e: Error) -> PyErr {
     exception(class_of(&e), in_python_words(&e.to_string()), file, field, e.exit_code())
 }
 
+/// An error of reading problem text `text` (None: not at hand) named `file` as a Python
+/// exception: a TOML error of that text (unknown, missing or wrongly typed key; not one of
+/// another file it reads, a robust object's) names its field, found in the text.
+pub fn problem_error(e: Error, text: Option<&str>, file: &std::path::Path) -> PyErr {
+    let field = match (&e, text) {
+        (Error::ProblemParse { source, file: of, .. }, Some(text)) if of == file => {
+            crate::toml_field::field_of(text, source)
+        }
+        _ => None,
+    };
+    let Some(field) = field else { return to_py(e) };
+    let file = e.file().map(|p| p.display().to_string());
+    exception(class_of(&e), in_python_words(&e.to_string()), file, Some(field), e.exit_code())
+}
+
 /// An exception of class `class` (in `gripopt.errors`) with gripopt's message and attributes.
 fn exception(class: &str, message: String, file: Option<String>, field: Option<String>, code: i32) -> PyErr {
     Python::attach(|py| {

@@ -10,6 +10,7 @@ mod fork;
 mod frame;
 mod problem;
 mod run;
+mod toml_field;
 
 use pyo3::prelude::*;
 

@@ -2,7 +2,7 @@
 //! with the GIL released (the Python side, `gripopt.Problem`, makes the DataFrames).
 
 use crate::args;
-use crate::errors::{argument, input, IntoPy};
+use crate::errors::{argument, input, problem_error, IntoPy};
 use crate::frame::Table;
 use gripopt::{DesignParameters, Integration, Method, Problem, Stages, DESIGN_NAMES};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
@@ -84,6 +84,96 @@ fn rows_table(p: &Problem, rows: &[gripopt::EvaluatedRow], stages: Stages) -> gr
     table.map_err(|e| gripopt::Error::Input(format!("a row as columns: {e}")))
 }
 
+/// About how long one part of a batch runs (s) before Python handles its signals (ctrl-c).
+const PART_SECONDS: f64 = 0.25;
+
+/// `xs` evaluated as [`gripopt::evaluate_rows`] does, in parts of about [`PART_SECONDS`]
+/// each with the GIL released, Python's signal handlers run between parts: ctrl-c raises
+/// KeyboardInterrupt within a part's time, not at the batch's end. Each design's row is a
+/// function of the design and its id alone, so the rows are the same whatever the parts
+/// (their sizes follow the measured time) and the thread count. An empty batch is one
+/// empty part (its arguments are checked all the same).
+fn evaluate_interruptibly(
+    py: Python<'_>,
+    p: &Problem,
+    xs: &[DesignParameters],
+    first_id: u64,
+    stages: Stages,
+    threads: Option<usize>,
+) -> PyResult<Vec<gripopt::EvaluatedRow>> {
+    let pool = crate::fork::Pool::new();
+    let workers = threads.unwrap_or_else(|| pool.run(rayon::current_num_threads)).max(1);
+    let mut rows = Vec::with_capacity(xs.len());
+    let mut size = 4 * workers;
+    loop {
+        let start = rows.len();
+        let part = &xs[start..xs.len().min(start + size)];
+        let t = std::time::Instant::now();
+        let id = first_id + start as u64;
+        rows.extend(py.detach(|| pool.run(|| gripopt::evaluate_rows(p, part, id, stages, threads))).py()?);
+        if rows.len() >= xs.len() {
+            return Ok(rows);
+        }
+        py.check_signals()?;
+        // the next part: about PART_SECONDS of work at this part's pace, at most 4 times
+        // this one (a design's cost varies), never fewer designs than threads
+        let scale = (PART_SECONDS / t.elapsed().as_secs_f64().max(1e-6)).clamp(0.25, 4.0);
+        size = ((part.len() as f64 * scale) as usize).max(workers);
+    }
+}
+
+/// The index of the robust object `name` of `p`: else an input error naming `object`.
+fn object_index(p: &Problem, name: &str) -> PyResult<usize> {
+    let Some(robust) = &p.robust else {
+        let why = "the problem is not robust (no [robust] section): its one object is its [object]";
+        return Err(argument(
+            "object",
+            format!("object = {name:?}: {why}; object= picks one of a robust problem's [[robust.objects]]"),
+        ));
+    };
+    robust.objects.iter().position(|o| o.name == name).ok_or_else(|| {
+        let names: Vec<&str> = robust.objects.iter().map(|o| o.name.as_str()).collect();
+        argument(
+            "object",
+            format!(
+                "object = {name:?}: no such robust object; the problem's [[robust.objects]] are: {}",
+                names.join(", ")
+            ),
+        )
+    })
+}
+
+/// `gripopt simulate --object NAME`: design `x` simulated on robust object `o` of `problem`
+/// (its cylinder and grip torque, the spring sized at `[hand] tau`, as the robust
+/// evaluation's stage 2 has them) in `scene` (None: the problem's), diagnostic mode.
+fn simulate_object(
+    problem: &Problem,
+    x: &gripopt::Design,
+    scene: Option<(gripopt::SceneKind, Option<f64>)>,
+    o: usize,
+    integration: &Integration,
+) -> gripopt::Result<gripopt::Simulation> {
+    let p = match scene {
+        Some((kind, x_off)) => problem.in_scene(kind, x_off, Path::new("the simulation's scene"))?,
+        None => problem.clone(),
+    };
+    let setup = gripopt::eval::RobustSetup::of(&p).ok_or_else(|| gripopt::Error::Input("no [robust]".into()))?;
+    let spec = gripopt::sim::SceneSpec::of(&p.scene.setup);
+    let (mut trajectory, mut poses) = (gripopt::Trajectory::default(), Vec::new());
+    let ctl = gripopt::Controls::DIAGNOSTIC;
+    let ev = gripopt::eval::simulate_object(x, &setup, o, &spec, integration, &ctl, &mut (&mut trajectory, &mut poses));
+    if ev.scene.is_none() {
+        let d = ev.discard.expect("a design that did not reach its scene was discarded");
+        let name = &setup.spec.objects[o].name;
+        return Err(gripopt::Error::Input(format!(
+            "the design is discarded on object {name} at stage {} ({}); a simulation needs stages 0–2",
+            d.stage, d.reason
+        )));
+    }
+    let record = gripopt::SimulationRecord { record: gripopt::Record::from_eval(&ev), method: integration.method };
+    Ok(gripopt::Simulation { record, trajectory, poses })
+}
+
 fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
     serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
 }
@@ -125,7 +215,12 @@ impl PyProblem {
 
     /// The problem of a file.
     pub fn from_file(path: &Path) -> PyResult<Self> {
-        Ok(PyProblem { problem: Problem::load(path).py()?, path: Some(path.to_path_buf()) })
+        let problem = Problem::load(path).map_err(|e| {
+            // the text the error is about (read again: only on the error's path)
+            let text = std::fs::read_to_string(path).ok();
+            problem_error(e, text.as_deref(), path)
+        })?;
+        Ok(PyProblem { problem, path: Some(path.to_path_buf()) })
     }
 }
 
@@ -142,7 +237,8 @@ impl PyProblem {
     #[pyo3(signature = (text, path=None))]
     fn from_toml(text: &str, path: Option<PathBuf>) -> PyResult<Self> {
         let shown = path.clone().unwrap_or_else(|| PathBuf::from(TEXT));
-        Ok(PyProblem { problem: Problem::from_toml_str(text, &shown).py()?, path })
+        let problem = Problem::from_toml_str(text, &shown).map_err(|e| problem_error(e, Some(text), &shown))?;
+        Ok(PyProblem { problem, path })
     }
 
     /// What a pickle carries besides the text: the text with each robust object given by
@@ -201,6 +297,11 @@ impl PyProblem {
     fn method(&self) -> &'static str {
         self.problem.solver.method.as_str()
     }
+    /// The names of a robust problem's objects (`[[robust.objects]]`), None: not robust.
+    #[getter]
+    fn robust_objects(&self) -> Option<Vec<String>> {
+        self.problem.robust.as_ref().map(|r| r.objects.iter().map(|o| o.name.clone()).collect())
+    }
     /// The nominal design (ψ in degrees).
     #[getter]
     fn nominal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -228,18 +329,16 @@ impl PyProblem {
             }
         }
         let p = &self.problem;
+        let rows = evaluate_interruptibly(py, p, &xs, first_id, stages(static_only), threads)?;
         let (table, f, k) = py
-            .detach(|| {
-                crate::fork::fork_safe(|| -> gripopt::Result<_> {
-                    let rows = gripopt::evaluate_rows(p, &xs, first_id, stages(static_only), threads)?;
-                    let table = rows_table(p, &rows, stages(static_only))?;
-                    let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
-                    for r in &rows {
-                        f.extend(r.minimised);
-                        k.extend([f64::from(r.infeasibility.stages_short), r.infeasibility.violation]);
-                    }
-                    Ok((table, f, k))
-                })
+            .detach(|| -> gripopt::Result<_> {
+                let table = crate::fork::fork_safe(|| rows_table(p, &rows, stages(static_only)))?;
+                let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
+                for r in &rows {
+                    f.extend(r.minimised);
+                    k.extend([f64::from(r.infeasibility.stages_short), r.infeasibility.violation]);
+                }
+                Ok((table, f, k))
             })
             .py()?;
         let n = xs.len();
@@ -259,8 +358,9 @@ impl PyProblem {
 
     /// Simulate one design in a scene (None: the problem's) in diagnostic mode, as
     /// `gripopt simulate --json --csv` does: the record's JSON text, the grasp samples and
-    /// (free scene) the object's poses as columns.
-    #[pyo3(signature = (design, scene=None, rtol=None, method=None))]
+    /// (free scene) the object's poses as columns. `object`: one of a robust problem's
+    /// objects by name (`simulate --object NAME`; None: the reference `[object]`).
+    #[pyo3(signature = (design, scene=None, rtol=None, method=None, object=None))]
     #[allow(clippy::type_complexity)]
     fn simulate<'py>(
         &self,
@@ -269,6 +369,7 @@ impl PyProblem {
         scene: Option<&str>,
         rtol: Option<f64>,
         method: Option<&str>,
+        object: Option<&str>,
     ) -> PyResult<(String, Bound<'py, PyList>, Bound<'py, PyList>)> {
         let x = design_of(&design)?.design();
         let p = &self.problem;
@@ -281,23 +382,21 @@ impl PyProblem {
             }
         };
         if let Some(r) = rtol {
-            gripopt::params::limit("solver.rtol").check(r).map_err(|rule| {
-                crate::errors::to_py(gripopt::Error::InvalidField {
-                    file: "simulate()".into(),
-                    field: "rtol".into(),
-                    value: r.to_string(),
-                    rule,
-                })
-            })?;
+            let limit = gripopt::params::limit("solver.rtol");
+            limit.check(r).map_err(|rule| argument("rtol", format!("rtol = {r}: {rule}")))?;
         }
         let s = &p.solver;
         method.check_atol(s.atol).map_err(|rule| {
             input(format!("method `{method}`: the problem's solver.atol {}: {rule}", gripopt::params::fmt_num(s.atol)))
         })?;
         let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
+        let object = object.map(|name| object_index(p, name)).transpose()?;
         let sim = py
             .detach(|| {
-                crate::fork::fork_safe(|| gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC))
+                crate::fork::fork_safe(|| match object {
+                    None => gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC),
+                    Some(o) => simulate_object(p, &x, scene, o, &integ),
+                })
             })
             .py()?;
         let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);

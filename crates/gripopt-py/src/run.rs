@@ -30,11 +30,14 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
 /// The run's progress, told to a Python callable; an exception it raises stops the run
 /// after the generation's checkpoint and is raised again when the run has stopped. Notes
-/// (warnings) become Python warnings (`gripopt.errors.GripoptWarning`).
+/// are kept for the caller's thread, which issues them as Python warnings
+/// (`gripopt.errors.GripoptWarning`) at the caller's line: the run's thread has no Python
+/// caller (a warning issued there is reported at `sys:1`).
 struct PyProgress {
     callback: Option<Py<PyAny>>,
     stop: Arc<AtomicBool>,
     raised: Arc<Mutex<Option<PyErr>>>,
+    notes: Arc<Mutex<Vec<String>>>,
 }
 
 impl PyProgress {
@@ -68,10 +71,7 @@ impl Progress for PyProgress {
         Ok(())
     }
     fn note(&mut self, message: &str) {
-        let r = Python::attach(|py| warn(py, message));
-        if let Err(e) = r {
-            self.keep(e);
-        }
+        self.notes.lock().expect("run notes").push(message.to_string());
     }
 }
 
@@ -82,7 +82,17 @@ impl Progress for PyProgress {
 fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path) -> PyResult<RunSummary> {
     let stop = Arc::new(AtomicBool::new(false));
     let raised = Arc::new(Mutex::new(None));
-    let progress = PyProgress { callback, stop: stop.clone(), raised: raised.clone() };
+    let notes = Arc::new(Mutex::new(Vec::new()));
+    let progress = PyProgress { callback, stop: stop.clone(), raised: raised.clone(), notes: notes.clone() };
+    // the notes so far as warnings, on this (the caller's) thread; a warning turned into an
+    // error (a warnings filter) stops the run as the callback's exception does
+    let warn_notes = |py: Python<'_>| {
+        let taken = std::mem::take(&mut *notes.lock().expect("run notes"));
+        if let Err(e) = taken.iter().try_for_each(|n| warn(py, n)) {
+            stop.store(true, Ordering::SeqCst);
+            raised.lock().expect("progress error").get_or_insert(e);
+        }
+    };
     let opt = opt.progress(progress).stop_flag(stop.clone());
     let mut interrupt: Option<PyErr> = None;
     let joined = py.detach(|| {
@@ -90,6 +100,7 @@ fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path
             let run = s.spawn(move || crate::fork::fork_safe(|| opt.run()));
             while !run.is_finished() {
                 std::thread::sleep(SIGNAL_POLL);
+                Python::attach(warn_notes);
                 if interrupt.is_none() {
                     if let Err(e) = Python::attach(|py| py.check_signals()) {
                         stop.store(true, Ordering::SeqCst);
@@ -101,6 +112,7 @@ fn drive(py: Python<'_>, opt: Optimiser, callback: Option<Py<PyAny>>, out: &Path
         })
     });
     let result = joined.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    warn_notes(py);
     let summary = result.py()?;
     if let Some(e) = raised.lock().expect("progress error").take() {
         return Err(e);
@@ -233,10 +245,10 @@ fn check_ran_text(problem: &PyProblem, file: &Path, out: &Path) -> PyResult<()> 
     }
 }
 
-/// A `GripoptWarning` with `message`.
+/// A `GripoptWarning` with `message`, reported at the caller's line (the first frame
+/// outside the package: `gripopt.errors._warn`).
 fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
-    let w = py.import("gripopt.errors")?.getattr("GripoptWarning")?;
-    py.import("warnings")?.call_method1("warn", (message, w, 2))?;
+    py.import("gripopt.errors")?.call_method1("_warn", (message,))?;
     Ok(())
 }
 
