@@ -184,3 +184,27 @@ fn export_of_a_run_without_its_problem_file_says_what_is_missing() {
     assert!(text.contains("bottle-1l.toml") && !text.contains("not a run folder"), "{text}");
     assert!(!d.join("e.xml").exists());
 }
+
+/// An object too large for the open hand (bottle-1l with R = 70 mm; the open pose is set by
+/// `hand.r_open`, not by R) penetrates it even centred: refused in every format, the depth
+/// the build sheet's open pose gives for R = 70 mm.
+#[test]
+fn an_object_too_large_for_the_open_hand_is_refused_even_centred() {
+    let d = scratch("large");
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap().replacen("radius = 0.040 ", "radius = 0.070 ", 1);
+    assert!(text.contains("radius = 0.070 "));
+    let problem = d.join("large.toml");
+    std::fs::write(&problem, text).unwrap();
+    let (seg, w) = open_phalanges("l21=0.0494,b=0.056,t22=0.0376,r=0.46,p=0.4,psi_deg=129.76");
+    let depth = penetration(&seg, w, 0.070, 0.0);
+    assert!(depth > 1e-3, "{depth}");
+    for format in ["mjcf", "json", "csv"] {
+        let o = run_gripopt(&["export", problem.to_str().unwrap(), "--format", format, "--out", "-"]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{format}: {text}");
+        assert!(o.stdout.is_empty() && text.contains("even centred"), "{format}: {text}");
+        assert!(text.contains("the problem's [scene] (centred"), "{text}");
+        let said = number_after(&text, "penetrates it by ") * 1e-3;
+        assert!((said - depth).abs() < 1e-3 * depth, "said {said} m, geometry {depth} m");
+    }
+}

@@ -232,15 +232,14 @@ fn refuse_open_penetration(e: &ExportedDesign, scene: Option<&str>) -> Result<()
         None => format!("the problem's [scene] ({}, x_off = {} m)", e.placement.name(), short(x_off)),
     };
     let fix = match e.clear_offset() {
-        None => "the open hand touches the object even centred (x_off = 0): no placement of this object starts clear"
-            .to_string(),
+        None => "the open hand touches the object even centred (x_off = 0)".to_string(),
         Some(clear) => format!(
             "the open hand clears the object up to |x_off| = {} mm on this side: give a smaller offset",
             short(clear.abs() * 1e3)
         ),
     };
     bail!(
-        "{asked}: with the object at x_off = {} m the open finger {}'s {} phalanx penetrates it by {} mm at t = 0; the model would start with the object inside the finger, and `gripopt simulate` discards this scene at t = 0 (\"open finger penetrates the object at t = 0\"); {fix} (docs/export.md)",
+        "{asked}: with the object at x_off = {} m the open finger {}'s {} phalanx penetrates it by {} mm at t = 0; the model would start with the object inside the finger, where a simulation refuses to start (\"open finger penetrates the object at t = 0\"); {fix} (docs/export.md)",
         short(x_off),
         pen.finger,
         pen.phalanx,
