@@ -41,6 +41,8 @@ mod robustness_cli;
 mod robustness_edges;
 mod robustness_folders;
 mod s34_small;
+mod s35_cli_export;
+mod s35_cli_runs;
 mod s35_csv;
 mod s35_physics;
 mod scene_cli;

@@ -108,6 +108,9 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
     })?;
     // absent; anything else there (a pipe, a folder) is refused by its read, naming it
     if std::fs::symlink_metadata(dir.join("problem.toml")).is_err() {
+        if std::fs::symlink_metadata(dir.join("run.json")).is_ok() {
+            return Err(missing_problem(dir).into());
+        }
         return Err(gripopt::Error::Input(format!(
             "{}: not a run folder (no problem.toml); give a folder written by `gripopt optimise`",
             dir.display()
@@ -134,6 +137,23 @@ fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, Strin
         .into());
     }
     Ok((run.problem, x, format!("run folder {}, design {id} ({from})", dir.display())))
+}
+
+/// A run folder (run.json there) whose problem.toml was deleted: an input error saying so,
+/// with the file the run started from and the checksum that tells whether it is still the
+/// same (run.json's `problem_path`, `problem_sha256`), when run.json can be read.
+fn missing_problem(dir: &Path) -> gripopt::Error {
+    let started = gripopt::RunFolder::open(dir).and_then(|f| f.info()).ok().map_or(String::new(), |i| {
+        format!(
+            " (the run started from {}; it is the same file if its SHA-256 is run.json's problem_sha256 {})",
+            i.problem_path.display(),
+            i.problem_sha256
+        )
+    });
+    gripopt::Error::Input(format!(
+        "{}: problem.toml is missing from the run folder (run.json is there): restore it{started}; a run's designs are exported with the problem they were evaluated with",
+        dir.display()
+    ))
 }
 
 /// Design `id` of a run that recorded nothing (None: the run was recorded), from its
@@ -194,6 +214,39 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
+/// `x` to 4 significant digits, compactly (`0.001823`, `2.5e-7`).
+fn short(x: f64) -> String {
+    gripopt::params::fmt_num(format!("{x:.3e}").parse().unwrap_or(x))
+}
+
+/// An exported scene whose open hand already penetrates the object at t = 0 (an offset or
+/// free object placed into a finger): refused, as every simulated scene refuses to start
+/// there ("open finger penetrates the object at t = 0"), naming `--scene` (or the problem's
+/// `[scene]`), the offset, the finger and the depth, and the offset up to which the open hand
+/// clears the object (docs/export.md).
+fn refuse_open_penetration(e: &ExportedDesign, scene: Option<&str>) -> Result<()> {
+    let Some(pen) = e.open_penetration() else { return Ok(()) };
+    let x_off = e.placement.x_off;
+    let asked = match scene {
+        Some(arg) => format!("--scene {arg}"),
+        None => format!("the problem's [scene] ({}, x_off = {} m)", e.placement.name(), short(x_off)),
+    };
+    let fix = match e.clear_offset() {
+        None => "the open hand touches the object even centred (x_off = 0)".to_string(),
+        Some(clear) => format!(
+            "the open hand clears the object up to |x_off| = {} mm on this side: give a smaller offset",
+            short(clear.abs() * 1e3)
+        ),
+    };
+    bail!(
+        "{asked}: with the object at x_off = {} m the open finger {}'s {} phalanx penetrates it by {} mm at t = 0; the model would start with the object inside the finger, where a simulation refuses to start (\"open finger penetrates the object at t = 0\"); {fix} (docs/export.md)",
+        short(x_off),
+        pen.finger,
+        pen.phalanx,
+        short(pen.depth * 1e3),
+    )
+}
+
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--object NAME] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
@@ -241,6 +294,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
         }
         _ => ExportedDesign::new(&x, &p.scene, placement, &source)?,
     };
+    refuse_open_penetration(&e, a.scene.as_deref())?;
     let source = &e.source;
     let text = match format {
         FormatArg::Mjcf => e.mjcf(),

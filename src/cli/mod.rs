@@ -279,6 +279,10 @@ fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
             );
         }
     }
+    if let Some(why) = x.invalid_length() {
+        // stage 0 says "a length is not positive": which one, and why (stderr only)
+        eprintln!("warning: --design: {why}; the design has no finger (discarded at stage 0)");
+    }
     Ok(x)
 }
 
@@ -314,6 +318,29 @@ fn hooks() -> gripopt::run::RunHooks {
         stop: Some(progress::ctrl_c_flag()),
         evaluator: None,
     }
+}
+
+/// Refuse `optimise --out DIR` inside another run's folder (`A/sub`, `A/recording/sub`: the
+/// nearest existing folder on the way up is a run folder or lies in one, the rule of
+/// [`gripopt::run_folder_around`] that `export --out` and `sweep --out` follow): exit 2 before
+/// anything is created. DIR itself a run folder is the library's to judge (resume, or refused
+/// as another run's).
+fn refuse_run_inside_run(out: &std::path::Path) -> Result<()> {
+    let existing = out
+        .ancestors()
+        .skip(1)
+        .map(|a| if a.as_os_str().is_empty() { std::path::Path::new(".") } else { a })
+        .find(|a| a.is_dir());
+    let Some(dir) = existing else { return Ok(()) };
+    if let Some((run, mark)) = gripopt::run_folder_around(&dir.join("_")) {
+        return Err(gripopt::Error::Input(format!(
+            "--out {}: inside the run folder {} (it holds {mark}); a run is never created inside another run's folder: give a folder outside it",
+            out.display(),
+            run.display()
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder, a
@@ -454,6 +481,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             json,
         } => {
             use gripopt::record::TrajectoryKeep;
+            refuse_run_inside_run(&out)?;
             let (enabled, trajectories) = match record {
                 RecordArg::All => (true, TrajectoryKeep::All),
                 RecordArg::Feasible => (true, TrajectoryKeep::Feasible),

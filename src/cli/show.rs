@@ -194,6 +194,20 @@ pub fn run(a: ShowArgs) -> Result<()> {
     }
     if let Some(id) = a.design {
         let Some((row, f)) = find_design(&folder, tables.as_ref(), id)? else {
+            // ids are 0, 1, … in the order of evaluation: one the run never had is no older
+            // design, and replay would not find it either
+            let n = run.evaluations;
+            if id >= n {
+                let ids = if n == 0 {
+                    "it has evaluated no design yet".to_string()
+                } else {
+                    format!("its ids are 0 to {}", n - 1)
+                };
+                bail!(
+                    "--design {id}: the run {} has no design {id}: {ids} (run.json: {n} evaluations at its last checkpoint)",
+                    quoted(dir)
+                );
+            }
             let older = match replay(id) {
                 Some(r) => format!("older designs: `{r}`"),
                 None => "older designs are not kept: the run was not recorded".into(),

@@ -14,7 +14,9 @@ pub struct SweepArgs {
     /// NAME: a design variable (l21, b, t22, r, p, psi_deg), a derived one (l11: p = l11/l21
     /// and psi = 140 - 25.6 p; l22: r = l22/l11; l_hand: t22 = (l_hand - b - 2 l21)/2), or a
     /// numeric problem-file field (tau, density, grasp_height, radius, restitution, hand.w, scene.x_off …),
-    /// or mu_scale (the phalanx friction coefficients scaled; stage 3 only).
+    /// or mu_scale (the phalanx friction coefficients scaled; stage 3 only). A [scene] field
+    /// the problem's scene kind does not simulate is refused (scene.x_off: offset or free;
+    /// scene.t_obs, scene.ground_*: free).
     #[arg(long = "vary", required = true)]
     pub vary: Vec<String>,
     /// Base design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
@@ -123,6 +125,14 @@ pub fn run(a: SweepArgs) -> Result<()> {
         eprintln!(
             "note: {} has [robust]: a sweep varies and evaluates the reference [object] and [scene] only; the robust objects and scenarios are not evaluated (docs/robust.md)",
             crate::cli::out::path(&a.problem)
+        );
+    }
+    let late = sweep::stage3_only_names(&spec);
+    if spec.stage != Stage::Dynamic && !late.is_empty() {
+        eprintln!(
+            "warning: --vary {}: only stage 3 (the simulated grasp) uses it, and --stage {} stops before it: every point is the same in it (--stage dynamic)",
+            late.join(", "),
+            if spec.stage == Stage::Static { "static" } else { "kinematics" }
         );
     }
     let mut b = rayon::ThreadPoolBuilder::new();

@@ -2,13 +2,16 @@
 //! the object, and a build sheet (JSON or CSV) for CAD and for building the prototype
 //! (`gripopt export`, docs/export.md).
 //!
-//! Beside `sweep` above `eval`: it imports `params`, `model` and `eval` only (never the run
+//! Beside `sweep` above `eval`: it imports `params`, `model`, `sim` (the open hand's start
+//! check) and `eval` only (never the run
 //! folder, the recording or the optimiser; the CLI resolves a run's design).
 
+mod clearance;
 mod mjcf;
 mod sheet;
 mod xml;
 
+pub use clearance::{OpenPenetration, START_PENETRATION_TOL};
 pub use mjcf::{mjcf, MujocoSettings, MUJOCO};
 pub use sheet::{build_sheet, BuildSheet, SheetRow};
 pub use xml::XmlWriter;
@@ -45,12 +48,13 @@ impl ExportScene {
     pub fn free(x_off: f64) -> Self {
         ExportScene { object: ObjectMode::Free, x_off }
     }
-    /// `centred`, `offset:X` or `free:X`, as `--scene` spells scenes.
+    /// `centred`, `offset:X` or `free:X`, as `--scene` spells scenes (X as [`num`] writes it:
+    /// `free:1e-320`, not 320 digits).
     pub fn name(&self) -> String {
         match (self.object, self.x_off) {
             (ObjectMode::Fixed, 0.0) => "centred".into(),
-            (ObjectMode::Fixed, x) => format!("offset:{x}"),
-            (ObjectMode::Free, x) => format!("free:{x}"),
+            (ObjectMode::Fixed, x) => format!("offset:{}", num(x)),
+            (ObjectMode::Free, x) => format!("free:{}", num(x)),
         }
     }
 }
@@ -123,7 +127,12 @@ impl ExportedDesign {
             return Err(Error::Input(format!("export: object offset x_off = {} is not finite", placement.x_off)));
         }
         let finger = Finger::new(x, s).map_err(|g| {
-            Error::Input(format!("{source}: the design cannot be exported: {} (MODEL.md §3)", g.reason()))
+            // which length, and its value (a subnormal input underflows to a zero length)
+            let why = match (g, x.invalid_length()) {
+                (crate::model::GeomError::InvalidLength, Some(why)) => why,
+                _ => g.reason().to_string(),
+            };
+            Error::Input(format!("{source}: the design cannot be exported: {why} (MODEL.md §3)"))
         })?;
         let (tau_s_min, tau_s0) = spring_preload(&finger, spring_scene).ok_or_else(|| {
             Error::Input(format!(

@@ -74,6 +74,54 @@ impl Design {
     pub fn l_hand(&self) -> f64 {
         self.b + 2.0 * self.t22 + 2.0 * self.l21
     }
+    /// Why the design has no finger (stage 0's "a length is not positive", MODEL.md §3),
+    /// naming the length and its value: a given length l21, b, t22 that is not positive or
+    /// not finite, ψ not finite, or a derived length l11 = p·l21, l22 = r·l11 that is not
+    /// positive, said as an underflow when both factors are positive (a subnormal input such
+    /// as 5e-324 m: its product rounds to 0). None when every length is positive and finite.
+    pub fn invalid_length(&self) -> Option<String> {
+        let n = super::fmt_num;
+        for (name, v) in [("l21", self.l21), ("b", self.b), ("t22", self.t22)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Some(format!("{name} = {} m is not a positive length", n(v)));
+            }
+        }
+        if !self.psi.is_finite() {
+            return Some(format!("psi_deg = {} is not finite", n(self.psi.to_degrees())));
+        }
+        let l11 = self.p * self.l21;
+        let derived = [
+            ("l11 = p·l21", "p", self.p, "l21", self.l21, l11),
+            ("l22 = r·l11", "r", self.r, "l11", l11, self.r * l11),
+        ];
+        for (what, fa, a, fb, b, v) in derived {
+            if v.is_finite() && v > 0.0 {
+                continue;
+            }
+            let product = format!("{what} = {} × {} m = {} m", n(a), n(b), n(v));
+            if a > 0.0 && b > 0.0 && v == 0.0 {
+                let tiny: Vec<String> = [(fa, a), (fb, b)]
+                    .iter()
+                    .filter(|(_, x)| !x.is_normal())
+                    .map(|(f, x)| format!("{f} = {}", n(*x)))
+                    .collect();
+                let why = if tiny.is_empty() {
+                    String::new()
+                } else {
+                    let s = if tiny.len() == 1 { "is a subnormal number" } else { "are subnormal numbers" };
+                    format!(
+                        " ({} {s}, below {:.1e}: far below any length the model can compute with)",
+                        tiny.join(" and "),
+                        f64::MIN_POSITIVE
+                    )
+                };
+                return Some(format!("{product}: the product underflows to 0{why}"));
+            }
+            return Some(format!("{product} is not a positive length"));
+        }
+        None
+    }
+
     /// Parse `l21=..,b=..,t22=..,r=..,p=..,psi_deg=..` (all six required, each once).
     pub fn parse_assignments(s: &str) -> Result<Self> {
         let mut vals: [Option<f64>; 6] = [None; 6];

@@ -13,6 +13,10 @@
 //!   together (stage 3 only; 0 allowed);
 //! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
 //!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
+//!   A `[scene]` field the problem's scene kind does not simulate is refused
+//!   ([`scene_kinds_using`]: `scene.x_off` needs the offset or free scene, `scene.t_obs` and
+//!   the ground's fields the free scene), as every point would be the same design in the same
+//!   scene.
 //!
 //! Results do not depend on the number of threads: every point is evaluated on its own and
 //! rows are written in grid order.
@@ -26,7 +30,7 @@ pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
 use crate::cells::{cells, Floats};
 use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
-use crate::params::{limit, Design, Problem, DESIGN_NAMES, LIMITS};
+use crate::params::{limit, Design, Problem, SceneKind, DESIGN_NAMES, LIMITS};
 use crate::{Error, Result};
 use out::{record_unit, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
@@ -290,6 +294,23 @@ impl SweepSpec {
         if self.hold_l_hand && !has(design("l21")) && !has(design("b")) {
             return Err(Error::Input("--hold-l-hand: keeps l_hand while l21 or b vary, and neither is varied".into()));
         }
+        for v in &self.vary {
+            let Knob::Field(i) = v.knob else { continue };
+            let field = LIMITS[i].field;
+            let kind = self.problem.scene.setup.kind;
+            let Some(kinds) = scene_kinds_using(field) else { continue };
+            if !kinds.contains(&kind) {
+                let names: Vec<String> = kinds.iter().map(|k| format!("\"{k}\"")).collect();
+                return Err(Error::Input(format!(
+                    "--vary {}: the problem's scene kind \"{kind}\" ([scene] kind) does not use {field}, which only the {} scene{} simulate{}: every point would be the same; sweep a problem whose [scene] kind is {} (docs/scenes.md)",
+                    v.name,
+                    kinds.iter().map(|k| k.as_str()).collect::<Vec<_>>().join(" and "),
+                    if kinds.len() > 1 { "s" } else { "" },
+                    if kinds.len() > 1 { "" } else { "s" },
+                    names.join(" or ")
+                )));
+            }
+        }
         let total: usize =
             self.vary.iter().map(|v| v.n).try_fold(1usize, |a, n| a.checked_mul(n)).unwrap_or(usize::MAX);
         if total > MAX_POINTS {
@@ -356,6 +377,35 @@ impl SweepSpec {
         }
         Ok((p, Design::from_array(&x)))
     }
+}
+
+/// The scene kinds whose stage 3 uses the `[scene]` field `field` (MODEL.md §14): the
+/// object's offset `scene.x_off` the offset and free scenes, the observation time and the
+/// ground (`scene.t_obs`, `scene.ground_*`) the free scene only; None for a field outside
+/// `[scene]` (used whatever the scene).
+pub fn scene_kinds_using(field: &str) -> Option<&'static [SceneKind]> {
+    match field {
+        "scene.x_off" => Some(&[SceneKind::Offset, SceneKind::Free]),
+        "scene.t_obs" | "scene.ground_points" | "scene.ground_k" | "scene.ground_v_s" | "scene.ground_v_d" => {
+            Some(&[SceneKind::Free])
+        }
+        _ => None,
+    }
+}
+
+/// Varied names whose values only stage 3 uses (the `[scene]` setup, the solver, `mu_scale`):
+/// with `--stage kinematics` or `static` every point is the same in them. Their names, for
+/// a warning.
+pub fn stage3_only_names(spec: &SweepSpec) -> Vec<&str> {
+    spec.vary
+        .iter()
+        .filter(|v| match v.knob {
+            Knob::MuScale => true,
+            Knob::Field(i) => LIMITS[i].field.starts_with("scene.") || LIMITS[i].field.starts_with("solver."),
+            _ => false,
+        })
+        .map(|v| v.name.as_str())
+        .collect()
 }
 
 /// Thesis eq. 4.15: ψ = 140 − 25.6 p (degrees).
