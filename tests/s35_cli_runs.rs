@@ -122,3 +122,37 @@ fn optimise_refuses_a_run_inside_another_runs_folder() {
     ]);
     assert!(o.status.success(), "{}", output_text(&o));
 }
+
+/// The library refuses it too (Python's `optimise` and any Rust caller go through
+/// `run::optimise`, not the CLI's check): nothing is created inside the run.
+#[test]
+fn the_library_refuses_a_run_inside_another_runs_folder() {
+    let d = scratch("nested-lib");
+    let run = tiny_run(&d);
+    let out = run.join("recording").join("sub");
+    let spec = gripopt::run::RunSpec {
+        problem_path: PathBuf::from(BOTTLE_FILE),
+        out: out.clone(),
+        pop: 4,
+        generations: 1,
+        seed: 1,
+        threads: Some(1),
+        record: gripopt::record::RecordOptions::default(),
+    };
+    let e = gripopt::run::optimise(&spec).unwrap_err().to_string();
+    assert!(e.contains("inside the run folder") && e.contains("holds run.json"), "{e}");
+    assert!(!out.exists());
+}
+
+/// `verify` of a run whose problem.toml was deleted says that file is missing (run.json is
+/// there), not "not a run folder".
+#[test]
+fn verify_names_a_missing_problem_toml() {
+    let d = scratch("verify-no-problem");
+    let run = tiny_run(&d);
+    std::fs::remove_file(run.join("problem.toml")).unwrap();
+    let o = run_gripopt(&["verify", run.to_str().unwrap(), "--record", "none"]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("problem.toml is missing from the run folder (run.json is there)"), "{text}");
+}

@@ -162,6 +162,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
             message: "is a file, not a folder: give a new or empty folder for the run".into(),
         });
     }
+    refuse_run_inside_run(&spec.out)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     // refused before the lock's pid file is written into a folder that is not ours
     Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
@@ -581,6 +582,26 @@ fn run_options(s: &SolverSettings, rec: &RecordOptions) -> serde_json::Value {
     };
     // numbers, strings and plain structs: serialising cannot fail
     serde_json::to_value(o).expect("run options serialise")
+}
+
+/// A new run's folder is never created inside another run's folder (its recording/ or any
+/// folder below it): the nearest existing ancestor of `out` must not be, or lie inside, a run
+/// folder (`crate::run_folder_around`; `out` itself being a run is the resume's case,
+/// refused by the folder scan with its own message).
+fn refuse_run_inside_run(out: &Path) -> Result<()> {
+    let existing =
+        out.ancestors().skip(1).map(|a| if a.as_os_str().is_empty() { Path::new(".") } else { a }).find(|a| a.is_dir());
+    let Some(dir) = existing else { return Ok(()) };
+    match crate::fsutil::run_folder_around(&dir.join("_")) {
+        Some((run, mark)) => Err(Error::RunDir {
+            path: out.to_path_buf(),
+            message: format!(
+                "inside the run folder {} (it holds {mark}): a run is never created inside another run's folder; give a folder outside it",
+                run.display()
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The problem file a run started with, when it is still there (else the run uses its copy).

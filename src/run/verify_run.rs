@@ -61,10 +61,15 @@ pub fn verify(
     for f in ["run.json", "problem.toml"] {
         // absent; anything else there (a pipe, a folder) is refused by its read, naming it
         if std::fs::symlink_metadata(dir.join(f)).is_err() {
-            return Err(Error::RunDir {
-                path: dir.to_path_buf(),
-                message: format!("not a run folder (no {f}); give a folder written by `gripopt optimise`"),
-            });
+            let message = if f == "problem.toml" {
+                "problem.toml is missing from the run folder (run.json is there): restore it (a copy of the \
+                 problem file the run started from, run.json's problem_path; its SHA-256 is run.json's \
+                 problem_sha256)"
+                    .to_string()
+            } else {
+                format!("not a run folder (no {f}); give a folder written by `gripopt optimise`")
+            };
+            return Err(Error::RunDir { path: dir.to_path_buf(), message });
         }
     }
     let _lock = RunLock::acquire(dir)?;
