@@ -320,29 +320,6 @@ fn hooks() -> gripopt::run::RunHooks {
     }
 }
 
-/// Refuse `optimise --out DIR` inside another run's folder (`A/sub`, `A/recording/sub`: the
-/// nearest existing folder on the way up is a run folder or lies in one, the rule of
-/// [`gripopt::run_folder_around`] that `export --out` and `sweep --out` follow): exit 2 before
-/// anything is created. DIR itself a run folder is the library's to judge (resume, or refused
-/// as another run's).
-fn refuse_run_inside_run(out: &std::path::Path) -> Result<()> {
-    let existing = out
-        .ancestors()
-        .skip(1)
-        .map(|a| if a.as_os_str().is_empty() { std::path::Path::new(".") } else { a })
-        .find(|a| a.is_dir());
-    let Some(dir) = existing else { return Ok(()) };
-    if let Some((run, mark)) = gripopt::run_folder_around(&dir.join("_")) {
-        return Err(gripopt::Error::Input(format!(
-            "--out {}: inside the run folder {} (it holds {mark}); a run is never created inside another run's folder: give a folder outside it",
-            out.display(),
-            run.display()
-        ))
-        .into());
-    }
-    Ok(())
-}
-
 /// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder, a
 /// pipe or device, one of the command's `inputs` or an existing file inside an input folder
 /// even with `force` ([`gripopt::check_output_file`], as `export --out`); `-` (standard output carries the
@@ -481,7 +458,6 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             json,
         } => {
             use gripopt::record::TrajectoryKeep;
-            refuse_run_inside_run(&out)?;
             let (enabled, trajectories) = match record {
                 RecordArg::All => (true, TrajectoryKeep::All),
                 RecordArg::Feasible => (true, TrajectoryKeep::Feasible),
