@@ -14,10 +14,7 @@ const BOTTLE: &str = crate::common::BOTTLE_FILE;
 
 /// A scratch folder of this module under target/.
 fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/export-object-tests")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::scratch_dir("export-object-tests", name)
 }
 
 /// kitchen.toml with the can gripped at τ = 0.4 N·m (the hand's τ stays 0.5): the can's

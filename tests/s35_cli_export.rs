@@ -10,10 +10,7 @@ use std::path::PathBuf;
 const HOSTILE: &str = "l21=0.051584811442040655,b=0.07088732948111638,t22=0.03980884267391382,r=0.21257567978228534,p=0.5996165495350303,psi_deg=109.86029530342392";
 
 fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s35-cli-export")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::scratch_dir("s35-cli-export", name)
 }
 
 /// Finger 1's phalanges at the open pose (segments, m) and the capsule radius w (m), read

@@ -6,10 +6,7 @@ use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s35-cli-runs")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::scratch_dir("s35-cli-runs", name)
 }
 
 /// bottle-1l with `[scene] kind` replaced, written into `dir`.

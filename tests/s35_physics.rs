@@ -9,10 +9,7 @@ use std::path::PathBuf;
 const KITCHEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
 
 fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s35-physics")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::scratch_dir("s35-physics", name)
 }
 
 /// kitchen.toml's scene with one robust object (the 1 l bottle), its phalanx friction drawn

@@ -100,6 +100,14 @@ pub fn optimise_crashing_after(spec: &gripopt::run::RunSpec, k: u64) -> gripopt:
     gripopt::run::optimise_with(spec, hooks)
 }
 
+/// A fresh, empty folder `target/AREA/NAME` for a test's files (removed first if left over).
+pub fn scratch_dir(area: &str, name: &str) -> std::path::PathBuf {
+    let d = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target")).join(area).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 /// A fresh folder `name` under `target/mcap-check` (or `$GRIPOPT_MCAP_CHECK_DIR`), whose
 /// MCAP files `make test` checks with the independent reader.
 pub fn check_dir(name: &str) -> std::path::PathBuf {
