@@ -163,13 +163,15 @@ fn show_takes_the_designs_from_the_checkpoint_not_from_pareto_csv() {
     assert_eq!(truth["warnings"], serde_json::json!([]), "{truth}");
 }
 
-/// Finding 5: a run with `--record none`: `show` offers no replay command, and `export`
-/// writes a design of the checkpoint (the message for one not there says the run was not
+/// Finding 5: a run with `--record none`: no layout is written, `show` offers no replay
+/// command, and `export` writes a design of the checkpoint (the message for one not there says the run was not
 /// recorded).
 #[test]
 fn a_run_without_recording_is_shown_and_exported_from_its_checkpoint() {
     let dir = tmp("trust-norec");
     optimise(&spec(&dir, 2, false)).unwrap();
+    // no recording, so no layout naming channels that no file has
+    assert!(!dir.join("foxglove-layout.json").exists() && !dir.join("recording").exists());
     let d = dir.display().to_string();
     let s = out(&cli(&["show", &d]));
     assert!(!s.contains("gripopt replay") && s.contains("--record none"), "{s}");

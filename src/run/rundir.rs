@@ -198,7 +198,10 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     };
     write_json(&spec.out.join(RUN_FILE), &info)?;
     write_current(&spec.out, &info, &gp.problem)?;
-    crate::record::write_layout(&spec.out, &spec.record)?;
+    // a run that records nothing gets no layout: it would name channels no file has
+    if spec.record.enabled {
+        crate::record::write_layout(&spec.out, &spec.record)?;
+    }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
     let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0 };
