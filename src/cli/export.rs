@@ -273,7 +273,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
     }
     // `--scene` as simulate and replay read it (`free` alone keeps the problem's x_off)
     let p = match &a.scene {
-        Some(arg) => super::scenes::apply_scene(&p, arg)?,
+        Some(arg) => super::scenes::apply_scene(&p, &a.source, arg)?,
         None => p,
     };
     let setup = p.scene.setup;

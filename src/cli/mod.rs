@@ -415,7 +415,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             check_output("--csv", csv.as_deref(), force, &inputs)?;
             check_output("--plot", plot.as_deref(), force, &inputs)?;
             if let Some(sc) = &scene {
-                p = scenes::apply_scene(&p, sc)?;
+                p = scenes::apply_scene(&p, &problem, sc)?;
             }
             let object = object.as_deref().map(|name| scenes::PickedObject::of(&p, name, &problem)).transpose()?;
             if p.robust.is_some() && object.is_none() {

@@ -13,9 +13,10 @@ use gripopt::{Column, POSE_COLUMNS, SAMPLE_COLUMNS};
 use serde::Serialize;
 use std::path::Path;
 
-/// `centred`, `offset:X` or `free[:X]` (metres) applied to the problem's `[scene]` (checked
-/// by the library as a problem file's would be: the free scene needs g_eq = 0).
-pub fn apply_scene(p: &Problem, arg: &str) -> Result<Problem> {
+/// `centred`, `offset:X` or `free[:X]` (metres) applied to the `[scene]` of problem `p`, read
+/// from `from` (checked by the library as a problem file's would be: the free scene needs
+/// g_eq = 0; an error names `from` and the flag).
+pub fn apply_scene(p: &Problem, from: &Path, arg: &str) -> Result<Problem> {
     let num = |x: &str| x.parse::<f64>().with_context(|| format!("--scene {arg}: not a number"));
     let (kind, x_off) = match arg.split_once(':') {
         None if arg == "centred" => (SceneKind::Centred, None),
@@ -24,7 +25,7 @@ pub fn apply_scene(p: &Problem, arg: &str) -> Result<Problem> {
         Some(("free", x)) => (SceneKind::Free, Some(num(x)?)),
         _ => bail!("--scene {arg}: must be centred, offset:X or free[:X] (metres)"),
     };
-    Ok(p.in_scene(kind, x_off, Path::new(&format!("--scene {arg}")))?)
+    Ok(p.in_scene(kind, x_off, Path::new(&format!("{} with --scene {arg}", from.display())))?)
 }
 
 /// How `simulate` (and `replay --scene`) runs a design and reports it.
@@ -270,7 +271,7 @@ pub fn replay_in_scene(
 ) -> Result<Option<i32>> {
     let folder = gripopt::run::RunFolder::open(dir)?;
     let run_problem = folder.problem()?;
-    let p = apply_scene(&run_problem, scene)?;
+    let p = apply_scene(&run_problem, &dir.join("problem.toml"), scene)?;
     let (ran, recorded) = (scene_name(&p), scene_name(&run_problem));
     let (a, b) = (&p.scene.setup, &run_problem.scene.setup);
     // numerically: free:-0 is the run's free:0

@@ -159,12 +159,13 @@ impl GraspRecord {
     pub fn from_result(d: Option<&DynamicsResult>) -> Self {
         let Some(d) = d else { return Self::default() };
         let fc: Option<FirstContact> = d.first;
+        // the hand force is watched once a contact force acts: not when the simulation
+        // ended at or before its first contact (a design discarded at its first impact)
+        let watched = fc.is_some_and(|f| d.t_end > f.t);
         GraspRecord {
             impact: fc.map_or_else(ImpactRecord::default, |f| ImpactRecord::of(f.t, f.phalanx, &f.impact)),
             theta2_first_contact: fc.map(|f| f.theta2),
-            // watched only once a contact force acts: null when the simulation ended at or
-            // before its first contact (a design discarded at its first impact)
-            min_force_margin: fin(d.min_force_margin).filter(|_| fc.is_some_and(|f| d.t_end > f.t)),
+            min_force_margin: fin(d.min_force_margin).filter(|_| watched),
             static_force_margin: fin(d.static_force_margin),
             t_stab: d.t_stab,
             f_stab_1: d.t_stab.map(|_| d.f_end[0]),
@@ -177,7 +178,12 @@ impl GraspRecord {
             outcome: Some(d.outcome),
             impact_ok: d.impact_ok,
             fold_ok: d.fold_ok,
-            force_ok: Some(d.t_force_violation.is_none() && d.static_force_margin >= 0.0),
+            // failed where either part failed; passed only where the hand force was watched
+            force_ok: if d.t_force_violation.is_some() || d.static_force_margin < 0.0 {
+                Some(false)
+            } else {
+                watched.then_some(true)
+            },
             t_end: Some(d.t_end),
         }
     }

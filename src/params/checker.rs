@@ -34,3 +34,9 @@ impl Checker<'_> {
         Error::InvalidField { file: self.file.to_path_buf(), field: field.into(), value, rule: rule.into() }
     }
 }
+
+/// The rule for a hand plane lower than the fingers' half-thickness `w` (the [object]'s and
+/// each robust object's `grasp_height`).
+pub(super) fn below_finger_rule(w: f64) -> String {
+    format!("must be at least hand.w ({w}): the fingers, capsules of radius hand.w in the hand plane, would cut the floor the object stands on")
+}

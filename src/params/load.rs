@@ -302,6 +302,23 @@ impl Problem {
                 &format!("must be below the object's top (object.length {})", scene.object.length),
             ));
         }
+        if scene.object.grasp_height < scene.hand.w {
+            return Err(c.fail(
+                "object.grasp_height",
+                format!("{}", scene.object.grasp_height),
+                &super::checker::below_finger_rule(scene.hand.w),
+            ));
+        }
+        if scene.env.g_eq != 0.0 && scene.env.theta_g.cos().abs() > 1e-12 {
+            return Err(c.fail(
+                "environment.theta_g_deg",
+                format!("{}", en.theta_g_deg),
+                &format!(
+                    "must be -90 or 90 where environment.g_eq ({}) is not 0: finger 2 is finger 1's mirror image (MODEL.md §2, §8), which a gravity component along the fingers' closing axis x would break (docs/model.md decision 23)",
+                    scene.env.g_eq
+                ),
+            ));
+        }
         if cr.r_sing.len() > MAX_R_SING {
             return Err(c.fail(
                 "criteria.r_sing",
@@ -422,13 +439,20 @@ fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
                     sink * 1e3,
                     st.ground_points,
                     per_point,
-                    super::limits::num(least),
+                    super::limits::num(round_up_3(least)),
                     MAX_GROUND_SINK * 1e3
                 ),
             ));
         }
     }
     Ok(())
+}
+
+/// `v` > 0 rounded up to three significant digits (a bound that still holds, for a message).
+fn round_up_3(v: f64) -> f64 {
+    let unit = 10f64.powi(v.log10().floor() as i32 - 2);
+    // through its three-digit text, so that it prints without binary noise
+    format!("{:.2e}", (v / unit).ceil() * unit).parse().unwrap_or(v)
 }
 
 /// The largest static sink of the object into the ground the free scene accepts (m): the

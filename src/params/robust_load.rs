@@ -128,6 +128,7 @@ impl RawRobust {
             if d == 0 {
                 return Err(c.fail("robust.sampling", "\"corners\"".into(), "needs at least one uncertain input"));
             }
+            check_corner_centres(&robust, c)?;
             if scenarios != corner_count(d) {
                 return Err(c.fail(
                     "robust.scenarios",
@@ -202,10 +203,16 @@ impl RawRobust {
                     &format!("must be below the object's top (length {})", object.length),
                 ));
             }
+            if object.grasp_height < scene.hand.w {
+                return Err(c.fail(
+                    &field("grasp_height"),
+                    format!("{}", object.grasp_height),
+                    &super::checker::below_finger_rule(scene.hand.w),
+                ));
+            }
             let tau = super::limits::limit("hand.tau")
                 .check(o.tau)
                 .map_err(|rule| c.fail(&field("tau"), super::limits::num(o.tau), &rule))?;
-            let _ = scene;
             out.push(ObjectCase { name: o.name.clone(), object, tau, file: o.file.clone() });
         }
         Ok(out)
@@ -294,6 +301,26 @@ impl RawDist {
     }
 }
 
+/// The centre scenario of `sampling = "corners"` takes each input's centre (a normal's
+/// mean): it must be a value a draw can take, within the input's bounds, which
+/// [`check_supports`] checked (a mean outside them gave a negative friction or torque).
+fn check_corner_centres(r: &Robust, c: &Checker<'_>) -> Result<()> {
+    for (i, d) in r.uncertainty.inputs.iter().enumerate() {
+        let Some(d) = d else { continue };
+        let ((lo, hi), centre) = (d.support(), d.centre());
+        if !(lo..=hi).contains(&centre) {
+            return Err(c.fail(
+                &format!("robust.uncertainty.{}", INPUTS[i]),
+                super::robust::describe(d),
+                &format!(
+                    "with sampling = \"corners\" the centre scenario takes the mean {centre}, which must lie within the bounds [{lo}, {hi}]"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Every value a draw can take keeps each object's inputs in their admissible range (no
 /// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …).
 fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()> {
@@ -328,10 +355,10 @@ fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()
                     let (limit, v) = match name {
                         "height_offset" => {
                             let h = (o.object.grasp_height + lo, o.object.grasp_height + hi);
-                            if !(h.0 > 0.0) || h.1 >= o.object.length {
+                            if !(h.0 >= scene.hand.w) || h.1 >= o.object.length {
                                 return Err(bad(format!(
-                                    "keeps object {}'s grasp height {} + offset on its side, in (0, {})",
-                                    o.name, o.object.grasp_height, o.object.length
+                                    "keeps object {}'s grasp height {} + offset on its side, in [hand.w {}, {}) (the fingers clear the floor and stay below the top)",
+                                    o.name, o.object.grasp_height, scene.hand.w, o.object.length
                                 )));
                             }
                             continue;
