@@ -3,12 +3,13 @@
 //! steps, events and on a uniform grid to the caller's [`Sink`]. Knows nothing of fingers
 //! or criteria.
 
-use super::events::EventSearch;
+use super::events::{Crossing, EventKind, EventSearch, EventValues};
 use super::integrate::{hermite, Dopri5, Radau5, Stats, StepError, StepPoint, Stepper, Switching, Tol, TrBdf2};
 use super::result::MAX_EVENTS;
-use super::scene::{End, Run, Scene};
+use super::scene::{End, Response, Run, Scene};
 use super::settings::{Controls, Integration, Method};
 use super::sink::{EventNote, Point, Sink};
+use nalgebra::SVector;
 
 /// Run `scene` from t = 0 to `t_end` with the method, first step and budget of `integ`,
 /// the tolerances `tol` and the grid of `ctl`, reporting to `sink`, and return the
@@ -62,8 +63,29 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
     };
     ev = ev0;
     g = scene.event_values(&y, &ev);
-    let mut fy = scene.derivative(&y, &ev);
     let mut search = EventSearch::new(scene.events());
+    // a contact that starts past δ = 0 within `begin`'s allowance has its onset at t = 0⁺
+    // (MODEL.md §8.7), for the reason `stranded_onsets` gives
+    let start = if any_stranded(scene, &search, &g) {
+        stranded_onsets(scene, &search, t, &y, &mut ev, &mut g, &mut run.events, sink)
+    } else {
+        Ok(Response { restart: false, stop: false })
+    };
+    match start {
+        Ok(r) if !r.stop => {}
+        Ok(_) => {
+            run.end = End::Stopped;
+            run.last = Some(ev);
+            run.stats = stepper.stats();
+            return run;
+        }
+        Err(end) => {
+            run.end = end;
+            run.stats = stepper.stats();
+            return run;
+        }
+    }
+    let mut fy = scene.derivative(&y, &ev);
     let record = sink.wants_samples();
     let mut grid_next = 0.0;
     if record {
@@ -146,13 +168,25 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         }
         let Some(ev2) = scene.evaluate(&y) else { break End::Undefined };
         ev = ev2;
-        fy = scene.derivative(&y, &ev);
         g = scene.event_values(&y, &ev);
+        let mut stop = response.stop;
+        if !stop && any_stranded(scene, &search, &g) {
+            match stranded_onsets(scene, &search, t, &y, &mut ev, &mut g, &mut run.events, sink) {
+                Ok(r) => {
+                    if r.restart {
+                        stepper.restart();
+                    }
+                    stop = r.stop;
+                }
+                Err(end) => break end,
+            }
+        }
+        fy = scene.derivative(&y, &ev);
         scene.track(Point::Event, &ev, &g);
         if record {
             scene.sample(Point::Event, t, &y, &ev, sink);
         }
-        if response.stop {
+        if stop {
             break End::Stopped;
         }
     };
@@ -162,4 +196,73 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
     run.stats = stepper.stats();
     run.locate_evals = search.evals;
     run
+}
+
+/// Onsets of contacts stranded past their threshold at an event's state (time `t`, state `y`,
+/// its evaluation `ev` and event values `g`, both updated here).
+///
+/// An event located within rounding of another contact's δ = 0 can leave that contact at
+/// δ > 0 with no memory: §8.7 gives the others an onset only when δ̇ > 0 as well, and a
+/// grazing contact's δ̇ is rounding noise too (the free scene's palm, placed at δ = 0, sits at
+/// |δ| ~ 1e-16 until a finger pushes the object onto it). Its event function, already > 0,
+/// can then never be seen crossing up: the contact penetrates with no force until some later
+/// event's sweep happens to give it an onset, at whatever δ̇ it has by then. Which side of
+/// zero the rounding falls on depends on the interpolant the event state was taken from, so
+/// the outcome did too (docs/benchmarks.md, "Stiffness switching"). Each such contact gets
+/// its own onset here, as if located now (δ̇⁻ floored at v_min, docs/model.md item 8), noted
+/// as an event of zero-length step. Err: the run ends (too many events, model undefined).
+#[allow(clippy::too_many_arguments)]
+// rare: kept out of the step loop's code ([`any_stranded`] decides whether to call it)
+#[inline(never)]
+fn stranded_onsets<const N: usize, const E: usize, Sc: Scene<N, E>, K: Sink + ?Sized>(
+    scene: &mut Sc,
+    search: &EventSearch<E>,
+    t: f64,
+    y: &SVector<f64, N>,
+    ev: &mut Sc::Eval,
+    g: &mut EventValues<E>,
+    events: &mut u32,
+    sink: &mut K,
+) -> Result<Response, End> {
+    let mut out = Response { restart: false, stop: false };
+    for k in 0..E {
+        if !stranded(scene, search, g, k) {
+            continue;
+        }
+        sink.event(&EventNote { kind: search.kind(k), t, step: [t, t], memories: scene.memories() });
+        *events += 1;
+        if *events > MAX_EVENTS {
+            return Err(End::Aborted);
+        }
+        let response = scene.handle(k, t, ev, g);
+        out.restart |= response.restart;
+        *ev = scene.evaluate(y).ok_or(End::Undefined)?;
+        *g = scene.event_values(y, ev);
+        if response.stop {
+            out.stop = true;
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// Is contact event `k` stranded: an onset (up) crossing whose event value is already > 0?
+#[inline]
+fn stranded<const N: usize, const E: usize, Sc: Scene<N, E>>(
+    scene: &Sc,
+    search: &EventSearch<E>,
+    g: &EventValues<E>,
+    k: usize,
+) -> bool {
+    g.g[k] > 0.0 && matches!(search.kind(k), EventKind::Contact(_)) && scene.crossing(k) == Some(Crossing::Up)
+}
+
+/// Does any contact need [`stranded_onsets`]?
+#[inline]
+fn any_stranded<const N: usize, const E: usize, Sc: Scene<N, E>>(
+    scene: &Sc,
+    search: &EventSearch<E>,
+    g: &EventValues<E>,
+) -> bool {
+    (0..E).any(|k| stranded(scene, search, g, k))
 }
