@@ -45,6 +45,7 @@ mod s35_cli_export;
 mod s35_cli_runs;
 mod s35_csv;
 mod s35_physics;
+mod s36_mcap;
 mod scene_cli;
 mod scenes;
 mod seams;

@@ -220,16 +220,22 @@ fn fingers_entity(t_ns: u64, design_id: u64, id: &str, f: &Finger, p: &crate::mo
     e
 }
 
-/// `/scene` message: both fingers at sample `s` (finger 2 the mirror of finger 1); with
-/// `first`, it first deletes the previous design's fingers. `None` when there is no finger or
-/// the pose cannot be assembled (then, with `first`, a message that only deletes).
+/// `/scene` message: both fingers at sample `s` (finger 2 the mirror of finger 1 in the
+/// centred scene; at its own angles `s.q2`, mirrored, in the offset scene); with `first`, it
+/// first deletes the previous design's fingers. `None` when there is no finger or a pose
+/// cannot be assembled (then, with `first`, a message that only deletes).
 pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, first: bool) -> Option<SceneUpdate> {
     let deletions = if first { delete_all(t_ns) } else { vec![] };
-    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p)));
-    let Some((finger, p)) = pose else {
+    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p, s.q2)));
+    let drawn = match pose {
+        Some((finger, p, None)) => Some(fingers_entity(t_ns, id, "fingers", finger, &p, ORANGE)),
+        Some((finger, p1, Some(q2))) => finger.dgm(q2[0], q2[1]).ok().map(|p2| two_fingers(t_ns, id, finger, &p1, &p2)),
+        None => None,
+    };
+    let Some(e) = drawn else {
         return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
-    Some(SceneUpdate { deletions, entities: vec![fingers_entity(t_ns, id, "fingers", finger, &p, ORANGE)] })
+    Some(SceneUpdate { deletions, entities: vec![e] })
 }
 
 /// `/scene` message of a design recorded without a trajectory (discarded at stages 0–2, or
@@ -318,10 +324,16 @@ pub fn free_fingers(id: u64, t_ns: u64, finger: Option<&Finger>, q: [f64; 4], fi
     let Some((finger, p1, p2)) = poses else {
         return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
+    Some(SceneUpdate { deletions, entities: vec![two_fingers(t_ns, id, finger, &p1, &p2)] })
+}
+
+/// The entity `fingers`: finger 1 at pose `p1`, finger 2 at its own pose `p2` (in its
+/// mirrored frame).
+fn two_fingers(t_ns: u64, id: u64, finger: &Finger, p1: &crate::model::Pose, p2: &crate::model::Pose) -> SceneEntity {
     let mut e = entity(t_ns, HAND, "fingers", id);
-    e.lines.push(finger_line(finger, &p1, 1.0, ORANGE));
-    e.lines.push(finger_line(finger, &p2, -1.0, ORANGE));
-    Some(SceneUpdate { deletions, entities: vec![e] })
+    e.lines.push(finger_line(finger, p1, 1.0, ORANGE));
+    e.lines.push(finger_line(finger, p2, -1.0, ORANGE));
+    e
 }
 
 #[cfg(test)]

