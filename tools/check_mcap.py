@@ -21,7 +21,9 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    `simulated_samples` = 0, so a Plot panel redraws); where there is a scene, `/tf` at the window
    start and at its last nanosecond, `/scene/static` (deleting all, then ground, palm, object,
    label) and `/scene` (deleting all first) at the window start, and the last finger pose at
-   the last recorded sample;
+   the last recorded sample; the drawn fingers touch the drawn object where the series has a
+   contact force (check_fingers_touch), never deeper inside it than the deepest penetration,
+   and hold it at the last pose of a feasible design;
 5. a verify recording: window k (at epoch_s + window_base_s + k s) holds one `/verify` record
    and one `/verify/series` at the window start; `/scene/static` deletes all, then draws ground
    (frame world), palm (hand), object (object) and a label; `/tf` carries world -> hand and
@@ -184,6 +186,7 @@ class FileInfo:
         self.front = {}  # /front: id -> on_final_front
         self.designs = {}  # /designs: id -> (feasible, objectives)
         self.ids = set()
+        self.contacts = 0  # drawn contacts checked against the series' forces
 
 
 def check(path):
@@ -248,7 +251,7 @@ def check(path):
         if [ids[0], ids[-1], len(ids)] != [int(run[first]), int(run[last]), int(run["designs"])]:
             raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run[first]}..{run[last]} ({run['designs']})")
         for d, msgs in by_design.items():
-            per_design(d, epoch + d * NS, msgs, scene_topics)
+            info.contacts += per_design(d, epoch + d * NS, msgs, scene_topics) or 0
         info.ids = set(ids)
         if scene_topics:
             info.geometry = info.scene.finish()
@@ -332,6 +335,71 @@ def check_design(d, t0, msgs, scene):
         last = t0 + min(round(t[-1] * NS), NS - 1)
         if drawn[-1][0] != last:
             raise ValueError(f"design {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last sample at {last - t0} ns")
+    return check_fingers_touch(d, t0, s, st, drawn, designs[0][1]["feasible"])
+
+
+# ---------------------------------------------------------------- drawn contact
+CONTACT_TOL = 5e-6  # m: the drawing is rounded to 2^-20 m (1 um), compact values to f32
+
+
+def seg_dist(p, a, b):
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    s = max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1.0)))
+    return math.hypot(a[0] + s * dx - p[0], a[1] + s * dy - p[1])
+
+
+def phalanx_gaps(line, c, r):
+    """A drawn finger (line strip tip, O22, base, ...) against the object's circle (centre c,
+    radius r) in the hand plane: the gaps (m; < 0 drawn inside) of its proximal phalanx
+    (base - O22) and distal phalanx (O22 - tip), rods of the line's thickness."""
+    p = [(q.x, q.y) for q in line.points]
+    half = line.thickness / 2
+    return seg_dist(c, p[2], p[1]) - r - half, seg_dist(c, p[1], p[0]) - r - half
+
+
+def drawn_object(st):
+    cyl = next(e for e in st.entities if e.id == "object").cylinders[0]
+    return (cyl.pose.position.x, cyl.pose.position.y), cyl.size.x / 2
+
+
+def check_fingers_touch(d, t0, s, st, drawn, feasible):
+    """The drawn fingers touch the drawn object where the series says they do: at every
+    drawn pose whose time is a series sample, a phalanx with a non-zero normal force lies
+    within [-(delta + tol), tol] of the object's surface (delta its recorded penetration);
+    the series' contacts are finger 1's, and finger 2's too where it is finger 1's mirror
+    (object at x = 0, no finger-2 columns). No drawn finger is ever deeper in the object than
+    the deepest penetration simulated, and at the last pose of a feasible (stable) grasp both
+    fingers touch it. The number of contacts checked."""
+    c, r = drawn_object(st)
+    mirrored = not len(getattr(s, "finger2_q11", [])) and abs(c[0]) < 1e-12
+    at_sample = {round(t * NS): k for k, t in enumerate(s.t)}
+    deltas, forces = (s.proximal_penetration, s.distal_penetration), (s.proximal_normal_force, s.distal_normal_force)
+    deepest = max([0.0] + [x for col in deltas for x in col if x == x])
+    checked = 0
+    for tm, m in drawn:
+        lines = next(e for e in m.entities if e.id == "fingers").lines
+        for n, line in enumerate(lines):
+            g = min(phalanx_gaps(line, c, r))
+            if g < -(deepest + CONTACT_TOL):
+                raise ValueError(f"design {d}: at {(tm - t0) / 1e6:.3f} ms finger {n + 1} is drawn {-g * 1e6:.1f} um inside the object (deepest penetration simulated {deepest * 1e6:.1f} um)")
+        k = at_sample.get(tm - t0)
+        if k is None:
+            continue
+        for ph, name in enumerate(("proximal", "distal")):
+            f, delta = forces[ph][k], deltas[ph][k]
+            if not f > 0:
+                continue
+            for n, line in enumerate(lines if mirrored else lines[:1]):
+                g = phalanx_gaps(line, c, r)[ph]
+                if not -(delta + CONTACT_TOL) <= g <= CONTACT_TOL:
+                    raise ValueError(f"design {d}: at {(tm - t0) / 1e6:.3f} ms finger {n + 1}'s {name} phalanx is drawn {g * 1e6:+.1f} um from the object's surface while its contact force is {f:.3g} N (penetration {delta * 1e6:.1f} um)")
+                checked += 1
+    if feasible and drawn:
+        for n, line in enumerate(next(e for e in drawn[-1][1].entities if e.id == "fingers").lines):
+            g = min(phalanx_gaps(line, c, r))
+            if not -(deepest + CONTACT_TOL) <= g <= CONTACT_TOL:
+                raise ValueError(f"design {d}: the stable grasp's last pose draws finger {n + 1} {g * 1e6:+.1f} um from the object's surface (it holds the object)")
+    return checked
 
 
 def check_verify_design(d, t0, msgs, scene):
@@ -498,6 +566,8 @@ def main(folders):
             extra = ""
             if geo:
                 extra = f"; world geometry: {geo['finger_points']} finger points, lowest {geo['lowest_finger_z'] * 1e3:.1f} mm above the ground, {geo['objects']} objects standing"
+            if info.contacts:
+                extra += f"; {info.contacts} drawn contacts touch the object"
             print(f"ok   {p}: {n} messages in {chunks} chunks decoded; schemas official / viewer-parsable; time windows consistent{extra}")
             ok += 1
         except Exception as e:  # noqa: BLE001 - report every failure
