@@ -90,3 +90,63 @@ fn offset_scene_draws_finger_2_touching_the_object() {
     assert!(stable > 0, "no stable grasp to check: change the run");
     assert!(apart < 60e-6);
 }
+
+/// kitchen.toml with the can first among the robust objects (stage 2 then discards many
+/// designs on the can) and 2 scenarios per object, in `dir`.
+fn can_first_problem(dir: &Path) -> PathBuf {
+    let src = std::fs::read_to_string(Path::new(BOTTLE_FILE).with_file_name("kitchen.toml")).unwrap();
+    let start = src.find("[[robust.objects]]\nname = \"can\"").expect("kitchen.toml's can: fix the test");
+    let len = src[start..].find("\n\n").unwrap() + 2;
+    let can = src[start..start + len].to_string();
+    let mut src = format!("{}{}", &src[..start], &src[start + len..]);
+    let first = src.find("[[robust.objects]]").unwrap();
+    src.insert_str(first, &can);
+    let src = src.replacen("scenarios = 8 ", "scenarios = 2 ", 1).replacen("p_min = 0.85 ", "p_min = 0.5 ", 1);
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join("kitchen-can-first.toml");
+    std::fs::write(&p, src).unwrap();
+    p
+}
+
+/// A robust design that stage 2 discards on an object other than the reference shows that
+/// object (its radius and length, standing on the ground) and the red closed pose on it: both
+/// phalanges touch it (the closed pose's contacts, at zero penetration).
+#[test]
+fn a_robust_stage_2_discard_is_drawn_on_the_object_it_failed_on() {
+    let base = check_dir("s36-robust-red");
+    let problem = can_first_problem(&base.with_extension("problem"));
+    let p = gripopt::params::Problem::load(&problem).unwrap();
+    let run = tiny_run_in(base, &problem, 60, 1);
+    let robust = p.robust.as_ref().unwrap();
+    let hc = p.scene.object.grasp_height;
+    let mut on = std::collections::BTreeMap::new();
+    for msgs in messages(&run) {
+        let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
+        let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
+        let reason = rec["reason"].as_str().unwrap_or("");
+        let Some(o) = robust.objects.iter().find(|o| reason.starts_with(&format!("object {}: ", o.name))) else {
+            continue;
+        };
+        if rec["failed_stage"] != 2 {
+            continue;
+        }
+        let scene = SceneUpdate::decode(&of("/scene").next().unwrap().2[..]).unwrap();
+        let Some(red) = scene.entities.iter().find(|e| e.id == "failing_pose") else { continue };
+        let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+        let cyl = &st.entities.iter().find(|e| e.id == "object").unwrap().cylinders[0];
+        let (pos, size) = (cyl.pose.unwrap().position.unwrap(), cyl.size.unwrap());
+        assert_eq!((size.x / 2.0, size.z), (o.object.radius, o.object.length), "design {}: {reason}", rec["id"]);
+        assert_eq!(pos.y, o.object.radius, "touching the palm");
+        assert!((pos.z - (o.object.length / 2.0 - hc)).abs() < 1e-15, "standing on the ground");
+        for line in &red.lines {
+            let pts: Vec<(f64, f64)> = line.points.iter().map(|q| (q.x, q.y)).collect();
+            let c = (pos.x, pos.y);
+            for (a, b) in [(2, 1), (1, 0)] {
+                let g = seg_dist(c, pts[a], pts[b]) - o.object.radius - line.thickness / 2.0;
+                assert!(g.abs() < 3e-6, "design {}: red phalanx {g:e} m off the drawn {}", rec["id"], o.name);
+            }
+        }
+        *on.entry(o.name.clone()).or_insert(0) += 1;
+    }
+    assert!(on.get("can").copied().unwrap_or(0) > 0, "no stage-2 discard on the can: {on:?}");
+}

@@ -23,7 +23,8 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    label) and `/scene` (deleting all first) at the window start, and the last finger pose at
    the last recorded sample; the drawn fingers touch the drawn object where the series has a
    contact force (check_fingers_touch), never deeper inside it than the deepest penetration,
-   and hold it at the last pose of a feasible design;
+   and hold it at the last pose of a feasible design; a stage-2 discard's red closed pose
+   touches the drawn object with both phalanges;
 5. a verify recording: window k (at epoch_s + window_base_s + k s) holds one `/verify` record
    and one `/verify/series` at the window start; `/scene/static` deletes all, then draws ground
    (frame world), palm (hand), object (object) and a label; `/tf` carries world -> hand and
@@ -330,7 +331,7 @@ def check_design(d, t0, msgs, scene):
     if placeholder:
         if len(fingers) != 1:
             raise ValueError(f"design {d}: without a grasp, /scene holds one message (the open and failing poses)")
-        return
+        return check_closed_pose_touches(d, designs[0][1], st, fingers[0][1])
     if drawn:
         last = t0 + min(round(t[-1] * NS), NS - 1)
         if drawn[-1][0] != last:
@@ -339,6 +340,21 @@ def check_design(d, t0, msgs, scene):
 
 
 # ---------------------------------------------------------------- drawn contact
+def check_closed_pose_touches(d, rec, st, scene):
+    """A design discarded at stage 2 whose red pose is drawn: that pose is the closed pose on
+    the object whose statics failed, so both phalanges of each finger touch the drawn object
+    (zero penetration, within the drawing's rounding). 1 when checked."""
+    red = [e for e in scene.entities if e.id == "failing_pose"]
+    if rec.get("failed_stage") != 2 or not red:
+        return 0
+    c, r = drawn_object(st)
+    for n, line in enumerate(red[0].lines):
+        for g, name in zip(phalanx_gaps(line, c, r), ("proximal", "distal")):
+            if abs(g) > CONTACT_TOL:
+                raise ValueError(f"design {d}: the red closed pose of a stage-2 discard draws finger {n + 1}'s {name} phalanx {g * 1e6:+.1f} um from the drawn object ({rec.get('reason', '')[:60]})")
+    return 1
+
+
 CONTACT_TOL = 5e-6  # m: the drawing is rounded to 2^-20 m (1 um), compact values to f32
 
 

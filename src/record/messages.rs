@@ -8,7 +8,8 @@ use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
 use crate::sim::Sample;
 
 pub use super::scene::{
-    discarded_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene, window_end_ns,
+    discarded_scene, drawn_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene,
+    window_end_ns,
 };
 
 /// Log time (ns since 1970) at which design `id`'s window starts: `epoch_ns + id` s.

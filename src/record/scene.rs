@@ -16,13 +16,14 @@
 use super::entry::DesignEntry;
 use crate::math::V2;
 use crate::model::{closed_pose, singularity_sweep, Finger, SweepFailure};
-use crate::params::{Design, SceneKind, SceneParams};
+use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::Sample;
 use foxglove::messages::{
     line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
     FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity, SceneEntityDeletion,
     SceneUpdate, TextPrimitive, Timestamp, Vector3,
 };
+use std::borrow::Cow;
 
 /// The fixed frame: z up, the ground's top face at z = 0.
 pub const WORLD: &str = "world";
@@ -93,6 +94,27 @@ pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
 pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
     let x = if sc.setup.kind == SceneKind::Offset { sc.setup.x_off } else { 0.0 };
     [x, sc.object.radius, sc.object.length / 2.0 - sc.object.grasp_height]
+}
+
+/// The scene a design's picture is drawn in: the problem's, except for a robust design that
+/// stage 2 discarded on another of its objects (its reason "object NAME: …"): then that
+/// object's cylinder (radius and length), standing on the ground under the reference's hand
+/// plane, so that the red closed pose that failed is drawn on the object it failed on.
+pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
+    let sc = &problem.scene;
+    let failed_on =
+        (d.record.verdict.failed_stage == Some(2)).then(|| d.record.verdict.reason.as_deref()).flatten().and_then(
+            |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
+        );
+    match failed_on {
+        Some(o) if (o.object.radius, o.object.length) != (sc.object.radius, sc.object.length) => {
+            let mut drawn = sc.clone();
+            drawn.object.radius = o.object.radius;
+            drawn.object.length = o.object.length;
+            Cow::Owned(drawn)
+        }
+        _ => Cow::Borrowed(sc),
+    }
 }
 
 /// `/scene/static` of a design's window (optimisation recordings): deletes everything of the
@@ -245,19 +267,29 @@ pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, fi
 /// pose of the singularity sweep closest to a singularity ("singularity margin"), the last
 /// pose the linkage can still be assembled in ("not mountable" at a larger θ2), or the
 /// closed pose on the object whose forces fail the statics (stage 2).
-pub fn discarded_scene(t_ns: u64, id: u64, x: &Design, failed_stage: Option<u8>, sc: &SceneParams) -> SceneUpdate {
+/// The closed pose is drawn on the drawn object ([`drawn_scene`]: a robust design's failing
+/// object); the finger and its sweep are the problem's (`sc`).
+pub fn discarded_scene(
+    t_ns: u64,
+    id: u64,
+    x: &Design,
+    failed_stage: Option<u8>,
+    sc: &SceneParams,
+    drawn: &SceneParams,
+) -> SceneUpdate {
     let mut m = SceneUpdate { deletions: delete_all(t_ns), entities: vec![] };
     let Ok(f) = Finger::new(x, sc) else { return m };
     m.entities.push(fingers_entity(t_ns, id, "fingers", &f, &f.open, ORANGE));
-    if let Some((p, _)) = failed_stage.filter(|s| (1..=2).contains(s)).and_then(|_| failing_pose(&f, sc)) {
+    let failing = failed_stage.filter(|s| (1..=2).contains(s)).and_then(|_| failing_pose(&f, sc, drawn.object.radius));
+    if let Some((p, _)) = failing {
         m.entities.push(fingers_entity(t_ns, id, "failing_pose", &f, &p, RED));
     }
     m
 }
 
 /// The linkage pose that explains a stage-1 or stage-2 discard (see [`discarded_scene`]) and
-/// its θ2.
-fn failing_pose(f: &Finger, sc: &SceneParams) -> Option<(crate::model::Pose, f64)> {
+/// its θ2; a stage-2 discard's closed pose on the object of radius `radius`.
+fn failing_pose(f: &Finger, sc: &SceneParams, radius: f64) -> Option<(crate::model::Pose, f64)> {
     match singularity_sweep(f, sc) {
         Err(SweepFailure::Margin(s)) => f.ik(f.open.q21, s.at_theta2).ok().map(|p| (p, s.at_theta2)),
         Err(SweepFailure::Pose(th2, _)) => {
@@ -275,7 +307,7 @@ fn failing_pose(f: &Finger, sc: &SceneParams) -> Option<(crate::model::Pose, f64
             f.ik(f.open.q21, lo).ok().map(|p| (p, lo))
         }
         Err(SweepFailure::ClosedPose(..)) => None,
-        Ok(_) => closed_pose(f, sc.object.radius, 0.0).ok().map(|c| (c.pose, c.theta2)),
+        Ok(_) => closed_pose(f, radius, 0.0).ok().map(|c| (c.pose, c.theta2)),
     }
 }
 
@@ -370,12 +402,12 @@ mod tests {
             let ev = crate::eval::evaluate_statics(&x, sc);
             let Some(stage) = ev.discard.map(|d| d.stage).filter(|s| (1..=2).contains(s)) else { continue };
             let Ok(f) = Finger::new(&x, sc) else { continue };
-            let m = discarded_scene(7, 1, &x, Some(stage), sc);
+            let m = discarded_scene(7, 1, &x, Some(stage), sc, sc);
             assert_eq!((m.deletions.len(), m.entities[0].id.as_str()), (1, "fingers"));
             let drawn = m.entities.iter().any(|e| e.id == "failing_pose");
             match singularity_sweep(&f, sc) {
                 Err(SweepFailure::Margin(s)) => {
-                    let (q, _) = failing_pose(&f, sc).unwrap();
+                    let (q, _) = failing_pose(&f, sc, sc.object.radius).unwrap();
                     let d = [q.q12, q.q22, q.q13].map(dist_to_singular).into_iter().fold(f64::INFINITY, f64::min);
                     assert!((d - s.min_margin).abs() < 1e-12 && drawn);
                     margin += 1;
@@ -383,7 +415,7 @@ mod tests {
                 Err(SweepFailure::Pose(th2, _)) => {
                     // the edge of the assemblable poses below the sweep's failing θ2: a pose
                     // through which the linkage passes a singularity (q12, q22 or q13 at 0 or π)
-                    let (q, th) = failing_pose(&f, sc).unwrap();
+                    let (q, th) = failing_pose(&f, sc, sc.object.radius).unwrap();
                     assert!(crate::math::wrap(q.q22 + f.psi - th).abs() < 1e-9);
                     let d = [q.q12, q.q22, q.q13].map(dist_to_singular).into_iter().fold(f64::INFINITY, f64::min);
                     assert!(th < th2 && d < 1e-4 && drawn, "{th} {th2} {d}");

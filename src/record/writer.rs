@@ -124,10 +124,13 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let design = Design::from_array(&d.parameters);
     let finger = d.record.lengths().and_then(|_| Finger::new(&design, sc).ok());
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
-    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, sc))));
+    // the object drawn: a robust design's stage-2 discard shows the object it failed on
+    let shown = messages::drawn_scene(problem, d);
+    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, &shown))));
     let end = messages::window_end_ns(t0);
     if samples.is_empty() {
-        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, d.record.verdict.failed_stage, sc))));
+        let failed = d.record.verdict.failed_stage;
+        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, failed, sc, &shown))));
         out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
         return out;
     }
