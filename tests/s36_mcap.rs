@@ -150,3 +150,69 @@ fn a_robust_stage_2_discard_is_drawn_on_the_object_it_failed_on() {
     }
     assert!(on.get("can").copied().unwrap_or(0) > 0, "no stage-2 discard on the can: {on:?}");
 }
+
+/// `replay --scenario` recordings of one run each sit in their own window (opened together
+/// they never mix), say which scenario they are (metadata, `/verify`, label), and draw the
+/// hand at the scenario's physical height: the object's grasp height + its height offset.
+#[test]
+fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
+    let base = check_dir("s36-scenarios");
+    let problem = can_first_problem(&base.with_extension("problem"));
+    let p = gripopt::params::Problem::load(&problem).unwrap();
+    let run = tiny_run_in(base, &problem, 60, 1);
+    let robust = p.robust.as_ref().unwrap();
+    let mut files = vec![];
+    'designs: for id in 0..60 {
+        for o in &robust.objects {
+            for k in 0..2 {
+                if let Ok(r) = gripopt::run::replay_scenario(&run, id, &o.name, k, true) {
+                    files.extend(r.recording);
+                }
+                if files.len() >= 3 {
+                    break 'designs;
+                }
+            }
+        }
+    }
+    assert!(files.len() >= 2, "scenario recordings: {files:?}");
+    let mut windows = std::collections::BTreeSet::new();
+    for f in &files {
+        let buf = std::fs::read(f).unwrap();
+        let summary = mcap::Summary::read(&buf).unwrap().unwrap();
+        let meta: std::collections::BTreeMap<String, String> = summary
+            .metadata_indexes
+            .iter()
+            .map(|i| mcap::read::metadata(&buf, i).unwrap())
+            .find(|m| m.name == "gripopt.verify")
+            .unwrap()
+            .metadata;
+        let (object, k) = (&meta["scenario_object"], meta["scenario_index"].parse::<u64>().unwrap());
+        let name = f.file_name().unwrap().to_str().unwrap();
+        assert!(name.ends_with(&format!("-{object}-{k}.mcap")), "{name}");
+        let case = robust.objects.iter().find(|o| &o.name == object).unwrap();
+        let h: f64 = meta["height_offset"].parse().unwrap();
+        assert_eq!(meta["object_grasp_height"].parse::<f64>().unwrap(), case.object.grasp_height);
+        for m in mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()) {
+            windows.insert((m.log_time / 1_000_000_000, name.to_string()));
+            match m.channel.topic.as_str() {
+                "/verify" => {
+                    let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+                    assert_eq!((v["scenario_object"].as_str(), v["scenario_index"].as_u64()), (Some(object.as_str()), Some(k)));
+                }
+                "/tf" => {
+                    let tf = foxglove::messages::FrameTransforms::decode(&m.data[..]).unwrap();
+                    assert_eq!(tf.transforms[0].translation.unwrap().z, case.object.grasp_height + h, "{name}: hand height");
+                }
+                "/scene/static" => {
+                    let st = SceneUpdate::decode(&m.data[..]).unwrap();
+                    let label = &st.entities.iter().find(|e| e.id == "label").unwrap().texts[0].text;
+                    assert!(label.contains(&format!("scenario {object}:{k}")), "{label}");
+                }
+                _ => {}
+            }
+        }
+    }
+    // each file one second of its own: no second holds two files' messages
+    let seconds: std::collections::BTreeSet<u64> = windows.iter().map(|w| w.0).collect();
+    assert_eq!(seconds.len(), files.len(), "{windows:?}");
+}

@@ -38,7 +38,10 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    moving object never below the ground by more than a contact penetration.
 
 Then per run folder: the same world frame (world -> hand, ground plane) in its shards and
-verify files; verify files in time ranges disjoint from the shards' and from each other; the
+verify files, except a `replay --scenario` file, whose hand is level at exactly its scenario's
+height (metadata object_grasp_height + height_offset, the grasp height that of problem.toml's
+object) over the same ground; verify and scenario files in time ranges disjoint from the shards' and from each other (with
+or without shards); the
 front recording present when the run finished, covering the shards' designs, its members
 those of pareto.csv; and every topic, message path and frame of each shipped layout
 (foxglove-layout.json: the shards and front.mcap; foxglove-verify-layout.json: each verify
@@ -188,6 +191,7 @@ class FileInfo:
         self.designs = {}  # /designs: id -> (feasible, objectives)
         self.ids = set()
         self.contacts = 0  # drawn contacts checked against the series' forces
+        self.meta = {}  # the gripopt.* metadata record
 
 
 def check(path):
@@ -221,6 +225,7 @@ def check(path):
             if k not in run:
                 raise ValueError(f"{name} metadata lacks {k!r}")
         info = FileInfo(path, kind)
+        info.meta = dict(run)
         base = int(run.get("window_base_s", 0))
         epoch = (int(run["epoch_s"]) + base) * NS
         window_start = lambda t: (t - epoch) % NS == 0  # noqa: E731
@@ -489,20 +494,23 @@ def check_run_folder(run, r):
     """The folder-level checks of one run folder; a description of what was checked."""
     done = []
     scenes = [i for i in r["shards"] + r["verify"] if i.scene is not None and i.scene.world_hand is not None]
-    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in scenes}
+    scenarios = [i for i in scenes if scenario_height(i) is not None]
+    common = [i for i in scenes if scenario_height(i) is None]
+    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in common}
     if len(frames) > 1:
-        raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in scenes]})")
-    if scenes:
-        done.append(f"one world frame in {len(scenes)} files")
+        raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in common]})")
+    if common:
+        done.append(f"one world frame in {len(common)} files")
+    for i in scenarios:
+        check_scenario_frame(run, i, frames)
+    if scenarios:
+        done.append(f"{len(scenarios)} scenario files with the hand at their scenario's height")
+    ranges = [(i.path.name, i.start, i.end) for i in r["verify"]]
     if r["shards"]:
-        lo, hi = min(i.start for i in r["shards"]), max(i.end for i in r["shards"])
-        ranges = [("the shards", lo, hi)] + [(i.path.name, i.start, i.end) for i in r["verify"]]
-        for a in range(len(ranges)):
-            for b in range(a + 1, len(ranges)):
-                (na, la, ha), (nb, lb, hb) = ranges[a], ranges[b]
-                if la <= hb and lb <= ha:
-                    raise ValueError(f"{na} and {nb} overlap in time ([{la}, {ha}] and [{lb}, {hb}]): opened together, two designs would share a second")
-        done.append("time ranges disjoint")
+        ranges.insert(0, ("the shards", min(i.start for i in r["shards"]), max(i.end for i in r["shards"])))
+    if len(ranges) > 1:
+        check_disjoint(ranges)
+        done.append(f"time ranges of {len(ranges)} recordings disjoint")
     status = {}
     if (run / "run.json").is_file():
         status = json.loads((run / "run.json").read_text())
@@ -537,6 +545,50 @@ def check_run_folder(run, r):
             raise ValueError(f"{v.path.name} is shipped without {vlayout.name}")
         done.append(f"{check_layout(vlayout, v.recording)} layout paths of {vlayout.name} in {v.path.name}")
     return done
+
+
+def check_disjoint(ranges):
+    """(name, first, last log time) of recordings of one run: no two overlap (opened
+    together, two designs would share a second, and a viewer applies a deletion of all
+    entities whatever its timestamp)."""
+    for a in range(len(ranges)):
+        for b in range(a + 1, len(ranges)):
+            (na, la, ha), (nb, lb, hb) = ranges[a], ranges[b]
+            if la <= hb and lb <= ha:
+                raise ValueError(f"{na} and {nb} overlap in time ([{la}, {ha}] and [{lb}, {hb}]): opened together, two designs would share a second")
+
+
+def scenario_height(info):
+    """The hand height of a `replay --scenario` file: the scenario object's grasp height plus
+    the scenario's drawn height offset, as its metadata says (None: not a scenario file)."""
+    m = info.meta
+    if info.kind != "verify" or "height_offset" not in m or "object_grasp_height" not in m or "scenario_object" not in m:
+        return None
+    return float(m["object_grasp_height"]) + float(m["height_offset"])
+
+
+def check_scenario_frame(run, info, frames):
+    """A scenario file's world frame: the hand level at exactly its scenario's height (its
+    metadata's object grasp height + height offset; the object's grasp height that of the
+    run's problem.toml where the object is given there inline), the ground where the other
+    files have it."""
+    h, m = scenario_height(info), info.meta
+    want = ("world", "hand", 0.0, 0.0, round(h, 12), 0.0, 0.0, 0.0, 1.0)
+    got = sorted(info.scene.world_hands)
+    if got != [want]:
+        raise ValueError(f"{info.path.name}: world -> hand {got}, its scenario {m['scenario_object']}:{m.get('scenario_index')} puts the hand at {h * 1e3:.3f} mm (grasp height {m['object_grasp_height']} + height offset {m['height_offset']})")
+    grounds = {g for _, g in frames}
+    if grounds and round(info.scene.ground_top, 12) not in grounds:
+        raise ValueError(f"{info.path.name}: the ground plane differs from the other files'")
+    problem = run / "problem.toml"
+    if problem.is_file():
+        import tomllib
+        objects = tomllib.loads(problem.read_text()).get("robust", {}).get("objects", [])
+        o = next((o for o in objects if o.get("name") == m["scenario_object"]), None)
+        if o is None:
+            raise ValueError(f"{info.path.name}: scenario object {m['scenario_object']!r} is not one of problem.toml's [[robust.objects]]")
+        if "grasp_height" in o and o["grasp_height"] != float(m["object_grasp_height"]):
+            raise ValueError(f"{info.path.name}: object_grasp_height {m['object_grasp_height']}, problem.toml gives {m['scenario_object']} grasp_height {o['grasp_height']}")
 
 
 def check_front_members(members, designs):

@@ -10,6 +10,9 @@ built here from the official Foxglove message classes (foxglove-schemas-protobuf
 * fingers drawn off the object they hold: finger 2 drawn as finger 1's mirror with the
   object at x_off = 2 mm (the offset scene before session 36: 4 mm off the object), a
   phalanx with a contact force drawn 3 mm away, a finger drawn deep inside the object;
+* a scenario file (`replay --scenario`) whose hand is not at its scenario's height, over
+  another ground, or naming a grasp height problem.toml does not give; two scenario files in
+  one time window;
 * a layout naming a topic or a field the recording lacks, a panel titled for one viewer only,
   an unknown panel type;
 and accept the scene and layout as gripopt now writes them.
@@ -23,7 +26,7 @@ from types import SimpleNamespace
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from check_layout import Recording, check_layout  # noqa: E402
-from check_mcap import check_fingers_touch  # noqa: E402
+from check_mcap import check_disjoint, check_fingers_touch, check_scenario_frame  # noqa: E402
 from mcap_scene import Scene  # noqa: E402
 from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms  # noqa: E402
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate  # noqa: E402
@@ -103,6 +106,31 @@ def contact_cases():
     expect_failure("a finger drawn 2 mm inside the object", lambda: run(0.0, [0.043, -0.043], []), "inside the object")
 
 
+def scenario_cases():
+    """A `replay --scenario` file: its hand at its scenario's height (the object's grasp
+    height + the drawn height offset, as its metadata says, the grasp height problem.toml's);
+    scenario files of one run in disjoint windows."""
+    def info(z, meta, ground=0.0):
+        scene = SimpleNamespace(world_hands={("world", "hand", 0.0, 0.0, round(z, 12), 0.0, 0.0, 0.0, 1.0)}, ground_top=ground)
+        return SimpleNamespace(path=pathlib.Path("scenario-68-can-1.mcap"), kind="verify", meta=meta, scene=scene)
+    meta = {"scenario_object": "can", "scenario_index": "1", "object_grasp_height": "0.04", "height_offset": "0.0042"}
+    frames = {((("world", "hand", 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 1.0),), 0.0)}
+    with tempfile.TemporaryDirectory() as d:
+        run = pathlib.Path(d)
+        (run / "problem.toml").write_text('[[robust.objects]]\nname = "can"\ngrasp_height = 0.040\n')
+        check_scenario_frame(run, info(0.04 + 0.0042, meta), frames)
+        print("ok   accepts a scenario file with the hand at its scenario's height")
+        expect_failure("a scenario file whose hand is not at its scenario's height",
+                       lambda: check_scenario_frame(run, info(0.05, meta), frames), "puts the hand at")
+        expect_failure("a scenario file over another ground", lambda: check_scenario_frame(run, info(0.0442, meta, 0.01), frames), "ground plane")
+        expect_failure("a scenario file whose object grasp height is not problem.toml's",
+                       lambda: check_scenario_frame(run, info(0.0542, {**meta, "object_grasp_height": "0.05"}), frames), "problem.toml gives")
+    s = 1_000_000_000
+    check_disjoint([("the shards", 0, 99 * s), ("scenario-68-can-0.mcap", 3546 * s, 3547 * s - 1), ("scenario-68-can-1.mcap", 3547 * s, 3548 * s - 1)])
+    expect_failure("two scenario files in one window (before session 36)",
+                   lambda: check_disjoint([("scenario-68-can-0.mcap", 3000 * s, 3001 * s - 1), ("scenario-68-bottle-full-0.mcap", 3000 * s, 3001 * s - 1)]), "overlap")
+
+
 def run_scene(messages, level_hand=False):
     s = Scene(lambda t: t % 1_000_000_000 == 0, level_hand)
     for topic, t, m in messages:
@@ -148,6 +176,7 @@ def main():
                    lambda: run_scene([("/tf", 0, tf(0, now[0], now[1])), ("/scene/static", 0, static(0, now[2], locked=False))]), "frame_locked")
 
     contact_cases()
+    scenario_cases()
 
     # layouts against a recording holding /grasp/series-like JSON and the frames
     rec = Recording()
