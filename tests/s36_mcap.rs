@@ -110,7 +110,8 @@ fn can_first_problem(dir: &Path) -> PathBuf {
 
 /// A robust design that stage 2 discards on an object other than the reference shows that
 /// object (its radius and length, standing on the ground) and the red closed pose on it: both
-/// phalanges touch it (the closed pose's contacts, at zero penetration).
+/// phalanges touch it (the closed pose's contacts, at zero penetration). Every label fits the
+/// 3-D panel, the robust reasons of 200 characters included.
 #[test]
 fn a_robust_stage_2_discard_is_drawn_on_the_object_it_failed_on() {
     let base = check_dir("s36-robust-red");
@@ -119,11 +120,16 @@ fn a_robust_stage_2_discard_is_drawn_on_the_object_it_failed_on() {
     let run = tiny_run_in(base, &problem, 60, 1);
     let robust = p.robust.as_ref().unwrap();
     let hc = p.scene.object.grasp_height;
-    let mut on = std::collections::BTreeMap::new();
+    let (mut on, mut longest) = (std::collections::BTreeMap::new(), 0);
     for msgs in messages(&run) {
         let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
         let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
         let reason = rec["reason"].as_str().unwrap_or("");
+        // every label fits the 3-D panel (docs/recording.md: at most 120 characters)
+        let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+        let label = &st.entities.iter().find(|e| e.id == "label").unwrap().texts[0].text;
+        assert!(label.chars().count() <= 120, "{} characters: {label}", label.chars().count());
+        longest = longest.max(reason.chars().count());
         let Some(o) = robust.objects.iter().find(|o| reason.starts_with(&format!("object {}: ", o.name))) else {
             continue;
         };
@@ -149,6 +155,7 @@ fn a_robust_stage_2_discard_is_drawn_on_the_object_it_failed_on() {
         *on.entry(o.name.clone()).or_insert(0) += 1;
     }
     assert!(on.get("can").copied().unwrap_or(0) > 0, "no stage-2 discard on the can: {on:?}");
+    assert!(longest > 120, "no reason longer than a label: the label check checked nothing");
 }
 
 /// `replay --scenario` recordings of one run each sit in their own window (opened together
@@ -197,11 +204,18 @@ fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
             match m.channel.topic.as_str() {
                 "/verify" => {
                     let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
-                    assert_eq!((v["scenario_object"].as_str(), v["scenario_index"].as_u64()), (Some(object.as_str()), Some(k)));
+                    assert_eq!(
+                        (v["scenario_object"].as_str(), v["scenario_index"].as_u64()),
+                        (Some(object.as_str()), Some(k))
+                    );
                 }
                 "/tf" => {
                     let tf = foxglove::messages::FrameTransforms::decode(&m.data[..]).unwrap();
-                    assert_eq!(tf.transforms[0].translation.unwrap().z, case.object.grasp_height + h, "{name}: hand height");
+                    assert_eq!(
+                        tf.transforms[0].translation.unwrap().z,
+                        case.object.grasp_height + h,
+                        "{name}: hand height"
+                    );
                 }
                 "/scene/static" => {
                     let st = SceneUpdate::decode(&m.data[..]).unwrap();

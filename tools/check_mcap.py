@@ -20,7 +20,7 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    forward inside the window (a design without a grasp: one placeholder sample at t = 0 with
    `simulated_samples` = 0, so a Plot panel redraws); where there is a scene, `/tf` at the window
    start and at its last nanosecond, `/scene/static` (deleting all, then ground, palm, object,
-   label) and `/scene` (deleting all first) at the window start, and the last finger pose at
+   label, at most 120 characters on one line) and `/scene` (deleting all first) at the window start, and the last finger pose at
    the last recorded sample; the drawn fingers touch the drawn object where the series has a
    contact force (check_fingers_touch), never deeper inside it than the deepest penetration,
    and hold it at the last pose of a feasible design; a stage-2 discard's red closed pose
@@ -294,6 +294,17 @@ def repeated(f):
     return rep if rep is not None else f.label == f.LABEL_REPEATED
 
 
+LABEL_MAX_CHARS = 120  # 11 px text, ~6.6 px a character: 790 px, a 3-D panel of half a 1920 px screen
+
+
+def check_label(what, st):
+    """The label (one line) fits the 3-D panel."""
+    for e in st.entities:
+        for t in e.texts:
+            if len(t.text) > LABEL_MAX_CHARS or "\n" in t.text:
+                raise ValueError(f"{what}: label of {len(t.text)} characters (at most {LABEL_MAX_CHARS} on one line fit a 3-D panel of half a screen): {t.text[:60]}...")
+
+
 def window_end(t0):
     return t0 + NS - 1
 
@@ -330,6 +341,7 @@ def check_design(d, t0, msgs, scene):
     st = static[0][1]
     if not st.deletions or st.deletions[0].type != 1 or {e.id for e in st.entities} != {"ground", "palm", "object", "label"}:
         raise ValueError(f"design {d}: /scene/static must delete all, then draw ground, palm, object and label")
+    check_label(f"design {d}", st)
     if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
         raise ValueError(f"design {d}: the first /scene message must be at the window start and delete the previous fingers")
     drawn = [(tm, m) for tm, m in fingers if m.entities]
@@ -441,6 +453,7 @@ def check_verify_design(d, t0, msgs, scene):
     if len(static) != 1 or static[0][0] != t0:
         raise ValueError(f"window {d}: /scene/static must hold one message at the window start")
     st = static[0][1]
+    check_label(f"window {d}", st)
     frames = {e.id: e.frame_id for e in st.entities}
     if not st.deletions or st.deletions[0].type != 1 or frames != {"ground": "world", "palm": "hand", "object": "object", "label": "world"}:
         raise ValueError(f"window {d}: /scene/static must delete all, then draw ground (world), palm (hand), object (object) and label (world); got {frames}")

@@ -135,12 +135,20 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
     }
 }
 
+/// The most characters of a label: 120 characters of the label's 11 px font (about 6.6 px
+/// each, 790 px) fit a 3-D panel of half a 1920 px screen, the layouts' 3-D views.
+pub const LABEL_MAX_CHARS: usize = 120;
+
 /// One short line saying what became of a design: feasible with its objectives, or where
-/// and why it was discarded (it must fit a 3-D panel of half a screen's width).
+/// and why it was discarded; at most [`LABEL_MAX_CHARS`] characters, so that it fits a 3-D
+/// panel of half a screen's width ([`fit_label`]; the whole reason is in `/designs`).
 pub fn verdict(d: &DesignEntry<'_>) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
     match d.record.verdict.failed_stage {
-        Some(s) => format!("{head} stage {s}: {}", d.record.verdict.reason.as_deref().unwrap_or("no reason recorded")),
+        Some(s) => fit_label(
+            &format!("{head} stage {s}: "),
+            d.record.verdict.reason.as_deref().unwrap_or("no reason recorded"),
+        ),
         None => {
             let o = d.record.objectives();
             let f =
@@ -154,6 +162,32 @@ pub fn verdict(d: &DesignEntry<'_>) -> String {
             )
         }
     }
+}
+
+/// `head` + `reason` if that has at most [`LABEL_MAX_CHARS`] characters; else the reason
+/// without its parenthesised details ("… in 0 of 2 scenarios (P(stay) 0.000 < p_min 0.5;
+/// …)" loses the bracket), and if still too long cut to the limit, ending with "…".
+pub fn fit_label(head: &str, reason: &str) -> String {
+    let whole = format!("{head}{reason}");
+    if whole.chars().count() <= LABEL_MAX_CHARS {
+        return whole;
+    }
+    let (mut out, mut depth) = (String::new(), 0usize);
+    for c in reason.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth > 0 => depth -= 1,
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    // the spaces left around a removed bracket
+    let reason = out.split_whitespace().collect::<Vec<_>>().join(" ").replace(" ;", ";").replace(" :", ":");
+    let mut out = format!("{head}{reason}");
+    if out.chars().count() > LABEL_MAX_CHARS {
+        out = out.chars().take(LABEL_MAX_CHARS - 1).collect::<String>() + "…";
+    }
+    out
 }
 
 /// The ground plane (frame `world`, top face at z = 0).
@@ -376,6 +410,20 @@ mod tests {
 
     fn bottle() -> crate::params::Problem {
         crate::params::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap()
+    }
+
+    #[test]
+    fn a_long_label_is_shortened_to_fit() {
+        let short = "force positiveness violated (min force -7.2609 N)";
+        assert_eq!(fit_label("12 (gen 1) stage 2: ", short), format!("12 (gen 1) stage 2: {short}"));
+        let robust = "object bottle-full: stays (finger criteria met, object barely moves) in 0 of 2 scenarios (P(stay) 0.000 < p_min 0.5; Clopper–Pearson 95%: [0.000, 0.842]); stopped early after 5 of 8 scenarios";
+        assert_eq!(
+            fit_label("88 (gen 3) stage 3: ", robust),
+            "88 (gen 3) stage 3: object bottle-full: stays in 0 of 2 scenarios; stopped early after 5 of 8 scenarios"
+        );
+        let long = "x".repeat(300);
+        assert_eq!(fit_label("1 (gen 1) stage 3: ", &long).chars().count(), LABEL_MAX_CHARS);
+        assert!(fit_label("1 (gen 1) stage 3: ", &long).ends_with('…'));
     }
 
     #[test]
