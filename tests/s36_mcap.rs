@@ -230,3 +230,48 @@ fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
     let seconds: std::collections::BTreeSet<u64> = windows.iter().map(|w| w.0).collect();
     assert_eq!(seconds.len(), files.len(), "{windows:?}");
 }
+
+/// A free-kind run's shards draw the centred diagnostic grasp (object at x = 0) and say so:
+/// the label of every design the free scene judged reads "centred grasp; free scene's
+/// verdict: …", and the shard's `gripopt.run` metadata names the scene kind and x_off (a
+/// centred run's metadata has neither, as before).
+#[test]
+fn a_free_kind_shard_says_it_draws_the_centred_grasp() {
+    let base = check_dir("s36-free-kind");
+    let dir = base.with_extension("problem");
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let src = src.replacen("kind = \"centred\"", "kind = \"free\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
+    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
+    std::fs::write(dir.join("free.toml"), src).unwrap();
+    let run = tiny_run_in(base, &dir.join("free.toml"), 24, 2);
+    let shard_meta = |run: &Path| {
+        let e = &read_index(&run.join("recording")).unwrap()[0];
+        let buf = std::fs::read(run.join("recording").join(&e.file)).unwrap();
+        let summary = mcap::Summary::read(&buf).unwrap().unwrap();
+        let m = summary.metadata_indexes.iter().map(|i| mcap::read::metadata(&buf, i).unwrap());
+        m.into_iter().find(|m| m.name == "gripopt.run").unwrap().metadata
+    };
+    let meta = shard_meta(&run);
+    assert_eq!((meta["scene_kind"].as_str(), meta["x_off"].as_str()), ("free", "0.002"));
+    let mut judged = 0;
+    for msgs in messages(&run) {
+        let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
+        let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
+        let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+        let label = &st.entities.iter().find(|e| e.id == "label").unwrap().texts[0].text;
+        let x = st.entities.iter().find(|e| e.id == "object").unwrap().cylinders[0].pose.unwrap().position.unwrap().x;
+        assert_eq!(x, 0.0, "the centred grasp's object");
+        assert!(label.chars().count() <= 120, "{label}");
+        if rec.get("free_scene").is_some() {
+            assert!(label.contains("centred grasp; free scene's verdict: "), "{label}");
+            judged += 1;
+        } else {
+            assert!(!label.contains("free scene's verdict"), "{label}");
+        }
+    }
+    assert!(judged > 0, "no design reached the free scene");
+    let centred = tiny_run_in(check_dir("s36-centred-meta"), Path::new(BOTTLE_FILE), 8, 1);
+    let meta = shard_meta(&centred);
+    assert!(!meta.contains_key("scene_kind") && !meta.contains_key("x_off"), "{meta:?}");
+}

@@ -130,7 +130,7 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
             ground_entity(t_ns, d.id),
             palm_entity(t_ns, d.id, &design, sc.hand.w),
             object,
-            label_entity(t_ns, d.id, &verdict(d)),
+            label_entity(t_ns, d.id, &scene_verdict(d, sc)),
         ],
     }
 }
@@ -143,7 +143,24 @@ pub const LABEL_MAX_CHARS: usize = 120;
 /// and why it was discarded; at most [`LABEL_MAX_CHARS`] characters, so that it fits a 3-D
 /// panel of half a screen's width ([`fit_label`]; the whole reason is in `/designs`).
 pub fn verdict(d: &DesignEntry<'_>) -> String {
+    verdict_after(d, format!("{} (gen {})", d.id, d.generation))
+}
+
+/// The label of design `d` in the problem's scene `sc`: [`verdict`], except that a design of a
+/// free-kind problem whose stage 3 ran in the free scene says that the grasp drawn is the
+/// centred one and the verdict the free scene's (the free scene itself is drawn by `gripopt
+/// verify`): "k (gen g) centred grasp; free scene's verdict: …".
+pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
+    if sc.setup.kind == SceneKind::Free && d.record.free_scene.is_some() {
+        verdict_after(d, format!("{head} centred grasp; free scene's verdict:"))
+    } else {
+        verdict_after(d, head)
+    }
+}
+
+/// [`verdict`] after the words `head`.
+fn verdict_after(d: &DesignEntry<'_>, head: String) -> String {
     match d.record.verdict.failed_stage {
         Some(s) => fit_label(
             &format!("{head} stage {s}: "),

@@ -61,6 +61,20 @@ pub fn write_shard<R: Recordable>(
         meta.insert("last_id".into(), last.to_string());
     }
     meta.insert("designs".into(), designs.len().to_string());
+    // the scene of stage 3 (absent: centred, as in every recording before session 36); a
+    // free-kind run's shards draw the centred diagnostic grasp, the label its free verdict
+    let setup = &problem.scene.setup;
+    if setup.kind != crate::params::SceneKind::Centred {
+        meta.insert("scene_kind".into(), setup.kind.to_string());
+        meta.insert("x_off".into(), setup.x_off.to_string());
+        let drawn = match setup.kind {
+            crate::params::SceneKind::Free => {
+                "centred grasp (object at x = 0); the label gives the free scene's verdict"
+            }
+            _ => "the offset scene's grasp (object at x_off)",
+        };
+        meta.insert("scene_drawn".into(), drawn.into());
+    }
     meta.insert("epoch_s".into(), opts.epoch_s.to_string());
     meta.insert(
         "resolution".into(),
