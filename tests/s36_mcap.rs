@@ -74,7 +74,7 @@ fn offset_scene_draws_finger_2_touching_the_object() {
         let pos = cyl.pose.unwrap().position.unwrap();
         let (c, r) = ((pos.x, pos.y), cyl.size.unwrap().x / 2.0);
         assert!((c.0 - 0.002).abs() < 1e-12, "the object at x_off");
-        let last = of("/scene").last().map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).unwrap();
+        let last = of("/scene").next_back().map(|m| SceneUpdate::decode(&m.2[..]).unwrap()).unwrap();
         let lines = &last.entities[0].lines;
         let (g1, g2) = (gap(&lines[0], c, r), gap(&lines[1], c, r));
         // a stable grasp holds the object with both fingers: each touches it, pressed in by

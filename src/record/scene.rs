@@ -103,7 +103,7 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
 pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
     let sc = &problem.scene;
     let failed_on =
-        (d.record.verdict.failed_stage == Some(2)).then(|| d.record.verdict.reason.as_deref()).flatten().and_then(
+        (d.record.verdict.failed_stage == Some(2)).then_some(d.record.verdict.reason.as_deref()).flatten().and_then(
             |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
         );
     match failed_on {
@@ -139,15 +139,10 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
 /// each, 790 px) fit a 3-D panel of half a 1920 px screen, the layouts' 3-D views.
 pub const LABEL_MAX_CHARS: usize = 120;
 
-/// One short line saying what became of a design: feasible with its objectives, or where
-/// and why it was discarded; at most [`LABEL_MAX_CHARS`] characters, so that it fits a 3-D
-/// panel of half a screen's width ([`fit_label`]; the whole reason is in `/designs`).
-pub fn verdict(d: &DesignEntry<'_>) -> String {
-    verdict_after(d, format!("{} (gen {})", d.id, d.generation))
-}
-
-/// The label of design `d` in the problem's scene `sc`: [`verdict`], except that a design of a
-/// free-kind problem whose stage 3 ran in the free scene says that the grasp drawn is the
+/// The label of design `d` in the problem's scene `sc`: one short line saying what became of
+/// it, feasible with its objectives, or where and why it was discarded; at most
+/// [`LABEL_MAX_CHARS`] characters, so that it fits a 3-D panel of half a screen's width
+/// ([`fit_label`]; the whole reason is in `/designs`). A design of a free-kind problem whose stage 3 ran in the free scene says that the grasp drawn is the
 /// centred one and the verdict the free scene's (the free scene itself is drawn by `gripopt
 /// verify`): "k (gen g) centred grasp; free scene's verdict: …".
 pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
@@ -159,7 +154,7 @@ pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
     }
 }
 
-/// [`verdict`] after the words `head`.
+/// The verdict of `d` after the words `head`.
 fn verdict_after(d: &DesignEntry<'_>, head: String) -> String {
     match d.record.verdict.failed_stage {
         Some(s) => fit_label(
