@@ -59,13 +59,28 @@ fn offset_scene_draws_finger_2_touching_the_object() {
     let base = check_dir("s36-offset");
     let problem = offset_problem(&base.with_extension("problem"));
     let run = tiny_run_in(base, &problem, 24, 2);
-    let (mut stable, mut apart) = (0, 0.0f64);
+    let (mut stable, mut apart, mut red_poses) = (0, 0.0f64, 0);
     for msgs in messages(&run) {
         let of = |topic: &'static str| msgs.iter().filter(move |m| m.0 == topic);
         let rec: serde_json::Value = serde_json::from_slice(&of("/designs").next().unwrap().2).unwrap();
         let s = <GraspSeries as prost::Message>::decode(&of("/grasp/series").next().unwrap().2[..]).unwrap();
         // finger 2's angles, as many as the other columns (a NaN placeholder without a grasp)
         assert_eq!((s.finger2_q11.len(), s.finger2_q21.len()), (s.t.len(), s.t.len()), "finger 2's angles");
+        if s.simulated_samples == 0 && rec["failed_stage"] == 2 {
+            // stage 2 is the centred grasp's (the offset scene is stage 3's): its red closed
+            // pose touches the object drawn at x = 0 with both phalanges
+            let st = SceneUpdate::decode(&of("/scene/static").next().unwrap().2[..]).unwrap();
+            let cyl = &st.entities.iter().find(|e| e.id == "object").unwrap().cylinders[0];
+            let pos = cyl.pose.unwrap().position.unwrap();
+            let scene = SceneUpdate::decode(&of("/scene").next().unwrap().2[..]).unwrap();
+            if let Some(red) = scene.entities.iter().find(|e| e.id == "failing_pose") {
+                assert_eq!(pos.x, 0.0, "design {}: a stage-2 discard's object", rec["id"]);
+                for line in &red.lines {
+                    assert!(gap(line, (pos.x, pos.y), cyl.size.unwrap().x / 2.0).abs() < 3e-6, "design {}", rec["id"]);
+                }
+                red_poses += 1;
+            }
+        }
         if s.simulated_samples == 0 || rec["feasible"] != true {
             continue;
         }
@@ -87,7 +102,10 @@ fn offset_scene_draws_finger_2_touching_the_object() {
         let r = gripopt::record::replay(&run, rec["id"].as_u64().unwrap()).unwrap();
         assert!(r.verified && r.max_difference == 0.0, "design {}: replay", rec["id"]);
     }
-    assert!(stable > 0, "no stable grasp to check: change the run");
+    assert!(
+        stable > 0 && red_poses > 0,
+        "no stable grasp or red pose to check ({stable}, {red_poses}): change the run"
+    );
     assert!(apart < 60e-6);
 }
 

@@ -99,9 +99,17 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
 /// The scene a design's picture is drawn in: the problem's, except for a robust design that
 /// stage 2 discarded on another of its objects (its reason "object NAME: …"): then that
 /// object's cylinder (radius and length), standing on the ground under the reference's hand
-/// plane, so that the red closed pose that failed is drawn on the object it failed on.
+/// plane, so that the red closed pose that failed is drawn on the object it failed on; and
+/// for a design of the offset scene discarded at stages 0–2, whose statics are the centred
+/// grasp's (MODEL.md §14: the offset scene is stage 3's), the object at x = 0, where its red
+/// closed pose was computed.
 pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
     let sc = &problem.scene;
+    if sc.setup.kind == SceneKind::Offset && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
+        let mut centred = sc.clone();
+        centred.setup.kind = SceneKind::Centred;
+        return Cow::Owned(centred);
+    }
     let failed_on =
         (d.record.verdict.failed_stage == Some(2)).then_some(d.record.verdict.reason.as_deref()).flatten().and_then(
             |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
