@@ -20,8 +20,12 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    forward inside the window (a design without a grasp: one placeholder sample at t = 0 with
    `simulated_samples` = 0, so a Plot panel redraws); where there is a scene, `/tf` at the window
    start and at its last nanosecond, `/scene/static` (deleting all, then ground, palm, object,
-   label) and `/scene` (deleting all first) at the window start, and the last finger pose at
-   the last recorded sample;
+   label, at most 120 characters on one line) and `/scene` (deleting all first) at the window start, and the last finger pose at
+   the last recorded sample; the drawn fingers touch the drawn object where the series has a
+   contact force (check_fingers_touch), never deeper inside it than 1.5 x the deepest kept
+   penetration + 20 um,
+   and hold it at the last pose of a feasible design; a stage-2 discard's red closed pose
+   touches the drawn object with both phalanges;
 5. a verify recording: window k (at epoch_s + window_base_s + k s) holds one `/verify` record
    and one `/verify/series` at the window start; `/scene/static` deletes all, then draws ground
    (frame world), palm (hand), object (object) and a label; `/tf` carries world -> hand and
@@ -35,7 +39,10 @@ Foxglove schemas from `foxglove-schemas-protobuf`, and composes the /tf transfor
    moving object never below the ground by more than a contact penetration.
 
 Then per run folder: the same world frame (world -> hand, ground plane) in its shards and
-verify files; verify files in time ranges disjoint from the shards' and from each other; the
+verify files, except a `replay --scenario` file, whose hand is level at exactly its scenario's
+height (metadata object_grasp_height + height_offset, the grasp height that of problem.toml's
+object) over the same ground; verify and scenario files in time ranges disjoint from the shards' and from each other (with
+or without shards); the
 front recording present when the run finished, covering the shards' designs, its members
 those of pareto.csv; and every topic, message path and frame of each shipped layout
 (foxglove-layout.json: the shards and front.mcap; foxglove-verify-layout.json: each verify
@@ -184,6 +191,8 @@ class FileInfo:
         self.front = {}  # /front: id -> on_final_front
         self.designs = {}  # /designs: id -> (feasible, objectives)
         self.ids = set()
+        self.contacts = 0  # drawn contacts checked against the series' forces
+        self.meta = {}  # the gripopt.* metadata record
 
 
 def check(path):
@@ -217,6 +226,7 @@ def check(path):
             if k not in run:
                 raise ValueError(f"{name} metadata lacks {k!r}")
         info = FileInfo(path, kind)
+        info.meta = dict(run)
         base = int(run.get("window_base_s", 0))
         epoch = (int(run["epoch_s"]) + base) * NS
         window_start = lambda t: (t - epoch) % NS == 0  # noqa: E731
@@ -248,7 +258,7 @@ def check(path):
         if [ids[0], ids[-1], len(ids)] != [int(run[first]), int(run[last]), int(run["designs"])]:
             raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run[first]}..{run[last]} ({run['designs']})")
         for d, msgs in by_design.items():
-            per_design(d, epoch + d * NS, msgs, scene_topics)
+            info.contacts += per_design(d, epoch + d * NS, msgs, scene_topics) or 0
         info.ids = set(ids)
         if scene_topics:
             info.geometry = info.scene.finish()
@@ -283,6 +293,17 @@ def repeated(f):
     """A repeated field (protobuf >= 5 has `is_repeated`; older ones `label`)."""
     rep = getattr(f, "is_repeated", None)
     return rep if rep is not None else f.label == f.LABEL_REPEATED
+
+
+LABEL_MAX_CHARS = 120  # 11 px text, ~6.6 px a character: 790 px, a 3-D panel of half a 1920 px screen
+
+
+def check_label(what, st):
+    """The label (one line) fits the 3-D panel."""
+    for e in st.entities:
+        for t in e.texts:
+            if len(t.text) > LABEL_MAX_CHARS or "\n" in t.text:
+                raise ValueError(f"{what}: label of {len(t.text)} characters (at most {LABEL_MAX_CHARS} on one line fit a 3-D panel of half a screen): {t.text[:60]}...")
 
 
 def window_end(t0):
@@ -321,17 +342,102 @@ def check_design(d, t0, msgs, scene):
     st = static[0][1]
     if not st.deletions or st.deletions[0].type != 1 or {e.id for e in st.entities} != {"ground", "palm", "object", "label"}:
         raise ValueError(f"design {d}: /scene/static must delete all, then draw ground, palm, object and label")
+    check_label(f"design {d}", st)
     if not fingers or fingers[0][0] != t0 or not fingers[0][1].deletions or fingers[0][1].deletions[0].type != 1:
         raise ValueError(f"design {d}: the first /scene message must be at the window start and delete the previous fingers")
     drawn = [(tm, m) for tm, m in fingers if m.entities]
     if placeholder:
         if len(fingers) != 1:
             raise ValueError(f"design {d}: without a grasp, /scene holds one message (the open and failing poses)")
-        return
+        return check_closed_pose_touches(d, designs[0][1], st, fingers[0][1])
     if drawn:
         last = t0 + min(round(t[-1] * NS), NS - 1)
         if drawn[-1][0] != last:
             raise ValueError(f"design {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last sample at {last - t0} ns")
+    return check_fingers_touch(d, t0, s, st, drawn, designs[0][1]["feasible"])
+
+
+# ---------------------------------------------------------------- drawn contact
+def check_closed_pose_touches(d, rec, st, scene):
+    """A design discarded at stage 2 whose red pose is drawn: that pose is the closed pose on
+    the object whose statics failed, so both phalanges of each finger touch the drawn object
+    (zero penetration, within the drawing's rounding). 1 when checked."""
+    red = [e for e in scene.entities if e.id == "failing_pose"]
+    if rec.get("failed_stage") != 2 or not red:
+        return 0
+    c, r = drawn_object(st)
+    for n, line in enumerate(red[0].lines):
+        for g, name in zip(phalanx_gaps(line, c, r), ("proximal", "distal")):
+            if abs(g) > CONTACT_TOL:
+                raise ValueError(f"design {d}: the red closed pose of a stage-2 discard draws finger {n + 1}'s {name} phalanx {g * 1e6:+.1f} um from the drawn object ({rec.get('reason', '')[:60]})")
+    return 1
+
+
+CONTACT_TOL = 5e-6  # m: the drawing is rounded to 2^-20 m (1 um), compact values to f32
+
+
+def seg_dist(p, a, b):
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    s = max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1.0)))
+    return math.hypot(a[0] + s * dx - p[0], a[1] + s * dy - p[1])
+
+
+def phalanx_gaps(line, c, r):
+    """A drawn finger (line strip tip, O22, base, ...) against the object's circle (centre c,
+    radius r) in the hand plane: the gaps (m; < 0 drawn inside) of its proximal phalanx
+    (base - O22) and distal phalanx (O22 - tip), rods of the line's thickness."""
+    p = [(q.x, q.y) for q in line.points]
+    half = line.thickness / 2
+    return seg_dist(c, p[2], p[1]) - r - half, seg_dist(c, p[1], p[0]) - r - half
+
+
+def drawn_object(st):
+    cyl = next(e for e in st.entities if e.id == "object").cylinders[0]
+    return (cyl.pose.position.x, cyl.pose.position.y), cyl.size.x / 2
+
+
+def check_fingers_touch(d, t0, s, st, drawn, feasible):
+    """The drawn fingers touch the drawn object where the series says they do: at every
+    drawn pose whose time is a series sample, a phalanx with a non-zero normal force lies
+    within [-(delta + tol), tol] of the object's surface (delta its recorded penetration);
+    the series' contacts are finger 1's, and finger 2's too where it is finger 1's mirror
+    (object at x = 0, no finger-2 columns). No drawn finger is ever deeper in the object than
+    1.5 times the deepest penetration the series kept + 20 um (a drawn pose between its
+    samples may be deeper than the kept ones), and at the last pose of a feasible (stable) grasp both
+    fingers touch it. The number of contacts checked."""
+    c, r = drawn_object(st)
+    mirrored = not len(getattr(s, "finger2_q11", [])) and abs(c[0]) < 1e-12
+    at_sample = {round(t * NS): k for k, t in enumerate(s.t)}
+    deltas, forces = (s.proximal_penetration, s.distal_penetration), (s.proximal_normal_force, s.distal_normal_force)
+    deepest = max([0.0] + [x for col in deltas for x in col if x == x])
+    # a drawn pose between the series' samples may lie deeper than the deepest kept sample
+    # (a damped impact's deepest point follows its force peak, which the series keeps)
+    inside_limit = 1.5 * deepest + 20e-6
+    checked = 0
+    for tm, m in drawn:
+        lines = next(e for e in m.entities if e.id == "fingers").lines
+        for n, line in enumerate(lines):
+            g = min(phalanx_gaps(line, c, r))
+            if g < -inside_limit:
+                raise ValueError(f"design {d}: at {(tm - t0) / 1e6:.3f} ms finger {n + 1} is drawn {-g * 1e6:.1f} um inside the object (deepest penetration kept {deepest * 1e6:.1f} um)")
+        k = at_sample.get(tm - t0)
+        if k is None:
+            continue
+        for ph, name in enumerate(("proximal", "distal")):
+            f, delta = forces[ph][k], deltas[ph][k]
+            if not f > 0:
+                continue
+            for n, line in enumerate(lines if mirrored else lines[:1]):
+                g = phalanx_gaps(line, c, r)[ph]
+                if not -(delta + CONTACT_TOL) <= g <= CONTACT_TOL:
+                    raise ValueError(f"design {d}: at {(tm - t0) / 1e6:.3f} ms finger {n + 1}'s {name} phalanx is drawn {g * 1e6:+.1f} um from the object's surface while its contact force is {f:.3g} N (penetration {delta * 1e6:.1f} um)")
+                checked += 1
+    if feasible and drawn:
+        for n, line in enumerate(next(e for e in drawn[-1][1].entities if e.id == "fingers").lines):
+            g = min(phalanx_gaps(line, c, r))
+            if not -(deepest + CONTACT_TOL) <= g <= CONTACT_TOL:
+                raise ValueError(f"design {d}: the stable grasp's last pose draws finger {n + 1} {g * 1e6:+.1f} um from the object's surface (it holds the object)")
+    return checked
 
 
 def check_verify_design(d, t0, msgs, scene):
@@ -352,6 +458,7 @@ def check_verify_design(d, t0, msgs, scene):
     if len(static) != 1 or static[0][0] != t0:
         raise ValueError(f"window {d}: /scene/static must hold one message at the window start")
     st = static[0][1]
+    check_label(f"window {d}", st)
     frames = {e.id: e.frame_id for e in st.entities}
     if not st.deletions or st.deletions[0].type != 1 or frames != {"ground": "world", "palm": "hand", "object": "object", "label": "world"}:
         raise ValueError(f"window {d}: /scene/static must delete all, then draw ground (world), palm (hand), object (object) and label (world); got {frames}")
@@ -405,20 +512,23 @@ def check_run_folder(run, r):
     """The folder-level checks of one run folder; a description of what was checked."""
     done = []
     scenes = [i for i in r["shards"] + r["verify"] if i.scene is not None and i.scene.world_hand is not None]
-    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in scenes}
+    scenarios = [i for i in scenes if scenario_height(i) is not None]
+    common = [i for i in scenes if scenario_height(i) is None]
+    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in common}
     if len(frames) > 1:
-        raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in scenes]})")
-    if scenes:
-        done.append(f"one world frame in {len(scenes)} files")
+        raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in common]})")
+    if common:
+        done.append(f"one world frame in {len(common)} files")
+    for i in scenarios:
+        check_scenario_frame(run, i, frames)
+    if scenarios:
+        done.append(f"{len(scenarios)} scenario files with the hand at their scenario's height")
+    ranges = [(i.path.name, i.start, i.end) for i in r["verify"]]
     if r["shards"]:
-        lo, hi = min(i.start for i in r["shards"]), max(i.end for i in r["shards"])
-        ranges = [("the shards", lo, hi)] + [(i.path.name, i.start, i.end) for i in r["verify"]]
-        for a in range(len(ranges)):
-            for b in range(a + 1, len(ranges)):
-                (na, la, ha), (nb, lb, hb) = ranges[a], ranges[b]
-                if la <= hb and lb <= ha:
-                    raise ValueError(f"{na} and {nb} overlap in time ([{la}, {ha}] and [{lb}, {hb}]): opened together, two designs would share a second")
-        done.append("time ranges disjoint")
+        ranges.insert(0, ("the shards", min(i.start for i in r["shards"]), max(i.end for i in r["shards"])))
+    if len(ranges) > 1:
+        check_disjoint(ranges)
+        done.append(f"time ranges of {len(ranges)} recordings disjoint")
     status = {}
     if (run / "run.json").is_file():
         status = json.loads((run / "run.json").read_text())
@@ -453,6 +563,50 @@ def check_run_folder(run, r):
             raise ValueError(f"{v.path.name} is shipped without {vlayout.name}")
         done.append(f"{check_layout(vlayout, v.recording)} layout paths of {vlayout.name} in {v.path.name}")
     return done
+
+
+def check_disjoint(ranges):
+    """(name, first, last log time) of recordings of one run: no two overlap (opened
+    together, two designs would share a second, and a viewer applies a deletion of all
+    entities whatever its timestamp)."""
+    for a in range(len(ranges)):
+        for b in range(a + 1, len(ranges)):
+            (na, la, ha), (nb, lb, hb) = ranges[a], ranges[b]
+            if la <= hb and lb <= ha:
+                raise ValueError(f"{na} and {nb} overlap in time ([{la}, {ha}] and [{lb}, {hb}]): opened together, two designs would share a second")
+
+
+def scenario_height(info):
+    """The hand height of a `replay --scenario` file: the scenario object's grasp height plus
+    the scenario's drawn height offset, as its metadata says (None: not a scenario file)."""
+    m = info.meta
+    if info.kind != "verify" or "height_offset" not in m or "object_grasp_height" not in m or "scenario_object" not in m:
+        return None
+    return float(m["object_grasp_height"]) + float(m["height_offset"])
+
+
+def check_scenario_frame(run, info, frames):
+    """A scenario file's world frame: the hand level at exactly its scenario's height (its
+    metadata's object grasp height + height offset; the object's grasp height that of the
+    run's problem.toml where the object is given there inline), the ground where the other
+    files have it."""
+    h, m = scenario_height(info), info.meta
+    want = ("world", "hand", 0.0, 0.0, round(h, 12), 0.0, 0.0, 0.0, 1.0)
+    got = sorted(info.scene.world_hands)
+    if got != [want]:
+        raise ValueError(f"{info.path.name}: world -> hand {got}, its scenario {m['scenario_object']}:{m.get('scenario_index')} puts the hand at {h * 1e3:.3f} mm (grasp height {m['object_grasp_height']} + height offset {m['height_offset']})")
+    grounds = {g for _, g in frames}
+    if grounds and round(info.scene.ground_top, 12) not in grounds:
+        raise ValueError(f"{info.path.name}: the ground plane differs from the other files'")
+    problem = run / "problem.toml"
+    if problem.is_file():
+        import tomllib
+        objects = tomllib.loads(problem.read_text()).get("robust", {}).get("objects", [])
+        o = next((o for o in objects if o.get("name") == m["scenario_object"]), None)
+        if o is None:
+            raise ValueError(f"{info.path.name}: scenario object {m['scenario_object']!r} is not one of problem.toml's [[robust.objects]]")
+        if "grasp_height" in o and o["grasp_height"] != float(m["object_grasp_height"]):
+            raise ValueError(f"{info.path.name}: object_grasp_height {m['object_grasp_height']}, problem.toml gives {m['scenario_object']} grasp_height {o['grasp_height']}")
 
 
 def check_front_members(members, designs):
@@ -498,6 +652,8 @@ def main(folders):
             extra = ""
             if geo:
                 extra = f"; world geometry: {geo['finger_points']} finger points, lowest {geo['lowest_finger_z'] * 1e3:.1f} mm above the ground, {geo['objects']} objects standing"
+            if info.contacts:
+                extra += f"; {info.contacts} drawn contacts touch the object"
             print(f"ok   {p}: {n} messages in {chunks} chunks decoded; schemas official / viewer-parsable; time windows consistent{extra}")
             ok += 1
         except Exception as e:  # noqa: BLE001 - report every failure

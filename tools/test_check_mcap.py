@@ -7,6 +7,12 @@ built here from the official Foxglove message classes (foxglove-schemas-protobuf
   not level, the bottle lying, finger rods below the ground, each check on its own), a /tf
   message without world -> hand, an entity
   that is not frame_locked, an object lifted off the ground;
+* fingers drawn off the object they hold: finger 2 drawn as finger 1's mirror with the
+  object at x_off = 2 mm (the offset scene before session 36: 4 mm off the object), a
+  phalanx with a contact force drawn 3 mm away, a finger drawn deep inside the object;
+* a scenario file (`replay --scenario`) whose hand is not at its scenario's height, over
+  another ground, or naming a grasp height problem.toml does not give; two scenario files in
+  one time window;
 * a layout naming a topic or a field the recording lacks, a panel titled for one viewer only,
   an unknown panel type;
 and accept the scene and layout as gripopt now writes them.
@@ -16,9 +22,11 @@ import pathlib
 import sys
 import tempfile
 import json
+from types import SimpleNamespace
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from check_layout import Recording, check_layout  # noqa: E402
+from check_mcap import check_disjoint, check_fingers_touch, check_scenario_frame  # noqa: E402
 from mcap_scene import Scene  # noqa: E402
 from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms  # noqa: E402
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate  # noqa: E402
@@ -59,6 +67,68 @@ def fingers(points):
     for x, y in points:
         line.points.add(x=x, y=y, z=0.0)
     return m
+
+
+def hand_pair(xs, y_top=0.08, thickness=0.01):
+    """Both fingers as straight proximal phalanges x = xs[k] from the palm to y_top (tip
+    beyond, away from the object), the way the recording's line strips run: tip, O22, base."""
+    m = SceneUpdate()
+    e = m.entities.add(id="fingers", frame_id="hand", frame_locked=True)
+    for x in xs:
+        line = e.lines.add(thickness=thickness)
+        line.pose.orientation.w = 1.0
+        sign = 1 if x > 0 else -1
+        for px, py in [(x + sign * 0.03, y_top + 0.03), (x, y_top), (x, 0.0), (x + sign * 0.01, 0.01)]:
+            line.points.add(x=px, y=py, z=0.0)
+    return m
+
+
+def contact_cases():
+    """check_fingers_touch on a drawn proximal contact (object R = 40 mm, rods 10 mm thick:
+    a rod at |x - x_c| = 45 mm touches)."""
+    def series(f2):
+        return SimpleNamespace(t=[0.0, 0.01], proximal_normal_force=[0.0, 5.0], distal_normal_force=[0.0, 0.0],
+                               proximal_penetration=[0.0, 2e-6], distal_penetration=[0.0, 0.0], finger2_q11=f2)
+    ms = 1_000_000
+
+    def run(centre_x, xs_last, f2, feasible=True):
+        st = static(0, (centre_x, R, L / 2 - H))
+        drawn = [(0, hand_pair([centre_x + 0.06, centre_x - 0.06])), (10 * ms, hand_pair(xs_last))]
+        return check_fingers_touch(7, 0, series(f2), st, drawn, feasible)
+
+    assert run(0.0, [0.045 - 2e-6, -0.045 + 2e-6], []) == 2  # centred: both (mirrored) fingers pressed in 2 um
+    assert run(0.002, [0.047 - 2e-6, -0.043], [0.1, 0.1]) == 1  # offset: finger 2 at its own angles, touching
+    print("ok   accepts fingers drawn touching the object where the series has a contact force")
+    expect_failure("finger 2 drawn as finger 1's mirror in the offset scene (x_off = 2 mm)",
+                   lambda: run(0.002, [0.047, -0.047], [0.1, 0.1]), "finger 2")
+    expect_failure("a proximal phalanx with a contact force drawn 3 mm off the object",
+                   lambda: run(0.0, [0.048, -0.048], [], feasible=False), "proximal phalanx")
+    expect_failure("a finger drawn 2 mm inside the object", lambda: run(0.0, [0.043, -0.043], []), "inside the object")
+
+
+def scenario_cases():
+    """A `replay --scenario` file: its hand at its scenario's height (the object's grasp
+    height + the drawn height offset, as its metadata says, the grasp height problem.toml's);
+    scenario files of one run in disjoint windows."""
+    def info(z, meta, ground=0.0):
+        scene = SimpleNamespace(world_hands={("world", "hand", 0.0, 0.0, round(z, 12), 0.0, 0.0, 0.0, 1.0)}, ground_top=ground)
+        return SimpleNamespace(path=pathlib.Path("scenario-68-can-1.mcap"), kind="verify", meta=meta, scene=scene)
+    meta = {"scenario_object": "can", "scenario_index": "1", "object_grasp_height": "0.04", "height_offset": "0.0042"}
+    frames = {((("world", "hand", 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 1.0),), 0.0)}
+    with tempfile.TemporaryDirectory() as d:
+        run = pathlib.Path(d)
+        (run / "problem.toml").write_text('[[robust.objects]]\nname = "can"\ngrasp_height = 0.040\n')
+        check_scenario_frame(run, info(0.04 + 0.0042, meta), frames)
+        print("ok   accepts a scenario file with the hand at its scenario's height")
+        expect_failure("a scenario file whose hand is not at its scenario's height",
+                       lambda: check_scenario_frame(run, info(0.05, meta), frames), "puts the hand at")
+        expect_failure("a scenario file over another ground", lambda: check_scenario_frame(run, info(0.0442, meta, 0.01), frames), "ground plane")
+        expect_failure("a scenario file whose object grasp height is not problem.toml's",
+                       lambda: check_scenario_frame(run, info(0.0542, {**meta, "object_grasp_height": "0.05"}), frames), "problem.toml gives")
+    s = 1_000_000_000
+    check_disjoint([("the shards", 0, 99 * s), ("scenario-68-can-0.mcap", 3546 * s, 3547 * s - 1), ("scenario-68-can-1.mcap", 3547 * s, 3548 * s - 1)])
+    expect_failure("two scenario files in one window (before session 36)",
+                   lambda: check_disjoint([("scenario-68-can-0.mcap", 3000 * s, 3001 * s - 1), ("scenario-68-bottle-full-0.mcap", 3000 * s, 3001 * s - 1)]), "overlap")
 
 
 def run_scene(messages, level_hand=False):
@@ -104,6 +174,9 @@ def main():
                    lambda: run_scene([("/tf", 0, tf(0, now[0], now[1])), ("/tf", 5, tf(5, now[0], now[1], with_hand=False))]), "no world -> hand")
     expect_failure("an entity that is not frame_locked",
                    lambda: run_scene([("/tf", 0, tf(0, now[0], now[1])), ("/scene/static", 0, static(0, now[2], locked=False))]), "frame_locked")
+
+    contact_cases()
+    scenario_cases()
 
     # layouts against a recording holding /grasp/series-like JSON and the frames
     rec = Recording()

@@ -130,8 +130,8 @@ pub fn layout(scene: bool) -> Value {
     let s = "/grasp/series";
     let contact = plot(
         s,
-        "Contact forces near the holding force (y clipped to -5..25 N; impacts run off the top)",
-        "contact force (N)",
+        "Contact forces of finger 1 near the holding force (y clipped to -5..25 N; impacts run off the top)",
+        "finger 1 contact force (N)",
         &[
             ("proximal_normal_force", "proximal normal"),
             ("distal_normal_force", "distal normal"),

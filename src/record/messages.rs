@@ -8,7 +8,8 @@ use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
 use crate::sim::Sample;
 
 pub use super::scene::{
-    discarded_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene, window_end_ns,
+    discarded_scene, drawn_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene,
+    window_end_ns,
 };
 
 /// Log time (ns since 1970) at which design `id`'s window starts: `epoch_ns + id` s.
@@ -72,12 +73,15 @@ pub fn at_precision(x: f64, res: Resolution) -> f64 {
 /// would leave the previous design's curves on screen after a seek (docs/recording.md).
 /// `mean_force_objective` repeats the design's F̃ (stage 2's static mean contact force, the
 /// objective) on every sample, so the Plot panel draws it as a line beside the simulated forces.
+/// With `finger2` (the offset scene) the series has finger 2's angle columns, as long as the
+/// others (NaN in the placeholder).
 pub fn series(
     d: &DesignEntry<'_>,
     samples: &[Sample],
     kept: &[usize],
     simulated: usize,
     opts: &RecordOptions,
+    finger2: bool,
 ) -> GraspSeries {
     let r = opts.resolution;
     let mut m = GraspSeries {
@@ -90,6 +94,10 @@ pub fn series(
         m.t.push(0.0);
         for c in m.value_columns_mut() {
             c.push(f64::NAN);
+        }
+        if finger2 {
+            m.finger2_q11.push(f64::NAN);
+            m.finger2_q21.push(f64::NAN);
         }
         return m;
     }
@@ -114,6 +122,10 @@ pub fn series(
         m.energy.push(p(s.energy));
         m.energy_excess.push(p(s.energy_excess));
         m.mean_force_objective.push(f_tilde);
+        if let Some(q2) = s.q2 {
+            m.finger2_q11.push(p(q2[0]));
+            m.finger2_q21.push(p(q2[1]));
+        }
     }
     m
 }
@@ -146,6 +158,12 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
     if cols.iter().any(|c| c.len() != n) {
         return None;
     }
+    // finger 2's own angles: offset scene only (absent in older recordings)
+    let finger2 = match (m.finger2_q11.len(), m.finger2_q21.len()) {
+        (0, 0) => false,
+        (a, b) if a == n && b == n => true,
+        _ => return None,
+    };
     Some(
         (0..n)
             .map(|k| Sample {
@@ -160,6 +178,7 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
                 filtered_fy: m.filtered_hand_force[k],
                 energy: m.energy[k],
                 energy_excess: m.energy_excess[k],
+                q2: finger2.then(|| [m.finger2_q11[k], m.finger2_q21[k]]),
             })
             .collect(),
     )

@@ -11,8 +11,9 @@ use prost_types::{DescriptorProto, FieldDescriptorProto, FileDescriptorProto, Fi
 /// Full name of the message (the MCAP schema name).
 pub const SERIES_NAME: &str = "gripopt.GraspSeries";
 
-/// One design's recorded grasp trajectory as columns (finger 2 mirrors finger 1 in the
-/// symmetric scene, so one finger is stored). Plotted in Foxglove with the x-axis
+/// One design's recorded grasp trajectory as columns: finger 1's (finger 2 mirrors it in the
+/// centred scene), and in the offset scene finger 2's own angles (`finger2_q11`,
+/// `finger2_q21`; empty, i.e. absent from the bytes, otherwise). Plotted in Foxglove with the x-axis
 /// "Path (current)" `/grasp/series.t`.
 #[derive(Clone, PartialEq, Message)]
 pub struct GraspSeries {
@@ -78,6 +79,13 @@ pub struct GraspSeries {
     /// computed).
     #[prost(double, repeated, tag = "20")]
     pub mean_force_objective: Vec<f64>,
+    /// Finger 2's q11 (rad, in its own mirrored frame), offset scene only (finger 2 is not
+    /// finger 1's mirror image there); empty otherwise.
+    #[prost(double, repeated, tag = "21")]
+    pub finger2_q11: Vec<f64>,
+    /// Finger 2's q21 (rad, in its own mirrored frame), offset scene only; empty otherwise.
+    #[prost(double, repeated, tag = "22")]
+    pub finger2_q21: Vec<f64>,
 }
 
 impl GraspSeries {
@@ -128,8 +136,14 @@ pub const SERIES_FIELDS: [(&str, i32, Type, bool); 20] = [
     ("mean_force_objective", 20, Type::Double, true),
 ];
 
-/// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3).
-pub fn series_descriptor() -> Vec<u8> {
+/// The fields of finger 2's own angles (offset scene), after [`SERIES_FIELDS`].
+pub const FINGER2_FIELDS: [(&str, i32, Type, bool); 2] =
+    [("finger2_q11", 21, Type::Double, true), ("finger2_q21", 22, Type::Double, true)];
+
+/// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3): [`SERIES_FIELDS`],
+/// and with `finger2` (a shard of the offset scene) [`FINGER2_FIELDS`] too — a centred run's
+/// shards keep the schema, and so the bytes, they always had.
+pub fn series_descriptor(finger2: bool) -> Vec<u8> {
     let field = |(name, number, ty, repeated): (&str, i32, Type, bool)| FieldDescriptorProto {
         name: Some(name.into()),
         number: Some(number),
@@ -140,7 +154,7 @@ pub fn series_descriptor() -> Vec<u8> {
     };
     let msg = DescriptorProto {
         name: Some("GraspSeries".into()),
-        field: SERIES_FIELDS.into_iter().map(field).collect(),
+        field: SERIES_FIELDS.into_iter().chain(FINGER2_FIELDS.into_iter().filter(|_| finger2)).map(field).collect(),
         ..Default::default()
     };
     let file = FileDescriptorProto {
@@ -165,6 +179,8 @@ mod tests {
         for (k, c) in m.value_columns_mut().into_iter().enumerate() {
             c.push(k as f64 + 1.5);
         }
+        m.finger2_q11.push(17.5);
+        m.finger2_q21.push(18.5);
         let b = m.encode_to_vec();
         let mut i = 0;
         let mut seen = vec![];
@@ -180,7 +196,8 @@ mod tests {
                 }
             }
             let (tag, wire) = ((key >> 3) as i32, (key & 7) as u8);
-            let (_, _, ty, rep) = SERIES_FIELDS.iter().find(|f| f.1 == tag).copied().expect("field in the table");
+            let (_, _, ty, rep) =
+                SERIES_FIELDS.iter().chain(&FINGER2_FIELDS).find(|f| f.1 == tag).copied().expect("field in the table");
             match (ty, rep) {
                 (Type::Double, true) => {
                     assert_eq!((wire, b[i]), (2, 8), "packed double");
@@ -195,7 +212,13 @@ mod tests {
             }
             seen.push(tag);
         }
-        assert_eq!(seen, (1..=20).collect::<Vec<_>>());
-        assert!(!series_descriptor().is_empty());
+        assert_eq!(seen, (1..=22).collect::<Vec<_>>());
+        // the centred scene's schema is the one of older recordings: the offset fields only with `finger2`
+        let (plain, with2) = (series_descriptor(false), series_descriptor(true));
+        let names = |b: &[u8]| {
+            let set = FileDescriptorSet::decode(b).unwrap();
+            set.file[0].message_type[0].field.iter().map(|f| f.number()).collect::<Vec<_>>()
+        };
+        assert_eq!((names(&plain), names(&with2)), ((1..=20).collect(), (1..=22).collect()));
     }
 }

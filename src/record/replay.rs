@@ -609,6 +609,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
                 filtered_fy: p(s.filtered_fy),
                 energy: p(s.energy),
                 energy_excess: p(s.energy_excess),
+                q2: s.q2.map(|q| q.map(p)),
             };
             let opts = RecordOptions { resolution: recorded.resolution, ..opts };
             opts.kept_samples(&t.samples).into_iter().map(|k| round(&t.samples[k])).collect()
@@ -640,6 +641,13 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         ];
         for (u, v) in pairs {
             maxd = maxd.max(rel(u, v));
+        }
+        // finger 2's own angles (offset scene), where the recording has them (older
+        // recordings of the offset scene do not: finger 1's columns verify those)
+        match (a.q2, b.q2) {
+            (Some(u), Some(v)) => maxd = maxd.max(rel(u[0], v[0])).max(rel(u[1], v[1])),
+            (None, Some(_)) => maxd = f64::INFINITY,
+            _ => {}
         }
     }
     let feasible_rec = recorded.record.feasible;

@@ -16,13 +16,14 @@
 use super::entry::DesignEntry;
 use crate::math::V2;
 use crate::model::{closed_pose, singularity_sweep, Finger, SweepFailure};
-use crate::params::{Design, SceneKind, SceneParams};
+use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::Sample;
 use foxglove::messages::{
     line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
     FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity, SceneEntityDeletion,
     SceneUpdate, TextPrimitive, Timestamp, Vector3,
 };
+use std::borrow::Cow;
 
 /// The fixed frame: z up, the ground's top face at z = 0.
 pub const WORLD: &str = "world";
@@ -95,6 +96,35 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
     [x, sc.object.radius, sc.object.length / 2.0 - sc.object.grasp_height]
 }
 
+/// The scene a design's picture is drawn in: the problem's, except for a robust design that
+/// stage 2 discarded on another of its objects (its reason "object NAME: …"): then that
+/// object's cylinder (radius and length), standing on the ground under the reference's hand
+/// plane, so that the red closed pose that failed is drawn on the object it failed on; and
+/// for a design of the offset scene discarded at stages 0–2, whose statics are the centred
+/// grasp's (MODEL.md §14: the offset scene is stage 3's), the object at x = 0, where its red
+/// closed pose was computed.
+pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
+    let sc = &problem.scene;
+    if sc.setup.kind == SceneKind::Offset && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
+        let mut centred = sc.clone();
+        centred.setup.kind = SceneKind::Centred;
+        return Cow::Owned(centred);
+    }
+    let failed_on =
+        (d.record.verdict.failed_stage == Some(2)).then_some(d.record.verdict.reason.as_deref()).flatten().and_then(
+            |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
+        );
+    match failed_on {
+        Some(o) if (o.object.radius, o.object.length) != (sc.object.radius, sc.object.length) => {
+            let mut drawn = sc.clone();
+            drawn.object.radius = o.object.radius;
+            drawn.object.length = o.object.length;
+            Cow::Owned(drawn)
+        }
+        _ => Cow::Borrowed(sc),
+    }
+}
+
 /// `/scene/static` of a design's window (optimisation recordings): deletes everything of the
 /// previous design on this topic, then draws the ground (`world`), the palm and the fixed
 /// object (`hand`) and the design's verdict as a text label above the scene (`world`).
@@ -108,17 +138,37 @@ pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUp
             ground_entity(t_ns, d.id),
             palm_entity(t_ns, d.id, &design, sc.hand.w),
             object,
-            label_entity(t_ns, d.id, &verdict(d)),
+            label_entity(t_ns, d.id, &scene_verdict(d, sc)),
         ],
     }
 }
 
-/// One short line saying what became of a design: feasible with its objectives, or where
-/// and why it was discarded (it must fit a 3-D panel of half a screen's width).
-pub fn verdict(d: &DesignEntry<'_>) -> String {
+/// The most characters of a label: 120 characters of the label's 11 px font (about 6.6 px
+/// each, 790 px) fit a 3-D panel of half a 1920 px screen, the layouts' 3-D views.
+pub const LABEL_MAX_CHARS: usize = 120;
+
+/// The label of design `d` in the problem's scene `sc`: one short line saying what became of
+/// it, feasible with its objectives, or where and why it was discarded; at most
+/// [`LABEL_MAX_CHARS`] characters, so that it fits a 3-D panel of half a screen's width
+/// ([`fit_label`]; the whole reason is in `/designs`). A design of a free-kind problem whose stage 3 ran in the free scene says that the grasp drawn is the
+/// centred one and the verdict the free scene's (the free scene itself is drawn by `gripopt
+/// verify`): "k (gen g) centred grasp; free scene's verdict: …".
+pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
+    if sc.setup.kind == SceneKind::Free && d.record.free_scene.is_some() {
+        verdict_after(d, format!("{head} centred grasp; free scene's verdict:"))
+    } else {
+        verdict_after(d, head)
+    }
+}
+
+/// The verdict of `d` after the words `head`.
+fn verdict_after(d: &DesignEntry<'_>, head: String) -> String {
     match d.record.verdict.failed_stage {
-        Some(s) => format!("{head} stage {s}: {}", d.record.verdict.reason.as_deref().unwrap_or("no reason recorded")),
+        Some(s) => fit_label(
+            &format!("{head} stage {s}: "),
+            d.record.verdict.reason.as_deref().unwrap_or("no reason recorded"),
+        ),
         None => {
             let o = d.record.objectives();
             let f =
@@ -132,6 +182,32 @@ pub fn verdict(d: &DesignEntry<'_>) -> String {
             )
         }
     }
+}
+
+/// `head` + `reason` if that has at most [`LABEL_MAX_CHARS`] characters; else the reason
+/// without its parenthesised details ("… in 0 of 2 scenarios (P(stay) 0.000 < p_min 0.5;
+/// …)" loses the bracket), and if still too long cut to the limit, ending with "…".
+pub fn fit_label(head: &str, reason: &str) -> String {
+    let whole = format!("{head}{reason}");
+    if whole.chars().count() <= LABEL_MAX_CHARS {
+        return whole;
+    }
+    let (mut out, mut depth) = (String::new(), 0usize);
+    for c in reason.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth > 0 => depth -= 1,
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    // the spaces left around a removed bracket
+    let reason = out.split_whitespace().collect::<Vec<_>>().join(" ").replace(" ;", ";").replace(" :", ":");
+    let mut out = format!("{head}{reason}");
+    if out.chars().count() > LABEL_MAX_CHARS {
+        out = out.chars().take(LABEL_MAX_CHARS - 1).collect::<String>() + "…";
+    }
+    out
 }
 
 /// The ground plane (frame `world`, top face at z = 0).
@@ -220,16 +296,22 @@ fn fingers_entity(t_ns: u64, design_id: u64, id: &str, f: &Finger, p: &crate::mo
     e
 }
 
-/// `/scene` message: both fingers at sample `s` (finger 2 the mirror of finger 1); with
-/// `first`, it first deletes the previous design's fingers. `None` when there is no finger or
-/// the pose cannot be assembled (then, with `first`, a message that only deletes).
+/// `/scene` message: both fingers at sample `s` (finger 2 the mirror of finger 1 in the
+/// centred scene; at its own angles `s.q2`, mirrored, in the offset scene); with `first`, it
+/// first deletes the previous design's fingers. `None` when there is no finger or a pose
+/// cannot be assembled (then, with `first`, a message that only deletes).
 pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, first: bool) -> Option<SceneUpdate> {
     let deletions = if first { delete_all(t_ns) } else { vec![] };
-    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p)));
-    let Some((finger, p)) = pose else {
+    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p, s.q2)));
+    let drawn = match pose {
+        Some((finger, p, None)) => Some(fingers_entity(t_ns, id, "fingers", finger, &p, ORANGE)),
+        Some((finger, p1, Some(q2))) => finger.dgm(q2[0], q2[1]).ok().map(|p2| two_fingers(t_ns, id, finger, &p1, &p2)),
+        None => None,
+    };
+    let Some(e) = drawn else {
         return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
-    Some(SceneUpdate { deletions, entities: vec![fingers_entity(t_ns, id, "fingers", finger, &p, ORANGE)] })
+    Some(SceneUpdate { deletions, entities: vec![e] })
 }
 
 /// `/scene` message of a design recorded without a trajectory (discarded at stages 0–2, or
@@ -239,19 +321,29 @@ pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, fi
 /// pose of the singularity sweep closest to a singularity ("singularity margin"), the last
 /// pose the linkage can still be assembled in ("not mountable" at a larger θ2), or the
 /// closed pose on the object whose forces fail the statics (stage 2).
-pub fn discarded_scene(t_ns: u64, id: u64, x: &Design, failed_stage: Option<u8>, sc: &SceneParams) -> SceneUpdate {
+/// The closed pose is drawn on the drawn object ([`drawn_scene`]: a robust design's failing
+/// object); the finger and its sweep are the problem's (`sc`).
+pub fn discarded_scene(
+    t_ns: u64,
+    id: u64,
+    x: &Design,
+    failed_stage: Option<u8>,
+    sc: &SceneParams,
+    drawn: &SceneParams,
+) -> SceneUpdate {
     let mut m = SceneUpdate { deletions: delete_all(t_ns), entities: vec![] };
     let Ok(f) = Finger::new(x, sc) else { return m };
     m.entities.push(fingers_entity(t_ns, id, "fingers", &f, &f.open, ORANGE));
-    if let Some((p, _)) = failed_stage.filter(|s| (1..=2).contains(s)).and_then(|_| failing_pose(&f, sc)) {
+    let failing = failed_stage.filter(|s| (1..=2).contains(s)).and_then(|_| failing_pose(&f, sc, drawn.object.radius));
+    if let Some((p, _)) = failing {
         m.entities.push(fingers_entity(t_ns, id, "failing_pose", &f, &p, RED));
     }
     m
 }
 
 /// The linkage pose that explains a stage-1 or stage-2 discard (see [`discarded_scene`]) and
-/// its θ2.
-fn failing_pose(f: &Finger, sc: &SceneParams) -> Option<(crate::model::Pose, f64)> {
+/// its θ2; a stage-2 discard's closed pose on the object of radius `radius`.
+fn failing_pose(f: &Finger, sc: &SceneParams, radius: f64) -> Option<(crate::model::Pose, f64)> {
     match singularity_sweep(f, sc) {
         Err(SweepFailure::Margin(s)) => f.ik(f.open.q21, s.at_theta2).ok().map(|p| (p, s.at_theta2)),
         Err(SweepFailure::Pose(th2, _)) => {
@@ -269,7 +361,7 @@ fn failing_pose(f: &Finger, sc: &SceneParams) -> Option<(crate::model::Pose, f64
             f.ik(f.open.q21, lo).ok().map(|p| (p, lo))
         }
         Err(SweepFailure::ClosedPose(..)) => None,
-        Ok(_) => closed_pose(f, sc.object.radius, 0.0).ok().map(|c| (c.pose, c.theta2)),
+        Ok(_) => closed_pose(f, radius, 0.0).ok().map(|c| (c.pose, c.theta2)),
     }
 }
 
@@ -318,10 +410,16 @@ pub fn free_fingers(id: u64, t_ns: u64, finger: Option<&Finger>, q: [f64; 4], fi
     let Some((finger, p1, p2)) = poses else {
         return first.then(|| SceneUpdate { deletions, entities: vec![] });
     };
+    Some(SceneUpdate { deletions, entities: vec![two_fingers(t_ns, id, finger, &p1, &p2)] })
+}
+
+/// The entity `fingers`: finger 1 at pose `p1`, finger 2 at its own pose `p2` (in its
+/// mirrored frame).
+fn two_fingers(t_ns: u64, id: u64, finger: &Finger, p1: &crate::model::Pose, p2: &crate::model::Pose) -> SceneEntity {
     let mut e = entity(t_ns, HAND, "fingers", id);
-    e.lines.push(finger_line(finger, &p1, 1.0, ORANGE));
-    e.lines.push(finger_line(finger, &p2, -1.0, ORANGE));
-    Some(SceneUpdate { deletions, entities: vec![e] })
+    e.lines.push(finger_line(finger, p1, 1.0, ORANGE));
+    e.lines.push(finger_line(finger, p2, -1.0, ORANGE));
+    e
 }
 
 #[cfg(test)]
@@ -332,6 +430,20 @@ mod tests {
 
     fn bottle() -> crate::params::Problem {
         crate::params::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml")).unwrap()
+    }
+
+    #[test]
+    fn a_long_label_is_shortened_to_fit() {
+        let short = "force positiveness violated (min force -7.2609 N)";
+        assert_eq!(fit_label("12 (gen 1) stage 2: ", short), format!("12 (gen 1) stage 2: {short}"));
+        let robust = "object bottle-full: stays (finger criteria met, object barely moves) in 0 of 2 scenarios (P(stay) 0.000 < p_min 0.5; Clopper–Pearson 95%: [0.000, 0.842]); stopped early after 5 of 8 scenarios";
+        assert_eq!(
+            fit_label("88 (gen 3) stage 3: ", robust),
+            "88 (gen 3) stage 3: object bottle-full: stays in 0 of 2 scenarios; stopped early after 5 of 8 scenarios"
+        );
+        let long = "x".repeat(300);
+        assert_eq!(fit_label("1 (gen 1) stage 3: ", &long).chars().count(), LABEL_MAX_CHARS);
+        assert!(fit_label("1 (gen 1) stage 3: ", &long).ends_with('…'));
     }
 
     #[test]
@@ -358,12 +470,12 @@ mod tests {
             let ev = crate::eval::evaluate_statics(&x, sc);
             let Some(stage) = ev.discard.map(|d| d.stage).filter(|s| (1..=2).contains(s)) else { continue };
             let Ok(f) = Finger::new(&x, sc) else { continue };
-            let m = discarded_scene(7, 1, &x, Some(stage), sc);
+            let m = discarded_scene(7, 1, &x, Some(stage), sc, sc);
             assert_eq!((m.deletions.len(), m.entities[0].id.as_str()), (1, "fingers"));
             let drawn = m.entities.iter().any(|e| e.id == "failing_pose");
             match singularity_sweep(&f, sc) {
                 Err(SweepFailure::Margin(s)) => {
-                    let (q, _) = failing_pose(&f, sc).unwrap();
+                    let (q, _) = failing_pose(&f, sc, sc.object.radius).unwrap();
                     let d = [q.q12, q.q22, q.q13].map(dist_to_singular).into_iter().fold(f64::INFINITY, f64::min);
                     assert!((d - s.min_margin).abs() < 1e-12 && drawn);
                     margin += 1;
@@ -371,7 +483,7 @@ mod tests {
                 Err(SweepFailure::Pose(th2, _)) => {
                     // the edge of the assemblable poses below the sweep's failing θ2: a pose
                     // through which the linkage passes a singularity (q12, q22 or q13 at 0 or π)
-                    let (q, th) = failing_pose(&f, sc).unwrap();
+                    let (q, th) = failing_pose(&f, sc, sc.object.radius).unwrap();
                     assert!(crate::math::wrap(q.q22 + f.psi - th).abs() < 1e-9);
                     let d = [q.q12, q.q22, q.q13].map(dist_to_singular).into_iter().fold(f64::INFINITY, f64::min);
                     assert!(th < th2 && d < 1e-4 && drawn, "{th} {th2} {d}");

@@ -29,9 +29,38 @@ pub const VERIFY_METADATA: &str = "gripopt.verify";
 /// Width (s) of one time band of a run's time axis: its design count rounded up to whole
 /// thousands (at least 1000). Band 0, [epoch, epoch + band), holds the run's designs (design
 /// k at second k); a study of the run records in a later band: `gripopt verify` in band 1,
-/// `verify --sample` in band 2 (later scenario recordings take the next free band).
+/// `verify --sample` in band 2, `replay --scenario` from band 3 on ([`scenario_window`]).
 pub fn band_s(run_designs: u64) -> u64 {
     run_designs.div_ceil(1000).max(1) * 1000
+}
+
+/// The window, after the start of band 3, of the recording of scenario `k` of object `o` of
+/// design `id` (`gripopt replay --scenario`; `objects` objects of `per_object` scenarios
+/// each): its own second, `id · objects · per_object + o · per_object + k`, so that any of
+/// a run's scenario recordings opened together never share a window.
+pub fn scenario_window(id: u64, o: usize, k: usize, objects: usize, per_object: usize) -> u64 {
+    id * (objects * per_object) as u64 + (o * per_object + k) as u64
+}
+
+/// The metadata keys of a scenario recording (`replay --scenario`): which scenario it is
+/// (`scenario_object`, `scenario_index`) and where its hand is: the object's `grasp_height`
+/// (`object_grasp_height`, m) raised by the scenario's drawn `height_offset` (m), the height
+/// of `world → hand` in the file. The writer copies the scenario into `/verify` and the label.
+pub fn scenario_metadata(object: &str, k: usize, grasp_height: f64, height_offset: f64) -> BTreeMap<String, String> {
+    BTreeMap::from([
+        ("scenario_object".to_string(), object.to_string()),
+        ("scenario_index".to_string(), k.to_string()),
+        ("object_grasp_height".to_string(), grasp_height.to_string()),
+        ("height_offset".to_string(), height_offset.to_string()),
+    ])
+}
+
+/// The scenario of a recording's metadata ([`scenario_metadata`]): object, index, height offset.
+fn scenario_of(meta: &BTreeMap<String, String>) -> Option<(String, u64, f64)> {
+    let object = meta.get("scenario_object")?.clone();
+    let k = meta.get("scenario_index")?.parse().ok()?;
+    let h = meta.get("height_offset")?.parse().ok()?;
+    Some((object, k, h))
 }
 
 /// The `/verify` message of one design: the columns of verify.csv (values not computed are
@@ -130,7 +159,8 @@ pub fn verify_schema() -> Value {
             "x_off": num(), "impact_ratio": num(), "e_trans": num(), "e_rot": num(), "force_margin": num(), "stable": boolean(), "predicted_moves": boolean(),
             "object_max_displacement": num(), "object_max_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(), "free_end": json!({"type": "string"}),
             "moved": boolean(), "toppled": boolean(), "escaped": boolean(), "rim_contact": boolean(), "agrees": boolean(),
-            "peak_e_trans_ratio": num(), "peak_e_rot_ratio": num(), "t_end": num(), "poses": int()
+            "peak_e_trans_ratio": num(), "peak_e_rot_ratio": num(), "t_end": num(), "poses": int(),
+            "scenario_object": json!({"type": "string"}), "scenario_index": int(), "height_offset": num()
         }),
         &[
             "window",
@@ -252,18 +282,22 @@ fn series_of(k: u64, id: u64, poses: &[PoseSample]) -> VerifySeries {
     s
 }
 
-/// The label drawn above the scene: what was predicted and what the free object did.
-fn verdict(r: &VerifyRecord) -> String {
+/// The label drawn above the scene: what was predicted and what the free object did (in a
+/// scenario recording, which scenario: "68 (bottle-half:0, +4.2 mm): …").
+fn verdict(r: &VerifyRecord, scenario: Option<&(String, u64, f64)>) -> String {
     let outcome = match r.moved {
         Some(true) => "moved",
         Some(false) => "barely moved",
         None => "not observed to the end",
     };
     let predicted = if r.predicted_moves { "moves" } else { "stays" };
+    let which = match scenario {
+        Some((object, k, h)) => format!("scenario {object}:{k}, height {:+.1} mm", h * 1e3),
+        None => format!("row {}", r.window),
+    };
     format!(
-        "{} (row {}): predicted {predicted}; {outcome}: {:.3} mm, {:.3} deg",
+        "{} ({which}): predicted {predicted}; {outcome}: {:.3} mm, {:.3} deg",
         r.id,
-        r.window,
         r.object_max_displacement * 1e3,
         r.object_max_tilt_deg
     )
@@ -273,7 +307,13 @@ fn verdict(r: &VerifyRecord) -> String {
 /// time order: at the window start the record, the series, the static scene, the frames and
 /// the fingers (deleting the previous design's first); then the frames and the fingers at
 /// every further pose; at the window's last nanosecond the frames at the final pose.
-fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions) -> Vec<(usize, u64, Vec<u8>)> {
+fn encode(
+    k: u64,
+    e: &VerifyEntry,
+    problem: &Problem,
+    opts: &VerifyRecordOptions,
+    scenario: Option<&(String, u64, f64)>,
+) -> Vec<(usize, u64, Vec<u8>)> {
     let t0 = window_start_ns(opts.epoch_s.saturating_mul(1_000_000_000), opts.window_base_s + k);
     let sc = &problem.scene;
     let mut r = e.record.clone();
@@ -287,8 +327,14 @@ fn encode(k: u64, e: &VerifyEntry, problem: &Problem, opts: &VerifyRecordOptions
     let design = Design::from_array(&[p.l21, p.b, p.t22, p.r, p.p, p.psi_deg]);
     let finger = Finger::new(&design, sc).ok();
     let series = serde_json::to_vec(&series_of(k, r.id, &e.poses)).expect("series serialise");
-    let mut out = vec![(0, t0, serde_json::to_vec(&r).expect("records serialise")), (4, t0, series)];
-    out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r)))));
+    let mut record = serde_json::to_value(&r).expect("records serialise");
+    if let Some((object, k, h)) = scenario {
+        record["scenario_object"] = object.as_str().into();
+        record["scenario_index"] = (*k).into();
+        record["height_offset"] = (*h).into();
+    }
+    let mut out = vec![(0, t0, serde_json::to_vec(&record).expect("records serialise")), (4, t0, series)];
+    out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r, scenario)))));
     let end = window_end_ns(t0);
     let Some(last) = e.poses.last() else {
         // nothing simulated (the free scene ended at its start, e.g. an open finger inside the
@@ -330,6 +376,7 @@ pub fn write_verify(
     let tmp = super::mcapfile::temporary(path);
     let mc = super::mcapfile::error(&tmp);
     let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
+    let scenario = scenario_of(meta);
     let mut meta = meta.clone();
     meta.insert("designs".into(), entries.len().to_string());
     meta.insert("first_window".into(), "0".into());
@@ -352,7 +399,7 @@ pub fn write_verify(
         (series_schema, "json"),
     ];
     let chans = add_channels(&mut w, &TOPICS, &schema_of, &tmp)?;
-    let designs = entries.iter().enumerate().map(|(k, e)| encode(k as u64, e, problem, opts));
+    let designs = entries.iter().enumerate().map(|(k, e)| encode(k as u64, e, problem, opts, scenario.as_ref()));
     write_designs(&mut w, &chans, designs, &tmp)?;
     super::mcapfile::finish(w, &tmp, path)
 }

@@ -61,6 +61,20 @@ pub fn write_shard<R: Recordable>(
         meta.insert("last_id".into(), last.to_string());
     }
     meta.insert("designs".into(), designs.len().to_string());
+    // the scene of stage 3 (absent: centred, as in every recording before session 36); a
+    // free-kind run's shards draw the centred diagnostic grasp, the label its free verdict
+    let setup = &problem.scene.setup;
+    if setup.kind != crate::params::SceneKind::Centred {
+        meta.insert("scene_kind".into(), setup.kind.to_string());
+        meta.insert("x_off".into(), setup.x_off.to_string());
+        let drawn = match setup.kind {
+            crate::params::SceneKind::Free => {
+                "centred grasp (object at x = 0); the label gives the free scene's verdict"
+            }
+            _ => "the offset scene's grasp (object at x_off)",
+        };
+        meta.insert("scene_drawn".into(), drawn.into());
+    }
     meta.insert("epoch_s".into(), opts.epoch_s.to_string());
     meta.insert(
         "resolution".into(),
@@ -72,8 +86,10 @@ pub fn write_shard<R: Recordable>(
     );
     // metadata before any channel: no empty chunk
     w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
+    // finger 2's own angles are columns of the offset scene's series only
+    let finger2 = has_finger2(problem);
     let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(problem.solver.method), &tmp)?;
-    let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor()).map_err(mc)?;
+    let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor(finger2)).map_err(mc)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
     let schema_of = [
@@ -95,6 +111,12 @@ pub fn write_shard<R: Recordable>(
     super::mcapfile::finish(w, &tmp, path)
 }
 
+/// Whether the problem's shards carry finger 2's own angles (the offset scene, where finger 2
+/// is not finger 1's mirror image).
+fn has_finger2(problem: &Problem) -> bool {
+    problem.scene.setup.kind == crate::params::SceneKind::Offset
+}
+
 /// All messages of one design as (channel, log time, bytes), in time order: at the window
 /// start the record, the series, the frames, the static scene and the first finger pose
 /// (without a trajectory: the open and failing poses); then the fingers every `scene_dt` of
@@ -108,7 +130,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
         None => (&[][..], &[][..], &[][..], 0),
     };
     let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
-    let series = messages::series(d, samples, kept, simulated, opts).encode_to_vec();
+    let series = messages::series(d, samples, kept, simulated, opts, has_finger2(problem)).encode_to_vec();
     let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, series)];
     if opts.scene_dt <= 0.0 {
         return out;
@@ -116,10 +138,13 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let design = Design::from_array(&d.parameters);
     let finger = d.record.lengths().and_then(|_| Finger::new(&design, sc).ok());
     out.push((Ch::Tf, t0, fx(&messages::frames(t0, sc))));
-    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, sc))));
+    // the object drawn: a robust design's stage-2 discard shows the object it failed on
+    let shown = messages::drawn_scene(problem, d);
+    out.push((Ch::Static, t0, fx(&messages::static_scene(t0, d, &shown))));
     let end = messages::window_end_ns(t0);
     if samples.is_empty() {
-        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, d.record.verdict.failed_stage, sc))));
+        let failed = d.record.verdict.failed_stage;
+        out.push((Ch::Scene, t0, fx(&messages::discarded_scene(t0, d.id, &design, failed, sc, &shown))));
         out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
         return out;
     }

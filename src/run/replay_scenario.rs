@@ -101,9 +101,14 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
         (true, Some(row)) => {
             let name = format!("scenario-{id}-{object}-{k}.mcap");
             let what = format!("design {id} scenario {object}:{k}");
-            let r = VerifyRecording::for_scenario(dir, &name, what)?;
+            let i = o * setup.k + k;
+            let window = crate::record::scenario_window(id, o, k, setup.spec.objects.len(), setup.k);
+            // the scenario's hand height is the object's grasp height + its drawn height offset
+            let h = setup.scenarios[i].values[1];
+            let tag = crate::record::scenario_metadata(object, k, setup.spec.objects[o].object.grasp_height, h);
+            let r = VerifyRecording::for_scenario(dir, &name, what, window, tag)?;
             let mut ps = p.clone();
-            ps.scene = setup.scenario_scenes[o * setup.k + k].clone();
+            ps.scene = setup.scenario_scenes[i].clone();
             let kept = crate::record::keep_poses(&poses, r.opts.scene_dt);
             Some(r.write(&ps, vec![(row, kept)])?)
         }

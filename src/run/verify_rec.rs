@@ -85,12 +85,21 @@ impl VerifyRecording {
     }
 
     /// The recording of one robust scenario replayed (`gripopt replay --scenario`): the file
-    /// `name` in the run folder, in the run's band 3 (bands 1 and 2 are verify's).
-    pub fn for_scenario(dir: &Path, name: &str, what: String) -> Result<Self> {
+    /// `name` in the run folder, in its own `window` after the start of the run's band 3
+    /// (bands 1 and 2 are verify's; [`crate::record::scenario_window`]), with the scenario's
+    /// metadata `tag` ([`crate::record::scenario_metadata`]).
+    pub fn for_scenario(
+        dir: &Path,
+        name: &str,
+        what: String,
+        window: u64,
+        tag: BTreeMap<String, String>,
+    ) -> Result<Self> {
         let mut r = Self::new(dir, &VerifySource::Pareto)?;
-        r.opts.window_base_s *= 3;
+        r.opts.window_base_s = r.opts.window_base_s * 3 + window;
         r.path = dir.join(name);
         r.meta.insert("source".into(), what);
+        r.meta.extend(tag);
         Ok(r)
     }
 

@@ -198,7 +198,9 @@ impl DynamicsResult {
     }
 }
 
-/// One trajectory sample (finger 1, local frame; finger 2 is its mirror image).
+/// One trajectory sample: finger 1 in its local frame, the hand force and the energy of the
+/// scene; finger 2 is finger 1's mirror image in the centred scene, and has its own angles
+/// `q2` in the offset scene.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Sample {
     /// Time (s).
@@ -223,6 +225,10 @@ pub struct Sample {
     pub energy: f64,
     /// E_ex = E − V* (J).
     pub energy_excess: f64,
+    /// Finger 2's q11, q21 (rad, in its own mirrored frame) where it is not finger 1's
+    /// mirror image (the offset scene); `None` in the centred scene.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub q2: Option<[f64; 2]>,
 }
 
 /// A sample of the free scene's object pose and fingers (for `--csv` and recordings).

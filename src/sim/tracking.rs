@@ -54,6 +54,7 @@ pub fn grasp_sample(t: f64, q: [f64; 4], f: &FingerEval, hand: [f64; 2], energy:
         filtered_fy: hand[1],
         energy,
         energy_excess: energy - v_star,
+        q2: None,
     }
 }
 

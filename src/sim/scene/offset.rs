@@ -288,12 +288,14 @@ impl Scene<NO, EO> for OffsetScene<'_> {
     fn memories(&self) -> &[Memory] {
         &self.mem
     }
-    /// Finger 1's sample (its angles, contacts and θ2; finger 2 is not its mirror image
-    /// here), with the hand force (both fingers, y component), its filtered value and the
-    /// energy of both fingers.
+    /// Finger 1's sample (its angles, contacts and θ2) with finger 2's own angles (`q2`:
+    /// finger 2 is not finger 1's mirror image here), the hand force (both fingers, y
+    /// component), its filtered value and the energy of both fingers.
     fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &St, ev: &PairEval, sink: &mut K) {
         let q = [y[0], y[1], y[2], y[3]];
-        sink.finger(at, &grasp_sample(t, q, &ev.f[0], [ev.hand.y, y[9]], ev.energy, self.limits.v_star));
+        let mut s = grasp_sample(t, q, &ev.f[0], [ev.hand.y, y[9]], ev.energy, self.limits.v_star);
+        s.q2 = Some([y[4], y[5]]);
+        sink.finger(at, &s);
     }
     fn finish(mut self, run: &Run<NO, PairEval>) -> OffsetResult {
         self.tracker.on_end(run.end);
