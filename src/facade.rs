@@ -147,7 +147,8 @@ pub fn parse_scene(text: &str) -> Result<(SceneKind, Option<f64>)> {
     }
 }
 
-/// The values of a grasp [`Sample`] (finger 1, its local frame; finger 2 is its mirror),
+/// The values of a grasp [`Sample`] (finger 1, its local frame; finger 2 is its mirror in
+/// the centred scene, while the offset scene's finger 2 is in the recordings' series only),
 /// named as `gripopt simulate --csv` and `replay --csv` name them, with units.
 pub const SAMPLE_COLUMNS: [Column; 16] = [
     ("t", "s", "time"),
