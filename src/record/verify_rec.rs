@@ -42,6 +42,15 @@ pub fn scenario_window(id: u64, o: usize, k: usize, objects: usize, per_object: 
     id * (objects * per_object) as u64 + (o * per_object + k) as u64
 }
 
+/// Seconds from the epoch to the window of the free-scene recording of design `id` of a
+/// single-object free-kind run (`gripopt replay RUN --design ID`, `free-ID.mcap`), `band`
+/// being [`band_s`]: band 3's start + `id`, the window a scenario recording would have with
+/// one object of one scenario. Scenario files belong to robust runs and free files to
+/// single-object ones, so files of one run never share a window.
+pub fn free_window(band: u64, id: u64) -> u64 {
+    3 * band + scenario_window(id, 0, 0, 1, 1)
+}
+
 /// The metadata keys of a scenario recording (`replay --scenario`): which scenario it is
 /// (`scenario_object`, `scenario_index`) and where its hand is: the object's `grasp_height`
 /// (`object_grasp_height`, m) raised by the scenario's drawn `height_offset` (m), the height
