@@ -29,7 +29,8 @@ pub const VERIFY_METADATA: &str = "gripopt.verify";
 /// Width (s) of one time band of a run's time axis: its design count rounded up to whole
 /// thousands (at least 1000). Band 0, [epoch, epoch + band), holds the run's designs (design
 /// k at second k); a study of the run records in a later band: `gripopt verify` in band 1,
-/// `verify --sample` in band 2, `replay --scenario` from band 3 on ([`scenario_window`]).
+/// `verify --sample` in band 2, `replay --scenario` from band 3 on ([`scenario_window`]),
+/// a single-object free-kind run's `replay` in band 3 ([`free_window`]).
 pub fn band_s(run_designs: u64) -> u64 {
     run_designs.div_ceil(1000).max(1) * 1000
 }
