@@ -46,6 +46,7 @@ mod s35_cli_runs;
 mod s35_csv;
 mod s35_physics;
 mod s36_auto_events;
+mod s36_free_replay;
 mod s36_mcap;
 mod s36_params;
 mod scene_cli;

@@ -128,7 +128,8 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// Print a recorded design, re-simulate it and verify its trajectory.
+    /// Print a recorded design, re-simulate it and verify its trajectory (a single-object
+    /// free-kind run: also record its free scene to RUN_DIR/free-ID.mcap).
     Replay {
         /// Run folder.
         run_dir: PathBuf,

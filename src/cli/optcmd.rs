@@ -197,6 +197,12 @@ struct ReplayJson<'a> {
     compared_values: usize,
     file: String,
     replay_s: f64,
+    /// A single-object free-kind run: the design's free scene recorded here (`free-ID.mcap`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    free_recording: Option<String>,
+    /// A single-object free-kind run: why the free scene was not recorded.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    free_not_recorded: Option<String>,
 }
 
 /// `replay --json`'s `across_revisions`.
@@ -242,6 +248,16 @@ pub fn replay(
         crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, samples)?))?;
     }
     let rec = &r.recorded.record;
+    // a single-object free-kind run: the design's free scene to MCAP (docs/recording.md)
+    let free = match r.problem_note {
+        Some(_) => None,
+        None => gripopt::run::record_free_scene(dir, id, rec.generation, &r.recorded.design())?,
+    };
+    let (free_recording, free_not_recorded) = match &free {
+        Some(gripopt::run::FreeRecording::Recorded(p)) => (Some(p.display().to_string()), None),
+        Some(gripopt::run::FreeRecording::NotRecorded(why)) => (None, Some(why.clone())),
+        None => (None, None),
+    };
     if json {
         let v = ReplayJson {
             recorded: rec,
@@ -260,6 +276,8 @@ pub fn replay(
             compared_values: r.values_compared,
             file: r.recorded.file.display().to_string(),
             replay_s: secs,
+            free_recording,
+            free_not_recorded,
         };
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(code);
@@ -309,6 +327,15 @@ pub fn replay(
             r.max_difference,
             r.compared,
             r.recomputed_feasible
+        );
+    }
+    if let Some(why) = &free_not_recorded {
+        outln!("  {why}");
+    }
+    if let Some(m) = &free_recording {
+        outln!(
+            "  free scene recorded to {m} (open in Foxglove with {})",
+            dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
         );
     }
     outln!("  ({:.1} ms)", secs * 1e3);

@@ -53,8 +53,8 @@ pub use replay::{problem_of_generation, read_design, replay, AcrossRevisions, Re
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
-    band_s, keep_poses, parameters as verify_parameters, scenario_metadata, scenario_window, verify_schema,
-    verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, VerifySeries,
-    WindowStart, VERIFY_METADATA,
+    band_s, free_window, keep_poses, parameters as verify_parameters, scenario_metadata, scenario_window,
+    verify_schema, verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions,
+    VerifySeries, WindowStart, VERIFY_METADATA,
 };
 pub use writer::{write_shard, Recorder, ShardTask};

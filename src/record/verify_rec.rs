@@ -29,7 +29,8 @@ pub const VERIFY_METADATA: &str = "gripopt.verify";
 /// Width (s) of one time band of a run's time axis: its design count rounded up to whole
 /// thousands (at least 1000). Band 0, [epoch, epoch + band), holds the run's designs (design
 /// k at second k); a study of the run records in a later band: `gripopt verify` in band 1,
-/// `verify --sample` in band 2, `replay --scenario` from band 3 on ([`scenario_window`]).
+/// `verify --sample` in band 2, `replay --scenario` from band 3 on ([`scenario_window`]),
+/// a single-object free-kind run's `replay` in band 3 ([`free_window`]).
 pub fn band_s(run_designs: u64) -> u64 {
     run_designs.div_ceil(1000).max(1) * 1000
 }
@@ -40,6 +41,15 @@ pub fn band_s(run_designs: u64) -> u64 {
 /// a run's scenario recordings opened together never share a window.
 pub fn scenario_window(id: u64, o: usize, k: usize, objects: usize, per_object: usize) -> u64 {
     id * (objects * per_object) as u64 + (o * per_object + k) as u64
+}
+
+/// Seconds from the epoch to the window of the free-scene recording of design `id` of a
+/// single-object free-kind run (`gripopt replay RUN --design ID`, `free-ID.mcap`), `band`
+/// being [`band_s`]: band 3's start + `id`, the window a scenario recording would have with
+/// one object of one scenario. Scenario files belong to robust runs and free files to
+/// single-object ones, so files of one run never share a window.
+pub fn free_window(band: u64, id: u64) -> u64 {
+    3 * band + scenario_window(id, 0, 0, 1, 1)
 }
 
 /// The metadata keys of a scenario recording (`replay --scenario`): which scenario it is

@@ -22,6 +22,7 @@ mod outputs;
 mod persist;
 mod plots;
 mod problems;
+mod replay_free;
 mod replay_scenario;
 mod robust_columns;
 mod robust_eval;
@@ -52,6 +53,7 @@ pub use outputs::{
 pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
 pub use problems::PROBLEM_FILE;
+pub use replay_free::{free_file_name, record_free_scene, FreeRecording};
 pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{robust_unit, RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
 pub use robust_eval::RobustScheduled;

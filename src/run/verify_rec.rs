@@ -103,6 +103,20 @@ impl VerifyRecording {
         Ok(r)
     }
 
+    /// The recording of a single-object free-kind design's free scene (`gripopt replay
+    /// RUN --design ID`, `free-ID.mcap`): its own second `ID` after the start of band 3,
+    /// [`crate::record::free_window`], with `free_design` (the design id) and the `run_id`
+    /// of the run that wrote it in its metadata (an existing file is replaced only then).
+    pub fn for_free(dir: &Path, name: &str, id: u64, run_id: &str) -> Result<Self> {
+        let mut r = Self::new(dir, &VerifySource::Pareto)?;
+        r.opts.window_base_s = crate::record::free_window(r.opts.window_base_s, id);
+        r.path = dir.join(name);
+        r.meta.insert("source".into(), format!("replay design {id} (free scene)"));
+        r.meta.insert("free_design".into(), id.to_string());
+        r.meta.insert("run_id".into(), run_id.to_string());
+        Ok(r)
+    }
+
     /// Write the rows (in order: row k is window k) with their poses, and the layout file;
     /// returns the recording's path.
     pub fn write(self, p: &Problem, rows: Vec<(VerifyRow, Vec<PoseSample>)>) -> Result<PathBuf> {
