@@ -247,6 +247,27 @@ fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
     // each file one second of its own: no second holds two files' messages
     let seconds: std::collections::BTreeSet<u64> = windows.iter().map(|w| w.0).collect();
     assert_eq!(seconds.len(), files.len(), "{windows:?}");
+    // the same scenario replayed again replaces its file; a file of another origin at that
+    // name (another scenario's recording) is refused, named, and kept byte for byte
+    let source = |f: &std::path::Path| {
+        let buf = std::fs::read(f).unwrap();
+        let summary = mcap::Summary::read(&buf).unwrap().unwrap();
+        let m = summary.metadata_indexes.iter().map(|i| mcap::read::metadata(&buf, i).unwrap());
+        m.into_iter().find(|m| m.name == "gripopt.verify").unwrap().metadata["source"].clone()
+    };
+    let src = source(&files[0]);
+    let (id, case) = src.strip_prefix("design ").unwrap().split_once(" scenario ").unwrap();
+    let (object, k) = case.rsplit_once(':').unwrap();
+    let (id, k): (u64, usize) = (id.parse().unwrap(), k.parse().unwrap());
+    let again = gripopt::run::replay_scenario(&run, id, object, k, true).unwrap();
+    assert_eq!(again.recording.as_ref(), Some(&files[0]));
+    std::fs::copy(&files[1], &files[0]).unwrap();
+    let foreign = std::fs::read(&files[0]).unwrap();
+    let e = gripopt::run::replay_scenario(&run, id, object, k, true).unwrap_err().to_string();
+    assert!(e.contains(files[0].file_name().unwrap().to_str().unwrap()) && e.contains("nothing was done"), "{e}");
+    assert_eq!(std::fs::read(&files[0]).unwrap(), foreign, "the foreign file was changed");
+    std::fs::remove_file(&files[0]).unwrap();
+    gripopt::run::replay_scenario(&run, id, object, k, true).unwrap();
 }
 
 /// A free-kind run's shards draw the centred diagnostic grasp (object at x = 0) and say so:

@@ -70,14 +70,33 @@ pub fn record_free_scene(
 
 /// An existing `path` may be replaced only when it is a regular file this run's replay wrote.
 fn check_replaceable(path: &Path, run_id: &str) -> Result<()> {
+    let what = format!("a free-scene recording `replay` wrote for this run (run id {run_id})");
+    check_ours(path, &what, |m| {
+        if m.contains_key("free_design") && m.get("run_id").map(String::as_str) == Some(run_id) {
+            Ok(())
+        } else {
+            Err(format!(
+                "written by another run or command (run id {})",
+                m.get("run_id").map_or("none", String::as_str)
+            ))
+        }
+    })
+}
+
+/// An existing `path` (a file `replay` writes into a run folder) may be replaced only when
+/// it is a regular, readable MCAP whose `gripopt.verify` metadata `ours` accepts (Err: why
+/// not); otherwise an error naming it, saying it is not `what` and that nothing was done.
+pub(super) fn check_ours(
+    path: &Path,
+    what: &str,
+    ours: impl Fn(&std::collections::BTreeMap<String, String>) -> std::result::Result<(), String>,
+) -> Result<()> {
     if std::fs::symlink_metadata(path).is_err() {
         return Ok(());
     }
-    let refuse = |why: &str| {
-        Error::RunDir {
+    let refuse = |why: &str| Error::RunDir {
         path: path.to_path_buf(),
-        message: format!("{why}: it is not a free-scene recording `replay` wrote for this run (run id {run_id}); move it away to record the design's free scene (nothing was done)"),
-    }
+        message: format!("{why}: it is not {what}; move it away to record it again (nothing was done)"),
     };
     let bytes = crate::fsutil::read_regular(path, 1 << 30).map_err(|_| refuse("not a readable regular file"))?;
     let summary = mcap::Summary::read(&bytes).ok().flatten().ok_or_else(|| refuse("not a readable MCAP"))?;
@@ -87,10 +106,5 @@ fn check_replaceable(path: &Path, run_id: &str) -> Result<()> {
         .find(|m| m.name == VERIFY_METADATA)
         .and_then(|mi| mcap::read::metadata(&bytes, mi).ok())
         .ok_or_else(|| refuse("no gripopt.verify metadata"))?;
-    let m = &meta.metadata;
-    if !m.contains_key("free_design") || m.get("run_id").map(String::as_str) != Some(run_id) {
-        let theirs = m.get("run_id").map_or("none", String::as_str);
-        return Err(refuse(&format!("written by another run or command (run id {theirs})")));
-    }
-    Ok(())
+    ours(&meta.metadata).map_err(|why| refuse(&why))
 }

@@ -106,7 +106,23 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
             // the scenario's hand height is the object's grasp height + its drawn height offset
             let h = setup.scenarios[i].values[1];
             let tag = crate::record::scenario_metadata(object, k, setup.spec.objects[o].object.grasp_height, h);
-            let r = VerifyRecording::for_scenario(dir, &name, what, window, tag)?;
+            let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
+            // replaced only when this run's replay of this scenario wrote it: same epoch
+            // (the run's start, in every file of its time axis) and the same source
+            let epoch = r.opts.epoch_s.to_string();
+            let desc = format!("the recording `replay --scenario {object}:{k}` wrote for this run (epoch {epoch})");
+            super::replay_free::check_ours(&dir.join(&name), &desc, |m| {
+                let (e, src) = (m.get("epoch_s"), m.get("source"));
+                if e == Some(&epoch) && src == Some(&what) {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "written by another run or command (epoch {}, source {:?})",
+                        e.map_or("none", String::as_str),
+                        src.map_or("none", String::as_str)
+                    ))
+                }
+            })?;
             let mut ps = p.clone();
             ps.scene = setup.scenario_scenes[i].clone();
             let kept = crate::record::keep_poses(&poses, r.opts.scene_dt);
