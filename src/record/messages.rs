@@ -214,14 +214,7 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
             for (x, c) in v.iter_mut().zip(&f2[..cols]) {
                 *x = c[k];
             }
-            FingerSample {
-                q: [v[0], v[1]],
-                qd: [v[2], v[3]],
-                theta2: v[4],
-                delta: [v[5], v[6]],
-                normal: [v[7], v[8]],
-                friction: [v[9], v[10]],
-            }
+            FingerSample::from_values(v)
         })
     };
     Some(

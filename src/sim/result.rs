@@ -234,6 +234,18 @@ impl FingerSample {
         let [q, qd, d, n, f] = [self.q, self.qd, self.delta, self.normal, self.friction];
         [q[0], q[1], qd[0], qd[1], self.theta2, d[0], d[1], n[0], n[1], f[0], f[1]]
     }
+
+    /// The finger of [`FingerSample::values`] `v`.
+    pub fn from_values(v: [f64; 11]) -> FingerSample {
+        FingerSample {
+            q: [v[0], v[1]],
+            qd: [v[2], v[3]],
+            theta2: v[4],
+            delta: [v[5], v[6]],
+            normal: [v[7], v[8]],
+            friction: [v[9], v[10]],
+        }
+    }
 }
 
 /// One trajectory sample: finger 1 in its local frame, the hand force and the energy of the
