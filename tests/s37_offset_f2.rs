@@ -222,6 +222,11 @@ fn an_offset_run_records_and_replays_finger_2() {
     });
     let r = replay(&tampered, id).unwrap();
     assert!(!r.verified && r.max_difference > 1e-4, "a changed finger-2 force: {}", r.max_difference);
+    // a shard missing one of finger 2's columns is refused, naming the file
+    let partial = copy("partial");
+    rewrite_series(&shard_of(&partial, id), |s| s.finger2_theta2.clear());
+    let e = read_design(&partial, id).unwrap_err().to_string();
+    assert!(e.contains("differ in length") && e.contains(".mcap"), "{e}");
     // session 36's shards (finger 2's angles only) and older ones (none) still verify
     for (name, keep, shape) in [("s36", 2, Finger2Columns::Angles), ("s35", 0, Finger2Columns::None)] {
         let old = copy(name);
