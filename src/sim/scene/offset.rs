@@ -200,7 +200,6 @@ impl Rhs<NO> for OffsetScene<'_> {
 
 impl Scene<NO, EO> for OffsetScene<'_> {
     type Eval = PairEval;
-    type Output = OffsetResult;
 
     fn events(&self) -> [EventKind; EO] {
         OFFSET_EVENTS
@@ -297,6 +296,10 @@ impl Scene<NO, EO> for OffsetScene<'_> {
         s.finger2 = Some(finger_sample([y[4], y[5], y[6], y[7]], &ev.f[1]));
         sink.finger(at, &s);
     }
+}
+
+impl OffsetScene<'_> {
+    /// The output of a finished run: the criteria's verdicts and the measured values.
     fn finish(mut self, run: &Run<NO, PairEval>) -> OffsetResult {
         self.tracker.on_end(run.end);
         let end = run.last.map(|ev| EndValues {
@@ -330,7 +333,10 @@ pub(crate) fn run<K: Sink + ?Sized>(
     sink: &mut K,
 ) -> OffsetResult {
     match OffsetScene::new(f, s, st, x_off, ctl) {
-        Ok(sc) => driver::simulate(sc, integ, ctl, tolerances(integ), s.criteria.t_max, sink),
+        Ok(mut sc) => {
+            let run = driver::simulate(&mut sc, integ, ctl, tolerances(integ), s.criteria.t_max, sink);
+            sc.finish(&run)
+        }
         Err(why) => {
             // the scene could not be set up: nothing simulated, nothing known but R_area
             let mut k = Tracker::<4>::new(ctl.mode == Mode::Pipeline);
