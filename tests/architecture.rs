@@ -1,6 +1,6 @@
 //! The layering of docs/architecture.md, checked on the source text: each layer imports only
-//! the layers below it; no source file is over 700 lines; the library reads no
-//! environment variable and uses no anyhow (CLI only).
+//! the layers below it; no two files import each other; no source file is over 700 lines;
+//! the library reads no environment variable, uses no anyhow and never prints (CLI only).
 
 use std::path::{Path, PathBuf};
 
@@ -90,6 +90,33 @@ fn the_library_reads_no_environment_and_uses_no_anyhow() {
         }
     }
     assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// Files of the library allowed to print, each with its reason: none. What a user sees of the
+/// library's work (a run's progress, a benchmark's bars, warnings, a trace) reaches the
+/// caller through a callback, a sink or a writer it is given; printing and progress bars are
+/// the CLI's (src/main.rs, src/cli/).
+const MAY_PRINT: &[(&str, &str)] = &[];
+
+/// The library never prints and draws no progress bar: no `println!`, `eprintln!`, `print!`,
+/// `eprint!`, `dbg!`, no write to the process's stdout or stderr, no indicatif outside
+/// src/main.rs and src/cli/.
+#[test]
+fn the_library_never_prints() {
+    let mut files = Vec::new();
+    rs_files(&src(), &mut files);
+    let mut bad = Vec::new();
+    let cli = |f: &PathBuf| f.starts_with(src().join("cli")) || *f == src().join("main.rs");
+    let excepted = |f: &PathBuf| MAY_PRINT.iter().any(|(p, _)| *f == src().join(p));
+    for f in files.iter().filter(|f| !cli(f) && !excepted(f)) {
+        let c = code(f);
+        for what in ["println!", "eprintln!", "print!", "eprint!", "dbg!", "io::stdout", "io::stderr", "indicatif"] {
+            if c.contains(what) {
+                bad.push(format!("{} uses {what}", f.display()));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "the library prints (give the caller a callback, a sink or a writer):\n{}", bad.join("\n"));
 }
 
 /// The module path of a source file (`src/sim/scene/mod.rs` → sim::scene).
