@@ -13,18 +13,11 @@ use gripopt::{Column, POSE_COLUMNS};
 use serde::Serialize;
 use std::path::Path;
 
-/// `centred`, `offset:X` or `free[:X]` (metres) applied to the `[scene]` of problem `p`, read
+/// `centred`, `offset:X` or `free[:X]` (metres; the library's [`gripopt::parse_scene`]) applied to the `[scene]` of problem `p`, read
 /// from `from` (checked by the library as a problem file's would be: the free scene needs
 /// g_eq = 0; an error names `from` and the flag).
 pub fn apply_scene(p: &Problem, from: &Path, arg: &str) -> Result<Problem> {
-    let num = |x: &str| x.parse::<f64>().with_context(|| format!("--scene {arg}: not a number"));
-    let (kind, x_off) = match arg.split_once(':') {
-        None if arg == "centred" => (SceneKind::Centred, None),
-        None if arg == "free" => (SceneKind::Free, None),
-        Some(("offset", x)) => (SceneKind::Offset, Some(num(x)?)),
-        Some(("free", x)) => (SceneKind::Free, Some(num(x)?)),
-        _ => bail!("--scene {arg}: must be centred, offset:X or free[:X] (metres)"),
-    };
+    let (kind, x_off) = gripopt::parse_scene(arg).context("--scene")?;
     Ok(p.in_scene(kind, x_off, Path::new(&format!("{} with --scene {arg}", from.display())))?)
 }
 
