@@ -13,7 +13,7 @@ Units: lengths in m, ψ as ``psi_deg`` in degrees, forces in N, times in s; ever
 says so in ``df.attrs["units"]`` (docs/outputs.md, docs/python.md).
 """
 
-from ._frames import DESIGN_COLUMNS, DESIGN_NAMES, HISTORY_COLUMNS, POSE_COLUMNS, SAMPLE_COLUMNS
+from ._frames import DESIGN_COLUMNS, DESIGN_NAMES, FINGER2_COLUMNS, HISTORY_COLUMNS, POSE_COLUMNS, SAMPLE_COLUMNS
 from ._gripopt import __version__
 from .errors import (
     GripoptError,
@@ -32,6 +32,7 @@ __all__ = [
     "Bounds",
     "DESIGN_COLUMNS",
     "DESIGN_NAMES",
+    "FINGER2_COLUMNS",
     "GenerationReport",
     "GripoptError",
     "GripoptWarning",

@@ -24,6 +24,8 @@ DESIGN_NAMES: list[str]
 DESIGN_COLUMNS: list[ColumnInfo]
 HISTORY_COLUMNS: list[ColumnInfo]
 SAMPLE_COLUMNS: list[ColumnInfo]
+# finger 2's own trajectory columns, after SAMPLE_COLUMNS in the offset scene (docs/outputs.md)
+FINGER2_COLUMNS: list[ColumnInfo]
 POSE_COLUMNS: list[ColumnInfo]
 # a robust problem's design-table columns, then each object's `NAME.column` (docs/robust.md)
 ROBUST_COLUMNS: list[ColumnInfo]
