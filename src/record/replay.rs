@@ -410,11 +410,16 @@ struct Msg {
 /// Why `run_dir` has no recording folder `dir`: run.json's recording settings say whether
 /// the run recorded anything.
 fn no_recording(run_dir: &Path, dir: &Path) -> String {
+    /// run.json as far as this reads it (record does not know the run layer's `RunInfo`).
+    #[derive(serde::Deserialize)]
+    struct RunRecording {
+        recording: Option<super::RecordOptions>,
+    }
     let run_json = run_dir.join("run.json");
     let enabled = crate::fsutil::read_regular(&run_json, crate::fsutil::caps::RUN_JSON)
         .ok()
-        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .and_then(|v| v["recording"]["enabled"].as_bool());
+        .and_then(|b| serde_json::from_slice::<RunRecording>(&b).ok())
+        .and_then(|v| v.recording.map(|r| r.enabled));
     match enabled {
         Some(false) => "the run was not recorded (run.json: recording off, started with `--record none`): no design can be replayed; `gripopt show` and `gripopt export` take its last designs from the checkpoint".into(),
         Some(true) => format!("{} is missing, but run.json says the run recorded its designs: restore it (e.g. from a backup)", dir.display()),

@@ -39,7 +39,7 @@ pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FO
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
-pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
+pub use info::{new_run_id, RecordingHeader, Resume, RunHeader, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
     check_population, check_sample, check_threads, sample_bytes_recorded, threads_note, BYTES_PER_DESIGN, MAX_THREADS,
     MIN_DESIGNS_PER_THREAD, SAMPLE_BYTES_PER_DESIGN,

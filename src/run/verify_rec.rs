@@ -13,7 +13,7 @@ use crate::record::{
     WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
-use crate::{Error, Result};
+use crate::Result;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -36,28 +36,9 @@ impl VerifyRecording {
     /// For run folder `dir` and the designs of `source`: the epoch is the run's
     /// (`run.json` → `recording.epoch_s`; 0 = 1970 when the run has none).
     pub fn new(dir: &Path, source: &VerifySource) -> Result<Self> {
-        let run_json = dir.join("run.json");
-        let text = crate::fsutil::read_regular_string(&run_json, crate::fsutil::caps::RUN_JSON)
-            .map_err(|e| Error::io(&run_json, "cannot read", e))?;
-        let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json {
-            path: run_json.clone(),
-            what: "invalid run.json",
-            source,
-        })?;
-        let epoch_s = match &run["recording"]["epoch_s"] {
-            serde_json::Value::Null => 0,
-            v => v.as_u64().ok_or_else(|| Error::RunDir {
-                path: run_json.clone(),
-                message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds"),
-            })?,
-        };
-        let designs = match &run["evaluations"] {
-            serde_json::Value::Null => 0,
-            v => v.as_u64().ok_or_else(|| Error::RunDir {
-                path: run_json.clone(),
-                message: format!("field `evaluations` = {v} is not a whole number"),
-            })?,
-        };
+        let run = super::RunHeader::load(dir)?;
+        let epoch_s = run.epoch_s();
+        let designs = run.evaluations.unwrap_or(0);
         // the recording's last design id, should run.json's count be short of it
         let recorded =
             crate::record::read_index(&dir.join("recording")).ok().and_then(|i| i.last().map(|e| e.last_id + 1));
@@ -70,9 +51,9 @@ impl VerifyRecording {
         let mut meta = BTreeMap::new();
         meta.insert("gripopt_version".into(), env!("CARGO_PKG_VERSION").into());
         meta.insert("source".into(), src);
-        for k in ["problem_name", "problem_sha256"] {
-            if let Some(v) = run[k].as_str() {
-                meta.insert(k.into(), v.into());
+        for (k, v) in [("problem_name", run.problem_name), ("problem_sha256", run.problem_sha256)] {
+            if let Some(v) = v {
+                meta.insert(k.into(), v);
             }
         }
         let opts = VerifyRecordOptions {
