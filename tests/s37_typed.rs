@@ -72,3 +72,54 @@ fn replay_of_a_run_without_recording_says_why_from_run_json() {
     let e = gripopt::record::read_design(&d, 0).unwrap_err().to_string();
     assert!(e.contains("does not say whether"), "{e}");
 }
+
+/// Checkpoints written by the gripopt of session 36 (its options an untyped JSON value):
+/// a run of bottle-1l (RADAU5, the method not stated) and one with `method = "trbdf2"`.
+fn s36_checkpoint(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36")).join(name)
+}
+
+#[test]
+fn an_s36_checkpoint_reads_into_typed_options_and_writes_back_its_own_bytes() {
+    use gripopt::run::{settings_hash, Checkpoint, GripperInfo, PIPELINE};
+    for (name, method) in [("radau5", None), ("trbdf2", Some(gripopt::sim::Method::TrBdf2))] {
+        let path = s36_checkpoint(name).join("checkpoint.json");
+        let cp = Checkpoint::<GripperInfo>::load(&path).unwrap();
+        assert_eq!(cp.options.pipeline.as_deref(), Some(PIPELINE), "{name}");
+        assert_eq!(cp.options.method, method, "{name}: `method` only where not the default");
+        let o = &cp.options;
+        assert_eq!((o.rtol, o.atol, o.max_steps), (Some(1e-6), Some(1e-9), Some(200_000)), "{name}");
+        assert!(!o.recording.unwrap().enabled, "{name}: run with --record none");
+        // the hash over the typed options is the one the old gripopt wrote over its JSON value
+        assert_eq!(cp.settings_hash, settings_hash(&cp.settings, &cp.options), "{name}");
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(cp.to_bytes(&path).unwrap() == bytes, "{name}: the checkpoint written back is not the file's bytes");
+    }
+}
+
+#[test]
+fn an_s36_checkpoint_resumes() {
+    for name in ["radau5", "trbdf2"] {
+        let d = scratch_dir("s37-typed", &format!("resume-{name}"));
+        copy_dir(&s36_checkpoint(name), &d);
+        let s = gripopt::run::resume(&d, Some(2), false, Some(1)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(s.generations, 2, "{name}");
+        let cp = gripopt::run::Checkpoint::<gripopt::run::GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
+        let old =
+            gripopt::run::Checkpoint::<gripopt::run::GripperInfo>::load(&s36_checkpoint(name).join("checkpoint.json"))
+                .unwrap();
+        assert_eq!(cp.options, old.options, "{name}: the resumed run states the options it started with");
+        assert_eq!(cp.settings_hash, old.settings_hash, "{name}");
+    }
+}
+
+#[test]
+fn a_checkpoint_with_an_unknown_option_is_refused_naming_it() {
+    let d = scratch_dir("s37-typed", "unknown-option");
+    copy_dir(&s36_checkpoint("radau5"), &d);
+    let path = d.join("checkpoint.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replacen("\"options\":{", "\"options\":{\"extra\":1,", 1)).unwrap();
+    let e = gripopt::run::Checkpoint::<gripopt::run::GripperInfo>::load_unverified(&path).unwrap_err().to_string();
+    assert!(e.contains("extra") && e.contains("checkpoint.json"), "{e}");
+}

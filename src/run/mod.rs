@@ -35,7 +35,7 @@ mod verify_run;
 
 pub use crate::error::{counted, printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
-pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
+pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
