@@ -71,7 +71,7 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     let x = p.nominal.to_array().to_vec();
     let eval = gp.evaluate(&x);
     let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.simulated);
-    let meta = std::collections::BTreeMap::from([("synthetic".to_string(), "gripopt bench replay".to_string())]);
+    let meta = crate::record::RunMetadata { synthetic: Some("gripopt bench replay".into()), ..Default::default() };
     let t0 = std::time::Instant::now();
     let shards = n.div_ceil(per_shard);
     let pb = super::progress(shards, "writing synthetic run [{bar:30}] {pos}/{len} shards");

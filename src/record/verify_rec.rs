@@ -11,6 +11,7 @@
 
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
+use super::metadata::{RunMetadata, ScenarioTag};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::sim::PoseSample;
@@ -20,7 +21,6 @@ use foxglove::Encode;
 use mcap::records::Metadata;
 use serde::Serialize;
 use serde_json::{json, Value};
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Name of the metadata record of a verify recording.
@@ -50,27 +50,6 @@ pub fn scenario_window(id: u64, o: usize, k: usize, objects: usize, per_object: 
 /// single-object ones, so files of one run never share a window.
 pub fn free_window(band: u64, id: u64) -> u64 {
     3 * band + scenario_window(id, 0, 0, 1, 1)
-}
-
-/// The metadata keys of a scenario recording (`replay --scenario`): which scenario it is
-/// (`scenario_object`, `scenario_index`) and where its hand is: the object's `grasp_height`
-/// (`object_grasp_height`, m) raised by the scenario's drawn `height_offset` (m), the height
-/// of `world → hand` in the file. The writer copies the scenario into `/verify` and the label.
-pub fn scenario_metadata(object: &str, k: usize, grasp_height: f64, height_offset: f64) -> BTreeMap<String, String> {
-    BTreeMap::from([
-        ("scenario_object".to_string(), object.to_string()),
-        ("scenario_index".to_string(), k.to_string()),
-        ("object_grasp_height".to_string(), grasp_height.to_string()),
-        ("height_offset".to_string(), height_offset.to_string()),
-    ])
-}
-
-/// The scenario of a recording's metadata ([`scenario_metadata`]): object, index, height offset.
-fn scenario_of(meta: &BTreeMap<String, String>) -> Option<(String, u64, f64)> {
-    let object = meta.get("scenario_object")?.clone();
-    let k = meta.get("scenario_index")?.parse().ok()?;
-    let h = meta.get("height_offset")?.parse().ok()?;
-    Some((object, k, h))
 }
 
 /// The `/verify` message of one design: the columns of verify.csv (values not computed are
@@ -294,7 +273,7 @@ fn series_of(k: u64, id: u64, poses: &[PoseSample]) -> VerifySeries {
 
 /// The label drawn above the scene: what was predicted and what the free object did (in a
 /// scenario recording, which scenario: "68 (bottle-half:0, +4.2 mm): …").
-fn verdict(r: &VerifyRecord, scenario: Option<&(String, u64, f64)>) -> String {
+fn verdict(r: &VerifyRecord, scenario: Option<&ScenarioTag>) -> String {
     let outcome = match r.moved {
         Some(true) => "moved",
         Some(false) => "barely moved",
@@ -302,7 +281,7 @@ fn verdict(r: &VerifyRecord, scenario: Option<&(String, u64, f64)>) -> String {
     };
     let predicted = if r.predicted_moves { "moves" } else { "stays" };
     let which = match scenario {
-        Some((object, k, h)) => format!("scenario {object}:{k}, height {:+.1} mm", h * 1e3),
+        Some(t) => format!("scenario {}:{}, height {:+.1} mm", t.object, t.index, t.height_offset * 1e3),
         None => format!("row {}", r.window),
     };
     format!(
@@ -322,7 +301,7 @@ fn encode(
     e: &VerifyEntry,
     problem: &Problem,
     opts: &VerifyRecordOptions,
-    scenario: Option<&(String, u64, f64)>,
+    scenario: Option<&ScenarioTag>,
 ) -> Vec<(usize, u64, Vec<u8>)> {
     let t0 = window_start_ns(opts.epoch_s.saturating_mul(1_000_000_000), opts.window_base_s + k);
     let sc = &problem.scene;
@@ -338,10 +317,10 @@ fn encode(
     let finger = Finger::new(&design, sc).ok();
     let series = serde_json::to_vec(&series_of(k, r.id, &e.poses)).expect("series serialise");
     let mut record = serde_json::to_value(&r).expect("records serialise");
-    if let Some((object, k, h)) = scenario {
-        record["scenario_object"] = object.as_str().into();
-        record["scenario_index"] = (*k).into();
-        record["height_offset"] = (*h).into();
+    if let Some(t) = scenario {
+        record["scenario_object"] = t.object.as_str().into();
+        record["scenario_index"] = t.index.into();
+        record["height_offset"] = t.height_offset.into();
     }
     let mut out = vec![(0, t0, serde_json::to_vec(&record).expect("records serialise")), (4, t0, series)];
     out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r, scenario)))));
@@ -379,24 +358,26 @@ fn encode(
 pub fn write_verify(
     path: &Path,
     problem: &Problem,
-    meta: &BTreeMap<String, String>,
+    meta: &RunMetadata,
     entries: &[VerifyEntry],
     opts: &VerifyRecordOptions,
 ) -> Result<u64> {
     let tmp = super::mcapfile::temporary(path);
     let mc = super::mcapfile::error(&tmp);
     let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
-    let scenario = scenario_of(meta);
-    let mut meta = meta.clone();
-    meta.insert("designs".into(), entries.len().to_string());
-    meta.insert("first_window".into(), "0".into());
-    meta.insert("last_window".into(), entries.len().saturating_sub(1).to_string());
-    meta.insert("epoch_s".into(), opts.epoch_s.to_string());
-    meta.insert("window_base_s".into(), opts.window_base_s.to_string());
-    meta.insert("scene_dt".into(), opts.scene_dt.to_string());
-    meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into());
+    let scenario = meta.scenario.clone();
+    let meta = RunMetadata {
+        designs: Some(entries.len() as u64),
+        first_window: Some(0),
+        last_window: Some(entries.len().saturating_sub(1) as u64),
+        epoch_s: Some(opts.epoch_s),
+        window_base_s: Some(opts.window_base_s),
+        scene_dt: Some(opts.scene_dt),
+        time_convention: Some("design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into()),
+        ..meta.clone()
+    };
     // metadata before any channel: no empty chunk
-    w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
+    w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta.to_map() }).map_err(mc)?;
     let verify_schema = add_json_schema(&mut w, "gripopt.Verify", &verify_schema(), &tmp)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;

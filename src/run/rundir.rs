@@ -20,7 +20,7 @@ use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
-use crate::record::{ProblemUse, RecordOptions, Recorder};
+use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
 use crate::{Error, Result};
 use argmin::core::State;
 use std::path::{Path, PathBuf};
@@ -520,8 +520,7 @@ fn drive(
     info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
     let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
-    let status =
-        std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
+    let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     lock.check()?;
     write_json(&out.join(RUN_FILE), &info)?;
@@ -541,22 +540,19 @@ fn drive(
 }
 
 /// Metadata written into every shard of the recording: the run (its id, problem and the
-/// problem's hash, settings, recording options) and the time convention.
-fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::BTreeMap<String, String> {
-    let mut meta = std::collections::BTreeMap::new();
-    meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
-    meta.insert("simulator_revision".to_string(), crate::sim::SIMULATOR_REVISION.to_string());
-    meta.insert("run_id".to_string(), info.run_id.clone());
-    meta.insert("problem".to_string(), gp.problem.name.clone());
-    meta.insert("problem_sha256".to_string(), info.problem_sha256.clone());
-    // plain structs of numbers, strings and enums: serialising cannot fail
-    meta.insert("settings".to_string(), serde_json::to_string(&info.settings).expect("settings serialise"));
-    meta.insert("recording".to_string(), serde_json::to_string(&info.recording).expect("recording options serialise"));
-    meta.insert(
-        "time_convention".to_string(),
-        "design k: log_time in [k s, k s + 1 s); field t = simulated time".to_string(),
-    );
-    meta
+/// problem's hash, settings, recording options; the shard adds its contents and time convention).
+fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
+    RunMetadata {
+        gripopt_version: Some(env!("CARGO_PKG_VERSION").to_string()),
+        simulator_revision: Some(crate::sim::SIMULATOR_REVISION),
+        run_id: Some(info.run_id.clone()),
+        problem: Some(gp.problem.name.clone()),
+        problem_sha256: Some(info.problem_sha256.clone()),
+        // plain structs of numbers, strings and enums: serialising cannot fail
+        settings: Some(serde_json::to_string(&info.settings).expect("settings serialise")),
+        recording: Some(serde_json::to_string(&info.recording).expect("recording options serialise")),
+        ..RunMetadata::default()
+    }
 }
 
 /// A new run's folder is never created inside another run's folder (its recording/ or any

@@ -9,12 +9,11 @@
 use super::verify::{VerifyRow, VerifySource};
 use crate::params::Problem;
 use crate::record::{
-    band_s, verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions,
-    WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
+    band_s, verify_parameters, write_verify, write_verify_layout, RunMetadata, ScenarioTag, VerifyEntry, VerifyRecord,
+    VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
 use crate::Result;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The recording of the verify designs of a run.
@@ -27,7 +26,7 @@ pub const VERIFY_SAMPLE_MCAP: &str = "verify_sample.mcap";
 pub(crate) struct VerifyRecording {
     path: PathBuf,
     dir: PathBuf,
-    meta: BTreeMap<String, String>,
+    meta: RunMetadata,
     /// Recording settings.
     pub opts: VerifyRecordOptions,
 }
@@ -48,14 +47,13 @@ impl VerifyRecording {
             VerifySource::All => (VERIFY_MCAP, "all".to_string(), 1),
             VerifySource::Sample { n, seed } => (VERIFY_SAMPLE_MCAP, format!("sample {n} seed {seed}"), 2),
         };
-        let mut meta = BTreeMap::new();
-        meta.insert("gripopt_version".into(), env!("CARGO_PKG_VERSION").into());
-        meta.insert("source".into(), src);
-        for (k, v) in [("problem_name", run.problem_name), ("problem_sha256", run.problem_sha256)] {
-            if let Some(v) = v {
-                meta.insert(k.into(), v);
-            }
-        }
+        let meta = RunMetadata {
+            gripopt_version: Some(env!("CARGO_PKG_VERSION").into()),
+            source: Some(src),
+            problem_name: run.problem_name,
+            problem_sha256: run.problem_sha256,
+            ..RunMetadata::default()
+        };
         let opts = VerifyRecordOptions {
             scene_dt: DEFAULT_SCENE_DT,
             epoch_s,
@@ -68,19 +66,13 @@ impl VerifyRecording {
     /// The recording of one robust scenario replayed (`gripopt replay --scenario`): the file
     /// `name` in the run folder, in its own `window` after the start of the run's band 3
     /// (bands 1 and 2 are verify's; [`crate::record::scenario_window`]), with the scenario's
-    /// metadata `tag` ([`crate::record::scenario_metadata`]).
-    pub fn for_scenario(
-        dir: &Path,
-        name: &str,
-        what: String,
-        window: u64,
-        tag: BTreeMap<String, String>,
-    ) -> Result<Self> {
+    /// metadata `tag` (its `scenario_*` keys).
+    pub fn for_scenario(dir: &Path, name: &str, what: String, window: u64, tag: ScenarioTag) -> Result<Self> {
         let mut r = Self::new(dir, &VerifySource::Pareto)?;
         r.opts.window_base_s = r.opts.window_base_s * 3 + window;
         r.path = dir.join(name);
-        r.meta.insert("source".into(), what);
-        r.meta.extend(tag);
+        r.meta.source = Some(what);
+        r.meta.scenario = Some(tag);
         Ok(r)
     }
 
@@ -92,18 +84,17 @@ impl VerifyRecording {
         let mut r = Self::new(dir, &VerifySource::Pareto)?;
         r.opts.window_base_s = crate::record::free_window(r.opts.window_base_s, id);
         r.path = dir.join(name);
-        r.meta.insert("source".into(), format!("replay design {id} (free scene)"));
-        r.meta.insert("free_design".into(), id.to_string());
-        r.meta.insert("run_id".into(), run_id.to_string());
+        r.meta.source = Some(format!("replay design {id} (free scene)"));
+        r.meta.free_design = Some(id);
+        r.meta.run_id = Some(run_id.to_string());
         Ok(r)
     }
 
     /// Write the rows (in order: row k is window k) with their poses, and the layout file;
     /// returns the recording's path.
     pub fn write(self, p: &Problem, rows: Vec<(VerifyRow, Vec<PoseSample>)>) -> Result<PathBuf> {
-        let mut meta = self.meta;
         let x_off = p.scene.setup.x_off;
-        meta.insert("scene".into(), format!("free:{x_off}"));
+        let meta = RunMetadata { free_scene_x_off: Some(x_off), ..self.meta };
         let entries: Vec<VerifyEntry> =
             rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
         write_verify(&self.path, p, &meta, &entries, &self.opts)?;
