@@ -195,3 +195,112 @@ fn a_shard_without_its_epoch_is_refused_naming_the_key() {
     let e = gripopt::record::read_design(&d, 0).unwrap_err().to_string();
     assert!(e.contains("`epoch_s`") && e.contains("gen-00001.mcap"), "{e}");
 }
+
+#[test]
+fn discard_causes_read_and_write_their_words() {
+    use gripopt::run::Discards;
+    use gripopt::Cause;
+    // as run.json states them: a cause's word, or `unknown` for a discard without one
+    let text = r#"{"evaluated":5,"causes":[{"stage":1,"cause":"no_closed_pose","count":3,"closest":2,"violation":0.5,"reason":"r","detail":null},{"stage":3,"cause":"unknown","count":1,"closest":4,"violation":null,"reason":"","detail":"d"}]}"#;
+    let d: Discards = serde_json::from_str(text).unwrap();
+    assert_eq!(d.causes[0].cause, Some(Cause::NoClosedPose));
+    assert_eq!(d.causes[1].cause, None);
+    assert_eq!(serde_json::to_string(&d).unwrap(), text, "written back word for word");
+    let bad = text.replace("no_closed_pose", "no_such_cause");
+    let e = serde_json::from_str::<Discards>(&bad).unwrap_err().to_string();
+    assert!(e.contains("no_such_cause"), "{e}");
+}
+
+fn verify_row(observed: bool) -> gripopt::run::VerifyRow {
+    use gripopt::sim::FreeEnd;
+    gripopt::run::VerifyRow {
+        id: 7,
+        design: crate::common::nominal(),
+        impact_ratio: Some(0.5),
+        e_trans_rot: Some((2e-3, 0.0)),
+        force_margin: f64::INFINITY,
+        stable: true,
+        predicted_moves: false,
+        max_displacement: 1e-4,
+        max_tilt_deg: 0.25,
+        peak_e: (1e-3, 2e-4),
+        moved: observed.then_some(false),
+        toppled: observed.then_some(false),
+        escaped: observed.then_some(false),
+        rim_contact: false,
+        end: if observed { FreeEnd::Observed } else { FreeEnd::StepBudget },
+        t_end: 0.1,
+    }
+}
+
+#[test]
+fn verify_csv_columns_are_the_column_table() {
+    use gripopt::run::{verify_csv, VERIFY_COLUMNS};
+    let csv = verify_csv(&[verify_row(true), verify_row(false)], 0.0);
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let names: Vec<&str> = VERIFY_COLUMNS.iter().map(|c| c.0).collect();
+    assert_eq!(header, names, "the units table lists verify.csv's columns in order");
+    let cell = |line: &str, col: &str| {
+        let k = names.iter().position(|n| *n == col).unwrap();
+        line.split(',').nth(k).unwrap().to_string()
+    };
+    let (seen, unseen) = (lines.next().unwrap(), lines.next().unwrap());
+    assert_eq!(cell(seen, "free_end"), "t_obs");
+    assert_eq!(cell(unseen, "free_end"), "aborted: step budget exhausted", "the enum's words");
+    assert_eq!(cell(seen, "force_margin"), "inf", "the CSV writes every number");
+    // E_rot = 0: the rotational ratio is infinite, the translational 0.5
+    assert_eq!((cell(seen, "peak_e_trans_ratio").as_str(), cell(seen, "peak_e_rot_ratio").as_str()), ("0.5", "inf"));
+    for col in ["moved", "agrees", "peak_e_trans_ratio"] {
+        assert_eq!(cell(unseen, col), "", "{col}: not observed, an empty cell");
+    }
+}
+
+#[test]
+fn a_verify_message_leaves_out_what_was_not_computed_and_its_schema_names_every_field() {
+    use gripopt::record::{verify_parameters, verify_schema, VerifyRecord, VerifyScenario, WindowStart};
+    let rec = |row: &gripopt::run::VerifyRow, scenario: Option<VerifyScenario>| VerifyRecord {
+        window: 1,
+        window_start: WindowStart { sec: 5, nsec: 0 },
+        window_start_s: 1.0,
+        epoch_s: 4,
+        id: row.id,
+        parameters: verify_parameters(&row.design),
+        x_off: 0.0,
+        measure: row.measure(),
+        t_end: row.t_end,
+        poses: 3,
+        scenario,
+    };
+    let json = |r: &VerifyRecord| -> serde_json::Map<String, serde_json::Value> {
+        let bytes = r.to_json();
+        let text = String::from_utf8(bytes).unwrap();
+        let keys: Vec<String> = serde_json::from_str::<serde_json::Map<_, _>>(&text).unwrap().keys().cloned().collect();
+        let mut sorted = keys.clone();
+        sorted.sort();
+        assert_eq!(keys, sorted, "keys written sorted");
+        serde_json::from_str(&text).unwrap()
+    };
+    let seen = json(&rec(&verify_row(true), None));
+    assert!(!seen.contains_key("force_margin"), "not finite: left out");
+    assert!(!seen.contains_key("peak_e_rot_ratio"), "not finite: left out");
+    assert_eq!(seen["peak_e_trans_ratio"], 0.5);
+    assert_eq!(seen["free_end"], "t_obs");
+    assert!(!seen.contains_key("scenario_object"));
+    let s = VerifyScenario { scenario_object: "can".into(), scenario_index: 2, height_offset: -0.004 };
+    let unseen = json(&rec(&verify_row(false), Some(s)));
+    for k in ["moved", "toppled", "escaped", "agrees", "peak_e_trans_ratio"] {
+        assert!(!unseen.contains_key(k), "{k}: not observed, left out");
+    }
+    assert_eq!((unseen["scenario_object"].as_str(), unseen["scenario_index"].as_u64()), (Some("can"), Some(2)));
+    // the schema names every field a message can have, and requires those every one has
+    let schema = verify_schema();
+    let props = schema["properties"].as_object().unwrap();
+    for k in seen.keys().chain(unseen.keys()) {
+        assert!(props.contains_key(k), "{k} is in the schema");
+    }
+    for k in schema["required"].as_array().unwrap() {
+        let k = k.as_str().unwrap();
+        assert!(seen.contains_key(k) && unseen.contains_key(k), "required {k} is in every message");
+    }
+}

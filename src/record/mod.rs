@@ -56,7 +56,7 @@ pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
     band_s, free_window, keep_poses, parameters as verify_parameters, scenario_window, verify_schema,
-    verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions, VerifySeries,
-    WindowStart, VERIFY_METADATA,
+    verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyMeasure, VerifyRecord, VerifyRecordOptions,
+    VerifyScenario, VerifySeries, WindowStart, VERIFY_METADATA,
 };
 pub use writer::{write_shard, Recorder, ShardTask};

@@ -62,7 +62,7 @@ pub use tables::CheckpointTables;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
     verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,
-    VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{

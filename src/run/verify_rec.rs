@@ -106,9 +106,6 @@ impl VerifyRecording {
 
 /// The `/verify` message of a row (window fields are the writer's).
 fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
-    let fin = |v: f64| v.is_finite().then_some(v);
-    let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
-    let (rt, rr) = r.energy_ratios();
     VerifyRecord {
         window: 0,
         window_start: WindowStart { sec: 0, nsec: 0 },
@@ -117,25 +114,9 @@ fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
         id: r.id,
         parameters: verify_parameters(&r.design),
         x_off,
-        impact_ratio: r.impact_ratio.and_then(fin),
-        e_trans: et.and_then(fin),
-        e_rot: er.and_then(fin),
-        force_margin: fin(r.force_margin),
-        stable: r.stable,
-        predicted_moves: r.predicted_moves,
-        object_max_displacement: r.max_displacement,
-        object_max_tilt_deg: r.max_tilt_deg,
-        object_peak_e_trans: r.peak_e.0,
-        object_peak_e_rot: r.peak_e.1,
-        moved: r.moved,
-        toppled: r.toppled,
-        escaped: r.escaped,
-        rim_contact: r.rim_contact,
-        free_end: r.free_end().to_string(),
-        agrees: r.agrees(),
-        peak_e_trans_ratio: rt.and_then(fin),
-        peak_e_rot_ratio: rr.and_then(fin),
+        measure: r.measure(),
         t_end: r.t_end,
         poses: 0,
+        scenario: None,
     }
 }
