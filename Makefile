@@ -62,22 +62,33 @@ lint: $(VENV_STAMP)
 	$(PYO3_ENV) $(CARGO) clippy $(WORKSPACE) --all-targets --locked -- -D warnings
 
 # Correctness tests (unit, integration, property, and the extension crate's unit tests; the
-# test profile is optimised, opt-level 1), then the independent reader over every MCAP file and shipped layout the tests wrote (after
-# its self-test: it must reject the scene and layout defects it checks for), then the pandas
-# example of docs/python.md on a run the tests wrote, then MuJoCo on the exported models
-# (docs/export.md). The Python package: its build (make python-test: dev profile, every
-# dependency already compiled by `cargo test`), its pytest suite against the gripopt command (exit code 5, no test collected, fails too) and
-# every block of docs/python.md (tools/check_python_docs.py).
+# test profile is optimised, opt-level 1), then the independent reader's self-test (it must
+# reject the scene and layout defects it checks for), then two lanes side by side (`-j2`,
+# each lane's output printed whole when it ends; a failure in either fails `make test`):
+# - test-readers: the independent reader over every MCAP file and shipped layout the tests
+#   wrote, and MuJoCo on the exported models (docs/export.md);
+# - test-python: the Python package's build (make python-test: dev profile, every
+#   dependency already compiled by `cargo test`), its pytest suite against the gripopt
+#   command (exit code 5, no test collected, fails too), and every block of docs/python.md
+#   (tools/check_python_docs.py) with the pandas example on a run the tests wrote.
+# The readers need only Python while maturin compiles, so the lanes share the 2 cores of CI
+# (docs/benchmarks.md "Test suite time").
 test: $(VENV_STAMP) lint
 	rm -rf target/mcap-check
 	$(PYO3_ENV) $(CARGO) test $(WORKSPACE) --locked
 	$(VENV)/bin/python tools/test_check_mcap.py
+	$(MAKE) --no-print-directory -j2 --output-sync=target test-readers test-python
+
+# The lanes of `make test` (they read what its `cargo test` wrote: run `make test`).
+.PHONY: test-readers test-python
+test-readers: $(VENV_STAMP)
 	$(VENV)/bin/python tools/check_mcap.py target/mcap-check
-	$(MAKE) python-test
+	$(VENV)/bin/python tools/check_mjcf.py $${CARGO_TARGET_DIR:-target}/debug/gripopt problems/bottle-1l.toml target/mjcf-check --nominal
+
+test-python: python-test
 	GRIPOPT=$${CARGO_TARGET_DIR:-target}/debug/gripopt $(VENV)/bin/python -m pytest python/tests -q -p no:cacheprovider; \
 	  rc=$$?; if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
 	MPLBACKEND=Agg $(VENV)/bin/python tools/check_python_docs.py target/mcap-check/robust-outputs $${CARGO_TARGET_DIR:-target}/debug/gripopt
-	$(VENV)/bin/python tools/check_mjcf.py $${CARGO_TARGET_DIR:-target}/debug/gripopt problems/bottle-1l.toml target/mjcf-check --nominal
 
 # The main job on the default problem: a short NSGA-II optimisation (pop 60, 25
 # generations, 1 500 designs through all four stages, every design and grasp recorded to

@@ -7,7 +7,8 @@
 //! For callers that tabulate (the Python package's DataFrames): [`evaluate_rows`] gives a
 //! batch as the run's own rows ([`DesignRow`], population.csv's columns) with how the
 //! optimiser ranks each design, [`parse_scene`] reads a scene as `--scene` spells it, and
-//! [`SAMPLE_COLUMNS`] / [`POSE_COLUMNS`] name a trajectory's values with their units.
+//! [`SAMPLE_COLUMNS`] (with [`FINGER2_COLUMNS`] in the offset scene) / [`POSE_COLUMNS`] name
+//! a trajectory's values with their units.
 
 use crate::eval::{EvalOptions, Record, SimulationRecord};
 use crate::optim::{Evaluator, Individual, Infeasibility, MooProblem};
@@ -148,7 +149,7 @@ pub fn parse_scene(text: &str) -> Result<(SceneKind, Option<f64>)> {
 }
 
 /// The values of a grasp [`Sample`] (finger 1, its local frame; finger 2 is its mirror in
-/// the centred scene, while the offset scene's finger 2 is in the recordings' series only),
+/// the centred scene, while the offset scene's finger 2 has its own, [`FINGER2_COLUMNS`]),
 /// named as `gripopt simulate --csv` and `replay --csv` name them, with units.
 pub const SAMPLE_COLUMNS: [Column; 16] = [
     ("t", "s", "time"),
@@ -189,6 +190,41 @@ pub fn sample_values(s: &Sample) -> [f64; 16] {
         s.energy,
         s.energy_excess,
     ]
+}
+
+/// Finger 2's own values in an offset-scene trajectory (its mirrored local frame), named
+/// as [`SAMPLE_COLUMNS`] names finger 1's with `finger2_` before: after them in
+/// `gripopt simulate --scene offset:X --csv`, `replay --csv` of an offset run and the
+/// Python trajectories. The centred scene has none (finger 2 is finger 1's mirror).
+pub const FINGER2_COLUMNS: [Column; 11] = [
+    ("finger2_q11", "rad", "finger 2's q11 (its mirrored frame)"),
+    ("finger2_q21", "rad", "finger 2's q21"),
+    ("finger2_q11_dot", "rad/s", "its rate"),
+    ("finger2_q21_dot", "rad/s", "its rate"),
+    ("finger2_theta2", "rad", "finger 2's θ2"),
+    ("finger2_delta_1", "m", "penetration of finger 2's proximal contact"),
+    ("finger2_delta_2", "m", "penetration of finger 2's distal contact"),
+    ("finger2_fn_1", "N", "normal force of finger 2's proximal contact"),
+    ("finger2_fn_2", "N", "normal force of finger 2's distal contact"),
+    ("finger2_ft_1", "N", "friction force of finger 2's proximal contact (on the finger along its t_c)"),
+    ("finger2_ft_2", "N", "friction force of finger 2's distal contact"),
+];
+
+/// A grasp trajectory's columns: [`SAMPLE_COLUMNS`], then with `finger2` (the offset
+/// scene, where finger 2 moves on its own) [`FINGER2_COLUMNS`].
+pub fn trajectory_columns(finger2: bool) -> Vec<Column> {
+    let extra = if finger2 { &FINGER2_COLUMNS[..] } else { &[] };
+    SAMPLE_COLUMNS.iter().chain(extra).copied().collect()
+}
+
+/// A [`Sample`]'s values in the order of [`trajectory_columns`]`(finger2)`: finger 2's NaN
+/// where the sample lacks them (a recording of an older gripopt).
+pub fn trajectory_row(s: &Sample, finger2: bool) -> Vec<f64> {
+    let mut v = sample_values(s).to_vec();
+    if finger2 {
+        v.extend(s.finger2.map_or([f64::NAN; 11], |f| f.values()));
+    }
+    v
 }
 
 /// The values of a free-scene [`PoseSample`], named as `gripopt simulate

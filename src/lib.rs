@@ -77,7 +77,8 @@ pub use error::{Error, Result};
 pub use eval::{Cause, EvaluationRecord, Record, SimulationRecord};
 pub use facade::{
     evaluate, evaluate_batch, evaluate_rows, parse_scene, pose_values, random_designs, sample_values, simulate,
-    EvaluatedRow, Optimiser, Simulation, Stages, POSE_COLUMNS, SAMPLE_COLUMNS,
+    trajectory_columns, trajectory_row, EvaluatedRow, Optimiser, Simulation, Stages, FINGER2_COLUMNS, POSE_COLUMNS,
+    SAMPLE_COLUMNS,
 };
 pub use fsutil::{check_new_file, check_output_file, run_folder_around, run_folder_file, write_atomic};
 pub use optim::{Batch, Evaluations, Evaluator, Infeasibility};
@@ -87,4 +88,6 @@ pub use run::{
     Column, DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RunFolder, RunInfo, RunSummary,
     DESIGN_COLUMNS, HISTORY_COLUMNS,
 };
-pub use sim::{Controls, EventNote, Integration, Method, Mode, Point, PoseSample, Sample, Sink, Trajectory};
+pub use sim::{
+    Controls, EventNote, FingerSample, Integration, Method, Mode, Point, PoseSample, Sample, Sink, Trajectory,
+};

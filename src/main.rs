@@ -35,9 +35,9 @@ fn fix_malloc_thresholds() {
 
 fn main() {
     fix_malloc_thresholds();
-    // the CLI prints through `cli::out`, which never panics; a `println!` elsewhere (the
-    // library's benchmarks) panics when stdout or stderr cannot be written: end as `out`
-    // does, quietly for a closed pipe (`gripopt … | head -1`), else with one line
+    // the CLI prints through `cli::out`, which never panics; an `eprintln!` elsewhere in the
+    // CLI (a note, a warning) panics when stderr cannot be written (the library never prints):
+    // end as `out` does, quietly for a closed pipe (`gripopt … | head -1`), else with one line
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let text = info

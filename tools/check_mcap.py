@@ -396,19 +396,33 @@ def drawn_object(st):
     return (cyl.pose.position.x, cyl.pose.position.y), cyl.size.x / 2
 
 
+def finger_contacts(s, mirrored):
+    """Each drawn finger's (penetrations, normal forces) by phalanx, as the series records
+    them: finger 1's columns; finger 2's own (`finger2_...`, the offset scene since session
+    37), finger 1's where finger 2 is its mirror (object at x = 0, no finger-2 columns), or
+    None (an offset shard written before session 37 records no finger-2 force)."""
+    one = ((s.proximal_penetration, s.distal_penetration), (s.proximal_normal_force, s.distal_normal_force))
+    f2 = [getattr(s, "finger2_" + n, []) for n in ("proximal_penetration", "distal_penetration", "proximal_normal_force", "distal_normal_force")]
+    if all(len(c) for c in f2):
+        return [one, ((f2[0], f2[1]), (f2[2], f2[3]))]
+    return [one, one if mirrored else None]
+
+
 def check_fingers_touch(d, t0, s, st, drawn, feasible):
     """The drawn fingers touch the drawn object where the series says they do: at every
     drawn pose whose time is a series sample, a phalanx with a non-zero normal force lies
     within [-(delta + tol), tol] of the object's surface (delta its recorded penetration);
-    the series' contacts are finger 1's, and finger 2's too where it is finger 1's mirror
-    (object at x = 0, no finger-2 columns). No drawn finger is ever deeper in the object than
+    finger 1's contacts from its columns, finger 2's from its own (`finger2_...`, the offset
+    scene) or finger 1's where it is finger 1's mirror (object at x = 0, no finger-2 columns).
+    No drawn finger is ever deeper in the object than
     1.5 times the deepest penetration the series kept + 20 um (a drawn pose between its
     samples may be deeper than the kept ones), and at the last pose of a feasible (stable) grasp both
     fingers touch it. The number of contacts checked."""
     c, r = drawn_object(st)
     mirrored = not len(getattr(s, "finger2_q11", [])) and abs(c[0]) < 1e-12
+    contacts = finger_contacts(s, mirrored)
     at_sample = {round(t * NS): k for k, t in enumerate(s.t)}
-    deltas, forces = (s.proximal_penetration, s.distal_penetration), (s.proximal_normal_force, s.distal_normal_force)
+    deltas = [col for f in contacts if f for col in f[0]]
     deepest = max([0.0] + [x for col in deltas for x in col if x == x])
     # a drawn pose between the series' samples may lie deeper than the deepest kept sample
     # (a damped impact's deepest point follows its force peak, which the series keeps)
@@ -423,11 +437,13 @@ def check_fingers_touch(d, t0, s, st, drawn, feasible):
         k = at_sample.get(tm - t0)
         if k is None:
             continue
-        for ph, name in enumerate(("proximal", "distal")):
-            f, delta = forces[ph][k], deltas[ph][k]
-            if not f > 0:
+        for n, (line, finger) in enumerate(zip(lines, contacts)):
+            if finger is None:
                 continue
-            for n, line in enumerate(lines if mirrored else lines[:1]):
+            for ph, name in enumerate(("proximal", "distal")):
+                f, delta = finger[1][ph][k], finger[0][ph][k]
+                if not f > 0:
+                    continue
                 g = phalanx_gaps(line, c, r)[ph]
                 if not -(delta + CONTACT_TOL) <= g <= CONTACT_TOL:
                     raise ValueError(f"design {d}: at {(tm - t0) / 1e6:.3f} ms finger {n + 1}'s {name} phalanx is drawn {g * 1e6:+.1f} um from the object's surface while its contact force is {f:.3g} N (penetration {delta * 1e6:.1f} um)")

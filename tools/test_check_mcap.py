@@ -9,7 +9,9 @@ built here from the official Foxglove message classes (foxglove-schemas-protobuf
   that is not frame_locked, an object lifted off the ground;
 * fingers drawn off the object they hold: finger 2 drawn as finger 1's mirror with the
   object at x_off = 2 mm (the offset scene before session 36: 4 mm off the object), a
-  phalanx with a contact force drawn 3 mm away, a finger drawn deep inside the object;
+  phalanx with a contact force drawn 3 mm away, a finger drawn deep inside the object, and in
+  the offset scene a finger-2 force recorded (its own columns, session 37) while finger 2 is
+  drawn 3 mm off the object or 12 um inside it (recorded penetration 3 um);
 * a scenario file (`replay --scenario`) whose hand is not at its scenario's height, over
   another ground, or naming a grasp height problem.toml does not give; two scenario files in
   one time window;
@@ -86,21 +88,35 @@ def hand_pair(xs, y_top=0.08, thickness=0.01):
 def contact_cases():
     """check_fingers_touch on a drawn proximal contact (object R = 40 mm, rods 10 mm thick:
     a rod at |x - x_c| = 45 mm touches)."""
-    def series(f2):
-        return SimpleNamespace(t=[0.0, 0.01], proximal_normal_force=[0.0, 5.0], distal_normal_force=[0.0, 0.0],
-                               proximal_penetration=[0.0, 2e-6], distal_penetration=[0.0, 0.0], finger2_q11=f2)
+    def series(f2, f2_force=None):
+        s = SimpleNamespace(t=[0.0, 0.01], proximal_normal_force=[0.0, 5.0], distal_normal_force=[0.0, 0.0],
+                            proximal_penetration=[0.0, 2e-6], distal_penetration=[0.0, 0.0], finger2_q11=f2)
+        if f2_force is not None:  # finger 2's own contact columns (offset shards since session 37)
+            s.finger2_proximal_normal_force, s.finger2_distal_normal_force = [0.0, f2_force], [0.0, 0.0]
+            s.finger2_proximal_penetration, s.finger2_distal_penetration = [0.0, 3e-6 if f2_force else 0.0], [0.0, 0.0]
+        return s
     ms = 1_000_000
 
-    def run(centre_x, xs_last, f2, feasible=True):
+    def run(centre_x, xs_last, f2, feasible=True, f2_force=None):
         st = static(0, (centre_x, R, L / 2 - H))
         drawn = [(0, hand_pair([centre_x + 0.06, centre_x - 0.06])), (10 * ms, hand_pair(xs_last))]
-        return check_fingers_touch(7, 0, series(f2), st, drawn, feasible)
+        return check_fingers_touch(7, 0, series(f2, f2_force), st, drawn, feasible)
 
     assert run(0.0, [0.045 - 2e-6, -0.045 + 2e-6], []) == 2  # centred: both (mirrored) fingers pressed in 2 um
-    assert run(0.002, [0.047 - 2e-6, -0.043], [0.1, 0.1]) == 1  # offset: finger 2 at its own angles, touching
+    assert run(0.002, [0.047 - 2e-6, -0.043], [0.1, 0.1]) == 1  # offset before session 37: finger 2 at its own angles, touching
+    # offset since session 37: finger 2's own force checked against its drawn phalanx (pressed in 3 um)
+    assert run(0.002, [0.047 - 2e-6, -0.043 + 3e-6], [0.1, 0.1], f2_force=4.0) == 2
+    # finger 2 drawn off the object where it records no force: nothing to check for it (not a stable grasp)
+    assert run(0.002, [0.047 - 2e-6, -0.046], [0.1, 0.1], feasible=False, f2_force=0.0) == 1
     print("ok   accepts fingers drawn touching the object where the series has a contact force")
     expect_failure("finger 2 drawn as finger 1's mirror in the offset scene (x_off = 2 mm)",
                    lambda: run(0.002, [0.047, -0.047], [0.1, 0.1]), "finger 2")
+    expect_failure("a finger-2 force recorded while finger 2 is drawn 3 mm off the object (offset scene)",
+                   lambda: run(0.002, [0.047 - 2e-6, -0.046], [0.1, 0.1], feasible=False, f2_force=4.0),
+                   "finger 2's proximal phalanx")
+    expect_failure("a finger-2 force recorded while finger 2 is drawn 12 um inside the object (penetration 3 um)",
+                   lambda: run(0.002, [0.047 - 2e-6, -0.043 + 12e-6], [0.1, 0.1], feasible=False, f2_force=4.0),
+                   "finger 2's proximal phalanx")
     expect_failure("a proximal phalanx with a contact force drawn 3 mm off the object",
                    lambda: run(0.0, [0.048, -0.048], [], feasible=False), "proximal phalanx")
     expect_failure("a finger drawn 2 mm inside the object", lambda: run(0.0, [0.043, -0.043], []), "inside the object")

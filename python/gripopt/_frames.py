@@ -63,7 +63,8 @@ def _count(values: Any) -> Any:
 def frame(columns: Columns, table: ColumnTable, index: Optional[pd.Index] = None) -> pd.DataFrame:
     """A DataFrame of native ``columns``; ``table`` gives the units and meanings put in
     ``df.attrs["units"]`` and ``df.attrs["meanings"]`` (and the columns of an empty table).
-    A design table's robust count columns are ``Int64``."""
+    A design table's robust count columns are ``Int64``; a trajectory's (``SAMPLE_COLUMNS``)
+    finger-2 columns of the offset scene get theirs from ``FINGER2_COLUMNS``."""
     counts = table is DESIGN_COLUMNS
     if columns:
         data = {
@@ -76,6 +77,9 @@ def frame(columns: Columns, table: ColumnTable, index: Optional[pd.Index] = None
     if counts:
         known = {name for name, _, _ in table}
         table = tuple(table) + robust_columns([c for c in df.columns if c not in known])
+    if table is SAMPLE_COLUMNS:
+        # an offset-scene trajectory: finger 2's columns after finger 1's
+        table = tuple(table) + FINGER2_COLUMNS
     df.attrs["units"] = {c: units_of(table).get(c, "") for c in df.columns}
     df.attrs["meanings"] = {c: meanings_of(table).get(c, "") for c in df.columns}
     return df
@@ -101,4 +105,6 @@ DESIGN_NAMES: tuple[str, ...] = tuple(_gripopt.DESIGN_NAMES)
 DESIGN_COLUMNS: ColumnTable = tuple(_gripopt.DESIGN_COLUMNS)
 HISTORY_COLUMNS: ColumnTable = tuple(_gripopt.HISTORY_COLUMNS)
 SAMPLE_COLUMNS: ColumnTable = tuple(_gripopt.SAMPLE_COLUMNS)
+#: Finger 2's columns of an offset-scene trajectory (after ``SAMPLE_COLUMNS``'s).
+FINGER2_COLUMNS: ColumnTable = tuple(_gripopt.FINGER2_COLUMNS)
 POSE_COLUMNS: ColumnTable = tuple(_gripopt.POSE_COLUMNS)

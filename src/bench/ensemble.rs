@@ -2,7 +2,7 @@
 
 use super::say;
 use super::work_precision::{check_atol, rel};
-use super::{progress, time_it};
+use super::{time_it, BenchProgress};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::model::{Finger, StaticsResult};
 use crate::params::{Design, Problem, DESIGN_NAMES};
@@ -10,7 +10,7 @@ use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The `f`-quantile (nearest rank) of the non-NaN values of `v`; NaN if none.
 pub(super) fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
@@ -22,20 +22,33 @@ pub(super) fn quantile(mut v: Vec<f64>, f: f64) -> f64 {
     v[((v.len() - 1) as f64 * f).round() as usize]
 }
 
-/// Work-precision over an ensemble of `n` random designs of the box that pass stage 2
-/// (seed `seed`): for each method and rtol, the median CPU time per simulation and the
+/// What `bench work-precision --sample N` is asked for.
+#[derive(Debug, Clone)]
+pub struct EnsembleBench {
+    /// Random designs in the ensemble (at least 1).
+    pub sample: usize,
+    /// The seed of their draw.
+    pub seed: u64,
+    /// The folder of work_precision_ensemble.csv and its designs' CSV.
+    pub out_dir: PathBuf,
+    /// Absolute tolerance (None: rtol × 1e-3), as in [`super::WorkPrecision`].
+    pub atol: Option<f64>,
+}
+
+/// Work-precision over an ensemble of `b.sample` random designs of the box that pass stage
+/// 2 (seed `b.seed`): for each method and rtol, the median CPU time per simulation and the
 /// median / 90th-percentile relative errors in t_stab and E_cyl against Radau IIA at rtol
-/// 1e-11, and how many verdicts differ. `atol` as in [`super::WorkPrecision`]; `path` is
-/// the problem file, for messages. Writes work_precision_ensemble.csv into `out_dir`.
+/// 1e-11, and how many verdicts differ. `path` is the problem file, for messages. Writes
+/// work_precision_ensemble.csv into `b.out_dir`; the text goes to `out`, the drawing of the
+/// designs and their references to `progress`.
 pub fn work_precision_ensemble(
     problem: &Problem,
     path: &Path,
-    n: usize,
-    seed: u64,
-    out_dir: &Path,
-    atol: Option<f64>,
+    b: &EnsembleBench,
     out: super::Out,
+    progress: &dyn BenchProgress,
 ) -> Result<serde_json::Value> {
+    let (n, seed, out_dir, atol) = (b.sample, b.seed, b.out_dir.as_path(), b.atol);
     if n == 0 {
         return Err(Error::Input("--sample 0: must be at least 1".into()));
     }
@@ -43,7 +56,7 @@ pub fn work_precision_ensemble(
     let p = problem;
     let s = &p.scene;
     let diag = |m: Method, rtol: f64| Integration::new(rtol, atol.unwrap_or(rtol * 1e-3), 5_000_000).with_method(m);
-    let (cases, drawn) = draw_cases(p, n, seed)?;
+    let (cases, drawn) = draw_cases(p, n, seed, progress)?;
     if cases.is_empty() {
         return Err(Error::bench(format!(
             "{}: no random design of the box passed stage 2 and reached stability in {drawn} draws",
@@ -132,13 +145,13 @@ pub struct Case {
 
 /// `n` random designs of the box (seed `seed`) that pass stage 2 and whose reference reaches
 /// stability, and how many were drawn (at most 1000·n).
-fn draw_cases(p: &Problem, n: usize, seed: u64) -> Result<(Vec<Case>, usize)> {
+fn draw_cases(p: &Problem, n: usize, seed: u64, progress: &dyn BenchProgress) -> Result<(Vec<Case>, usize)> {
     let s = &p.scene;
     let tight = Integration::new(1e-11, 1e-14, 5_000_000);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut cases = vec![];
     let mut drawn = 0usize;
-    let pb = progress(n as u64, "designs + references [{bar:30}] {pos}/{len}");
+    progress.begin("designs + references", n as u64, "");
     while cases.len() < n && drawn < 1000 * n {
         drawn += 1;
         let d = p.bounds.sample(&mut rng);
@@ -149,9 +162,9 @@ fn draw_cases(p: &Problem, n: usize, seed: u64) -> Result<(Vec<Case>, usize)> {
             continue;
         }
         cases.push(Case { design: d, finger: k.finger, statics: st, reference });
-        pb.inc(1);
+        progress.step();
     }
-    pb.finish_and_clear();
+    progress.end();
     Ok((cases, drawn))
 }
 
@@ -161,7 +174,7 @@ pub fn ensemble_cases(p: &Problem, n: usize, seed: u64) -> Result<Vec<Case>> {
     if n == 0 {
         return Err(Error::Input("--sample 0: must be at least 1".into()));
     }
-    let (cases, drawn) = draw_cases(p, n, seed)?;
+    let (cases, drawn) = draw_cases(p, n, seed, &())?;
     if cases.is_empty() {
         return Err(Error::bench(format!(
             "no random design of the box passed stage 2 and reached stability in {drawn} draws"

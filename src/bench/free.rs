@@ -5,7 +5,7 @@
 //! errors of the §14.4 outputs.
 
 use super::work_precision::{check_atol, rel, WorkPrecision};
-use super::{progress, say, time_it, Out};
+use super::{say, time_it, BenchProgress, Out};
 use crate::eval::StaticsResult;
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::model::Finger;
@@ -123,7 +123,13 @@ fn run(f: &Finger, s: &SceneParams, st: &StaticsResult, dense: bool, o: &Integra
 /// block Jacobian, checked against the dense Jacobian at the same tolerance), then each
 /// rtol of `free.table` with each Jacobian. Writes free_work_precision.csv and .svg into
 /// `free.table.out_dir`; the text goes to `out`, the figures come back as JSON.
-pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out) -> Result<serde_json::Value> {
+pub fn free_scene(
+    problem: &Problem,
+    design: &Design,
+    free: &FreeBench,
+    out: Out,
+    progress: &dyn BenchProgress,
+) -> Result<serde_json::Value> {
     let b = &free.table;
     check_atol(b.atol)?;
     if b.rtols.is_empty() || b.rtols.iter().any(|r| !(*r > 0.0 && *r < 1.0)) {
@@ -163,11 +169,11 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
     let all: &[(&'static str, bool, Method)] =
         &[("blocks", false, Method::Radau5), ("blocks", false, Method::Auto), ("dense", true, Method::Radau5)];
     let jacs = if free.dense { all } else { &all[..2] };
-    let pb = progress((jacs.len() * b.rtols.len()) as u64, "bench free [{bar:30}] {pos}/{len} {msg}");
+    progress.begin("bench free", (jacs.len() * b.rtols.len()) as u64, "");
     let mut rows = vec![];
     for &(label, dense, method) in jacs {
         for &rtol in &b.rtols {
-            pb.set_message(format!("{} {label} rtol {rtol:e}", method.as_str()));
+            progress.message(&format!("{} {label} rtol {rtol:e}", method.as_str()));
             let o = opts(rtol).with_method(method);
             let mut reps = 0;
             let (x, tmin, tmed) = time_it(
@@ -202,10 +208,10 @@ pub fn free_scene(problem: &Problem, design: &Design, free: &FreeBench, out: Out
                 err_max: e.iter().cloned().fold(0.0, f64::max),
                 verdict_same: same_verdict(&x, r),
             });
-            pb.inc(1);
+            progress.step();
         }
     }
-    pb.finish_and_clear();
+    progress.end();
     print_rows(&rows, out)?;
     let csv = b.out_dir.join("free_work_precision.csv");
     write_rows(&rows, &csv)?;

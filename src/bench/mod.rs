@@ -3,7 +3,7 @@
 //! work-precision reference, error measures and table writers from here. Each benchmark
 //! writes its figures as text to the writer it is given (the CLI's stdout, or stderr with
 //! `--json`), returns them as a JSON summary, and writes its tables into the folder it is
-//! given.
+//! given. What they tell while they run goes to the caller's [`BenchProgress`].
 //!
 //! The top layer of the library: it may use everything below it.
 
@@ -17,7 +17,7 @@ mod static_eval;
 mod table;
 mod work_precision;
 
-pub use ensemble::{ensemble_cases, work_precision_ensemble, Case};
+pub use ensemble::{ensemble_cases, work_precision_ensemble, Case, EnsembleBench};
 pub use free::{free_scene, FreeBench, FreeRow, FREE_REFERENCE_RTOL, FREE_RTOLS};
 pub use nsga::nsga;
 pub use order::{radau_order, simulate_order, Order};
@@ -64,9 +64,20 @@ fn min_med(mut v: Vec<f64>) -> (f64, f64) {
     (v[0], v[v.len() / 2])
 }
 
-/// A progress bar with `template` (a constant, known to be valid).
-fn progress(len: u64, template: &'static str) -> indicatif::ProgressBar {
-    let pb = indicatif::ProgressBar::new(len);
-    pb.set_style(indicatif::ProgressStyle::with_template(template).expect("template"));
-    pb
+/// What a benchmark tells its caller as it goes, for a progress display: the library never
+/// draws or prints (the CLI shows an indicatif bar on stderr). Phases follow one another, each
+/// begun, stepped and ended. Every method does nothing by default; `()` shows nothing.
+pub trait BenchProgress: Sync {
+    /// A phase of `len` steps begins: `label` names it (`"bench free"`), `unit` says what it
+    /// counts (`"shards"`; may be empty) until a [`message`](Self::message) says more.
+    fn begin(&self, _label: &str, _len: u64, _unit: &str) {}
+    /// What the current step is (a method and its tolerance).
+    fn message(&self, _m: &str) {}
+    /// One step of the phase done.
+    fn step(&self) {}
+    /// The phase is over.
+    fn end(&self) {}
 }
+
+/// No progress shown.
+impl BenchProgress for () {}

@@ -11,8 +11,7 @@ use super::{say, time_it, Out};
 use crate::model::{Finger, StaticsResult};
 use crate::params::{Problem, SceneParams};
 use crate::sim::{
-    centred_tolerances, drive, CentredScene, Controls, DynamicsResult, Integration, Radau5, RadauIIA, Scene, Stepper,
-    NS,
+    centred_tolerances, drive, CentredScene, Controls, DynamicsResult, Integration, Radau5, RadauIIA, Stepper, NS,
 };
 use crate::Result;
 

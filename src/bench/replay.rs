@@ -41,7 +41,12 @@ fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
 /// evaluation and recorded grasp (the problem's nominal), then finds, reads and replays 50
 /// random ids; writes min / median times to `out_text` and returns them as JSON. An existing
 /// `b.out` is cleared only if it is an earlier synthetic run (its run.json says so).
-pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Result<serde_json::Value> {
+pub fn replay(
+    problem: &Problem,
+    b: &ReplayBench,
+    out_text: super::Out,
+    progress: &dyn super::BenchProgress,
+) -> Result<serde_json::Value> {
     let (p, n, out) = (problem, b.designs, b.out.as_path());
     let per_shard = b.per_shard.max(1);
     if out.exists() {
@@ -74,7 +79,7 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
     let meta = crate::record::RunMetadata { synthetic: Some("gripopt bench replay".into()), ..Default::default() };
     let t0 = std::time::Instant::now();
     let shards = n.div_ceil(per_shard);
-    let pb = super::progress(shards, "writing synthetic run [{bar:30}] {pos}/{len} shards");
+    progress.begin("writing synthetic run", shards, "shards");
     let mut index = String::new();
     let mut bytes = 0u64;
     let index_path = rec_dir.join("index.jsonl");
@@ -100,9 +105,9 @@ pub fn replay(problem: &Problem, b: &ReplayBench, out_text: super::Out) -> Resul
         };
         index.push_str(&serde_json::to_string(&entry).map_err(json_err(&index_path))?);
         index.push('\n');
-        pb.inc(1);
+        progress.step();
     }
-    pb.finish_and_clear();
+    progress.end();
     std::fs::write(&index_path, index).map_err(|e| Error::io(&index_path, "cannot write", e))?;
     let write_s = t0.elapsed().as_secs_f64();
     say!(out_text, "synthetic run: {n} designs ({samples} trajectory samples each) in {shards} shards, {:.1} MB, written in {:.1} s", bytes as f64 / 1e6, write_s);

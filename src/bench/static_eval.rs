@@ -1,6 +1,6 @@
 //! `gripopt bench static`: throughput of the static pipeline (stages 0–2).
 
-use super::{say, Out};
+use super::{say, BenchProgress, Out};
 use crate::eval::{evaluate, EvalOptions};
 use crate::params::{Design, Problem};
 use crate::Result;
@@ -10,7 +10,14 @@ use std::path::Path;
 /// Static pipeline (stages 0–2) throughput on one core: `n` random designs in the bounds of
 /// `problem` (seed `seed`), five repetitions; prints designs/s and the discard counts per
 /// stage to `out` and returns them as JSON. `path` is the problem file, for the printout.
-pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64, out: Out) -> Result<serde_json::Value> {
+pub fn static_pipeline(
+    problem: &Problem,
+    path: &Path,
+    n: usize,
+    seed: u64,
+    out: Out,
+    progress: &dyn BenchProgress,
+) -> Result<serde_json::Value> {
     let p = problem;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let designs: Vec<Design> = (0..n).map(|_| p.bounds.sample(&mut rng)).collect();
@@ -18,8 +25,7 @@ pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64, out:
     let mut counts = [0usize; 4];
     let mut feasible = 0usize;
     let mut times = Vec::new();
-    let pb = super::progress(5, "{msg} [{bar:30}] {pos}/{len} repetitions");
-    pb.set_message("bench static");
+    progress.begin("bench static", 5, "repetitions");
     for rep in 0..5 {
         let t0 = std::time::Instant::now();
         for x in &designs {
@@ -33,9 +39,9 @@ pub fn static_pipeline(problem: &Problem, path: &Path, n: usize, seed: u64, out:
             std::hint::black_box(&ev);
         }
         times.push(t0.elapsed().as_secs_f64());
-        pb.inc(1);
+        progress.step();
     }
-    pb.finish_and_clear();
+    progress.end();
     times.sort_by(f64::total_cmp);
     let (tmin, tmed) = (times[0], times[times.len() / 2]);
     say!(

@@ -3,8 +3,8 @@
 //! what the diffsol comparison (`benches/diffsol.rs`) uses.
 
 use super::table::{plot, print_table, print_targets, write_csv, Row};
-use super::{progress, time_it};
 use super::{say, Out};
+use super::{time_it, BenchProgress};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::model::Finger;
 use crate::params::{Design, Problem, SceneParams};
@@ -176,22 +176,27 @@ impl Reference {
     }
 
     /// Rows of gripopt's own integrators (Radau IIA, TR-BDF2, Dormand–Prince) at each rtol
-    /// of `wp`, each point timed for ~1 s or `wp.reps` runs.
+    /// of `wp`, each point timed for ~1 s or `wp.reps` runs; no progress shown.
     pub fn own_rows(&self, wp: &WorkPrecision) -> Vec<Row> {
+        self.own_rows_showing(wp, &())
+    }
+
+    /// [`own_rows`](Self::own_rows), telling `progress` each point as it goes.
+    pub fn own_rows_showing(&self, wp: &WorkPrecision, progress: &dyn BenchProgress) -> Vec<Row> {
         let (f, s, st) = (&self.finger, &self.scene, &self.statics);
         let methods = [Method::Radau5, Method::TrBdf2, Method::Dopri5, Method::Auto];
-        let pb = progress((methods.len() * wp.rtols.len()) as u64, "work-precision [{bar:30}] {pos}/{len} {msg}");
+        progress.begin("work-precision", (methods.len() * wp.rtols.len()) as u64, "");
         let mut rows = vec![];
         for m in methods {
             for &rtol in &wp.rtols {
-                pb.set_message(format!("{m:?} rtol {rtol:e}"));
+                progress.message(&format!("{m:?} rtol {rtol:e}"));
                 let o = Integration::new(rtol, wp.atol_at(rtol), 5_000_000).with_method(m);
                 let (r, tmin, tmed) = time_it(|| diagnostic_grasp(f, s, st, &o), 1.0, wp.reps);
                 rows.push(self.row(label(m), rtol, tmin, tmed, &Measured::of(&r, &self.run)));
-                pb.inc(1);
+                progress.step();
             }
         }
-        pb.finish_and_clear();
+        progress.end();
         rows
     }
 }
@@ -211,7 +216,13 @@ fn label(m: Method) -> &'static str {
 /// method within 1e-5 on t_stab, and the whole staged evaluation's time. Writes
 /// work_precision.csv and work_precision.svg into `wp.out_dir`; the text goes to `out`, the
 /// figures come back as JSON.
-pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, out: Out) -> Result<serde_json::Value> {
+pub fn work_precision(
+    problem: &Problem,
+    design: &Design,
+    wp: &WorkPrecision,
+    out: Out,
+    progress: &dyn BenchProgress,
+) -> Result<serde_json::Value> {
     check_atol(wp.atol)?;
     check_rtols(&wp.rtols)?;
     let reference = Reference::new(problem, design)?;
@@ -223,7 +234,7 @@ pub fn work_precision(problem: &Problem, design: &Design, wp: &WorkPrecision, ou
         "           Dormand–Prince rtol 1e-12 differs by {:.1e} relative in t_stab",
         rel(check.t_stab, reference.run.t_stab)
     );
-    let rows = reference.own_rows(wp);
+    let rows = reference.own_rows_showing(wp, progress);
     say!(out, "(diffsol rows: `cargo bench -p gripopt-diffsol-bench --bench diffsol`, as `make bench` does)");
     let csv = wp.out_dir.join("work_precision.csv");
     write_csv(&rows, &csv)?;

@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Subcommand;
-use gripopt::bench::{FreeBench, ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::bench::{EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
 use std::path::PathBuf;
 
 /// The design a table is about, and where it is written (`bench work-precision`, `bench free`).
@@ -39,6 +39,45 @@ fn robust_note(p: &gripopt::params::Problem, path: &std::path::Path, bench: &str
             "note: {} has [robust]: bench {bench} evaluates the reference [object] and [scene] only; the robust objects and scenarios are not evaluated, and its verdict is not the robust one (`gripopt evaluate`, docs/robust.md)",
             super::out::path(path)
         );
+    }
+}
+
+/// A benchmark's progress as the CLI shows it (the library reports it,
+/// [`gripopt::bench::BenchProgress`]): an indicatif bar on stderr per phase, cleared when the
+/// phase ends (drawn only on a terminal).
+#[derive(Default)]
+struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
+
+impl Bars {
+    fn with(&self, f: impl FnOnce(&indicatif::ProgressBar)) {
+        if let Some(pb) = self.0.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+            f(pb);
+        }
+    }
+}
+
+impl gripopt::bench::BenchProgress for Bars {
+    fn begin(&self, label: &str, len: u64, unit: &str) {
+        let pb = indicatif::ProgressBar::new(len);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg}").expect("template"),
+        );
+        pb.set_prefix(label.to_string());
+        pb.set_message(unit.to_string());
+        if let Some(old) = self.0.lock().unwrap_or_else(|e| e.into_inner()).replace(pb) {
+            old.finish_and_clear();
+        }
+    }
+    fn message(&self, m: &str) {
+        self.with(|pb| pb.set_message(m.to_string()));
+    }
+    fn step(&self) {
+        self.with(|pb| pb.inc(1));
+    }
+    fn end(&self) {
+        if let Some(pb) = self.0.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            pb.finish_and_clear();
+        }
     }
 }
 
@@ -201,12 +240,13 @@ fn check_scaling_flags(
 pub fn run(b: BenchCmd, json: bool) -> Result<()> {
     let (mut stdout, mut stderr) = (std::io::stdout().lock(), std::io::stderr().lock());
     let out: gripopt::bench::Out = if json { &mut stderr } else { &mut stdout };
+    let bars = Bars::default();
     let summary = match b {
         BenchCmd::Static { problem, n, seed } => {
             at_least_one("--n", n)?;
             let p = super::load_problem(&problem)?;
             robust_note(&p, &problem, "static");
-            gripopt::bench::static_pipeline(&p, &problem, n, seed, out)?
+            gripopt::bench::static_pipeline(&p, &problem, n, seed, out, &bars)?
         }
         BenchCmd::Nsga { reps } => {
             at_least_one("--reps", reps)?;
@@ -214,7 +254,7 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         }
         BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
-            gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out)?
+            gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out, &bars)?
         }
         BenchCmd::Scaling {
             problem,
@@ -257,19 +297,26 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             gripopt::bench::check_atol(atol)?;
             let p = super::load_problem(&target.problem)?;
             robust_note(&p, &target.problem, "work-precision");
-            gripopt::bench::work_precision_ensemble(&p, &target.problem, n, seed, &target.out, atol, out)?
+            let b = EnsembleBench { sample: n, seed, out_dir: target.out, atol };
+            gripopt::bench::work_precision_ensemble(&p, &target.problem, &b, out, &bars)?
         }
         BenchCmd::WorkPrecision { target, reps, atol, rtols, .. } => {
             at_least_one("--reps", reps)?;
             gripopt::bench::check_atol(atol)?;
             let (p, x) = target.load("work-precision")?;
-            gripopt::bench::work_precision(&p, &x, &WorkPrecision { out_dir: target.out, reps, atol, rtols }, out)?
+            gripopt::bench::work_precision(
+                &p,
+                &x,
+                &WorkPrecision { out_dir: target.out, reps, atol, rtols },
+                out,
+                &bars,
+            )?
         }
         BenchCmd::Free { target, reps, atol, rtols, no_dense } => {
             at_least_one("--reps", reps)?;
             let (p, x) = target.load("free")?;
             let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
-            gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out)?
+            gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out, &bars)?
         }
     };
     if json {

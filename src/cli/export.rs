@@ -282,9 +282,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
         SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
         SceneKind::Free => ExportScene::free(setup.x_off),
     };
-    if placement.object == ObjectMode::Free && p.scene.env.g_eq != 0.0 {
-        bail!("--scene free needs environment.g_eq = 0 (hand horizontal, MODEL.md §14.1), not {}", p.scene.env.g_eq);
-    }
+    // (the free scene's g_eq = 0 is the library's rule: Problem::load and in_scene name the file and field)
     let e = match (object, RobustSetup::of(&p)) {
         // the robust evaluation's own per-object scene (its cylinder and grip torque) in the
         // scene asked for; the spring sized at [hand] tau, as there

@@ -240,7 +240,9 @@ pub fn replay(
             gripopt::Resolution::Compact => "the compact subset, values at f32 precision",
             gripopt::Resolution::Full => "every recorded sample at full precision",
         };
-        let title = format!("trajectory: finger 1 of design {id} as recorded ({kept}; docs/recording.md)");
+        let fingers =
+            if samples.iter().any(|s| s.finger2.is_some()) { "finger 1, then finger 2 (finger2_)" } else { "finger 1" };
+        let title = format!("trajectory: {fingers} of design {id} as recorded ({kept}; docs/recording.md)");
         crate::cli::scenes::write_samples_csv(path, &title, samples, |v| format!("{v}"))?;
     }
     if let Some(path) = plot {

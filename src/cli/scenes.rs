@@ -9,22 +9,15 @@ use anyhow::{bail, Context, Result};
 use gripopt::eval::{Record, RobustSetup, SimulationRecord};
 use gripopt::params::{Design, Problem, SceneKind};
 use gripopt::sim::{Controls, Integration, Method, SceneSpec};
-use gripopt::{Column, POSE_COLUMNS, SAMPLE_COLUMNS};
+use gripopt::{Column, POSE_COLUMNS};
 use serde::Serialize;
 use std::path::Path;
 
-/// `centred`, `offset:X` or `free[:X]` (metres) applied to the `[scene]` of problem `p`, read
+/// `centred`, `offset:X` or `free[:X]` (metres; the library's [`gripopt::parse_scene`]) applied to the `[scene]` of problem `p`, read
 /// from `from` (checked by the library as a problem file's would be: the free scene needs
 /// g_eq = 0; an error names `from` and the flag).
 pub fn apply_scene(p: &Problem, from: &Path, arg: &str) -> Result<Problem> {
-    let num = |x: &str| x.parse::<f64>().with_context(|| format!("--scene {arg}: not a number"));
-    let (kind, x_off) = match arg.split_once(':') {
-        None if arg == "centred" => (SceneKind::Centred, None),
-        None if arg == "free" => (SceneKind::Free, None),
-        Some(("offset", x)) => (SceneKind::Offset, Some(num(x)?)),
-        Some(("free", x)) => (SceneKind::Free, Some(num(x)?)),
-        _ => bail!("--scene {arg}: must be centred, offset:X or free[:X] (metres)"),
-    };
+    let (kind, x_off) = gripopt::parse_scene(arg).context("--scene")?;
     Ok(p.in_scene(kind, x_off, Path::new(&format!("{} with --scene {arg}", from.display())))?)
 }
 
@@ -104,7 +97,13 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
     watch.csv = match (o.csv, kind) {
         (None, _) => None,
         (Some(path), SceneKind::Free) => Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?)),
-        (Some(path), _) => Some(Streamed::Samples(CsvStream::create(path, SAMPLES_TITLE, &SAMPLE_COLUMNS)?)),
+        (Some(path), _) => {
+            // the offset scene's finger 2 moves on its own: its columns after finger 1's
+            let finger2 = kind == SceneKind::Offset;
+            let columns = gripopt::trajectory_columns(finger2);
+            let title = if finger2 { SAMPLES_TITLE_OFFSET } else { SAMPLES_TITLE };
+            Some(Streamed::Samples(CsvStream::create(path, title, &columns)?, finger2))
+        }
     };
     let ev = match object {
         Some(ob) => gripopt::eval::simulate_object(x, &ob.setup, ob.index, &spec, &integ, &ctl, &mut watch),
@@ -193,6 +192,8 @@ fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Metho
 }
 
 const SAMPLES_TITLE: &str = "trajectory: finger 1 at every accepted step and event (docs/outputs.md)";
+const SAMPLES_TITLE_OFFSET: &str =
+    "trajectory: finger 1, then finger 2 (finger2_), at every accepted step and event (docs/outputs.md)";
 const POSES_TITLE: &str =
     "free scene: the object's pose and both fingers at every accepted step and event (docs/outputs.md)";
 
@@ -211,11 +212,13 @@ pub fn write_samples_csv(
     samples: &[gripopt::sim::Sample],
     fmt: fn(f64) -> String,
 ) -> Result<()> {
-    let mut w = csv_head(title, &SAMPLE_COLUMNS);
+    // finger 2's columns where recorded (an offset run's; NaN where an older gripopt left some out)
+    let finger2 = samples.iter().any(|s| s.finger2.is_some());
+    let mut w = csv_head(title, &gripopt::trajectory_columns(finger2));
     for s in samples {
-        let v = gripopt::sample_values(s);
+        let v: Vec<String> = gripopt::trajectory_row(s, finger2).into_iter().map(fmt).collect();
         w.push('\n');
-        w.push_str(&v.map(fmt).join(","));
+        w.push_str(&v.join(","));
     }
     w.push('\n');
     crate::cli::out::write_file(path, w.as_bytes())

@@ -18,8 +18,9 @@ pub const EVERY: Duration = Duration::from_secs(5);
 /// A CSV fed by the simulation: the grasp samples or the free scene's poses (steps and
 /// events, not the grid).
 pub enum Streamed {
-    /// `simulate --csv` in the centred and offset scenes.
-    Samples(CsvStream),
+    /// `simulate --csv` in the centred and offset scenes (true: with finger 2's columns,
+    /// the offset scene).
+    Samples(CsvStream, bool),
     /// `simulate --scene free --csv`.
     Poses(CsvStream),
 }
@@ -28,7 +29,7 @@ impl Streamed {
     /// The stream, whichever it is.
     pub fn into_stream(self) -> CsvStream {
         match self {
-            Streamed::Samples(s) | Streamed::Poses(s) => s,
+            Streamed::Samples(s, _) | Streamed::Poses(s) => s,
         }
     }
 }
@@ -109,8 +110,8 @@ impl Sink for Watch {
             self.traj.finger(at, s);
         }
         if at != Point::Grid {
-            if let Some(Streamed::Samples(c)) = self.csv.as_mut() {
-                c.row(&gripopt::sample_values(s));
+            if let Some(Streamed::Samples(c, finger2)) = self.csv.as_mut() {
+                c.row(&gripopt::trajectory_row(s, *finger2));
             }
             self.tick(s.t);
         }

@@ -191,6 +191,25 @@ impl Problem {
         self.robust.iter().flat_map(|r| &r.objects).filter_map(|o| o.file.as_ref()).map(|f| folder.join(f)).collect()
     }
 
+    /// A run folder keeps only its problem.toml, hashed: a robust object taken from another
+    /// file (`file = "…"`) could change under a run unnoticed (resume, replay and verify would
+    /// read the edited file) and would be missing where the folder is moved. A run's problem
+    /// must therefore give every object inline; the error names `path` and the field.
+    pub fn check_self_contained(&self, path: &Path) -> Result<()> {
+        let objects = self.robust.iter().flat_map(|r| r.objects.iter().enumerate());
+        for (i, o) in objects {
+            if let Some(f) = &o.file {
+                return Err(Error::InvalidField {
+                    file: path.to_path_buf(),
+                    field: format!("robust.objects[{i}].file"),
+                    value: format!("{f:?}"),
+                    rule: format!("a run (optimise, resume) needs every object inline: a run folder keeps only problem.toml, so an object file could change under the run unnoticed; copy {f}'s [object] values (radius, length, density, grasp_height) into this object instead of `file`"),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Load and validate a problem file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();

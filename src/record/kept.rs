@@ -79,7 +79,7 @@ mod tests {
             filtered_fy: 0.0,
             energy: 0.0,
             energy_excess: 0.0,
-            q2: None,
+            finger2: None,
         };
         let samples = ts.iter().map(|&t| sample(t)).collect();
         Trajectory { samples, grid: vec![] }

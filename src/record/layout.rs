@@ -14,6 +14,7 @@
 //!   covers the curves), x-axis "Path (current)" against the design's own simulated time.
 
 use crate::fsutil::write_atomic;
+use crate::params::{Problem, SceneKind};
 use crate::Result;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -75,10 +76,17 @@ fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
 /// its array `t`, x-axis "Path (current)": the arrays of the latest message, i.e. the design
 /// under the playhead. A column that parses as a number is a horizontal reference line.
 /// `y_range`: fixed limits of the y axis (None: automatic).
-fn plot(topic: &str, title: &str, y_label: &str, columns: &[(&str, &str)], y_range: Option<(f64, f64)>) -> Value {
+fn plot<C: AsRef<str>, L: AsRef<str>>(
+    topic: &str,
+    title: &str,
+    y_label: &str,
+    columns: &[(C, L)],
+    y_range: Option<(f64, f64)>,
+) -> Value {
     let paths: Vec<Value> = columns
         .iter()
         .map(|(c, label)| {
+            let (c, label) = (c.as_ref(), label.as_ref());
             let value = if c.parse::<f64>().is_ok() { c.to_string() } else { format!("{topic}.{c}[:]") };
             json!({"value": value, "enabled": true, "timestampMethod": "receiveTime", "label": label})
         })
@@ -104,6 +112,17 @@ fn plot(topic: &str, title: &str, y_label: &str, columns: &[(&str, &str)], y_ran
     titled(p, title)
 }
 
+/// Plot columns from finger 1's series fields and labels; with `finger2`, each labelled
+/// "finger 1 …", followed by finger 2's own (`finger2_` + the field: the offset scene's
+/// series).
+fn finger_columns(columns: &[(&str, &str)], finger2: bool) -> Vec<(String, String)> {
+    if !finger2 {
+        return columns.iter().map(|&(f, l)| (f.to_string(), l.to_string())).collect();
+    }
+    let ones = columns.iter().map(|&(f, l)| (f.to_string(), format!("finger 1 {l}")));
+    ones.chain(columns.iter().map(|&(f, l)| (format!("finger2_{f}"), format!("finger 2 {l}")))).collect()
+}
+
 fn raw_messages(topic: &str, title: &str) -> Value {
     titled(
         json!({"topicPath": topic, "diffEnabled": false, "diffMethod": "custom", "diffTopicPath": "", "showFullMessageForDiff": false, "expansion": "all"}),
@@ -125,20 +144,29 @@ fn document(config_by_id: Value, tree: Value) -> Value {
 /// The layout of a run folder: the oblique and the top 3-D views (left; left out when the
 /// recording has no scene channels, `scene` false); on the right whether the design is on
 /// the final front (`/front` of `recording/front.mcap`), the contact forces at the scale of
-/// the holding force, the hand force, the joint angles and the `/designs` record.
-pub fn layout(scene: bool) -> Value {
+/// the holding force, the hand force, the joint angles and the `/designs` record. With
+/// `finger2` (the offset scene, whose series carries finger 2's own columns) the contact
+/// force and joint angle plots show both fingers.
+pub fn layout(scene: bool, finger2: bool) -> Value {
     let s = "/grasp/series";
-    let contact = plot(
-        s,
-        "Contact forces of finger 1 near the holding force (y clipped to -5..25 N; impacts run off the top)",
-        "finger 1 contact force (N)",
+    let mut forces = finger_columns(
         &[
             ("proximal_normal_force", "proximal normal"),
             ("distal_normal_force", "distal normal"),
             ("proximal_friction_force", "proximal friction"),
             ("distal_friction_force", "distal friction"),
-            ("mean_force_objective", "F~ (objective)"),
         ],
+        finger2,
+    );
+    forces.push(("mean_force_objective".into(), "F~ (objective)".into()));
+    let angles =
+        finger_columns(&[("q11", "q11 (actuated)"), ("q21", "q21 = theta1"), ("theta2", "theta2 (distal)")], finger2);
+    let fingers = if finger2 { "both fingers" } else { "finger 1" };
+    let contact = plot(
+        s,
+        &format!("Contact forces of {fingers} near the holding force (y clipped to -5..25 N; impacts run off the top)"),
+        &format!("{fingers} contact force (N)"),
+        &forces,
         Some((-5.0, 25.0)),
     );
     let hand = plot(
@@ -148,13 +176,7 @@ pub fn layout(scene: bool) -> Value {
         &[("hand_force", "raw"), ("filtered_hand_force", "low-pass T_f")],
         Some((-25.0, 25.0)),
     );
-    let joints = plot(
-        s,
-        "Joint angles of finger 1",
-        "angle (rad)",
-        &[("q11", "q11 (actuated)"), ("q21", "q21 = theta1"), ("theta2", "theta2 (distal)")],
-        None,
-    );
+    let joints = plot(s, &format!("Joint angles of {fingers}"), "angle (rad)", &angles, None);
     let front = titled(
         json!({
             "path": "/front.on_final_front",
@@ -235,11 +257,13 @@ pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
     )
 }
 
-/// Write [`layout`] for a run recorded with `opts` to `RUN_DIR/foxglove-layout.json`;
+/// Write [`layout`] for a run of `problem` recorded with `opts` (both fingers plotted in the
+/// offset scene) to `RUN_DIR/foxglove-layout.json`;
 /// returns its path.
-pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions) -> Result<PathBuf> {
+pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions, problem: &Problem) -> Result<PathBuf> {
     let path = run_dir.join(LAYOUT_FILE);
-    let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0)).expect("the layout serialises");
+    let finger2 = problem.scene.setup.kind == SceneKind::Offset;
+    let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0, finger2)).expect("the layout serialises");
     write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
@@ -262,9 +286,12 @@ mod tests {
     /// axis labels and a legend beside the chart, and a mosaic naming exactly the panels.
     #[test]
     fn layouts_are_written_for_both_viewers() {
-        for (name, l) in
-            [("run", layout(true)), ("run without scene", layout(false)), ("verify", verify_layout(1.0, 1.0))]
-        {
+        for (name, l) in [
+            ("run", layout(true, false)),
+            ("run without scene", layout(false, false)),
+            ("offset run", layout(true, true)),
+            ("verify", verify_layout(1.0, 1.0)),
+        ] {
             let configs = l["configById"].as_object().unwrap();
             assert!(l["playbackConfig"]["speed"].as_f64().unwrap() <= 0.05, "{name}: a grasp must be watchable");
             let mut leaves = vec![];
@@ -299,6 +326,29 @@ mod tests {
                 }
             }
         }
-        assert!(layout(false)["configById"].get("3D!oblique").is_none(), "no 3-D panel without scene channels");
+        assert!(layout(false, false)["configById"].get("3D!oblique").is_none(), "no 3-D panel without scene channels");
+    }
+
+    /// The offset scene's layout plots finger 2's own series fields beside finger 1's, each
+    /// labelled with its finger; the other scenes' layouts name no finger-2 field (their
+    /// series have none: the viewer would plot nothing).
+    #[test]
+    fn the_offset_layout_plots_both_fingers() {
+        let paths = |l: &Value, id: &str| -> Vec<(String, String)> {
+            let p = l["configById"][id]["paths"].as_array().unwrap();
+            p.iter().map(|v| (v["value"].as_str().unwrap().into(), v["label"].as_str().unwrap().into())).collect()
+        };
+        let (offset, centred) = (layout(true, true), layout(true, false));
+        for id in ["Plot!contact", "Plot!joints"] {
+            let (two, one) = (paths(&offset, id), paths(&centred, id));
+            let f2: Vec<_> = two.iter().filter(|(v, _)| v.starts_with("/grasp/series.finger2_")).collect();
+            assert!(!f2.is_empty() && f2.iter().all(|(_, l)| l.starts_with("finger 2 ")), "{id}: {two:?}");
+            for (v, _) in &f2 {
+                let own = v.replace("finger2_", "");
+                assert!(one.iter().any(|(w, _)| *w == own), "{id}: {v} has no finger-1 field {own}");
+            }
+            assert_eq!(two.len(), one.len() + f2.len(), "{id}: finger 1's fields kept");
+            assert!(one.iter().all(|(v, _)| !v.contains("finger2_")), "{id}");
+        }
     }
 }

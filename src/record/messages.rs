@@ -5,7 +5,7 @@ use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
 use super::proto::GraspSeries;
 use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
-use crate::sim::Sample;
+use crate::sim::{FingerSample, Sample};
 
 pub use super::scene::{
     discarded_scene, drawn_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene,
@@ -73,8 +73,8 @@ pub fn at_precision(x: f64, res: Resolution) -> f64 {
 /// would leave the previous design's curves on screen after a seek (docs/recording.md).
 /// `mean_force_objective` repeats the design's F̃ (stage 2's static mean contact force, the
 /// objective) on every sample, so the Plot panel draws it as a line beside the simulated forces.
-/// With `finger2` (the offset scene) the series has finger 2's angle columns, as long as the
-/// others (NaN in the placeholder).
+/// With `finger2` (the offset scene) the series has finger 2's columns (its angles, rates, θ2
+/// and contacts), as long as the others (NaN in the placeholder).
 pub fn series(
     d: &DesignEntry<'_>,
     samples: &[Sample],
@@ -96,8 +96,9 @@ pub fn series(
             c.push(f64::NAN);
         }
         if finger2 {
-            m.finger2_q11.push(f64::NAN);
-            m.finger2_q21.push(f64::NAN);
+            for c in m.finger2_columns_mut() {
+                c.push(f64::NAN);
+            }
         }
         return m;
     }
@@ -122,17 +123,58 @@ pub fn series(
         m.energy.push(p(s.energy));
         m.energy_excess.push(p(s.energy_excess));
         m.mean_force_objective.push(f_tilde);
-        if let Some(q2) = s.q2 {
-            m.finger2_q11.push(p(q2[0]));
-            m.finger2_q21.push(p(q2[1]));
+        if let Some(f2) = &s.finger2 {
+            for (c, v) in m.finger2_columns_mut().into_iter().zip(f2.values()) {
+                c.push(p(v));
+            }
         }
     }
     m
 }
 
+/// Which of finger 2's columns a `/grasp/series` message has (offset scene).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Finger2Columns {
+    /// None (another scene, or an offset shard written before session 36).
+    None,
+    /// Its angles `finger2_q11`, `finger2_q21` only (an offset shard of session 36).
+    Angles,
+    /// All of them (an offset shard written since session 37).
+    All,
+}
+
+impl Finger2Columns {
+    /// The finger-2 columns of `m`; `None` if they are not as long as `t` or not one of the
+    /// sets gripopt has written.
+    pub fn of(m: &GraspSeries) -> Option<Self> {
+        let n = m.t.len();
+        let lens = m.finger2_columns().map(Vec::len);
+        let (angles, rest) = lens.split_at(2);
+        let full = |c: &[usize]| c.iter().all(|&l| l == n);
+        let empty = |c: &[usize]| c.iter().all(|&l| l == 0);
+        match (full(angles), empty(angles), full(rest), empty(rest)) {
+            (_, true, _, true) => Some(Finger2Columns::None),
+            (true, _, _, true) => Some(Finger2Columns::Angles),
+            (true, _, true, _) => Some(Finger2Columns::All),
+            _ => None,
+        }
+    }
+
+    /// `s` as a recording with these columns holds it: finger 2 left out without them, its
+    /// rates, θ2 and contacts NaN with its angles only.
+    pub fn shape(self, s: &Sample) -> Sample {
+        let finger2 = match self {
+            Finger2Columns::None => None,
+            Finger2Columns::Angles => s.finger2.map(|f| FingerSample { q: f.q, ..FingerSample::map(&f, |_| f64::NAN) }),
+            Finger2Columns::All => s.finger2,
+        };
+        Sample { finger2, ..*s }
+    }
+}
+
 /// Samples back from a `/grasp/series` message (replay); `None` if its columns differ in
 /// length. The placeholder of a design without a trajectory (`simulated_samples` = 0) gives
-/// no sample.
+/// no sample. Finger 2's columns the message lacks are NaN ([`Finger2Columns`]).
 pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
     if m.simulated_samples == 0 {
         return Some(vec![]);
@@ -158,11 +200,22 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
     if cols.iter().any(|c| c.len() != n) {
         return None;
     }
-    // finger 2's own angles: offset scene only (absent in older recordings)
-    let finger2 = match (m.finger2_q11.len(), m.finger2_q21.len()) {
-        (0, 0) => false,
-        (a, b) if a == n && b == n => true,
-        _ => return None,
+    // finger 2's own columns: offset scene only; absent in older recordings (all of them
+    // before session 36, all but the angles in session 36's)
+    let f2 = m.finger2_columns();
+    let finger2 = match Finger2Columns::of(m)? {
+        Finger2Columns::None => None,
+        Finger2Columns::Angles => Some(2),
+        Finger2Columns::All => Some(f2.len()),
+    };
+    let finger2_at = |k: usize| {
+        finger2.map(|cols| {
+            let mut v = [f64::NAN; 11];
+            for (x, c) in v.iter_mut().zip(&f2[..cols]) {
+                *x = c[k];
+            }
+            FingerSample::from_values(v)
+        })
     };
     Some(
         (0..n)
@@ -178,7 +231,7 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
                 filtered_fy: m.filtered_hand_force[k],
                 energy: m.energy[k],
                 energy_excess: m.energy_excess[k],
-                q2: finger2.then(|| [m.finger2_q11[k], m.finger2_q21[k]]),
+                finger2: finger2_at(k),
             })
             .collect(),
     )

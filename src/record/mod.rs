@@ -44,7 +44,7 @@ pub use kept::{scene_samples, KeptTrajectory};
 pub use layout::{
     layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };
-pub use messages::{samples_from, window_start_ns};
+pub use messages::{samples_from, window_start_ns, Finger2Columns};
 pub use metadata::{RunMetadata, ScenarioTag, RUN_METADATA};
 pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,

@@ -12,8 +12,8 @@ use prost_types::{DescriptorProto, FieldDescriptorProto, FileDescriptorProto, Fi
 pub const SERIES_NAME: &str = "gripopt.GraspSeries";
 
 /// One design's recorded grasp trajectory as columns: finger 1's (finger 2 mirrors it in the
-/// centred scene), and in the offset scene finger 2's own angles (`finger2_q11`,
-/// `finger2_q21`; empty, i.e. absent from the bytes, otherwise). Plotted in Foxglove with the x-axis
+/// centred scene), and in the offset scene finger 2's own (`finger2_q11` … `finger2_distal_friction_force`;
+/// empty, i.e. absent from the bytes, otherwise; shards of session 36 have its angles only). Plotted in Foxglove with the x-axis
 /// "Path (current)" `/grasp/series.t`.
 #[derive(Clone, PartialEq, Message)]
 pub struct GraspSeries {
@@ -86,9 +86,70 @@ pub struct GraspSeries {
     /// Finger 2's q21 (rad, in its own mirrored frame), offset scene only; empty otherwise.
     #[prost(double, repeated, tag = "22")]
     pub finger2_q21: Vec<f64>,
+    /// Finger 2's q̇11 (rad/s), offset scene only (since session 37); empty otherwise.
+    #[prost(double, repeated, tag = "23")]
+    pub finger2_q11_dot: Vec<f64>,
+    /// Finger 2's q̇21 (rad/s), offset scene only.
+    #[prost(double, repeated, tag = "24")]
+    pub finger2_q21_dot: Vec<f64>,
+    /// Finger 2's θ2 (rad), offset scene only.
+    #[prost(double, repeated, tag = "25")]
+    pub finger2_theta2: Vec<f64>,
+    /// Finger 2's proximal penetration (m), offset scene only.
+    #[prost(double, repeated, tag = "26")]
+    pub finger2_proximal_penetration: Vec<f64>,
+    /// Finger 2's distal penetration (m), offset scene only.
+    #[prost(double, repeated, tag = "27")]
+    pub finger2_distal_penetration: Vec<f64>,
+    /// Finger 2's proximal normal force (N), offset scene only.
+    #[prost(double, repeated, tag = "28")]
+    pub finger2_proximal_normal_force: Vec<f64>,
+    /// Finger 2's distal normal force (N), offset scene only.
+    #[prost(double, repeated, tag = "29")]
+    pub finger2_distal_normal_force: Vec<f64>,
+    /// Finger 2's proximal friction force (N, on the finger along its t_c), offset scene only.
+    #[prost(double, repeated, tag = "30")]
+    pub finger2_proximal_friction_force: Vec<f64>,
+    /// Finger 2's distal friction force (N), offset scene only.
+    #[prost(double, repeated, tag = "31")]
+    pub finger2_distal_friction_force: Vec<f64>,
 }
 
 impl GraspSeries {
+    /// Finger 2's columns (offset scene), in tag order: [`FINGER2_FIELDS`].
+    pub fn finger2_columns(&self) -> [&Vec<f64>; 11] {
+        [
+            &self.finger2_q11,
+            &self.finger2_q21,
+            &self.finger2_q11_dot,
+            &self.finger2_q21_dot,
+            &self.finger2_theta2,
+            &self.finger2_proximal_penetration,
+            &self.finger2_distal_penetration,
+            &self.finger2_proximal_normal_force,
+            &self.finger2_distal_normal_force,
+            &self.finger2_proximal_friction_force,
+            &self.finger2_distal_friction_force,
+        ]
+    }
+
+    /// Finger 2's columns, mutable.
+    pub(crate) fn finger2_columns_mut(&mut self) -> [&mut Vec<f64>; 11] {
+        [
+            &mut self.finger2_q11,
+            &mut self.finger2_q21,
+            &mut self.finger2_q11_dot,
+            &mut self.finger2_q21_dot,
+            &mut self.finger2_theta2,
+            &mut self.finger2_proximal_penetration,
+            &mut self.finger2_distal_penetration,
+            &mut self.finger2_proximal_normal_force,
+            &mut self.finger2_distal_normal_force,
+            &mut self.finger2_proximal_friction_force,
+            &mut self.finger2_distal_friction_force,
+        ]
+    }
+
     /// Every value column (all but `t`), in tag order.
     pub(crate) fn value_columns_mut(&mut self) -> [&mut Vec<f64>; 16] {
         [
@@ -136,9 +197,21 @@ pub const SERIES_FIELDS: [(&str, i32, Type, bool); 20] = [
     ("mean_force_objective", 20, Type::Double, true),
 ];
 
-/// The fields of finger 2's own angles (offset scene), after [`SERIES_FIELDS`].
-pub const FINGER2_FIELDS: [(&str, i32, Type, bool); 2] =
-    [("finger2_q11", 21, Type::Double, true), ("finger2_q21", 22, Type::Double, true)];
+/// The fields of finger 2's own state and contacts (offset scene), after [`SERIES_FIELDS`]:
+/// its angles (since session 36), then its rates, θ2 and contacts (since session 37).
+pub const FINGER2_FIELDS: [(&str, i32, Type, bool); 11] = [
+    ("finger2_q11", 21, Type::Double, true),
+    ("finger2_q21", 22, Type::Double, true),
+    ("finger2_q11_dot", 23, Type::Double, true),
+    ("finger2_q21_dot", 24, Type::Double, true),
+    ("finger2_theta2", 25, Type::Double, true),
+    ("finger2_proximal_penetration", 26, Type::Double, true),
+    ("finger2_distal_penetration", 27, Type::Double, true),
+    ("finger2_proximal_normal_force", 28, Type::Double, true),
+    ("finger2_distal_normal_force", 29, Type::Double, true),
+    ("finger2_proximal_friction_force", 30, Type::Double, true),
+    ("finger2_distal_friction_force", 31, Type::Double, true),
+];
 
 /// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3): [`SERIES_FIELDS`],
 /// and with `finger2` (a shard of the offset scene) [`FINGER2_FIELDS`] too — a centred run's
@@ -179,8 +252,9 @@ mod tests {
         for (k, c) in m.value_columns_mut().into_iter().enumerate() {
             c.push(k as f64 + 1.5);
         }
-        m.finger2_q11.push(17.5);
-        m.finger2_q21.push(18.5);
+        for (k, c) in m.finger2_columns_mut().into_iter().enumerate() {
+            c.push(k as f64 + 17.5);
+        }
         let b = m.encode_to_vec();
         let mut i = 0;
         let mut seen = vec![];
@@ -212,13 +286,13 @@ mod tests {
             }
             seen.push(tag);
         }
-        assert_eq!(seen, (1..=22).collect::<Vec<_>>());
+        assert_eq!(seen, (1..=31).collect::<Vec<_>>());
         // the centred scene's schema is the one of older recordings: the offset fields only with `finger2`
         let (plain, with2) = (series_descriptor(false), series_descriptor(true));
         let names = |b: &[u8]| {
             let set = FileDescriptorSet::decode(b).unwrap();
             set.file[0].message_type[0].field.iter().map(|f| f.number()).collect::<Vec<_>>()
         };
-        assert_eq!((names(&plain), names(&with2)), ((1..=20).collect(), (1..=22).collect()));
+        assert_eq!((names(&plain), names(&with2)), ((1..=20).collect(), (1..=31).collect()));
     }
 }

@@ -3,7 +3,7 @@
 //! verify that the new trajectory equals the recorded one.
 
 use super::index::{read_index, ProblemUse, ShardEntry};
-use super::messages::{at_precision, samples_from, window_start_ns};
+use super::messages::{at_precision, samples_from, window_start_ns, Finger2Columns};
 use super::metadata::{RunMetadata, RUN_METADATA};
 use super::proto::GraspSeries;
 use super::schema::DesignMessage;
@@ -24,6 +24,9 @@ pub struct Recorded {
     pub record: DesignMessage,
     /// The recorded trajectory (possibly a subset, see the run's recording options).
     pub samples: Vec<Sample>,
+    /// Which of finger 2's columns the recording has (offset scene; NaN in `samples` where
+    /// it lacks one).
+    pub finger2_columns: Finger2Columns,
     /// Resolution of the recorded trajectory (compact: values to f32 precision).
     pub resolution: Resolution,
     /// SHA-256 of the problem the design was evaluated with, as the shard's metadata says
@@ -528,7 +531,28 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let problem_sha256 = meta.problem_sha256;
     // absent in recordings of simulator revision 1
     let simulator_revision = meta.simulator_revision.unwrap_or(1);
-    Ok(Recorded { file: path, record, samples, resolution, problem_sha256, simulator_revision })
+    let finger2_columns = Finger2Columns::of(&series)
+        .ok_or_else(|| bad(format!("design {id}: finger 2's columns of /grasp/series are not a set gripopt writes")))?;
+    Ok(Recorded { file: path, record, samples, finger2_columns, resolution, problem_sha256, simulator_revision })
+}
+
+/// The largest relative difference between fresh sample `a` (shaped as recorded) and the
+/// recorded `b`: finger 1's values, the hand force and energy, and finger 2's where recorded
+/// (a value NaN on one side only, or finger 2 on one side only, differs infinitely).
+fn sample_difference(a: &Sample, b: &Sample) -> f64 {
+    let (fa, fb) = (a.finger1().values(), b.finger1().values());
+    let rest = [(a.t, b.t), (a.hand_fy, b.hand_fy), (a.filtered_fy, b.filtered_fy), (a.energy, b.energy)];
+    let one = rest.into_iter().chain([(a.energy_excess, b.energy_excess)]).chain(fa.into_iter().zip(fb));
+    let mut d = one.map(|(u, v)| rel(u, v)).fold(0.0, f64::max);
+    match (a.finger2, b.finger2) {
+        (Some(u), Some(v)) => {
+            let nan_apart = |(x, y): (f64, f64)| if x.is_nan() != y.is_nan() { f64::INFINITY } else { rel(x, y) };
+            d = u.values().into_iter().zip(v.values()).map(nan_apart).fold(d, f64::max);
+        }
+        (None, None) => {}
+        _ => d = f64::INFINITY,
+    }
+    d
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -595,21 +619,8 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let tr = ev.dynamics.is_some().then_some(traj);
     let fresh: Vec<Sample> = match tr {
         Some(t) => {
-            let p = |x: f64| at_precision(x, recorded.resolution);
-            let round = |s: &Sample| Sample {
-                t: s.t,
-                q: s.q.map(p),
-                qd: s.qd.map(p),
-                theta2: p(s.theta2),
-                delta: s.delta.map(p),
-                normal: s.normal.map(p),
-                friction: s.friction.map(p),
-                hand_fy: p(s.hand_fy),
-                filtered_fy: p(s.filtered_fy),
-                energy: p(s.energy),
-                energy_excess: p(s.energy_excess),
-                q2: s.q2.map(|q| q.map(p)),
-            };
+            // rounded as recorded (t exact), finger 2 left as the recording has it
+            let round = |s: &Sample| recorded.finger2_columns.shape(&s.map(|x| at_precision(x, recorded.resolution)));
             let opts = RecordOptions { resolution: recorded.resolution, ..opts };
             opts.kept_samples(&t.samples).into_iter().map(|k| round(&t.samples[k])).collect()
         }
@@ -620,34 +631,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let mut maxd = 0.0f64;
     let same_len = fresh.len() == recorded.samples.len();
     for (a, b) in fresh.iter().zip(&recorded.samples) {
-        let pairs = [
-            (a.t, b.t),
-            (a.q[0], b.q[0]),
-            (a.q[1], b.q[1]),
-            (a.qd[0], b.qd[0]),
-            (a.qd[1], b.qd[1]),
-            (a.theta2, b.theta2),
-            (a.delta[0], b.delta[0]),
-            (a.delta[1], b.delta[1]),
-            (a.normal[0], b.normal[0]),
-            (a.normal[1], b.normal[1]),
-            (a.friction[0], b.friction[0]),
-            (a.friction[1], b.friction[1]),
-            (a.hand_fy, b.hand_fy),
-            (a.filtered_fy, b.filtered_fy),
-            (a.energy, b.energy),
-            (a.energy_excess, b.energy_excess),
-        ];
-        for (u, v) in pairs {
-            maxd = maxd.max(rel(u, v));
-        }
-        // finger 2's own angles (offset scene), where the recording has them (older
-        // recordings of the offset scene do not: finger 1's columns verify those)
-        match (a.q2, b.q2) {
-            (Some(u), Some(v)) => maxd = maxd.max(rel(u[0], v[0])).max(rel(u[1], v[1])),
-            (None, Some(_)) => maxd = f64::INFINITY,
-            _ => {}
-        }
+        maxd = maxd.max(sample_difference(a, b));
     }
     let feasible_rec = recorded.record.feasible;
     // same build: 0 (bitwise); another build may differ in the last bits, then by at most

@@ -297,12 +297,12 @@ fn fingers_entity(t_ns: u64, design_id: u64, id: &str, f: &Finger, p: &crate::mo
 }
 
 /// `/scene` message: both fingers at sample `s` (finger 2 the mirror of finger 1 in the
-/// centred scene; at its own angles `s.q2`, mirrored, in the offset scene); with `first`, it
+/// centred scene; at its own angles `s.finger2`, mirrored, in the offset scene); with `first`, it
 /// first deletes the previous design's fingers. `None` when there is no finger or a pose
 /// cannot be assembled (then, with `first`, a message that only deletes).
 pub fn scene(id: u64, t_ns: u64, finger: Option<&Finger>, s: Option<&Sample>, first: bool) -> Option<SceneUpdate> {
     let deletions = if first { delete_all(t_ns) } else { vec![] };
-    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p, s.q2)));
+    let pose = finger.zip(s).and_then(|(f, s)| f.dgm(s.q[0], s.q[1]).ok().map(|p| (f, p, s.finger2.map(|f2| f2.q))));
     let drawn = match pose {
         Some((finger, p, None)) => Some(fingers_entity(t_ns, id, "fingers", finger, &p, ORANGE)),
         Some((finger, p1, Some(q2))) => finger.dgm(q2[0], q2[1]).ok().map(|p2| two_fingers(t_ns, id, finger, &p1, &p2)),

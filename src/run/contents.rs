@@ -210,7 +210,8 @@ impl Scan {
         match n {
             "problem.toml" => crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256,
             LAYOUT_FILE => {
-                [true, false].iter().any(|s| serde_json::to_string_pretty(&layout(*s)).is_ok_and(|l| l == text()))
+                let written = |s, f2| serde_json::to_string_pretty(&layout(s, f2)).is_ok_and(|l| l == text());
+                [(true, false), (false, false), (true, true), (false, true)].iter().any(|&(s, f2)| written(s, f2))
             }
             n if VIEWS.contains(&n) => text().starts_with(&format!("# gripopt {n}")),
             // written beside the first checkpoint by a gripopt before issue 24

@@ -89,16 +89,6 @@ impl GripperProblem {
         GripperProblem { problem, options, recording: RecordOptions::none(), robust, lo, hi }
     }
 
-    /// The batch evaluator a run uses unless its caller gives one: for a robust problem the
-    /// one that spreads every design's scenarios over the threads
-    /// ([`RobustScheduled`](super::RobustScheduled)), else [`crate::optim::Scheduled`].
-    pub fn default_evaluator(&self) -> Box<dyn crate::optim::Evaluator<GripperProblem>> {
-        match self.robust {
-            Some(_) => Box::new(super::RobustScheduled::default()),
-            None => Box::new(crate::optim::Scheduled::default()),
-        }
-    }
-
     /// The evaluation of a robust design from its stages 0–2 and its scenarios.
     pub fn robust_evaluated(
         &self,

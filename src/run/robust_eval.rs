@@ -17,6 +17,18 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
+impl GripperProblem {
+    /// The batch evaluator a run uses unless its caller gives one: for a robust problem the
+    /// one that spreads every design's scenarios over the threads ([`RobustScheduled`]),
+    /// else [`Scheduled`].
+    pub fn default_evaluator(&self) -> Box<dyn Evaluator<GripperProblem>> {
+        match self.robust {
+            Some(_) => Box::new(RobustScheduled::default()),
+            None => Box::new(Scheduled::default()),
+        }
+    }
+}
+
 /// The default evaluator of a gripper problem: robust problems by (design, scenario) tasks,
 /// others by [`Scheduled`].
 #[derive(Debug, Default)]

@@ -200,7 +200,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     write_current(&spec.out, &info, &gp.problem)?;
     // a run that records nothing gets no layout: it would name channels no file has
     if spec.record.enabled {
-        crate::record::write_layout(&spec.out, &spec.record)?;
+        crate::record::write_layout(&spec.out, &spec.record, &gp.problem)?;
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);

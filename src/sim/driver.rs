@@ -12,23 +12,22 @@ use super::sink::{EventNote, Point, Sink};
 use nalgebra::SVector;
 
 /// Run `scene` from t = 0 to `t_end` with the method, first step and budget of `integ`,
-/// the tolerances `tol` and the grid of `ctl`, reporting to `sink`, and return the
-/// scene's output.
+/// the tolerances `tol` and the grid of `ctl`, reporting to `sink`, and return how the
+/// run ended (the scene, which keeps its criteria, makes its own output from it).
 pub fn simulate<const N: usize, const E: usize, Sc: Scene<N, E>, K: Sink + ?Sized>(
-    mut scene: Sc,
+    scene: &mut Sc,
     integ: &Integration,
     ctl: &Controls,
     tol: Tol<N>,
     t_end: f64,
     sink: &mut K,
-) -> Sc::Output {
-    let run = match integ.method {
-        Method::Radau5 => drive(&mut scene, &mut Radau5::<N>::new(tol, integ.h0), integ, ctl, t_end, sink),
-        Method::TrBdf2 => drive(&mut scene, &mut TrBdf2::new(tol, integ.h0), integ, ctl, t_end, sink),
-        Method::Dopri5 => drive(&mut scene, &mut Dopri5::new(tol, integ.h0), integ, ctl, t_end, sink),
-        Method::Auto => drive(&mut scene, &mut Switching::new(tol, integ.h0), integ, ctl, t_end, sink),
-    };
-    scene.finish(&run)
+) -> Run<N, Sc::Eval> {
+    match integ.method {
+        Method::Radau5 => drive(scene, &mut Radau5::<N>::new(tol, integ.h0), integ, ctl, t_end, sink),
+        Method::TrBdf2 => drive(scene, &mut TrBdf2::new(tol, integ.h0), integ, ctl, t_end, sink),
+        Method::Dopri5 => drive(scene, &mut Dopri5::new(tol, integ.h0), integ, ctl, t_end, sink),
+        Method::Auto => drive(scene, &mut Switching::new(tol, integ.h0), integ, ctl, t_end, sink),
+    }
 }
 
 /// The step loop with a given stepper.

@@ -39,7 +39,9 @@ pub use integrate::{
     RadauIIAScheme, RadauScheme, RadauStepper, Rhs, Scalar, Stats, StepError, StepPoint, Stepper, Tol, TrBdf2,
 };
 pub use memory::{Memory, MemoryChange};
-pub use result::{DynOutcome, DynamicsResult, FirstContact, FreeEnd, PoseSample, Sample, Trajectory, MAX_EVENTS};
+pub use result::{
+    DynOutcome, DynamicsResult, FingerSample, FirstContact, FreeEnd, PoseSample, Sample, Trajectory, MAX_EVENTS,
+};
 pub use scene::centred::{
     compliant_equilibrium, tolerances as centred_tolerances, CentredScene, FingerOde, State, EVENTS as CENTRED_EVENTS,
     NS,

@@ -198,9 +198,59 @@ impl DynamicsResult {
     }
 }
 
+/// One finger's state and contacts at a sample, in its local frame (finger 2's: mirrored).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FingerSample {
+    /// q11, q21 (rad).
+    pub q: [f64; 2],
+    /// q̇11, q̇21 (rad/s).
+    pub qd: [f64; 2],
+    /// θ2 (rad).
+    pub theta2: f64,
+    /// Penetrations δ (m), proximal and distal.
+    pub delta: [f64; 2],
+    /// Normal forces (N).
+    pub normal: [f64; 2],
+    /// Friction forces (N, on the finger along t_c).
+    pub friction: [f64; 2],
+}
+
+impl FingerSample {
+    /// Every value with `f` applied (e.g. a recording's rounding).
+    pub fn map(&self, f: impl Fn(f64) -> f64) -> FingerSample {
+        FingerSample {
+            q: self.q.map(&f),
+            qd: self.qd.map(&f),
+            theta2: f(self.theta2),
+            delta: self.delta.map(&f),
+            normal: self.normal.map(&f),
+            friction: self.friction.map(&f),
+        }
+    }
+
+    /// The values in the order q11, q21, q̇11, q̇21, θ2, δ (proximal, distal), F_n (same),
+    /// F_t (same): the order of a trajectory's finger columns.
+    pub fn values(&self) -> [f64; 11] {
+        let [q, qd, d, n, f] = [self.q, self.qd, self.delta, self.normal, self.friction];
+        [q[0], q[1], qd[0], qd[1], self.theta2, d[0], d[1], n[0], n[1], f[0], f[1]]
+    }
+
+    /// The finger of [`FingerSample::values`] `v`.
+    pub fn from_values(v: [f64; 11]) -> FingerSample {
+        FingerSample {
+            q: [v[0], v[1]],
+            qd: [v[2], v[3]],
+            theta2: v[4],
+            delta: [v[5], v[6]],
+            normal: [v[7], v[8]],
+            friction: [v[9], v[10]],
+        }
+    }
+}
+
 /// One trajectory sample: finger 1 in its local frame, the hand force and the energy of the
-/// scene; finger 2 is finger 1's mirror image in the centred scene, and has its own angles
-/// `q2` in the offset scene.
+/// scene; finger 2 is finger 1's mirror image in the centred scene, and moves on its own in
+/// the offset scene (`finger2`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Sample {
     /// Time (s).
@@ -225,10 +275,39 @@ pub struct Sample {
     pub energy: f64,
     /// E_ex = E − V* (J).
     pub energy_excess: f64,
-    /// Finger 2's q11, q21 (rad, in its own mirrored frame) where it is not finger 1's
-    /// mirror image (the offset scene); `None` in the centred scene.
+    /// Finger 2's own state and contacts (its mirrored frame) where it is not finger 1's
+    /// mirror image (the offset scene); `None` in the centred scene. Read back from an
+    /// offset recording of session 36 it holds the angles only (the rest NaN), and from an
+    /// older one it is `None`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub q2: Option<[f64; 2]>,
+    pub finger2: Option<FingerSample>,
+}
+
+impl Sample {
+    /// Finger 1's part of the sample.
+    pub fn finger1(&self) -> FingerSample {
+        let s = self;
+        FingerSample { q: s.q, qd: s.qd, theta2: s.theta2, delta: s.delta, normal: s.normal, friction: s.friction }
+    }
+
+    /// Every value of the sample with `f` applied (finger 2's too).
+    pub fn map(&self, f: impl Fn(f64) -> f64) -> Sample {
+        let f1 = self.finger1().map(&f);
+        Sample {
+            t: self.t,
+            q: f1.q,
+            qd: f1.qd,
+            theta2: f1.theta2,
+            delta: f1.delta,
+            normal: f1.normal,
+            friction: f1.friction,
+            hand_fy: f(self.hand_fy),
+            filtered_fy: f(self.filtered_fy),
+            energy: f(self.energy),
+            energy_excess: f(self.energy_excess),
+            finger2: self.finger2.map(|g| g.map(&f)),
+        }
+    }
 }
 
 /// A sample of the free scene's object pose and fingers (for `--csv` and recordings).

@@ -39,7 +39,8 @@ pub trait Sink {
         false
     }
     /// A sample of a grasp scene: finger 1 (in the centred scene finger 2 is its mirror
-    /// image; in the offset scene finger 2 is not, and the hand force is both fingers').
+    /// image; in the offset scene finger 2 is not and comes with it, and the hand force is
+    /// both fingers').
     fn finger(&mut self, _at: Point, _s: &Sample) {}
     /// A sample of the free scene: the object's pose and both fingers' angles.
     fn pose(&mut self, _at: Point, _s: &PoseSample) {}

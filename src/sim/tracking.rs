@@ -9,7 +9,7 @@ use super::events::EventKind;
 use super::finger::FingerEval;
 use super::integrate::Stats;
 use super::memory::{Memory, MemoryChange};
-use super::result::{DynOutcome, DynamicsResult, FirstContact, Sample};
+use super::result::{DynOutcome, DynamicsResult, FingerSample, FirstContact, Sample};
 use super::scene::{End, Response, Run};
 use crate::params::SceneParams;
 use nalgebra::Matrix2;
@@ -54,7 +54,21 @@ pub fn grasp_sample(t: f64, q: [f64; 4], f: &FingerEval, hand: [f64; 2], energy:
         filtered_fy: hand[1],
         energy,
         energy_excess: energy - v_star,
-        q2: None,
+        finger2: None,
+    }
+}
+
+/// One finger's part of a sample: its angles and rates `q` (q11, q21, q̇11, q̇21) and its
+/// evaluation `f` (θ2, the contacts), in its local frame.
+pub fn finger_sample(q: [f64; 4], f: &FingerEval) -> FingerSample {
+    let c = &f.contacts;
+    FingerSample {
+        q: [q[0], q[1]],
+        qd: [q[2], q[3]],
+        theta2: f.theta2,
+        delta: [c[0].geom.delta, c[1].geom.delta],
+        normal: [c[0].normal_force, c[1].normal_force],
+        friction: [c[0].friction_force, c[1].friction_force],
     }
 }
 

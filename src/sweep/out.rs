@@ -9,7 +9,7 @@
 //! evaluation record's keys' ([`record_unit`]); the numeric keys a sweep's stage computes,
 //! which `--y` and `--color` may plot ([`plot_keys`]).
 
-use super::{Stage, SweepSpec};
+use super::spec::{Stage, SweepSpec, ARRAY_KEYS};
 use crate::cells::{cells, Floats};
 use crate::eval::{Evaluation, FreeSceneRecord, Record};
 use crate::params::SceneKind;
@@ -150,7 +150,7 @@ pub fn plot_keys(spec: &SweepSpec) -> Vec<String> {
     }
     let mut keys = vec![];
     for k in json(cells(&r, Floats::Json)).into_iter().filter(|k| !skip.contains(k)) {
-        match super::ARRAY_KEYS.iter().find(|a| a.0 == k) {
+        match ARRAY_KEYS.iter().find(|a| a.0 == k) {
             Some(&(_, n)) => keys.extend((0..n).map(|i| format!("{k}_{i}"))),
             None => keys.push(k),
         }

@@ -168,12 +168,13 @@ impl Table {
         Ok(())
     }
 
-    /// Columns of plain numbers (named `names`), e.g. a trajectory's samples.
-    pub fn of_numbers<const N: usize>(names: &[&str; N], rows: impl Iterator<Item = [f64; N]>) -> Self {
-        let mut cols: Vec<Vec<f64>> = vec![Vec::new(); N];
+    /// Columns of plain numbers (named `names`, a value per name in each row), e.g. a
+    /// trajectory's samples.
+    pub fn of_numbers<R: AsRef<[f64]>>(names: &[&str], rows: impl Iterator<Item = R>) -> Self {
+        let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
         for r in rows {
-            for (c, v) in cols.iter_mut().zip(r) {
-                c.push(v);
+            for (c, v) in cols.iter_mut().zip(r.as_ref()) {
+                c.push(*v);
             }
         }
         let rows = cols.first().map_or(0, Vec::len);
@@ -188,6 +189,15 @@ impl Table {
             })
             .collect();
         Table { cols, rows, ..Table::default() }
+    }
+
+    /// A grasp trajectory's columns (`gripopt.SAMPLE_COLUMNS`, as `simulate --csv` writes
+    /// them), with finger 2's (`finger2_…`) where the samples carry them (the offset scene).
+    pub fn of_samples(samples: &[gripopt::Sample]) -> Self {
+        let finger2 = samples.iter().any(|s| s.finger2.is_some());
+        let columns = gripopt::trajectory_columns(finger2);
+        let names: Vec<&str> = columns.iter().map(|c| c.0).collect();
+        Self::of_numbers(&names, samples.iter().map(|s| gripopt::trajectory_row(s, finger2)))
     }
 
     fn put(&mut self, key: &str, leaf: Value, optional: bool) -> Result<(), FrameError> {
@@ -305,6 +315,23 @@ mod tests {
         name: Option<String>,
         ok: Option<bool>,
         nested: Inner,
+    }
+
+    #[test]
+    fn a_trajectory_has_finger_2s_columns_where_its_samples_do() {
+        let p = gripopt::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../problems/bottle-1l.toml")).unwrap();
+        let integ = gripopt::Integration::from_solver(&p.solver);
+        let names = |scene| {
+            let sim = gripopt::simulate(&p, &p.nominal, scene, &integ, &gripopt::Controls::DIAGNOSTIC).unwrap();
+            let t = Table::of_samples(&sim.trajectory.samples);
+            assert!(t.rows() > 100 && t.cols.iter().all(|c| c.len() == t.rows()));
+            t.cols.iter().map(|c| c.name.clone()).collect::<Vec<_>>()
+        };
+        let centred = names(None);
+        assert_eq!(centred, gripopt::SAMPLE_COLUMNS.map(|c| c.0));
+        let offset = names(Some((gripopt::SceneKind::Offset, Some(0.002))));
+        assert_eq!(offset[..16], centred[..]);
+        assert_eq!(offset[16..], gripopt::FINGER2_COLUMNS.map(|c| c.0));
     }
 
     #[test]

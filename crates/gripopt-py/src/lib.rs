@@ -31,6 +31,7 @@ fn _gripopt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DESIGN_COLUMNS", columns(&gripopt::DESIGN_COLUMNS))?;
     m.add("HISTORY_COLUMNS", columns(&gripopt::HISTORY_COLUMNS))?;
     m.add("SAMPLE_COLUMNS", columns(&gripopt::SAMPLE_COLUMNS))?;
+    m.add("FINGER2_COLUMNS", columns(&gripopt::FINGER2_COLUMNS))?;
     m.add("POSE_COLUMNS", columns(&gripopt::POSE_COLUMNS))?;
     // a robust problem's design-table columns: these, then each object's `NAME.column`
     m.add("ROBUST_COLUMNS", gripopt::run::ROBUST_COLUMNS.to_vec())?;

@@ -399,8 +399,7 @@ impl PyProblem {
                 })
             })
             .py()?;
-        let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
-        let traj = Table::of_numbers(&names, sim.trajectory.samples.iter().map(gripopt::sample_values));
+        let traj = Table::of_samples(&sim.trajectory.samples);
         let names = gripopt::POSE_COLUMNS.map(|c| c.0);
         let poses = Table::of_numbers(&names, sim.poses.iter().map(gripopt::pose_values));
         Ok((json(&sim.record)?, traj.into_py(py)?, poses.into_py(py)?))

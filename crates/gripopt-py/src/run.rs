@@ -423,8 +423,7 @@ impl PyRunFolder {
     ) -> PyResult<(String, Bound<'py, PyList>, String, PathBuf)> {
         let f = &self.folder;
         let rec = py.detach(|| f.design(id)).py()?;
-        let names = gripopt::SAMPLE_COLUMNS.map(|c| c.0);
-        let traj = Table::of_numbers(&names, rec.samples.iter().map(gripopt::sample_values));
+        let traj = Table::of_samples(&rec.samples);
         let res = serde_json::to_value(rec.resolution).ok().and_then(|v| v.as_str().map(String::from));
         Ok((json(&rec.record)?, traj.into_py(py)?, res.unwrap_or_default(), rec.file))
     }

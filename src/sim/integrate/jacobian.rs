@@ -1,6 +1,8 @@
-//! The finite-difference Jacobian shared by the implicit methods and its refresh policy.
+//! The finite-difference Jacobian shared by the implicit methods, its refresh policy, and
+//! the start of their step attempts (the Jacobian refreshed when needed, the Newton matrix
+//! factored: [`prepare_attempt`]).
 
-use super::{Piece, Rhs, Stats, StepPoint};
+use super::{Piece, Rhs, Stats, StepError, StepPoint, HMIN};
 use nalgebra::{SMatrix, SVector};
 
 /// A finite-difference Jacobian that never straddles a kink of a piecewise-smooth f (see
@@ -79,6 +81,49 @@ impl<const N: usize> JacobianCache<N> {
         self.fresh = true;
         true
     }
+}
+
+/// An implicit stepper's Jacobian and factored Newton matrix, for the shared start of a
+/// step attempt ([`prepare_attempt`]).
+pub(super) trait NewtonMatrix<const N: usize> {
+    /// The Jacobian cache, the counters and the step-size proposal.
+    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64);
+    /// Forget the factorisation (the Jacobian changed).
+    fn drop_factor(&mut self);
+    /// Factor the Newton matrix for step `h` (no-op if already factored for `h`).
+    fn factor(&mut self, h: f64) -> bool;
+}
+
+/// Start a step attempt: bound h, refresh the Jacobian if needed and factor. `Ok(None)`:
+/// retry (a stale Jacobian was dropped, or h halved after a singular matrix).
+pub(super) fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
+    m: &mut M,
+    sys: &mut S,
+    from: &StepPoint<N>,
+    h_max: f64,
+) -> Result<Option<f64>, StepError> {
+    let (jc, stats, h_prop) = m.parts();
+    let h = h_prop.min(h_max);
+    if h < HMIN {
+        return Err(StepError::StepTooSmall);
+    }
+    if !jc.valid {
+        if !jc.compute(sys, from, stats) {
+            return Err(StepError::RhsFailed);
+        }
+        m.drop_factor();
+    }
+    if m.factor(h) {
+        return Ok(Some(h));
+    }
+    let (jc, stats, h_prop) = m.parts();
+    if !jc.fresh {
+        jc.valid = false;
+    } else {
+        *h_prop = h * 0.5;
+        stats.rejected += 1;
+    }
+    Ok(None)
 }
 
 /// The dense forward-difference Jacobian of `sys` at (t, y), f = f(t, y), into `jac`: one

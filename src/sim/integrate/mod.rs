@@ -5,7 +5,7 @@
 //! both ends so a driver can do cubic Hermite dense output ([`hermite`]) and event
 //! location. The implicit methods share the Jacobian's refresh policy (`jacobian`; the
 //! Jacobian itself is the system's [`Rhs::jacobian`], by default dense forward differences,
-//! [`fd_jacobian`]), the start of a step attempt (`prepare_attempt`) and the LU ([`Lu`]);
+//! [`fd_jacobian`]) and the start of a step attempt (`jacobian`'s `prepare_attempt`), and the LU ([`Lu`]);
 //! Radau IIA also solves its Newton systems by block elimination over a system's
 //! [`Partition`] (`reduced`). No heap allocation.
 
@@ -34,7 +34,6 @@ pub use reduced::Partition;
 pub use switching::Switching;
 pub use trbdf2::TrBdf2;
 
-use jacobian::JacobianCache;
 use nalgebra::{SMatrix, SVector};
 
 /// Identifier of the smooth piece of a piecewise-smooth right-hand side: a set of on/off
@@ -219,49 +218,6 @@ pub trait Stepper<const N: usize> {
 
 /// The smallest step size.
 const HMIN: f64 = 1e-14;
-
-/// An implicit stepper's Jacobian and factored Newton matrix, for the shared start of a
-/// step attempt ([`prepare_attempt`]).
-trait NewtonMatrix<const N: usize> {
-    /// The Jacobian cache, the counters and the step-size proposal.
-    fn parts(&mut self) -> (&mut JacobianCache<N>, &mut Stats, &mut f64);
-    /// Forget the factorisation (the Jacobian changed).
-    fn drop_factor(&mut self);
-    /// Factor the Newton matrix for step `h` (no-op if already factored for `h`).
-    fn factor(&mut self, h: f64) -> bool;
-}
-
-/// Start a step attempt: bound h, refresh the Jacobian if needed and factor. `Ok(None)`:
-/// retry (a stale Jacobian was dropped, or h halved after a singular matrix).
-fn prepare_attempt<M: NewtonMatrix<N>, S: Rhs<N>, const N: usize>(
-    m: &mut M,
-    sys: &mut S,
-    from: &StepPoint<N>,
-    h_max: f64,
-) -> Result<Option<f64>, StepError> {
-    let (jc, stats, h_prop) = m.parts();
-    let h = h_prop.min(h_max);
-    if h < HMIN {
-        return Err(StepError::StepTooSmall);
-    }
-    if !jc.valid {
-        if !jc.compute(sys, from, stats) {
-            return Err(StepError::RhsFailed);
-        }
-        m.drop_factor();
-    }
-    if m.factor(h) {
-        return Ok(Some(h));
-    }
-    let (jc, stats, h_prop) = m.parts();
-    if !jc.fresh {
-        jc.valid = false;
-    } else {
-        *h_prop = h * 0.5;
-        stats.rejected += 1;
-    }
-    Ok(None)
-}
 
 #[cfg(test)]
 pub(crate) mod testsys {

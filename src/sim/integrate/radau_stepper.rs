@@ -8,8 +8,9 @@
 //! [`RadauScheme`].
 
 use super::jacobian::JacobianCache;
+use super::jacobian::{prepare_attempt, NewtonMatrix};
 use super::reduced::Partition;
-use super::{prepare_attempt, NewtonMatrix, Rhs, Stats, StepError, StepPoint, Stepper, Tol};
+use super::{Rhs, Stats, StepError, StepPoint, Stepper, Tol};
 use nalgebra::{SMatrix, SVector};
 
 /// The stage values Z_1..Z_S (or their transforms) of an S-stage method.

@@ -2,8 +2,9 @@
 //! estimate filtered by (I − dhJ)⁻¹.
 
 use super::jacobian::JacobianCache;
+use super::jacobian::{prepare_attempt, NewtonMatrix};
 use super::lu::Lu;
-use super::{prepare_attempt, NewtonMatrix, Rhs, Stats, StepError, StepPoint, Stepper, Tol};
+use super::{Rhs, Stats, StepError, StepPoint, Stepper, Tol};
 use nalgebra::{SMatrix, SVector};
 
 /// TR-BDF2 (γ = 2 − √2) as an ESDIRK with a simplified Newton iteration, finite-difference

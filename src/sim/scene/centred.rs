@@ -232,7 +232,6 @@ impl Rhs<NS> for CentredScene<'_> {
 
 impl Scene<NS, 6> for CentredScene<'_> {
     type Eval = FingerEval;
-    type Output = DynamicsResult;
 
     fn initial_state(&self) -> State {
         let f = self.ode.model.finger;
@@ -343,8 +342,11 @@ impl Scene<NS, 6> for CentredScene<'_> {
         let hand = [FingerOde::hand_fy(ev), y[4]];
         sink.finger(at, &grasp_sample(t, [y[0], y[1], y[2], y[3]], ev, hand, ev.energy, self.limits.v_star));
     }
+}
 
-    fn finish(mut self, run: &Run<NS, FingerEval>) -> DynamicsResult {
+impl CentredScene<'_> {
+    /// The output of a finished run: the criteria's verdicts and the measured values.
+    pub(crate) fn finish(mut self, run: &Run<NS, FingerEval>) -> DynamicsResult {
         self.tracker.on_end(run.end);
         let end = run.last.map(|ev| EndValues {
             f_end: [ev.contacts[0].normal_force, ev.contacts[1].normal_force],
@@ -375,7 +377,8 @@ pub(crate) fn run<K: Sink + ?Sized>(
 ) -> DynamicsResult {
     let mut scene = CentredScene::new(f, s, st, ctl);
     if scene.prepare(st.grasp.f0, ctl) {
-        driver::simulate(scene, integ, ctl, tolerances(integ), s.criteria.t_max, sink)
+        let run = driver::simulate(&mut scene, integ, ctl, tolerances(integ), s.criteria.t_max, sink);
+        scene.finish(&run)
     } else {
         scene.result()
     }

@@ -95,8 +95,6 @@ pub struct Run<const N: usize, Ev> {
 pub trait Scene<const N: usize, const E: usize>: Rhs<N> {
     /// The full model at one state (forces, contacts, energy).
     type Eval: Copy;
-    /// What the run produces.
-    type Output;
 
     // ---- the system (with `Rhs`)
     /// The initial state.
@@ -141,6 +139,4 @@ pub trait Scene<const N: usize, const E: usize>: Rhs<N> {
     // ---- output
     /// Report a sample to `sink` (called only when it takes samples).
     fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &SVector<f64, N>, ev: &Self::Eval, sink: &mut K);
-    /// The output of a finished run.
-    fn finish(self, run: &Run<N, Self::Eval>) -> Self::Output;
 }

@@ -17,7 +17,7 @@ use crate::sim::memory::Memory;
 use crate::sim::result::{DynOutcome, DynamicsResult};
 use crate::sim::settings::{Controls, Integration, Mode};
 use crate::sim::sink::{Point, Sink};
-use crate::sim::tracking::{grasp_sample, EndValues, GraspLimits, Tracker};
+use crate::sim::tracking::{finger_sample, grasp_sample, EndValues, GraspLimits, Tracker};
 use nalgebra::{SVector, Vector2};
 
 /// State dimension of the offset scene.
@@ -200,7 +200,6 @@ impl Rhs<NO> for OffsetScene<'_> {
 
 impl Scene<NO, EO> for OffsetScene<'_> {
     type Eval = PairEval;
-    type Output = OffsetResult;
 
     fn events(&self) -> [EventKind; EO] {
         OFFSET_EVENTS
@@ -288,15 +287,19 @@ impl Scene<NO, EO> for OffsetScene<'_> {
     fn memories(&self) -> &[Memory] {
         &self.mem
     }
-    /// Finger 1's sample (its angles, contacts and θ2) with finger 2's own angles (`q2`:
-    /// finger 2 is not finger 1's mirror image here), the hand force (both fingers, y
-    /// component), its filtered value and the energy of both fingers.
+    /// Finger 1's sample (its angles, rates, contacts and θ2) with finger 2's own
+    /// (`finger2`: finger 2 is not finger 1's mirror image here), the hand force (both
+    /// fingers, y component), its filtered value and the energy of both fingers.
     fn sample<K: Sink + ?Sized>(&self, at: Point, t: f64, y: &St, ev: &PairEval, sink: &mut K) {
         let q = [y[0], y[1], y[2], y[3]];
         let mut s = grasp_sample(t, q, &ev.f[0], [ev.hand.y, y[9]], ev.energy, self.limits.v_star);
-        s.q2 = Some([y[4], y[5]]);
+        s.finger2 = Some(finger_sample([y[4], y[5], y[6], y[7]], &ev.f[1]));
         sink.finger(at, &s);
     }
+}
+
+impl OffsetScene<'_> {
+    /// The output of a finished run: the criteria's verdicts and the measured values.
     fn finish(mut self, run: &Run<NO, PairEval>) -> OffsetResult {
         self.tracker.on_end(run.end);
         let end = run.last.map(|ev| EndValues {
@@ -319,7 +322,7 @@ fn tolerances(integ: &Integration) -> Tol<NO> {
 }
 
 /// Simulate the grasp of the design's fingers on the fixed object at world offset `x_off`,
-/// reporting finger 1's samples to `sink`.
+/// reporting both fingers' samples to `sink`.
 pub(crate) fn run<K: Sink + ?Sized>(
     f: &Finger,
     s: &SceneParams,
@@ -330,7 +333,10 @@ pub(crate) fn run<K: Sink + ?Sized>(
     sink: &mut K,
 ) -> OffsetResult {
     match OffsetScene::new(f, s, st, x_off, ctl) {
-        Ok(sc) => driver::simulate(sc, integ, ctl, tolerances(integ), s.criteria.t_max, sink),
+        Ok(mut sc) => {
+            let run = driver::simulate(&mut sc, integ, ctl, tolerances(integ), s.criteria.t_max, sink);
+            sc.finish(&run)
+        }
         Err(why) => {
             // the scene could not be set up: nothing simulated, nothing known but R_area
             let mut k = Tracker::<4>::new(ctl.mode == Mode::Pipeline);

@@ -358,7 +358,6 @@ const FREE_EVENT_KINDS: [EventKind; EF] = free_events();
 
 impl Scene<NF, EF> for FreeScene<'_> {
     type Eval = FreeEval;
-    type Output = FreeResult;
 
     fn events(&self) -> [EventKind; EF] {
         FREE_EVENT_KINDS
@@ -509,6 +508,10 @@ impl Scene<NF, EF> for FreeScene<'_> {
         };
         sink.pose(at, &pose);
     }
+}
+
+impl FreeScene<'_> {
+    /// The output of a finished run: the criteria's verdicts and the measured values.
     fn finish(self, run: &Run<NF, FreeEval>) -> FreeResult {
         let mut o = self.out;
         o.end = self.end.unwrap_or(match run.end {
@@ -563,8 +566,9 @@ pub(crate) fn run<K: Sink + ?Sized>(
     integ: &Integration,
     sink: &mut K,
 ) -> FreeResult {
-    let scene = FreeScene::new(f, s, tau_s0, x_off, setup);
+    let mut scene = FreeScene::new(f, s, tau_s0, x_off, setup);
     let t_end = t_end.unwrap_or(s.criteria.t_max.min(s.setup.t_obs));
     // the free scene has no pipeline mode: it always runs to t_end
-    driver::simulate(scene, integ, &Controls::DIAGNOSTIC, free_tolerances(integ), t_end, sink)
+    let run = driver::simulate(&mut scene, integ, &Controls::DIAGNOSTIC, free_tolerances(integ), t_end, sink);
+    scene.finish(&run)
 }
