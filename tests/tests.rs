@@ -50,6 +50,7 @@ mod s36_free_replay;
 mod s36_mcap;
 mod s36_params;
 mod s37_offset_f2;
+mod s37_typed;
 mod scene_cli;
 mod scenes;
 mod seams;

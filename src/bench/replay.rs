@@ -23,6 +23,16 @@ pub struct ReplayBench {
     pub keep: bool,
 }
 
+/// The run.json of a synthetic run (what marks the folder as this benchmark's).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SyntheticRun {
+    /// Always true: the folder may be cleared by the next benchmark.
+    #[serde(default)]
+    synthetic: bool,
+    /// The recording settings of the synthetic shards.
+    recording: crate::record::RecordOptions,
+}
+
 fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
     move |source| Error::Json { path: path.to_path_buf(), what: "synthetic run file", source }
 }
@@ -43,8 +53,8 @@ pub fn replay(
         // never delete a folder this benchmark did not write (a real run, say)
         let synthetic = crate::fsutil::read_regular_string(&out.join("run.json"), crate::fsutil::caps::RUN_JSON)
             .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .is_some_and(|v| v["synthetic"] == true);
+            .and_then(|t| serde_json::from_str::<SyntheticRun>(&t).ok())
+            .is_some_and(|v| v.synthetic);
         let empty = std::fs::read_dir(out).map(|mut d| d.next().is_none()).unwrap_or(false);
         if !synthetic && !empty {
             return Err(Error::RunDir { path: out.to_path_buf(), message: "exists and is not a synthetic run of `gripopt bench replay`: choose another --out (nothing was deleted)".into() });
@@ -57,7 +67,7 @@ pub fn replay(
     std::fs::write(&problem_toml, &p.source_text).map_err(|e| Error::io(&problem_toml, "cannot write", e))?;
     let opts = crate::record::RecordOptions { scene_dt: 0.0, ..Default::default() };
     let run_json = out.join("run.json");
-    let text = serde_json::to_string_pretty(&serde_json::json!({ "synthetic": true, "recording": opts }))
+    let text = serde_json::to_string_pretty(&SyntheticRun { synthetic: true, recording: opts })
         .map_err(json_err(&run_json))?;
     std::fs::write(&run_json, text).map_err(|e| Error::io(&run_json, "cannot write", e))?;
     // the nominal design's real evaluation and recorded grasp, under every id
@@ -66,7 +76,7 @@ pub fn replay(
     let x = p.nominal.to_array().to_vec();
     let eval = gp.evaluate(&x);
     let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.simulated);
-    let meta = std::collections::BTreeMap::from([("synthetic".to_string(), "gripopt bench replay".to_string())]);
+    let meta = crate::record::RunMetadata { synthetic: Some("gripopt bench replay".into()), ..Default::default() };
     let t0 = std::time::Instant::now();
     let shards = n.div_ceil(per_shard);
     progress.begin("writing synthetic run", shards, "shards");

@@ -123,7 +123,7 @@ fn run_once(problem: &Problem, b: &ScalingBench, threads: usize, dir: &Path) -> 
         path: dir.join("checkpoint.json"),
         problem_hash: String::new(),
         settings: settings.clone(),
-        options: serde_json::json!({}),
+        options: crate::run::RunOptions::of(&problem.solver, &b.record),
         wall_before: 0.0,
         start,
     };

@@ -19,7 +19,9 @@ mod stages;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
 pub use objectives::Objectives;
-pub use record::{Derived, EvaluationRecord, KinematicsRecord, Record, SimulationRecord, StaticsRecord, Verdict};
+pub use record::{
+    Derived, EvaluationRecord, KinematicsRecord, OffsetEnd, Record, SimulationRecord, StaticsRecord, Verdict,
+};
 pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord, SolverAbort};
 pub use robust::{
     decided, evaluate_sequential, fold, needed_bound, run_scenario, simulate_object, start as robust_start, Decided,

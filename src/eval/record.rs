@@ -8,7 +8,7 @@ use super::objectives::Objectives;
 use super::record_robust::RobustRecord;
 use super::scene_record::{fin, FreeSceneRecord, GraspRecord, OffsetSceneRecord};
 use super::stages::{Cause, Evaluation, Reason};
-use crate::model::SweepFailure;
+use crate::model::{ClosedPoseError, GeomError, OffsetFailure, SweepFailure};
 use crate::params::{DesignParameters, ForceModel, SceneKind};
 use crate::sim::Method;
 use serde::{Deserialize, Serialize};
@@ -137,7 +137,7 @@ pub struct StaticsRecord {
     /// optimiser ranks such a design with −Δ_off internally, a placeholder never reported).
     pub max_offset: Option<f64>,
     /// What ended the offset scan (null if off_max was reached).
-    pub max_offset_ended_by: Option<String>,
+    pub max_offset_ended_by: Option<OffsetEnd>,
     /// Objective 2: α of the problem's force model (D22).
     pub alpha: Option<f64>,
     /// Objective 3 (N): F̃ of the problem's force model (D22).
@@ -287,7 +287,7 @@ impl StaticsRecord {
             form_closed_0: st.map(|s| s.form_closed_0),
             form_closed: st.map(|s| s.max_offset >= 0.0),
             max_offset: st.map(|s| s.max_offset).filter(|m| *m >= 0.0),
-            max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(|e| e.reason())),
+            max_offset_ended_by: st.and_then(|s| s.offset_ended_by.map(OffsetEnd::from)),
             alpha: st.and_then(|s| fin(s.alpha)),
             mean_force: st.map(|s| s.mean_force),
             alpha_mu: st.and_then(|s| fin(s.alpha_mu)),
@@ -335,5 +335,162 @@ impl Record {
     /// Form closed at the centred object (the offset scan admits x_off = 0, MODEL.md §6.7).
     pub fn form_closed(&self) -> Option<bool> {
         self.statics.form_closed
+    }
+}
+
+/// What ended the offset scan of §6.7 (the record's `max_offset_ended_by`), written as its
+/// text (the model's `OffsetFailure::reason`: "finger 2: distal cannot reach the object",
+/// "force positiveness violated (min force -0.0123 N)", …). A force is held as the text
+/// writes it (4 decimals), so an end read back equals the one computed; a text this gripopt
+/// does not write (a record of an older one) is kept as it is.
+#[derive(Debug, Clone)]
+pub enum OffsetEnd {
+    /// Finger `finger` (1 or 2) has no closed pose at the offset.
+    NoClosedPose {
+        /// 1 or 2.
+        finger: usize,
+        /// Why.
+        why: ClosedPoseError,
+    },
+    /// Singular static force system.
+    SingularForces,
+    /// A force of f⁰ or f^μ is ≤ 0: the most negative (N).
+    ForceNotPositive(f64),
+    /// F^μ_hand,y ≥ 0: its value (N).
+    PalmForceNotPositive(f64),
+    /// Not form closed.
+    NotFormClosed,
+    /// A text of an older gripopt, kept verbatim.
+    Other(String),
+}
+
+/// Every closed-pose failure (reading a `NoClosedPose` text back).
+const CLOSED_POSE_ERRORS: [ClosedPoseError; 9] = [
+    ClosedPoseError::OverlapsBase,
+    ClosedPoseError::ProximalOutOfRange,
+    ClosedPoseError::DistalBeyondTip,
+    ClosedPoseError::DistalCannotReach,
+    ClosedPoseError::Geometry(GeomError::InvalidLength),
+    ClosedPoseError::Geometry(GeomError::NoOpenPose),
+    ClosedPoseError::Geometry(GeomError::NotMountable),
+    ClosedPoseError::Geometry(GeomError::AssemblyModeChange),
+    ClosedPoseError::Singular,
+];
+
+const MIN_FORCE: (&str, &str) = ("force positiveness violated (min force ", " N)");
+const PALM_FORCE: (&str, &str) = ("palm force positiveness violated (F_y = ", " N)");
+
+/// `v` as the text writes it (4 decimals), read back.
+fn printed(v: f64) -> f64 {
+    format!("{v:.4}").parse().unwrap_or(v)
+}
+
+impl From<OffsetFailure> for OffsetEnd {
+    fn from(e: OffsetFailure) -> Self {
+        match e {
+            OffsetFailure::NoClosedPose(j, why) => OffsetEnd::NoClosedPose { finger: j + 1, why },
+            OffsetFailure::SingularForces => OffsetEnd::SingularForces,
+            OffsetFailure::ForceNotPositive(v) => OffsetEnd::ForceNotPositive(printed(v)),
+            OffsetFailure::PalmForceNotPositive(v) => OffsetEnd::PalmForceNotPositive(printed(v)),
+            OffsetFailure::NotFormClosed => OffsetEnd::NotFormClosed,
+        }
+    }
+}
+
+impl std::fmt::Display for OffsetEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OffsetEnd::NoClosedPose { finger, why } => write!(f, "finger {finger}: {}", why.reason()),
+            OffsetEnd::SingularForces => f.write_str("singular static force system"),
+            OffsetEnd::ForceNotPositive(v) => write!(f, "{}{v:.4}{}", MIN_FORCE.0, MIN_FORCE.1),
+            OffsetEnd::PalmForceNotPositive(v) => write!(f, "{}{v:.4}{}", PALM_FORCE.0, PALM_FORCE.1),
+            OffsetEnd::NotFormClosed => f.write_str("not form closed"),
+            OffsetEnd::Other(text) => f.write_str(text),
+        }
+    }
+}
+
+impl std::str::FromStr for OffsetEnd {
+    type Err = std::convert::Infallible;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let number = |(head, tail): (&str, &str)| s.strip_prefix(head)?.strip_suffix(tail)?.parse::<f64>().ok();
+        let closed_pose = || {
+            let (finger, why) = s.strip_prefix("finger ")?.split_once(": ")?;
+            let finger = finger.parse().ok().filter(|f| [1, 2].contains(f))?;
+            let why = CLOSED_POSE_ERRORS.into_iter().find(|e| e.reason() == why)?;
+            Some(OffsetEnd::NoClosedPose { finger, why })
+        };
+        let end = match s {
+            "singular static force system" => Some(OffsetEnd::SingularForces),
+            "not form closed" => Some(OffsetEnd::NotFormClosed),
+            _ => closed_pose()
+                .or_else(|| number(MIN_FORCE).map(OffsetEnd::ForceNotPositive))
+                .or_else(|| number(PALM_FORCE).map(OffsetEnd::PalmForceNotPositive)),
+        };
+        // only a text this type writes back as it was is read as its variant
+        Ok(end.filter(|e| e.to_string() == s).unwrap_or_else(|| OffsetEnd::Other(s.to_string())))
+    }
+}
+
+/// Two ends are the same when their texts are (a force compares as written).
+impl PartialEq for OffsetEnd {
+    fn eq(&self, other: &Self) -> bool {
+        self.to_string() == other.to_string()
+    }
+}
+
+impl Serialize for OffsetEnd {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for OffsetEnd {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        Ok(text.parse().unwrap_or_else(|never: std::convert::Infallible| match never {}))
+    }
+}
+
+#[cfg(test)]
+mod offset_end_tests {
+    use super::{OffsetEnd, CLOSED_POSE_ERRORS};
+    use crate::model::OffsetFailure;
+
+    #[test]
+    fn every_offset_failure_reads_back_as_itself_with_the_models_text() {
+        let mut failures: Vec<OffsetFailure> = vec![
+            OffsetFailure::SingularForces,
+            OffsetFailure::NotFormClosed,
+            OffsetFailure::ForceNotPositive(-0.012345678),
+            OffsetFailure::ForceNotPositive(-0.0),
+            OffsetFailure::ForceNotPositive(-1234.56789),
+            OffsetFailure::PalmForceNotPositive(0.30000000000000004),
+            OffsetFailure::PalmForceNotPositive(f64::NAN),
+        ];
+        for j in 0..2 {
+            failures.extend(CLOSED_POSE_ERRORS.map(|e| OffsetFailure::NoClosedPose(j, e)));
+        }
+        for f in failures {
+            let end = OffsetEnd::from(f);
+            assert_eq!(end.to_string(), f.reason(), "the model's text");
+            let back: OffsetEnd = serde_json::from_value(serde_json::to_value(&end).unwrap()).unwrap();
+            assert!(!matches!(back, OffsetEnd::Other(_)), "{end} read as its variant");
+            assert_eq!(back, end);
+            assert_eq!(serde_json::to_value(&back).unwrap(), serde_json::json!(f.reason()));
+        }
+    }
+
+    #[test]
+    fn an_unknown_text_is_kept_as_it_is() {
+        for text in [
+            "scan stopped by something new",
+            "finger 3: distal cannot reach the object",
+            "force positiveness violated (min force -1.5 N)",
+        ] {
+            let end: OffsetEnd = serde_json::from_value(serde_json::json!(text)).unwrap();
+            assert_eq!(end, OffsetEnd::Other(text.to_string()));
+            assert_eq!(serde_json::to_value(&end).unwrap(), serde_json::json!(text));
+        }
     }
 }

@@ -11,6 +11,7 @@
 
 use super::index::read_index;
 use super::messages::window_start_ns;
+use super::metadata::RunMetadata;
 use super::RecordOptions;
 use crate::Result;
 use mcap::records::{MessageHeader, Metadata};
@@ -49,13 +50,13 @@ pub fn front_schema() -> Value {
 
 /// Write `RUN_DIR/recording/front.mcap` for every design of the recording's index, with
 /// `front` the ids of the final front; `meta` is added to the metadata record (e.g. the run's
-/// status). Nothing when recording is off or the run has no recording folder.
+/// `status`). Nothing when recording is off or the run has no recording folder.
 pub fn write_front(
     run_dir: &Path,
     opts: &RecordOptions,
     front: &[u64],
     generations: u64,
-    meta: &BTreeMap<String, String>,
+    meta: &RunMetadata,
 ) -> Result<Option<PathBuf>> {
     let dir = run_dir.join("recording");
     if !opts.enabled || !dir.join("index.jsonl").is_file() {
@@ -67,15 +68,18 @@ pub fn write_front(
     let tmp = super::mcapfile::temporary(&path);
     let mc = super::mcapfile::error(&tmp);
     let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
-    let mut meta = meta.clone();
-    meta.insert("designs".into(), ids.len().to_string());
-    meta.insert("first_id".into(), ids.first().map_or(String::new(), |i| i.to_string()));
-    meta.insert("last_id".into(), ids.last().map_or(String::new(), |i| i.to_string()));
-    meta.insert("front_size".into(), on_front.len().to_string());
-    meta.insert("generations".into(), generations.to_string());
-    meta.insert("epoch_s".into(), opts.epoch_s.to_string());
-    meta.insert("time_convention".into(), "design k: /front at epoch_s + k s (its window start in the shards)".into());
-    w.write_metadata(&Metadata { name: FRONT_METADATA.into(), metadata: meta }).map_err(mc)?;
+    let meta = RunMetadata {
+        designs: Some(ids.len() as u64),
+        // written empty for a recording of no design
+        first_id: Some(ids.first().copied()),
+        last_id: Some(ids.last().copied()),
+        front_size: Some(on_front.len() as u64),
+        generations: Some(generations),
+        epoch_s: Some(opts.epoch_s),
+        time_convention: Some("design k: /front at epoch_s + k s (its window start in the shards)".into()),
+        ..meta.clone()
+    };
+    w.write_metadata(&Metadata { name: FRONT_METADATA.into(), metadata: meta.to_map() }).map_err(mc)?;
     let schema = w
         .add_schema("gripopt.Front", "jsonschema", &serde_json::to_vec(&front_schema()).expect("schema serialises"))
         .map_err(mc)?;

@@ -27,6 +27,7 @@ mod kept;
 mod layout;
 mod mcapfile;
 mod messages;
+mod metadata;
 mod options;
 mod proto;
 mod recover;
@@ -44,6 +45,7 @@ pub use layout::{
     layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };
 pub use messages::{samples_from, window_start_ns, Finger2Columns};
+pub use metadata::{RunMetadata, ScenarioTag, RUN_METADATA};
 pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
 };
@@ -53,8 +55,8 @@ pub use replay::{problem_of_generation, read_design, replay, AcrossRevisions, Re
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
-    band_s, free_window, keep_poses, parameters as verify_parameters, scenario_metadata, scenario_window,
-    verify_schema, verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyRecord, VerifyRecordOptions,
-    VerifySeries, WindowStart, VERIFY_METADATA,
+    band_s, free_window, keep_poses, parameters as verify_parameters, scenario_window, verify_schema,
+    verify_series_schema, write_verify, Parameters, VerifyEntry, VerifyMeasure, VerifyRecord, VerifyRecordOptions,
+    VerifyScenario, VerifySeries, WindowStart, VERIFY_METADATA,
 };
 pub use writer::{write_shard, Recorder, ShardTask};

@@ -22,6 +22,7 @@
 //! from the `/designs` channel's statistics; the size from the file system.
 
 use super::index::ShardEntry;
+use super::metadata::{RunMetadata, RUN_METADATA};
 use crate::{Error, Result};
 use std::path::Path;
 
@@ -134,24 +135,21 @@ fn read_shard(path: &Path) -> Result<(ShardEntry, bool)> {
             source: source.into(),
         })?
         .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
-    let (mut generation, mut first, mut last, mut count, mut epoch_s) = (None, None, None, None, 0u64);
-    let (mut run_id, mut problem_sha256, mut gripopt) = (None, None, false);
-    for mi in summary.metadata_indexes.iter().filter(|m| m.name == "gripopt.run") {
+    let mut meta = None;
+    for mi in summary.metadata_indexes.iter().filter(|m| m.name == RUN_METADATA) {
         let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording {
             path: path.to_path_buf(),
             what: "cannot read the metadata record".into(),
             source: source.into(),
         })?;
-        gripopt = true;
-        let num = |k: &str| m.metadata.get(k).and_then(|g| g.parse::<u64>().ok());
-        generation = num("generation");
-        first = num("first_id");
-        last = num("last_id");
-        count = num("designs");
-        epoch_s = num("epoch_s").unwrap_or(0);
-        run_id = m.metadata.get("run_id").cloned();
-        problem_sha256 = m.metadata.get("problem_sha256").cloned();
+        meta = Some(RunMetadata::from_map(&m.metadata).map_err(bad)?);
     }
+    let gripopt = meta.is_some();
+    let meta = meta.unwrap_or_default();
+    let (generation, first, last, count) =
+        (meta.generation, meta.first_id.flatten(), meta.last_id.flatten(), meta.designs);
+    let epoch_s = meta.epoch_s.unwrap_or(0);
+    let (run_id, problem_sha256) = (meta.run_id, meta.problem_sha256);
     let generation = generation
         .or_else(|| shard_generation(&file))
         .ok_or_else(|| bad("no generation in the metadata or the file name".into()))?;

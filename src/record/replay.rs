@@ -4,6 +4,7 @@
 
 use super::index::{read_index, ProblemUse, ShardEntry};
 use super::messages::{at_precision, samples_from, window_start_ns, Finger2Columns};
+use super::metadata::{RunMetadata, RUN_METADATA};
 use super::proto::GraspSeries;
 use super::schema::DesignMessage;
 use super::{RecordOptions, Resolution};
@@ -413,11 +414,16 @@ struct Msg {
 /// Why `run_dir` has no recording folder `dir`: run.json's recording settings say whether
 /// the run recorded anything.
 fn no_recording(run_dir: &Path, dir: &Path) -> String {
+    /// run.json as far as this reads it (record does not know the run layer's `RunInfo`).
+    #[derive(serde::Deserialize)]
+    struct RunRecording {
+        recording: Option<super::RecordOptions>,
+    }
     let run_json = run_dir.join("run.json");
     let enabled = crate::fsutil::read_regular(&run_json, crate::fsutil::caps::RUN_JSON)
         .ok()
-        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .and_then(|v| v["recording"]["enabled"].as_bool());
+        .and_then(|b| serde_json::from_slice::<RunRecording>(&b).ok())
+        .and_then(|v| v.recording.map(|r| r.enabled));
     match enabled {
         Some(false) => "the run was not recorded (run.json: recording off, started with `--record none`): no design can be replayed; `gripopt show` and `gripopt export` take its last designs from the checkpoint".into(),
         Some(true) => format!("{} is missing, but run.json says the run recorded its designs: restore it (e.g. from a backup)", dir.display()),
@@ -469,26 +475,21 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     let meta = summary
         .metadata_indexes
         .iter()
-        .find(|m| m.name == "gripopt.run")
+        .find(|m| m.name == RUN_METADATA)
         .ok_or_else(|| bad("no gripopt.run metadata record".into()))
         .and_then(|mi| {
             mcap::read::metadata(&buf, mi).map_err(mc("cannot read the gripopt.run metadata record".into()))
         })?;
+    let meta = RunMetadata::from_map(&meta.metadata).map_err(bad)?;
     // attributed: a shard of another run (copied in) is never read as this run's design
     let ours = recorded_run_id(run_dir, id)?;
-    let theirs = meta.metadata.get("run_id").map(String::as_str).unwrap_or_default();
+    let theirs = meta.run_id.as_deref().unwrap_or_default();
     if theirs != ours {
         let name = |r: &str| if r.is_empty() { "none".to_string() } else { r.to_string() };
         return Err(bad(format!("written by another run (run id {}; this run's id {}, run.json): it is not this run's generation {}; restore this run's shard", name(theirs), name(&ours), entry.generation)));
     }
-    let epoch_s: u64 = meta.metadata.get("epoch_s").and_then(|v| v.parse().ok()).ok_or_else(|| {
-        bad("metadata `epoch_s` missing or not an integer (a recording from an older gripopt?)".into())
-    })?;
-    let resolution = match meta.metadata.get("resolution").map(String::as_str) {
-        Some("full") => Resolution::Full,
-        Some("compact") => Resolution::Compact,
-        other => return Err(bad(format!("metadata `resolution` is {other:?}, expected \"full\" or \"compact\""))),
-    };
+    let epoch_s = meta.require_epoch_s().map_err(bad)?;
+    let resolution = meta.require_resolution().map_err(bad)?;
     let epoch_ns = epoch_s.saturating_mul(1_000_000_000);
     let (lo, hi) = (window_start_ns(epoch_ns, id), window_start_ns(epoch_ns, id + 1));
     let (mut design, mut series) = (None, None);
@@ -527,11 +528,9 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     }
     let samples = samples_from(&series)
         .ok_or_else(|| bad(format!("design {id}: the columns of /grasp/series differ in length")))?;
-    let problem_sha256 = meta.metadata.get("problem_sha256").cloned();
-    let simulator_revision = match meta.metadata.get("simulator_revision") {
-        None => 1,
-        Some(v) => v.parse().map_err(|_| bad(format!("metadata `simulator_revision` is {v:?}, not an integer")))?,
-    };
+    let problem_sha256 = meta.problem_sha256;
+    // absent in recordings of simulator revision 1
+    let simulator_revision = meta.simulator_revision.unwrap_or(1);
     let finger2_columns = Finger2Columns::of(&series)
         .ok_or_else(|| bad(format!("design {id}: finger 2's columns of /grasp/series are not a set gripopt writes")))?;
     Ok(Recorded { file: path, record, samples, finger2_columns, resolution, problem_sha256, simulator_revision })

@@ -11,16 +11,16 @@
 
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
+use super::metadata::{RunMetadata, ScenarioTag};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
-use crate::sim::PoseSample;
+use crate::sim::{FreeEnd, PoseSample};
 use crate::Result;
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
 use mcap::records::Metadata;
 use serde::Serialize;
 use serde_json::{json, Value};
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Name of the metadata record of a verify recording.
@@ -52,29 +52,72 @@ pub fn free_window(band: u64, id: u64) -> u64 {
     3 * band + scenario_window(id, 0, 0, 1, 1)
 }
 
-/// The metadata keys of a scenario recording (`replay --scenario`): which scenario it is
-/// (`scenario_object`, `scenario_index`) and where its hand is: the object's `grasp_height`
-/// (`object_grasp_height`, m) raised by the scenario's drawn `height_offset` (m), the height
-/// of `world → hand` in the file. The writer copies the scenario into `/verify` and the label.
-pub fn scenario_metadata(object: &str, k: usize, grasp_height: f64, height_offset: f64) -> BTreeMap<String, String> {
-    BTreeMap::from([
-        ("scenario_object".to_string(), object.to_string()),
-        ("scenario_index".to_string(), k.to_string()),
-        ("object_grasp_height".to_string(), grasp_height.to_string()),
-        ("height_offset".to_string(), height_offset.to_string()),
-    ])
+/// One verified design's centred prediction and free-scene measurement: verify.csv's
+/// columns after the id and the design's, in order, and the same fields of its `/verify`
+/// message (one type for both). A value not computed (`None`) is an empty cell in the CSV and
+/// left out of `/verify` (as on `/designs`); so is, on `/verify`, a number JSON cannot hold
+/// (not finite).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VerifyMeasure {
+    /// Prediction: E_cyl/E_lim at the centred first contact (None: no contact).
+    pub impact_ratio: Option<f64>,
+    /// Prediction: §9.1's E_trans at the centred first contact (J).
+    pub e_trans: Option<f64>,
+    /// Prediction: §9.1's E_rot (J).
+    pub e_rot: Option<f64>,
+    /// Prediction: the smaller of the filtered and static force margins (N).
+    pub force_margin: f64,
+    /// The centred grasp reached stability.
+    pub stable: bool,
+    /// The centred criteria predict motion: impact ratio > 1 or force margin < 0.
+    pub predicted_moves: bool,
+    /// Measured: largest horizontal displacement of G (m).
+    pub object_max_displacement: f64,
+    /// Measured: largest tilt (°).
+    pub object_max_tilt_deg: f64,
+    /// Measured: peak translational kinetic energy during the first contact (J).
+    pub object_peak_e_trans: f64,
+    /// Measured: peak rotational kinetic energy during the first contact (J).
+    pub object_peak_e_rot: f64,
+    /// How the free scene ended: `t_obs`, or why it stopped early (then no verdict: the
+    /// verdict flags, `agrees` and the ratios are None).
+    pub free_end: FreeEnd,
+    /// §14.4's verdict: the object moved more than Δx_max or θ_max.
+    pub moved: Option<bool>,
+    /// Tilt above 45°.
+    pub toppled: Option<bool>,
+    /// No phalanx in contact at t_end.
+    pub escaped: Option<bool>,
+    /// A phalanx met the rim or a face.
+    pub rim_contact: bool,
+    /// Prediction and measurement agree.
+    pub agrees: Option<bool>,
+    /// Object peak E_trans / §9.1's E_trans.
+    pub peak_e_trans_ratio: Option<f64>,
+    /// Object peak E_rot / §9.1's E_rot.
+    pub peak_e_rot_ratio: Option<f64>,
 }
 
-/// The scenario of a recording's metadata ([`scenario_metadata`]): object, index, height offset.
-fn scenario_of(meta: &BTreeMap<String, String>) -> Option<(String, u64, f64)> {
-    let object = meta.get("scenario_object")?.clone();
-    let k = meta.get("scenario_index")?.parse().ok()?;
-    let h = meta.get("height_offset")?.parse().ok()?;
-    Some((object, k, h))
+/// The scenario of a `/verify` message of a `replay --scenario` recording.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VerifyScenario {
+    /// The object's name.
+    pub scenario_object: String,
+    /// The scenario's index among the object's.
+    pub scenario_index: u64,
+    /// The scenario's drawn hand height offset (m).
+    pub height_offset: f64,
 }
 
-/// The `/verify` message of one design: the columns of verify.csv (values not computed are
-/// left out, as on `/designs`), its time window and the free scene's end time.
+impl From<&ScenarioTag> for VerifyScenario {
+    fn from(t: &ScenarioTag) -> Self {
+        VerifyScenario { scenario_object: t.object.clone(), scenario_index: t.index, height_offset: t.height_offset }
+    }
+}
+
+/// The `/verify` message of one design: its time window, the design, the verify row's
+/// [`VerifyMeasure`] and the free scene's end time (and, in a scenario recording, which
+/// scenario). Written with its keys sorted and the values not computed left out.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct VerifyRecord {
     /// The window index k (the row's index in the verify table).
@@ -91,58 +134,63 @@ pub struct VerifyRecord {
     pub parameters: Parameters,
     /// Object offset of the free scene (m).
     pub x_off: f64,
-    /// Prediction: E_cyl/E_lim at the centred first contact.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub impact_ratio: Option<f64>,
-    /// Prediction: §9.1's E_trans (J).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub e_trans: Option<f64>,
-    /// Prediction: §9.1's E_rot (J).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub e_rot: Option<f64>,
-    /// Prediction: the smaller of the filtered and static force margins (N).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub force_margin: Option<f64>,
-    /// The centred grasp reached stability.
-    pub stable: bool,
-    /// The centred criteria predict motion.
-    pub predicted_moves: bool,
-    /// Measured: largest horizontal displacement of G (m).
-    pub object_max_displacement: f64,
-    /// Measured: largest tilt (°).
-    pub object_max_tilt_deg: f64,
-    /// Measured: peak translational kinetic energy during the first contact (J).
-    pub object_peak_e_trans: f64,
-    /// Measured: peak rotational kinetic energy during the first contact (J).
-    pub object_peak_e_rot: f64,
-    /// How the free scene ended: "t_obs", or why it stopped early (then no verdict: the
-    /// verdict flags, `agrees` and the ratios are left out).
-    pub free_end: String,
-    /// §14.4's verdict.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub moved: Option<bool>,
-    /// Tilt above 45°.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub toppled: Option<bool>,
-    /// No phalanx in contact at t_end.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub escaped: Option<bool>,
-    /// A phalanx met the rim or a face.
-    pub rim_contact: bool,
-    /// Prediction and measurement agree.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub agrees: Option<bool>,
-    /// Object peak E_trans / §9.1's E_trans.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub peak_e_trans_ratio: Option<f64>,
-    /// Object peak E_rot / §9.1's E_rot.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub peak_e_rot_ratio: Option<f64>,
+    /// Prediction and measurement.
+    #[serde(flatten)]
+    pub measure: VerifyMeasure,
     /// Time the free scene reached (s): the last pose drawn.
     pub t_end: f64,
     /// Object poses drawn (`/tf` hand → object messages).
     pub poses: u64,
+    /// The scenario (a `replay --scenario` recording).
+    #[serde(flatten)]
+    pub scenario: Option<VerifyScenario>,
 }
+
+impl VerifyRecord {
+    /// The message's JSON: keys sorted, values not computed (null: `None` or not finite)
+    /// left out.
+    pub fn to_json(&self) -> Vec<u8> {
+        let mut v = serde_json::to_value(self).expect("records serialise");
+        if let Value::Object(m) = &mut v {
+            m.retain(|_, v| !v.is_null());
+        }
+        serde_json::to_vec(&v).expect("records serialise")
+    }
+}
+
+/// `/verify`'s fields (`gripopt.Verify`): name, JSON type, whether every message has it.
+const VERIFY_FIELDS: [(&str, &str, bool); 30] = [
+    ("window", "integer", true),
+    ("window_start", "object", true),
+    ("window_start_s", "number", true),
+    ("epoch_s", "integer", true),
+    ("id", "integer", true),
+    ("parameters", "object", true),
+    ("x_off", "number", true),
+    ("impact_ratio", "number", false),
+    ("e_trans", "number", false),
+    ("e_rot", "number", false),
+    ("force_margin", "number", false),
+    ("stable", "boolean", true),
+    ("predicted_moves", "boolean", true),
+    ("object_max_displacement", "number", true),
+    ("object_max_tilt_deg", "number", true),
+    ("object_peak_e_trans", "number", true),
+    ("object_peak_e_rot", "number", true),
+    ("free_end", "string", true),
+    ("moved", "boolean", false),
+    ("toppled", "boolean", false),
+    ("escaped", "boolean", false),
+    ("rim_contact", "boolean", true),
+    ("agrees", "boolean", false),
+    ("peak_e_trans_ratio", "number", false),
+    ("peak_e_rot_ratio", "number", false),
+    ("t_end", "number", true),
+    ("poses", "integer", true),
+    ("scenario_object", "string", false),
+    ("scenario_index", "integer", false),
+    ("height_offset", "number", false),
+];
 
 /// A window start as seconds and nanoseconds since 1970.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -156,42 +204,27 @@ pub struct WindowStart {
 /// The design's parameters, as on `/designs` (the one type of a design as written).
 pub use crate::params::DesignParameters as Parameters;
 
-/// JSON schema of `/verify` (`gripopt.Verify`), parsable by Foxglove (one type per field).
+/// JSON schema of `/verify` (`gripopt.Verify`), parsable by Foxglove (one type per field),
+/// from [`VERIFY_FIELDS`].
 pub fn verify_schema() -> Value {
+    let obj = |props: Value, required: &[&str]| json!({"type": "object", "properties": props, "required": required});
     let num = || json!({"type": "number"});
     let int = || json!({"type": "integer", "minimum": 0});
-    let boolean = || json!({"type": "boolean"});
-    let obj = |props: Value, required: &[&str]| json!({"type": "object", "properties": props, "required": required});
-    let mut s = obj(
-        json!({
-            "window": int(), "window_start": obj(json!({"sec": int(), "nsec": int()}), &["sec", "nsec"]), "window_start_s": num(), "epoch_s": int(), "id": int(),
-            "parameters": obj(json!({"l21": num(), "b": num(), "t22": num(), "r": num(), "p": num(), "psi_deg": num()}), &["l21", "b", "t22", "r", "p", "psi_deg"]),
-            "x_off": num(), "impact_ratio": num(), "e_trans": num(), "e_rot": num(), "force_margin": num(), "stable": boolean(), "predicted_moves": boolean(),
-            "object_max_displacement": num(), "object_max_tilt_deg": num(), "object_peak_e_trans": num(), "object_peak_e_rot": num(), "free_end": json!({"type": "string"}),
-            "moved": boolean(), "toppled": boolean(), "escaped": boolean(), "rim_contact": boolean(), "agrees": boolean(),
-            "peak_e_trans_ratio": num(), "peak_e_rot_ratio": num(), "t_end": num(), "poses": int(),
-            "scenario_object": json!({"type": "string"}), "scenario_index": int(), "height_offset": num()
-        }),
-        &[
-            "window",
-            "window_start",
-            "window_start_s",
-            "epoch_s",
-            "id",
-            "parameters",
-            "x_off",
-            "stable",
-            "predicted_moves",
-            "object_max_displacement",
-            "object_max_tilt_deg",
-            "object_peak_e_trans",
-            "object_peak_e_rot",
-            "free_end",
-            "rim_contact",
-            "t_end",
-            "poses",
-        ],
-    );
+    let names = ["l21", "b", "t22", "r", "p", "psi_deg"];
+    let props: serde_json::Map<String, Value> = VERIFY_FIELDS
+        .iter()
+        .map(|&(name, kind, _)| {
+            let v = match (name, kind) {
+                ("window_start", _) => obj(json!({"sec": int(), "nsec": int()}), &["sec", "nsec"]),
+                ("parameters", _) => obj(names.iter().map(|n| (n.to_string(), num())).collect(), &names),
+                (_, "integer") => int(),
+                (_, kind) => json!({ "type": kind }),
+            };
+            (name.to_string(), v)
+        })
+        .collect();
+    let required: Vec<&str> = VERIFY_FIELDS.iter().filter(|f| f.2).map(|f| f.0).collect();
+    let mut s = obj(Value::Object(props), &required);
     s["title"] = "gripopt.Verify".into();
     s
 }
@@ -294,22 +327,23 @@ fn series_of(k: u64, id: u64, poses: &[PoseSample]) -> VerifySeries {
 
 /// The label drawn above the scene: what was predicted and what the free object did (in a
 /// scenario recording, which scenario: "68 (bottle-half:0, +4.2 mm): …").
-fn verdict(r: &VerifyRecord, scenario: Option<&(String, u64, f64)>) -> String {
-    let outcome = match r.moved {
+fn verdict(r: &VerifyRecord, scenario: Option<&ScenarioTag>) -> String {
+    let m = &r.measure;
+    let outcome = match m.moved {
         Some(true) => "moved",
         Some(false) => "barely moved",
         None => "not observed to the end",
     };
-    let predicted = if r.predicted_moves { "moves" } else { "stays" };
+    let predicted = if m.predicted_moves { "moves" } else { "stays" };
     let which = match scenario {
-        Some((object, k, h)) => format!("scenario {object}:{k}, height {:+.1} mm", h * 1e3),
+        Some(t) => format!("scenario {}:{}, height {:+.1} mm", t.object, t.index, t.height_offset * 1e3),
         None => format!("row {}", r.window),
     };
     format!(
         "{} ({which}): predicted {predicted}; {outcome}: {:.3} mm, {:.3} deg",
         r.id,
-        r.object_max_displacement * 1e3,
-        r.object_max_tilt_deg
+        m.object_max_displacement * 1e3,
+        m.object_max_tilt_deg
     )
 }
 
@@ -322,7 +356,7 @@ fn encode(
     e: &VerifyEntry,
     problem: &Problem,
     opts: &VerifyRecordOptions,
-    scenario: Option<&(String, u64, f64)>,
+    scenario: Option<&ScenarioTag>,
 ) -> Vec<(usize, u64, Vec<u8>)> {
     let t0 = window_start_ns(opts.epoch_s.saturating_mul(1_000_000_000), opts.window_base_s + k);
     let sc = &problem.scene;
@@ -337,13 +371,8 @@ fn encode(
     let design = Design::from_array(&[p.l21, p.b, p.t22, p.r, p.p, p.psi_deg]);
     let finger = Finger::new(&design, sc).ok();
     let series = serde_json::to_vec(&series_of(k, r.id, &e.poses)).expect("series serialise");
-    let mut record = serde_json::to_value(&r).expect("records serialise");
-    if let Some((object, k, h)) = scenario {
-        record["scenario_object"] = object.as_str().into();
-        record["scenario_index"] = (*k).into();
-        record["height_offset"] = (*h).into();
-    }
-    let mut out = vec![(0, t0, serde_json::to_vec(&record).expect("records serialise")), (4, t0, series)];
+    r.scenario = scenario.map(VerifyScenario::from);
+    let mut out = vec![(0, t0, r.to_json()), (4, t0, series)];
     out.push((2, t0, fx(&free_static_scene(t0, r.id, &design, sc, &verdict(&r, scenario)))));
     let end = window_end_ns(t0);
     let Some(last) = e.poses.last() else {
@@ -379,24 +408,26 @@ fn encode(
 pub fn write_verify(
     path: &Path,
     problem: &Problem,
-    meta: &BTreeMap<String, String>,
+    meta: &RunMetadata,
     entries: &[VerifyEntry],
     opts: &VerifyRecordOptions,
 ) -> Result<u64> {
     let tmp = super::mcapfile::temporary(path);
     let mc = super::mcapfile::error(&tmp);
     let mut w = super::mcapfile::open(&tmp, opts.zstd_level, 0)?;
-    let scenario = scenario_of(meta);
-    let mut meta = meta.clone();
-    meta.insert("designs".into(), entries.len().to_string());
-    meta.insert("first_window".into(), "0".into());
-    meta.insert("last_window".into(), entries.len().saturating_sub(1).to_string());
-    meta.insert("epoch_s".into(), opts.epoch_s.to_string());
-    meta.insert("window_base_s".into(), opts.window_base_s.to_string());
-    meta.insert("scene_dt".into(), opts.scene_dt.to_string());
-    meta.insert("time_convention".into(), "design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into());
+    let scenario = meta.scenario.clone();
+    let meta = RunMetadata {
+        designs: Some(entries.len() as u64),
+        first_window: Some(0),
+        last_window: Some(entries.len().saturating_sub(1) as u64),
+        epoch_s: Some(opts.epoch_s),
+        window_base_s: Some(opts.window_base_s),
+        scene_dt: Some(opts.scene_dt),
+        time_convention: Some("design k (row k of the verify table): log_time in [epoch_s + (window_base_s + k) s, epoch_s + (window_base_s + k + 1) s); simulated time t at its start + t".into()),
+        ..meta.clone()
+    };
     // metadata before any channel: no empty chunk
-    w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta }).map_err(mc)?;
+    w.write_metadata(&Metadata { name: VERIFY_METADATA.into(), metadata: meta.to_map() }).map_err(mc)?;
     let verify_schema = add_json_schema(&mut w, "gripopt.Verify", &verify_schema(), &tmp)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;

@@ -3,6 +3,7 @@
 use super::entry::{DesignEntry, Recordable};
 use super::index::{write_index, ShardEntry};
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
+use super::metadata::{RunMetadata, RUN_METADATA};
 use super::{messages, proto, schema, RecordOptions};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
@@ -12,7 +13,6 @@ use foxglove::Encode;
 use mcap::records::Metadata;
 use prost::Message;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -45,7 +45,7 @@ fn fx<T: Encode>(m: &T) -> Vec<u8> {
 pub fn write_shard<R: Recordable>(
     path: &Path,
     problem: &Problem,
-    meta: &BTreeMap<String, String>,
+    meta: &RunMetadata,
     designs: &[&R],
     opts: &RecordOptions,
 ) -> Result<u64> {
@@ -56,36 +56,32 @@ pub fn write_shard<R: Recordable>(
     let mut meta = meta.clone();
     let ids: Vec<u64> = designs.iter().map(|d| d.entry().id).collect();
     if let (Some(first), Some(last)) = (ids.iter().min(), ids.iter().max()) {
-        meta.entry("generation".into()).or_insert_with(|| designs[0].entry().generation.to_string());
-        meta.insert("first_id".into(), first.to_string());
-        meta.insert("last_id".into(), last.to_string());
+        meta.generation = meta.generation.or(Some(designs[0].entry().generation));
+        meta.first_id = Some(Some(*first));
+        meta.last_id = Some(Some(*last));
     }
-    meta.insert("designs".into(), designs.len().to_string());
+    meta.designs = Some(designs.len() as u64);
     // the scene of stage 3 (absent: centred, as in every recording before session 36); a
     // free-kind run's shards draw the centred diagnostic grasp, the label its free verdict
     let setup = &problem.scene.setup;
     if setup.kind != crate::params::SceneKind::Centred {
-        meta.insert("scene_kind".into(), setup.kind.to_string());
-        meta.insert("x_off".into(), setup.x_off.to_string());
+        meta.scene_kind = Some(setup.kind);
+        meta.x_off = Some(setup.x_off);
         let drawn = match setup.kind {
             crate::params::SceneKind::Free => {
                 "centred grasp (object at x = 0); the label gives the free scene's verdict"
             }
             _ => "the offset scene's grasp (object at x_off)",
         };
-        meta.insert("scene_drawn".into(), drawn.into());
+        meta.scene_drawn = Some(drawn.into());
     }
-    meta.insert("epoch_s".into(), opts.epoch_s.to_string());
-    meta.insert(
-        "resolution".into(),
-        serde_json::to_value(opts.resolution).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(),
-    );
-    meta.insert(
-        "time_convention".into(),
+    meta.epoch_s = Some(opts.epoch_s);
+    meta.resolution = Some(opts.resolution);
+    meta.time_convention = Some(
         "design k: log_time in [epoch_s + k s, epoch_s + k s + 1 s); simulated time t at epoch_s + k s + t".into(),
     );
     // metadata before any channel: no empty chunk
-    w.write_metadata(&Metadata { name: "gripopt.run".into(), metadata: meta }).map_err(mc)?;
+    w.write_metadata(&Metadata { name: RUN_METADATA.into(), metadata: meta.to_map() }).map_err(mc)?;
     // finger 2's own angles are columns of the offset scene's series only
     let finger2 = has_finger2(problem);
     let design_schema = add_json_schema(&mut w, "gripopt.Design", &schema::design(problem.solver.method), &tmp)?;
@@ -169,7 +165,7 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
 pub struct Recorder {
     dir: PathBuf,
     problem: Arc<Problem>,
-    meta: BTreeMap<String, String>,
+    meta: RunMetadata,
     opts: RecordOptions,
     index: Vec<ShardEntry>,
     /// Bytes written by this process.
@@ -189,7 +185,7 @@ pub struct ShardTask {
     file: String,
     generation: u64,
     problem: Arc<Problem>,
-    meta: BTreeMap<String, String>,
+    meta: RunMetadata,
     opts: RecordOptions,
 }
 
@@ -212,8 +208,8 @@ impl ShardTask {
             last_id,
             designs: designs.len() as u64,
             bytes,
-            run_id: self.meta.get("run_id").cloned(),
-            problem_sha256: self.meta.get("problem_sha256").cloned(),
+            run_id: self.meta.run_id.clone(),
+            problem_sha256: self.meta.problem_sha256.clone(),
         };
         Ok(Some((e, t0.elapsed().as_secs_f64())))
     }
@@ -228,7 +224,7 @@ impl Recorder {
     pub fn open(
         run_dir: &Path,
         problem: Problem,
-        meta: BTreeMap<String, String>,
+        meta: RunMetadata,
         opts: RecordOptions,
         completed: u64,
     ) -> Result<Self> {
@@ -236,7 +232,7 @@ impl Recorder {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, "cannot create the recording folder", e))?;
         // never deletes what the checkpoint covers; refuses (touching nothing) when a covered
         // shard must be re-indexed but cannot be read
-        let recovery = super::recover::recover_run(&dir, completed, meta.get("run_id").map(String::as_str))?;
+        let recovery = super::recover::recover_run(&dir, completed, meta.run_id.as_deref())?;
         let warnings = recovery.warnings(&dir);
         write_index(&dir, &recovery.index)?;
         Ok(Recorder {
@@ -259,7 +255,7 @@ impl Recorder {
         }
         let file = format!("gen-{generation:05}.mcap");
         let mut meta = self.meta.clone();
-        meta.insert("generation".into(), generation.to_string());
+        meta.generation = Some(generation);
         Some(ShardTask {
             path: self.dir.join(&file),
             file,

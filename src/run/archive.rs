@@ -50,8 +50,9 @@ pub struct Discards {
 pub struct DiscardCause {
     /// The stage (0–3).
     pub stage: u8,
-    /// What discarded them (the record's `cause`, one word).
-    pub cause: String,
+    /// What discarded them (the record's `cause`; written as its word, `unknown` for none).
+    #[serde(with = "cause_or_unknown")]
+    pub cause: Option<Cause>,
     /// How many.
     pub count: u64,
     /// The one closest to passing (smallest violation; ties: smallest id).
@@ -65,19 +66,40 @@ pub struct DiscardCause {
     pub detail: Option<String>,
 }
 
+/// A discard's cause as its word ([`Cause::as_str`]), `unknown` where the record has none.
+mod cause_or_unknown {
+    use crate::eval::Cause;
+    use serde::de::IntoDeserializer;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    const UNKNOWN: &str = "unknown";
+
+    pub fn serialize<S: Serializer>(c: &Option<Cause>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(c.map_or(UNKNOWN, Cause::as_str))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Cause>, D::Error> {
+        let word = String::deserialize(d)?;
+        if word == UNKNOWN {
+            return Ok(None);
+        }
+        Cause::deserialize(IntoDeserializer::<D::Error>::into_deserializer(word.as_str())).map(Some)
+    }
+}
+
 impl Discards {
     /// Count one evaluated design.
     pub fn add(&mut self, id: u64, r: &Record) {
         self.evaluated += 1;
         let Some(stage) = r.verdict.failed_stage else { return };
-        let cause = r.verdict.cause.map_or("unknown", Cause::as_str);
+        let cause = r.verdict.cause;
         let violation = r.verdict.violation.filter(|v| v.is_finite());
         let at = match self.causes.iter().position(|c| c.stage == stage && c.cause == cause) {
             Some(k) => k,
             None => {
                 self.causes.push(DiscardCause {
                     stage,
-                    cause: cause.to_string(),
+                    cause,
                     count: 0,
                     closest: id,
                     violation,
@@ -129,7 +151,7 @@ impl Discards {
             out.push(format!(
                 "  {share} % at stage {} by {} ({}): {}; closest to passing: design {}{v}{d}",
                 c.stage,
-                c.cause.replace('_', " "),
+                c.cause.map_or("unknown", Cause::as_str).replace('_', " "),
                 crate::error::counted(c.count, "design", "designs"),
                 c.reason,
                 c.closest

@@ -8,6 +8,8 @@ use super::archive::Archive;
 use super::checkpoint_json::{self, Canonical};
 use crate::fsutil::write_atomic;
 use crate::optim::{Nsga2Settings, Nsga2State};
+use crate::params::{Method, SolverSettings};
+use crate::record::RecordOptions;
 use crate::{Error, Result};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::path::Path;
@@ -39,7 +41,7 @@ pub struct Checkpoint<I> {
     /// Always [`FORMAT`].
     pub format: String,
     /// Run options that change the outcome besides the algorithm settings.
-    pub options: serde_json::Value,
+    pub options: RunOptions,
     /// SHA-256 of the problem file's text.
     pub problem_hash: String,
     /// The run that wrote it (run.json's `run_id`).
@@ -55,6 +57,59 @@ pub struct Checkpoint<I> {
     pub version: u32,
     /// Wall time spent so far (s).
     pub wall_s: f64,
+}
+
+/// What the pipeline of a run's stage 3 is, as its checkpoints state it.
+pub const PIPELINE: &str = "stages 0-3, stage 3 in pipeline mode";
+
+/// Run options that change results besides the algorithm settings: a checkpoint's `options`,
+/// hashed with the settings into its `settings_hash`. Written as the canonical JSON of every
+/// checkpoint (keys sorted), so the declaration order does not matter. Every field is
+/// written by [`RunOptions::of`]; read back, one may be absent: the integration method is
+/// stated only when it is not RADAU5, the default (a run of a problem without
+/// `solver.method` writes the options it wrote before the key existed), and a field removed
+/// by hand stays absent (its hash then differs, and the resume names the field as missing
+/// beside the run's value). A field the type does not know is an error naming it.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunOptions {
+    /// The evaluation pipeline ([`PIPELINE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pipeline: Option<String>,
+    /// Relative tolerance of the integration (`[solver] rtol`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance (`[solver] atol`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atol: Option<f64>,
+    /// Step limit (`[solver] max_steps`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_steps: Option<u64>,
+    /// The run's recording options (run.json's `recording`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recording: Option<RecordOptions>,
+    /// The integration method, where not the default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<Method>,
+}
+
+impl RunOptions {
+    /// The options of a run of a problem with solver settings `s`, recording `rec`.
+    pub fn of(s: &SolverSettings, rec: &RecordOptions) -> Self {
+        RunOptions {
+            pipeline: Some(PIPELINE.into()),
+            rtol: Some(s.rtol),
+            atol: Some(s.atol),
+            max_steps: Some(s.max_steps),
+            recording: Some(*rec),
+            method: (!s.method.is_default()).then_some(s.method),
+        }
+    }
+    /// As a JSON tree (for comparing field by field: [`field_differences`]).
+    pub(crate) fn to_value(&self) -> serde_json::Value {
+        // numbers, strings and plain structs: serialising cannot fail
+        serde_json::to_value(self).expect("run options serialise")
+    }
 }
 
 impl ChecksumMismatch {
@@ -116,7 +171,7 @@ pub(crate) fn field_differences(
 }
 
 /// Hash of settings and options (canonical JSON).
-pub fn settings_hash(settings: &Nsga2Settings, options: &serde_json::Value) -> String {
+pub fn settings_hash(settings: &Nsga2Settings, options: &RunOptions) -> String {
     let v = serde_json::json!({ "settings": settings, "options": options });
     sha256_hex(serde_json::to_string(&v).expect("serialisable").as_bytes())
 }
@@ -126,7 +181,7 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
     pub fn new(
         problem_hash: String,
         settings: Nsga2Settings,
-        options: serde_json::Value,
+        options: RunOptions,
         state: Nsga2State<I>,
         wall_s: f64,
     ) -> Self {

@@ -75,13 +75,7 @@ impl RunFolder {
     /// The run id run.json records now (empty for a run of a gripopt before issue 24);
     /// None where run.json is missing, unreadable or without a text `run_id`.
     fn current_run_id(&self) -> Option<String> {
-        let path = self.dir.join(super::RUN_FILE);
-        let bytes = crate::fsutil::read_regular(&path, crate::fsutil::caps::RUN_JSON).ok()?;
-        let v: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
-        match v.get("run_id") {
-            None => Some(String::new()),
-            Some(id) => id.as_str().map(String::from),
-        }
+        super::RunHeader::load(&self.dir).ok().map(|h| h.run_id().to_string())
     }
     /// For a folder opened with [`RunFolder::open_pinned`]: an error when it no longer holds
     /// the run it was opened on (run.json records another run id, or cannot be read).

@@ -129,6 +129,66 @@ impl RunInfo {
     }
 }
 
+/// The parts of `run.json` that identify a run and place its recordings, read tolerantly:
+/// every field may be missing or `null` (run folders of older gripopt versions, or a run.json
+/// written before its first checkpoint), unknown fields are ignored; a field present with a
+/// wrong type is an error naming it. [`RunInfo`] is the whole, strict record.
+#[derive(Debug, Clone, Default, Deserialize)]
+pub struct RunHeader {
+    /// The run's id (`None` in run folders of a gripopt before issue 24).
+    #[serde(default)]
+    pub run_id: Option<String>,
+    /// Problem name.
+    #[serde(default)]
+    pub problem_name: Option<String>,
+    /// SHA-256 of the problem in force.
+    #[serde(default)]
+    pub problem_sha256: Option<String>,
+    /// Evaluations of the last checkpoint.
+    #[serde(default, deserialize_with = "evaluations_field")]
+    pub evaluations: Option<u64>,
+    /// The recording settings (their epoch).
+    #[serde(default)]
+    pub recording: Option<RecordingHeader>,
+}
+
+/// `run.json` → `recording`, as far as [`RunHeader`] reads it.
+#[derive(Debug, Clone, Default, Deserialize)]
+pub struct RecordingHeader {
+    /// Epoch of the recording's time axis, whole seconds since 1970.
+    #[serde(default, deserialize_with = "epoch_s_field")]
+    pub epoch_s: Option<u64>,
+}
+
+fn evaluations_field<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<u64>, D::Error> {
+    Option::<u64>::deserialize(d)
+        .map_err(|e| serde::de::Error::custom(format!("field `evaluations` is not a whole number ({e})")))
+}
+
+fn epoch_s_field<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<u64>, D::Error> {
+    Option::<u64>::deserialize(d).map_err(|e| {
+        serde::de::Error::custom(format!("field `recording.epoch_s` is not a whole number of seconds ({e})"))
+    })
+}
+
+impl RunHeader {
+    /// Read `RUN_DIR/run.json` (errors name the file, and the field where one has a wrong type).
+    pub fn load(dir: &Path) -> Result<RunHeader> {
+        let p = dir.join(RUN_FILE);
+        let text = crate::fsutil::read_regular_string(&p, crate::fsutil::caps::RUN_JSON)
+            .map_err(|e| Error::io(&p, "cannot read", e))?;
+        serde_json::from_str(&text).map_err(|source| Error::Json { path: p, what: "invalid run.json", source })
+    }
+    /// The run id (empty for a run of a gripopt before issue 24).
+    pub fn run_id(&self) -> &str {
+        self.run_id.as_deref().unwrap_or("")
+    }
+    /// The recording's epoch (0 = 1970 where run.json has none).
+    pub fn epoch_s(&self) -> u64 {
+        self.recording.as_ref().and_then(|r| r.epoch_s).unwrap_or(0)
+    }
+}
+
 /// A new run id: 16 hex digits from the clock, the process and the folder (unique, not a
 /// secret; never part of a result).
 pub fn new_run_id(dir: &Path) -> String {

@@ -35,11 +35,11 @@ mod verify_run;
 
 pub use crate::error::{counted, printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
-pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, FORMAT, VERSION};
+pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
-pub use info::{new_run_id, Resume, RunInfo, RunStatus, RUN_FILE};
+pub use info::{new_run_id, RecordingHeader, Resume, RunHeader, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
     check_population, check_sample, check_threads, sample_bytes_recorded, threads_note, BYTES_PER_DESIGN, MAX_THREADS,
     MIN_DESIGNS_PER_THREAD, SAMPLE_BYTES_PER_DESIGN,
@@ -62,7 +62,7 @@ pub use tables::CheckpointTables;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
     verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,
-    VerifySummary, VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{

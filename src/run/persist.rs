@@ -102,7 +102,7 @@ pub struct CheckpointSpec {
     /// Algorithm settings.
     pub settings: Nsga2Settings,
     /// Run options that change results.
-    pub options: serde_json::Value,
+    pub options: super::RunOptions,
     /// Wall seconds before this process started.
     pub wall_before: f64,
     /// Start of this process's run.

@@ -72,13 +72,10 @@ pub fn record_free_scene(
 fn check_replaceable(path: &Path, run_id: &str) -> Result<()> {
     let what = format!("a free-scene recording `replay` wrote for this run (run id {run_id})");
     check_ours(path, &what, |m| {
-        if m.contains_key("free_design") && m.get("run_id").map(String::as_str) == Some(run_id) {
+        if m.free_design.is_some() && m.run_id.as_deref() == Some(run_id) {
             Ok(())
         } else {
-            Err(format!(
-                "written by another run or command (run id {})",
-                m.get("run_id").map_or("none", String::as_str)
-            ))
+            Err(format!("written by another run or command (run id {})", m.run_id.as_deref().unwrap_or("none")))
         }
     })
 }
@@ -89,7 +86,7 @@ fn check_replaceable(path: &Path, run_id: &str) -> Result<()> {
 pub(super) fn check_ours(
     path: &Path,
     what: &str,
-    ours: impl Fn(&std::collections::BTreeMap<String, String>) -> std::result::Result<(), String>,
+    ours: impl Fn(&crate::record::RunMetadata) -> std::result::Result<(), String>,
 ) -> Result<()> {
     if std::fs::symlink_metadata(path).is_err() {
         return Ok(());
@@ -106,5 +103,6 @@ pub(super) fn check_ours(
         .find(|m| m.name == VERIFY_METADATA)
         .and_then(|mi| mcap::read::metadata(&bytes, mi).ok())
         .ok_or_else(|| refuse("no gripopt.verify metadata"))?;
-    ours(&meta.metadata).map_err(|why| refuse(&why))
+    let meta = crate::record::RunMetadata::from_map(&meta.metadata).map_err(|why| refuse(&why))?;
+    ours(&meta).map_err(|why| refuse(&why))
 }

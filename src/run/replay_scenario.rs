@@ -105,21 +105,26 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
             let window = crate::record::scenario_window(id, o, k, setup.spec.objects.len(), setup.k);
             // the scenario's hand height is the object's grasp height + its drawn height offset
             let h = setup.scenarios[i].values[1];
-            let tag = crate::record::scenario_metadata(object, k, setup.spec.objects[o].object.grasp_height, h);
+            let tag = crate::record::ScenarioTag {
+                object: object.to_string(),
+                index: k as u64,
+                grasp_height: setup.spec.objects[o].object.grasp_height,
+                height_offset: h,
+            };
             let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
             // replaced only when this run's replay of this scenario wrote it: same epoch
             // (the run's start, in every file of its time axis) and the same source
-            let epoch = r.opts.epoch_s.to_string();
+            let epoch = r.opts.epoch_s;
             let desc = format!("the recording `replay --scenario {object}:{k}` wrote for this run (epoch {epoch})");
             super::replay_free::check_ours(&dir.join(&name), &desc, |m| {
-                let (e, src) = (m.get("epoch_s"), m.get("source"));
-                if e == Some(&epoch) && src == Some(&what) {
+                let (e, src) = (m.epoch_s, m.source.as_deref());
+                if e == Some(epoch) && src == Some(what.as_str()) {
                     Ok(())
                 } else {
                     Err(format!(
                         "written by another run or command (epoch {}, source {:?})",
-                        e.map_or("none", String::as_str),
-                        src.map_or("none", String::as_str)
+                        e.map_or("none".to_string(), |e| e.to_string()),
+                        src.unwrap_or("none")
                     ))
                 }
             })?;

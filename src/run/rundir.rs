@@ -9,7 +9,7 @@
 //! population with discard stages and reasons), `pareto_matrix.svg`, `hypervolume.svg`.
 
 use super::archive::{Archive, Discards};
-use super::checkpoint::{field_differences, settings_hash, sha256_hex, Checkpoint};
+use super::checkpoint::{field_differences, settings_hash, sha256_hex, Checkpoint, RunOptions};
 use super::contents::Scan;
 use super::gripper::{GripperInfo, GripperProblem};
 use super::info::{new_run_id, write_json, Resume, RunInfo, RunStatus, RUN_FILE};
@@ -19,8 +19,8 @@ use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
-use crate::params::{Problem, SolverSettings};
-use crate::record::{ProblemUse, RecordOptions, Recorder};
+use crate::params::Problem;
+use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
 use crate::{Error, Result};
 use argmin::core::State;
 use std::path::{Path, PathBuf};
@@ -333,15 +333,16 @@ pub fn resume_with(
         check_same_objects(&before.problem, &problem, &problem_path)?;
         notes.insert(0, format!("forced: problem file changed (sha256 {} → {})", &cp.problem_hash[..12], &now[..12]));
     }
-    let recording = serde_json::to_value(info.recording).map_err(|source| Error::Json {
-        path: run_json.clone(),
-        what: "field `recording`",
-        source,
-    })?;
-    if cp.options.get("recording") != Some(&recording) {
-        let null = serde_json::Value::Null;
-        let ours = cp.options.get("recording").unwrap_or(&null);
-        return Err(modified(field_differences("options.recording", ours, &recording, &|_| RUN_FILE.into())));
+    if cp.options.recording != Some(info.recording) {
+        let value = |r: &Option<RecordOptions>| {
+            serde_json::to_value(r).map_err(|source| Error::Json {
+                path: run_json.clone(),
+                what: "field `recording`",
+                source,
+            })
+        };
+        let (ours, theirs) = (value(&cp.options.recording)?, value(&Some(info.recording))?);
+        return Err(modified(field_differences("options.recording", &ours, &theirs, &|_| RUN_FILE.into())));
     }
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
@@ -417,7 +418,7 @@ fn drive(
     let mut info = info;
     info.threads = pool.current_num_threads();
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
-    let options = run_options(&gp.problem.solver, &info.recording);
+    let options = RunOptions::of(&gp.problem.solver, &info.recording);
     let mut gp = gp;
     if info.recording.enabled {
         gp.recording = info.recording;
@@ -519,8 +520,7 @@ fn drive(
     info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
     let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
-    let status =
-        std::collections::BTreeMap::from([("status".to_string(), format!("{:?}", info.status).to_lowercase())]);
+    let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     lock.check()?;
     write_json(&out.join(RUN_FILE), &info)?;
@@ -540,51 +540,19 @@ fn drive(
 }
 
 /// Metadata written into every shard of the recording: the run (its id, problem and the
-/// problem's hash, settings, recording options) and the time convention.
-fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> std::collections::BTreeMap<String, String> {
-    let mut meta = std::collections::BTreeMap::new();
-    meta.insert("gripopt_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
-    meta.insert("simulator_revision".to_string(), crate::sim::SIMULATOR_REVISION.to_string());
-    meta.insert("run_id".to_string(), info.run_id.clone());
-    meta.insert("problem".to_string(), gp.problem.name.clone());
-    meta.insert("problem_sha256".to_string(), info.problem_sha256.clone());
-    // plain structs of numbers, strings and enums: serialising cannot fail
-    meta.insert("settings".to_string(), serde_json::to_string(&info.settings).expect("settings serialise"));
-    meta.insert("recording".to_string(), serde_json::to_string(&info.recording).expect("recording options serialise"));
-    meta.insert(
-        "time_convention".to_string(),
-        "design k: log_time in [k s, k s + 1 s); field t = simulated time".to_string(),
-    );
-    meta
-}
-
-/// Run options hashed into checkpoints (its `options`): pipeline settings and recording.
-/// The integration method is stated only when it is not RADAU5, the default (a run of a
-/// problem without `solver.method` writes the options it wrote before the key existed).
-#[derive(serde::Serialize)]
-struct RunOptions<'a> {
-    pipeline: &'static str,
-    rtol: f64,
-    atol: f64,
-    max_steps: u64,
-    recording: &'a RecordOptions,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    method: Option<crate::params::Method>,
-}
-
-/// The run's [`RunOptions`] as the checkpoint holds them (a JSON value: a checkpoint's own
-/// `options` are compared field by field with these).
-fn run_options(s: &SolverSettings, rec: &RecordOptions) -> serde_json::Value {
-    let o = RunOptions {
-        pipeline: "stages 0-3, stage 3 in pipeline mode",
-        rtol: s.rtol,
-        atol: s.atol,
-        max_steps: s.max_steps,
-        recording: rec,
-        method: (!s.method.is_default()).then_some(s.method),
-    };
-    // numbers, strings and plain structs: serialising cannot fail
-    serde_json::to_value(o).expect("run options serialise")
+/// problem's hash, settings, recording options; the shard adds its contents and time convention).
+fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
+    RunMetadata {
+        gripopt_version: Some(env!("CARGO_PKG_VERSION").to_string()),
+        simulator_revision: Some(crate::sim::SIMULATOR_REVISION),
+        run_id: Some(info.run_id.clone()),
+        problem: Some(gp.problem.name.clone()),
+        problem_sha256: Some(info.problem_sha256.clone()),
+        // plain structs of numbers, strings and enums: serialising cannot fail
+        settings: Some(serde_json::to_string(&info.settings).expect("settings serialise")),
+        recording: Some(serde_json::to_string(&info.recording).expect("recording options serialise")),
+        ..RunMetadata::default()
+    }
 }
 
 /// A new run's folder is never created inside another run's folder (its recording/ or any
@@ -627,16 +595,17 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
             "options.pipeline" => "this gripopt".to_string(),
             _ => file.clone(),
         };
-        let expected = run_options(&problem.solver, &info.recording);
+        let expected = RunOptions::of(&problem.solver, &info.recording);
         // the run's options leave out the default method (RADAU5): name it beside a
         // checkpoint's `method`
         let mut named = expected.clone();
-        if let (Some(_), Some(map)) = (cp.options.get("method"), named.as_object_mut()) {
-            map.entry("method").or_insert_with(|| serde_json::json!(problem.solver.method));
+        if cp.options.method.is_some() {
+            named.method.get_or_insert(problem.solver.method);
         }
-        let mut options = field_differences("options", &cp.options, &named, &source);
+        let ours = cp.options.to_value();
+        let mut options = field_differences("options", &ours, &named.to_value(), &source);
         if options.is_empty() {
-            options = field_differences("options", &cp.options, &expected, &source);
+            options = field_differences("options", &ours, &expected.to_value(), &source);
         }
         found.extend(options);
     }

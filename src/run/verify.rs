@@ -14,13 +14,12 @@ use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
 use crate::eval::{evaluate, simulate, EvalOptions};
 use crate::optim::Individual;
-use crate::params::{Design, DesignParameters, Problem, DESIGN_NAMES};
-use crate::record::{keep_poses, ProblemUse};
+use crate::params::{Design, DesignParameters, Problem};
+use crate::record::{keep_poses, ProblemUse, VerifyMeasure};
 use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
 use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
-use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -103,6 +102,30 @@ impl VerifyRow {
     /// `free_end` as verify.csv writes it: "t_obs", or why the free scene stopped early.
     pub fn free_end(&self) -> String {
         self.end.to_string()
+    }
+    /// The row's prediction and measurement, as verify.csv and `/verify` write them.
+    pub fn measure(&self) -> VerifyMeasure {
+        let (peak_e_trans_ratio, peak_e_rot_ratio) = self.energy_ratios();
+        VerifyMeasure {
+            impact_ratio: self.impact_ratio,
+            e_trans: self.e_trans_rot.map(|e| e.0),
+            e_rot: self.e_trans_rot.map(|e| e.1),
+            force_margin: self.force_margin,
+            stable: self.stable,
+            predicted_moves: self.predicted_moves,
+            object_max_displacement: self.max_displacement,
+            object_max_tilt_deg: self.max_tilt_deg,
+            object_peak_e_trans: self.peak_e.0,
+            object_peak_e_rot: self.peak_e.1,
+            free_end: self.end,
+            moved: self.moved,
+            toppled: self.toppled,
+            escaped: self.escaped,
+            rim_contact: self.rim_contact,
+            agrees: self.agrees(),
+            peak_e_trans_ratio,
+            peak_e_rot_ratio,
+        }
     }
 }
 
@@ -383,38 +406,53 @@ pub fn verify_designs_poses(
         .collect()
 }
 
-/// A verified design as verify.csv writes it: its columns, in order (the design's, the
-/// centred prediction's, the free scene's measurement, and their comparison).
+/// A verified design as verify.csv writes it: its columns, in order (the id, the design's,
+/// then [`VerifyMeasure`]'s: the centred prediction, the free scene's measurement, and their
+/// comparison).
+#[derive(Serialize)]
+struct VerifyCells {
+    id: u64,
+    #[serde(flatten)]
+    design: DesignParameters,
+    #[serde(flatten)]
+    measure: VerifyMeasure,
+}
+
 impl Serialize for VerifyRow {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let d = DesignParameters::from_array(&self.design.to_array());
-        let (et, er) = self.energy_ratios();
-        let mut m = s.serialize_map(Some(25))?;
-        m.serialize_entry("id", &self.id)?;
-        for (k, v) in DESIGN_NAMES.iter().zip(d.to_array()) {
-            m.serialize_entry(k, &v)?;
-        }
-        m.serialize_entry("impact_ratio", &self.impact_ratio)?;
-        m.serialize_entry("e_trans", &self.e_trans_rot.map(|e| e.0))?;
-        m.serialize_entry("e_rot", &self.e_trans_rot.map(|e| e.1))?;
-        m.serialize_entry("force_margin", &self.force_margin)?;
-        m.serialize_entry("stable", &self.stable)?;
-        m.serialize_entry("predicted_moves", &self.predicted_moves)?;
-        m.serialize_entry("object_max_displacement", &self.max_displacement)?;
-        m.serialize_entry("object_max_tilt_deg", &self.max_tilt_deg)?;
-        m.serialize_entry("object_peak_e_trans", &self.peak_e.0)?;
-        m.serialize_entry("object_peak_e_rot", &self.peak_e.1)?;
-        m.serialize_entry("free_end", &self.end)?;
-        m.serialize_entry("moved", &self.moved)?;
-        m.serialize_entry("toppled", &self.toppled)?;
-        m.serialize_entry("escaped", &self.escaped)?;
-        m.serialize_entry("rim_contact", &self.rim_contact)?;
-        m.serialize_entry("agrees", &self.agrees())?;
-        m.serialize_entry("peak_e_trans_ratio", &et)?;
-        m.serialize_entry("peak_e_rot_ratio", &er)?;
-        m.end()
+        let design = DesignParameters::from_array(&self.design.to_array());
+        VerifyCells { id: self.id, design, measure: self.measure() }.serialize(s)
     }
 }
+
+/// verify.csv's columns, in order, with their units (`-`: none; the `# units:` line).
+pub const VERIFY_COLUMNS: [(&str, &str); 25] = [
+    ("id", "-"),
+    ("l21", "m"),
+    ("b", "m"),
+    ("t22", "m"),
+    ("r", "-"),
+    ("p", "-"),
+    ("psi_deg", "deg"),
+    ("impact_ratio", "-"),
+    ("e_trans", "J"),
+    ("e_rot", "J"),
+    ("force_margin", "N"),
+    ("stable", "bool"),
+    ("predicted_moves", "bool"),
+    ("object_max_displacement", "m"),
+    ("object_max_tilt_deg", "deg"),
+    ("object_peak_e_trans", "J"),
+    ("object_peak_e_rot", "J"),
+    ("free_end", "text"),
+    ("moved", "bool"),
+    ("toppled", "bool"),
+    ("escaped", "bool"),
+    ("rim_contact", "bool"),
+    ("agrees", "bool"),
+    ("peak_e_trans_ratio", "-"),
+    ("peak_e_rot_ratio", "-"),
+];
 
 /// verify.csv's text (`#` header lines, then one row per design).
 pub fn verify_csv(rows: &[VerifyRow], x_off: f64) -> String {

@@ -9,12 +9,11 @@
 use super::verify::{VerifyRow, VerifySource};
 use crate::params::Problem;
 use crate::record::{
-    band_s, verify_parameters, write_verify, write_verify_layout, VerifyEntry, VerifyRecord, VerifyRecordOptions,
-    WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
+    band_s, verify_parameters, write_verify, write_verify_layout, RunMetadata, ScenarioTag, VerifyEntry, VerifyRecord,
+    VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
-use crate::{Error, Result};
-use std::collections::BTreeMap;
+use crate::Result;
 use std::path::{Path, PathBuf};
 
 /// The recording of the verify designs of a run.
@@ -27,7 +26,7 @@ pub const VERIFY_SAMPLE_MCAP: &str = "verify_sample.mcap";
 pub(crate) struct VerifyRecording {
     path: PathBuf,
     dir: PathBuf,
-    meta: BTreeMap<String, String>,
+    meta: RunMetadata,
     /// Recording settings.
     pub opts: VerifyRecordOptions,
 }
@@ -36,28 +35,9 @@ impl VerifyRecording {
     /// For run folder `dir` and the designs of `source`: the epoch is the run's
     /// (`run.json` → `recording.epoch_s`; 0 = 1970 when the run has none).
     pub fn new(dir: &Path, source: &VerifySource) -> Result<Self> {
-        let run_json = dir.join("run.json");
-        let text = crate::fsutil::read_regular_string(&run_json, crate::fsutil::caps::RUN_JSON)
-            .map_err(|e| Error::io(&run_json, "cannot read", e))?;
-        let run: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::Json {
-            path: run_json.clone(),
-            what: "invalid run.json",
-            source,
-        })?;
-        let epoch_s = match &run["recording"]["epoch_s"] {
-            serde_json::Value::Null => 0,
-            v => v.as_u64().ok_or_else(|| Error::RunDir {
-                path: run_json.clone(),
-                message: format!("field `recording.epoch_s` = {v} is not a whole number of seconds"),
-            })?,
-        };
-        let designs = match &run["evaluations"] {
-            serde_json::Value::Null => 0,
-            v => v.as_u64().ok_or_else(|| Error::RunDir {
-                path: run_json.clone(),
-                message: format!("field `evaluations` = {v} is not a whole number"),
-            })?,
-        };
+        let run = super::RunHeader::load(dir)?;
+        let epoch_s = run.epoch_s();
+        let designs = run.evaluations.unwrap_or(0);
         // the recording's last design id, should run.json's count be short of it
         let recorded =
             crate::record::read_index(&dir.join("recording")).ok().and_then(|i| i.last().map(|e| e.last_id + 1));
@@ -67,14 +47,13 @@ impl VerifyRecording {
             VerifySource::All => (VERIFY_MCAP, "all".to_string(), 1),
             VerifySource::Sample { n, seed } => (VERIFY_SAMPLE_MCAP, format!("sample {n} seed {seed}"), 2),
         };
-        let mut meta = BTreeMap::new();
-        meta.insert("gripopt_version".into(), env!("CARGO_PKG_VERSION").into());
-        meta.insert("source".into(), src);
-        for k in ["problem_name", "problem_sha256"] {
-            if let Some(v) = run[k].as_str() {
-                meta.insert(k.into(), v.into());
-            }
-        }
+        let meta = RunMetadata {
+            gripopt_version: Some(env!("CARGO_PKG_VERSION").into()),
+            source: Some(src),
+            problem_name: run.problem_name,
+            problem_sha256: run.problem_sha256,
+            ..RunMetadata::default()
+        };
         let opts = VerifyRecordOptions {
             scene_dt: DEFAULT_SCENE_DT,
             epoch_s,
@@ -87,19 +66,13 @@ impl VerifyRecording {
     /// The recording of one robust scenario replayed (`gripopt replay --scenario`): the file
     /// `name` in the run folder, in its own `window` after the start of the run's band 3
     /// (bands 1 and 2 are verify's; [`crate::record::scenario_window`]), with the scenario's
-    /// metadata `tag` ([`crate::record::scenario_metadata`]).
-    pub fn for_scenario(
-        dir: &Path,
-        name: &str,
-        what: String,
-        window: u64,
-        tag: BTreeMap<String, String>,
-    ) -> Result<Self> {
+    /// metadata `tag` (its `scenario_*` keys).
+    pub fn for_scenario(dir: &Path, name: &str, what: String, window: u64, tag: ScenarioTag) -> Result<Self> {
         let mut r = Self::new(dir, &VerifySource::Pareto)?;
         r.opts.window_base_s = r.opts.window_base_s * 3 + window;
         r.path = dir.join(name);
-        r.meta.insert("source".into(), what);
-        r.meta.extend(tag);
+        r.meta.source = Some(what);
+        r.meta.scenario = Some(tag);
         Ok(r)
     }
 
@@ -111,18 +84,17 @@ impl VerifyRecording {
         let mut r = Self::new(dir, &VerifySource::Pareto)?;
         r.opts.window_base_s = crate::record::free_window(r.opts.window_base_s, id);
         r.path = dir.join(name);
-        r.meta.insert("source".into(), format!("replay design {id} (free scene)"));
-        r.meta.insert("free_design".into(), id.to_string());
-        r.meta.insert("run_id".into(), run_id.to_string());
+        r.meta.source = Some(format!("replay design {id} (free scene)"));
+        r.meta.free_design = Some(id);
+        r.meta.run_id = Some(run_id.to_string());
         Ok(r)
     }
 
     /// Write the rows (in order: row k is window k) with their poses, and the layout file;
     /// returns the recording's path.
     pub fn write(self, p: &Problem, rows: Vec<(VerifyRow, Vec<PoseSample>)>) -> Result<PathBuf> {
-        let mut meta = self.meta;
         let x_off = p.scene.setup.x_off;
-        meta.insert("scene".into(), format!("free:{x_off}"));
+        let meta = RunMetadata { free_scene_x_off: Some(x_off), ..self.meta };
         let entries: Vec<VerifyEntry> =
             rows.into_iter().map(|(r, poses)| VerifyEntry { record: record_of(&r, x_off), poses }).collect();
         write_verify(&self.path, p, &meta, &entries, &self.opts)?;
@@ -134,9 +106,6 @@ impl VerifyRecording {
 
 /// The `/verify` message of a row (window fields are the writer's).
 fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
-    let fin = |v: f64| v.is_finite().then_some(v);
-    let (et, er) = (r.e_trans_rot.map(|e| e.0), r.e_trans_rot.map(|e| e.1));
-    let (rt, rr) = r.energy_ratios();
     VerifyRecord {
         window: 0,
         window_start: WindowStart { sec: 0, nsec: 0 },
@@ -145,25 +114,9 @@ fn record_of(r: &VerifyRow, x_off: f64) -> VerifyRecord {
         id: r.id,
         parameters: verify_parameters(&r.design),
         x_off,
-        impact_ratio: r.impact_ratio.and_then(fin),
-        e_trans: et.and_then(fin),
-        e_rot: er.and_then(fin),
-        force_margin: fin(r.force_margin),
-        stable: r.stable,
-        predicted_moves: r.predicted_moves,
-        object_max_displacement: r.max_displacement,
-        object_max_tilt_deg: r.max_tilt_deg,
-        object_peak_e_trans: r.peak_e.0,
-        object_peak_e_rot: r.peak_e.1,
-        moved: r.moved,
-        toppled: r.toppled,
-        escaped: r.escaped,
-        rim_contact: r.rim_contact,
-        free_end: r.free_end().to_string(),
-        agrees: r.agrees(),
-        peak_e_trans_ratio: rt.and_then(fin),
-        peak_e_rot_ratio: rr.and_then(fin),
+        measure: r.measure(),
         t_end: r.t_end,
         poses: 0,
+        scenario: None,
     }
 }

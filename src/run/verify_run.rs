@@ -12,7 +12,7 @@ use super::limits::check_sample;
 use super::lock::RunLock;
 use super::verify::{
     run_line, sample_designs, verify_csv, verify_designs_poses, CheckedState, Confusion, VerifiedGeneration, VerifyRow,
-    VerifySource, VerifySummary, CHECKPOINT_FILE, VERIFY_FILE, VERIFY_SAMPLE_FILE,
+    VerifySource, VerifySummary, CHECKPOINT_FILE, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
 use super::verify_rec::VerifyRecording;
 use super::verify_robust::VERIFY_ROBUST_FILE;
@@ -181,25 +181,11 @@ pub fn verify(
 fn attributed(csv: &str, run_id: &str, state: &VerifiedGeneration, used: &[&ProblemUse]) -> String {
     let line = run_line(run_id, state, used);
     // the unit of every column, as in every CSV gripopt writes (docs/outputs.md)
-    let header = csv.lines().find(|l| !l.starts_with('#')).unwrap_or_default();
-    let units: Vec<String> = header.split(',').map(|c| format!("{c} [{}]", verify_unit(c))).collect();
+    let units: Vec<String> = VERIFY_COLUMNS.iter().map(|(c, u)| format!("{c} [{u}]")).collect();
     let line = format!("{line}# units: {}\n", units.join(" "));
     match csv.split_once('\n') {
         Some((title, rest)) => format!("{title}\n{line}{rest}"),
         None => format!("{line}{csv}"),
-    }
-}
-
-/// The unit of a column of verify.csv (`-`: none).
-fn verify_unit(column: &str) -> &'static str {
-    match column {
-        "l21" | "b" | "t22" | "object_max_displacement" => "m",
-        "psi_deg" | "object_max_tilt_deg" => "deg",
-        "e_trans" | "e_rot" | "object_peak_e_trans" | "object_peak_e_rot" => "J",
-        "force_margin" => "N",
-        "stable" | "predicted_moves" | "moved" | "toppled" | "escaped" | "rim_contact" | "agrees" => "bool",
-        "free_end" => "text",
-        _ => "-",
     }
 }
 
