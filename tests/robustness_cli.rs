@@ -20,6 +20,26 @@ fn bench_json_summaries() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("static pipeline"));
 }
 
+/// `gripopt bench replay` runs to its end: the synthetic run's designs replay (they are
+/// found, read and re-evaluated with the problem file the synthetic run recorded), and no
+/// count of 0 is taken (exit 2 naming the flag, not a panic).
+#[test]
+fn bench_replay_runs_to_its_end_and_refuses_zero_designs() {
+    let dir = tmp("bench-replay-end");
+    let o = dir.to_str().unwrap();
+    let out = cli(&["bench", "replay", PROBLEM, "--designs", "6", "--per-shard", "2", "--out", o, "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    assert!(v.to_string().contains("replay"), "{v}");
+    assert!(!dir.exists(), "the synthetic run is removed without --keep");
+    for flag in ["--designs", "--per-shard"] {
+        let out = cli(&["bench", "replay", PROBLEM, flag, "0", "--out", o]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flag}: {err}");
+        assert!(err.contains(&format!("{flag} 0")), "{err}");
+    }
+}
+
 /// `gripopt bench replay --out DIR` never deletes a folder it did not write itself.
 #[test]
 fn bench_replay_refuses_to_clear_a_folder_it_did_not_write() {

@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 /// Settings of the replay benchmark.
 #[derive(Debug, Clone)]
 pub struct ReplayBench {
-    /// Recorded designs in the synthetic run.
+    /// Recorded designs in the synthetic run (at least 1; 0 is refused).
     pub designs: u64,
-    /// Designs per shard (at least 1).
+    /// Designs per shard (at least 1; 0 is refused).
     pub per_shard: u64,
     /// Folder of the synthetic run (cleared first).
     pub out: PathBuf,
@@ -31,6 +31,9 @@ struct SyntheticRun {
     synthetic: bool,
     /// The recording settings of the synthetic shards.
     recording: crate::record::RecordOptions,
+    /// SHA-256 of its problem.toml (a replay checks the file against it).
+    #[serde(default)]
+    problem_sha256: String,
 }
 
 fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
@@ -47,8 +50,12 @@ pub fn replay(
     out_text: super::Out,
     progress: &dyn super::BenchProgress,
 ) -> Result<serde_json::Value> {
-    let (p, n, out) = (problem, b.designs, b.out.as_path());
-    let per_shard = b.per_shard.max(1);
+    let (p, n, out, per_shard) = (problem, b.designs, b.out.as_path(), b.per_shard);
+    for (flag, v) in [("--designs", n), ("--per-shard", per_shard)] {
+        if v == 0 {
+            return Err(Error::Input(format!("bench replay: {flag} 0: at least 1 design is needed")));
+        }
+    }
     if out.exists() {
         // never delete a folder this benchmark did not write (a real run, say)
         let synthetic = crate::fsutil::read_regular_string(&out.join("run.json"), crate::fsutil::caps::RUN_JSON)
@@ -61,14 +68,34 @@ pub fn replay(
         }
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot clear", e))?;
     }
+    // the synthetic run is removed afterwards without --keep, also when the benchmark fails
+    let result = write_and_replay(p, n, per_shard, out, out_text, progress);
+    if !b.keep && out.exists() {
+        let removed = std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e));
+        return result.and_then(|v| removed.map(|()| v));
+    }
+    result
+}
+
+/// Write the synthetic run of `n` designs (`per_shard` a shard) into `out` and time finding,
+/// reading and replaying 50 random ids (`replay`'s work).
+fn write_and_replay(
+    p: &Problem,
+    n: u64,
+    per_shard: u64,
+    out: &Path,
+    out_text: super::Out,
+    progress: &dyn super::BenchProgress,
+) -> Result<serde_json::Value> {
     let rec_dir = out.join("recording");
     std::fs::create_dir_all(&rec_dir).map_err(|e| Error::io(&rec_dir, "cannot create", e))?;
     let problem_toml = out.join("problem.toml");
     std::fs::write(&problem_toml, &p.source_text).map_err(|e| Error::io(&problem_toml, "cannot write", e))?;
     let opts = crate::record::RecordOptions { scene_dt: 0.0, ..Default::default() };
     let run_json = out.join("run.json");
-    let text = serde_json::to_string_pretty(&SyntheticRun { synthetic: true, recording: opts })
-        .map_err(json_err(&run_json))?;
+    let problem_sha256 = crate::fsutil::sha256_hex(p.source_text.as_bytes());
+    let synthetic = SyntheticRun { synthetic: true, recording: opts, problem_sha256: problem_sha256.clone() };
+    let text = serde_json::to_string_pretty(&synthetic).map_err(json_err(&run_json))?;
     std::fs::write(&run_json, text).map_err(|e| Error::io(&run_json, "cannot write", e))?;
     // the nominal design's real evaluation and recorded grasp, under every id
     let mut gp = GripperProblem::new(p.clone());
@@ -101,7 +128,7 @@ pub fn replay(
             designs: ids.end - ids.start,
             bytes: b,
             run_id: None,
-            problem_sha256: None,
+            problem_sha256: Some(problem_sha256.clone()),
         };
         index.push_str(&serde_json::to_string(&entry).map_err(json_err(&index_path))?);
         index.push('\n');
@@ -142,9 +169,6 @@ pub fn replay(
         r1 * 1e3
     );
     say!(out_text, "replay (find, read, re-simulate, verify):               {:.2} / {:.2} ms", f0 * 1e3, f1 * 1e3);
-    if !b.keep {
-        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e))?;
-    }
     Ok(serde_json::json!({
         "bench": "replay", "designs": n, "samples_per_design": samples, "shards": shards, "bytes": bytes, "write_s": write_s,
         "find_read_ms": { "min": r0 * 1e3, "median": r1 * 1e3 }, "replay_ms": { "min": f0 * 1e3, "median": f1 * 1e3 },
