@@ -41,15 +41,15 @@ impl GraspLimits {
 /// and evaluation `f`, the hand force F_hand,y, its filtered value and the scene's total
 /// energy (its excess over the compliant equilibrium's `v_star`).
 pub fn grasp_sample(t: f64, q: [f64; 4], f: &FingerEval, hand: [f64; 2], energy: f64, v_star: f64) -> Sample {
-    let c = &f.contacts;
+    let FingerSample { q, qd, theta2, delta, normal, friction } = finger_sample(q, f);
     Sample {
         t,
-        q: [q[0], q[1]],
-        qd: [q[2], q[3]],
-        theta2: f.theta2,
-        delta: [c[0].geom.delta, c[1].geom.delta],
-        normal: [c[0].normal_force, c[1].normal_force],
-        friction: [c[0].friction_force, c[1].friction_force],
+        q,
+        qd,
+        theta2,
+        delta,
+        normal,
+        friction,
         hand_fy: hand[0],
         filtered_fy: hand[1],
         energy,
