@@ -2,7 +2,7 @@
 //! names the scene it times and the stream it failed to write, `--reps`, the median and
 //! `--scene`'s parsing say what they do, and `bench free --out` keeps earlier files.
 
-use crate::common::bottle;
+use crate::common::{bottle, output_text, run_gripopt, scratch_dir, BOTTLE_FILE};
 use gripopt::eval::{stage_kinematics, stage_statics, Cause};
 use gripopt::model::{grasp_at, OffsetFailure};
 use gripopt::params::SceneKind;
@@ -42,4 +42,48 @@ fn an_offset_past_the_grasp_says_which_finger_has_no_closed_pose() {
         assert!(grasp_at(&kin.finger, &p.scene, st.tau_s0, x_off).is_ok());
         assert_ne!(offset_verdict(x_off).cause, Some(Cause::NoOffsetGrasp));
     }
+}
+
+/// bottle-1l.toml with `[scene] kind = "offset"`, `x_off = 3 mm`, written into `dir`.
+fn offset_problem(dir: &std::path::Path) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let text =
+        text.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.003 ", 1);
+    assert!(text.contains("kind = \"offset\"") && text.contains("x_off = 0.003 "));
+    let path = dir.join("offset.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The JSON of `gripopt bench work-precision FILE --json` at one coarse rtol.
+fn work_precision_json(problem: &std::path::Path, out: &std::path::Path) -> (serde_json::Value, String) {
+    let args = ["bench", "work-precision", problem.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let o = run_gripopt(&[&args[..], &["--reps", "1", "--rtols", "0.001", "--json"]].concat());
+    assert!(o.status.success(), "{}", output_text(&o));
+    (serde_json::from_slice(&o.stdout).unwrap(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+/// (2) `bench work-precision` on an offset-kind problem names the scene it simulates: the
+/// centred one (its rows are the centred problem's: same steps and RHS counts at every
+/// method), says plainly that the problem's own scene is not it, and the whole staged
+/// evaluation names the problem's scene it runs.
+#[test]
+fn work_precision_names_the_scene_it_simulates() {
+    let dir = scratch_dir("s37_fixes", "work_precision_scene");
+    let off = offset_problem(&dir);
+    let (centred, centred_text) = work_precision_json(std::path::Path::new(BOTTLE_FILE), &dir.join("c"));
+    let (offset, offset_text) = work_precision_json(&off, &dir.join("o"));
+    assert_eq!(centred["scene"], "centred");
+    assert_eq!(offset["scene"], "centred");
+    assert_eq!(centred["problem_scene"], "centred");
+    assert_eq!(offset["problem_scene"], "offset");
+    assert_eq!(offset["whole_evaluation_ms"]["scene"], "offset");
+    assert_eq!(offset["whole_evaluation_ms"]["x_off"], 0.003);
+    let counts = |v: &serde_json::Value| -> Vec<(serde_json::Value, serde_json::Value)> {
+        v["rows"].as_array().unwrap().iter().map(|r| (r["steps"].clone(), r["rhs"].clone())).collect()
+    };
+    assert_eq!(counts(&centred), counts(&offset), "the table is the centred grasp's in both");
+    assert!(centred_text.contains("scene: centred") && !centred_text.contains("does NOT simulate"), "{centred_text}");
+    assert!(offset_text.contains("this problem's scene is offset (x_off 3.000 mm), which the table does NOT simulate"));
+    assert!(offset_text.contains("the problem's scene offset (x_off 3.000 mm)"), "{offset_text}");
 }

@@ -63,6 +63,7 @@ pub fn work_precision_ensemble(
             path.display()
         )));
     }
+    super::work_precision::say_scene(p, out)?;
     say!(out, "ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
     write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.design), out)?;
@@ -125,7 +126,7 @@ pub fn work_precision_ensemble(
     w.flush().map_err(io)?;
     say!(out, "wrote {}", csv.display());
     Ok(
-        serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
+        serde_json::json!({ "bench": "work-precision-ensemble", "scene": "centred", "problem_scene": p.scene.setup.kind, "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
     )
 }
 

@@ -7,7 +7,7 @@ use super::{say, Out};
 use super::{time_it, BenchProgress};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::model::Finger;
-use crate::params::{Design, Problem, SceneParams};
+use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use std::path::PathBuf;
@@ -67,6 +67,35 @@ pub(super) fn rel(a: Option<f64>, b: Option<f64>) -> f64 {
         (Some(a), Some(b)) if b != 0.0 => ((a - b) / b).abs(),
         _ => f64::NAN,
     }
+}
+
+/// The problem's own scene, as the bench names it: `centred`, `offset (x_off 3.000 mm)`.
+pub(super) fn problem_scene_name(problem: &Problem) -> String {
+    let setup = &problem.scene.setup;
+    match setup.kind {
+        SceneKind::Centred => "centred".into(),
+        k => format!("{} (x_off {:.3} mm)", k.as_str(), setup.x_off * 1e3),
+    }
+}
+
+/// Says which scene a work-precision table simulates: always the centred grasp (its
+/// reference, t_first, E_cyl, t_stab and f_stab are that scene's), and plainly so when
+/// the problem's own scene is another one.
+pub(super) fn say_scene(problem: &Problem, out: Out) -> Result<()> {
+    say!(out, "scene: centred (the work-precision table always simulates the centred grasp)");
+    if problem.scene.setup.kind != SceneKind::Centred {
+        let other = match problem.scene.setup.kind {
+            SceneKind::Free => "`gripopt bench free` times the free scene",
+            _ => "`gripopt simulate` runs it",
+        };
+        say!(
+            out,
+            "note: this problem's scene is {}, which the table does NOT simulate ({other}); only the whole \
+             staged evaluation line runs the problem's own scene",
+            problem_scene_name(problem)
+        );
+    }
+    Ok(())
 }
 
 fn discarded(d: Discard) -> Error {
@@ -228,6 +257,7 @@ pub fn work_precision(
     let reference = Reference::new(problem, design)?;
     let check =
         diagnostic_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
+    say_scene(problem, out)?;
     reference.print(wp.atol, out)?;
     say!(
         out,
@@ -253,7 +283,8 @@ pub fn work_precision(
     let ev = evaluate(design, s, &opts);
     say!(
         out,
-        "whole staged evaluation (stages 0-3, pipeline mode, method {}, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        "whole staged evaluation (stages 0-3, pipeline mode, the problem's scene {}, method {}, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        problem_scene_name(problem),
         problem.solver.method,
         problem.solver.rtol,
         ts[0] * 1e3,
@@ -264,9 +295,10 @@ pub fn work_precision(
     plot(&rows, &svg)?;
     say!(out, "wrote {} and {}", csv.display(), svg.display());
     Ok(serde_json::json!({
-        "bench": "work-precision", "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
+        "bench": "work-precision", "scene": "centred", "problem_scene": problem.scene.setup.kind, "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
         "whole_evaluation_ms": {
             "min": ts[0] * 1e3, "median": ts[ts.len() / 2] * 1e3, "rtol": problem.solver.rtol, "method": problem.solver.method,
+            "scene": problem.scene.setup.kind, "x_off": problem.scene.setup.x_off,
         },
     }))
 }
