@@ -87,3 +87,25 @@ fn work_precision_names_the_scene_it_simulates() {
     assert!(offset_text.contains("this problem's scene is offset (x_off 3.000 mm), which the table does NOT simulate"));
     assert!(offset_text.contains("the problem's scene offset (x_off 3.000 mm)"), "{offset_text}");
 }
+
+/// (3) A bench whose JSON cannot be written to standard output says so, as the text mode
+/// and `evaluate --json` do (docs/cli.md): exit 1 and `error: cannot write to standard
+/// output: …`. Standard output is a file under `ulimit -f 0` (SIGXFSZ ignored), so every
+/// write to it fails (EFBIG), as on a full disk; stderr is a pipe, which the limit spares.
+#[test]
+fn a_bench_json_that_cannot_be_written_names_standard_output() {
+    let dir = scratch_dir("s37_fixes", "bench_json_stdout");
+    let sink = dir.join("stdout.json");
+    for args in ["bench static '{BOTTLE}' --n 20 --json", "bench nsga --reps 1 --json"] {
+        let script = format!(
+            "trap '' XFSZ; ulimit -f 0; exec '{}' {} > '{}'",
+            crate::common::GRIPOPT_BIN,
+            args.replace("{BOTTLE}", BOTTLE_FILE),
+            sink.display()
+        );
+        let o = std::process::Command::new("sh").args(["-c", &script]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args}: {err}");
+        assert!(err.lines().last().unwrap().starts_with("error: cannot write to standard output: "), "{args}: {err}");
+    }
+}

@@ -1,7 +1,7 @@
 //! `gripopt bench …`: the arguments of the speed figures (not tests); the benchmarks
 //! themselves are the library's `gripopt::bench`.
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use clap::Subcommand;
 use gripopt::bench::{EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
 use std::path::PathBuf;
@@ -320,8 +320,11 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         }
     };
     if json {
+        // as every other stdout write of the CLI: a failure names standard output (a full
+        // disk would otherwise read like a failed CSV or SVG write of the bench)
         use std::io::Write as _;
-        writeln!(stdout, "{}", serde_json::to_string_pretty(&summary)?)?;
+        let text = serde_json::to_string_pretty(&summary)?;
+        writeln!(stdout, "{text}").and_then(|_| stdout.flush()).context("cannot write to standard output")?;
     }
     Ok(())
 }
