@@ -85,7 +85,7 @@ fn work_precision_names_the_scene_it_simulates() {
     assert_eq!(counts(&centred), counts(&offset), "the table is the centred grasp's in both");
     assert!(centred_text.contains("scene: centred") && !centred_text.contains("does NOT simulate"), "{centred_text}");
     assert!(offset_text.contains("this problem's scene is offset (x_off 3.000 mm), which the table does NOT simulate"));
-    assert!(offset_text.contains("the problem's scene offset (x_off 3.000 mm)"), "{offset_text}");
+    assert!(offset_text.contains("rtol 1e-6) in the problem's scene offset (x_off 3.000 mm): min "), "{offset_text}");
 }
 
 /// (3) A bench whose JSON cannot be written to standard output says so, as the text mode
@@ -108,4 +108,85 @@ fn a_bench_json_that_cannot_be_written_names_standard_output() {
         assert_eq!(o.status.code(), Some(1), "{args}: {err}");
         assert!(err.lines().last().unwrap().starts_with("error: cannot write to standard output: "), "{args}: {err}");
     }
+}
+
+/// (4a) `--reps N` is a maximum that is honoured: `time_it` runs `f` exactly N times for
+/// N = 1 and 2 (it used to run 3), and at least three times otherwise.
+#[test]
+fn reps_is_honoured_as_a_maximum() {
+    for (max_reps, expected) in [(1usize, 1usize), (2, 2), (3, 3), (50, 3)] {
+        let mut calls = 0;
+        // a zero time budget: only the minimum number of runs
+        let (last, min, med) = gripopt::bench::time_it(
+            || {
+                calls += 1;
+                calls
+            },
+            0.0,
+            max_reps,
+        );
+        assert_eq!((calls, last), (expected, expected), "max_reps {max_reps}");
+        assert!(min <= med, "max_reps {max_reps}");
+    }
+}
+
+/// (4b) The median of an even count is the mean of the two middle values (the conventional
+/// one), not the upper one; NaNs are left out.
+#[test]
+fn the_median_of_an_even_count_is_the_mean_of_the_middle_two() {
+    use gripopt::bench::median;
+    assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
+    assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+    assert_eq!(median(vec![5.0, f64::NAN, 1.0]), 3.0);
+    assert!(median(vec![]).is_nan());
+}
+
+/// (4b) With two designs the ensemble's median error is their mean and its p90 the larger
+/// (nearest rank): so median ≤ p90 ≤ 2·median in every row, and below p90 wherever the two
+/// errors differ (before, the "median" was the upper value and equalled p90 in every row).
+#[test]
+fn an_ensemble_of_two_has_a_median_below_its_p90() {
+    let dir = scratch_dir("s37_fixes", "ensemble_two");
+    let args = ["bench", "work-precision", BOTTLE_FILE, "--sample", "2", "--json", "--out", dir.to_str().unwrap()];
+    let o = run_gripopt(&args);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut strictly_below = 0;
+    for r in v["rows"].as_array().unwrap() {
+        for (med, p90) in [("err_t_stab_median", "err_t_stab_p90"), ("err_e_cyl_median", "err_e_cyl_p90")] {
+            let (m, p) = (r[med].as_f64().unwrap(), r[p90].as_f64().unwrap());
+            assert!(m <= p && p <= 2.0 * m * (1.0 + 1e-12), "{r}");
+            strictly_below += usize::from(m < p);
+        }
+    }
+    assert!(strictly_below > 0, "{v}");
+}
+
+/// (4c) `--scene` names what is wrong with a missing or blank-padded offset instead of
+/// showing an empty pair of backticks or accepting it silently.
+#[test]
+fn parse_scene_names_a_missing_or_padded_offset() {
+    use gripopt::parse_scene;
+    for kind in ["offset", "free"] {
+        let missing = parse_scene(&format!("{kind}:")).unwrap_err().to_string();
+        assert!(missing.contains(&format!("a number is missing after `{kind}:`")), "{missing}");
+        assert!(!missing.contains("``"), "{missing}");
+        let padded = parse_scene(&format!("{kind}: 0.01")).unwrap_err().to_string();
+        assert!(padded.contains(&format!("write `{kind}:0.01`")), "{padded}");
+        assert!(parse_scene(&format!("{kind}:0.01 ")).is_ok(), "a blank after the whole value is the shell's");
+    }
+    assert_eq!(parse_scene("offset:0.002").unwrap(), (SceneKind::Offset, Some(0.002)));
+    let bad = parse_scene("offset:abc").unwrap_err().to_string();
+    assert!(bad.contains("`abc` after `offset:` is not a number"), "{bad}");
+}
+
+/// (4d) A bench that writes over its earlier files says so (bench outputs are regenerated
+/// figures and need no `--force`, docs/benchmarks.md), never silently.
+#[test]
+fn a_bench_rewriting_its_files_says_so() {
+    let dir = scratch_dir("s37_fixes", "bench_rewrite");
+    let (_, first) = work_precision_json(std::path::Path::new(BOTTLE_FILE), &dir);
+    assert!(first.contains("work_precision.svg\n") && !first.contains("replacing"), "{first}");
+    let (_, second) = work_precision_json(std::path::Path::new(BOTTLE_FILE), &dir);
+    assert!(second.contains("work_precision.svg (replacing the earlier files of that name)"), "{second}");
 }

@@ -168,7 +168,9 @@ pub enum BenchCmd {
     WorkPrecision {
         #[command(flatten)]
         target: DesignTable,
-        /// Maximum repetitions per point (each point also stops after ~1 s).
+        /// Maximum repetitions per point: each point runs this many times, or stops after
+        /// ~1 s once 3 ran (so 1 or 2 run exactly that often); the whole staged evaluation
+        /// line runs max(this, 20) times.
         #[arg(long, default_value_t = 200)]
         reps: usize,
         /// Instead of one design: an ensemble of this many random designs of the box that
@@ -191,7 +193,8 @@ pub enum BenchCmd {
     Free {
         #[command(flatten)]
         target: DesignTable,
-        /// Maximum repetitions per point (each point also stops after ~1 s).
+        /// Maximum repetitions per point: each point runs this many times, or stops after
+        /// ~1 s once 3 ran (so 1 or 2 run exactly that often; the CSV's `reps` says how many).
         #[arg(long, default_value_t = 100)]
         reps: usize,
         /// Absolute tolerance at every rtol (default: 1e-3·rtol).
