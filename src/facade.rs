@@ -138,12 +138,27 @@ pub fn random_designs(problem: &Problem, n: usize, seed: u64) -> impl Iterator<I
 /// offset X in metres; None keeps the problem's), for [`simulate`].
 pub fn parse_scene(text: &str) -> Result<(SceneKind, Option<f64>)> {
     let bad = |why: &str| Error::Input(format!("scene `{text}`: {why}"));
-    let num = |x: &str| x.trim().parse::<f64>().map_err(|_| bad(&format!("`{x}` is not a number (metres)")));
+    // the offset after `kind:` exactly as written: missing and blank-padded values are
+    // refused by name, not read as a number or an empty pair of backticks
+    let num = |kind: &str, x: &str| {
+        if x.trim().is_empty() {
+            return Err(bad(&format!(
+                "a number is missing after `{kind}:` (the object offset in metres, e.g. `{kind}:0.002`)"
+            )));
+        }
+        if x.trim() != x {
+            return Err(bad(&format!(
+                "no blank may surround the number after `{kind}:` (write `{kind}:{}`)",
+                x.trim()
+            )));
+        }
+        x.parse::<f64>().map_err(|_| bad(&format!("`{x}` after `{kind}:` is not a number (metres)")))
+    };
     match text.trim().split_once(':') {
         None if text.trim() == "centred" => Ok((SceneKind::Centred, None)),
         None if text.trim() == "free" => Ok((SceneKind::Free, None)),
-        Some(("offset", x)) => Ok((SceneKind::Offset, Some(num(x)?))),
-        Some(("free", x)) => Ok((SceneKind::Free, Some(num(x)?))),
+        Some(("offset", x)) => Ok((SceneKind::Offset, Some(num("offset", x)?))),
+        Some(("free", x)) => Ok((SceneKind::Free, Some(num("free", x)?))),
         _ => Err(bad("must be centred, offset:X or free[:X] (X in metres)")),
     }
 }

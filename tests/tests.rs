@@ -49,6 +49,7 @@ mod s36_auto_events;
 mod s36_free_replay;
 mod s36_mcap;
 mod s36_params;
+mod s37_fixes;
 mod s37_offset_f2;
 mod s37_typed;
 mod scene_cli;

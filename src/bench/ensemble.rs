@@ -2,7 +2,7 @@
 
 use super::say;
 use super::work_precision::{check_atol, rel};
-use super::{time_it, BenchProgress};
+use super::{median, time_it, BenchProgress};
 use crate::eval::{stage_kinematics, stage_statics};
 use crate::model::{Finger, StaticsResult};
 use crate::params::{Design, Problem, DESIGN_NAMES};
@@ -63,10 +63,12 @@ pub fn work_precision_ensemble(
             path.display()
         )));
     }
+    super::work_precision::say_scene(p, out)?;
     say!(out, "ensemble: {} designs passing stage 2 and reaching stability (drawn {drawn}, seed {seed}); reference Radau IIA rtol 1e-11", cases.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, "cannot create", e))?;
-    write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.design), out)?;
     let csv = out_dir.join("work_precision_ensemble.csv");
+    let existed = csv.exists();
+    write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.design), out)?;
     let io = |e| Error::io(&csv, "cannot write", e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
     writeln!(w, "method,rtol,designs,cpu_median_s,steps_median,rhs_median,err_t_stab_median,err_t_stab_p90,err_e_cyl_median,err_e_cyl_p90,verdicts_differing").map_err(io)?;
@@ -103,8 +105,8 @@ pub fn work_precision_ensemble(
                 differ += usize::from(r.outcome != reference.outcome);
             }
             let q = quantile;
-            let (cpu, steps, rhs) = (q(cpu, 0.5), q(steps, 0.5), q(rhs, 0.5));
-            let (ets_med, ets_p90, ee_med, ee_p90) = (q(ets.clone(), 0.5), q(ets, 0.9), q(ee.clone(), 0.5), q(ee, 0.9));
+            let (cpu, steps, rhs) = (median(cpu), median(steps), median(rhs));
+            let (ets_med, ets_p90, ee_med, ee_p90) = (median(ets.clone()), q(ets, 0.9), median(ee.clone()), q(ee, 0.9));
             summary.push(serde_json::json!({
                 "method": format!("{m:?}"), "rtol": rtol, "cpu_median_s": cpu, "steps_median": steps, "rhs_median": rhs,
                 "err_t_stab_median": ets_med, "err_t_stab_p90": ets_p90, "err_e_cyl_median": ee_med, "err_e_cyl_p90": ee_p90, "verdicts_differing": differ,
@@ -123,9 +125,9 @@ pub fn work_precision_ensemble(
         }
     }
     w.flush().map_err(io)?;
-    say!(out, "wrote {}", csv.display());
+    say!(out, "wrote {}{}", csv.display(), super::replaced_note(existed));
     Ok(
-        serde_json::json!({ "bench": "work-precision-ensemble", "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
+        serde_json::json!({ "bench": "work-precision-ensemble", "scene": "centred", "problem_scene": p.scene.setup.kind, "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
     )
 }
 

@@ -214,10 +214,11 @@ pub fn free_scene(
     progress.end();
     print_rows(&rows, out)?;
     let csv = b.out_dir.join("free_work_precision.csv");
-    write_rows(&rows, &csv)?;
     let svg = b.out_dir.join("free_work_precision.svg");
+    let existed = csv.exists() || svg.exists();
+    write_rows(&rows, &csv)?;
     plot_rows(&rows, &svg)?;
-    say!(out, "wrote {} and {}", csv.display(), svg.display());
+    say!(out, "wrote {} and {}{}", csv.display(), svg.display(), super::replaced_note(existed));
     Ok(serde_json::json!({
         "bench": "free", "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
         "reference": {

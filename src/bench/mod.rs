@@ -42,26 +42,52 @@ macro_rules! say {
 }
 pub(crate) use say;
 
-/// Run `f` at least three times, and on while under `budget_s` seconds in all and fewer
-/// than `max_reps` runs: the last result and the minimum and median times in seconds.
+/// Run `f` until `max_reps` runs, stopping earlier once `budget_s` seconds are spent and
+/// at least three (or `max_reps`, if fewer) ran: the last result and the minimum and median
+/// times in seconds. `max_reps` ≥ 1 is honoured as a maximum (`--reps 1` runs once).
 pub fn time_it<T, F: FnMut() -> T>(mut f: F, budget_s: f64, max_reps: usize) -> (T, f64, f64) {
     let mut ts = vec![];
     let start = Instant::now();
     let mut last = None;
-    while ts.len() < 3 || (start.elapsed().as_secs_f64() < budget_s && ts.len() < max_reps) {
+    let at_least = max_reps.clamp(1, 3);
+    while ts.len() < at_least || (start.elapsed().as_secs_f64() < budget_s && ts.len() < max_reps) {
         let t0 = Instant::now();
         let r = f();
         ts.push(t0.elapsed().as_secs_f64());
         last = Some(r);
     }
-    ts.sort_by(f64::total_cmp);
-    (last.expect("ran"), ts[0], ts[ts.len() / 2])
+    let (min, med) = min_med(ts);
+    (last.expect("ran"), min, med)
 }
 
-/// Minimum and median of a non-empty list.
-fn min_med(mut v: Vec<f64>) -> (f64, f64) {
+/// What a bench says after `wrote A and B`: that it replaced earlier files there, if any
+/// existed before it wrote (`existed`). A bench's files are regenerated figures, rewritten by
+/// every run (`make bench` included), so they need no `--force`; the overwrite is said,
+/// never silent (docs/benchmarks.md).
+pub(crate) fn replaced_note(existed: bool) -> &'static str {
+    if existed {
+        " (replacing the earlier files of that name)"
+    } else {
+        ""
+    }
+}
+
+/// The median of the non-NaN values of `v`, the conventional one: the middle value, or
+/// for an even count the mean of the two middle values; NaN if none.
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| !x.is_nan());
     v.sort_by(f64::total_cmp);
-    (v[0], v[v.len() / 2])
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Minimum and (conventional) median of a non-empty list.
+pub(crate) fn min_med(v: Vec<f64>) -> (f64, f64) {
+    let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+    (min, median(v))
 }
 
 /// What a benchmark tells its caller as it goes, for a progress display: the library never

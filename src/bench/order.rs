@@ -6,6 +6,7 @@
 //! (docs/benchmarks.md has the figures).
 
 use super::ensemble::{ensemble_cases, quantile};
+use super::median;
 use super::work_precision::rel;
 use super::{say, time_it, Out};
 use crate::model::{Finger, StaticsResult};
@@ -103,7 +104,7 @@ pub fn radau_order(
                 differ += usize::from(r.outcome != c.reference.outcome);
             }
             let name = if order == Order::Five { "5 (RADAU5)" } else { "9" };
-            let row = (quantile(cpu, 0.5), quantile(ets.clone(), 0.5), quantile(ets, 0.9), quantile(ees.clone(), 0.5));
+            let row = (median(cpu), median(ets.clone()), quantile(ets, 0.9), median(ees.clone()));
             let ee90 = quantile(ees, 0.9);
             say!(
                 out,

@@ -264,9 +264,7 @@ fn per_design_min(mut best: Measured, runs: &[Measured]) -> Measured {
 }
 
 fn min_med(v: &[f64]) -> (f64, f64) {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    (v[0], v[v.len() / 2])
+    super::min_med(v.to_vec())
 }
 
 /// Run the benchmark: prints the table and the prediction; `dir` holds the run folders

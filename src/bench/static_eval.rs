@@ -42,8 +42,7 @@ pub fn static_pipeline(
         progress.step();
     }
     progress.end();
-    times.sort_by(f64::total_cmp);
-    let (tmin, tmed) = (times[0], times[times.len() / 2]);
+    let (tmin, tmed) = super::min_med(times);
     say!(
         out,
         "static pipeline (stages 0-2), {} random designs in the bounds of {}, seed {seed}, 1 thread, 5 repetitions",

@@ -7,7 +7,7 @@ use super::{say, Out};
 use super::{time_it, BenchProgress};
 use crate::eval::{evaluate, stage_kinematics, stage_statics, Discard, EvalOptions, StaticsResult};
 use crate::model::Finger;
-use crate::params::{Design, Problem, SceneParams};
+use crate::params::{Design, Problem, SceneKind, SceneParams};
 use crate::sim::{diagnostic_grasp, DynamicsResult, Integration, Method};
 use crate::{Error, Result};
 use std::path::PathBuf;
@@ -21,7 +21,7 @@ pub const RTOLS: [f64; 8] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10];
 pub struct WorkPrecision {
     /// Output folder.
     pub out_dir: PathBuf,
-    /// Maximum repetitions per point (each point also stops after ~1 s; at least 3 run).
+    /// Maximum repetitions per point (each point stops after ~1 s once min(3, reps) ran).
     pub reps: usize,
     /// Absolute tolerance on angles and rates at every rtol (`None`: 1e-3·rtol).
     pub atol: Option<f64>,
@@ -67,6 +67,35 @@ pub(super) fn rel(a: Option<f64>, b: Option<f64>) -> f64 {
         (Some(a), Some(b)) if b != 0.0 => ((a - b) / b).abs(),
         _ => f64::NAN,
     }
+}
+
+/// The problem's own scene, as the bench names it: `centred`, `offset (x_off 3.000 mm)`.
+pub(super) fn problem_scene_name(problem: &Problem) -> String {
+    let setup = &problem.scene.setup;
+    match setup.kind {
+        SceneKind::Centred => "centred".into(),
+        k => format!("{} (x_off {:.3} mm)", k.as_str(), setup.x_off * 1e3),
+    }
+}
+
+/// Says which scene a work-precision table simulates: always the centred grasp (its
+/// reference, t_first, E_cyl, t_stab and f_stab are that scene's), and plainly so when
+/// the problem's own scene is another one.
+pub(super) fn say_scene(problem: &Problem, out: Out) -> Result<()> {
+    say!(out, "scene: centred (the work-precision table always simulates the centred grasp)");
+    if problem.scene.setup.kind != SceneKind::Centred {
+        let other = match problem.scene.setup.kind {
+            SceneKind::Free => "`gripopt bench free` times the free scene",
+            _ => "`gripopt simulate` runs it",
+        };
+        say!(
+            out,
+            "note: this problem's scene is {}, which the table does NOT simulate ({other}); only the whole \
+             staged evaluation line runs the problem's own scene",
+            problem_scene_name(problem)
+        );
+    }
+    Ok(())
 }
 
 fn discarded(d: Discard) -> Error {
@@ -228,6 +257,7 @@ pub fn work_precision(
     let reference = Reference::new(problem, design)?;
     let check =
         diagnostic_grasp(&reference.finger, &reference.scene, &reference.statics, &Reference::options(Method::Dopri5));
+    say_scene(problem, out)?;
     reference.print(wp.atol, out)?;
     say!(
         out,
@@ -237,6 +267,8 @@ pub fn work_precision(
     let rows = reference.own_rows_showing(wp, progress);
     say!(out, "(diffsol rows: `cargo bench -p gripopt-diffsol-bench --bench diffsol`, as `make bench` does)");
     let csv = wp.out_dir.join("work_precision.csv");
+    let svg = wp.out_dir.join("work_precision.svg");
+    let existed = csv.exists() || svg.exists();
     write_csv(&rows, &csv)?;
     print_table(&rows, out)?;
     print_targets(&rows, out)?;
@@ -249,24 +281,25 @@ pub fn work_precision(
         std::hint::black_box(evaluate(design, s, &opts));
         ts.push(t0.elapsed().as_secs_f64());
     }
-    ts.sort_by(f64::total_cmp);
+    let (t_min, t_med) = super::min_med(ts);
     let ev = evaluate(design, s, &opts);
     say!(
         out,
-        "whole staged evaluation (stages 0-3, pipeline mode, method {}, rtol {:e}): min {:.3} ms, median {:.3} ms; verdict: {}",
+        "whole staged evaluation (stages 0-3, pipeline mode, method {}, rtol {:e}) in the problem's scene {}: min {:.3} ms, median {:.3} ms; verdict: {}",
         problem.solver.method,
         problem.solver.rtol,
-        ts[0] * 1e3,
-        ts[ts.len() / 2] * 1e3,
+        problem_scene_name(problem),
+        t_min * 1e3,
+        t_med * 1e3,
         ev.discard.map(|d| format!("stage {} {}", d.stage, d.reason)).unwrap_or("feasible".into())
     );
-    let svg = wp.out_dir.join("work_precision.svg");
     plot(&rows, &svg)?;
-    say!(out, "wrote {} and {}", csv.display(), svg.display());
+    say!(out, "wrote {} and {}{}", csv.display(), svg.display(), super::replaced_note(existed));
     Ok(serde_json::json!({
-        "bench": "work-precision", "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
+        "bench": "work-precision", "scene": "centred", "problem_scene": problem.scene.setup.kind, "rows": rows, "csv": csv.display().to_string(), "svg": svg.display().to_string(),
         "whole_evaluation_ms": {
-            "min": ts[0] * 1e3, "median": ts[ts.len() / 2] * 1e3, "rtol": problem.solver.rtol, "method": problem.solver.method,
+            "min": t_min * 1e3, "median": t_med * 1e3, "rtol": problem.solver.rtol, "method": problem.solver.method,
+            "scene": problem.scene.setup.kind, "x_off": problem.scene.setup.x_off,
         },
     }))
 }

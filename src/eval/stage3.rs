@@ -101,8 +101,11 @@ pub(super) fn stage3<K: Sink + ?Sized>(
             ev.offset = Some(o);
         }
         let d = grasp(run);
-        ev.discard =
-            d.discard_violation().map(|v| Discard { stage: 3, reason: Reason::Dynamics(d.outcome), violation: v });
+        let reason = match ev.offset.and_then(|o| o.grasp_failure.map(|e| (o.x_off, e))) {
+            Some((x_off, why)) => Reason::OffsetGrasp(x_off, why),
+            None => Reason::Dynamics(d.outcome),
+        };
+        ev.discard = d.discard_violation().map(|v| Discard { stage: 3, reason, violation: v });
         ev.dynamics = Some(d);
     }
     ev.stage_seconds[3] = t2.elapsed().as_secs_f64();

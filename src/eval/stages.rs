@@ -30,6 +30,9 @@ pub enum Reason {
     Grasp(OffsetFailure),
     /// Stage 3: a dynamic criterion or the simulation itself failed.
     Dynamics(DynOutcome),
+    /// Stage 3 of an offset-kind problem: no static grasp of the object at x_off (m), so
+    /// the scene could not start (why).
+    OffsetGrasp(f64, OffsetFailure),
     /// Stage 3 of a free-kind problem: the free object did not barely move (§14.4).
     ObjectMoved(ObjectMotion),
     /// Stage 3 of a free-kind problem: the free scene ended before t_obs (why).
@@ -91,6 +94,8 @@ pub enum Cause {
     FreeSceneAborted,
     /// A robust design: the object barely moves in too few scenarios (P(stay) < p_min).
     PStay,
+    /// Offset scene: no static grasp of the object at its offset.
+    NoOffsetGrasp,
 }
 
 impl Cause {
@@ -101,7 +106,7 @@ impl Cause {
 }
 
 /// [`Cause`]'s words in variant order (checked against serde's by a test).
-const CAUSE_WORDS: [&str; 25] = [
+const CAUSE_WORDS: [&str; 26] = [
     "invalid",
     "no_open_pose",
     "mode_change",
@@ -127,6 +132,7 @@ const CAUSE_WORDS: [&str; 25] = [
     "object_moved",
     "free_scene_aborted",
     "p_stay",
+    "no_offset_grasp",
 ];
 
 impl Reason {
@@ -163,7 +169,9 @@ impl Reason {
                 D::Aborted | D::StepBudget | D::StepTooSmall => Cause::Aborted,
                 D::InitialPenetration => Cause::InitialPenetration,
                 D::NoEquilibrium => Cause::NoEquilibrium,
+                D::NoOffsetGrasp => Cause::NoOffsetGrasp,
             },
+            Reason::OffsetGrasp(..) => Cause::NoOffsetGrasp,
             Reason::ObjectMoved(_) => Cause::ObjectMoved,
             // the open finger in the object at t = 0 is geometry, not a solver failure: the
             // hand cannot be placed around the object there (as in the offset scene)
@@ -227,6 +235,9 @@ impl fmt::Display for Reason {
             Reason::SpringUndefined => write!(f, "spring preload undefined (singular open pose)"),
             Reason::Grasp(g) => write!(f, "{}", g.reason()),
             Reason::Dynamics(d) => write!(f, "{d}"),
+            Reason::OffsetGrasp(x_off, why) => {
+                write!(f, "{} (x_off = {:.3} mm): {}", DynOutcome::NoOffsetGrasp, x_off * 1e3, why.reason())
+            }
             Reason::ObjectMoved(m) => write!(f, "{m}"),
             Reason::FreeSceneEnded(why) => write!(f, "free scene: {why}"),
         }

@@ -49,7 +49,7 @@ pub use scene::centred::{
 pub use scene::free::{
     free_tolerances, FreeEval, FreeJacobian, FreeResult, FreeScene, FreeSetup, EF as FREE_EVENTS, NF as FREE_NS,
 };
-pub use scene::offset::{OffsetResult, OffsetScene, PairEval, OFFSET_EVENTS};
+pub use scene::offset::{OffsetResult, OffsetScene, PairEval, StartFailure, OFFSET_EVENTS};
 pub use scene::{End, Response, Run, Scene};
 pub use settings::{Controls, Integration, Method, Mode, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
 pub use simulate::{diagnostic_grasp, simulate, SceneResult, SceneSpec};

@@ -81,6 +81,10 @@ text_enum! {
         InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
         /// The compliant equilibrium of §8.9 was not found.
         NoEquilibrium => format_args!("compliant static equilibrium not found"),
+        /// Offset scene: the static grasp of the object at its offset does not exist
+        /// (MODEL.md §6.7: a finger has no closed pose there, or its static forces are not
+        /// admissible), so nothing is simulated.
+        NoOffsetGrasp => format_args!("no static grasp of the object at its offset"),
     }
 }
 

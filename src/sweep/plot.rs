@@ -37,6 +37,7 @@ const VERDICT_COLOURS: &[(&str, RGBColor)] = &[
     ("no_equilibrium", RGBColor(90, 90, 90)),
     ("object_moved", RGBColor(255, 120, 0)),
     ("free_scene_aborted", RGBColor(60, 60, 60)),
+    ("no_offset_grasp", RGBColor(240, 160, 40)),
 ];
 
 /// The colour of a verdict class.

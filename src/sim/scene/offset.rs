@@ -5,7 +5,7 @@
 
 use super::{KeptEval, Response, Run, Scene};
 use crate::math::V2;
-use crate::model::{grasp_at, Finger, StaticsResult};
+use crate::model::{grasp_at, Finger, OffsetFailure, StaticsResult};
 use crate::params::SceneParams;
 use crate::sim::criteria::{force_margin, r_area, u_min};
 use crate::sim::driver;
@@ -64,6 +64,19 @@ pub struct OffsetResult {
     pub hand_end: [f64; 2],
     /// F⁰_hand of the static model at the offset (world, N).
     pub hand0: [f64; 2],
+    /// Why the static grasp at the offset does not exist, when it does not (then the
+    /// outcome is [`DynOutcome::NoOffsetGrasp`] and nothing was simulated).
+    pub grasp_failure: Option<OffsetFailure>,
+}
+
+/// Why an offset scene cannot start.
+#[derive(Debug, Clone, Copy)]
+pub enum StartFailure {
+    /// No static grasp of the object at the offset (a finger has no closed pose, or its
+    /// static forces are not admissible).
+    NoGrasp(OffsetFailure),
+    /// A finger's compliant equilibrium (§8.9) was not found.
+    NoEquilibrium,
 }
 
 /// The offset scene during a run.
@@ -89,11 +102,11 @@ impl<'a> OffsetScene<'a> {
         st: &StaticsResult,
         x_off: f64,
         ctl: &Controls,
-    ) -> Result<Self, DynOutcome> {
+    ) -> Result<Self, StartFailure> {
         let model = FingerModel::new(f, s, st.tau_s0);
         let r = s.object.radius;
         let centre = [V2::new(x_off, r), V2::new(-x_off, r)];
-        let g = grasp_at(f, s, st.tau_s0, x_off).map_err(|_| DynOutcome::NoEquilibrium)?;
+        let g = grasp_at(f, s, st.tau_s0, x_off).map_err(StartFailure::NoGrasp)?;
         let f0 = [g.forces[0].f0, g.forces[1].f0];
         let r_area = r_area(s);
         let limits = GraspLimits {
@@ -123,7 +136,7 @@ impl<'a> OffsetScene<'a> {
             sc.limits.v_star = a.v_star + b.v_star;
             sc.limits.fstar = [a.fstar[0].max(b.fstar[0]), a.fstar[1].max(b.fstar[1])];
         } else {
-            return Err(DynOutcome::NoEquilibrium);
+            return Err(StartFailure::NoEquilibrium);
         }
         Ok(sc)
     }
@@ -309,7 +322,7 @@ impl OffsetScene<'_> {
         });
         let dynamics = self.tracker.result(&self.limits, self.evals, Some((run, end)));
         let hand_end = run.last.map_or([f64::NAN; 2], |ev| [ev.hand.x, ev.hand.y]);
-        OffsetResult { dynamics, x_off: self.x_off, hand_end, hand0: self.hand0 }
+        OffsetResult { dynamics, x_off: self.x_off, hand_end, hand0: self.hand0, grasp_failure: None }
     }
 }
 
@@ -340,10 +353,14 @@ pub(crate) fn run<K: Sink + ?Sized>(
         Err(why) => {
             // the scene could not be set up: nothing simulated, nothing known but R_area
             let mut k = Tracker::<4>::new(ctl.mode == Mode::Pipeline);
-            k.outcome = why;
+            let grasp_failure = match why {
+                StartFailure::NoGrasp(e) => Some(e),
+                StartFailure::NoEquilibrium => None,
+            };
+            k.outcome = if grasp_failure.is_some() { DynOutcome::NoOffsetGrasp } else { DynOutcome::NoEquilibrium };
             k.min_force_margin = f64::NAN;
             let dynamics = k.result::<NO, PairEval>(&GraspLimits::unknown(r_area(s)), 0, None);
-            OffsetResult { dynamics, x_off, hand_end: [f64::NAN; 2], hand0: [f64::NAN; 2] }
+            OffsetResult { dynamics, x_off, hand_end: [f64::NAN; 2], hand0: [f64::NAN; 2], grasp_failure }
         }
     }
 }
