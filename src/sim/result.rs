@@ -91,20 +91,21 @@ text_enum! {
 text_enum! {
     /// How the free scene's run ended (in JSON: `t_obs`, or the text of why it ended early).
     pub enum FreeEnd {
+        // the ends the grasp scenes share say what [`DynOutcome`]'s say, in its words
         /// It reached t_end = min(t_max, t_obs): the motion was observed.
         Observed => format_args!("t_obs"),
         /// A finger reached |sin q13| = 1e-3.
-        Singular => format_args!("singular configuration during the grasp (|sin q13| <= 1e-3)"),
+        Singular => format_args!("{}", DynOutcome::Singular),
         /// An open finger penetrates the object at t = 0.
-        InitialPenetration => format_args!("open finger penetrates the object at t = 0"),
+        InitialPenetration => format_args!("{}", DynOutcome::InitialPenetration),
         /// The step budget was spent.
-        StepBudget => format_args!("aborted: step budget exhausted"),
+        StepBudget => format_args!("{}", DynOutcome::StepBudget),
         /// The step size underflowed.
-        StepTooSmall => format_args!("aborted: step size underflow"),
+        StepTooSmall => format_args!("{}", DynOutcome::StepTooSmall),
         /// A linkage could not be assembled along the trajectory.
-        NotMountable => format_args!("linkage not mountable during the grasp"),
+        NotMountable => format_args!("{}", DynOutcome::DgmFailure),
         /// More than [`MAX_EVENTS`] events.
-        TooManyEvents => format_args!("aborted: more than {MAX_EVENTS} events"),
+        TooManyEvents => format_args!("{}", DynOutcome::Aborted),
         /// The run stopped before t_obs otherwise.
         Stopped => format_args!("the simulation ended before t_obs"),
     }
@@ -338,4 +339,30 @@ pub struct Trajectory {
     pub samples: Vec<Sample>,
     /// Samples on the uniform grid, if requested.
     pub grid: Vec<Sample>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The free scene's ends shared with the grasp scenes keep their words (JSON, CSV and
+    /// recordings written before read back): each is the text written by earlier versions.
+    #[test]
+    fn free_ends_keep_their_words() {
+        let words = [
+            (FreeEnd::Observed, "t_obs"),
+            (FreeEnd::Singular, "singular configuration during the grasp (|sin q13| <= 1e-3)"),
+            (FreeEnd::InitialPenetration, "open finger penetrates the object at t = 0"),
+            (FreeEnd::StepBudget, "aborted: step budget exhausted"),
+            (FreeEnd::StepTooSmall, "aborted: step size underflow"),
+            (FreeEnd::NotMountable, "linkage not mountable during the grasp"),
+            (FreeEnd::TooManyEvents, "aborted: more than 20000 events"),
+            (FreeEnd::Stopped, "the simulation ended before t_obs"),
+        ];
+        assert_eq!(words.len(), FreeEnd::ALL.len());
+        for (end, word) in words {
+            assert_eq!(end.to_string(), word);
+            assert_eq!(serde_json::from_value::<FreeEnd>(serde_json::json!(word)).unwrap(), end);
+        }
+    }
 }
