@@ -186,6 +186,22 @@ struct Shared {
     closed: bool,
     /// Write the last generation's views at the end if they were skipped (set on close).
     final_views: bool,
+    /// Shard and checkpoint tasks spawned into the pool that have not reported yet: the
+    /// thread waits for them before it stops, also after an error, so that nothing writes
+    /// into the run folder once the run has returned (and released its lock).
+    in_pool: usize,
+}
+
+/// Spawn `task` into `pool`, counted in [`Shared::in_pool`] until it has reported.
+fn spawn_counted(pool: &rayon::ThreadPool, shared: &SharedState, task: impl FnOnce() + Send + 'static) {
+    shared.0.lock().expect("persister lock").in_pool += 1;
+    let sh = shared.clone();
+    pool.spawn(move || {
+        task();
+        let (m, cv) = &*sh;
+        m.lock().expect("persister lock").in_pool -= 1;
+        cv.notify_all();
+    });
 }
 
 type SharedState = Arc<(Mutex<Shared>, Condvar)>;
@@ -472,7 +488,7 @@ fn persist_loop(
                         Some(task) => {
                             let sh = shared.clone();
                             let guard = hooks.guard.clone();
-                            pool.spawn(move || {
+                            spawn_counted(&pool, &shared, move || {
                                 let refs: Vec<&Individual<GripperInfo>> = designs.iter().collect();
                                 let result = guard.map_or(Ok(()), |g| g()).and_then(|_| task.write(&refs));
                                 drop(refs);
@@ -494,7 +510,7 @@ fn persist_loop(
                         (job.state.evaluations, archive.as_ref().map(|a| a.discards.clone()).unwrap_or_default());
                     let (sh, spc, state, wall_s) = (shared.clone(), sp.clone(), job.state, job.wall_s);
                     let run_id = hooks.run_id.clone();
-                    pool.spawn(move || {
+                    spawn_counted(&pool, &shared, move || {
                         let t = Instant::now();
                         let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s)
                             .of_run(run_id, archive)
@@ -567,6 +583,11 @@ fn persist_loop(
     })();
     let (m, cv) = &*shared;
     let mut s = m.lock().expect("persister lock");
+    // after an error, shards and checkpoints of later generations may still be in the pool:
+    // wait for them (their results are dropped), so that none writes after the run returned
+    while s.in_pool > 0 {
+        s = cv.wait(s).expect("persister lock");
+    }
     if let Err(e) = res {
         // later generations are dropped: nothing after a failed shard or checkpoint
         s.error = Some(e);
