@@ -7,7 +7,7 @@ use foxglove::messages::{LinePrimitive, SceneUpdate};
 use foxglove::Decode;
 use gripopt::record::{read_index, GraspSeries};
 
-use crate::common::{check_dir, tiny_run_in, BOTTLE_FILE};
+use crate::common::{check_dir, offset_problem, tiny_run_in, BOTTLE_FILE};
 use std::path::{Path, PathBuf};
 
 /// The messages of every shard of a run as (topic, log time − epoch, bytes), by design.
@@ -38,17 +38,6 @@ fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
 fn gap(line: &LinePrimitive, c: (f64, f64), r: f64) -> f64 {
     let p: Vec<(f64, f64)> = line.points.iter().map(|q| (q.x, q.y)).collect();
     seg_dist(c, p[0], p[1]).min(seg_dist(c, p[1], p[2])) - r - line.thickness / 2.0
-}
-
-/// bottle-1l with `[scene] kind = "offset"`, x_off = 2 mm, in `dir`.
-fn offset_problem(dir: &Path) -> PathBuf {
-    let src = std::fs::read_to_string(BOTTLE_FILE).unwrap();
-    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
-    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
-    std::fs::create_dir_all(dir).unwrap();
-    let p = dir.join("offset.toml");
-    std::fs::write(&p, src).unwrap();
-    p
 }
 
 /// In the offset scene finger 2 is not finger 1's mirror image: at the last pose of every

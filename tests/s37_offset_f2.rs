@@ -6,7 +6,7 @@
 //! forces summed in the world frame), finger 1's values where finger 2 is its mirror
 //! (x_off = 0), and the recording's own columns.
 
-use crate::common::{bottle, check_dir, copy_dir, run_gripopt, scratch_dir, tiny_run_in, BOTTLE_FILE};
+use crate::common::{bottle, check_dir, copy_dir, offset_problem, run_gripopt, scratch_dir, tiny_run_in};
 use gripopt::model::Finger;
 use gripopt::params::{Problem, SceneKind};
 use gripopt::record::{read_design, read_index, replay, Finger2Columns, GraspSeries};
@@ -118,17 +118,6 @@ fn at_no_offset_finger_2_is_finger_1s_mirror() {
         loaded += usize::from(names[k].starts_with("finger2_fn") && scale > 1.0);
     }
     assert_eq!(loaded, 2, "both phalanges carry load");
-}
-
-/// bottle-1l with `[scene] kind = "offset"`, x_off = 2 mm, in `dir`.
-fn offset_problem(dir: &Path) -> PathBuf {
-    let src = std::fs::read_to_string(BOTTLE_FILE).unwrap();
-    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
-    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
-    std::fs::create_dir_all(dir).unwrap();
-    let p = dir.join("offset.toml");
-    std::fs::write(&p, src).unwrap();
-    p
 }
 
 /// The shard holding design `id` and `id`'s window's series.

@@ -190,3 +190,14 @@ pub fn singular_closing_design() -> Design {
         126.19868905695499,
     ])
 }
+
+/// bottle-1l with `[scene] kind = "offset"`, x_off = 2 mm, in `dir`.
+pub fn offset_problem(dir: &std::path::Path) -> std::path::PathBuf {
+    let src = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let src = src.replacen("kind = \"centred\"", "kind = \"offset\"", 1).replacen("x_off = 0.0 ", "x_off = 0.002 ", 1);
+    assert!(src.contains("x_off = 0.002"), "the problem's [scene] changed: fix the test");
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join("offset.toml");
+    std::fs::write(&p, src).unwrap();
+    p
+}
