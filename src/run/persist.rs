@@ -27,6 +27,8 @@
 //!
 //! Errors of the persister are kept and returned by the observer at the next generation, or
 //! by [`Persister::finish`] at the end; a failed shard is never followed by its checkpoint.
+//! The thread stops only once every task it handed to its pool has reported, also after an
+//! error: nothing is written into the run folder after the run has returned.
 //! The pool is not the evaluation pool, so the two cannot block each other; a shard's
 //! designs are encoded in parallel and written in id order, so the bytes do not depend on
 //! the thread count.
