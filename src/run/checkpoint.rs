@@ -67,9 +67,12 @@ pub const PIPELINE: &str = "stages 0-3, stage 3 in pipeline mode";
 /// checkpoint (keys sorted), so the declaration order does not matter. Every field is
 /// written by [`RunOptions::of`]; read back, one may be absent: the integration method is
 /// stated only when it is not RADAU5, the default (a run of a problem without
-/// `solver.method` writes the options it wrote before the key existed), and a field removed
-/// by hand stays absent (its hash then differs, and the resume names the field as missing
-/// beside the run's value). A field the type does not know is an error naming it.
+/// `solver.method` writes the options it wrote before the key existed), and a top-level
+/// field removed by hand stays absent (its hash then differs, and the resume names the field
+/// as missing beside the run's value); inside `recording` a required field removed by hand
+/// fails the checkpoint's load (serde names it), and one with a default reads as that
+/// default. A field the type does not know is an error naming it: the checkpoint is then not
+/// read at all (resume, `show` and `export` refuse it alike).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunOptions {

@@ -72,8 +72,9 @@ impl RunFolder {
         f.check_run()?;
         Ok(f)
     }
-    /// The run id run.json records now (empty for a run of a gripopt before issue 24);
-    /// None where run.json is missing, unreadable or without a text `run_id`.
+    /// The run id run.json records now (empty where it records none: a run of a gripopt
+    /// before issue 24, or `run_id` null); None where run.json is missing or unreadable
+    /// (a field of the wrong type included: [`super::RunHeader::load`]).
     fn current_run_id(&self) -> Option<String> {
         super::RunHeader::load(&self.dir).ok().map(|h| h.run_id().to_string())
     }
