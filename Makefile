@@ -167,9 +167,15 @@ clean:
 # The thesis's chapter-4 parameter studies (figs 4.1-4.18) with `gripopt sweep`, into
 # results/studies/ (see scripts/studies.sh and docs/thesis-comparison.md). One study:
 # `scripts/studies.sh fig4_16`. `make figures` also copies the cited plots to docs/figures/.
-.PHONY: studies figures
+# `make thesis-checks`: the studies behind rows 8, 12-14, 22, 24 and 25, the figures those rows
+# quote (printed by scripts/thesis_checks.py) and row 14's α map with the ψ rule, into docs/figures/.
+.PHONY: studies figures thesis-checks
 studies: build
 	scripts/studies.sh
 
 figures: studies
 	scripts/figures.sh
+
+thesis-checks: build $(VENV_STAMP)
+	scripts/studies.sh fig4_5 fig4_8a fig4_8l fig4_8r fig4_13e fig4_16 fig4_16e fig4_17
+	$(VENV)/bin/python scripts/thesis_checks.py --figures docs/figures
