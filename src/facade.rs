@@ -46,7 +46,7 @@ impl Stages {
 /// over its objects and scenarios until each object's chance constraint is decided —
 /// early stop — docs/robust.md).
 pub fn evaluate(problem: &Problem, design: &Design, stages: Stages) -> Record {
-    crate::eval::evaluate_record(problem, design, &stages.options(problem), None)
+    crate::eval::evaluate_record(problem, design, &stages.options(problem))
 }
 
 /// Evaluate a batch of designs in parallel on `threads` threads (None: all cores): their
@@ -58,14 +58,8 @@ pub fn evaluate_batch(
     threads: Option<usize>,
 ) -> Result<Vec<Record>> {
     let opts = stages.options(problem);
-    let robust = crate::eval::RobustSetup::of(problem);
-    in_pool(threads, || {
-        designs
-            .par_iter()
-            .with_max_len(1)
-            .map(|x| crate::eval::evaluate_record(problem, x, &opts, robust.as_ref()))
-            .collect()
-    })
+    let study = crate::eval::Study::of(problem, &opts);
+    in_pool(threads, || designs.par_iter().with_max_len(1).map(|x| study.evaluate(x, &opts).record).collect())
 }
 
 /// `run` on `threads` threads (None: the current pool, all cores by default).
@@ -104,8 +98,7 @@ pub fn evaluate_rows(
     stages: Stages,
     threads: Option<usize>,
 ) -> Result<Vec<EvaluatedRow>> {
-    let mut gp = GripperProblem::new(problem.clone());
-    gp.options = stages.options(problem);
+    let gp = GripperProblem::with_options(problem.clone(), stages.options(problem));
     // a simulation (ms) is a task of its own, for balance; static evaluations (tens of µs)
     // are split adaptively, in chunks, by rayon
     let max_len = if stages == Stages::All { 1 } else { usize::MAX };

@@ -1,7 +1,7 @@
 //! Robust runs across a forced resume, and what a robust record reports for a design that
 //! is not form closed (hostile pass 32b).
 use crate::robust::{robust_problem, robust_text, spec, tmp, BOTTLE};
-use gripopt::eval::{evaluate_record, EvalOptions, RobustSetup};
+use gripopt::eval::{evaluate_record, EvalOptions, Study};
 use gripopt::optim::MooProblem;
 use gripopt::run::{GripperProblem, RunSpec};
 use rand::SeedableRng;
@@ -68,13 +68,13 @@ fn a_forced_resume_refuses_another_robust_object_list() {
 #[test]
 fn a_design_not_form_closed_has_no_robust_max_offset() {
     let p = robust_problem();
-    let setup = RobustSetup::of(&p).unwrap();
+    let setup = Study::of(&p, &EvalOptions::full(&p));
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let x = (0..20_000)
         .map(|_| p.bounds.sample(&mut rng))
         .find(|x| {
-            let flat = evaluate_record(&p, x, &EvalOptions::statics_only(), None);
-            flat.statics.form_closed == Some(false) && gripopt::eval::robust_start(x, &setup).passed()
+            let flat = evaluate_record(&p, x, &EvalOptions::statics_only());
+            flat.statics.form_closed == Some(false) && setup.start(x).passed()
         })
         .expect("a design passing stage 2 that is not form closed");
     let e = GripperProblem::new(p.clone()).evaluate(&x.to_array());

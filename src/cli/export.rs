@@ -3,7 +3,7 @@
 //! files; this resolves the design and the scene (docs/export.md).
 
 use anyhow::{bail, Context, Result};
-use gripopt::eval::RobustSetup;
+use gripopt::eval::{EvalOptions, Study};
 use gripopt::export::{write_file, ExportScene, ExportedDesign, ObjectMode};
 use gripopt::params::{Design, Problem, SceneKind};
 use std::path::{Path, PathBuf};
@@ -283,12 +283,13 @@ pub fn run(a: ExportArgs) -> Result<()> {
         SceneKind::Free => ExportScene::free(setup.x_off),
     };
     // (the free scene's g_eq = 0 is the library's rule: Problem::load and in_scene name the file and field)
-    let e = match (object, RobustSetup::of(&p)) {
+    let study = p.robust.is_some().then(|| Study::of(&p, &EvalOptions::full(&p)));
+    let e = match (object, study) {
         // the robust evaluation's own per-object scene (its cylinder and grip torque) in the
         // scene asked for; the spring sized at [hand] tau, as there
-        (Some(o), Some(setup)) => {
-            let source = format!("{source}, robust object {}", setup.spec.objects[o].name);
-            ExportedDesign::on_object(&x, &setup, o, placement, &source)?
+        (Some(o), Some(study)) => {
+            let source = format!("{source}, robust object {}", study.object_name(o).unwrap_or_default());
+            ExportedDesign::on_object(&x, &study, o, placement, &source)?
         }
         _ => ExportedDesign::new(&x, &p.scene, placement, &source)?,
     };

@@ -43,15 +43,10 @@ pub fn yes_no(v: Option<bool>) -> &'static str {
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
     let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
-    // a robust problem: the robust evaluation over every object and scenario; otherwise the
-    // single pipeline, with progress on stderr when the grasp simulation takes long
-    let rec = match gripopt::eval::RobustSetup::of(p) {
-        Some(setup) if opts.dynamics => gripopt::eval::evaluate_record(p, x, &opts, Some(&setup)),
-        _ => {
-            let ev = gripopt::eval::evaluate_into(x, &p.scene, &opts, &mut crate::cli::watch::Watch::new(false, false));
-            gripopt::eval::Record::from_eval(&ev)
-        }
-    };
+    // the problem's study (a robust problem's objects and scenarios, or its one object in
+    // its scene), with progress on stderr when a simulation takes long
+    let study = gripopt::eval::Study::of(p, &opts);
+    let rec = study.evaluate_into(x, &opts, &mut crate::cli::watch::Watch::new(false, false)).record;
     if json {
         let v = gripopt::EvaluationRecord::new(&rec, p.solver.method, opts.dynamics);
         outln!("{}", serde_json::to_string_pretty(&v)?);

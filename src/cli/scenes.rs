@@ -6,7 +6,7 @@ use crate::cli::csv_stream::CsvStream;
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::{Streamed, Watch};
 use anyhow::{bail, Context, Result};
-use gripopt::eval::{Record, RobustSetup, SimulationRecord};
+use gripopt::eval::{EvalOptions, Record, SimulationRecord, Study};
 use gripopt::params::{Design, Problem, SceneKind};
 use gripopt::sim::{Controls, Integration, Method, SceneSpec};
 use gripopt::{Column, POSE_COLUMNS};
@@ -42,10 +42,10 @@ pub struct SimulateOpts<'a> {
 }
 
 /// One of a robust problem's objects, picked by `simulate --object NAME`: the problem's
-/// robust setup and the object's index in it.
+/// study and the object's index in it.
 pub struct PickedObject {
-    /// The problem's robust setup (the object's nominal scene, the spring's sizing scene).
-    pub setup: RobustSetup,
+    /// The problem's study (the object's nominal scene, the spring's sizing scene).
+    pub study: Study,
     /// The object's index.
     pub index: usize,
 }
@@ -56,13 +56,13 @@ impl PickedObject {
     pub fn of(p: &Problem, name: &str, source: &Path) -> Result<Self> {
         let without = "simulate runs without --object";
         let index = super::robust::object_index(p, name, &source.display().to_string(), without)?;
-        let setup = RobustSetup::of(p).ok_or_else(|| anyhow::anyhow!("--object {name}: no robust setup"))?;
-        Ok(PickedObject { setup, index })
+        let study = Study::of(p, &EvalOptions::full(p));
+        Ok(PickedObject { study, index })
     }
 
     /// The object's name.
     pub fn name(&self) -> &str {
-        &self.setup.spec.objects[self.index].name
+        self.study.object_name(self.index).unwrap_or_default()
     }
 }
 
@@ -106,7 +106,7 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
         }
     };
     let ev = match object {
-        Some(ob) => gripopt::eval::simulate_object(x, &ob.setup, ob.index, &spec, &integ, &ctl, &mut watch),
+        Some(ob) => ob.study.simulate_object(x, ob.index, &spec, &integ, &ctl, &mut watch),
         None => gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch),
     };
     let (traj, csv) = (std::mem::take(&mut watch.traj), watch.csv.take());

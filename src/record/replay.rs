@@ -594,7 +594,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     let design = recorded.design();
     if problem.robust.is_some() {
         // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
-        let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
+        let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem));
         let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
         // an older gripopt wrote the −Δ_off placeholder for max_offset in the robust record
         let recorded_robust = recorded.record.robust.as_ref().map(|r| r.without_offset_placeholder());

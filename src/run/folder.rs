@@ -155,7 +155,11 @@ impl RunFolder {
     /// problem, the earlier `problem-G.toml` for the generations before it), checked
     /// against the hash run.json recorded: an edited file is an error naming it.
     pub fn problem_of_generation(&self, g: u64) -> Result<Problem> {
-        self.of_run(|| self.checked_problem(g)).map(|(p, _)| p)
+        self.problem_file_of_generation(g).map(|(p, _)| p)
+    }
+    /// [`RunFolder::problem_of_generation`] with its file.
+    pub fn problem_file_of_generation(&self, g: u64) -> Result<(Problem, PathBuf)> {
+        self.of_run(|| self.checked_problem(g))
     }
     fn checked_problem(&self, g: u64) -> Result<(Problem, PathBuf)> {
         let p: RunProblem = problem_of_generation(&self.dir, g)?;

@@ -25,8 +25,8 @@ mod problems;
 mod replay_free;
 mod replay_scenario;
 mod robust_columns;
-mod robust_eval;
 mod rundir;
+mod scheduler;
 mod tables;
 mod verify;
 mod verify_rec;
@@ -38,7 +38,7 @@ pub use archive::{Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
-pub use gripper::{GripperInfo, GripperProblem, Started, TrajectoryKeep};
+pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use info::{new_run_id, RecordingHeader, Resume, RunHeader, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
     check_population, check_sample, check_threads, sample_bytes_recorded, threads_note, BYTES_PER_DESIGN, MAX_THREADS,
@@ -56,8 +56,8 @@ pub use problems::PROBLEM_FILE;
 pub use replay_free::{free_file_name, record_free_scene, FreeRecording};
 pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{robust_unit, RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
-pub use robust_eval::RobustScheduled;
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
+pub use scheduler::StudyScheduled;
 pub use tables::CheckpointTables;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,

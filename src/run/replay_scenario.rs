@@ -1,6 +1,7 @@
 //! `gripopt replay RUN_DIR --design ID --scenario OBJECT:K` (issue 22): one scenario of a
-//! robust design re-simulated — its inputs re-drawn from the run's problem (the same
-//! common-random-number stream), stage 3 of the free kind exactly as the optimisation ran it
+//! robust design re-simulated — its inputs re-drawn from the problem its generation was
+//! evaluated with (the same common-random-number stream; after a forced resume that changed
+//! the problem, the earlier file run.json names), stage 3 exactly as the optimisation ran it
 //! — and compared with what the recording's `/designs` message says of that scenario; the
 //! free scene's poses are recorded to `RUN_DIR/scenario-ID-OBJECT-K.mcap` (band 3 of the
 //! run's time axis) so the scenario can be watched in Foxglove with the verify layout.
@@ -9,7 +10,7 @@ use super::folder::RunFolder;
 use super::lock::RunLock;
 use super::verify::row_of;
 use super::verify_rec::VerifyRecording;
-use crate::eval::{robust_start, run_scenario, EvalOptions, Record, RobustSetup, ScenarioRecord};
+use crate::eval::{EvalOptions, Record, ScenarioRecord, Study};
 use crate::sim::PoseSample;
 use crate::{Error, Result};
 use serde::Serialize;
@@ -63,29 +64,33 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     let folder = RunFolder::open(dir)?;
     // it writes into the run folder: under its lock, as verify does
     let _lock = if record { Some(RunLock::acquire(dir)?) } else { None };
-    let p = folder.problem()?;
-    let file = dir.join("problem.toml");
+    let rec = folder.design(id)?;
+    // the problem the design's generation was evaluated with (issue 44 class 5)
+    let (p, file) = folder.problem_file_of_generation(rec.record.generation)?;
     let not = |m: String| Error::RunDir { path: file.clone(), message: m };
-    let setup =
-        RobustSetup::of(&p).ok_or_else(|| not("not a robust problem (no [robust]): --scenario needs one".into()))?;
-    let names: Vec<&str> = setup.spec.objects.iter().map(|o| o.name.as_str()).collect();
+    if p.robust.is_none() {
+        return Err(not("not a robust problem (no [robust]): --scenario needs one".into()));
+    }
+    let opts = EvalOptions::full(&p);
+    let study = Study::of(&p, &opts);
+    let names: Vec<&str> = (0..study.objects()).filter_map(|o| study.object_name(o)).collect();
     let o = names.iter().position(|n| *n == object).ok_or_else(|| {
         Error::Input(format!("--scenario {object}:{k}: no object {object:?} (the run's objects: {})", names.join(", ")))
     })?;
-    if k >= setup.k {
+    if k >= study.k {
         return Err(Error::Input(format!(
             "--scenario {object}:{k}: the run has scenarios 0 to {} per object",
-            setup.k - 1
+            study.k - 1
         )));
     }
-    let rec = folder.design(id)?;
     let design = rec.design();
-    let start = robust_start(&design, &setup);
-    if let Some((stage, why, ..)) = &start.discard {
+    let start = study.start(&design);
+    if let Some(d) = &start.discard {
+        let (stage, why) = (d.stage(), d.reason(&study));
         return Err(Error::Input(format!("design {id} is discarded at stage {stage} ({why}): it has no scenarios")));
     }
     let mut poses: Vec<PoseSample> = vec![];
-    let (scenario, ev) = run_scenario(&start, &setup, o, k, &EvalOptions::full(&p), &mut poses);
+    let (scenario, ev) = study.run_scenario(&start, o, k, &opts, &mut poses);
     let recorded =
         rec.record.robust.as_ref().and_then(|r| r.scenarios.iter().find(|s| s.object == o && s.k == k).cloned());
     // compared as written: the solver's account (`abort`) is not in the recording
@@ -101,15 +106,14 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
         (true, Some(row)) => {
             let name = format!("scenario-{id}-{object}-{k}.mcap");
             let what = format!("design {id} scenario {object}:{k}");
-            let i = o * setup.k + k;
-            let window = crate::record::scenario_window(id, o, k, setup.spec.objects.len(), setup.k);
+            let window = crate::record::scenario_window(id, o, k, study.objects(), study.k);
             // the scenario's hand height is the object's grasp height + its drawn height offset
-            let h = setup.scenarios[i].values[1];
+            let sc = study.scenario(o, k);
             let tag = crate::record::ScenarioTag {
                 object: object.to_string(),
                 index: k as u64,
-                grasp_height: setup.spec.objects[o].object.grasp_height,
-                height_offset: h,
+                grasp_height: study.objects[o].scene.object.grasp_height,
+                height_offset: sc.scenario.values[1],
             };
             let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
             // replaced only when this run's replay of this scenario wrote it: same epoch
@@ -129,7 +133,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
                 }
             })?;
             let mut ps = p.clone();
-            ps.scene = setup.scenario_scenes[i].clone();
+            ps.scene = sc.scene.clone();
             let kept = crate::record::keep_poses(&poses, r.opts.scene_dt);
             Some(r.write(&ps, vec![(row, kept)])?)
         }

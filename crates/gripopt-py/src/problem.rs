@@ -157,14 +157,17 @@ fn simulate_object(
         Some((kind, x_off)) => problem.in_scene(kind, x_off, Path::new("the simulation's scene"))?,
         None => problem.clone(),
     };
-    let setup = gripopt::eval::RobustSetup::of(&p).ok_or_else(|| gripopt::Error::Input("no [robust]".into()))?;
+    if p.robust.is_none() {
+        return Err(gripopt::Error::Input("no [robust]".into()));
+    }
+    let study = gripopt::eval::Study::of(&p, &gripopt::eval::EvalOptions::full(&p));
     let spec = gripopt::sim::SceneSpec::of(&p.scene.setup);
     let (mut trajectory, mut poses) = (gripopt::Trajectory::default(), Vec::new());
     let ctl = gripopt::Controls::DIAGNOSTIC;
-    let ev = gripopt::eval::simulate_object(x, &setup, o, &spec, integration, &ctl, &mut (&mut trajectory, &mut poses));
+    let ev = study.simulate_object(x, o, &spec, integration, &ctl, &mut (&mut trajectory, &mut poses));
     if ev.scene.is_none() {
         let d = ev.discard.expect("a design that did not reach its scene was discarded");
-        let name = &setup.spec.objects[o].name;
+        let name = study.object_name(o).unwrap_or_default();
         return Err(gripopt::Error::Input(format!(
             "the design is discarded on object {name} at stage {} ({}); a simulation needs stages 0–2",
             d.stage, d.reason
