@@ -109,9 +109,9 @@ fn every_design_sees_the_same_scenarios() {
         assert!((0.6..=1.4).contains(&sc.values[2]));
         for rec in &recs {
             if let Some(s) = rec.robust.as_ref().unwrap().scenarios.iter().find(|s| s.object == o && s.k == k) {
-                assert_eq!(s.inputs.x_off, x_off);
-                assert_eq!(s.inputs.restitution, e);
-                assert_eq!(s.inputs.mu_phalanx, sc.values[2]);
+                assert_eq!(s.inputs.get("x_off").unwrap(), x_off);
+                assert_eq!(s.inputs.get("restitution").unwrap(), e);
+                assert_eq!(s.inputs.get("mu_phalanx").unwrap(), sc.values[2]);
             }
         }
         assert_ne!(r.scenario(&p.scene, o, k, 1).values, sc.values, "the verify stream is another draw");
@@ -315,7 +315,7 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     let r = gripopt::run::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
     assert_eq!(r.verified, Some(true), "{r:?}");
     assert!(r.recording.as_ref().unwrap().is_file());
-    assert_eq!(r.scenario.inputs.x_off, r.record.x_off.unwrap());
+    assert_eq!(r.scenario.inputs.get("x_off").unwrap(), r.record.x_off.unwrap());
     let front = folder.front().unwrap();
     if front.is_empty() {
         return;
@@ -412,7 +412,8 @@ fn scenarios_reproduce_the_issues_nominal_figures() {
     let p = corners_problem("mu_phalanx = { list = [0.2, 1.0, 1.5] }");
     let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p));
     let sc = &rec.robust.as_ref().unwrap().scenarios;
-    let got: Vec<(f64, f64)> = sc.iter().map(|s| (s.inputs.mu_phalanx, s.max_displacement.unwrap())).collect();
+    let got: Vec<(f64, f64)> =
+        sc.iter().map(|s| (s.inputs.get("mu_phalanx").unwrap(), s.max_displacement.unwrap())).collect();
     assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [1.0, 0.2, 1.5], "centre, then the corners");
     for ((f, d), r) in got.iter().zip([0.26, 0.93, 0.17]) {
         assert_mm(*d, r, &format!("friction factor {f}"));
@@ -422,7 +423,7 @@ fn scenarios_reproduce_the_issues_nominal_figures() {
     let p = corners_problem("x_off = { list = [0.0, 0.003, 0.004] }");
     let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p));
     let rb = rec.robust.as_ref().unwrap();
-    let by_off = |x: f64| rb.scenarios.iter().find(|s| s.inputs.x_off == x).unwrap();
+    let by_off = |x: f64| rb.scenarios.iter().find(|s| s.inputs.get("x_off").unwrap() == x).unwrap();
     assert_mm(by_off(0.0).max_displacement.unwrap(), 0.26, "x_off 0");
     assert_mm(by_off(0.003).max_displacement.unwrap(), 1.19, "x_off 3 mm");
     assert_mm(by_off(0.004).max_displacement.unwrap(), 2.02, "x_off 4 mm");

@@ -6,7 +6,7 @@
 use crate::common::{nominal, output_text, run_gripopt, untimed, BOTTLE_FILE};
 use gripopt::eval::{evaluate, EvalOptions, Record};
 use gripopt::params::Problem;
-use gripopt::sim::{Controls, Integration, Method};
+use gripopt::sim::{Integration, Method};
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
@@ -40,11 +40,7 @@ fn untimed_record(r: &Record) -> serde_json::Value {
 fn records(p: &Problem, m: Method) -> (Record, Record) {
     let own = Record::from_eval(&evaluate(&nominal(), &p.scene, &EvalOptions::full(p)));
     let s = &p.solver;
-    let explicit = EvalOptions {
-        dynamics: true,
-        integration: Integration::new(s.rtol, s.atol, s.max_steps).with_method(m),
-        controls: Controls::PIPELINE,
-    };
+    let explicit = EvalOptions::pipeline(Integration::new(s.rtol, s.atol, s.max_steps).with_method(m));
     (own, Record::from_eval(&evaluate(&nominal(), &p.scene, &explicit)))
 }
 

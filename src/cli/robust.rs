@@ -23,12 +23,8 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
         outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
         let s = &r.scenario;
-        let i = &s.inputs;
         outln!("design {id}, object {object}, scenario {k} of {}", dir.display());
-        outln!(
-            "  inputs: x_off {:.3} mm, height offset {:.3} mm, phalanx friction x{:.3}, ground friction x{:.3}, restitution {:.3}, fill x{:.3}, torque x{:.4}",
-            i.x_off * 1e3, i.height_offset * 1e3, i.mu_phalanx, i.mu_ground, i.restitution, i.fill, i.tau
-        );
+        outln!("  inputs: {}", s.inputs.shown());
         outln!("  outcome: {}", outcome(s));
         match r.verified {
             Some(true) => outln!("  verified: the re-simulation equals the recorded scenario, bit for bit"),

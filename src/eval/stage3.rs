@@ -48,7 +48,7 @@ pub fn evaluate_dynamics<K: Sink + ?Sized>(
     sink: &mut K,
 ) -> Evaluation {
     let spec = SceneSpec::of(&s.setup);
-    stage3(ev, s, &spec, &opts.integration, &opts.controls, false, sink)
+    stage3(ev, s, &spec, &opts.integration, &opts.controls, opts.measure_always, sink)
 }
 
 /// Simulate design `x` in scene `spec` of the problem's `s`: stages 0–2, then the scene

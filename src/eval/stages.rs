@@ -355,6 +355,10 @@ pub struct EvalOptions {
     pub integration: Integration,
     /// The run controls of stage 3 (pipeline mode).
     pub controls: Controls,
+    /// In the free kind, measure the free scene even when the finger's own criteria discard
+    /// the design (a diagnostic simulation, `verify`); false in the pipeline, which stops at
+    /// the first failing criterion.
+    pub measure_always: bool,
 }
 
 impl EvalOptions {
@@ -364,11 +368,23 @@ impl EvalOptions {
             dynamics: false,
             integration: Integration::new(1e-6, 1e-9, 200_000),
             controls: Controls::PIPELINE,
+            measure_always: false,
         }
     }
     /// All four stages with the problem's solver settings, stopping at the first violated criterion.
     pub fn full(p: &Problem) -> Self {
-        EvalOptions { dynamics: true, integration: Integration::from_solver(&p.solver), controls: Controls::PIPELINE }
+        Self::pipeline(Integration::from_solver(&p.solver))
+    }
+    /// All four stages with the numerics `integration`, stopping at the first violated criterion.
+    pub fn pipeline(integration: Integration) -> Self {
+        EvalOptions { dynamics: true, integration, controls: Controls::PIPELINE, measure_always: false }
+    }
+    /// A diagnostic simulation with the problem's solver settings: every criterion run to
+    /// its end, the free scene measured whatever the finger's criteria say (`gripopt
+    /// simulate`, `verify`).
+    pub fn diagnostic(p: &Problem) -> Self {
+        let integration = Integration::from_solver(&p.solver);
+        EvalOptions { dynamics: true, integration, controls: Controls::DIAGNOSTIC, measure_always: true }
     }
 }
 

@@ -24,4 +24,4 @@ pub use robust::{
 };
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
 pub use scene_kind::{SceneKind, SceneSetup};
-pub use uncertainty::{phi, phi_inv, Dist, Uncertainty, INPUTS, INPUT_MEANINGS};
+pub use uncertainty::{input_slot, phi, phi_inv, Dist, InputRow, Uncertainty, INPUTS, N_INPUTS};

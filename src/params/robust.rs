@@ -5,7 +5,7 @@
 //! aggregated over them and the constraint P(object barely moves) ≥ p_min per object.
 
 use super::scene::{Object, SceneParams};
-use super::uncertainty::{Dist, Uncertainty};
+use super::uncertainty::{Dist, Uncertainty, INPUTS, N_INPUTS};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
@@ -116,9 +116,8 @@ pub struct Scenario {
     pub k: usize,
     /// The stream it was drawn from (0: optimisation, 1: verify).
     pub stream: u64,
-    /// x_off (m), height_offset (m), mu_phalanx, mu_ground (factors), restitution, fill,
-    /// tau (factors), in the order of [`INPUTS`](super::INPUTS).
-    pub values: [f64; 7],
+    /// Each input's value, in the order of [`INPUTS`].
+    pub values: [f64; N_INPUTS],
 }
 
 impl Scenario {
@@ -126,27 +125,26 @@ impl Scenario {
     /// free scene at the drawn offset, the object's cylinder filled and raised as drawn, the
     /// frictions scaled, the restitution and the grip torque as drawn.
     pub fn scene(&self, base: &SceneParams, o: &ObjectCase) -> SceneParams {
-        let v = &self.values;
         let mut s = base.clone();
         s.object = o.object;
-        s.object.grasp_height += v[1];
-        s.object.density *= v[5];
-        s.contact.mu_s *= v[2];
-        s.contact.mu_d *= v[2];
-        s.env.mu_g *= v[3];
-        s.contact.restitution = v[4];
-        s.hand.tau = o.tau * v[6];
         s.setup.kind = super::SceneKind::Free;
-        s.setup.x_off = v[0];
+        for (row, v) in INPUTS.iter().zip(self.values) {
+            (row.apply)(&mut s, o, v);
+        }
         s
+    }
+
+    /// The value of input `name` (a row of [`INPUTS`]).
+    pub fn value(&self, name: &str) -> Option<f64> {
+        super::input_slot(name).map(|i| self.values[i])
     }
 }
 
 impl Robust {
     /// The nominal value of each input for problem scene `base` (x_off from `[scene]`,
-    /// restitution from `[contact]`, no height offset, factors 1).
-    pub fn nominal_values(base: &SceneParams) -> [f64; 7] {
-        [base.setup.x_off, 0.0, 1.0, 1.0, base.contact.restitution, 1.0, 1.0]
+    /// restitution from `[contact]`, no height offset, factors 1: each row's own).
+    pub fn nominal_values(base: &SceneParams) -> [f64; N_INPUTS] {
+        INPUTS.map(|row| (row.nominal)(base))
     }
 
     /// Number of scenarios per object of `stream` (the optimisation's K, or verify's count).

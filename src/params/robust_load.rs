@@ -4,7 +4,7 @@
 use super::checker::Checker;
 use super::robust::{corner_count, Aggregation, ObjectCase, Robust, Sampling};
 use super::scene::{Object, SceneParams};
-use super::uncertainty::{phi, Dist, Uncertainty, INPUTS};
+use super::uncertainty::{input_slot, phi, Dist, Uncertainty, INPUTS};
 use super::SceneKind;
 use crate::Result;
 use serde::Deserialize;
@@ -57,17 +57,11 @@ struct RawObjectCase {
     tau: f64,
 }
 
+/// `[robust.uncertainty]` as written: a distribution per input named by its row of
+/// [`INPUTS`] (an unknown name is refused naming the known ones).
 #[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct RawUncertainty {
-    x_off: Option<RawDist>,
-    height_offset: Option<RawDist>,
-    mu_phalanx: Option<RawDist>,
-    mu_ground: Option<RawDist>,
-    restitution: Option<RawDist>,
-    fill: Option<RawDist>,
-    tau: Option<RawDist>,
-}
+#[serde(transparent)]
+struct RawUncertainty(std::collections::BTreeMap<String, RawDist>);
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -221,20 +215,18 @@ impl RawRobust {
 
 impl RawUncertainty {
     fn validate(&self, c: &Checker<'_>) -> Result<Uncertainty> {
-        let raw = [
-            &self.x_off,
-            &self.height_offset,
-            &self.mu_phalanx,
-            &self.mu_ground,
-            &self.restitution,
-            &self.fill,
-            &self.tau,
-        ];
         let mut u = Uncertainty::default();
-        for (i, r) in raw.iter().enumerate() {
-            if let Some(r) = r {
-                u.inputs[i] = Some(r.validate(c, &format!("robust.uncertainty.{}", INPUTS[i]))?);
-            }
+        for (name, r) in &self.0 {
+            let field = format!("robust.uncertainty.{name}");
+            let Some(i) = input_slot(name) else {
+                let known: Vec<&str> = INPUTS.iter().map(|r| r.name).collect();
+                return Err(c.fail(
+                    &field,
+                    "{…}".into(),
+                    &format!("is not an uncertain input (known: {})", known.join(", ")),
+                ));
+            };
+            u.inputs[i] = Some(r.validate(c, &field)?);
         }
         Ok(u)
     }
@@ -310,7 +302,7 @@ fn check_corner_centres(r: &Robust, c: &Checker<'_>) -> Result<()> {
         let ((lo, hi), centre) = (d.support(), d.centre());
         if !(lo..=hi).contains(&centre) {
             return Err(c.fail(
-                &format!("robust.uncertainty.{}", INPUTS[i]),
+                &format!("robust.uncertainty.{}", INPUTS[i].name),
                 super::robust::describe(d),
                 &format!(
                     "with sampling = \"corners\" the centre scenario takes the mean {centre}, which must lie within the bounds [{lo}, {hi}]"
@@ -322,57 +314,16 @@ fn check_corner_centres(r: &Robust, c: &Checker<'_>) -> Result<()> {
 }
 
 /// Every value a draw can take keeps each object's inputs in their admissible range (no
-/// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …).
+/// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …: each
+/// input's own rule, [`InputRow::admissible`](super::InputRow)).
 fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()> {
-    for (i, d) in r.uncertainty.inputs.iter().enumerate() {
+    for (row, d) in INPUTS.iter().zip(&r.uncertainty.inputs) {
         let Some(d) = d else { continue };
         let (lo, hi) = d.support();
-        let field = format!("robust.uncertainty.{}", INPUTS[i]);
-        let bad = |rule: String| c.fail(&field, format!("draws in [{lo}, {hi}]"), &rule);
-        match INPUTS[i] {
-            "x_off" => {
-                if lo < -0.1 || hi > 0.1 {
-                    return Err(bad("must keep the offset in [-0.1, 0.1] m".into()));
-                }
-            }
-            "restitution" => {
-                if lo < 0.01 || hi > 0.99 {
-                    return Err(bad("must keep the restitution in [0.01, 0.99]".into()));
-                }
-            }
-            name => {
-                if name != "height_offset" && !(lo > 0.0) {
-                    let what = match name {
-                        "mu_phalanx" | "mu_ground" => {
-                            "a friction factor must be > 0 (no negative or zero friction draws)"
-                        }
-                        "fill" => "a fill factor must be > 0 (an object has mass)",
-                        _ => "a torque factor must be > 0",
-                    };
-                    return Err(bad(what.into()));
-                }
-                for o in &r.objects {
-                    let (limit, v) = match name {
-                        "height_offset" => {
-                            let h = (o.object.grasp_height + lo, o.object.grasp_height + hi);
-                            if !(h.0 >= scene.hand.w) || h.1 >= o.object.length {
-                                return Err(bad(format!(
-                                    "keeps object {}'s grasp height {} + offset on its side, in [hand.w {}, {}) (the fingers clear the floor and stay below the top)",
-                                    o.name, o.object.grasp_height, scene.hand.w, o.object.length
-                                )));
-                            }
-                            continue;
-                        }
-                        "mu_phalanx" => ("contact.mu_s", scene.contact.mu_s.max(scene.contact.mu_d) * hi),
-                        "mu_ground" => ("environment.mu_g", scene.env.mu_g * hi),
-                        "fill" => ("object.density", o.object.density * hi),
-                        _ => ("hand.tau", o.tau * hi),
-                    };
-                    if let Err(rule) = super::limits::limit(limit).check(v) {
-                        return Err(bad(format!("gives {limit} = {v} for object {}: {rule}", o.name)));
-                    }
-                }
-            }
+        let field = format!("robust.uncertainty.{}", row.name);
+        for o in &r.objects {
+            (row.admissible)(lo, hi, o, scene)
+                .map_err(|rule| c.fail(&field, format!("draws in [{lo}, {hi}]"), &rule))?;
         }
     }
     Ok(())

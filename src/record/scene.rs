@@ -97,7 +97,7 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
 }
 
 /// The scene a design's picture is drawn in: the problem's, except for a robust design that
-/// stage 2 discarded on another of its objects (its reason "object NAME: …"): then that
+/// stage 2 discarded on another of its objects ([`crate::eval::Record::failed_object`]): then that
 /// object's cylinder (radius and length), standing on the ground under the reference's hand
 /// plane, so that the red closed pose that failed is drawn on the object it failed on; and
 /// for a design of the offset scene discarded at stages 0–2, whose statics are the centred
@@ -110,10 +110,10 @@ pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, Sce
         centred.setup.kind = SceneKind::Centred;
         return Cow::Owned(centred);
     }
-    let failed_on =
-        (d.record.verdict.failed_stage == Some(2)).then_some(d.record.verdict.reason.as_deref()).flatten().and_then(
-            |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
-        );
+    let failed_on = (d.record.verdict.failed_stage == Some(2))
+        .then(|| d.record.failed_object())
+        .flatten()
+        .and_then(|o| problem.robust.as_ref()?.objects.get(o));
     match failed_on {
         Some(o) if (o.object.radius, o.object.length) != (sc.object.radius, sc.object.length) => {
             let mut drawn = sc.clone();

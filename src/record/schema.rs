@@ -152,7 +152,8 @@ fn robust_schema() -> Value {
     let mut scenario = nums(&["t_stab", "max_displacement", "max_tilt_deg"]);
     scenario["object"] = int();
     scenario["k"] = int();
-    scenario["inputs"] = obj(nums(&crate::params::INPUTS), &[]);
+    let inputs: Vec<&str> = crate::params::INPUTS.iter().map(|r| r.name).collect();
+    scenario["inputs"] = obj(nums(&inputs), &[]);
     scenario["stays"] = json!({"type": "boolean"});
     scenario["cause"] = json!({"type": "string"});
     scenario["rhs_evals"] = pair.clone();

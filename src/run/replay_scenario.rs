@@ -113,7 +113,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
                 object: object.to_string(),
                 index: k as u64,
                 grasp_height: study.objects[o].scene.object.grasp_height,
-                height_offset: sc.scenario.values[1],
+                height_offset: sc.scenario.value("height_offset").unwrap_or(0.0),
             };
             let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
             // replaced only when this run's replay of this scenario wrote it: same epoch
