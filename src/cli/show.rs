@@ -170,10 +170,10 @@ fn find_design(
 /// `gripopt show`.
 pub fn run(a: ShowArgs) -> Result<()> {
     let dir = &a.run_dir;
-    let objectives = [("max_offset", true), ("alpha", false), ("mean_force", true), ("t_stab", false)];
-    let Some(&(obj, maximise)) = objectives.iter().find(|o| o.0 == a.best) else {
-        bail!("--best {}: expected one of max_offset, alpha, mean_force, t_stab", a.best);
+    let Some(best) = gripopt::eval::OBJECTIVES.iter().find(|o| o.name == a.best) else {
+        bail!("--best {}: expected one of {}", a.best, gripopt::eval::objective_names().join(", "));
     };
+    let (obj, maximise) = (best.name, best.sense == gripopt::eval::Sense::Maximise);
     let folder = RunFolder::open(dir)?;
     let file = if a.archive { "archive.csv" } else { "pareto.csv" };
     let run = folder.info()?;

@@ -3,13 +3,13 @@
 //! its Clopper–Pearson interval, the aggregated objectives) and the verdict over all objects.
 
 use super::binomial::clopper_pearson;
-use super::fold::{decided, Decided};
 use super::objectives::Objectives;
 use super::record::{Record, Verdict};
 use super::record_robust::{ObjectRecord, RobustRecord, ScenarioRecord};
 use super::scenario::DesignStart;
 use super::scene_record::fin;
 use super::stages::Cause;
+use super::stop::{decided, Decided};
 use super::study::Study;
 use crate::params::SceneKind;
 

@@ -6,64 +6,14 @@
 //! ran what.
 
 use super::chance::chance_record;
+use super::objectives::minimised;
 use super::record::Record;
 use super::record_robust::ScenarioRecord;
 use super::scenario::DesignStart;
 use super::stages::{EvalOptions, Evaluation};
+use super::stop::StopRule;
 use super::study::Study;
 use crate::params::Design;
-
-/// What decides a design's stage 3, scanning its scenarios in their order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Decided {
-    /// The solver aborted the scenario at this position (in the order run): the design is a
-    /// solver-failure discard, as the single-object pipeline's aborted simulation.
-    Aborted(usize),
-    /// The scenario at this position gave its object more failures than its constraint
-    /// allows over K.
-    PStay(usize),
-}
-
-/// The sequential stopping rule: fed a design's scenarios in their order, it says when the
-/// verdict is known — at the first aborted scenario (its object's motion was never measured,
-/// so it is not counted as a failure) or at the first measured failure that makes some
-/// object's constraint impossible.
-#[derive(Debug, Clone)]
-pub struct StopRule {
-    fmax: usize,
-    fails: Vec<usize>,
-    seen: usize,
-}
-
-impl StopRule {
-    /// The rule for the designs of `study`.
-    pub fn new(study: &Study) -> Self {
-        StopRule { fmax: study.failures_allowed(), fails: vec![0; study.objects()], seen: 0 }
-    }
-
-    /// The next scenario; Some once this one decides the verdict.
-    pub fn push(&mut self, r: &ScenarioRecord) -> Option<Decided> {
-        let j = self.seen;
-        self.seen += 1;
-        if r.aborted() {
-            return Some(Decided::Aborted(j));
-        }
-        if !r.stays {
-            self.fails[r.object] += 1;
-            if self.fails[r.object] > self.fmax {
-                return Some(Decided::PStay(j));
-            }
-        }
-        None
-    }
-}
-
-/// What decides the verdict of a design with scenarios `scen` (in their order), if anything
-/// does: the first event of [`StopRule`].
-pub fn decided(study: &Study, scen: &[ScenarioRecord]) -> Option<Decided> {
-    let mut rule = StopRule::new(study);
-    scen.iter().find_map(|r| rule.push(r))
-}
 
 /// The result of a design's scenarios, folded: its record, and its objectives as the
 /// optimiser ranks them (minimisation form, MODEL.md §10's finite placeholders where one was
@@ -128,23 +78,16 @@ impl Study {
     /// Fold a design's scenarios (`scen`, in their order; with each its evaluation, which
     /// the 1 × 1 study's record is) into its result.
     pub fn fold(&self, start: &DesignStart, scen: Vec<(ScenarioRecord, Option<Evaluation>)>) -> Folded {
-        let ph = self.placeholders();
+        let c = &self.base.criteria;
         if self.is_single() {
             let ev = scen.into_iter().next().and_then(|s| s.1).unwrap_or(start.base);
-            let o = ev.objectives();
-            let minimised = std::array::from_fn(|k| if o[k].is_finite() { o[k] } else { ph[k] });
+            let minimised = minimised(ev.natural_objectives(), c);
             return Folded { record: Record::from_eval(&ev), minimised };
         }
         let (record, ranked_offset) = chance_record(self, start, scen.into_iter().map(|s| s.0).collect());
         let mut o = record.objectives();
         o[0] = ranked_offset;
-        let minimised = std::array::from_fn(|k| o[k].map(|v| if k == 0 || k == 2 { -v } else { v }).unwrap_or(ph[k]));
-        Folded { record, minimised }
-    }
-
-    /// The finite placeholders of MODEL.md §10 for missing objectives (minimisation form).
-    fn placeholders(&self) -> [f64; 4] {
-        [self.base.criteria.offset_step, 1e6, 0.0, self.base.criteria.t_max]
+        Folded { minimised: minimised(o, c), record }
     }
 
     /// Design `x` evaluated one scenario after the other (what a worker or the facade does;

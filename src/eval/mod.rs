@@ -21,11 +21,12 @@ mod scenario;
 mod scene_record;
 mod stage3;
 mod stages;
+mod stop;
 mod study;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
-pub use fold::{decided, Decided, Folded, StopRule};
-pub use objectives::Objectives;
+pub use fold::Folded;
+pub use objectives::{minimised, objective_names, Objective, Objectives, Sense, OBJECTIVES};
 pub use record::{
     Derived, EvaluationRecord, KinematicsRecord, OffsetEnd, Record, SimulationRecord, StaticsRecord, Verdict,
 };
@@ -39,6 +40,7 @@ pub use stages::{
     evaluate_kinematics, evaluate_statics, stage_kinematics, stage_statics, Cause, Discard, EvalOptions, Evaluation,
     KinematicsResult, ObjectMotion, Partial, Reason, StaticsResult, MISSING_POSE_VIOLATION,
 };
+pub use stop::{decided, Decided, StopRule};
 pub use study::{Constraint, Study, StudyObject, StudyScenario};
 
 /// The record of design `x` of problem `p` through `opts`' stages, on the problem's study

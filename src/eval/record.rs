@@ -338,6 +338,15 @@ impl Record {
     }
 }
 
+impl Record {
+    /// The object of a robust design's discard ([`RobustRecord::failed_object`]); None for a
+    /// single-object problem's record and for a feasible design.
+    pub fn failed_object(&self) -> Option<usize> {
+        let v = &self.verdict;
+        self.robust.as_ref()?.failed_object(v.failed_stage, v.cause)
+    }
+}
+
 /// What ended the offset scan of §6.7 (the record's `max_offset_ended_by`), written as its
 /// text (the model's `OffsetFailure::reason`: "finger 2: distal cannot reach the object",
 /// "force positiveness violated (min force -0.0123 N)", …). A force is held as the text

@@ -220,15 +220,6 @@ impl RobustRecord {
     }
 }
 
-impl super::Record {
-    /// The object of a robust design's discard ([`RobustRecord::failed_object`]); None for a
-    /// single-object problem's record and for a feasible design.
-    pub fn failed_object(&self) -> Option<usize> {
-        let v = &self.verdict;
-        self.robust.as_ref()?.failed_object(v.failed_stage, v.cause)
-    }
-}
-
 /// The robust part of `gripopt evaluate`'s report: per object its static objectives,
 /// P(stay) with its interval and the scenarios run.
 pub fn robust_summary(r: &RobustRecord) -> String {

@@ -332,17 +332,21 @@ impl Evaluation {
     pub fn feasible(&self) -> bool {
         self.discard.is_none()
     }
+    /// Objectives in their natural sense as the optimiser ranks them (max_offset, α, F̃,
+    /// t_stab; max_offset −Δ_off where not form closed, MODEL.md §6.7); None where not
+    /// computed, t_stab only for a design no stage discarded.
+    pub fn natural_objectives(&self) -> [Option<f64>; 4] {
+        let s = self.statics.as_ref();
+        let t = match (&self.dynamics, &self.discard) {
+            (Some(d), None) => d.t_stab,
+            _ => None,
+        };
+        [s.map(|s| s.max_offset), s.map(|s| s.alpha), s.map(|s| s.mean_force), t]
+    }
     /// Objectives in minimisation form (−max_offset, α, −F̃, t_stab); NaN where not computed.
     pub fn objectives(&self) -> [f64; 4] {
-        let (a, b, c) = match &self.statics {
-            Some(s) => (-s.max_offset, s.alpha, -s.mean_force),
-            None => (f64::NAN, f64::NAN, f64::NAN),
-        };
-        let t = match (&self.dynamics, &self.discard) {
-            (Some(d), None) => d.t_stab.unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        };
-        [a, b, c, t]
+        let o = self.natural_objectives();
+        std::array::from_fn(|k| o[k].map_or(f64::NAN, |v| super::objectives::OBJECTIVES[k].sense.sign() * v))
     }
 }
 

@@ -15,6 +15,7 @@ use super::archive::Archive;
 use super::gripper::{GripperInfo, GripperProblem};
 use super::robust_columns::{float_cell, line_with_floats, RobustColumns};
 use crate::cells::{line, Floats, RawCell};
+use crate::eval::OBJECTIVES;
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
 use crate::optim::Nsga2State;
@@ -48,10 +49,10 @@ pub const DESIGN_COLUMNS: [Column; 25] = [
     ("l22", "m", "derived length"),
     ("l_hand", "m", "hand length b + 2 t22 + 2 l21"),
     ("form_closed", "bool", "form closed at the centred object (false: max_offset is empty)"),
-    ("max_offset", "m", "objective, MAXIMISE: largest object offset still form closed"),
-    ("alpha", "-", "objective, MINIMISE: force isotropy (force model in force_model)"),
-    ("mean_force", "N", "objective, MAXIMISE: mean contact force"),
-    ("t_stab", "s", "objective, MINIMISE: time to stability"),
+    OBJECTIVES[0].column(),
+    OBJECTIVES[1].column(),
+    OBJECTIVES[2].column(),
+    OBJECTIVES[3].column(),
     ("sim_steps", "-", "accepted steps of the grasp simulation"),
     ("sim_rhs_evals", "-", "right-hand-side evaluations of the grasp simulation"),
     ("force_model", "text", "forces defining alpha and mean_force (mobilised or frictionless)"),
@@ -240,7 +241,8 @@ fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> Strin
     for (n, u) in &extra {
         let _ = write!(s, " {n} [{u}]");
     }
-    s.push_str("\n# objectives: max_offset maximise, alpha minimise, mean_force maximise, t_stab minimise\n");
+    let senses: Vec<String> = OBJECTIVES.iter().map(|o| format!("{} {}", o.name, o.sense.word())).collect();
+    let _ = writeln!(s, "\n# objectives: {}", senses.join(", "));
     if !extra.is_empty() {
         s.push_str("# robust problem: the objectives are aggregated over the objects and scenarios (docs/robust.md); NAME.* are per object\n");
     }

@@ -1,6 +1,7 @@
 //! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
 
 use super::gripper::{GripperInfo, GripperProblem};
+use crate::eval::OBJECTIVES;
 use crate::optim::Nsga2State;
 use crate::{Error, Result};
 use plotters::prelude::*;
@@ -15,19 +16,14 @@ fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl
 /// the non-dominated front in red, other feasible designs in grey, the problem's nominal
 /// design as a blue cross; axis names say which way is better.
 pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
-    let names = [
-        "max_offset (mm), higher better",
-        "alpha, lower better",
-        "mean force (N), higher better",
-        "t_stab (ms), lower better",
-    ];
+    let names = OBJECTIVES.map(|o| o.axis());
+    let scale = OBJECTIVES.map(|o| o.shown.1);
     let nominal = {
         use crate::optim::MooProblem;
         let ev = gp.evaluate(&gp.problem.nominal.to_array());
         let o = ev.info.record.objectives();
-        [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * [1e3, 1.0, 1.0, 1e3][k])
+        [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k])
     };
-    let scale = [1e3, 1.0, 1.0, 1e3];
     let pts: Vec<([f64; 4], bool)> = st
         .population
         .iter()
@@ -74,10 +70,10 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
         let mut mesh = chart.configure_mesh();
         mesh.x_labels(3).y_labels(3);
         if row == 3 {
-            mesh.x_desc(names[col]);
+            mesh.x_desc(names[col].as_str());
         }
         if col == 0 {
-            mesh.y_desc(names[row]);
+            mesh.y_desc(names[row].as_str());
         }
         mesh.draw().map_err(plot_error(path))?;
         if row == col {

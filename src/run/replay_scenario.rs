@@ -64,12 +64,19 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     let folder = RunFolder::open(dir)?;
     // it writes into the run folder: under its lock, as verify does
     let _lock = if record { Some(RunLock::acquire(dir)?) } else { None };
+    let not_robust = |file: PathBuf| Error::RunDir {
+        path: file,
+        message: "not a robust problem (no [robust]): --scenario needs one".into(),
+    };
+    let (p, file) = folder.problem_in_force()?;
+    if p.robust.is_none() {
+        return Err(not_robust(file));
+    }
     let rec = folder.design(id)?;
     // the problem the design's generation was evaluated with (issue 44 class 5)
     let (p, file) = folder.problem_file_of_generation(rec.record.generation)?;
-    let not = |m: String| Error::RunDir { path: file.clone(), message: m };
     if p.robust.is_none() {
-        return Err(not("not a robust problem (no [robust]): --scenario needs one".into()));
+        return Err(not_robust(file));
     }
     let opts = EvalOptions::full(&p);
     let study = Study::of(&p, &opts);
