@@ -4,7 +4,7 @@
 //! every design; or a deterministic centre-plus-corners design), how each objective is
 //! aggregated over them and the constraint P(object barely moves) ≥ p_min per object.
 
-use super::scene::{Object, SceneParams};
+use super::scene::{ObjectCase, SceneParams};
 use super::uncertainty::{Dist, Uncertainty, INPUTS, N_INPUTS};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -13,21 +13,6 @@ use serde::{Deserialize, Serialize};
 pub const STREAM_OPTIMISE: u64 = 0;
 /// The out-of-sample stream of `gripopt verify` on a robust run.
 pub const STREAM_VERIFY: u64 = 1;
-
-/// One object of a robust problem: its cylinder, grasp height and grip torque.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ObjectCase {
-    /// Its name (CSV columns `NAME.p_stay`, …).
-    pub name: String,
-    /// The cylinder and where it is grasped.
-    pub object: Object,
-    /// The grip torque τ the controller applies to this object (N·m; the spring preload is
-    /// sized once, at `[hand] tau`).
-    pub tau: f64,
-    /// The problem file its cylinder was taken from, as written (None: given inline).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub file: Option<String>,
-}
 
 /// How the scenarios are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

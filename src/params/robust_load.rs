@@ -2,8 +2,8 @@
 //! uncertain inputs are the ones listed), errors naming the file and the field.
 
 use super::checker::Checker;
-use super::robust::{corner_count, Aggregation, ObjectCase, Robust, Sampling};
-use super::scene::{Object, SceneParams};
+use super::robust::{corner_count, Aggregation, Robust, Sampling};
+use super::scene::{Object, ObjectCase, SceneParams};
 use super::uncertainty::{input_slot, phi, Dist, Uncertainty, INPUTS};
 use super::SceneKind;
 use crate::Result;

@@ -3,8 +3,7 @@
 //! that every input has its own fixed slot in a scenario's random stream (common random
 //! numbers: adding or removing one uncertain input changes no other input's draws).
 
-use super::robust::ObjectCase;
-use super::scene::SceneParams;
+use super::scene::{ObjectCase, SceneParams};
 use serde::{Deserialize, Serialize};
 
 /// A distribution of one uncertain input.
