@@ -12,6 +12,7 @@
 //! as every output reports them).
 
 mod binomial;
+mod certify;
 mod chance;
 mod fold;
 mod objectives;
@@ -25,6 +26,7 @@ mod stop;
 mod study;
 
 pub use binomial::{binomial_cdf, clopper_pearson};
+pub use certify::{CertificationRecord, CertifyPlan, CertifyRule, ObjectCertification, ObjectDecision};
 pub use fold::Folded;
 pub use objectives::{minimised, objective_names, Objective, Objectives, Sense, OBJECTIVES};
 pub use record::{

@@ -19,7 +19,10 @@ pub use limits::num as fmt_num;
 pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
 pub use method::Method;
-pub use robust::{corner_count, describe, Aggregation, Robust, Sampling, Scenario, STREAM_OPTIMISE, STREAM_VERIFY};
+pub use robust::{
+    corner_count, describe, Aggregation, Certify, Robust, Sampling, Scenario, STREAM_CERTIFY, STREAM_OPTIMISE,
+    STREAM_VERIFY,
+};
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, ObjectCase, SceneParams};
 pub use scene_kind::{SceneKind, SceneSetup};
 pub use uncertainty::{input_slot, phi, phi_inv, Dist, InputRow, Uncertainty, INPUTS, N_INPUTS};

@@ -13,6 +13,55 @@ use serde::{Deserialize, Serialize};
 pub const STREAM_OPTIMISE: u64 = 0;
 /// The out-of-sample stream of `gripopt verify` on a robust run.
 pub const STREAM_VERIFY: u64 = 1;
+/// The stream of the certification of a robust run's front (issue 41): scenarios neither
+/// the search nor `verify` uses.
+pub const STREAM_CERTIFY: u64 = 2;
+
+/// `[robust.certify]`: how a robust run certifies its front on fresh scenarios — a
+/// group-sequential one-sided exact binomial test per object of H₀: P(stay) < p_min, at
+/// level 1 − `confidence` split evenly over the looks (docs/robust.md, "Certification").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Certify {
+    /// Certify the front (false: pareto.csv is the search front, uncertified).
+    pub enabled: bool,
+    /// 1 − α of the test (e.g. 0.95).
+    pub confidence: f64,
+    /// Scenarios per object at each look, increasing (e.g. [24, 48]).
+    pub looks: Vec<usize>,
+}
+
+impl Certify {
+    /// The default plan for `p_min` at `confidence`: two looks, the first the fewest
+    /// scenarios that can certify an object that stayed in all of them at level α/2
+    /// (n₁ = ⌈ln(α/2) / ln p_min⌉), the second twice as many. None when p_min is 0 (nothing
+    /// to certify) or 1 (no finite sample certifies).
+    pub fn default_looks(p_min: f64, confidence: f64) -> Option<Vec<usize>> {
+        if !(p_min > 0.0 && p_min < 1.0) {
+            return None;
+        }
+        let alpha = (1.0 - confidence) / 2.0;
+        let n1 = (alpha.ln() / p_min.ln()).ceil().max(1.0) as usize;
+        Some(vec![n1, 2 * n1])
+    }
+
+    /// Why this plan cannot certify any object at `p_min` (None: it can): at its last look
+    /// an object that stayed in every scenario must reject H₀ at α/L, i.e. p_minⁿ ≤ α/L.
+    pub fn check(&self, p_min: f64) -> Result<(), String> {
+        let Some(&n) = self.looks.last() else {
+            return Err("must name at least one look".into());
+        };
+        let a = (1.0 - self.confidence) / self.looks.len() as f64;
+        if p_min >= 1.0 || p_min.powi(n as i32) > a {
+            let need = if p_min < 1.0 { format!("{}", (a.ln() / p_min.ln()).ceil()) } else { "infinitely many".into() };
+            return Err(format!(
+                "cannot certify any design at p_min {p_min}: even {n} of {n} staying leaves P(stay) < p_min possible at level {a:.4} (α {:.3} split over {} looks); the last look needs at least {need} scenarios (or set [robust.certify] enabled = false)",
+                1.0 - self.confidence,
+                self.looks.len()
+            ));
+        }
+        Ok(())
+    }
+}
 
 /// How the scenarios are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -90,6 +139,8 @@ pub struct Robust {
     pub early_stop: bool,
     /// Scenarios per object of `gripopt verify`'s out-of-sample draw.
     pub verify_scenarios: usize,
+    /// How the front is certified on fresh scenarios.
+    pub certify: Certify,
 }
 
 /// One scenario: an object and the values of every uncertain input (nominal where fixed).
@@ -137,6 +188,7 @@ impl Robust {
         match (self.sampling, stream) {
             (Sampling::Corners, STREAM_OPTIMISE) => corner_count(self.uncertainty.uncertain().len()),
             (_, STREAM_OPTIMISE) => self.scenarios,
+            (_, STREAM_CERTIFY) => self.certify.looks.last().copied().unwrap_or(0),
             _ => self.verify_scenarios,
         }
     }

@@ -2,7 +2,7 @@
 //! uncertain inputs are the ones listed), errors naming the file and the field.
 
 use super::checker::Checker;
-use super::robust::{corner_count, Aggregation, Robust, Sampling};
+use super::robust::{corner_count, Aggregation, Certify, Robust, Sampling};
 use super::scene::{Object, ObjectCase, SceneParams};
 use super::uncertainty::{input_slot, phi, Dist, Uncertainty, INPUTS};
 use super::SceneKind;
@@ -27,6 +27,17 @@ pub(super) struct RawRobust {
     aggregate: RawAggregate,
     objects: Vec<RawObjectCase>,
     uncertainty: RawUncertainty,
+    #[serde(default)]
+    certify: RawCertify,
+}
+
+/// `[robust.certify]` as written: every key optional (defaults from p_min).
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawCertify {
+    enabled: Option<bool>,
+    confidence: Option<f64>,
+    looks: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -104,6 +115,7 @@ impl RawRobust {
         ];
         let objects = self.objects(scene, c)?;
         let uncertainty = self.uncertainty.validate(c)?;
+        let certify = self.certify.validate(p_min, c)?;
         let robust = Robust {
             objects,
             uncertainty,
@@ -115,6 +127,7 @@ impl RawRobust {
             confidence: self.confidence,
             early_stop: self.early_stop,
             verify_scenarios,
+            certify,
         };
         check_supports(&robust, scene, c)?;
         if sampling == Sampling::Corners {
@@ -210,6 +223,55 @@ impl RawRobust {
             out.push(ObjectCase { name: o.name.clone(), object, tau, file: o.file.clone() });
         }
         Ok(out)
+    }
+}
+
+impl RawCertify {
+    fn validate(&self, p_min: f64, c: &Checker<'_>) -> Result<Certify> {
+        let confidence = self.confidence.unwrap_or(0.95);
+        if !(confidence > 0.0 && confidence < 1.0) {
+            return Err(c.fail("robust.certify.confidence", format!("{confidence}"), "must be in (0, 1), e.g. 0.95"));
+        }
+        // p_min 0 has no chance constraint to certify, p_min 1 no finite sample certifies:
+        // certification is on by default in between
+        let enabled = self.enabled.unwrap_or(p_min > 0.0 && p_min < 1.0);
+        if enabled && p_min == 0.0 {
+            return Err(c.fail(
+                "robust.certify.enabled",
+                "true".into(),
+                "p_min = 0 sets no chance constraint to certify (leave [robust.certify] out)",
+            ));
+        }
+        let looks = match (&self.looks, Certify::default_looks(p_min, confidence)) {
+            (Some(v), _) => {
+                let mut looks = Vec::with_capacity(v.len());
+                for (i, &n) in v.iter().enumerate() {
+                    let n = whole(c, &format!("robust.certify.looks[{i}]"), n, 1.0, 4096.0)?;
+                    if looks.last().is_some_and(|&m| n <= m) {
+                        return Err(c.fail(
+                            "robust.certify.looks",
+                            format!("{v:?}"),
+                            "must increase (scenarios per object at each look)",
+                        ));
+                    }
+                    looks.push(n);
+                }
+                if looks.is_empty() || looks.len() > 8 {
+                    return Err(c.fail("robust.certify.looks", format!("{v:?}"), "must hold 1 to 8 looks"));
+                }
+                looks
+            }
+            (None, Some(d)) => d,
+            // p_min 0 (no chance constraint) or 1 (no sample certifies): nothing to plan
+            (None, None) => vec![],
+        };
+        let plan = Certify { enabled, confidence, looks };
+        if enabled {
+            if let Err(why) = plan.check(p_min) {
+                return Err(c.fail("robust.certify.looks", format!("{:?}", plan.looks), &why));
+            }
+        }
+        Ok(plan)
     }
 }
 

@@ -8,6 +8,7 @@
 
 mod archive;
 mod attribution;
+mod certify;
 mod checkpoint;
 mod checkpoint_json;
 mod contents;
@@ -35,6 +36,7 @@ mod verify_run;
 
 pub use crate::error::{counted, printable, shell_quote};
 pub use archive::{Archive, DiscardCause, Discards};
+pub use certify::{certification_study, certify_front, CertifiedFront};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
