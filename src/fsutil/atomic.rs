@@ -1,0 +1,194 @@
+//! The one way a file gripopt writes reaches its name ([`AtomicFile`], [`write_atomic`],
+//! [`write_rendered`]): a new temporary file beside it (`.NAME.tmp`, created new, never
+//! opened through whatever stands at that name, and locked while it is written), synced,
+//! then renamed into place and the folder synced. A kill mid-write leaves the earlier file
+//! whole; the file at the name is replaced, never written into.
+//!
+//! Nothing is written through, or replaces, a link: a symbolic link at the name (it would
+//! send the write outside the folder, or replace what the user linked) and a file with
+//! several names (a hard link: `cp -al` backups share every file with the folder they
+//! copy) are refused, before the temporary file is made and again just before the rename
+//! ([`check_replaceable`]).
+
+use crate::{Error, Result};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The temporary file beside `path` that [`AtomicFile`] writes and renames into place.
+pub fn temporary(path: &Path) -> PathBuf {
+    let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+/// Why the name `path` may not be replaced by a new file, if it may not: a symbolic link
+/// (whatever it names, or nothing), or a regular file with more than one name (hard
+/// links). Nothing there, a regular file with one name, or what cannot be examined (the
+/// write names what is wrong) pass.
+pub fn link_at(path: &Path) -> Option<String> {
+    let m = std::fs::symlink_metadata(path).ok()?;
+    if m.file_type().is_symlink() {
+        let to = std::fs::read_link(path).map(|t| format!(" to {}", t.display())).unwrap_or_default();
+        return Some(format!(
+            "is a symbolic link{to}: gripopt never writes through a link nor replaces one; remove the link (`rm` removes the link, not what it names) or give another name"
+        ));
+    }
+    let names = links(&m);
+    (m.is_file() && names > 1).then(|| {
+        format!(
+            "is a file with {names} names (hard links, as `cp -al` or `ln` make): gripopt never replaces a file another name shares; give the file a name of its own (`cp FILE TMP && mv TMP FILE`), or copy folders with `cp -a`"
+        )
+    })
+}
+
+/// The number of names (hard links) of the file `m` describes (1 where unknown).
+fn links(m: &std::fs::Metadata) -> u64 {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        m.nlink()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = m;
+        1
+    }
+}
+
+/// Refuse (naming `path`) to replace the name `path` when [`link_at`] says why not.
+pub fn check_replaceable(path: &Path) -> Result<()> {
+    match link_at(path) {
+        Some(message) => Err(Error::RunDir { path: path.to_path_buf(), message }),
+        None => Ok(()),
+    }
+}
+
+/// A file being written to a temporary name beside its own, renamed into place by
+/// [`AtomicFile::commit`]; dropped uncommitted, the temporary file is removed.
+pub struct AtomicFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: Option<BufWriter<File>>,
+}
+
+impl AtomicFile {
+    /// Start writing `path`: refused when a link stands at it ([`check_replaceable`]); the
+    /// temporary file `.NAME.tmp` is created new (a stale one, whose writer is gone, is
+    /// replaced — a link there is removed, never followed; one another process is writing
+    /// right now is an error; a folder there makes the create fail, naming it) and locked.
+    pub fn create(path: &Path) -> Result<Self> {
+        check_replaceable(path)?;
+        let tmp = temporary(path);
+        clear_stale(path, &tmp)?;
+        let mut open = std::fs::OpenOptions::new();
+        open.write(true).create_new(true);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            open.custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC);
+        }
+        let file = open.open(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+        // held until the rename: another writer of the same file finds it busy, not stale
+        let _ = file.try_lock();
+        Ok(AtomicFile { path: path.to_path_buf(), tmp, out: Some(BufWriter::with_capacity(1 << 16, file)) })
+    }
+
+    /// The temporary file being written.
+    pub fn temporary_path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Flush and sync the temporary file, check the name again ([`check_replaceable`]: a
+    /// link put there meanwhile is refused, the temporary file removed), rename it into
+    /// place and sync the folder. Errors name the file (or the temporary file).
+    pub fn commit(mut self) -> Result<()> {
+        let out = self.out.take().expect("committed once");
+        let done = (|| {
+            let f = out.into_inner().map_err(|e| Error::io(&self.tmp, "cannot write", e.into_error()))?;
+            f.sync_all().map_err(|e| Error::io(&self.tmp, "cannot sync", e))?;
+            check_replaceable(&self.path)?;
+            std::fs::rename(&self.tmp, &self.path)
+                .map_err(|e| Error::io(&self.path, "cannot rename the temporary file into place", e))
+        })();
+        if done.is_err() {
+            // nothing half-written left behind (the file at the name is untouched)
+            let _ = std::fs::remove_file(&self.tmp);
+            return done;
+        }
+        let dir = self.path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.as_mut().expect("not committed").write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.as_mut().expect("not committed").flush()
+    }
+}
+
+impl Drop for AtomicFile {
+    /// Uncommitted (a failed write): the temporary file goes.
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Make way for a new temporary file `tmp` of `path`: a link there is removed (the link,
+/// not what it names); a regular file whose writer is gone (it is not locked) is removed;
+/// one that another process holds is an error naming `path` (exit 1: two commands write
+/// the same file at once). A folder is left (the create then fails, naming it).
+fn clear_stale(path: &Path, tmp: &Path) -> Result<()> {
+    let Ok(m) = std::fs::symlink_metadata(tmp) else { return Ok(()) };
+    if m.file_type().is_symlink() {
+        let _ = std::fs::remove_file(tmp);
+        return Ok(());
+    }
+    if !m.is_file() {
+        return Ok(());
+    }
+    let mut open = std::fs::OpenOptions::new();
+    open.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        open.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC);
+    }
+    let Ok(f) = open.open(tmp) else { return Ok(()) };
+    match f.try_lock() {
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::io(
+            path,
+            "cannot write",
+            std::io::Error::new(
+                std::io::ErrorKind::ResourceBusy,
+                format!("another process is writing this file right now (its temporary file {} is in use); wait for it to finish", tmp.display()),
+            ),
+        )),
+        _ => {
+            let _ = std::fs::remove_file(tmp);
+            Ok(())
+        }
+    }
+}
+
+/// Write `bytes` to `path` atomically ([`AtomicFile`]). Errors name the file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| Error::io(f.temporary_path(), "cannot write", e))?;
+    f.commit()
+}
+
+/// Write to `path` atomically what `render` puts into a text (an SVG drawn into a string):
+/// nothing is written when it fails.
+pub fn write_rendered(path: &Path, render: impl FnOnce(&mut String) -> Result<()>) -> Result<()> {
+    let mut text = String::new();
+    render(&mut text)?;
+    write_atomic(path, text.as_bytes())
+}
