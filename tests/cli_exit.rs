@@ -300,3 +300,31 @@ fn numbers_in_messages_never_run_to_hundreds_of_digits() {
     assert_eq!(gripopt::run::short_num(0.12345, 4), "0.1235");
     assert_eq!(gripopt::run::exact_num(1e-300), "1e-300");
 }
+
+/// Issue 44 class 3: writers of one file at the same moment (two exports to one `--out`)
+/// raced on its temporary file: one failed with "File exists" or "No such file", reported as
+/// bad input (exit 2). Now the temporary file is locked before it takes its name: each write
+/// either lands whole or fails as busy (exit 1), and the file always holds one whole write.
+#[test]
+fn writers_of_one_file_at_once_never_fail_as_bad_input() {
+    let d = scratch("i44-writers-race");
+    let f = d.join("out.txt");
+    let texts: Vec<String> = (0..4).map(|k| format!("{k}").repeat(200_000)).collect();
+    std::thread::scope(|s| {
+        for t in &texts {
+            let f = &f;
+            s.spawn(move || {
+                for _ in 0..50 {
+                    if let Err(e) = gripopt::write_atomic(f, t.as_bytes()) {
+                        assert_eq!(e.exit_code(), 1, "{e}");
+                    }
+                }
+            });
+        }
+    });
+    let got = std::fs::read_to_string(&f).unwrap();
+    assert!(texts.contains(&got), "a mixed or partial file");
+    let names: Vec<String> =
+        std::fs::read_dir(&d).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, vec!["out.txt".to_string()], "temporary files left");
+}

@@ -1,7 +1,7 @@
 //! The one way a file gripopt writes reaches its name ([`AtomicFile`], [`write_atomic`],
-//! [`write_rendered`]): a new temporary file beside it (`.NAME.tmp`, created new, never
-//! opened through whatever stands at that name, and locked while it is written), synced,
-//! then renamed into place and the folder synced. A kill mid-write leaves the earlier file
+//! [`write_rendered`]): a new temporary file beside it (`.NAME.tmp`, created new under a
+//! name of the process's own, never opened through whatever stands at that name, and locked
+//! while it is written), synced, then renamed into place and the folder synced. A kill mid-write leaves the earlier file
 //! whole; the file at the name is replaced, never written into.
 //!
 //! Nothing is written through, or replaces, a link: a symbolic link at the name (it would
@@ -72,14 +72,23 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
-    /// Start writing `path`: refused when a link stands at it ([`check_replaceable`]); the
-    /// temporary file `.NAME.tmp` is created new (a stale one, whose writer is gone, is
-    /// replaced — a link there is removed, never followed; one another process is writing
-    /// right now is an error; a folder there makes the create fail, naming it) and locked.
+    /// Start writing `path`: refused when a link stands at it ([`check_replaceable`]). The
+    /// temporary file is made under a name of this process's own (`.NAME.PID.tmp`: created
+    /// new, never through a link), locked, and only then given the name `.NAME.tmp` (a hard
+    /// link, which never replaces anything): another writer of the same file at the same
+    /// moment finds it locked (an error naming `path`, exit 1), never half-made. A stale
+    /// `.NAME.tmp` (its writer gone: not locked) is replaced, a link there removed (never
+    /// followed), a folder there makes the create fail, naming it. Where the file system has
+    /// no hard links, the process's own name is the temporary file.
     pub fn create(path: &Path) -> Result<Self> {
         check_replaceable(path)?;
         let tmp = temporary(path);
-        clear_stale(path, &tmp)?;
+        let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+        let own = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        // a leftover of a killed process that had this pid: no other process uses the name
+        if std::fs::symlink_metadata(&own).is_ok_and(|m| !m.is_dir()) {
+            let _ = std::fs::remove_file(&own);
+        }
         let mut open = std::fs::OpenOptions::new();
         open.write(true).create_new(true);
         #[cfg(unix)]
@@ -87,9 +96,21 @@ impl AtomicFile {
             use std::os::unix::fs::OpenOptionsExt;
             open.custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC);
         }
-        let file = open.open(&tmp).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+        let file = open.open(&own).map_err(|e| Error::io(&tmp, "cannot create", e))?;
         // held until the rename: another writer of the same file finds it busy, not stale
         let _ = file.try_lock();
+        let claimed = claim(path, &own, &tmp);
+        let tmp = match claimed {
+            Ok(true) => {
+                let _ = std::fs::remove_file(&own);
+                tmp
+            }
+            Ok(false) => own, // no hard links here
+            Err(e) => {
+                let _ = std::fs::remove_file(&own);
+                return Err(e);
+            }
+        };
         Ok(AtomicFile { path: path.to_path_buf(), tmp, out: Some(BufWriter::with_capacity(1 << 16, file)) })
     }
 
@@ -141,18 +162,51 @@ impl Drop for AtomicFile {
     }
 }
 
-/// Make way for a new temporary file `tmp` of `path`: a link there is removed (the link,
-/// not what it names); a regular file whose writer is gone (it is not locked) is removed;
-/// one that another process holds is an error naming `path` (exit 1: two commands write
-/// the same file at once). A folder is left (the create then fails, naming it).
-fn clear_stale(path: &Path, tmp: &Path) -> Result<()> {
-    let Ok(m) = std::fs::symlink_metadata(tmp) else { return Ok(()) };
+/// Give the locked file `own` the temporary name `tmp` of `path` (a hard link: it never
+/// replaces what is there): true once it has it; false where the file system has no hard
+/// links. A stale file at `tmp` (not locked: its writer is gone) is removed first, a link
+/// there removed (never followed); one another process holds is an error naming `path`
+/// (exit 1: two commands write the same file at once); a folder there is an error naming
+/// it.
+fn claim(path: &Path, own: &Path, tmp: &Path) -> Result<bool> {
+    for _ in 0..8 {
+        match std::fs::hard_link(own, tmp) {
+            Ok(()) => return Ok(true),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                if !clear_stale(path, tmp)? {
+                    return Err(Error::io(tmp, "cannot create", e));
+                }
+            }
+            Err(_) => return Ok(false),
+        }
+    }
+    Err(busy(path, tmp))
+}
+
+/// The error of a file another process is writing right now.
+fn busy(path: &Path, tmp: &Path) -> Error {
+    Error::io(
+        path,
+        "cannot write",
+        std::io::Error::new(
+            std::io::ErrorKind::ResourceBusy,
+            format!("another process is writing this file right now (its temporary file {} is in use); wait for it to finish", tmp.display()),
+        ),
+    )
+}
+
+/// Make way at `tmp`, the temporary name of `path`: a link there is removed (the link, not
+/// what it names); a regular file whose writer is gone (it is not locked) is removed; one
+/// that another process holds is an error naming `path` ([`busy`]). False: a folder (or
+/// another kind of file) stands there and stays.
+fn clear_stale(path: &Path, tmp: &Path) -> Result<bool> {
+    let Ok(m) = std::fs::symlink_metadata(tmp) else { return Ok(true) };
     if m.file_type().is_symlink() {
         let _ = std::fs::remove_file(tmp);
-        return Ok(());
+        return Ok(true);
     }
     if !m.is_file() {
-        return Ok(());
+        return Ok(false);
     }
     let mut open = std::fs::OpenOptions::new();
     open.read(true);
@@ -161,20 +215,30 @@ fn clear_stale(path: &Path, tmp: &Path) -> Result<()> {
         use std::os::unix::fs::OpenOptionsExt;
         open.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC);
     }
-    let Ok(f) = open.open(tmp) else { return Ok(()) };
+    let Ok(f) = open.open(tmp) else { return Ok(true) };
     match f.try_lock() {
-        Err(std::fs::TryLockError::WouldBlock) => Err(Error::io(
-            path,
-            "cannot write",
-            std::io::Error::new(
-                std::io::ErrorKind::ResourceBusy,
-                format!("another process is writing this file right now (its temporary file {} is in use); wait for it to finish", tmp.display()),
-            ),
-        )),
+        Err(std::fs::TryLockError::WouldBlock) => Err(busy(path, tmp)),
         _ => {
-            let _ = std::fs::remove_file(tmp);
-            Ok(())
+            // still the file locked here at that name (not one another writer put there since)
+            if same_inode(&f, tmp) {
+                let _ = std::fs::remove_file(tmp);
+            }
+            Ok(true)
         }
+    }
+}
+
+/// The open file `f` is the one at `path` now (device and inode; links not followed).
+fn same_inode(f: &File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        matches!((f.metadata(), std::fs::symlink_metadata(path)), (Ok(a), Ok(b)) if (a.dev(), a.ino()) == (b.dev(), b.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (f, path);
+        true
     }
 }
 

@@ -144,11 +144,13 @@ pub fn scenario_records(problem: &crate::params::Problem) -> u64 {
 /// memory, and the checkpoint of the population and an archive as large, within the size
 /// a checkpoint is read back at ([`crate::fsutil::caps::CHECKPOINT`]): a run is never
 /// started that cannot be resumed. The error gives the estimates and the largest population
-/// that fits.
-pub fn check_record_size(problem: &crate::params::Problem, pop: usize, recording: bool) -> Result<()> {
+/// that fits. A note (for the caller to show) when that checkpoint would take more than half
+/// of the cap: an archive that grows to several times the population would reach it, and a
+/// checkpoint past the cap is never written (the run stops at the last one that fits).
+pub fn check_record_size(problem: &crate::params::Problem, pop: usize, recording: bool) -> Result<Option<String>> {
     let n = scenario_records(problem);
     if n == 0 {
-        return Ok(());
+        return Ok(None);
     }
     let per_record =
         n * (RECORD_COPIES * std::mem::size_of::<crate::eval::ScenarioRecord>() as u64 + 2 * BYTES_PER_SCENARIO_JSON);
@@ -188,7 +190,14 @@ pub fn check_record_size(problem: &crate::params::Problem, pop: usize, recording
             if known { "available" } else { "assumed (memory unknown)" }
         )));
     }
-    Ok(())
+    Ok((checkpoint > cap / 2.0).then(|| {
+        format!(
+            "note: {what}: the checkpoint of the population and an archive as large takes about {}; an archive {:.1} times the population would pass the {} a checkpoint is read back at, and the run would stop at its last checkpoint that fits (fewer scenarios or objects, or a smaller --pop, leave room)",
+            gib(checkpoint),
+            cap / (pop as f64 * checkpoint_per) - 1.0,
+            gib(cap)
+        )
+    }))
 }
 
 /// Memory per design of `--sample N` (bytes), without a recording: the drawn batch, the

@@ -161,7 +161,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     let problem = Problem::load(&spec.problem_path)?;
     problem.check_self_contained(&spec.problem_path)?;
     // what the designs' records hold, before anything is written
-    super::limits::check_record_size(&problem, spec.pop, spec.record.enabled)?;
+    let size_note = super::limits::check_record_size(&problem, spec.pop, spec.record.enabled)?;
     if spec.out.exists() && !spec.out.is_dir() {
         return Err(Error::RunDir {
             path: spec.out.clone(),
@@ -180,7 +180,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     let lock = RunLock::acquire(&spec.out)?;
     // again under the lock: another process may have started meanwhile
     let earlier = Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
-    let mut notes = vec![];
+    let mut notes: Vec<String> = size_note.into_iter().collect();
     for f in &earlier.remove {
         // files of the earlier attempt that never reached its first checkpoint (content proven)
         std::fs::remove_file(f).map_err(|e| Error::io(f, "cannot remove a file of the earlier attempt", e))?;
@@ -379,7 +379,7 @@ pub fn resume_with(
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
     super::invariants::check_id_budget(&cp.state, cp.settings.pop_size, &cp_path, total)?;
-    super::limits::check_record_size(&problem, cp.settings.pop_size, info.recording.enabled)?;
+    let size_note = super::limits::check_record_size(&problem, cp.settings.pop_size, info.recording.enabled)?;
     if total < cp.state.generation {
         return Err(Error::Input(format!(
             "--generations {total}: the run already has {} generations",
@@ -399,7 +399,7 @@ pub fn resume_with(
         forced: problem_changed || notes.iter().any(|n| n.starts_with("forced")),
         note: notes.join("; "),
     });
-    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).collect();
+    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).chain(size_note).collect();
     info.generations = total;
     info.status = RunStatus::Running;
     info.completed_generations = at;
