@@ -63,6 +63,9 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
     }
 }
 
+/// Writes made by this process (what makes their first temporary names unique).
+static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 /// A file being written to a temporary name beside its own, renamed into place by
 /// [`AtomicFile::commit`]; dropped uncommitted, the temporary file is removed.
 pub struct AtomicFile {
@@ -73,7 +76,7 @@ pub struct AtomicFile {
 
 impl AtomicFile {
     /// Start writing `path`: refused when a link stands at it ([`check_replaceable`]). The
-    /// temporary file is made under a name of this process's own (`.NAME.PID.tmp`: created
+    /// temporary file is made under a name of this write's own (`.NAME.PID-N.tmp`: created
     /// new, never through a link), locked, and only then given the name `.NAME.tmp` (a hard
     /// link, which never replaces anything): another writer of the same file at the same
     /// moment finds it locked (an error naming `path`, exit 1), never half-made. A stale
@@ -84,11 +87,6 @@ impl AtomicFile {
         check_replaceable(path)?;
         let tmp = temporary(path);
         let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-        let own = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        // a leftover of a killed process that had this pid: no other process uses the name
-        if std::fs::symlink_metadata(&own).is_ok_and(|m| !m.is_dir()) {
-            let _ = std::fs::remove_file(&own);
-        }
         let mut open = std::fs::OpenOptions::new();
         open.write(true).create_new(true);
         #[cfg(unix)]
@@ -96,7 +94,17 @@ impl AtomicFile {
             use std::os::unix::fs::OpenOptionsExt;
             open.custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC);
         }
-        let file = open.open(&own).map_err(|e| Error::io(&tmp, "cannot create", e))?;
+        // a name no other write uses: this process's id and a counter of its writes (a name
+        // taken, by a killed process that had this id, is skipped, never removed)
+        let (own, file) = loop {
+            let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let own = path.with_file_name(format!(".{name}.{}-{n}.tmp", std::process::id()));
+            match open.open(&own) {
+                Ok(f) => break (own, f),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n % 64 != 63 => continue,
+                Err(e) => return Err(Error::io(&tmp, "cannot create", e)),
+            }
+        };
         // held until the rename: another writer of the same file finds it busy, not stale
         let _ = file.try_lock();
         let claimed = claim(path, &own, &tmp);
