@@ -80,7 +80,10 @@ pub use facade::{
     trajectory_columns, trajectory_row, EvaluatedRow, Optimiser, Simulation, Stages, FINGER2_COLUMNS, POSE_COLUMNS,
     SAMPLE_COLUMNS,
 };
-pub use fsutil::{check_new_file, check_output_file, run_folder_around, run_folder_file, write_atomic};
+pub use fsutil::{
+    check_new_file, check_output_file, run_folder_around, run_folder_file, set_aside, write_atomic, AtomicFile,
+    SET_ASIDE_DIR,
+};
 pub use optim::{Batch, Evaluations, Evaluator, Infeasibility};
 pub use params::{Bounds, Design, DesignParameters, Problem, SceneKind, DESIGN_NAMES};
 pub use record::{DesignMessage, RecordOptions, Recorded, Replay, Resolution, TrajectoryKeep};

@@ -238,6 +238,13 @@ fn check_scaling_flags(
     Ok(())
 }
 
+/// The lock of a benchmark's output folder `dir` (created), held while the benchmark writes
+/// its tables there: a held one is refused, naming the holder.
+fn lock_out(dir: &std::path::Path) -> Result<gripopt::run::RunLock> {
+    std::fs::create_dir_all(dir).map_err(|e| gripopt::Error::io(dir, "cannot create the output folder", e))?;
+    Ok(gripopt::run::RunLock::acquire(dir)?)
+}
+
 /// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
 /// the figures as one JSON object on stdout.
 pub fn run(b: BenchCmd, json: bool) -> Result<()> {
@@ -300,6 +307,7 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             gripopt::bench::check_atol(atol)?;
             let p = super::load_problem(&target.problem)?;
             robust_note(&p, &target.problem, "work-precision");
+            let _lock = lock_out(&target.out)?;
             let b = EnsembleBench { sample: n, seed, out_dir: target.out, atol };
             gripopt::bench::work_precision_ensemble(&p, &target.problem, &b, out, &bars)?
         }
@@ -307,6 +315,7 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             at_least_one("--reps", reps)?;
             gripopt::bench::check_atol(atol)?;
             let (p, x) = target.load("work-precision")?;
+            let _lock = lock_out(&target.out)?;
             gripopt::bench::work_precision(
                 &p,
                 &x,
@@ -318,6 +327,7 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         BenchCmd::Free { target, reps, atol, rtols, no_dense } => {
             at_least_one("--reps", reps)?;
             let (p, x) = target.load("free")?;
+            let _lock = lock_out(&target.out)?;
             let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
             gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out, &bars)?
         }

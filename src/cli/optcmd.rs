@@ -295,7 +295,7 @@ pub fn replay(
         Some(s) => outln!(
             "  DISCARDED at stage {s}: {} (violation {})",
             rec.reason.as_deref().unwrap_or(""),
-            rec.violation.map_or("null".into(), |v| v.to_string())
+            rec.violation.map_or("null".into(), gripopt::run::exact_num)
         ),
         None => outln!("  feasible; objectives {}", text(serde_json::to_string(&rec.objectives))),
     }

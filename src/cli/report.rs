@@ -125,7 +125,8 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
     match (&v.failed_stage, &v.reason) {
         (Some(s), Some(why)) => {
             let why = with_hint(why, p);
-            outln!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
+            let violation = gripopt::run::short_num(v.violation.unwrap_or(0.0), 4);
+            outln!("verdict    DISCARDED at stage {s}: {why} (violation {violation})")
         }
         _ => {
             // the record's objectives: null (—) where not computed, e.g. max_offset of a

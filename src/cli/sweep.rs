@@ -117,9 +117,9 @@ pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
 /// Run the sweep.
 pub fn run(a: SweepArgs) -> Result<()> {
     let spec = spec_of(&a)?;
-    // the folder is checked before anything is evaluated (a run folder, a file a sweep did
-    // not write: refused); an earlier sweep's files are replaced
-    let earlier = sweep::out::check_out_folder(&a.out)?;
+    // the folder is locked and checked before anything is evaluated (a run folder, a file a
+    // sweep did not write: refused); an earlier sweep's files are replaced
+    let (_lock, earlier) = sweep::out::open_out_folder(&a.out)?;
     if spec.problem.robust.is_some() {
         // said before anything runs: a sweep evaluates the single-object pipeline
         eprintln!(
@@ -175,6 +175,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
         sweep::write_boundaries(&a.out, &spec, &bounds)?;
     }
     let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, &a.color, &bounds)?;
+    sweep::seal(&a.out, &spec, &rows, &planned)?;
     summary(&a.out, &rows, &bounds, &files);
     Ok(())
 }

@@ -234,7 +234,8 @@ impl Problem {
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self> {
         let raw: RawFile = toml::from_str(text)
             .map_err(|e| {
-                let mut message = e.to_string().trim_end().to_string();
+                // what toml echoes of the file (a line of 800 kB) cut to a readable length
+                let mut message = crate::error::cap_lines(e.to_string().trim_end(), 200);
                 if message.contains("missing field `force_model`") {
                     // files written before MODEL.md v2 (D22), e.g. the copy in an older run folder
                     message.push_str("\n(problem files from before MODEL.md v2 lack `criteria.force_model`: add `force_model = \"frictionless\"` to reproduce a run as it was computed, or \"mobilised\" for the thesis's forces, D22)");

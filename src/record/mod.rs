@@ -50,7 +50,9 @@ pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
 };
 pub use proto::{GraspSeries, SERIES_NAME};
-pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
+pub use recover::{
+    index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, shard_metadata, Recovery,
+};
 pub use replay::{problem_of_generation, read_design, replay, AcrossRevisions, Recorded, Replay, RunProblem};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};

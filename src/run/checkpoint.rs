@@ -210,7 +210,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         self
     }
 
-    /// Save atomically, with the content checksum `sha256`.
+    /// Save atomically, with the content checksum `sha256`. A checkpoint larger than it is
+    /// read back at ([`crate::fsutil::caps::CHECKPOINT`]) is refused (the earlier one stays).
     pub fn save(&self, path: &Path) -> Result<()> {
         write_atomic(path, &self.to_bytes(path)?)
     }
@@ -226,6 +227,16 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         // streamed twice, never as a tree: the content into its hash, then the file's bytes
         // with the hash at its sorted place (`,"sha256":"…"`)
         let (sum, len) = checkpoint_json::sha256_of(self, SORTED_STRUCTS).map_err(ser)?;
+        if len as u64 > crate::fsutil::caps::CHECKPOINT {
+            // it could never be read back: the earlier checkpoint stays the run's last
+            return Err(Error::Checkpoint {
+                file: path.to_path_buf(),
+                message: format!(
+                    "would be {len} bytes, more than the {} bytes a checkpoint is read back at: not written (the earlier checkpoint resumes the run); the population and archive hold too many robust scenario records (fewer designs, scenarios or objects)",
+                    crate::fsutil::caps::CHECKPOINT
+                ),
+            });
+        }
         let mut c = Canonical::new(Vec::with_capacity(len + 12 + sum.len()), SORTED_STRUCTS).with_field("sha256", &sum);
         self.serialize(&mut c).map_err(ser)?;
         Ok((c.into_inner(), sum))
@@ -307,6 +318,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
                 "field `state` is inconsistent (population, ranks, generation and history disagree)".into(),
             ));
         }
+        // what no checksum overrides (`resume --force` included)
+        super::invariants::check_invariants(&cp.state, cp.archive.as_ref(), path)?;
         Ok((cp, computed, mismatch))
     }
 }

@@ -16,6 +16,7 @@ mod folder;
 mod grasp_plot;
 mod gripper;
 mod info;
+mod invariants;
 mod limits;
 mod lock;
 mod observers;
@@ -34,7 +35,7 @@ mod verify_rec;
 mod verify_robust;
 mod verify_run;
 
-pub use crate::error::{counted, printable, shell_quote};
+pub use crate::error::{cap_lines, counted, exact_num, hidden, printable, shell_quote, short_num};
 pub use archive::{Archive, DiscardCause, Discards};
 pub use certify::{certification_study, certify_front, CertifiedFront};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
@@ -43,8 +44,9 @@ pub use grasp_plot::grasp_plot;
 pub use gripper::{GripperInfo, GripperProblem, TrajectoryKeep};
 pub use info::{new_run_id, RecordingHeader, Resume, RunHeader, RunInfo, RunStatus, RUN_FILE};
 pub use limits::{
-    check_population, check_sample, check_threads, sample_bytes_recorded, threads_note, BYTES_PER_DESIGN, MAX_THREADS,
-    MIN_DESIGNS_PER_THREAD, SAMPLE_BYTES_PER_DESIGN,
+    check_population, check_record_size, check_sample, check_threads, sample_bytes_recorded, scenario_records,
+    threads_note, BYTES_PER_DESIGN, BYTES_PER_SCENARIO_JSON, MAX_THREADS, MIN_DESIGNS_PER_THREAD,
+    SAMPLE_BYTES_PER_DESIGN,
 };
 pub use lock::{LockHolder, RunLock, LOCK_FILE};
 pub use observers::{GenerationReport, OutputsObserver, Progress};

@@ -7,6 +7,9 @@ use crate::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
+/// A plot drawn into a text ([`crate::fsutil::write_rendered`] writes it atomically).
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
 /// The error of drawing into `path`.
 fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl Fn(E) -> Error + '_ {
     move |x| Error::Plot { path: path.to_path_buf(), source: Box::new(x) }
@@ -16,6 +19,13 @@ fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl
 /// the non-dominated front in red, other feasible designs in grey, the problem's nominal
 /// design as a blue cross; axis names say which way is better.
 pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
+    let draw = |svg: &mut String| {
+        draw_pareto_matrix(SVGBackend::with_string(svg, (1000, 1000)).into_drawing_area(), path, gp, st)
+    };
+    crate::fsutil::write_rendered(path, draw)
+}
+
+fn draw_pareto_matrix(root: Area<'_>, path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
     let names = OBJECTIVES.map(|o| o.axis());
     let scale = OBJECTIVES.map(|o| o.shown.1);
     let nominal = {
@@ -34,7 +44,6 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
             ([0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k]), *r == 0)
         })
         .collect();
-    let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_error(path))?;
     let title = format!(
         "generation {}: {} feasible; red = Pareto front ({}), grey = dominated, blue cross = nominal design",
@@ -103,7 +112,13 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
 /// crowding drops a front member) and the archive of every feasible non-dominated design
 /// (never falls).
 pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
-    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
+    let draw = |svg: &mut String| {
+        draw_hypervolume(SVGBackend::with_string(svg, (800, 500)).into_drawing_area(), path, hv, archive_hv)
+    };
+    crate::fsutil::write_rendered(path, draw)
+}
+
+fn draw_hypervolume(root: Area<'_>, path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
     root.fill(&WHITE).map_err(plot_error(path))?;
     let ymax = hv.iter().chain(archive_hv).cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
     let mut chart = ChartBuilder::on(&root)

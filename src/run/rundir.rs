@@ -148,6 +148,10 @@ fn recorded_problem_path(given: &Path) -> PathBuf {
     resolved(&absolute).unwrap_or(absolute)
 }
 
+/// The files of a run folder a run or resume rewrites besides its views (checked with
+/// them before any work: [`crate::fsutil::check_rewritable`]).
+const STATE_FILES: [&str; 4] = ["checkpoint.json", "run.json", "problem.toml", "recording/index.jsonl"];
+
 /// [`optimise`] with the caller's progress, stop flag or evaluator.
 ///
 /// run.json is written first (under the folder's lock), so that every other file of the
@@ -156,6 +160,8 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
     problem.check_self_contained(&spec.problem_path)?;
+    // what the designs' records hold, before anything is written
+    let size_note = super::limits::check_record_size(&problem, spec.pop, spec.record.enabled)?;
     if spec.out.exists() && !spec.out.is_dir() {
         return Err(Error::RunDir {
             path: spec.out.clone(),
@@ -164,14 +170,33 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     refuse_run_inside_run(&spec.out)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
+    // a folder another process holds is refused naming it, before its files (changing as
+    // that process writes them) are looked at
+    if let super::lock::LockHolder::Held(pid) = RunLock::holder(&spec.out)? {
+        return Err(Error::Locked { path: spec.out.clone(), pid });
+    }
     // refused before the lock's pid file is written into a folder that is not ours
     Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
     let lock = RunLock::acquire(&spec.out)?;
     // again under the lock: another process may have started meanwhile
-    for f in Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)? {
-        // files of the earlier attempt that never reached its first checkpoint (proven)
-        std::fs::remove_file(&f).map_err(|e| Error::io(&f, "cannot remove a file of the earlier attempt", e))?;
+    let earlier = Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
+    let mut notes: Vec<String> = size_note.into_iter().collect();
+    for f in &earlier.remove {
+        // files of the earlier attempt that never reached its first checkpoint (content proven)
+        std::fs::remove_file(f).map_err(|e| Error::io(f, "cannot remove a file of the earlier attempt", e))?;
     }
+    for (folder, name) in &earlier.set_aside {
+        // attributed only by a name or a title line: moved, never removed
+        let to = crate::fsutil::set_aside(folder, name)?;
+        notes.push(format!(
+            "note: {} is not provably the earlier attempt's (a name or title line proves nothing): set aside as {}",
+            folder.join(name).display(),
+            to.display()
+        ));
+    }
+    // a link at a name the run rewrites is refused before any work (never replaced)
+    crate::fsutil::check_rewritable(&spec.out, &super::outputs::REWRITTEN_FILES)?;
+    crate::fsutil::check_rewritable(&spec.out, &STATE_FILES)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let problem_sha256 = sha256_hex(gp.problem.source_text.as_bytes());
@@ -204,7 +229,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0 };
+    let start = Start { recorder, archive: Archive::default(), notes, wall_before: 0.0 };
     drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
@@ -237,6 +262,7 @@ pub fn resume_with(
     }
     let lock = RunLock::acquire(dir)?;
     crate::fsutil::check_rewritable(dir, &super::outputs::REWRITTEN_FILES)?;
+    crate::fsutil::check_rewritable(dir, &STATE_FILES)?;
     let scan = Scan::of(dir)?;
     if !scan.checkpoint {
         return Err(scan.no_checkpoint());
@@ -253,6 +279,12 @@ pub fn resume_with(
     };
     let cp_path = dir.join("checkpoint.json");
     let (cp, cp_sha256, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
+    super::invariants::check_design_length(
+        &cp.state,
+        cp.archive.as_ref(),
+        &cp_path,
+        crate::params::DESIGN_NAMES.len(),
+    )?;
     let mut notes = vec![];
     if let Some(m) = mismatch {
         if !force {
@@ -346,6 +378,8 @@ pub fn resume_with(
     }
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
+    super::invariants::check_id_budget(&cp.state, cp.settings.pop_size, &cp_path, total)?;
+    let size_note = super::limits::check_record_size(&problem, cp.settings.pop_size, info.recording.enabled)?;
     if total < cp.state.generation {
         return Err(Error::Input(format!(
             "--generations {total}: the run already has {} generations",
@@ -365,7 +399,7 @@ pub fn resume_with(
         forced: problem_changed || notes.iter().any(|n| n.starts_with("forced")),
         note: notes.join("; "),
     });
-    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).collect();
+    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).chain(size_note).collect();
     info.generations = total;
     info.status = RunStatus::Running;
     info.completed_generations = at;

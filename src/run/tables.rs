@@ -42,6 +42,12 @@ impl RunFolder {
         }
         let info = self.info()?;
         let (cp, sha256) = Checkpoint::<GripperInfo>::load_with_sha256(&path)?;
+        super::invariants::check_design_length(
+            &cp.state,
+            cp.archive.as_ref(),
+            &path,
+            crate::params::DESIGN_NAMES.len(),
+        )?;
         let st = &cp.state;
         let running = matches!(RunLock::holder(self.dir())?, LockHolder::Held(_));
         let front = final_front(st).into_iter().map(|i| DesignRow::of(i, Some(0))).collect();
