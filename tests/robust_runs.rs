@@ -125,15 +125,7 @@ fn a_scenario_record_takes_no_more_json_than_the_size_checks_count() {
     let rec = gripopt::eval::ScenarioRecord {
         object: 99_999,
         k: 999_999,
-        inputs: gripopt::eval::ScenarioInputs {
-            x_off: long,
-            height_offset: long,
-            mu_phalanx: long,
-            mu_ground: long,
-            restitution: long,
-            fill: long,
-            tau: long,
-        },
+        inputs: gripopt::eval::ScenarioInputs([long; gripopt::params::N_INPUTS]),
         stays: false,
         cause: Some(gripopt::Cause::InitialPenetration),
         t_stab: Some(long),

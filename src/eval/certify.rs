@@ -310,7 +310,7 @@ impl Study {
         let mut fails = vec![0usize; self.objects()];
         for (j, (o, _)) in self.sequence().enumerate() {
             let Some(r) = done.get(j).and_then(Option::as_ref) else { continue };
-            if !(r.stays && !r.aborted()) {
+            if !r.stays || r.aborted() {
                 fails[o] += 1;
                 if fails[o] > plan.max_failures() {
                     return j;

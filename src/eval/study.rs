@@ -40,7 +40,7 @@ pub enum Constraint {
     AllPass,
     /// Per object, P(stay) ≥ p_min over its scenarios, objectives aggregated as the section
     /// says (a robust problem's `[robust]`).
-    Chance(Robust),
+    Chance(Box<Robust>),
 }
 
 /// What a problem asks of every design (see the module's documentation).
@@ -110,7 +110,7 @@ impl Study {
                 StudyScenario { scenario, scene, drawn: true }
             })
             .collect();
-        Study { base, objects, k: n, scenarios, constraint: Constraint::Chance(r.clone()), early_stop }
+        Study { base, objects, k: n, scenarios, constraint: Constraint::Chance(Box::new(r.clone())), early_stop }
     }
 
     /// Number of objects.
