@@ -15,11 +15,15 @@
 //! stage gives the same bits at any thread count and after a kill and a resume.
 
 use super::gripper::{GripperInfo, GripperProblem};
+use super::outputs::DesignRow;
+use crate::error::{Error, Result};
 use crate::eval::{minimised, CertificationRecord, CertifyPlan, DesignStart, EvalOptions, ScenarioRecord, Study};
 use crate::optim::{pareto_ranks, Individual};
 use crate::params::{Problem, STREAM_CERTIFY};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -168,4 +172,77 @@ fn certify_batch(
             })
         })
         .collect()
+}
+
+/// The file of a robust run's certification (every design tested, the plan, the front).
+pub const CERTIFICATION_FILE: &str = "certification.json";
+
+/// certification.json: what the certification stage found, as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CertificationFile {
+    /// P(stay) ≥ p_min, the constraint certified.
+    pub p_min: f64,
+    /// 1 − α of the test.
+    pub confidence: f64,
+    /// Scenarios per object at each look.
+    pub looks: Vec<usize>,
+    /// Per look the fewest stays that certify an object.
+    pub min_stays: Vec<usize>,
+    /// The reported front (certified, non-dominated among the certified), by id.
+    pub front: Vec<u64>,
+    /// Why nothing was certified (None when some design is).
+    pub why_none: Option<String>,
+    /// Every design tested, by id.
+    pub designs: BTreeMap<u64, CertificationRecord>,
+}
+
+impl CertifiedFront {
+    /// The file of this certification (None: nothing was certified, the problem does not
+    /// certify).
+    pub fn file(&self) -> Option<CertificationFile> {
+        let plan = self.plan.as_ref()?;
+        Some(CertificationFile {
+            p_min: plan.p_min,
+            confidence: plan.confidence,
+            looks: plan.looks.clone(),
+            min_stays: plan.min_stays.clone(),
+            front: self.front.clone(),
+            why_none: self.why_none(),
+            designs: self.records.clone(),
+        })
+    }
+}
+
+/// Write `RUN_DIR/certification.json` (atomically).
+pub fn write_certification(dir: &Path, c: &CertificationFile) -> Result<()> {
+    let text = serde_json::to_string_pretty(c).map_err(|e| Error::Input(format!("certification: {e}")))?;
+    crate::fsutil::write_atomic(&dir.join(CERTIFICATION_FILE), text.as_bytes())
+}
+
+/// `RUN_DIR/certification.json`, if the run wrote one.
+pub fn read_certification(dir: &Path) -> Result<Option<CertificationFile>> {
+    let path = dir.join(CERTIFICATION_FILE);
+    if std::fs::symlink_metadata(&path).is_err() {
+        return Ok(None);
+    }
+    let text = crate::fsutil::read_regular_string(&path, crate::fsutil::caps::TABLE)
+        .map_err(|e| Error::io(&path, "cannot read", e))?;
+    serde_json::from_str(&text).map(Some).map_err(|source| Error::Json {
+        path,
+        what: "invalid certification.json",
+        source,
+    })
+}
+
+/// pareto.csv's row of design `ind` certified as `c`: its objectives estimated on the fresh
+/// scenarios (t_stab aggregated over them; the static ones are stage 2's), the search's
+/// robust columns, then the certification's (per object its fresh counts and the one-sided
+/// lower bound on P(stay)).
+pub fn certified_row(ind: &Individual<GripperInfo>, c: &CertificationRecord) -> DesignRow {
+    let mut row = DesignRow::of(ind, Some(0));
+    let search_t_stab = row.t_stab;
+    let o = c.objectives.reported();
+    (row.max_offset, row.alpha, row.mean_force, row.t_stab) = (o.max_offset, o.alpha, o.mean_force, o.t_stab);
+    row.robust = std::mem::take(&mut row.robust).with_certification(c, search_t_stab);
+    row
 }

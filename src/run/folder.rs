@@ -8,7 +8,7 @@
 use super::info::{RunInfo, RunStatus};
 use super::lock::{LockHolder, RunLock};
 use super::outputs::{DesignRow, HistoryRow, DESIGN_COLUMNS, HISTORY_COLUMNS};
-use super::robust_columns::{OBJECT_COLUMNS, ROBUST_COLUMNS};
+use super::robust_columns::is_robust_column;
 use crate::params::Problem;
 use crate::record::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
 use crate::{Error, Result};
@@ -206,11 +206,7 @@ pub fn read_design_table(path: &Path) -> Result<Vec<DesignRow>> {
         if h.len() < fixed.len() || h.iter().zip(fixed).any(|(a, b)| *a != b) {
             return Err(format!("expected the columns {}", fixed.join(",")));
         }
-        let robust = |c: &str| {
-            ROBUST_COLUMNS.iter().any(|r| r.0 == c)
-                || c.rsplit_once('.').is_some_and(|(o, col)| !o.is_empty() && OBJECT_COLUMNS.iter().any(|r| r.0 == col))
-        };
-        match h.iter().skip(fixed.len()).find(|c| !robust(c)) {
+        match h.iter().skip(fixed.len()).find(|c| !is_robust_column(c)) {
             Some(c) => Err(format!(
                 "column `{c}` is not one of a design table (after {}, only a robust problem's columns)",
                 fixed.join(",")

@@ -37,7 +37,10 @@ mod verify_run;
 
 pub use crate::error::{cap_lines, counted, exact_num, hidden, printable, shell_quote, short_num};
 pub use archive::{Archive, DiscardCause, Discards};
-pub use certify::{certification_study, certify_front, CertifiedFront};
+pub use certify::{
+    certification_study, certified_row, certify_front, read_certification, write_certification, CertificationFile,
+    CertifiedFront, CERTIFICATION_FILE,
+};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;
@@ -59,7 +62,10 @@ pub use plots::{hypervolume, pareto_matrix};
 pub use problems::PROBLEM_FILE;
 pub use replay_free::{free_file_name, record_free_scene, FreeRecording};
 pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
-pub use robust_columns::{robust_unit, RobustColumns, OBJECT_COLUMNS, ROBUST_COLUMNS};
+pub use robust_columns::{
+    is_robust_column, robust_unit, RobustColumns, CERTIFIED_COLUMNS, CERTIFIED_OBJECT_COLUMNS, OBJECT_COLUMNS,
+    ROBUST_COLUMNS,
+};
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use scheduler::StudyScheduled;
 pub use tables::CheckpointTables;
