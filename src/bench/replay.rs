@@ -42,11 +42,14 @@ fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
 
 /// Replay speed: writes a synthetic run of `b.designs` copies of the nominal design's real
 /// evaluation and recorded grasp (the problem's nominal), then finds, reads and replays 50
-/// random ids; writes min / median times to `out_text` and returns them as JSON. An existing
-/// `b.out` is cleared only if it is an earlier synthetic run (its run.json says so).
+/// random ids with `replay_one` (the replay of the app layer, above this one: whether the
+/// design of the run folder verified); writes min / median times to `out_text` and returns
+/// them as JSON. An existing `b.out` is cleared only if it is an earlier synthetic run (its
+/// run.json says so).
 pub fn replay(
     problem: &Problem,
     b: &ReplayBench,
+    replay_one: &dyn Fn(&Path, u64) -> Result<bool>,
     out_text: super::Out,
     progress: &dyn super::BenchProgress,
 ) -> Result<serde_json::Value> {
@@ -69,7 +72,7 @@ pub fn replay(
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot clear", e))?;
     }
     // the synthetic run is removed afterwards without --keep, also when the benchmark fails
-    let result = write_and_replay(p, n, per_shard, out, out_text, progress);
+    let result = write_and_replay(p, n, per_shard, out, replay_one, out_text, progress);
     if !b.keep && out.exists() {
         let removed = std::fs::remove_dir_all(out).map_err(|e| Error::io(out, "cannot remove", e));
         return result.and_then(|v| removed.map(|()| v));
@@ -84,6 +87,7 @@ fn write_and_replay(
     n: u64,
     per_shard: u64,
     out: &Path,
+    replay_one: &dyn Fn(&Path, u64) -> Result<bool>,
     out_text: super::Out,
     progress: &dyn super::BenchProgress,
 ) -> Result<serde_json::Value> {
@@ -153,11 +157,11 @@ fn write_and_replay(
             });
         }
         let a = std::time::Instant::now();
-        let rp = crate::record::replay(out, id)
-            .map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
+        let verified =
+            replay_one(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
         t_full.push(a.elapsed().as_secs_f64());
-        if !rp.verified {
-            return Err(Error::Recording { path: rp.recorded.file, message: format!("design {id} did not verify") });
+        if !verified {
+            return Err(Error::Recording { path: r.file, message: format!("design {id} did not verify") });
         }
     }
     let (r0, r1) = min_med(t_read);

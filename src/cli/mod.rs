@@ -114,16 +114,16 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         record_every: u32,
         /// Interval of the 3D scene updates in milliseconds of simulated time (0 = none).
-        #[arg(long, default_value_t = gripopt::record::DEFAULT_SCENE_DT * 1e3)]
+        #[arg(long, default_value_t = gripopt::app::DEFAULT_SCENE_DT * 1e3)]
         scene_ms: f64,
         /// Record every trajectory sample in full f64 (default: the compact subset).
         #[arg(long)]
         record_full: bool,
         /// zstd compression level of the recording (changes file sizes, never content).
-        #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_LEVEL)]
+        #[arg(long, default_value_t = gripopt::app::DEFAULT_ZSTD_LEVEL)]
         zstd_level: u32,
         /// zstd worker threads per recording shard (0 = compress on the writing thread).
-        #[arg(long, default_value_t = gripopt::record::DEFAULT_ZSTD_THREADS)]
+        #[arg(long, default_value_t = gripopt::app::DEFAULT_ZSTD_THREADS)]
         zstd_threads: u32,
         /// Print the summary as one JSON object (for scripts).
         #[arg(long)]
@@ -245,12 +245,12 @@ pub enum MethodArg {
 }
 
 impl MethodArg {
-    fn to_method(self) -> gripopt::sim::Method {
+    fn to_method(self) -> gripopt::app::Method {
         match self {
-            MethodArg::Radau5 => gripopt::sim::Method::Radau5,
-            MethodArg::TrBdf2 => gripopt::sim::Method::TrBdf2,
-            MethodArg::Dopri5 => gripopt::sim::Method::Dopri5,
-            MethodArg::Auto => gripopt::sim::Method::Auto,
+            MethodArg::Radau5 => gripopt::app::Method::Radau5,
+            MethodArg::TrBdf2 => gripopt::app::Method::TrBdf2,
+            MethodArg::Dopri5 => gripopt::app::Method::Dopri5,
+            MethodArg::Auto => gripopt::app::Method::Auto,
         }
     }
 }
@@ -258,24 +258,18 @@ impl MethodArg {
 fn check_rtol(r: Option<f64>) -> Result<Option<f64>> {
     if let Some(v) = r {
         // the same range as the problem file's solver.rtol
-        gripopt::params::limit("solver.rtol")
-            .check(v)
-            .map_err(|rule| anyhow::anyhow!("--rtol {}: {rule}", gripopt::params::fmt_num(v)))?;
+        gripopt::app::check_rtol(v).map_err(|rule| anyhow::anyhow!("--rtol {}: {rule}", gripopt::app::fmt_num(v)))?;
     }
     Ok(r)
 }
 
 fn check_threads(t: Option<usize>) -> Result<()> {
-    Ok(gripopt::run::check_threads(t)?)
+    Ok(gripopt::app::check_threads(t)?)
 }
 
-/// What an optimise or resume run gets from the CLI: the progress bar and ctrl-c.
-fn hooks() -> gripopt::run::RunHooks {
-    gripopt::run::RunHooks {
-        progress: Some(Box::new(progress::Bar::new())),
-        stop: Some(progress::ctrl_c_flag()),
-        evaluator: None,
-    }
+/// An optimise or resume run with what it gets from the CLI: the progress bar and ctrl-c.
+fn with_hooks(o: gripopt::app::Optimiser) -> gripopt::app::Optimiser {
+    o.progress(progress::Bar::new()).stop_flag(progress::ctrl_c_flag())
 }
 
 /// Refuse an output file (`--csv`, `--plot`) that exists unless `force`, or a folder, a
@@ -375,7 +369,10 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             if let Some(sc) = &scene {
                 p = scenes::apply_scene(&p, &problem, sc)?;
             }
-            let object = object.as_deref().map(|name| scenes::PickedObject::of(&p, name, &problem)).transpose()?;
+            let without = "simulate runs without --object";
+            if let Some(name) = &object {
+                robust::object_index(&p, name, &problem.display().to_string(), without)?;
+            }
             if p.robust.is_some() && object.is_none() {
                 // as export and sweep say it; stderr, so that --json stays one JSON object
                 eprintln!(
@@ -389,6 +386,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             let o = scenes::SimulateOpts {
                 rtol,
                 method: method.map(MethodArg::to_method),
+                object,
                 contacts: !no_contact,
                 trace,
                 json,
@@ -396,7 +394,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
                 plot: plot.as_deref(),
                 replay: None,
             };
-            scenes::simulate_on(&p, &x, object.as_ref(), &o)
+            scenes::simulate_on(&p, &x, &o)
                 .with_context(|| format!("simulating {}", problem.display()))
                 .map(|_| 0)
         }
@@ -415,14 +413,14 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             record_full,
             json,
         } => {
-            use gripopt::record::TrajectoryKeep;
+            use gripopt::app::{Optimiser, TrajectoryKeep};
             let (enabled, trajectories) = match record {
                 RecordArg::All => (true, TrajectoryKeep::All),
                 RecordArg::Feasible => (true, TrajectoryKeep::Feasible),
                 RecordArg::Designs => (true, TrajectoryKeep::None),
                 RecordArg::None => (false, TrajectoryKeep::None),
             };
-            let rec = gripopt::record::RecordOptions {
+            let rec = gripopt::app::RecordOptions {
                 enabled,
                 trajectories,
                 every: record_every,
@@ -430,15 +428,14 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
                 zstd_level,
                 zstd_threads,
                 resolution: if record_full {
-                    gripopt::record::Resolution::Full
+                    gripopt::app::Resolution::Full
                 } else {
-                    gripopt::record::Resolution::Compact
+                    gripopt::app::Resolution::Compact
                 },
                 epoch_s: 0,
             };
-            let spec =
-                gripopt::run::RunSpec { problem_path: problem, out, pop, generations, seed, threads, record: rec };
-            let s = gripopt::run::optimise_with(&spec, hooks())?;
+            let run = Optimiser::new(problem, out).pop(pop).generations(generations).seed(seed).threads(threads);
+            let s = with_hooks(run.record(rec)).run()?;
             optcmd::summary(&s, json)
         }
         Cmd::Replay { run_dir, design, json, csv, plot, scene, scenario, force } => {
@@ -457,7 +454,11 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             optcmd::replay(&run_dir, design, json, csv.as_deref(), plot.as_deref())
         }
         Cmd::Resume { run_dir, generations, force, threads, json } => {
-            let s = gripopt::run::resume_with(&run_dir, generations, force, threads, hooks())?;
+            let mut run = gripopt::app::Optimiser::resume(&run_dir).force(force).threads(threads);
+            if let Some(g) = generations {
+                run = run.generations(g);
+            }
+            let s = with_hooks(run).run()?;
             optcmd::summary(&s, json)
         }
         Cmd::Show(a) => show::run(a).map(|_| 0),
@@ -468,7 +469,7 @@ fn dispatch(cmd: Cmd) -> Result<i32> {
             if generations == Some(0) {
                 anyhow::bail!("--generations 0: must be at least 1");
             }
-            gripopt::run::check_population(pop.max(4), generations.unwrap_or(250), false)?;
+            gripopt::app::check_population(pop.max(4), generations.unwrap_or(250), false)?;
             optcmd::moo_test(&name, seed, seeds, json, pop, generations)
         }
         Cmd::Bench { which, json } => bench::run(which, json).map(|_| 0),

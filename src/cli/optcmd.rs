@@ -2,7 +2,8 @@
 
 use crate::cli::out::EXIT_CHECK_FAILED;
 use anyhow::{bail, Context, Result};
-use gripopt::optim::{run_test, TestProblem};
+use gripopt::app::FreeRecording;
+use gripopt::app::moo::{run_test, TestProblem};
 
 /// The most seeds one `moo-test --seeds A-B` runs (each is a whole NSGA-II run; the list is
 /// held in memory).
@@ -80,7 +81,7 @@ pub fn moo_test(
                     "{}: hypervolume median {} over {} is OUTSIDE the reference band [{lo}, {hi}] (exit {EXIT_CHECK_FAILED})",
                     p.name(),
                     hv.median,
-                    gripopt::run::counted(runs.len() as u64, "seed", "seeds")
+                    gripopt::app::counted(runs.len() as u64, "seed", "seeds")
                 );
             }
             continue;
@@ -88,7 +89,7 @@ pub fn moo_test(
         let igd_med = median_and_range(runs.iter().map(|r| r.igd).collect()).median;
         let wall: f64 = runs.iter().map(|r| r.wall_s).sum::<f64>() / runs.len() as f64;
         let verdict = if inside { "inside" } else { "OUTSIDE" };
-        let seeds = gripopt::run::counted(runs.len() as u64, "seed", "seeds");
+        let seeds = gripopt::app::counted(runs.len() as u64, "seed", "seeds");
         outln!(
             "{:<8} {seeds:>8}: HV median {:.5} [min {:.5}, max {:.5}]  reference median {} [{}, {}]: {verdict}; IGD median {:.3e}; {} evals, {:.3} s/run",
             p.name(), hv.median, hv.min, hv.max, rm, lo, hi, igd_med, runs[0].evaluations, wall
@@ -129,7 +130,7 @@ struct SummaryJson<'a> {
 /// Print where the results are (text, or one JSON object with `--json`), and when no design
 /// was feasible, why (the discard causes); the exit code: 130 when the run was interrupted
 /// (after the checkpoint of the current generation), else 0.
-pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
+pub fn summary(s: &gripopt::app::RunSummary, json: bool) -> Result<i32> {
     let d = crate::cli::out::path(&s.out);
     let code = if s.interrupted { 130 } else { 0 };
     if json {
@@ -156,7 +157,7 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
             if s.evaluations == 1 { "" } else { "s" }
         );
     } else {
-        let n = gripopt::run::counted;
+        let n = gripopt::app::counted;
         outln!(
             "finished: {}, {} in {:.1} s; {} in the final population, {} on the Pareto front (hypervolume {:.4})",
             n(s.generations, "generation", "generations"),
@@ -170,7 +171,7 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
     if let Some(lines) = s.discards.explain() {
         // the run's step budget, for an aborted simulation's line
         let max_steps =
-            gripopt::run::RunFolder::open(&s.out).and_then(|f| f.problem()).ok().map(|p| p.solver.max_steps);
+            gripopt::app::RunFolder::open(&s.out).and_then(|f| f.problem()).ok().map(|p| p.solver.max_steps);
         for l in lines {
             outln!("{}", crate::cli::report::with_steps_hint(&l, max_steps));
         }
@@ -184,7 +185,7 @@ pub fn summary(s: &gripopt::run::RunSummary, json: bool) -> Result<i32> {
 #[derive(serde::Serialize)]
 struct ReplayJson<'a> {
     #[serde(flatten)]
-    recorded: &'a gripopt::record::DesignMessage,
+    recorded: &'a gripopt::app::DesignMessage,
     verified: bool,
     /// Why it cannot verify (a problem file edited since the run), else null.
     problem_note: Option<&'a str>,
@@ -227,7 +228,7 @@ pub fn replay(
     plot: Option<&std::path::Path>,
 ) -> Result<i32> {
     let t0 = std::time::Instant::now();
-    let r = gripopt::record::replay(dir, id)?;
+    let r = gripopt::app::replay(dir, id)?;
     let secs = t0.elapsed().as_secs_f64();
     let samples = &r.recorded.samples;
     // verified means something was re-computed and compared: the trajectory, or (recorded
@@ -247,17 +248,13 @@ pub fn replay(
     }
     if let Some(path) = plot {
         let title = format!("design {id}");
-        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, samples)?))?;
+        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::app::grasp_plot(tmp, &title, samples)?))?;
     }
     let rec = &r.recorded.record;
     // a single-object free-kind run: the design's free scene to MCAP (docs/recording.md)
-    let free = match r.problem_note {
-        Some(_) => None,
-        None => gripopt::run::record_free_scene(dir, id, rec.generation, &r.recorded.design())?,
-    };
-    let (free_recording, free_not_recorded) = match &free {
-        Some(gripopt::run::FreeRecording::Recorded(p)) => (Some(p.display().to_string()), None),
-        Some(gripopt::run::FreeRecording::NotRecorded(why)) => (None, Some(why.clone())),
+    let (free_recording, free_not_recorded) = match gripopt::app::record_free_scene(dir, &r)? {
+        Some(FreeRecording::Recorded(p)) => (Some(p.display().to_string()), None),
+        Some(FreeRecording::NotRecorded(why)) => (None, Some(why)),
         None => (None, None),
     };
     if json {
@@ -307,7 +304,7 @@ pub fn replay(
     if r.problem_note.is_some() {
         // its one verdict, printed above: the comparison is moot
     } else if let Some(a) = across {
-        let (rtol, rec, cur) = (gripopt::sim::ACROSS_REVISIONS_RTOL, a.recorded, a.current);
+        let (rtol, rec, cur) = (gripopt::app::ACROSS_REVISIONS_RTOL, a.recorded, a.current);
         match &a.differs {
             None => outln!("  verified across simulator revisions (recorded by revision {rec}, this build is revision {cur}): the same verdict, objectives and violation within {rtol:e} relative (largest difference {:e}); trajectories of two revisions are not compared sample by sample", a.max_difference),
             Some(d) => outln!("  NOT verified: recorded by simulator revision {rec}, this build is revision {cur}, and beyond {rtol:e} relative: {d}"),
@@ -317,7 +314,7 @@ pub fn replay(
     } else if r.compared == 0 {
         outln!("  NOT verified: no trajectory was recorded, and the re-evaluation differs from the record (recomputed feasible: {})", r.recomputed_feasible);
     } else if verified {
-        let precision = if r.recorded.resolution == gripopt::record::Resolution::Full {
+        let precision = if r.recorded.resolution == gripopt::app::Resolution::Full {
             "every sample, f64"
         } else {
             "compact subset, to the recorded f32 precision"
@@ -337,7 +334,7 @@ pub fn replay(
     if let Some(m) = &free_recording {
         outln!(
             "  free scene recorded to {m} (open in Foxglove with {})",
-            dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
+            dir.join(gripopt::app::VERIFY_LAYOUT_FILE).display()
         );
     }
     outln!("  ({:.1} ms)", secs * 1e3);

@@ -31,7 +31,7 @@ pub fn error_message(e: &anyhow::Error) -> String {
             msg.push_str(s);
         }
     }
-    gripopt::run::printable(&msg)
+    gripopt::app::printable(&msg)
 }
 
 /// The message of clap's rendered usage error `text` on one line: its lines before the
@@ -146,12 +146,12 @@ macro_rules! out {
 /// A path as one shell word, to copy into a command (quoted where needed; control
 /// characters escaped).
 pub fn path(p: &Path) -> String {
-    gripopt::run::shell_quote(&p.to_string_lossy())
+    gripopt::app::shell_quote(&p.to_string_lossy())
 }
 
 /// A text from a file (a problem's name) with its control characters escaped.
 pub fn shown(s: &str) -> String {
-    gripopt::run::printable(s)
+    gripopt::app::printable(s)
 }
 
 /// The file `path` with its causes' I/O error, or `e` with `path` named: what a failed

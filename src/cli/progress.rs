@@ -1,11 +1,11 @@
-//! The run's progress as the CLI shows it (the library reports it, [`gripopt::run::Progress`]):
+//! The run's progress as the CLI shows it (the library reports it, [`gripopt::app::Progress`]):
 //! on a terminal an indicatif bar (generation, evaluations/s, feasible count, hypervolume,
 //! ETA); otherwise (a log file, a pipe) one line per generation on stderr. Notes and
 //! warnings go to stderr. The first ctrl-c sets the run's stop flag and says so on stderr
 //! (the run stops after the current generation's checkpoint); a second one ends the
 //! process at once (exit 130; the last checkpoint resumes it).
 
-use gripopt::run::{GenerationReport, Progress};
+use gripopt::app::{GenerationReport, Progress};
 use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -2,8 +2,7 @@
 //! (shared with `simulate`).
 
 use anyhow::Result;
-use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, WorkRecord};
-use gripopt::params::{fmt_num, Design, Problem};
+use gripopt::app::{fmt_num, Design, FreeSceneRecord, GraspRecord, ImpactRecord, Problem, Stages, WorkRecord};
 
 /// A value scaled, to `prec` decimals, or "—".
 pub fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
@@ -42,13 +41,12 @@ pub fn yes_no(v: Option<bool>) -> &'static str {
 
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
-    let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
+    let stages = Stages::of(static_only);
     // the problem's study (a robust problem's objects and scenarios, or its one object in
     // its scene), with progress on stderr when a simulation takes long
-    let study = gripopt::eval::Study::of(p, &opts);
-    let rec = study.evaluate_into(x, &opts, &mut crate::cli::watch::Watch::new(false, false)).record;
+    let rec = gripopt::app::evaluate_into(p, x, stages, &mut crate::cli::watch::Watch::new(false, false));
     if json {
-        let v = gripopt::EvaluationRecord::new(&rec, p.solver.method, opts.dynamics);
+        let v = gripopt::app::evaluation_record(p, &rec, stages);
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -119,7 +117,7 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         }
     }
     if let Some(rb) = &rec.robust {
-        out!("{}", gripopt::eval::robust_summary(rb));
+        out!("{}", gripopt::app::robust_summary(rb));
     }
     let v = &rec.verdict;
     match (&v.failed_stage, &v.reason) {

@@ -21,5 +21,5 @@ pub use load::{Problem, SolverSettings};
 pub use method::Method;
 pub use robust::{corner_count, describe, Aggregation, Robust, Sampling, Scenario, STREAM_OPTIMISE, STREAM_VERIFY};
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, ObjectCase, SceneParams};
-pub use scene_kind::{SceneKind, SceneSetup};
+pub use scene_kind::{scene_kinds_using, SceneChoice, SceneKind, SceneSetup};
 pub use uncertainty::{input_slot, phi, phi_inv, Dist, InputRow, Uncertainty, INPUTS, N_INPUTS};

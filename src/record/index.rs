@@ -4,7 +4,7 @@
 //! evaluated which generations ([`ProblemUse`], kept in run.json).
 
 use crate::fsutil::write_atomic;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

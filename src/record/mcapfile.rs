@@ -2,7 +2,7 @@
 //! writer with gripopt's options (zstd chunks, summary with statistics, chunk and message
 //! indexes), written to a temporary file with one call, synced and renamed into place.
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use mcap::records::MessageHeader;
 use std::io::{Cursor, Write as _};
 use std::path::{Path, PathBuf};

@@ -15,7 +15,7 @@ use super::metadata::{RunMetadata, ScenarioTag};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::sim::{FreeEnd, PoseSample};
-use crate::Result;
+use crate::error::Result;
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
 use mcap::records::Metadata;

@@ -10,7 +10,7 @@ use super::info::{RunInfo, RunStatus, RUN_FILE};
 use super::lock::LOCK_FILE;
 use crate::error::shell_quote;
 use crate::record::{index_entry_from_shard, layout, shard_generation, LAYOUT_FILE};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).

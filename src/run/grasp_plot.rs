@@ -2,7 +2,7 @@
 //! the hand force with its low-pass filtered value of the force criterion, against time.
 
 use crate::sim::Sample;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -6,7 +6,7 @@ use super::archive::Discards;
 use crate::fsutil::write_atomic;
 use crate::optim::Nsga2Settings;
 use crate::record::{ProblemUse, RecordOptions};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

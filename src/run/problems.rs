@@ -9,7 +9,7 @@ use super::info::RunInfo;
 use crate::fsutil::{sha256_hex, write_atomic};
 use crate::params::Problem;
 use crate::record::ProblemUse;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// The file name of the problem in force.

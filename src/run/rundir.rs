@@ -21,7 +21,7 @@ use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
 use crate::params::Problem;
 use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use argmin::core::State;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;

@@ -13,7 +13,7 @@ use crate::record::{
     VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
-use crate::Result;
+use crate::error::Result;
 use std::path::{Path, PathBuf};
 
 /// The recording of the verify designs of a run.

@@ -15,7 +15,7 @@ use crate::eval::{DesignStart, EvalOptions, ScenarioRecord, Study};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, STREAM_VERIFY};
 use crate::record::ProblemUse;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 
 use super::{eval_row, out::BOUNDARIES_FILE, Row, SweepSpec};
 use crate::fsutil::write_atomic;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;

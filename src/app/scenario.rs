@@ -6,13 +6,10 @@
 //! free scene's poses are recorded to `RUN_DIR/scenario-ID-OBJECT-K.mcap` (band 3 of the
 //! run's time axis) so the scenario can be watched in Foxglove with the verify layout.
 
-use super::folder::RunFolder;
-use super::lock::RunLock;
-use super::verify::row_of;
-use super::verify_rec::VerifyRecording;
+use crate::error::{Error, Result};
 use crate::eval::{EvalOptions, Record, ScenarioRecord, Study};
+use crate::run::{row_of, RunFolder, RunLock, VerifyRecording};
 use crate::sim::PoseSample;
-use crate::{Error, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -98,8 +95,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     }
     let mut poses: Vec<PoseSample> = vec![];
     let (scenario, ev) = study.run_scenario(&start, o, k, &opts, &mut poses);
-    let recorded =
-        rec.record.robust.as_ref().and_then(|r| r.scenarios.iter().find(|s| s.object == o && s.k == k).cloned());
+    let recorded = rec.scenario(o, k).cloned();
     // compared as written: the solver's account (`abort`) is not in the recording
     let verified = recorded.as_ref().map(|r| *r == scenario.as_written());
     let row = row_of(id, &design, &ev);
@@ -127,7 +123,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
             // (the run's start, in every file of its time axis) and the same source
             let epoch = r.opts.epoch_s;
             let desc = format!("the recording `replay --scenario {object}:{k}` wrote for this run (epoch {epoch})");
-            super::replay_free::check_ours(&dir.join(&name), &desc, |m| {
+            super::free_scene::check_ours(&dir.join(&name), &desc, |m| {
                 let (e, src) = (m.epoch_s, m.source.as_deref());
                 if e == Some(epoch) && src == Some(what.as_str()) {
                     Ok(())
