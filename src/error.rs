@@ -92,8 +92,9 @@ pub enum Error {
         /// What is wrong and what to do.
         message: String,
     },
-    /// Another process holds the run folder's lock (its pid, when it could be read).
-    #[error("{}: the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    /// Another process holds the run folder's lock (its pid, when it could be read), or
+    /// another call in this one (a run in another thread of a Python session, say).
+    #[error("{}: {}", path.display(), lock_holder(*pid))]
     Locked {
         /// The run folder.
         path: PathBuf,
@@ -214,6 +215,21 @@ pub fn printable(s: &str) -> String {
 
 /// Result with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Who holds a run folder's lock, and what to do, in words: another process (its pid, where
+/// known), or this one — another call in it (a run in another thread), never named by its own
+/// pid as if it were another process.
+fn lock_holder(pid: Option<u32>) -> String {
+    match pid {
+        Some(p) if p == std::process::id() => format!(
+            "the run folder is in use by another call in this process (pid {p}: a run or replay still going in another thread, say); wait for that call to end (the lock is released when it returns)"
+        ),
+        _ => format!(
+            "the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)",
+            pid.map(|p| format!(" (pid {p})")).unwrap_or_default()
+        ),
+    }
+}
 
 impl Error {
     /// An I/O error on `path` while doing `action`.

@@ -39,7 +39,8 @@ fn the_streamed_csv_is_the_librarys_trajectory() {
         let o = run_gripopt(&["simulate", BOTTLE_FILE, "--scene", scene, "--csv", csv.to_str().unwrap()]);
         let text = output_text(&o);
         assert_eq!(o.status.code(), Some(0), "{text}");
-        let sim = gripopt::simulate(&p, &p.nominal, Some((kind, None)), &integ, &Controls::DIAGNOSTIC).unwrap();
+        let scene = Some(gripopt::SceneChoice { kind, x_off: None });
+        let sim = gripopt::simulate(&p, &p.nominal, &gripopt::SimulateRequest { scene, ..Default::default() }).unwrap();
         let want: Vec<Vec<f64>> = if kind == SceneKind::Free {
             sim.poses.iter().map(|s| gripopt::pose_values(s).to_vec()).collect()
         } else {

@@ -12,11 +12,15 @@
 //! re-run through its study and compared; another scene) ← `scenario` (one scenario of a
 //! robust design) · `free_scene` (a free-kind design's free scene recorded by its replay) ·
 //! `verify` (a run's designs on another study) · `show` (a run's state and designs) · `export`
-//! (the design and scene to export) · `sweep` (a parameter study).
+//! (the design and scene to export) · `sweep` (a parameter study) · `folder` (a run folder
+//! opened only where it holds a run; its design tables as the checkpoint holds them) ·
+//! `portable` (a problem's text with its object files written inline, for a pickle).
 
 mod evaluate;
 mod export;
+mod folder;
 mod free_scene;
+mod portable;
 mod replay;
 mod runs;
 mod scenario;
@@ -30,20 +34,27 @@ pub use evaluate::{
     EvaluatedRow, Stages,
 };
 pub use export::{check_open_hand, exported_design, run_design};
+pub use folder::{design_table, open_run};
 pub use free_scene::{free_file_name, record_free_scene, FreeRecording};
+pub use portable::{from_inlined, inlined_text};
 pub use replay::{design_in_scene, replay, DesignInScene, Replay, ReplayInScene, ReplaySource};
 pub use runs::{record_options, Optimiser, ProblemRun};
 pub use scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use show::{objective_named, row_objectives, show_design, show_run, DesignView, RunView, ShowRequest};
-pub use simulate::{check_rtol, object_index, simulate, simulate_into, NoSuchObject, SimulateRequest, Simulated, Simulation};
-pub use sweep::{check_sweep_folder, empty_plots, run_sweep, sweep_spec, unused_names, write_sweep, SweepRequest, Swept};
+pub use simulate::{
+    check_rtol, object_index, simulate, simulate_into, NoSuchObject, SimulateRequest, Simulated, Simulation,
+};
+pub use sweep::{
+    check_sweep_folder, empty_plots, run_sweep, sweep_spec, unused_names, write_sweep, SweepRequest, Swept,
+};
 pub use verify::{verify, Verified, VerifyRequest};
 
 // What the requests and results are made of (the layers' own types, re-exported as the face).
 pub use crate::error::{counted, printable, shell_quote, Error, Result};
 pub use crate::eval::{
-    objective_names, robust_summary, Cause, EvaluationRecord, FreeSceneRecord, GraspRecord, ImpactRecord, Objective,
-    Objectives, Record, ScenarioRecord, Sense, SimulationRecord, WorkRecord, OBJECTIVES,
+    objective_names, robust_summary, Cause, EvaluationRecord, FreeSceneRecord, GraspRecord, ImpactRecord,
+    KinematicsRecord, Objective, Objectives, Record, ScenarioRecord, Sense, SimulationRecord, StaticsRecord,
+    WorkRecord, OBJECTIVES,
 };
 pub use crate::export::{write_file as write_export, ExportedDesign};
 pub use crate::fsutil::{check_new_file, check_output_file, run_folder_around, run_folder_file, write_atomic};
@@ -71,8 +82,8 @@ pub use crate::sim::{
 /// the replay benchmark timing this layer's replay.
 pub mod bench {
     pub use crate::bench::{
-        check_atol, free_scene, nsga, scaling, static_pipeline, work_precision, work_precision_ensemble,
-        BenchProgress, EnsembleBench, FreeBench, Out, ReplayBench, ScalingBench, WorkPrecision, FREE_RTOLS, RTOLS,
+        check_atol, free_scene, nsga, scaling, static_pipeline, work_precision, work_precision_ensemble, BenchProgress,
+        EnsembleBench, FreeBench, Out, ReplayBench, ScalingBench, WorkPrecision, FREE_RTOLS, RTOLS,
     };
     use crate::error::Result;
     use crate::params::Problem;

@@ -196,6 +196,18 @@ impl ProblemRun {
         Ok(ProblemRun { file, out: out.to_path_buf(), text: text.clone(), copied: true, created, note })
     }
 
+    /// The run did not happen (it failed, or the caller stopped before it): where it wrote
+    /// no run.json, the problem's copy written for it is taken back, and the folder where
+    /// this run created it, so that the same call can be made again.
+    pub fn abandon(self) {
+        if self.copied && !self.out.join(RUN_FILE).exists() {
+            let _ = std::fs::remove_file(&self.file);
+            if self.created {
+                let _ = std::fs::remove_dir(&self.out); // only if empty
+            }
+        }
+    }
+
     /// The problem file the run starts from.
     pub fn file(&self) -> &Path {
         &self.file
@@ -211,12 +223,7 @@ impl ProblemRun {
         let s = match ran {
             Ok(s) => s,
             Err(e) => {
-                if self.copied && !self.out.join(RUN_FILE).exists() {
-                    let _ = std::fs::remove_file(&self.file);
-                    if self.created {
-                        let _ = std::fs::remove_dir(&self.out); // only if empty
-                    }
-                }
+                self.abandon();
                 return Err(e);
             }
         };

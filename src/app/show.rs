@@ -71,9 +71,10 @@ pub struct DesignView {
 
 /// The objective named `name`: an input error naming `--best` otherwise.
 pub fn objective_named(name: &str) -> Result<&'static Objective> {
-    OBJECTIVES.iter().find(|o| o.name == name).ok_or_else(|| {
-        Error::Input(format!("--best {name}: expected one of {}", objective_names().join(", ")))
-    })
+    OBJECTIVES
+        .iter()
+        .find(|o| o.name == name)
+        .ok_or_else(|| Error::Input(format!("--best {name}: expected one of {}", objective_names().join(", "))))
 }
 
 /// The objectives of a design row, in the order of [`OBJECTIVES`].
@@ -196,7 +197,8 @@ fn not_found(dir: &Path, id: u64, info: &RunInfo) -> String {
     let d = crate::error::shell_quote(&dir.to_string_lossy());
     let n = info.evaluations;
     if id >= n {
-        let ids = if n == 0 { "it has evaluated no design yet".to_string() } else { format!("its ids are 0 to {}", n - 1) };
+        let ids =
+            if n == 0 { "it has evaluated no design yet".to_string() } else { format!("its ids are 0 to {}", n - 1) };
         return format!(
             "--design {id}: the run {d} has no design {id}: {ids} (run.json: {n} evaluations at its last checkpoint)"
         );

@@ -212,7 +212,10 @@ mod tests {
             let mut t = Trajectory::default();
             let spec = SceneSpec::of(&ps.scene.setup);
             let ev = crate::eval::simulate(&p.nominal, &ps.scene, &spec, &integ, &Controls::DIAGNOSTIC, &mut t);
-            assert_eq!(untimed(serde_json::to_value(Record::from_eval(&ev)).unwrap()), untimed(serde_json::to_value(&s.record.record).unwrap()));
+            assert_eq!(
+                untimed(serde_json::to_value(Record::from_eval(&ev)).unwrap()),
+                untimed(serde_json::to_value(&s.record.record).unwrap())
+            );
             assert_eq!(t, s.trajectory);
         }
     }

@@ -4,6 +4,7 @@
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
 use gripopt::app::bench::{EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::app::RecordOptions;
 use std::path::PathBuf;
 
 /// The design a table is about, and where it is written (`bench work-precision`, `bench free`).
@@ -238,6 +239,19 @@ fn check_scaling_flags(
     Ok(())
 }
 
+/// The thread counts `bench scaling` times: those given (default: 1 to `max_threads`, else
+/// the cores), always with 1, sorted, once each.
+fn thread_counts(mut threads: Vec<usize>, max_threads: Option<usize>) -> Vec<usize> {
+    if threads.is_empty() {
+        let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        threads = (1..=max_threads.unwrap_or(cores)).collect();
+    }
+    threads.push(1);
+    threads.sort_unstable();
+    threads.dedup();
+    threads
+}
+
 /// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
 /// the figures as one JSON object on stdout.
 pub fn run(b: BenchCmd, json: bool) -> Result<()> {
@@ -273,23 +287,13 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         } => {
             check_scaling_flags(pop, generations, max_threads, &threads, reps)?;
             let p = super::load_problem(&problem)?;
-            let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-            let record = if no_record {
-                gripopt::app::RecordOptions::none()
-            } else {
-                gripopt::app::RecordOptions::default()
-            };
-            let mut threads = if threads.is_empty() { (1..=max_threads.unwrap_or(cores)).collect() } else { threads };
-            threads.push(1);
-            threads.sort_unstable();
-            threads.dedup();
             let b = ScalingBench {
                 pop,
                 generations,
                 seed,
-                threads,
+                threads: thread_counts(threads, max_threads),
                 reps,
-                record,
+                record: if no_record { RecordOptions::none() } else { RecordOptions::default() },
                 predict: vec![2, 16, 64],
                 ceiling: !no_ceiling,
             };

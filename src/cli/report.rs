@@ -2,7 +2,10 @@
 //! (shared with `simulate`).
 
 use anyhow::Result;
-use gripopt::app::{fmt_num, Design, FreeSceneRecord, GraspRecord, ImpactRecord, Problem, Stages, WorkRecord};
+use gripopt::app::{
+    fmt_num, Design, FreeSceneRecord, GraspRecord, ImpactRecord, KinematicsRecord, Problem, Stages, StaticsRecord,
+    WorkRecord,
+};
 
 /// A value scaled, to `prec` decimals, or "—".
 pub fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
@@ -50,66 +53,9 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let (k, r) = (&rec.kinematics, &rec.statics);
-    outln!(
-        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {} m){}",
-        crate::cli::out::shown(&p.name),
-        fmt_num(x.l21),
-        fmt_num(x.b),
-        fmt_num(x.t22),
-        fmt_num(x.r),
-        fmt_num(x.p),
-        x.psi.to_degrees(),
-        dec4(Some(x.l_hand())),
-        // the method of the grasp simulation, where it is not the default (RADAU5)
-        if static_only || p.solver.method.is_default() {
-            String::new()
-        } else {
-            format!("  method {}", p.solver.method)
-        }
-    );
-    outln!("stage 0/1  kinematics");
-    outln!("  l11 {} mm  l22 {} mm  l12 {} mm", milli(k.l11), milli(k.l22), milli(k.l12));
-    outln!(
-        "  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {}  sigma {}",
-        degrees(k.q11_0),
-        degrees(k.q21_0),
-        degrees(k.q12_0),
-        degrees(k.q22_0),
-        degrees(k.q13_0),
-        opt(k.gamma, 1.0, 0),
-        opt(k.sigma, 1.0, 0)
-    );
-    outln!(
-        "  singularity margin {} deg (limit {:.1})",
-        opt(k.min_margin_deg, 1.0, 3),
-        p.scene.criteria.margin_sing.to_degrees()
-    );
-    outln!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
-    outln!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
-    outln!(
-        "  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm",
-        degrees(r.theta1),
-        degrees(r.theta2),
-        milli(r.k1),
-        milli(r.k2)
-    );
-    outln!("  f0  {} / {} N   f_mu {} / {} N", dec4(r.f0_1), dec4(r.f0_2), dec4(r.fmu_1), dec4(r.fmu_2));
-    outln!(
-        "  F_hand0 ({}, {}) N   F_hand_mu ({}, {}) N",
-        dec4(r.fhand0_x),
-        dec4(r.fhand0_y),
-        dec4(r.fhandmu_x),
-        dec4(r.fhandmu_y)
-    );
-    outln!(
-        "  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}",
-        opt(r.alpha, 1.0, 5),
-        dec4(r.mean_force),
-        yes_no(r.form_closed_0),
-        milli(r.max_offset),
-        r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default()
-    );
+    print_head(p, x, static_only);
+    print_kinematics(p, &rec.kinematics);
+    print_statics(p, &rec.statics);
     if !static_only {
         print_dyn(&rec.grasp);
         if let Some(f) = &rec.free_scene {
@@ -139,6 +85,77 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         }
     }
     Ok(())
+}
+
+/// The report's first line: the problem, the design, the method where not the default.
+fn print_head(p: &Problem, x: &Design, static_only: bool) {
+    outln!(
+        "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {} m){}",
+        crate::cli::out::shown(&p.name),
+        fmt_num(x.l21),
+        fmt_num(x.b),
+        fmt_num(x.t22),
+        fmt_num(x.r),
+        fmt_num(x.p),
+        x.psi.to_degrees(),
+        dec4(Some(x.l_hand())),
+        // the method of the grasp simulation, where it is not the default (RADAU5)
+        if static_only || p.solver.method.is_default() {
+            String::new()
+        } else {
+            format!("  method {}", p.solver.method)
+        }
+    );
+}
+
+/// Stages 0–1 of a record.
+fn print_kinematics(p: &Problem, k: &KinematicsRecord) {
+    outln!("stage 0/1  kinematics");
+    outln!("  l11 {} mm  l22 {} mm  l12 {} mm", milli(k.l11), milli(k.l22), milli(k.l12));
+    outln!(
+        "  open pose q11 {} deg  q21 {} deg  q12 {} deg  q22 {} deg  q13 {} deg  Gamma {}  sigma {}",
+        degrees(k.q11_0),
+        degrees(k.q21_0),
+        degrees(k.q12_0),
+        degrees(k.q22_0),
+        degrees(k.q13_0),
+        opt(k.gamma, 1.0, 0),
+        opt(k.sigma, 1.0, 0)
+    );
+    outln!(
+        "  singularity margin {} deg (limit {:.1})",
+        opt(k.min_margin_deg, 1.0, 3),
+        p.scene.criteria.margin_sing.to_degrees()
+    );
+}
+
+/// Stage 2 of a record.
+fn print_statics(p: &Problem, r: &StaticsRecord) {
+    outln!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
+    outln!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
+    outln!(
+        "  closed pose theta1 {} deg  theta2 {} deg  k1 {} mm  k2 {} mm",
+        degrees(r.theta1),
+        degrees(r.theta2),
+        milli(r.k1),
+        milli(r.k2)
+    );
+    outln!("  f0  {} / {} N   f_mu {} / {} N", dec4(r.f0_1), dec4(r.f0_2), dec4(r.fmu_1), dec4(r.fmu_2));
+    outln!(
+        "  F_hand0 ({}, {}) N   F_hand_mu ({}, {}) N",
+        dec4(r.fhand0_x),
+        dec4(r.fhand0_y),
+        dec4(r.fhandmu_x),
+        dec4(r.fhandmu_y)
+    );
+    outln!(
+        "  alpha {}  mean force {} N  form closed at 0: {}  max_offset {} mm{}",
+        opt(r.alpha, 1.0, 5),
+        dec4(r.mean_force),
+        yes_no(r.form_closed_0),
+        milli(r.max_offset),
+        r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default()
+    );
 }
 
 /// A discard's reason for the text report, with the setting behind it where that is one

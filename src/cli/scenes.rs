@@ -3,15 +3,17 @@
 //! plot), in the same way for every scene.
 
 use crate::cli::csv_stream::CsvStream;
+use crate::cli::inputs::{design_of, load_problem};
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::{Streamed, Watch};
+use crate::cli::{check_output, check_rtol, MethodArg};
 use anyhow::{bail, Context, Result};
 use gripopt::app::{
     Column, Design, Method, Problem, Record, ReplayInScene, SceneChoice, SimulateRequest, SimulationRecord,
     POSE_COLUMNS,
 };
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `centred`, `offset:X` or `free[:X]` (metres; the library's [`SceneChoice::parse`]) applied to the `[scene]` of problem `p`, read
 /// from `from` (checked by the library as a problem file's would be: the free scene needs
@@ -19,6 +21,91 @@ use std::path::Path;
 pub fn apply_scene(p: &Problem, from: &Path, arg: &str) -> Result<Problem> {
     let scene = SceneChoice::parse(arg).context("--scene")?;
     Ok(p.in_scene(scene, Path::new(&format!("{} with --scene {arg}", from.display())))?)
+}
+
+/// Arguments of `gripopt simulate`.
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// Problem file (TOML).
+    pub problem: PathBuf,
+    /// Design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
+    #[arg(long)]
+    pub design: Option<String>,
+    /// Relative tolerance (default: the problem's solver.rtol).
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Integration method (default: the problem's solver.method, radau5 when absent).
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// A robust problem's object ([[robust.objects]] name) to grasp instead of the
+    /// reference [object]: its cylinder and grip torque, the spring sized at [hand] tau.
+    #[arg(long)]
+    pub object: Option<String>,
+    /// Print the evaluation record (stages 0–3, verdict, scene, method) as one JSON
+    /// object (docs/outputs.md).
+    #[arg(long)]
+    pub json: bool,
+    /// Write the trajectory (accepted steps and events) to this CSV file.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Close the finger on nothing (contacts off): shows where the linkage itself goes,
+    /// e.g. into a parallel singularity.
+    #[arg(long)]
+    pub no_contact: bool,
+    /// Print every located event to stderr.
+    #[arg(long)]
+    pub trace: bool,
+    /// Plot the grasp (joint angles, contact forces, raw and filtered hand force) to this SVG file.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Overwrite the --csv / --plot files if they exist (refused otherwise).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `gripopt simulate`: the outputs checked (never over an input: the problem file and a
+/// robust problem's object files), the scene and object applied, then the simulation.
+pub fn run(a: SimulateArgs) -> Result<()> {
+    let (csv, plot, force) = (a.csv.as_deref(), a.plot.as_deref(), a.force);
+    check_output("--csv", csv, force, &[&a.problem])?;
+    check_output("--plot", plot, force, &[&a.problem])?;
+    let mut p = load_problem(&a.problem)?;
+    // the robust objects' files are inputs too
+    let objects = p.object_files(&a.problem);
+    let inputs: Vec<&Path> = objects.iter().map(|f| f.as_path()).collect();
+    check_output("--csv", csv, force, &inputs)?;
+    check_output("--plot", plot, force, &inputs)?;
+    if let Some(sc) = &a.scene {
+        p = apply_scene(&p, &a.problem, sc)?;
+    }
+    let without = "simulate runs without --object";
+    if let Some(name) = &a.object {
+        super::robust::object_index(&p, name, &a.problem.display().to_string(), without)?;
+    }
+    if p.robust.is_some() && a.object.is_none() {
+        // as export and sweep say it; stderr, so that --json stays one JSON object
+        eprintln!(
+            "note: {} has [robust]: simulate runs the reference [object] only, not the robust objects or scenarios; --object NAME simulates the design on one of its objects ({}) (docs/robust.md)",
+            a.problem.display(),
+            super::robust::object_names(&p)
+        );
+    }
+    let x = design_of(&p, &a.design)?;
+    let o = SimulateOpts {
+        rtol: check_rtol(a.rtol)?,
+        method: a.method.map(MethodArg::to_method),
+        object: a.object.clone(),
+        contacts: !a.no_contact,
+        trace: a.trace,
+        json: a.json,
+        csv,
+        plot,
+        replay: None,
+    };
+    simulate_on(&p, &x, &o).with_context(|| format!("simulating {}", a.problem.display()))
 }
 
 /// How `simulate` (and `replay --scene`) runs a design and reports it.
@@ -65,9 +152,7 @@ pub fn simulate_on(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> 
     let mut watch = Watch::new(o.plot.is_some(), o.trace);
     watch.csv = match o.csv {
         None => None,
-        Some(path) if kind.is_free() => {
-            Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?))
-        }
+        Some(path) if kind.is_free() => Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?)),
         Some(path) => {
             // the offset scene's finger 2 moves on its own: its columns after finger 1's
             let finger2 = kind.has_finger2();
@@ -76,13 +161,8 @@ pub fn simulate_on(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> 
             Some(Streamed::Samples(CsvStream::create(path, title, &columns)?, finger2))
         }
     };
-    let req = SimulateRequest {
-        scene: None,
-        object: o.object.clone(),
-        rtol: o.rtol,
-        method: o.method,
-        contacts: o.contacts,
-    };
+    let req =
+        SimulateRequest { scene: None, object: o.object.clone(), rtol: o.rtol, method: o.method, contacts: o.contacts };
     let simulated = gripopt::app::simulate_into(p, x, &req, &mut watch);
     let (traj, csv) = (std::mem::take(&mut watch.traj), watch.csv.take());
     drop(watch);

@@ -2,7 +2,7 @@
 
 use crate::cli::out::path as quoted;
 use anyhow::{bail, Context, Result};
-use gripopt::app::{Confusion, Verified, VerifyRequest, VerifySource};
+use gripopt::app::{Confusion, Verified, VerifyRequest, VerifySource, VerifySummary};
 use std::path::PathBuf;
 
 /// Arguments of `gripopt verify`.
@@ -120,6 +120,13 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         }
         Verified::Designs(s) => s,
     };
+    report(&a, source, &s);
+    Ok(())
+}
+
+/// What a single-object run's verify found: the file, the recording, the 2×2 table and the
+/// counts.
+fn report(a: &VerifyArgs, source: VerifySource, s: &VerifySummary) {
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
     let plural = |n: usize| if n == 1 { "" } else { "s" };
@@ -176,5 +183,4 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if let Some((t, r)) = s.median_energy_ratio {
         outln!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
     }
-    Ok(())
 }

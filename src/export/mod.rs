@@ -16,10 +16,10 @@ pub use mjcf::{mjcf, MujocoSettings, MUJOCO};
 pub use sheet::{build_sheet, BuildSheet, SheetRow};
 pub use xml::XmlWriter;
 
+use crate::error::{Error, Result};
 use crate::eval::Study;
 use crate::model::{spring_preload, Finger};
 use crate::params::{Design, SceneKind, SceneParams, SceneSetup};
-use crate::error::{Error, Result};
 
 /// What the object does in the exported scene (MODEL.md §8, §14).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

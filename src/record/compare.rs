@@ -169,7 +169,6 @@ impl AcrossRevisions {
     }
 }
 
-
 /// Compare the recorded `/designs` message with the re-evaluation's record `fresh`:
 /// (values compared, all present on both sides alike, largest relative difference of the
 /// numbers). The values: objectives, violation, failing stage, reason, the grasp
@@ -237,4 +236,3 @@ fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / a.abs().max(b.abs()).max(1e-300)
     }
 }
-

@@ -14,10 +14,10 @@
 //!   covers the curves), x-axis "Path (current)" against the design's own simulated time.
 
 use super::proto::MEAN_FORCE_FIELD;
+use crate::error::Result;
 use crate::fsutil::write_atomic;
 use crate::params::Problem;
 use crate::sim::series_field;
-use crate::error::Result;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -158,7 +158,12 @@ fn document(config_by_id: Value, tree: Value) -> Value {
 pub fn layout(scene: bool, finger2: bool) -> Value {
     let s = "/grasp/series";
     let mut forces = finger_columns(
-        &[("fn_1", "proximal normal"), ("fn_2", "distal normal"), ("ft_1", "proximal friction"), ("ft_2", "distal friction")],
+        &[
+            ("fn_1", "proximal normal"),
+            ("fn_2", "distal normal"),
+            ("ft_1", "proximal friction"),
+            ("ft_2", "distal friction"),
+        ],
         finger2,
     );
     forces.push((MEAN_FORCE_FIELD.into(), "F~ (objective)".into()));

@@ -40,6 +40,7 @@ mod schema;
 mod verify_rec;
 mod writer;
 
+pub use compare::{compare_grasp, compare_robust, AcrossRevisions, Comparison};
 pub use entry::{DesignEntry, Recordable};
 pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
 pub use index::{read_index, ProblemUse, ShardEntry};
@@ -53,9 +54,8 @@ pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
 };
 pub use proto::{GraspSeries, SERIES_NAME};
-pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
-pub use compare::{compare_grasp, compare_robust, AcrossRevisions, Comparison};
 pub use read::{problem_of_generation, read_design, run_recording, Recorded, RunProblem};
+pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::design as design_schema;
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};

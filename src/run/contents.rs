@@ -9,8 +9,8 @@
 use super::info::{RunInfo, RunStatus, RUN_FILE};
 use super::lock::LOCK_FILE;
 use crate::error::shell_quote;
-use crate::record::{index_entry_from_shard, layout, shard_generation, LAYOUT_FILE};
 use crate::error::{Error, Result};
+use crate::record::{index_entry_from_shard, layout, shard_generation, LAYOUT_FILE};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).

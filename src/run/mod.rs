@@ -55,12 +55,12 @@ pub use robust_columns::{robust_unit, RobustColumns, OBJECT_COLUMNS, ROBUST_COLU
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use scheduler::StudyScheduled;
 pub use tables::CheckpointTables;
+pub(crate) use verify::row_of;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
     verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,
     VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
-pub(crate) use verify::row_of;
 pub(crate) use verify_rec::VerifyRecording;
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{

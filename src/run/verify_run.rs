@@ -16,10 +16,10 @@ use super::verify::{
 };
 use super::verify_rec::VerifyRecording;
 use super::verify_robust::VERIFY_ROBUST_FILE;
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, SceneChoice};
 use crate::record::ProblemUse;
-use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
 

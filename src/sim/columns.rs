@@ -71,14 +71,8 @@ pub struct PoseColumn {
 }
 
 /// The time, first column of a grasp trajectory.
-pub const TIME: SceneColumn = SceneColumn {
-    name: "t",
-    unit: "s",
-    meaning: "time",
-    series: "t",
-    get: |s| s.t,
-    set: |s, v| s.t = v,
-};
+pub const TIME: SceneColumn =
+    SceneColumn { name: "t", unit: "s", meaning: "time", series: "t", get: |s| s.t, set: |s, v| s.t = v };
 
 /// A finger's values, in the order of a trajectory's finger columns (and of
 /// [`FingerSample::values`]).

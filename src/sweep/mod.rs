@@ -29,15 +29,14 @@ mod spec;
 pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
 pub(crate) use spec::ARRAY_KEYS;
 pub use spec::{
-    psi_thesis, resolve, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS,
-    MAX_N, MAX_POINTS,
+    psi_thesis, resolve, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS, MAX_N, MAX_POINTS,
 };
 
 use crate::cells::{cells, Floats};
+use crate::error::{Error, Result};
 use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem};
-use crate::error::{Error, Result};
 use out::{record_unit, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
 use std::fmt::Write as _;

@@ -11,8 +11,8 @@
 
 use super::spec::{Stage, SweepSpec, ARRAY_KEYS};
 use crate::cells::{cells, Floats};
-use crate::eval::{Evaluation, Record};
 use crate::error::{Error, Result};
+use crate::eval::{Evaluation, Record};
 use std::path::{Path, PathBuf};
 
 /// The sweep's table.

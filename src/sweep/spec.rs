@@ -2,8 +2,8 @@
 //! values ([`Vary`]), the whole grid with its stages ([`SweepSpec`]: checked, its points, the
 //! problem and design at a point), and the record keys a sweep flattens ([`ARRAY_KEYS`]).
 
-use crate::params::{limit, scene_kinds_using, Design, Problem, DESIGN_NAMES, LIMITS};
 use crate::error::{Error, Result};
+use crate::params::{limit, scene_kinds_using, Design, Problem, DESIGN_NAMES, LIMITS};
 
 /// Problem-file fields that are whole numbers: swept over whole values only.
 pub const INTEGER_FIELDS: [&str; 2] = ["scene.ground_points", "solver.max_steps"];
