@@ -10,7 +10,7 @@
 //! on the first ground release.
 
 use gripopt::eval::{stage_kinematics, stage_statics};
-use gripopt::params::{Design, Problem, SceneKind};
+use gripopt::params::{Design, Problem};
 use gripopt::sim::{simulate, Controls, EventKind, EventNote, FreeResult, Integration, Method, SceneSpec, Sink};
 use std::path::Path;
 

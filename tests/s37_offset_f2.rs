@@ -11,7 +11,7 @@ use gripopt::model::Finger;
 use gripopt::params::{Problem, SceneKind};
 use gripopt::record::{read_design, read_index, Finger2Columns, GraspSeries};
 use gripopt::replay;
-use gripopt::sim::{Controls, FingerSample, Integration, Sample};
+use gripopt::sim::{FingerSample, Sample};
 use nalgebra::Vector2;
 use prost::Message;
 use std::path::{Path, PathBuf};
