@@ -92,7 +92,8 @@ pub enum Error {
         /// What is wrong and what to do.
         message: String,
     },
-    /// Another process holds the run folder's lock (its pid, when it could be read).
+    /// Another process holds the run folder's lock (its pid, when it could be read), or
+    /// another call in this one (a run in another thread of a Python session, say).
     #[error("{}: {}", path.display(), holder_text(*pid))]
     Locked {
         /// The run folder.
@@ -170,7 +171,7 @@ pub enum Error {
 /// run or run-folder object of the same program still open holds it).
 fn holder_text(pid: Option<u32>) -> String {
     match pid {
-        Some(p) if p == std::process::id() => "the folder is in use by this same process (pid {p}): an earlier run, resume, verify or open run folder of this program still holds its lock; finish or close that one first".replace("{p}", &p.to_string()),
+        Some(p) if p == std::process::id() => format!("the folder is in use by this same process (pid {p}): another call in this process holds its lock (an earlier run, resume, verify or open run folder, or one still going in another thread); finish or close that one first"),
         _ => format!("the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)", pid.map(|p| format!(" (pid {p})")).unwrap_or_default()),
     }
 }
@@ -290,6 +291,7 @@ const RACE_ACTIONS: [&str; 4] = ["cannot write", "cannot sync", "cannot rename",
 
 /// Result with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
 
 impl Error {
     /// An I/O error on `path` while doing `action`.

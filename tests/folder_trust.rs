@@ -217,11 +217,11 @@ fn replay_of_a_scenario_takes_the_run_folders_lock() {
     let dir = tmp("trust-scenario-lock");
     optimise(&spec(&dir, 1, false)).unwrap();
     let held = gripopt::run::RunLock::acquire(&dir).unwrap();
-    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
+    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
     assert!(matches!(e, gripopt::Error::Locked { .. }), "{e}");
     drop(held);
     // without the lock held: the folder's own answer (not a robust run)
-    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
+    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
     assert!(e.contains("not a robust problem"), "{e}");
     let _ = PROBLEM;
 }

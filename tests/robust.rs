@@ -312,7 +312,7 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     let rec = pop.iter().find(|r| r.robust.get("bottle", "scenarios").is_some_and(|n| n > 0.0)).unwrap();
     let whole = folder.replay(rec.id).unwrap();
     assert!(whole.verified && whole.fresh.robust.is_some(), "{:?}", whole.fresh.verdict);
-    let r = gripopt::run::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
+    let r = gripopt::app::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
     assert_eq!(r.verified, Some(true), "{r:?}");
     assert!(r.recording.as_ref().unwrap().is_file());
     assert_eq!(r.scenario.inputs.get("x_off").unwrap(), r.record.x_off.unwrap());

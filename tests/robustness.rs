@@ -173,7 +173,7 @@ fn an_emptied_truncated_or_missing_index_is_rebuilt_from_the_shards() {
     let after = read_index(&rdir).unwrap();
     assert_eq!(&after[..4], &original[..]);
     assert_eq!(after.len(), 5);
-    let r = gripopt::record::replay(&dir, original[1].first_id).unwrap();
+    let r = gripopt::replay(&dir, original[1].first_id).unwrap();
     assert_eq!(r.recorded.record.id, original[1].first_id);
 }
 

@@ -232,7 +232,7 @@ fn item4_a_forced_resume_keeps_each_generations_problem() {
     let idx = read_index(&dir.join("recording")).unwrap();
     assert_eq!(idx.len(), 5);
     for e in &idx {
-        let r = gripopt::record::replay(&dir, e.first_id).unwrap();
+        let r = gripopt::replay(&dir, e.first_id).unwrap();
         assert!(r.verified, "generation {}: design {} replays with its own problem", e.generation, e.first_id);
     }
     // problem.toml edited by hand: replay and verify refuse it (naming the file)

@@ -228,14 +228,8 @@ fn the_free_scene_rule_holds_for_library_callers() {
     assert!(Problem::load(&path).is_err());
     let mut p = bottle();
     p.scene.env.g_eq = 9.81;
-    let e = gripopt::simulate(
-        &p,
-        &nominal(),
-        Some((gripopt::SceneKind::Free, None)),
-        &Integration::from_solver(&p.solver),
-        &Controls::DIAGNOSTIC,
-    )
-    .unwrap_err();
+    let free = gripopt::SimulateRequest { scene: Some(gripopt::SceneChoice::free(None)), ..Default::default() };
+    let e = gripopt::simulate(&p, &nominal(), &free).unwrap_err();
     assert!(e.to_string().contains("environment.g_eq"), "{e}");
     // and the run's settings: a zstd level outside 1..22, no thread
     let bad = RunSpec {

@@ -42,12 +42,15 @@ fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> Error + '_ {
 
 /// Replay speed: writes a synthetic run of `b.designs` copies of the nominal design's real
 /// evaluation and recorded grasp (the problem's nominal), then finds, reads and replays 50
-/// random ids; writes min / median times to `out_text` and returns them as JSON. `b.out` is
-/// locked while the benchmark runs; of what it holds only an earlier synthetic run's files
-/// are removed (each proven by its content); anything else refuses the benchmark.
+/// random ids with `replay_one` (the replay of the app layer, above this one: whether the
+/// design of the run folder verified); writes min / median times to `out_text` and returns
+/// them as JSON. `b.out` is locked while the benchmark runs; of what it holds only an
+/// earlier synthetic run's files are removed (each proven by its content); anything else
+/// refuses the benchmark.
 pub fn replay(
     problem: &Problem,
     b: &ReplayBench,
+    replay_one: &dyn Fn(&Path, u64) -> Result<bool>,
     out_text: super::Out,
     progress: &dyn super::BenchProgress,
 ) -> Result<serde_json::Value> {
@@ -67,7 +70,7 @@ pub fn replay(
     // synthetic run's); anything else in the folder refuses it, nothing deleted
     remove_files(&synthetic_files(out)?)?;
     // the synthetic run is removed afterwards without --keep, also when the benchmark fails
-    let result = write_and_replay(p, n, per_shard, out, out_text, progress);
+    let result = write_and_replay(p, n, per_shard, out, replay_one, out_text, progress);
     if b.keep {
         return result;
     }
@@ -172,6 +175,7 @@ fn write_and_replay(
     n: u64,
     per_shard: u64,
     out: &Path,
+    replay_one: &dyn Fn(&Path, u64) -> Result<bool>,
     out_text: super::Out,
     progress: &dyn super::BenchProgress,
 ) -> Result<serde_json::Value> {
@@ -241,11 +245,11 @@ fn write_and_replay(
             });
         }
         let a = std::time::Instant::now();
-        let rp = crate::record::replay(out, id)
-            .map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
+        let verified =
+            replay_one(out, id).map_err(|e| Error::bench_from(format!("bench replay: replaying design {id}"), e))?;
         t_full.push(a.elapsed().as_secs_f64());
-        if !rp.verified {
-            return Err(Error::Recording { path: rp.recorded.file, message: format!("design {id} did not verify") });
+        if !verified {
+            return Err(Error::Recording { path: r.file, message: format!("design {id} did not verify") });
         }
     }
     let (r0, r1) = min_med(t_read);

@@ -32,12 +32,12 @@ pub fn error_message(e: &anyhow::Error) -> String {
         }
     }
     // whatever a message echoes of a file, at most a screenful: long lines and many of them cut
-    let msg = gripopt::run::cap_lines(&msg, 2000);
+    let msg = gripopt::app::cap_lines(&msg, 2000);
     let msg = match msg.char_indices().nth(8000) {
         Some((at, _)) => format!("{}… (cut: the message is longer)", &msg[..at]),
         None => msg,
     };
-    gripopt::run::printable(&msg)
+    gripopt::app::printable(&msg)
 }
 
 /// The message of clap's rendered usage error `text` on one line: its lines before the
@@ -153,12 +153,12 @@ macro_rules! out {
 /// A path as one shell word, to copy into a command (quoted where needed; control
 /// characters escaped).
 pub fn path(p: &Path) -> String {
-    gripopt::run::shell_quote(&p.to_string_lossy())
+    gripopt::app::shell_quote(&p.to_string_lossy())
 }
 
 /// A text from a file (a problem's name) with its control characters escaped.
 pub fn shown(s: &str) -> String {
-    gripopt::run::printable(s)
+    gripopt::app::printable(s)
 }
 
 /// The file `path` with its causes' I/O error, or `e` with `path` named: what a failed

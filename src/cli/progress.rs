@@ -1,4 +1,4 @@
-//! The run's progress as the CLI shows it (the library reports it, [`gripopt::run::Progress`]):
+//! The run's progress as the CLI shows it (the library reports it, [`gripopt::app::Progress`]):
 //! on a terminal an indicatif bar (generation, evaluations/s, feasible count, hypervolume,
 //! ETA); otherwise (a log file, a pipe) one line per generation on stderr. Notes and
 //! warnings go to stderr. The first ctrl-c — or SIGTERM (a batch scheduler's walltime) or
@@ -7,7 +7,7 @@
 //! (exit 130; the last checkpoint resumes it). Nothing written to stderr ends the run when
 //! stderr is gone (a closed terminal): those writes are never checked.
 
-use gripopt::run::{GenerationReport, Progress};
+use gripopt::app::{GenerationReport, Progress};
 use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

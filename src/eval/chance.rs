@@ -11,7 +11,6 @@ use super::scene_record::fin;
 use super::stages::Cause;
 use super::stop::{decided, Decided};
 use super::study::Study;
-use crate::params::SceneKind;
 
 /// The record of a design on a chance-constrained study, and the aggregated max_offset the
 /// optimiser ranks (m): an object not form closed at 0 counts as −Δ_off there (MODEL.md §6.7), a placeholder the record never
@@ -105,7 +104,8 @@ pub(super) fn chance_record(study: &Study, start: &DesignStart, scen: Vec<Scenar
     };
     rec.verdict = verdict(study, start, &rr);
     if start.passed() {
-        (rec.scene, rec.x_off) = (Some(SceneKind::Free), None);
+        // the scene its scenarios ran in (their offsets are drawn: none is the design's)
+        (rec.scene, rec.x_off) = (Some(study.scenario(0, 0).scene.setup.kind), None);
     }
     rec.robust = Some(rr);
     (rec, ranked_offset)

@@ -205,6 +205,18 @@ impl<'a> EvaluationRecord<'a> {
 }
 
 impl Record {
+    /// This record with the parts a record of scene `kind` holds beside the grasp, empty
+    /// where it has none (the offset scene's `offset_scene`, the free scene's `free_scene`):
+    /// the keys a sweep of that scene tabulates.
+    pub fn with_scene_parts(mut self, kind: SceneKind) -> Self {
+        match kind {
+            SceneKind::Offset => self.offset_scene = Some(self.offset_scene.unwrap_or_default()),
+            SceneKind::Free => self.free_scene = Some(self.free_scene.unwrap_or(FreeSceneRecord::from_result(None))),
+            SceneKind::Centred => {}
+        }
+        self
+    }
+
     /// The record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
         let x = &ev.design;

@@ -16,10 +16,10 @@ pub use mjcf::{mjcf, MujocoSettings, MUJOCO};
 pub use sheet::{build_sheet, BuildSheet, SheetRow};
 pub use xml::XmlWriter;
 
+use crate::error::{Error, Result};
 use crate::eval::Study;
 use crate::model::{spring_preload, Finger};
-use crate::params::{Design, SceneParams};
-use crate::{Error, Result};
+use crate::params::{Design, SceneKind, SceneParams, SceneSetup};
 
 /// What the object does in the exported scene (MODEL.md §8, §14).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,6 +47,15 @@ impl ExportScene {
     /// The free scene with the object at offset `x_off`.
     pub fn free(x_off: f64) -> Self {
         ExportScene { object: ObjectMode::Free, x_off }
+    }
+    /// Where a problem's `[scene]` puts the object: the centred scene's at x = 0, the offset
+    /// scene's fixed at its x_off, the free scene's free on the ground at its x_off.
+    pub fn of(setup: &SceneSetup) -> Self {
+        match setup.kind {
+            SceneKind::Centred => ExportScene::centred(),
+            SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
+            SceneKind::Free => ExportScene::free(setup.x_off),
+        }
     }
     /// `centred`, `offset:X` or `free:X`, as `--scene` spells scenes (X as [`num`] writes it:
     /// `free:1e-320`, not 320 digits).

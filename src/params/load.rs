@@ -10,9 +10,9 @@ use super::method::Method;
 use super::robust::Robust;
 use super::robust_load::RawRobust;
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
-use super::scene_kind::{SceneKind, SceneSetup};
+use super::scene_kind::{SceneChoice, SceneKind, SceneSetup};
+use crate::error::{Error, Result};
 use crate::math::deg;
-use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
 use std::path::Path;
@@ -250,7 +250,7 @@ impl Problem {
         let cr = &raw.criteria;
         let sc = &raw.scene;
         let setup = SceneSetup {
-            kind: SceneKind::parse(&sc.kind).ok_or_else(|| {
+            kind: sc.kind.parse::<SceneKind>().map_err(|()| {
                 c.fail(
                     "scene.kind",
                     format!("{:?}", sc.kind),
@@ -419,13 +419,13 @@ impl Problem {
         })
     }
 
-    /// This problem with stage 3 in scene `kind` at object offset `x_off` (None: the
-    /// problem's), checked as a problem file's `[scene]` is (`path`: where the request came
+    /// This problem with stage 3 in `scene` (its kind, and its object offset where given;
+    /// None keeps the problem's), checked as a problem file's `[scene]` is (`path`: where the request came
     /// from, for the error; e.g. the command line).
-    pub fn in_scene(&self, kind: SceneKind, x_off: Option<f64>, path: &Path) -> Result<Problem> {
+    pub fn in_scene(&self, scene: SceneChoice, path: &Path) -> Result<Problem> {
         let mut p = self.clone();
-        p.scene.setup.kind = kind;
-        if let Some(x) = x_off {
+        p.scene.setup.kind = scene.kind;
+        if let Some(x) = scene.x_off {
             p.scene.setup.x_off = Checker { file: path }.check("scene.x_off", x)?;
         }
         check_scene(&p.scene, path)?;
@@ -437,14 +437,14 @@ impl Problem {
 /// and a ground that bears the object (its static sink under its weight at most
 /// [`MAX_GROUND_SINK`]).
 fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
-    if scene.setup.kind == SceneKind::Free && scene.env.g_eq != 0.0 {
+    if scene.setup.kind.is_free() && scene.env.g_eq != 0.0 {
         return Err(Checker { file: path }.fail(
             "environment.g_eq",
             super::limits::num(scene.env.g_eq),
             "must be 0 for the free scene ([scene] kind = \"free\": the hand horizontal, MODEL.md §14.1)",
         ));
     }
-    if scene.setup.kind == SceneKind::Free {
+    if scene.setup.kind.is_free() {
         // Hertz points K_g δ^1.5 share the weight: δ = (m g / (n K_g))^(2/3)
         let st = &scene.setup;
         let per_point = scene.object.mass() * scene.env.g / st.ground_points as f64;

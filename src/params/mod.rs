@@ -24,5 +24,5 @@ pub use robust::{
     STREAM_VERIFY,
 };
 pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, ObjectCase, SceneParams};
-pub use scene_kind::{SceneKind, SceneSetup};
+pub use scene_kind::{scene_kinds_using, SceneChoice, SceneKind, SceneSetup};
 pub use uncertainty::{input_slot, phi, phi_inv, Dist, InputRow, Uncertainty, INPUTS, N_INPUTS};

@@ -163,7 +163,7 @@ impl Scenario {
     pub fn scene(&self, base: &SceneParams, o: &ObjectCase) -> SceneParams {
         let mut s = base.clone();
         s.object = o.object;
-        s.setup.kind = super::SceneKind::Free;
+        s.setup = s.setup.to_free();
         for (row, v) in INPUTS.iter().zip(self.values) {
             (row.apply)(&mut s, o, v);
         }

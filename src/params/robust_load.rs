@@ -5,8 +5,7 @@ use super::checker::Checker;
 use super::robust::{corner_count, Aggregation, Certify, Robust, Sampling};
 use super::scene::{Object, ObjectCase, SceneParams};
 use super::uncertainty::{input_slot, phi, Dist, Uncertainty, INPUTS};
-use super::SceneKind;
-use crate::Result;
+use crate::error::Result;
 use serde::Deserialize;
 
 /// Most objects of a robust problem.
@@ -85,7 +84,7 @@ struct RawDist {
 impl RawRobust {
     /// The checked `[robust]` of a problem whose other sections are `scene`.
     pub(super) fn validate(&self, scene: &SceneParams, c: &Checker<'_>) -> Result<Robust> {
-        if scene.setup.kind != SceneKind::Free {
+        if !scene.setup.kind.is_free() {
             return Err(c.fail(
                 "scene.kind",
                 format!("{:?}", scene.setup.kind.as_str()),

@@ -3,7 +3,7 @@
 //! indexes), written with one call through the one atomic, link-refusing write
 //! ([`crate::fsutil::write_atomic`]: a temporary file synced and renamed into place).
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use mcap::records::MessageHeader;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};

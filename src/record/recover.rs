@@ -24,7 +24,7 @@
 
 use super::index::ShardEntry;
 use super::metadata::{RunMetadata, RUN_METADATA};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// What recovery did to a recording folder.

@@ -16,7 +16,7 @@
 use super::entry::DesignEntry;
 use crate::math::V2;
 use crate::model::{closed_pose, singularity_sweep, Finger, SweepFailure};
-use crate::params::{Design, Problem, SceneKind, SceneParams};
+use crate::params::{Design, Problem, SceneParams};
 use crate::sim::Sample;
 use foxglove::messages::{
     line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
@@ -92,7 +92,7 @@ pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
 /// at y = R touching the palm (at x = x_off in the offset scene), standing on the ground
 /// (its base at z = −h_c).
 pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
-    let x = if sc.setup.kind == SceneKind::Offset { sc.setup.x_off } else { 0.0 };
+    let x = if sc.setup.kind.has_finger2() { sc.setup.x_off } else { 0.0 };
     [x, sc.object.radius, sc.object.length / 2.0 - sc.object.grasp_height]
 }
 
@@ -105,9 +105,9 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
 /// closed pose was computed.
 pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
     let sc = &problem.scene;
-    if sc.setup.kind == SceneKind::Offset && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
+    if sc.setup.kind.has_finger2() && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
         let mut centred = sc.clone();
-        centred.setup.kind = SceneKind::Centred;
+        centred.setup = centred.setup.to_centred();
         return Cow::Owned(centred);
     }
     let failed_on = (d.record.verdict.failed_stage == Some(2))
@@ -155,7 +155,7 @@ pub const LABEL_MAX_CHARS: usize = 120;
 /// verify`): "k (gen g) centred grasp; free scene's verdict: …".
 pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
-    if sc.setup.kind == SceneKind::Free && d.record.free_scene.is_some() {
+    if sc.setup.kind.is_free() && d.record.free_scene.is_some() {
         verdict_after(d, format!("{head} centred grasp; free scene's verdict:"))
     } else {
         verdict_after(d, head)

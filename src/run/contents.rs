@@ -11,9 +11,9 @@
 use super::info::{RunInfo, RunStatus, RUN_FILE};
 use super::lock::LOCK_FILE;
 use crate::error::shell_quote;
+use crate::error::{Error, Result};
 use crate::fsutil::SET_ASIDE_DIR;
 use crate::record::{index_entry_from_shard, layout, shard_generation, ShardEntry, LAYOUT_FILE};
-use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).

@@ -1,6 +1,6 @@
 //! Reading a run folder back, typed ([`RunFolder`]): run.json, the CSV tables (read with
 //! the csv crate into the rows they were written from), the recorded designs (their
-//! `/designs` record and trajectory from the MCAP shards) and replay; the run's state
+//! `/designs` record and trajectory from the MCAP shards; its replay is the app layer's); the run's state
 //! (running, stopped, interrupted, finished: run.json and the folder's lock) and its problem
 //! files, checked against the hashes run.json recorded. What `gripopt show`, `verify` and
 //! the Python package read.
@@ -10,7 +10,7 @@ use super::lock::{LockHolder, RunLock};
 use super::outputs::{DesignRow, HistoryRow, DESIGN_COLUMNS, HISTORY_COLUMNS};
 use super::robust_columns::is_robust_column;
 use crate::params::Problem;
-use crate::record::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
+use crate::record::{problem_of_generation, read_design, Recorded, RunProblem};
 use crate::{Error, Result};
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -190,10 +190,6 @@ impl RunFolder {
     /// Design `id` as recorded: its `/designs` record and trajectory (one chunk read).
     pub fn design(&self, id: u64) -> Result<Recorded> {
         self.of_run(|| read_design(&self.dir, id))
-    }
-    /// Re-simulate design `id` and compare it with its recording.
-    pub fn replay(&self, id: u64) -> Result<Replay> {
-        self.of_run(|| replay(&self.dir, id))
     }
 }
 

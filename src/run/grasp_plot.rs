@@ -1,8 +1,8 @@
 //! SVG plot of one grasp (thesis figs 4.11–4.12): joint angles, contact normal forces, and
 //! the hand force with its low-pass filtered value of the force criterion, against time.
 
+use crate::error::{Error, Result};
 use crate::sim::Sample;
-use crate::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! recording's id space, checked before anything is allocated, with the estimate in the
 //! error (docs/cli.md, "Limits of the command-line flags").
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Memory per design of the population, without trajectories (bytes): parents, offspring,
 /// the merged population while sorting, the last evaluated generation, the checkpoint's

@@ -24,8 +24,6 @@ mod outputs;
 mod persist;
 mod plots;
 mod problems;
-mod replay_free;
-mod replay_scenario;
 mod robust_columns;
 mod rundir;
 mod scheduler;
@@ -60,8 +58,6 @@ pub use outputs::{
 pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};
 pub use problems::PROBLEM_FILE;
-pub use replay_free::{free_file_name, record_free_scene, FreeRecording};
-pub use replay_scenario::{parse_scenario, replay_scenario, ScenarioReplay};
 pub use robust_columns::{
     is_robust_column, robust_unit, RobustColumns, CERTIFIED_COLUMNS, CERTIFIED_OBJECT_COLUMNS, OBJECT_COLUMNS,
     ROBUST_COLUMNS,
@@ -69,11 +65,13 @@ pub use robust_columns::{
 pub use rundir::{optimise, optimise_with, resume, resume_with, RunHooks, RunSpec, RunSummary};
 pub use scheduler::StudyScheduled;
 pub use tables::CheckpointTables;
+pub(crate) use verify::row_of;
 pub use verify::{
     checkpoint_designs, read_design_csv, read_design_rows, sample_designs, verify_csv, verify_design,
     verify_design_poses, verify_designs, verify_designs_poses, Confusion, VerifiedGeneration, VerifyRow, VerifySource,
     VerifySummary, VERIFY_COLUMNS, VERIFY_FILE, VERIFY_SAMPLE_FILE,
 };
+pub(crate) use verify_rec::VerifyRecording;
 pub use verify_rec::{VERIFY_MCAP, VERIFY_SAMPLE_MCAP};
 pub use verify_robust::{
     is_robust_run, verify_robust, AbortedOutOfSample, RobustVerifyRow, RobustVerifySummary, VERIFY_ROBUST_FILE,

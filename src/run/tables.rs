@@ -10,7 +10,7 @@ use super::folder::{read_table, RunFolder};
 use super::gripper::GripperInfo;
 use super::lock::{LockHolder, RunLock};
 use super::outputs::{final_front, DesignRow};
-use crate::Result;
+use crate::error::Result;
 
 /// The designs of a run's checkpoint, as pareto.csv, archive.csv and population.csv write
 /// them (the same rows, in the same order).
@@ -73,7 +73,7 @@ impl RunFolder {
         // the damaged or truncated file's error, naming the line
         read_table::<DesignRow>(&path)?;
         let text = crate::fsutil::read_regular_string(&path, crate::fsutil::caps::TABLE)
-            .map_err(|e| crate::Error::io(&path, "cannot read", e))?;
+            .map_err(|e| crate::error::Error::io(&path, "cannot read", e))?;
         let data: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).skip(1).collect();
         let expected: Vec<String> = rows.iter().map(DesignRow::csv_line).collect();
         let same =

@@ -12,12 +12,12 @@ use super::gripper::GripperInfo;
 use super::info::RunInfo;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
+use crate::error::{Error, Result};
 use crate::eval::{evaluate, EvalOptions, Study};
 use crate::optim::Individual;
-use crate::params::{Design, DesignParameters, Problem, SceneKind};
+use crate::params::{Design, DesignParameters, Problem};
 use crate::record::{keep_poses, ProblemUse, VerifyMeasure};
 use crate::sim::{FreeEnd, PoseSample};
-use crate::{Error, Result};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
@@ -202,7 +202,7 @@ pub fn verify_design_poses(
 ) -> Option<(VerifyRow, Vec<PoseSample>)> {
     // the 1 × 1 study of the problem's object in the free scene, diagnosed to its end
     let mut scene = p.scene.clone();
-    scene.setup.kind = SceneKind::Free;
+    scene.setup = scene.setup.to_free();
     let study = Study::single(scene);
     let opts = EvalOptions::diagnostic(p);
     let start = study.start(x);

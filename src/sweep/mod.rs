@@ -14,7 +14,7 @@
 //! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
 //!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
 //!   A `[scene]` field the problem's scene kind does not simulate is refused
-//!   ([`scene_kinds_using`]: `scene.x_off` needs the offset or free scene, `scene.t_obs` and
+//!   ([`crate::params::scene_kinds_using`]: `scene.x_off` needs the offset or free scene, `scene.t_obs` and
 //!   the ground's fields the free scene), as every point would be the same design in the same
 //!   scene.
 //!
@@ -29,15 +29,14 @@ mod spec;
 pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
 pub(crate) use spec::ARRAY_KEYS;
 pub use spec::{
-    psi_thesis, resolve, scene_kinds_using, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS,
-    MAX_N, MAX_POINTS,
+    psi_thesis, resolve, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS, MAX_N, MAX_POINTS,
 };
 
 use crate::cells::{cells, Floats};
+use crate::error::{Error, Result};
 use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem};
-use crate::{Error, Result};
 use out::{record_unit, EarlierFile, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
 use std::fmt::Write as _;

@@ -14,9 +14,8 @@
 
 use super::spec::{Stage, SweepSpec, ARRAY_KEYS};
 use crate::cells::{cells, Floats};
-use crate::eval::{Evaluation, FreeSceneRecord, Record};
-use crate::params::SceneKind;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
+use crate::eval::{Evaluation, Record};
 use std::path::{Path, PathBuf};
 
 /// The sweep's table.
@@ -205,12 +204,7 @@ const TEXT_KEYS: [&str; 4] = ["feasible", "reason", "cause", "scene"];
 /// grasp and the problem's scene keys (and x_off) at stage 3.
 pub fn plot_keys(spec: &SweepSpec) -> Vec<String> {
     let json = |c: Vec<(String, String)>| c.into_iter().map(|(k, _)| k).collect::<Vec<_>>();
-    let mut r = Record::from_eval(&Evaluation::new(spec.design));
-    match spec.problem.scene.setup.kind {
-        SceneKind::Offset => r.offset_scene = Some(Default::default()),
-        SceneKind::Free => r.free_scene = Some(FreeSceneRecord::from_result(None)),
-        SceneKind::Centred => {}
-    }
+    let mut r = Record::from_eval(&Evaluation::new(spec.design)).with_scene_parts(spec.problem.scene.setup.kind);
     let mut skip: Vec<String> = TEXT_KEYS.iter().map(|k| k.to_string()).collect();
     if spec.stage != Stage::Dynamic {
         skip.extend(json(cells(&r.grasp, Floats::Json)));

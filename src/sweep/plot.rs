@@ -2,7 +2,7 @@
 //! chosen record value for two, and one map per slice of the third name for three.
 
 use super::{Boundary, Row, SweepSpec};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};

@@ -6,13 +6,10 @@
 //! free scene's poses are recorded to `RUN_DIR/scenario-ID-OBJECT-K.mcap` (band 3 of the
 //! run's time axis) so the scenario can be watched in Foxglove with the verify layout.
 
-use super::folder::RunFolder;
-use super::lock::RunLock;
-use super::verify::row_of;
-use super::verify_rec::VerifyRecording;
+use crate::error::{Error, Result};
 use crate::eval::{EvalOptions, Record, ScenarioRecord, Study};
+use crate::run::{row_of, RunFolder, RunLock, VerifyRecording};
 use crate::sim::PoseSample;
-use crate::{Error, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -42,6 +39,58 @@ pub struct ScenarioReplay {
     /// The free object's poses (not serialised).
     #[serde(skip)]
     pub poses: Vec<PoseSample>,
+}
+
+/// Which scenario of which design of which run.
+struct ScenarioAt<'a> {
+    dir: &'a Path,
+    id: u64,
+    object: &'a str,
+    o: usize,
+    k: usize,
+}
+
+/// Record the scenario `at` (its verify row and free-scene poses, in the scenario's own
+/// problem `ps`) to `RUN_DIR/scenario-ID-OBJECT-K.mcap`, in its window of band 3; an existing
+/// file is replaced only when this run's replay of this scenario wrote it.
+fn record_scenario(
+    at: &ScenarioAt<'_>,
+    study: &Study,
+    ps: &crate::params::Problem,
+    row: crate::run::VerifyRow,
+    poses: &[PoseSample],
+) -> Result<PathBuf> {
+    let ScenarioAt { dir, id, object, o, k } = *at;
+    let name = format!("scenario-{id}-{object}-{k}.mcap");
+    let what = format!("design {id} scenario {object}:{k}");
+    let window = crate::record::scenario_window(id, o, k, study.objects(), study.k);
+    // the scenario's hand height is the object's grasp height + its drawn height offset
+    let sc = study.scenario(o, k);
+    let tag = crate::record::ScenarioTag {
+        object: object.to_string(),
+        index: k as u64,
+        grasp_height: study.objects[o].scene.object.grasp_height,
+        height_offset: sc.scenario.value("height_offset").unwrap_or(0.0),
+    };
+    let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
+    // replaced only when this run's replay of this scenario wrote it: same epoch (the run's
+    // start, in every file of its time axis) and the same source
+    let epoch = r.opts.epoch_s;
+    let desc = format!("the recording `replay --scenario {object}:{k}` wrote for this run (epoch {epoch})");
+    super::free_scene::check_ours(&dir.join(&name), &desc, |m| {
+        let (e, src) = (m.epoch_s, m.source.as_deref());
+        if e == Some(epoch) && src == Some(what.as_str()) {
+            Ok(())
+        } else {
+            Err(format!(
+                "written by another run or command (epoch {}, source {:?})",
+                e.map_or("none".to_string(), |e| e.to_string()),
+                src.unwrap_or("none")
+            ))
+        }
+    })?;
+    let kept = crate::record::keep_poses(poses, r.opts.scene_dt);
+    r.write(ps, vec![(row, kept)])
 }
 
 /// Parse `OBJECT:K`.
@@ -98,8 +147,7 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     }
     let mut poses: Vec<PoseSample> = vec![];
     let (scenario, ev) = study.run_scenario(&start, o, k, &opts, &mut poses);
-    let recorded =
-        rec.record.robust.as_ref().and_then(|r| r.scenarios.iter().find(|s| s.object == o && s.k == k).cloned());
+    let recorded = rec.scenario(o, k).cloned();
     // compared as written: the solver's account (`abort`) is not in the recording
     let verified = recorded.as_ref().map(|r| *r == scenario.as_written());
     let row = row_of(id, &design, &ev);
@@ -111,38 +159,10 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     });
     let recording = match (record, row) {
         (true, Some(row)) => {
-            let name = format!("scenario-{id}-{object}-{k}.mcap");
-            let what = format!("design {id} scenario {object}:{k}");
-            let window = crate::record::scenario_window(id, o, k, study.objects(), study.k);
-            // the scenario's hand height is the object's grasp height + its drawn height offset
-            let sc = study.scenario(o, k);
-            let tag = crate::record::ScenarioTag {
-                object: object.to_string(),
-                index: k as u64,
-                grasp_height: study.objects[o].scene.object.grasp_height,
-                height_offset: sc.scenario.value("height_offset").unwrap_or(0.0),
-            };
-            let r = VerifyRecording::for_scenario(dir, &name, what.clone(), window, tag)?;
-            // replaced only when this run's replay of this scenario wrote it: same epoch
-            // (the run's start, in every file of its time axis) and the same source
-            let epoch = r.opts.epoch_s;
-            let desc = format!("the recording `replay --scenario {object}:{k}` wrote for this run (epoch {epoch})");
-            super::replay_free::check_ours(&dir.join(&name), &desc, |m| {
-                let (e, src) = (m.epoch_s, m.source.as_deref());
-                if e == Some(epoch) && src == Some(what.as_str()) {
-                    Ok(())
-                } else {
-                    Err(format!(
-                        "written by another run or command (epoch {}, source {:?})",
-                        e.map_or("none".to_string(), |e| e.to_string()),
-                        src.unwrap_or("none")
-                    ))
-                }
-            })?;
+            let at = ScenarioAt { dir, id, object, o, k };
             let mut ps = p.clone();
-            ps.scene = sc.scene.clone();
-            let kept = crate::record::keep_poses(&poses, r.opts.scene_dt);
-            Some(r.write(&ps, vec![(row, kept)])?)
+            ps.scene = study.scenario(o, k).scene.clone();
+            Some(record_scenario(&at, &study, &ps, row, &poses)?)
         }
         _ => None,
     };
