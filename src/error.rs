@@ -292,7 +292,6 @@ const RACE_ACTIONS: [&str; 4] = ["cannot write", "cannot sync", "cannot rename",
 /// Result with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-
 impl Error {
     /// An I/O error on `path` while doing `action`.
     pub fn io(path: impl Into<PathBuf>, action: &'static str, source: std::io::Error) -> Self {

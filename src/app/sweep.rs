@@ -5,8 +5,8 @@
 
 use super::evaluate::in_pool;
 use crate::error::{Error, Result};
-use crate::params::{Design, Problem};
 use crate::fsutil::lock::RunLock;
+use crate::params::{Design, Problem};
 use crate::sweep::out::EarlierFile;
 use crate::sweep::{self, Boundary, Row, Stage, SweepSpec, Vary};
 use std::path::{Path, PathBuf};
