@@ -88,8 +88,8 @@ pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &S
         let atol = gripopt::params::fmt_num(p.solver.atol);
         bail!("--method {method}: the problem's solver.atol {atol}: {rule}");
     }
-    let integ =
-        Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
+    // the problem's own settings (the default's scaling included) unless a method is named
+    let integ = Integration::overridden(&p.solver, o.method, o.rtol);
     let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
     let spec = SceneSpec::of(&p.scene.setup);
     // the samples kept only for a plot, streamed to the CSV; progress on stderr when it takes long

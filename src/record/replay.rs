@@ -592,9 +592,15 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
     });
     let problem = run.problem.clone();
     let design = recorded.design();
+    // the settings the design was evaluated with: a problem without `solver.method` ran
+    // RADAU5 before revision 5
+    let eval_opts = EvalOptions {
+        integration: crate::sim::Integration::of_revision(&problem.solver, recorded.simulator_revision),
+        ..EvalOptions::full(&problem)
+    };
     if problem.robust.is_some() {
         // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
-        let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
+        let fresh = crate::eval::evaluate_record(&problem, &design, &eval_opts, None);
         let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
         // an older gripopt wrote the −Δ_off placeholder for max_offset in the robust record
         let recorded_robust = recorded.record.robust.as_ref().map(|r| r.without_offset_placeholder());
@@ -615,7 +621,7 @@ pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
         });
     }
     let mut traj = Trajectory::default();
-    let ev = evaluate_into(&design, &problem.scene, &EvalOptions::full(&problem), &mut traj);
+    let ev = evaluate_into(&design, &problem.scene, &eval_opts, &mut traj);
     let tr = ev.dynamics.is_some().then_some(traj);
     let fresh: Vec<Sample> = match tr {
         Some(t) => {

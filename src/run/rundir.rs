@@ -311,7 +311,9 @@ pub fn resume_with(
     // the problem: the file the run started with, or the run's copy if it is gone
     let original = original_problem(&info);
     let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
-    let problem = Problem::load(&problem_path)?;
+    // a problem without `solver.method` keeps the method the run started with (RADAU5 for
+    // a checkpoint that names none: the default before session 38)
+    let problem = Problem::load(&problem_path)?.with_run_method(cp.options.method);
     problem.check_self_contained(&problem_path)?;
     check_copy(dir, &info, &problem)?;
     if original.is_none() {
@@ -544,7 +546,7 @@ fn drive(
 fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
     RunMetadata {
         gripopt_version: Some(env!("CARGO_PKG_VERSION").to_string()),
-        simulator_revision: Some(crate::sim::SIMULATOR_REVISION),
+        simulator_revision: Some(crate::sim::revision_of(&gp.problem.solver)),
         run_id: Some(info.run_id.clone()),
         problem: Some(gp.problem.name.clone()),
         problem_sha256: Some(info.problem_sha256.clone()),

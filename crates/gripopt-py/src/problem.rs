@@ -375,12 +375,10 @@ impl PyProblem {
         let p = &self.problem;
         let scene = scene.map(gripopt::parse_scene).transpose().py()?;
         // None: the problem's solver.method
-        let method = match method {
-            None => p.solver.method,
-            Some(m) => {
-                Method::parse(m).ok_or_else(|| input(format!("method `{m}`: must be {}", Method::accepted())))?
-            }
-        };
+        let given = method
+            .map(|m| Method::parse(m).ok_or_else(|| input(format!("method `{m}`: must be {}", Method::accepted()))))
+            .transpose()?;
+        let method = given.unwrap_or(p.solver.method);
         if let Some(r) = rtol {
             let limit = gripopt::params::limit("solver.rtol");
             limit.check(r).map_err(|rule| argument("rtol", format!("rtol = {r}: {rule}")))?;
@@ -389,7 +387,8 @@ impl PyProblem {
         method.check_atol(s.atol).map_err(|rule| {
             input(format!("method `{method}`: the problem's solver.atol {}: {rule}", gripopt::params::fmt_num(s.atol)))
         })?;
-        let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
+        // the problem's own settings (the default's scaling included) unless a method is given
+        let integ = Integration::overridden(s, given, rtol);
         let object = object.map(|name| object_index(p, name)).transpose()?;
         let sim = py
             .detach(|| {

@@ -541,13 +541,18 @@ impl FreeScene<'_> {
 }
 
 /// Tolerances of the free scene: fingers as the centred scene, the object's position and
-/// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
+/// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol; rtol and
+/// the fingers' absolute tolerance times the free scene's factors of `integ.scaling`.
 pub fn free_tolerances(integ: &Integration) -> Tol<NF> {
+    let sc = integ.scaling;
     let mut atol = St::repeat(integ.atol);
+    for a in atol.iter_mut().take(G0) {
+        *a *= sc.free_fingers_atol;
+    }
     for j in 0..7 {
         atol[G0 + j] = integ.atol * 0.1;
     }
-    Tol { rtol: integ.rtol, atol }
+    Tol { rtol: integ.rtol * sc.free_rtol, atol }
 }
 
 /// Simulate the free scene of finger `f` (spring preload `tau_s0`) with the object at
