@@ -69,18 +69,22 @@ def test_bad_scenes_and_discarded_designs_are_input_errors(problem):
 def test_the_problems_solver_method_is_the_default(problem, cli_json, tmp_path):
     """`[solver] method = "auto"`: Problem.method says it, simulate() uses it (the record of
     `gripopt simulate --json` on the same file), an explicit method overrides it; a file
-    without the key is radau5."""
+    without the key runs the default, auto with the default's tolerance scaling (session 38:
+    not the named auto's record)."""
     text = problem.toml.replace("\n[solver]\n", '\n[solver]\nmethod = "auto"\n', 1)
     path = tmp_path / "auto.toml"
     path.write_text(text)
     auto = gripopt.Problem.load(path)
-    assert (problem.method, auto.method) == ("radau5", "auto")
+    assert (problem.method, auto.method) == ("auto", "auto")
     sim = auto.simulate()
     assert sim.record["method"] == "auto"
     assert same_record(untimed(sim.record), untimed(cli_json("simulate", path, "--json")))
     radau = auto.simulate(method="radau5")
     assert radau.record["method"] == "radau5" and radau.record["steps"] != sim.record["steps"]
-    assert same_record(untimed(radau.record), untimed(problem.simulate().record))
+    assert same_record(untimed(radau.record), untimed(problem.simulate(method="radau5").record))
+    default = problem.simulate()
+    assert default.record["method"] == "auto" and default.record["steps"] != sim.record["steps"]
+    assert same_record(untimed(default.record), untimed(cli_json("simulate", "problems/bottle-1l.toml", "--json")))
     with pytest.raises(gripopt.ProblemError, match="solver.method"):
         gripopt.Problem.from_toml(text.replace('"auto"', '"euler"'))
 

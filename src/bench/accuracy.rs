@@ -407,3 +407,36 @@ fn read_cache(path: &Path, key: &serde_json::Value) -> Option<Outcomes> {
     let c: CachedReference = serde_json::from_str(&text).ok()?;
     (c.key == *key).then_some(c.outcomes)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::accuracy_table::{Kind, Quantity};
+
+    #[test]
+    fn candidates_parse_as_written_and_refuse_what_is_not() {
+        assert_eq!(Candidate::parse("default").unwrap(), Candidate::Default);
+        let c = Candidate::parse("auto:1e-7").unwrap();
+        assert_eq!(c, Candidate::Fixed { method: Method::Auto, rtol: 1e-7, atol: None });
+        assert_eq!(c.label(), "auto:1e-7");
+        let c = Candidate::parse("tr-bdf2:1e-6:1e-9").unwrap();
+        assert_eq!(c, Candidate::Fixed { method: Method::TrBdf2, rtol: 1e-6, atol: Some(1e-9) });
+        for bad in ["auto", "euler:1e-6", "auto:2", "auto:1e-6:0", "trbdf2:1e-6:1e-13", "auto:1e-6:1e-9:1"] {
+            let e = Candidate::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("--candidates") && e.contains(bad), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_quantity_holds_within_the_rule_only() {
+        let q =
+            |kind, differing, p90, max| Quantity { name: "q".into(), kind, n: 10, differing, errors: [0.0, p90, max] };
+        assert!(q(Kind::Objective, 0, RULE_P90, RULE_MAX).holds());
+        assert!(!q(Kind::Objective, 0, RULE_P90 * 1.01, 0.0).holds());
+        assert!(!q(Kind::Objective, 0, 0.0, RULE_MAX * 1.01).holds());
+        assert!(!q(Kind::Objective, 1, 0.0, 0.0).holds(), "a value on one side only");
+        assert!(!q(Kind::Verdict, 1, f64::NAN, f64::NAN).holds());
+        assert!(q(Kind::Verdict, 0, f64::NAN, f64::NAN).holds());
+        assert!(q(Kind::Diagnostic, 3, 1.0, 1.0).holds(), "reported, not held");
+    }
+}

@@ -589,7 +589,7 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
     let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
     let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
     let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
-    if let Ok(problem) = Problem::load(&problem_path) {
+    if let Ok(problem) = Problem::load(&problem_path).map(|p| p.with_run_method(cp.options.method)) {
         let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
         let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
         let source = |f: &str| match f {

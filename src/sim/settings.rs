@@ -20,9 +20,10 @@ use serde::{Deserialize, Serialize};
 pub const SIMULATOR_REVISION: u32 = 4;
 
 /// Relative agreement expected of a design's objectives and violation between simulator
-/// revisions: issue 23 moved t_stab by at most 1.85e-4 relative over the work-precision
-/// ensemble (a threshold crossing moved by one oscillation; docs/benchmarks.md).
-pub const ACROSS_REVISIONS_RTOL: f64 = 1e-3;
+/// revisions: the accuracy rule's largest relative error of an objective against the tight
+/// reference (docs/benchmarks.md, "The accuracy rule"; 1e-3 before session 38, when issue 23
+/// had moved t_stab by at most 1.85e-4 over the work-precision ensemble).
+pub const ACROSS_REVISIONS_RTOL: f64 = 2e-3;
 
 /// How the scenes read a problem's tolerances: factors on the `[solver]` rtol and atol per
 /// scene and state. [`Scaling::AS_GIVEN`] (every factor 1) for a method a problem names;
