@@ -6,7 +6,10 @@
 //! the rule's bounds, the aggregated robust objectives included. Diagnostic quantities (the
 //! impact energy, the object's displacement and tilt) are reported, not held.
 
-use super::accuracy_table::{summarise, write_cases, CandidateSummary};
+use super::accuracy_table::{
+    summarise, write_cases, CandidateSummary, GraspOutcome, Outcomes, RobustOutcome, ScenarioOutcome, RULE_MAX,
+    RULE_P90,
+};
 use super::say;
 use super::BenchProgress;
 use crate::eval::{evaluate, simulate, EvalOptions, RobustSetup};
@@ -25,11 +28,6 @@ pub const REFERENCE_RTOL: f64 = 1e-10;
 pub const REFERENCE_ATOL: f64 = 1e-13;
 /// The reference's step budget.
 const REFERENCE_MAX_STEPS: u64 = 20_000_000;
-/// The rule's bound on each objective's 90th-percentile relative error.
-pub const RULE_P90: f64 = 5e-5;
-/// The rule's bound on each objective's largest relative error.
-pub const RULE_MAX: f64 = 2e-3;
-
 /// The kitchen front design of issue 40 (`make bench-instructions` counts its evaluation):
 /// the first design of the robust ensemble.
 pub const KITCHEN_FRONT_DESIGN: &str = "l21=0.04304807948252374,b=0.06871978187729287,t22=0.03375918412304188,r=0.2601664030440584,p=0.25261005423197275,psi_deg=135.766034896994";
@@ -112,64 +110,6 @@ pub struct AccuracyBench {
     pub candidates: Vec<Candidate>,
     /// Folder of accuracy.csv, accuracy_cases.csv and the reference's cache.
     pub out_dir: PathBuf,
-}
-
-/// A grasp-ensemble design's outcome under one setting.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct GraspOutcome {
-    /// The pipeline's verdict (feasible, failed stage, reason) in the problem's scene.
-    pub verdict: (bool, Option<u8>, Option<String>),
-    /// The pipeline's objectives.
-    pub objectives: [Option<f64>; 4],
-    /// t_stab of the diagnostic grasp (the objective where the pipeline stops earlier).
-    pub t_stab: Option<f64>,
-    /// E_cyl of the diagnostic grasp (diagnostic).
-    pub e_cyl: Option<f64>,
-    /// The free scene's verdict (x_off 0): feasible, failed stage, reason.
-    pub free_verdict: (bool, Option<u8>, Option<String>),
-    /// The free scene's largest displacement (m) and tilt (°) (diagnostic).
-    pub free_motion: (Option<f64>, Option<f64>),
-    /// Accepted steps and RHS evaluations of the three simulations.
-    pub work: [u64; 2],
-    /// Seconds.
-    pub seconds: f64,
-}
-
-/// One robust scenario's outcome.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct ScenarioOutcome {
-    /// The object barely moved.
-    pub stays: bool,
-    /// Its t_stab (s).
-    pub t_stab: Option<f64>,
-    /// Largest displacement (m) and tilt (°) of the object (diagnostic).
-    pub motion: (Option<f64>, Option<f64>),
-}
-
-/// A robust-ensemble design's outcome under one setting (every scenario run).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct RobustOutcome {
-    /// The design's verdict: feasible, failed stage.
-    pub verdict: (bool, Option<u8>),
-    /// The aggregated objectives.
-    pub objectives: [Option<f64>; 4],
-    /// Per object: its objectives and whether it meets p_min.
-    pub objects: Vec<([Option<f64>; 4], Option<bool>)>,
-    /// Every scenario, object-major.
-    pub scenarios: Vec<ScenarioOutcome>,
-    /// Accepted steps and RHS evaluations of all its simulations.
-    pub work: [u64; 2],
-    /// Seconds.
-    pub seconds: f64,
-}
-
-/// Every design's outcome under one setting.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Outcomes {
-    /// The grasp ensemble.
-    pub grasp: Vec<GraspOutcome>,
-    /// The robust ensemble.
-    pub robust: Vec<RobustOutcome>,
 }
 
 /// The reference's outcomes with what they were computed for (the cache's key).
@@ -411,7 +351,7 @@ fn read_cache(path: &Path, key: &serde_json::Value) -> Option<Outcomes> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::accuracy_table::{Kind, Quantity};
+    use crate::bench::accuracy_table::{Kind, Quantity, RULE_MAX, RULE_P90};
 
     #[test]
     fn candidates_parse_as_written_and_refuse_what_is_not() {

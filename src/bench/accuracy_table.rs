@@ -1,14 +1,77 @@
-//! `gripopt bench accuracy`'s statistics: per candidate, the verdicts that differ from the
-//! reference and each quantity's relative errors (median, p90, max), whether the rule holds,
-//! and the CSV files.
+//! `gripopt bench accuracy`'s outcomes and statistics: what each setting gives per design,
+//! and per candidate the verdicts that differ from the reference and each quantity's
+//! relative errors (median, p90, max), whether the rule holds, and the CSV files.
 
-use super::accuracy::{Outcomes, RULE_MAX, RULE_P90};
 use super::ensemble::quantile;
 use super::{median, say};
 use crate::params::{Design, DESIGN_NAMES};
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::Path;
+
+/// The rule's bound on each objective's 90th-percentile relative error.
+pub const RULE_P90: f64 = 5e-5;
+/// The rule's bound on each objective's largest relative error.
+pub const RULE_MAX: f64 = 2e-3;
+
+/// A grasp-ensemble design's outcome under one setting.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct GraspOutcome {
+    /// The pipeline's verdict (feasible, failed stage, reason) in the problem's scene.
+    pub verdict: (bool, Option<u8>, Option<String>),
+    /// The pipeline's objectives.
+    pub objectives: [Option<f64>; 4],
+    /// t_stab of the diagnostic grasp (the objective where the pipeline stops earlier).
+    pub t_stab: Option<f64>,
+    /// E_cyl of the diagnostic grasp (diagnostic).
+    pub e_cyl: Option<f64>,
+    /// The free scene's verdict (x_off 0): feasible, failed stage, reason.
+    pub free_verdict: (bool, Option<u8>, Option<String>),
+    /// The free scene's largest displacement (m) and tilt (°) (diagnostic).
+    pub free_motion: (Option<f64>, Option<f64>),
+    /// Accepted steps and RHS evaluations of the three simulations.
+    pub work: [u64; 2],
+    /// Seconds.
+    pub seconds: f64,
+}
+
+/// One robust scenario's outcome.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ScenarioOutcome {
+    /// The object barely moved.
+    pub stays: bool,
+    /// Its t_stab (s).
+    pub t_stab: Option<f64>,
+    /// Largest displacement (m) and tilt (°) of the object (diagnostic).
+    pub motion: (Option<f64>, Option<f64>),
+}
+
+/// A robust-ensemble design's outcome under one setting (every scenario run).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RobustOutcome {
+    /// The design's verdict: feasible, failed stage.
+    pub verdict: (bool, Option<u8>),
+    /// The aggregated objectives.
+    pub objectives: [Option<f64>; 4],
+    /// Per object: its objectives and whether it meets p_min.
+    pub objects: Vec<([Option<f64>; 4], Option<bool>)>,
+    /// Every scenario, object-major.
+    pub scenarios: Vec<ScenarioOutcome>,
+    /// Accepted steps and RHS evaluations of all its simulations.
+    pub work: [u64; 2],
+    /// Seconds.
+    pub seconds: f64,
+}
+
+/// Every design's outcome under one setting.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Outcomes {
+    /// The grasp ensemble.
+    pub grasp: Vec<GraspOutcome>,
+    /// The robust ensemble.
+    pub robust: Vec<RobustOutcome>,
+}
 
 /// What a quantity is to the rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -589,7 +589,10 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
     let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
     let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
     let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
-    if let Ok(problem) = Problem::load(&problem_path).map(|p| p.with_run_method(cp.options.method)) {
+    // a checkpoint naming no method ran RADAU5 (a problem without `solver.method` of before
+    // session 38); one naming a method is compared with the file's (or the default)
+    let legacy = |p: Problem| if cp.options.method.is_none() { p.with_run_method(None) } else { p };
+    if let Ok(problem) = Problem::load(&problem_path).map(legacy) {
         let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
         let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
         let source = |f: &str| match f {
