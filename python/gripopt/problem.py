@@ -277,8 +277,8 @@ class Problem:
     @property
     def method(self) -> str:
         """The integration method of its grasp simulations, ``[solver] method``:
-        ``"radau5"`` (also when the file leaves it out), ``"auto"``, ``"trbdf2"`` or
-        ``"dopri5"`` (docs/problem-files.md)."""
+        ``"radau5"``, ``"auto"`` (also when the file leaves it out: the default solver, with
+        the default's tolerance scaling), ``"trbdf2"`` or ``"dopri5"`` (docs/problem-files.md)."""
         return self._native.method
 
     @property
@@ -360,7 +360,9 @@ class Problem:
             rtol: relative tolerance (None: the problem's ``solver.rtol``).
             method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` (alias ``"tr-bdf2"``) or
                 ``"dopri5"``, the names ``gripopt simulate --method`` takes; None: the
-                problem's ``[solver] method`` (:attr:`method`; ``"radau5"`` when absent).
+                problem's ``[solver] method`` (:attr:`method`; absent, the default solver,
+                auto with the default's tolerance scaling; a method given here takes the
+                tolerances as given).
             object: a robust problem's object by name (its ``[[robust.objects]]``
                 ``name``), as ``gripopt simulate --object NAME``: the design on that object
                 (its cylinder and grip torque, the spring sized at ``[hand] tau``), in its

@@ -50,7 +50,7 @@ pub use sweep::{
 pub use verify::{verify, Verified, VerifyRequest};
 
 // What the requests and results are made of (the layers' own types, re-exported as the face).
-pub use crate::error::{cap_lines, counted, printable, shell_quote, short_num, Error, Result};
+pub use crate::error::{cap_lines, counted, exact_num, printable, shell_quote, short_num, Error, Result};
 pub use crate::eval::{
     objective_names, robust_summary, Cause, EvaluationRecord, FreeSceneRecord, GraspRecord, ImpactRecord,
     KinematicsRecord, Objective, Objectives, Record, ScenarioRecord, Sense, SimulationRecord, StaticsRecord,
@@ -86,8 +86,9 @@ pub use crate::sim::{
 /// the replay benchmark timing this layer's replay.
 pub mod bench {
     pub use crate::bench::{
-        check_atol, free_scene, nsga, scaling, static_pipeline, work_precision, work_precision_ensemble, BenchProgress,
-        EnsembleBench, FreeBench, Out, ReplayBench, ScalingBench, WorkPrecision, FREE_RTOLS, RTOLS,
+        accuracy, check_atol, free_scene, nsga, scaling, static_pipeline, work_precision, work_precision_ensemble,
+        AccuracyBench, BenchProgress, Candidate, EnsembleBench, FreeBench, Out, ReplayBench, ScalingBench,
+        WorkPrecision, FREE_RTOLS, RTOLS,
     };
     use crate::error::Result;
     use crate::params::Problem;

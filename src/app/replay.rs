@@ -94,7 +94,10 @@ pub fn replay(dir: &Path, id: u64) -> Result<Replay> {
     let comparable = problem_note.is_none();
     let problem = run.problem;
     let design = recorded.design();
-    let opts = EvalOptions::full(&problem);
+    // the settings the design was evaluated with: a problem without `solver.method` ran
+    // RADAU5 before simulator revision 5
+    let integration = crate::sim::Integration::of_revision(&problem.solver, recorded.simulator_revision);
+    let opts = EvalOptions { integration, ..EvalOptions::full(&problem) };
     let study = Study::of(&problem, &opts);
     let (mut traj, mut poses) = (Trajectory::default(), Vec::new());
     let (fresh, evaluation) = rerun(&study, &design, &opts, &mut (&mut traj, &mut poses));

@@ -127,7 +127,10 @@ pub fn replay_scenario(dir: &Path, id: u64, object: &str, k: usize, record: bool
     if p.robust.is_none() {
         return Err(not_robust(file));
     }
-    let opts = EvalOptions::full(&p);
+    // the settings the design was evaluated with (before simulator revision 5 a problem
+    // without `solver.method` ran RADAU5)
+    let integration = crate::sim::Integration::of_revision(&p.solver, rec.simulator_revision);
+    let opts = EvalOptions { integration, ..EvalOptions::full(&p) };
     let study = Study::of(&p, &opts);
     let names: Vec<&str> = (0..study.objects()).filter_map(|o| study.object_name(o)).collect();
     let o = names.iter().position(|n| *n == object).ok_or_else(|| {

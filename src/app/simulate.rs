@@ -101,7 +101,8 @@ fn integration(p: &Problem, req: &SimulateRequest) -> Result<Integration> {
     method.check_atol(s.atol).map_err(|rule| {
         Error::Input(format!("method `{method}`: the problem's solver.atol {}: {rule}", crate::params::fmt_num(s.atol)))
     })?;
-    Ok(Integration::new(rtol, s.atol, s.max_steps).with_method(method))
+    // the problem's own settings (the default's scaling included) unless a method is given
+    Ok(Integration::overridden(s, req.method, req.rtol))
 }
 
 /// Simulate `design` of `problem` as `req` asks, diagnostic mode, every sample and event to

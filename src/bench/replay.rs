@@ -195,7 +195,12 @@ fn write_and_replay(
     let x = p.nominal.to_array().to_vec();
     let eval = gp.evaluate(&x);
     let samples = eval.info.trajectory.as_ref().map_or(0, |t| t.simulated);
-    let meta = crate::record::RunMetadata { synthetic: Some(SYNTHETIC.into()), ..Default::default() };
+    let meta = crate::record::RunMetadata {
+        synthetic: Some(SYNTHETIC.into()),
+        // the revision whose settings replay re-evaluates with (as a run's shards state it)
+        simulator_revision: Some(crate::sim::revision_of(&p.solver)),
+        ..Default::default()
+    };
     let t0 = std::time::Instant::now();
     let shards = n.div_ceil(per_shard);
     progress.begin("writing synthetic run", shards, "shards");

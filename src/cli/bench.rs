@@ -3,7 +3,7 @@
 
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
-use gripopt::app::bench::{EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::app::bench::{AccuracyBench, EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
 use gripopt::app::RecordOptions;
 use std::path::PathBuf;
 
@@ -208,6 +208,34 @@ pub enum BenchCmd {
         #[arg(long)]
         no_dense: bool,
     },
+    /// The accuracy rule (docs/benchmarks.md): solver settings against RADAU5 at rtol 1e-10,
+    /// atol 1e-13 — verdicts over the grasp ensemble, its free scenes and a robust problem's
+    /// scenarios, and the objectives' relative errors (p90 <= 5e-5, max <= 2e-3); writes
+    /// accuracy.csv and accuracy_cases.csv (the reference is cached beside them).
+    Accuracy {
+        /// The grasp ensemble's problem.
+        #[arg(long, default_value = "problems/bottle-1l.toml")]
+        grasp_problem: PathBuf,
+        /// The robust problem.
+        #[arg(long, default_value = "problems/kitchen.toml")]
+        robust_problem: PathBuf,
+        /// Designs of the grasp ensemble (those of `bench work-precision --sample N`).
+        #[arg(long, default_value_t = 40)]
+        sample: usize,
+        /// Designs of the robust ensemble (the kitchen front design of issue 40 first).
+        #[arg(long, default_value_t = 30)]
+        designs: usize,
+        /// Seed of both ensembles.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Settings to check, comma-separated: `default` (each problem's own [solver]) or
+        /// METHOD:RTOL[:ATOL] (the problem's atol where left out).
+        #[arg(long, value_delimiter = ',', default_value = "default")]
+        candidates: Vec<String>,
+        /// Output folder.
+        #[arg(long, default_value = "results/bench")]
+        out: PathBuf,
+    },
 }
 
 /// The flags of `bench scaling`, each on its own: the first one out of range is named with
@@ -334,6 +362,18 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
             let _lock = lock_out(&target.out)?;
             let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
             gripopt::app::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out, &bars)?
+        }
+        BenchCmd::Accuracy { grasp_problem, robust_problem, sample, designs, seed, candidates, out: dir } => {
+            at_least_one("--sample", sample)?;
+            at_least_one("--designs", designs)?;
+            let candidates = candidates
+                .iter()
+                .map(|c| gripopt::app::bench::Candidate::parse(c))
+                .collect::<gripopt::Result<Vec<_>>>()?;
+            let gp = super::load_problem(&grasp_problem)?;
+            let rp = super::load_problem(&robust_problem)?;
+            let b = AccuracyBench { sample, robust_designs: designs, seed, candidates, out_dir: dir };
+            gripopt::app::bench::accuracy(&gp, &grasp_problem, &rp, &robust_problem, &b, out, &bars)?
         }
     };
     if json {

@@ -451,7 +451,7 @@ fn replay_text(dir: &std::path::Path, r: &Replay, verified: bool, secs: f64, fre
         Some(s) => outln!(
             "  DISCARDED at stage {s}: {} (violation {})",
             rec.reason.as_deref().unwrap_or(""),
-            rec.violation.map_or("null".into(), gripopt::run::exact_num)
+            rec.violation.map_or("null".into(), gripopt::app::exact_num)
         ),
         None => outln!("  feasible; objectives {}", text(serde_json::to_string(&rec.objectives))),
     }

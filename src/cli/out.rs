@@ -184,7 +184,7 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 }
 
 /// Write the output file `path` through `write`, a writer that writes it atomically itself
-/// (the SVG plots: [`gripopt::run::grasp_plot`]); its error names `path`.
+/// (the SVG plots: [`gripopt::app::grasp_plot`]); its error names `path`.
 pub fn write_file_with(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
     write(path).map_err(|e| naming(path, e))
 }

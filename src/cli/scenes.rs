@@ -34,7 +34,9 @@ pub struct SimulateArgs {
     /// Relative tolerance (default: the problem's solver.rtol).
     #[arg(long)]
     pub rtol: Option<f64>,
-    /// Integration method (default: the problem's solver.method, radau5 when absent).
+    /// Integration method (default: the problem's solver.method; absent there, the default
+    /// solver: auto with the default's tolerance scaling). A method given here takes the
+    /// tolerances as given.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
     /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).

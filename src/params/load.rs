@@ -1,7 +1,7 @@
 //! Problem files: TOML with the sections `[hand]`, `[object]`, `[contact]`,
 //! `[environment]`, `[criteria]`, `[scene]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
-//! required but `solver.method` (absent: RADAU5, the method of every problem written before
-//! the key existed) and unknown keys are rejected. Errors name the file and the field.
+//! required but `solver.method` (absent: the default method, [`Method::PROBLEM_DEFAULT`]; it
+//! was RADAU5 before session 38) and unknown keys are rejected. Errors name the file and the field.
 
 use super::checker::Checker;
 use super::design::{Bounds, Design, DESIGN_NAMES};
@@ -27,10 +27,15 @@ pub struct SolverSettings {
     pub atol: f64,
     /// Maximum number of accepted + rejected steps before a discard.
     pub max_steps: u64,
-    /// Integration method (`solver.method`; absent: RADAU5). Left out when serialised as
-    /// RADAU5, so that a problem without the key serialises as it did before the key.
+    /// Integration method (`solver.method`; absent: [`Method::PROBLEM_DEFAULT`]). Left out when
+    /// serialised as RADAU5, the type's default.
     #[serde(default, skip_serializing_if = "Method::is_default")]
     pub method: Method,
+    /// The file names `solver.method` (false: `method` is the default, whose tolerances the
+    /// simulator scales, `sim::Scaling::DEFAULT`; a resumed run of a problem without the key
+    /// takes the method its checkpoint records, [`Problem::with_run_method`]).
+    #[serde(skip)]
+    pub method_named: bool,
 }
 
 /// A loaded and validated problem.
@@ -82,7 +87,8 @@ struct RawSolver {
     rtol: f64,
     atol: f64,
     max_steps: f64,
-    /// Optional: absent is RADAU5 (files written before the key existed keep their results).
+    /// Optional: absent is the default method (RADAU5 before session 38; a run folder of
+    /// then resumes with it, [`Problem::with_run_method`]).
     #[serde(default)]
     method: Option<String>,
 }
@@ -183,6 +189,18 @@ macro_rules! checked {
 }
 
 impl Problem {
+    /// This problem as a run resumes it whose checkpoint records the method `recorded` (its
+    /// options' `method`; None: RADAU5, the method of a checkpoint that names none): where the
+    /// file names no `solver.method`, the run keeps the method it started with (a run folder
+    /// of a gripopt before session 38 ran RADAU5 there, not today's default). A file that
+    /// names its method keeps it.
+    pub fn with_run_method(mut self, recorded: Option<Method>) -> Self {
+        if !self.solver.method_named {
+            self.solver.method = recorded.unwrap_or_default();
+        }
+        self
+    }
+
     /// The files the problem read besides itself: the robust objects' `file = "…"`, each
     /// resolved against the folder of `problem_path` (the file it was loaded from), as the
     /// loader reads them. Outputs must never replace them (`gripopt::check_output_file`).
@@ -363,7 +381,7 @@ impl Problem {
         c.check("solver.rtol", s.rtol)?;
         c.check("solver.atol", s.atol)?;
         let method = match s.method.as_deref() {
-            None => Method::Radau5,
+            None => Method::PROBLEM_DEFAULT,
             Some(m) => Method::parse(m).ok_or_else(|| {
                 c.fail(
                     "solver.method",
@@ -378,6 +396,7 @@ impl Problem {
             atol: s.atol,
             max_steps: c.whole("solver.max_steps", s.max_steps)? as u64,
             method,
+            method_named: s.method.is_some(),
         };
         let n = &raw.nominal;
         let nominal = Design {

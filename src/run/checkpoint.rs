@@ -173,6 +173,19 @@ pub(crate) fn field_differences(
     out
 }
 
+/// The integration method a run's checkpoint at `path` records (its options' `method`;
+/// None inside: RADAU5, a checkpoint that names none), or None where the run has no
+/// checkpoint (or one that cannot be read: the caller then goes on with the problem file as
+/// it is). Only the options are read.
+pub fn recorded_method(path: &Path) -> Option<Option<Method>> {
+    #[derive(Deserialize)]
+    struct OptionsOnly {
+        options: RunOptions,
+    }
+    let bytes = crate::fsutil::read_regular(path, crate::fsutil::caps::CHECKPOINT).ok()?;
+    serde_json::from_slice::<OptionsOnly>(&bytes).ok().map(|c| c.options.method)
+}
+
 /// Hash of settings and options (canonical JSON).
 pub fn settings_hash(settings: &Nsga2Settings, options: &RunOptions) -> String {
     let v = serde_json::json!({ "settings": settings, "options": options });

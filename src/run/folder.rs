@@ -168,7 +168,12 @@ impl RunFolder {
                 path: p.file,
                 message: format!("{why}: restore it (replay and verify need the problem the run used)"),
             }),
-            None => Ok((p.problem, p.file)),
+            // a problem without `solver.method` as the run evaluated it: with the method its
+            // checkpoint records (RADAU5 for a run of before session 38)
+            None => match super::checkpoint::recorded_method(&self.dir.join("checkpoint.json")) {
+                Some(m) => Ok((p.problem.with_run_method(m), p.file)),
+                None => Ok((p.problem, p.file)),
+            },
         }
     }
     /// pareto.csv: the population's feasible non-dominated designs.

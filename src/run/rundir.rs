@@ -343,7 +343,9 @@ pub fn resume_with(
     // the problem: the file the run started with, or the run's copy if it is gone
     let original = original_problem(&info);
     let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
-    let problem = Problem::load(&problem_path)?;
+    // a problem without `solver.method` keeps the method the run started with (RADAU5 for
+    // a checkpoint that names none: the default before session 38)
+    let problem = Problem::load(&problem_path)?.with_run_method(cp.options.method);
     problem.check_self_contained(&problem_path)?;
     check_copy(dir, &info, &problem)?;
     if original.is_none() {
@@ -578,7 +580,7 @@ fn drive(
 fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
     RunMetadata {
         gripopt_version: Some(env!("CARGO_PKG_VERSION").to_string()),
-        simulator_revision: Some(crate::sim::SIMULATOR_REVISION),
+        simulator_revision: Some(crate::sim::revision_of(&gp.problem.solver)),
         run_id: Some(info.run_id.clone()),
         problem: Some(gp.problem.name.clone()),
         problem_sha256: Some(info.problem_sha256.clone()),
@@ -621,7 +623,10 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
     let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
     let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
     let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
-    if let Ok(problem) = Problem::load(&problem_path) {
+    // a checkpoint naming no method ran RADAU5 (a problem without `solver.method` of before
+    // session 38); one naming a method is compared with the file's (or the default)
+    let legacy = |p: Problem| if cp.options.method.is_none() { p.with_run_method(None) } else { p };
+    if let Ok(problem) = Problem::load(&problem_path).map(legacy) {
         let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
         let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
         let source = |f: &str| match f {

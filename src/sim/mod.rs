@@ -57,7 +57,10 @@ pub use scene::free::{
 };
 pub use scene::offset::{OffsetResult, OffsetScene, PairEval, StartFailure, OFFSET_EVENTS};
 pub use scene::{End, Response, Run, Scene};
-pub use settings::{Controls, Integration, Method, Mode, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
+pub use settings::{
+    revision_of, Controls, Integration, Method, Mode, Scaling, ACROSS_REVISIONS_RTOL, DEFAULT_AUTO_REVISION,
+    SIMULATOR_REVISION,
+};
 pub use simulate::{diagnostic_grasp, simulate, SceneResult, SceneSpec};
 pub use sink::{EventNote, Point, Sink};
 pub use tracking::{EndValues, GraspLimits, Tracker};

@@ -205,6 +205,13 @@ const TEXT_KEYS: [&str; 4] = ["feasible", "reason", "cause", "scene"];
 pub fn plot_keys(spec: &SweepSpec) -> Vec<String> {
     let json = |c: Vec<(String, String)>| c.into_iter().map(|(k, _)| k).collect::<Vec<_>>();
     let mut r = Record::from_eval(&Evaluation::new(spec.design)).with_scene_parts(spec.problem.scene.setup.kind);
+    if spec.problem.solver.method == crate::params::Method::Auto {
+        // the switching method's counters (the default solver's since session 38)
+        (r.grasp.work.switches, r.grasp.work.explicit_steps) = (Some(0), Some(0));
+        if let Some(f) = r.free_scene.as_mut() {
+            (f.work.switches, f.work.explicit_steps) = (Some(0), Some(0));
+        }
+    }
     let mut skip: Vec<String> = TEXT_KEYS.iter().map(|k| k.to_string()).collect();
     if spec.stage != Stage::Dynamic {
         skip.extend(json(cells(&r.grasp, Floats::Json)));

@@ -208,7 +208,8 @@ impl PyProblem {
     fn upper<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.problem.bounds.hi)
     }
-    /// The integration method of its grasp simulations (`solver.method`: radau5 when absent).
+    /// The integration method of its grasp simulations (`solver.method`; absent: the default,
+    /// auto with the default's tolerance scaling).
     #[getter]
     fn method(&self) -> &'static str {
         self.problem.solver.method.as_str()
