@@ -143,7 +143,8 @@ fn centred_kind_replay_writes_no_free_file() {
 /// recording is a side effect: where it cannot be written the replay's verdict comes first,
 /// with exit 0, and says why the free scene was not recorded (as when another process holds
 /// the folder). The folder is made read-only, and (for a test run as root, whom permissions
-/// do not stop) the file's temporary path is taken by a folder, so the write fails either way.
+/// do not stop) a folder stands at the file's temporary name (`.free-ID.mcap.tmp`), so the
+/// write fails either way.
 #[test]
 fn a_free_scene_that_cannot_be_written_leaves_the_verdict() {
     use std::os::unix::fs::PermissionsExt;
@@ -155,7 +156,8 @@ fn a_free_scene_that_cannot_be_written_leaves_the_verdict() {
     });
     let id = reached.expect("seed 16, pop 8: some design reaches the free scene");
     let file = run.join(format!("free-{id}.mcap"));
-    std::fs::create_dir_all(run.join(format!("free-{id}.mcap.tmp"))).unwrap();
+    let tmp = run.join(format!(".free-{id}.mcap.tmp"));
+    std::fs::create_dir_all(&tmp).unwrap();
     let mode = std::fs::metadata(&run).unwrap().permissions().mode();
     std::fs::set_permissions(&run, std::fs::Permissions::from_mode(0o555)).unwrap();
     let (code, v, text) = replay_json(&run, id);
@@ -170,5 +172,5 @@ fn a_free_scene_that_cannot_be_written_leaves_the_verdict() {
     assert_eq!(plain.status.code(), Some(0), "{said}");
     let verdict = said.find("verified").unwrap_or_else(|| panic!("no verdict: {said}"));
     assert!(verdict < said.find("free scene not recorded").unwrap(), "the verdict first: {said}");
-    std::fs::remove_dir(run.join(format!("free-{id}.mcap.tmp"))).unwrap();
+    std::fs::remove_dir(&tmp).unwrap();
 }

@@ -1,7 +1,7 @@
 //! `gripopt moo-test`, `optimise`, `resume`.
 
+use crate::cli::args::{check_output, with_hooks, RecordArg};
 use crate::cli::out::EXIT_CHECK_FAILED;
-use crate::cli::{check_output, with_hooks, RecordArg};
 use anyhow::{bail, Context, Result};
 use gripopt::app::moo::{run_test, TestProblem};
 use gripopt::app::{FreeRecording, Optimiser, RecordOptions, Replay, Resolution, TrajectoryKeep};

@@ -2,11 +2,11 @@
 //! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
 //! plot), in the same way for every scene.
 
+use crate::cli::args::{check_output, check_rtol, MethodArg};
 use crate::cli::csv_stream::CsvStream;
 use crate::cli::inputs::{design_of, load_problem};
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::{Streamed, Watch};
-use crate::cli::{check_output, check_rtol, MethodArg};
 use anyhow::{bail, Context, Result};
 use gripopt::app::{
     Column, Design, Method, Problem, Record, ReplayInScene, SceneChoice, SimulateRequest, SimulationRecord,
