@@ -95,6 +95,9 @@ pub struct RunSummary {
     /// Every design of the run counted by what discarded it ([`Discards::explain`] says why
     /// a run has no feasible design).
     pub discards: Discards,
+    /// A robust run's certification stage (None: the problem does not certify, or the run
+    /// was interrupted before it).
+    pub certification: Option<super::CertificationSummary>,
 }
 
 fn settings_for(p: &GripperProblem, pop: usize, seed: u64) -> Nsga2Settings {
@@ -555,7 +558,14 @@ fn drive(
     let archive = archive.lock().expect("archive").clone();
     info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
-    let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
+    let search = super::outputs::final_front(&st);
+    // a robust run that certifies reports the certified front (its stage after the search)
+    let certification =
+        if interrupted { None } else { pool.install(|| super::certify_run(out, &gp, &st, &archive, &search))? };
+    let front: Vec<u64> = match &certification {
+        Some(c) => c.front.clone(),
+        None => search.iter().map(|p| p.id).collect(),
+    };
     let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     lock.check()?;
@@ -572,6 +582,7 @@ fn drive(
         interrupted,
         wall_s: start.elapsed().as_secs_f64(),
         discards: archive.discards,
+        certification,
     })
 }
 

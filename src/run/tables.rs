@@ -18,7 +18,8 @@ use crate::error::Result;
 pub struct CheckpointTables {
     /// The checkpoint's generation.
     pub generation: u64,
-    /// pareto.csv's rows: the population's feasible non-dominated designs, by id.
+    /// pareto.csv's rows: the population's feasible non-dominated designs, by id (a robust
+    /// run certified at this generation: the certified front's rows).
     pub front: Vec<DesignRow>,
     /// archive.csv's rows: every feasible non-dominated design of the run, by id.
     pub archive: Vec<DesignRow>,
@@ -50,7 +51,11 @@ impl RunFolder {
         )?;
         let st = &cp.state;
         let running = matches!(RunLock::holder(self.dir())?, LockHolder::Held(_));
-        let front = final_front(st).into_iter().map(|i| DesignRow::of(i, Some(0))).collect();
+        // a robust run certified at this state reports its certified front (certification.json)
+        let certification = super::certify::read_certification(self.dir())?;
+        let certified = super::certify_stage::checkpoint_front(certification.as_ref(), st, cp.archive.as_ref());
+        let front =
+            certified.unwrap_or_else(|| final_front(st).into_iter().map(|i| DesignRow::of(i, Some(0))).collect());
         let archive =
             cp.archive.as_ref().map_or(vec![], |a| a.members.iter().map(|i| DesignRow::of(i, None)).collect());
         let mut order: Vec<usize> = (0..st.population.len()).collect();
