@@ -12,6 +12,7 @@ mod certify;
 mod checkpoint;
 mod checkpoint_json;
 mod contents;
+mod differences;
 mod folder;
 mod grasp_plot;
 mod gripper;
