@@ -20,11 +20,7 @@ fn verify_does_not_keep_a_design_whose_fresh_scenarios_the_solver_aborted() {
     let problem = d.join("small.toml");
     // with RADAU5 (the default before session 38), whose step counts the budget of 2000 cuts
     let radau5 = |steps: u64| {
-        set_line(
-            &kitchen_with_max_steps(steps, true),
-            "max_steps",
-            &format!("max_steps = {steps}\nmethod = \"radau5\""),
-        )
+        set_line(kitchen_with_max_steps(steps, true), "max_steps", &format!("max_steps = {steps}\nmethod = \"radau5\""))
     };
     std::fs::write(&problem, radau5(200_000)).unwrap();
     let run = d.join("run");
