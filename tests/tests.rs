@@ -52,6 +52,7 @@ mod s36_params;
 mod s37_fixes;
 mod s37_offset_f2;
 mod s37_typed;
+mod s38_front;
 mod scene_cli;
 mod scenes;
 mod seams;

@@ -34,7 +34,7 @@ mod verify_robust;
 mod verify_run;
 
 pub use crate::error::{counted, printable, shell_quote};
-pub use archive::{Archive, DiscardCause, Discards};
+pub use archive::{front_cap, reported_front, Archive, DiscardCause, Discards};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;

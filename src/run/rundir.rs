@@ -18,7 +18,7 @@ use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
-use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
+use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators, Survival, Variation};
 use crate::params::Problem;
 use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
 use crate::{Error, Result};
@@ -78,11 +78,11 @@ pub struct RunSummary {
     pub generations: u64,
     /// Evaluations.
     pub evaluations: u64,
-    /// Size of the final feasible front.
+    /// Designs on the reported front (pareto.csv).
     pub front_size: usize,
     /// Feasible members of the final population.
     pub feasible: usize,
-    /// Final normalised hypervolume of the population's feasible front.
+    /// Normalised hypervolume of the reported front (pareto.csv).
     pub hv: f64,
     /// Designs in the archive (every feasible non-dominated design evaluated).
     pub archive_size: usize,
@@ -204,7 +204,8 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0 };
+    let (survival, variation) = (Some(Survival::default()), Some(Variation::default()));
+    let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0, survival, variation };
     drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
@@ -376,7 +377,9 @@ pub fn resume_with(
     write_json(&run_json, &info)?;
     write_current(dir, &info, &gp.problem)?;
     let state = cp.state.with_max_generations(total);
-    let start = Start { recorder, archive, notes, wall_before: cp.wall_s };
+    // the algorithm the run started with (absent: NSGA-II's, a run from before issue 42)
+    let (survival, variation) = (cp.options.survival, cp.options.variation);
+    let start = Start { recorder, archive, notes, wall_before: cp.wall_s, survival, variation };
     drive(gp, cp.settings, state, info, dir, threads, hooks, lock, start)
 }
 
@@ -396,6 +399,10 @@ struct Start {
     archive: Archive,
     notes: Vec<String>,
     wall_before: f64,
+    /// The run's survival, as its checkpoints state it (None: crowding).
+    survival: Option<Survival>,
+    /// The run's variation, as its checkpoints state it (None: SBX).
+    variation: Option<Variation>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -418,7 +425,8 @@ fn drive(
     let mut info = info;
     info.threads = pool.current_num_threads();
     let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
-    let options = RunOptions::of(&gp.problem.solver, &info.recording);
+    let (survival, variation) = (begin.survival, begin.variation);
+    let options = RunOptions { survival, variation, ..RunOptions::of(&gp.problem.solver, &info.recording) };
     let mut gp = gp;
     if info.recording.enabled {
         gp.recording = info.recording;
@@ -471,7 +479,9 @@ fn drive(
     let persister = Persister::start_with(Some(outputs), recorder.clone(), ckpt, info.threads, persist_hooks)?;
     let (pers2, prog2) = (persister.clone(), progress.clone());
     let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
-    let mut solver = Nsga2::with_evaluator(settings, evaluator);
+    let mut solver = Nsga2::with_evaluator(settings, evaluator)
+        .with_survival(survival.unwrap_or(Survival::Crowding))
+        .with_variation(variation.unwrap_or(Variation::Sbx));
     solver.stop = hooks.stop;
     let mut result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));
     if let Ok((_, st)) = &mut result {
@@ -519,7 +529,7 @@ fn drive(
     let archive = archive.lock().expect("archive").clone();
     info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
-    let front: Vec<u64> = super::outputs::final_front(&st).iter().map(|p| p.id).collect();
+    let front: Vec<u64> = super::archive::reported_front(&st, Some(&archive)).iter().map(|p| p.id).collect();
     let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     lock.check()?;
@@ -528,9 +538,11 @@ fn drive(
         out: out.to_path_buf(),
         generations: st.generation,
         evaluations: st.evaluations,
-        front_size: st.feasible_front().len(),
+        front_size: front.len(),
         feasible: st.population.iter().filter(|p| p.eval.cv.is_feasible()).count(),
-        hv: st.hv_history.last().copied().unwrap_or(f64::NAN),
+        hv: if archive.front.is_some() { archive.front_hv_history.last() } else { st.hv_history.last() }
+            .copied()
+            .unwrap_or(f64::NAN),
         archive_size: archive.members.len(),
         archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
         interrupted,
@@ -595,7 +607,9 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
             "options.pipeline" => "this gripopt".to_string(),
             _ => file.clone(),
         };
-        let expected = RunOptions::of(&problem.solver, &info.recording);
+        // the algorithm is the run's own (its first checkpoint's), not the problem file's
+        let (survival, variation) = (cp.options.survival, cp.options.variation);
+        let expected = RunOptions { survival, variation, ..RunOptions::of(&problem.solver, &info.recording) };
         // the run's options leave out the default method (RADAU5): name it beside a
         // checkpoint's `method`
         let mut named = expected.clone();

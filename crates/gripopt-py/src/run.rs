@@ -396,6 +396,7 @@ impl PyRunFolder {
                     feasible: 0,
                     hypervolume: 0.0,
                     archive_hypervolume: None,
+                    pareto_hypervolume: None,
                 };
                 return columns(py, &f.history().py()?, || Some(template));
             }

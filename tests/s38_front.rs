@@ -1,0 +1,171 @@
+//! Issue 42: the front a run reports (pareto.csv, `show`, front.mcap, `verify`) is the best
+//! of the archive, at most the population size; the optimiser's survival and variation are
+//! stated in every checkpoint, and a checkpoint without them (a run started before issue 42)
+//! resumes with NSGA-II's.
+use gripopt::optim::{execute, Nsga2, Nsga2State, Survival, Variation};
+use gripopt::run::{optimise, resume, Checkpoint, GripperInfo, GripperProblem, RunSpec};
+use std::path::{Path, PathBuf};
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The data lines of a CSV view (no `#` lines, no header).
+fn rows(p: &Path) -> Vec<String> {
+    read(p).lines().filter(|l| !l.starts_with('#')).skip(1).map(str::to_string).collect()
+}
+
+/// A run of bottle-1l with population `pop`, nothing recorded.
+fn run(name: &str, pop: usize, generations: u64) -> PathBuf {
+    let d = crate::common::scratch_dir("s38-front", name);
+    let spec = RunSpec {
+        pop,
+        record: gripopt::record::RecordOptions::none(),
+        ..crate::common::bottle_spec(&d, generations, 5, 1)
+    };
+    optimise(&spec).unwrap();
+    d
+}
+
+/// The hypervolume of `points` (minimisation) below the reference point `r`, by
+/// inclusion–exclusion over every subset: Σ over non-empty subsets S of (−1)^(|S|+1) ·
+/// vol(box of the componentwise maximum of S), independent of the library's slicing.
+fn inclusion_exclusion(points: &[Vec<f64>], r: &[f64]) -> f64 {
+    let pts: Vec<&Vec<f64>> = points.iter().filter(|p| p.iter().zip(r).all(|(a, b)| a < b)).collect();
+    assert!(pts.len() <= 16, "inclusion–exclusion of {} points", pts.len());
+    let mut total = 0.0;
+    for mask in 1u32..(1 << pts.len()) {
+        let mut corner = vec![f64::NEG_INFINITY; r.len()];
+        for (k, p) in pts.iter().enumerate().filter(|(k, _)| mask & (1 << k) != 0) {
+            let _ = k;
+            for (c, v) in corner.iter_mut().zip(p.iter()) {
+                *c = c.max(*v);
+            }
+        }
+        let vol: f64 = corner.iter().zip(r).map(|(a, b)| b - a).product();
+        total += if mask.count_ones() % 2 == 1 { vol } else { -vol };
+    }
+    total
+}
+
+/// The normalised minimisation objectives of a pareto.csv or archive.csv row (run.json's
+/// ideal and reference points; a design not form closed: max_offset −Δ_off, outside).
+fn normalised(dir: &Path, file: &str) -> Vec<Vec<f64>> {
+    let info: serde_json::Value = serde_json::from_str(&read(&dir.join("run.json"))).unwrap();
+    let v =
+        |k: &str| -> Vec<f64> { info["settings"][k].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let (ideal, reference) = (v("hv_ideal"), v("hv_ref"));
+    let mut r = csv::ReaderBuilder::new().comment(Some(b'#')).from_path(dir.join(file)).unwrap();
+    let header = r.headers().unwrap().clone();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (o, a, m, t) = (col("max_offset"), col("alpha"), col("mean_force"), col("t_stab"));
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            let num = |k: usize| rec[k].parse::<f64>().ok();
+            let f = [-num(o).unwrap_or(-2.5e-4), num(a).unwrap(), -num(m).unwrap(), num(t).unwrap()];
+            f.iter().enumerate().map(|(k, x)| (x - ideal[k]) / (reference[k] - ideal[k])).collect()
+        })
+        .collect()
+}
+
+/// A pop-6 run whose archive outgrows six designs: pareto.csv holds six of archive.csv's
+/// rows (the same lines but `rank`), its hypervolume (history.csv's `pareto_hypervolume`, checked by
+/// inclusion–exclusion from the CSV's objectives) lies between the population's and the
+/// archive's and is the best of every six-design subset's but for at most the greedy's
+/// bound; while the archive fits, pareto.csv is archive.csv.
+#[test]
+fn pareto_csv_is_the_best_of_the_archive_at_most_the_population_size() {
+    let d = run("cap", 6, 12);
+    let (front, archive) = (rows(&d.join("pareto.csv")), rows(&d.join("archive.csv")));
+    assert!(archive.len() > 6, "the archive outgrew the population ({} designs): pick another seed", archive.len());
+    assert_eq!(front.len(), 6);
+    // the same cells but `rank` (pareto.csv 0, archive.csv empty)
+    let unranked = |l: &String| l.replacen(",0,", ",,", 1);
+    assert!(front.iter().all(|l| archive.contains(&unranked(l))), "every pareto.csv row is an archive.csv row");
+    let hist = rows(&d.join("history.csv"));
+    let last: Vec<&str> = hist.last().unwrap().split(',').collect();
+    let (pop_hv, archive_hv, pareto_hv): (f64, f64, f64) =
+        (last[3].parse().unwrap(), last[4].parse().unwrap(), last[5].parse().unwrap());
+    let r = [1.0; 4];
+    let ours = inclusion_exclusion(&normalised(&d, "pareto.csv"), &r);
+    assert!((ours - pareto_hv).abs() <= 1e-12, "history's {pareto_hv} vs inclusion–exclusion {ours}");
+    assert!(pareto_hv >= pop_hv - 1e-15 && pareto_hv <= archive_hv + 1e-15, "{pop_hv} ≤ {pareto_hv} ≤ {archive_hv}");
+    // against the best six-design subset of the archive (all of them, by brute force)
+    let all = normalised(&d, "archive.csv");
+    let inside: Vec<Vec<f64>> = all.into_iter().filter(|p| p.iter().all(|v| *v < 1.0)).collect();
+    if inside.len() <= 18 {
+        let mut best = 0.0f64;
+        for mask in 0u32..(1 << inside.len()) {
+            if mask.count_ones() as usize == 6.min(inside.len()) {
+                let sub: Vec<Vec<f64>> =
+                    inside.iter().enumerate().filter(|(k, _)| mask & (1 << k) != 0).map(|(_, p)| p.clone()).collect();
+                best = best.max(inclusion_exclusion(&sub, &r));
+            }
+        }
+        assert!(pareto_hv >= (1.0 - (-1.0f64).exp()) * best - 1e-15, "{pareto_hv} against the best subset's {best}");
+    }
+    // the first generations, while the archive fitted: pareto_hypervolume = archive_hypervolume
+    let first: Vec<&str> = hist[0].split(',').collect();
+    assert_eq!(first[4], first[5], "generation 1: {}", hist[0]);
+}
+
+/// `show`'s front (the checkpoint's designs) and `verify`'s designs are pareto.csv's.
+#[test]
+fn show_and_verify_report_pareto_csvs_designs() {
+    let d = run("views", 6, 12);
+    let folder = gripopt::RunFolder::open(&d).unwrap();
+    let tables = folder.checkpoint_tables().unwrap().unwrap();
+    let ids = |rows: &[gripopt::run::DesignRow]| rows.iter().map(|r| r.id).collect::<Vec<_>>();
+    assert_eq!(ids(&tables.front), ids(&folder.front().unwrap()));
+    assert!(folder.view_differs("pareto.csv", &tables.front, tables.generation).unwrap().is_none());
+    let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
+    let verified: Vec<u64> =
+        gripopt::run::checkpoint_designs(&cp, false, &d.join("checkpoint.json")).unwrap().iter().map(|v| v.0).collect();
+    assert_eq!(verified, ids(&tables.front));
+    assert!(tables.archive.len() > tables.front.len());
+}
+
+/// A new run's checkpoint states its survival and variation (the defaults).
+#[test]
+fn a_new_runs_checkpoint_states_its_algorithm() {
+    let d = run("options", 6, 2);
+    let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
+    assert_eq!(cp.options.survival, Some(Survival::Hypervolume));
+    assert_eq!(cp.options.variation, Some(Variation::DifferentialEvolution { f: 0.5, cr: 0.5 }));
+    let text = read(&d.join("checkpoint.json"));
+    assert!(text.contains(r#""survival":"hypervolume""#), "the option's word");
+    assert!(text.contains(r#""variation":{"cr":0.5,"f":0.5,"kind":"differential_evolution"}"#), "{}", &text[..300]);
+}
+
+/// A checkpoint of session 36 (no survival, no variation) resumes as NSGA-II: its next
+/// generation is the one NSGA-II makes from its state, not the default algorithm's.
+#[test]
+fn an_old_checkpoint_resumes_with_nsga2() {
+    let fixture = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36/radau5"));
+    let d = crate::common::scratch_dir("s38-front", "s36");
+    crate::common::copy_dir(&fixture, &d);
+    resume(&d, Some(2), false, Some(1)).unwrap();
+    let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
+    assert_eq!((cp.options.survival, cp.options.variation), (None, None), "the options it started with");
+    let old = Checkpoint::<GripperInfo>::load(&fixture.join("checkpoint.json")).unwrap();
+    let next = |solver: Nsga2| {
+        let gp = GripperProblem::new(gripopt::params::Problem::load(&fixture.join("problem.toml")).unwrap());
+        let state: Nsga2State<GripperInfo> = old.state.clone().with_max_generations(2);
+        let (_, st) = execute(gp, solver, state, |e| e).unwrap();
+        st.population.iter().map(|p| p.x.clone()).collect::<Vec<_>>()
+    };
+    let resumed: Vec<Vec<f64>> = cp.state.population.iter().map(|p| p.x.clone()).collect();
+    assert_eq!(resumed, next(Nsga2::new(old.settings.clone()).nsga2()));
+    assert_ne!(resumed, next(Nsga2::new(old.settings.clone())), "the default would make another generation");
+}
+
+/// A history.csv of a gripopt before issue 42 (no `pareto_hypervolume`) still reads, the
+/// column empty.
+#[test]
+fn an_old_history_csv_reads_without_pareto_hypervolume() {
+    let fixture = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36/radau5"));
+    assert!(!read(&fixture.join("history.csv")).contains("pareto_hypervolume"));
+    let h = gripopt::RunFolder::open(&fixture).unwrap().history().unwrap();
+    assert!(!h.is_empty() && h.iter().all(|r| r.pareto_hypervolume.is_none()));
+}
