@@ -123,7 +123,7 @@ run: build
 
 # The robust multi-object job (docs/robust.md): problems/kitchen.toml — the 1 l bottle full
 # and half full, a can and a 0.5 l bottle, 8 scenarios each of the uncertain grasp, in the
-# free scene — optimised (pop 40, 15 generations: about 9 minutes on 2 cores), then its front
+# free scene — optimised (pop 40, 15 generations: about 2–3 minutes on 2 cores), then its front
 # re-evaluated out of sample (`gripopt verify`: 32 fresh scenarios per object, verify_robust.csv).
 KITCHEN_OUT ?= results/kitchen
 KITCHEN_PROBLEM ?= problems/kitchen.toml
@@ -150,8 +150,11 @@ bench: build bench-instructions
 	$(CARGO) bench --locked -p gripopt-diffsol-bench --bench diffsol -- $(PROBLEM)
 
 # Instruction counts (valgrind's callgrind: repeatable on a noisy machine) of the nominal
-# centred grasp, the nominal free scene and a one-thread `optimise --pop 128 --generations
-# 10` (scripts/bench-instructions.sh; docs/benchmarks.md). valgrind is installed with apt-get
+# centred grasp and free scene (the default solver, RADAU5, auto at 1e-7), the kitchen front
+# design of issue 40 (32 robust scenarios) and a one-thread `optimise --pop 128 --generations
+# 10`, then the accuracy rule's table (`gripopt bench accuracy`: 40 grasp designs and 960
+# kitchen scenarios against RADAU5 at 1e-10; minutes the first time, its reference cached)
+# (scripts/bench-instructions.sh; docs/benchmarks.md). valgrind is installed with apt-get
 # when missing and this runs as root; otherwise it says how.
 .PHONY: bench-instructions
 bench-instructions: build
@@ -167,9 +170,15 @@ clean:
 # The thesis's chapter-4 parameter studies (figs 4.1-4.18) with `gripopt sweep`, into
 # results/studies/ (see scripts/studies.sh and docs/thesis-comparison.md). One study:
 # `scripts/studies.sh fig4_16`. `make figures` also copies the cited plots to docs/figures/.
-.PHONY: studies figures
+# `make thesis-checks`: the studies behind rows 8, 12-14, 22, 24 and 25, the figures those rows
+# quote (printed by scripts/thesis_checks.py) and row 14's α map with the ψ rule, into docs/figures/.
+.PHONY: studies figures thesis-checks
 studies: build
 	scripts/studies.sh
 
 figures: studies
 	scripts/figures.sh
+
+thesis-checks: build $(VENV_STAMP)
+	scripts/studies.sh fig4_5 fig4_8a fig4_8l fig4_8r fig4_13e fig4_16 fig4_16e fig4_17
+	$(VENV)/bin/python scripts/thesis_checks.py --figures docs/figures

@@ -5,15 +5,25 @@
 #     `gripopt simulate PROBLEM --scene free --json`, which runs both (the centred grasp in
 #     diagnostic mode without recording, as stage 3 runs it); each is the inclusive count of
 #     its simulation function (CENTRED_FN, FREE_FN), so parsing and stages 0-2 are left out;
+#   * the same two with RADAU5 (a copy of PROBLEM naming `method = "radau5"`: the default before
+#     session 38) and with `method = "auto"` at AUTO_RTOL;
+#   * the kitchen front design of issue 40: `gripopt evaluate KITCHEN --design KITCHEN_DESIGN
+#     --json` (32 scenarios, centred grasp and free scene each), the whole process, and the
+#     same with RADAU5;
 #   * a one-thread `gripopt optimise PROBLEM --pop 128 --generations 10 --seed 1` with recording
-#     on: the whole process, every thread.
-# Usage: scripts/bench-instructions.sh   (`make bench-instructions`; BIN, PROBLEM, POP,
-# GENERATIONS, AUTO_RTOL override; SKIP_OPTIMISE=1 leaves the optimisation out.) Writes its callgrind
-# files to target/bench-instructions/.
+#     on: the whole process, every thread;
+#   * the accuracy rule's table (not an instruction count): `gripopt bench accuracy
+#     --candidates radau5:1e-6,default` (docs/benchmarks.md, "The accuracy rule"), its
+#     reference cached in target/bench-instructions/accuracy (computing it takes minutes).
+# Usage: scripts/bench-instructions.sh   (`make bench-instructions`; BIN, PROBLEM, KITCHEN, POP,
+# GENERATIONS, AUTO_RTOL override; SKIP_OPTIMISE=1 leaves the optimisation out, SKIP_ACCURACY=1
+# the accuracy table.) Writes its callgrind files to target/bench-instructions/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${BIN:-target/release/gripopt}
 PROBLEM=${PROBLEM:-problems/bottle-1l.toml}
+KITCHEN=${KITCHEN:-problems/kitchen.toml}
+KITCHEN_DESIGN=l21=0.04304807948252374,b=0.06871978187729287,t22=0.03375918412304188,r=0.2601664030440584,p=0.25261005423197275,psi_deg=135.766034896994
 POP=${POP:-128}
 GENERATIONS=${GENERATIONS:-10}
 AUTO_RTOL=${AUTO_RTOL:-1e-7}
@@ -36,31 +46,50 @@ total() {
 }
 mega() { awk -v n="$1" 'BEGIN { if (n == "") print "?"; else printf "%.2f M", n / 1e6 }'; }
 
-valgrind --tool=callgrind --callgrind-out-file="$OUT/simulate-free.cg" "$BIN" simulate "$PROBLEM" --scene free --json \
-    > "$OUT/simulate-free.json" 2> "$OUT/simulate-free.log"
-centred=$(inclusive "$OUT/simulate-free.cg" "$CENTRED_FN")
-free=$(inclusive "$OUT/simulate-free.cg" "$FREE_FN")
-printf '%-58s %14s\n' "instructions (callgrind, $BIN)" "count"
-printf '%-58s %14s\n' "nominal centred grasp ($CENTRED_FN)" "$(mega "$centred")"
-printf '%-58s %14s\n' "nominal free scene to t_obs ($FREE_FN)" "$(mega "$free")"
-# the same with the stiffness-switching method at the tolerances where it is at least as
-# accurate as RADAU5 at the default 1e-6 / 1e-9 over the work-precision ensemble
-# (docs/benchmarks.md, "Stiffness switching"): a copy of the problem whose [solver] says
-# method = "auto", rtol = AUTO_RTOL, atol = 1e-3 AUTO_RTOL
-auto_problem="$OUT/problem-auto.toml"
-awk -v rtol="$AUTO_RTOL" '
-    /^\[/ { solver = ($0 ~ /^\[solver\]/) }
-    solver && /^(rtol|atol|method) *=/ { next }
-    { print }
-    /^\[solver\]/ { printf "method = \"auto\"\nrtol = %s\natol = %g\n", rtol, rtol * 1e-3 }' "$PROBLEM" > "$auto_problem"
-valgrind --tool=callgrind --callgrind-out-file="$OUT/simulate-free-auto.cg" "$BIN" simulate "$auto_problem" --scene free \
-    --json > "$OUT/simulate-free-auto.json" 2> "$OUT/simulate-free-auto.log"
-printf '%-58s %14s\n' "  method auto, rtol $AUTO_RTOL: nominal centred grasp" "$(mega "$(inclusive "$OUT/simulate-free-auto.cg" "$CENTRED_FN")")"
-printf '%-58s %14s\n' "  method auto, rtol $AUTO_RTOL: nominal free scene" "$(mega "$(inclusive "$OUT/simulate-free-auto.cg" "$FREE_FN")")"
+# a copy of problem $1 whose [solver] names method $2 (and, when given, rtol $3 and atol 1e-3·$3)
+with_method() {
+    awk -v m="$2" -v rtol="${3:-}" '
+        /^\[/ { solver = ($0 ~ /^\[solver\]/) }
+        solver && /^method *=/ { next }
+        solver && rtol != "" && /^(rtol|atol) *=/ { next }
+        { print }
+        /^\[solver\]/ { printf "method = \"%s\"\n", m; if (rtol != "") printf "rtol = %s\natol = %g\n", rtol, rtol * 1e-3 }' "$1"
+}
+# callgrind of `BIN simulate $2 --scene free --json` into $OUT/$1.cg; prints its two counts
+# under the label $3
+simulate_counts() {
+    valgrind --tool=callgrind --callgrind-out-file="$OUT/$1.cg" "$BIN" simulate "$2" --scene free --json \
+        > "$OUT/$1.json" 2> "$OUT/$1.log"
+    printf '%-66s %12s\n' "$3nominal centred grasp" "$(mega "$(inclusive "$OUT/$1.cg" "$CENTRED_FN")")"
+    printf '%-66s %12s\n' "$3nominal free scene to t_obs" "$(mega "$(inclusive "$OUT/$1.cg" "$FREE_FN")")"
+}
+printf '%-66s %12s\n' "instructions (callgrind, $BIN)" "count"
+simulate_counts simulate-free "$PROBLEM" "default solver: "
+with_method "$PROBLEM" radau5 > "$OUT/problem-radau5.toml"
+simulate_counts simulate-free-radau5 "$OUT/problem-radau5.toml" "  RADAU5 (the default before session 38): "
+# the stiffness-switching method named, at the tolerances where it is at least as accurate as
+# RADAU5 at the default 1e-6 / 1e-9 over the work-precision ensemble (docs/benchmarks.md,
+# "Stiffness switching")
+with_method "$PROBLEM" auto "$AUTO_RTOL" > "$OUT/problem-auto.toml"
+simulate_counts simulate-free-auto "$OUT/problem-auto.toml" "  method auto, rtol $AUTO_RTOL: "
+# the kitchen front design: 32 scenarios, the whole process
+kitchen_counts() {
+    valgrind --tool=callgrind --callgrind-out-file="$OUT/$1.cg" "$BIN" evaluate "$2" --design "$KITCHEN_DESIGN" \
+        --json > "$OUT/$1.json" 2> "$OUT/$1.log"
+    printf '%-66s %12s\n' "$3" "$(mega "$(total "$OUT/$1.cg")")"
+}
+kitchen_counts kitchen "$KITCHEN" "kitchen front design, 32 scenarios (whole process)"
+with_method "$KITCHEN" radau5 > "$OUT/kitchen-radau5.toml"
+kitchen_counts kitchen-radau5 "$OUT/kitchen-radau5.toml" "  the same with RADAU5 as given"
 if [ "${SKIP_OPTIMISE:-0}" != 1 ]; then
     run=$(mktemp -d)
     valgrind --tool=callgrind --callgrind-out-file="$OUT/optimise.cg" "$BIN" optimise "$PROBLEM" --out "$run/run" \
         --pop "$POP" --generations "$GENERATIONS" --seed 1 --threads 1 > "$OUT/optimise.log" 2>&1
     rm -rf "$run"
-    printf '%-58s %14s\n' "optimise --pop $POP --generations $GENERATIONS, one thread (whole process)" "$(mega "$(total "$OUT/optimise.cg")")"
+    printf '%-66s %12s\n' "optimise --pop $POP --generations $GENERATIONS, one thread (whole process)" "$(mega "$(total "$OUT/optimise.cg")")"
+fi
+if [ "${SKIP_ACCURACY:-0}" != 1 ]; then
+    echo "accuracy rule (gripopt bench accuracy --candidates radau5:1e-6,default; $OUT/accuracy/accuracy.csv):"
+    "$BIN" bench accuracy --candidates radau5:1e-6,default --out "$OUT/accuracy" > "$OUT/accuracy.txt" 2> "$OUT/accuracy.log"
+    grep -v '0 differ$' "$OUT/accuracy.txt" | grep -v '0.00e0  p90 0.00e0  max 0.00e0' || true
 fi

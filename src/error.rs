@@ -92,8 +92,9 @@ pub enum Error {
         /// What is wrong and what to do.
         message: String,
     },
-    /// Another process holds the run folder's lock (its pid, when it could be read).
-    #[error("{}: the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    /// Another process holds the run folder's lock (its pid, when it could be read), or
+    /// another call in this one (a run in another thread of a Python session, say).
+    #[error("{}: {}", path.display(), holder_text(*pid))]
     Locked {
         /// The run folder.
         path: PathBuf,
@@ -166,21 +167,38 @@ pub enum Error {
     },
 }
 
+/// Who holds a folder's lock, in words: another process (its pid), or this very process (a
+/// run or run-folder object of the same program still open holds it).
+fn holder_text(pid: Option<u32>) -> String {
+    match pid {
+        Some(p) if p == std::process::id() => format!("the folder is in use by this same process (pid {p}): another call in this process holds its lock (an earlier run, resume, verify or open run folder, or one still going in another thread); finish or close that one first"),
+        _ => format!("the run folder is in use by another gripopt process{}; wait for it to end or stop it (the lock is released when it exits, also when killed)", pid.map(|p| format!(" (pid {p})")).unwrap_or_default()),
+    }
+}
+
 /// `k` and the noun for it: "1 design", "3 designs".
 pub fn counted(k: u64, one: &str, many: &str) -> String {
     format!("{k} {}", if k == 1 { one } else { many })
 }
 
-/// `s` as one word of a POSIX shell command line, to be copied from a message: as it is
-/// when it holds only characters no shell treats specially, in single quotes otherwise
-/// (`'` written `'\''`), and as `$'…'` with escapes when it holds control characters (so
-/// that none reaches a terminal raw).
+/// `s`, a path, as one word of a POSIX shell command line, to be copied from a message: as
+/// it is when it holds only characters no shell treats specially, in single quotes
+/// otherwise (`'` written `'\''`), and as `$'…'` with escapes when it holds control or
+/// invisible format characters (so that none reaches a terminal raw). A path that starts
+/// with `-` is written `./-…`, so that the command does not take it for an option.
 pub fn shell_quote(s: &str) -> String {
+    let dashed;
+    let s = if s.starts_with('-') {
+        dashed = format!("./{s}");
+        dashed.as_str()
+    } else {
+        s
+    };
     let plain = |c: char| c.is_ascii_alphanumeric() || "@%+=:,./_-".contains(c);
     if !s.is_empty() && s.chars().all(plain) {
         return s.to_string();
     }
-    if !s.chars().any(char::is_control) {
+    if !s.chars().any(hidden) {
         return format!("'{}'", s.replace('\'', r"'\''"));
     }
     let mut out = String::from("$'");
@@ -190,7 +208,8 @@ pub fn shell_quote(s: &str) -> String {
             '\\' => out.push_str("\\\\"),
             '\n' => out.push_str("\\n"),
             '\t' => out.push_str("\\t"),
-            c if c.is_control() => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c if hidden(c) && (c as u32) > 0xFFFF => out.push_str(&format!("\\U{:08x}", c as u32)),
+            c if hidden(c) => out.push_str(&format!("\\u{:04x}", c as u32)),
             c => out.push(c),
         }
     }
@@ -198,12 +217,13 @@ pub fn shell_quote(s: &str) -> String {
     out
 }
 
-/// `s` with its control characters written as `\u{…}` escapes (a line break kept), so that
-/// none reaches a terminal raw.
+/// `s` with its control characters and invisible format characters (bidirectional
+/// overrides such as U+202E, zero-width characters, …) written as `\u{…}` escapes (a line
+/// break kept), so that none reaches a terminal raw or reorders what it shows.
 pub fn printable(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
-        if c.is_control() && c != '\n' {
+        if hidden(c) && c != '\n' {
             out.push_str(&format!("\\u{{{:x}}}", c as u32));
         } else {
             out.push(c);
@@ -211,6 +231,63 @@ pub fn printable(s: &str) -> String {
     }
     out
 }
+
+/// A control character, or a character a terminal does not show as itself: Unicode's format
+/// characters (category Cf: bidirectional controls, zero-width characters, the byte-order
+/// mark, tags, …) and the line and paragraph separators.
+pub fn hidden(c: char) -> bool {
+    c.is_control()
+        || matches!(c as u32,
+            0xAD | 0x600..=0x605 | 0x61C | 0x6DD | 0x70F | 0x890..=0x891 | 0x8E2 | 0x180E
+            | 0x200B..=0x200F | 0x2028..=0x202E | 0x2060..=0x2064 | 0x2066..=0x206F | 0xFEFF
+            | 0xFFF9..=0xFFFB | 0x110BD | 0x110CD | 0x13430..=0x1343F | 0x1BCA0..=0x1BCA3
+            | 0x1D173..=0x1D17A | 0xE0001 | 0xE0020..=0xE007F)
+}
+
+/// A number for a message: `{:.decimals}` where that reads well (0, or a magnitude from
+/// 1e-3 to below 1e6), otherwise four significant digits in exponent form (`1.478e298`),
+/// never hundreds of digits.
+pub fn short_num(v: f64, decimals: usize) -> String {
+    if !v.is_finite() || v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+/// A number for a message, exactly (its shortest round-trip form): as written from 1e-3 to
+/// below 1e6 (and 0), otherwise in exponent form (`1.4777425401370882e298`, `1e-300`),
+/// never hundreds of digits.
+pub fn exact_num(v: f64) -> String {
+    if !v.is_finite() || v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// `text` cut to at most `max` characters per line (a cut line ends in `… (N more
+/// characters)`): what a message echoes from a file (a line of 800 kB) stays readable.
+pub fn cap_lines(text: &str, max: usize) -> String {
+    let mut out = String::with_capacity(text.len().min(64 << 10));
+    for (k, line) in text.split('\n').enumerate() {
+        if k > 0 {
+            out.push('\n');
+        }
+        let n = line.chars().count();
+        if n > max {
+            out.extend(line.chars().take(max));
+            out.push_str(&format!("… ({} more characters)", n - max));
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
+/// The actions of an [`Error::Io`] on a file the command itself created: a `NotFound` there
+/// is a race (something removed the file or its folder meanwhile), exit 1, never bad input.
+const RACE_ACTIONS: [&str; 4] = ["cannot write", "cannot sync", "cannot rename", "cannot set aside"];
 
 /// Result with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
@@ -222,7 +299,8 @@ impl Error {
     }
 
     /// True when the error is the user's input (a file, field, flag or folder given that
-    /// cannot be used as asked): exit code 2. Other errors are failures of a run: exit 1.
+    /// cannot be used as asked): exit code 2. Other errors are failures of a run: exit 1,
+    /// an I/O race included (a file the command made that went missing before its rename).
     pub fn is_input(&self) -> bool {
         use std::io::ErrorKind as K;
         match self {
@@ -235,6 +313,13 @@ impl Error {
             | Error::Recording { .. }
             | Error::DamagedRecording { .. } => true,
             Error::Json { .. } => true,
+            // a file gripopt made that went missing before it was synced or renamed into
+            // place: the file system changed under the command (a race), not its input
+            Error::Io { action, source, .. }
+                if source.kind() == K::NotFound && RACE_ACTIONS.iter().any(|a| action.starts_with(a)) =>
+            {
+                false
+            }
             Error::Io { source, .. } => matches!(
                 source.kind(),
                 K::NotFound

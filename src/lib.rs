@@ -9,7 +9,8 @@
 //! design in a scene with its trajectory, run or resume an optimisation with the
 //! [`Optimiser`] builder (a [`Progress`] callback, a stop flag, another batch
 //! [`Evaluator`]), and read a run folder back with [`RunFolder`] (its front, population,
-//! archive and history rows, a design's recorded record and trajectory, replay).
+//! archive and history rows, a design's recorded record and trajectory, replay). The face is
+//! the application layer ([`app`]): its requests and results, and these re-exports of it.
 //!
 //! ```no_run
 //! let p = gripopt::Problem::load("problems/bottle-1l.toml")?;
@@ -28,7 +29,8 @@
 //! (finger geometry, kinematics, statics, closure) → [`sim`] (integrators, events, the
 //! driver, scenes) → [`eval`] (the staged pipeline and its record) → [`optim`] (pure
 //! NSGA-II) → [`record`] (MCAP) → [`run`] (run folders, checkpoints, the gripper problem)
-//! → [`sweep`] (beside run) → [`bench`](mod@bench) (above run); the CLI sits on top.
+//! → [`sweep`] (beside run) → [`bench`](mod@bench) (above run) → [`app`] (the application
+//! layer, the face); the CLI and the Python binding sit on top.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: a NaN must fail every physical check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -66,28 +68,26 @@ mod fsutil;
 #[doc(hidden)]
 pub mod math;
 
-// The face: the few names a library user needs.
-mod facade;
+// The application layer, on top: what a user asks of gripopt, as typed requests and results;
+// the CLI and the Python binding use it and nothing else.
+pub mod app;
 
 /// The row walker the CSV writers use, for the Python package's DataFrame columns (not a
 /// user's API).
 #[doc(hidden)]
 pub use cells::{walk_row, CellError, Leaf, RowSink};
-pub use error::{Error, Result};
-pub use eval::{Cause, EvaluationRecord, Record, SimulationRecord};
-pub use facade::{
-    evaluate, evaluate_batch, evaluate_rows, parse_scene, pose_values, random_designs, sample_values, simulate,
-    trajectory_columns, trajectory_row, EvaluatedRow, Optimiser, Simulation, Stages, FINGER2_COLUMNS, POSE_COLUMNS,
+// The face: the names a library user needs most, from the application layer.
+pub use app::{
+    evaluate, evaluate_batch, evaluate_rows, pose_values, random_designs, replay, sample_values, simulate,
+    trajectory_columns, trajectory_row, Batch, Bounds, Cause, Column, Controls, Design, DesignMessage,
+    DesignParameters, DesignRow, Error, EvaluatedRow, EvaluationRecord, Evaluations, Evaluator, EventNote,
+    FingerSample, GenerationReport, GripperProblem, HistoryRow, Infeasibility, Integration, Method, Mode, Optimiser,
+    Point, PoseSample, Problem, Progress, Record, RecordOptions, Recorded, Replay, Resolution, Result, RunFolder,
+    RunInfo, RunSummary, Sample, SceneChoice, SceneKind, SimulateRequest, Simulation, SimulationRecord, Sink, Stages,
+    Trajectory, TrajectoryKeep, DESIGN_COLUMNS, DESIGN_NAMES, FINGER2_COLUMNS, HISTORY_COLUMNS, POSE_COLUMNS,
     SAMPLE_COLUMNS,
 };
-pub use fsutil::{check_new_file, check_output_file, run_folder_around, run_folder_file, write_atomic};
-pub use optim::{Batch, Evaluations, Evaluator, Infeasibility};
-pub use params::{Bounds, Design, DesignParameters, Problem, SceneKind, DESIGN_NAMES};
-pub use record::{DesignMessage, RecordOptions, Recorded, Replay, Resolution, TrajectoryKeep};
-pub use run::{
-    Column, DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RunFolder, RunInfo, RunSummary,
-    DESIGN_COLUMNS, HISTORY_COLUMNS,
-};
-pub use sim::{
-    Controls, EventNote, FingerSample, Integration, Method, Mode, Point, PoseSample, Sample, Sink, Trajectory,
+pub use fsutil::{
+    check_new_file, check_output_file, run_folder_around, run_folder_file, set_aside, write_atomic, AtomicFile,
+    SET_ASIDE_DIR,
 };

@@ -1,12 +1,13 @@
 //! The layering of docs/architecture.md, checked on the source text: each layer imports only
 //! the layers below it; no two files import each other; no source file is over 700 lines;
-//! the library reads no environment variable, uses no anyhow and never prints (CLI only).
+//! the library reads no environment variable, uses no anyhow and never prints (CLI only);
+//! the CLI and the Python binding reach the library through its application layer only.
 
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first. `math`, `error` and `fsutil` are shared utilities below all.
 const LAYERS: &[&str] =
-    &["params", "model", "sim", "eval", "export", "optim", "record", "run", "sweep", "bench", "cli"];
+    &["params", "model", "sim", "eval", "export", "optim", "record", "run", "sweep", "bench", "app", "cli"];
 /// Layers that sit side by side and must not import each other (same rank).
 const PEERS: &[(&str, &str)] =
     &[("sweep", "run"), ("sweep", "record"), ("sweep", "optim"), ("sweep", "bench"), ("bench", "sweep")];
@@ -463,4 +464,60 @@ fn the_circle_finder_sees_every_kind_of_path() {
     assert_eq!(tree.circles(), ["p::a <-> p::b", "p::load <-> p::robust", "q <-> q::out"]);
     assert!(tree.edges().contains(&(m("q::spec"), m("q::out"))), "a re-exported name leads to its file");
     assert!(!tree.edges().contains(&(m("p::c"), m("p::a"))), "no path in a comment or string");
+}
+
+/// The layers inside the library: what a front end (the CLI, the Python binding) reaches only
+/// through the application layer (`gripopt::app::…`) or the crate root's re-exports of it.
+const INNER: &[&str] =
+    &["params", "model", "sim", "eval", "export", "optim", "record", "run", "sweep", "bench", "math"];
+
+/// Paths a front end may name inside the layers, each with why (docs/architecture.md, "The
+/// application layer"): none.
+const FRONT_END_EXCEPTIONS: &[(&str, &str)] = &[];
+
+/// The paths `gripopt::…` a front end's file names (in `use` lists and in code, groups
+/// expanded), strings and comments aside.
+fn gripopt_paths(code: &str) -> Vec<Vec<String>> {
+    let t = tokens(code);
+    let mut out = vec![];
+    let mut i = 0;
+    while i < t.len() {
+        let after_sep = i > 0 && (t[i - 1] == Tok::Sep || t[i - 1] == Tok::Other('.'));
+        match &t[i] {
+            Tok::Word(w) if w == "gripopt" && !after_sep && t.get(i + 1) == Some(&Tok::Sep) => {
+                let (paths, j) = parse_path(&t, i);
+                out.extend(paths.into_iter().map(|p| p.segs));
+                i = j.max(i + 1);
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
+/// The CLI (src/cli, src/main.rs) and the Python binding (crates/gripopt-py/src) name no path
+/// inside the layers: `gripopt::app::…` and the crate root's items only (issue 39 item 3:
+/// they parse and render, convert and own the GIL; the library decides).
+#[test]
+fn front_ends_reach_only_the_application_layer() {
+    let mut files = Vec::new();
+    rs_files(&src().join("cli"), &mut files);
+    files.push(src().join("main.rs"));
+    rs_files(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/crates/gripopt-py/src")), &mut files);
+    let mut bad = vec![];
+    for f in &files {
+        for p in gripopt_paths(&code(f)) {
+            let Some(layer) = p.get(1) else { continue };
+            let path = p.join("::");
+            if INNER.contains(&layer.as_str()) && !FRONT_END_EXCEPTIONS.iter().any(|(e, _)| path.starts_with(e)) {
+                bad.push(format!("{}: {path}", f.display()));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "front ends naming paths inside the layers (use gripopt::app):\n{}", bad.join("\n"));
+    // the finder sees groups, nested paths and code paths, not strings or comments
+    let seen =
+        gripopt_paths("use gripopt::{app::X, run::Y};\nfn f() { gripopt::eval::g(); let s = \"gripopt::sim::Z\"; }");
+    let seen: Vec<String> = seen.iter().map(|p| p.join("::")).collect();
+    assert_eq!(seen, ["gripopt::app::X", "gripopt::run::Y", "gripopt::eval::g"]);
 }

@@ -189,3 +189,142 @@ fn run_json_keeps_the_problem_path_absolute_and_normalised() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("changed since the run started"), "{}", text(&o));
 }
+
+/// Issue 44 class 3: every command that writes into a folder holds that folder's lock and
+/// refuses a held one (exit 2, naming the holder's pid): a sweep, `bench replay` and
+/// `optimise` into a folder another process holds (here: this test's process) wrote into it
+/// (a sweep, a bench) or first judged the files the holder was writing.
+#[test]
+fn a_folder_another_process_holds_is_refused_naming_it() {
+    let d = scratch("i44-held");
+    let held = d.join("held");
+    std::fs::create_dir_all(&held).unwrap();
+    let lock = gripopt::run::RunLock::acquire(&held).unwrap();
+    let h = held.to_str().unwrap();
+    let pid = format!("pid {}", std::process::id());
+    for args in [
+        vec!["sweep", BOTTLE, "--vary", "r=0.3:0.7:2", "--stage", "kinematics", "--out", h],
+        vec!["bench", "replay", BOTTLE, "--designs", "1", "--out", h],
+        vec!["optimise", BOTTLE, "--out", h, "--pop", "4", "--generations", "1", "--record", "none"],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        assert!(
+            stderr(&o).contains("in use by another gripopt process") && stderr(&o).contains(&pid),
+            "{args:?}: {}",
+            text(&o)
+        );
+    }
+    let names: Vec<_> = std::fs::read_dir(&held).unwrap().flatten().map(|e| e.file_name()).collect();
+    assert_eq!(names, vec![std::ffi::OsString::from(".lock")], "written into the held folder");
+    drop(lock);
+}
+
+/// Issue 44 class 3: a lock held by this very process (an earlier run or run folder of the
+/// same program still open) named the caller's own pid as "another gripopt process"; it now
+/// says it is this process. And an I/O race (a file the command made that went missing
+/// before its rename) is a failure (exit 1), never bad input (exit 2).
+#[test]
+fn the_lock_error_says_when_the_holder_is_this_process_and_a_race_is_not_bad_input() {
+    let d = scratch("i44-own-lock");
+    let _held = gripopt::run::RunLock::acquire(&d).unwrap();
+    let e = gripopt::run::RunLock::acquire(&d).unwrap_err().to_string();
+    assert!(e.contains("this same process") && !e.contains("another gripopt process"), "{e}");
+    let gone = || std::io::Error::from(std::io::ErrorKind::NotFound);
+    let race = gripopt::Error::io(d.join("x"), "cannot rename the temporary file into place", gone());
+    assert_eq!(race.exit_code(), 1, "{race}");
+    // a folder that does not exist, given by the user, stays bad input
+    let missing = gripopt::Error::io(d.join("none/x"), "cannot create", gone());
+    assert_eq!(missing.exit_code(), 2, "{missing}");
+}
+
+/// Issue 44 class 8: Unicode format characters (U+202E RIGHT-TO-LEFT OVERRIDE turns the
+/// rest of a line around on a terminal) reached the terminal raw in messages; they are
+/// escaped as control characters are. A path starting with `-` (`--out=-weird`) was printed
+/// in commands to copy as `-weird`, which the command takes for an option: now `./-weird`.
+#[test]
+fn messages_escape_format_characters_and_paths_that_look_like_options() {
+    let d = scratch("i44-escape");
+    let evil = d.join("a\u{202e}fdp.toml");
+    let o = run(&["evaluate", evil.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!text(&o).contains('\u{202e}') && stderr(&o).contains("\\u{202e}"), "{}", text(&o));
+    assert_eq!(gripopt::run::shell_quote("-weird"), "./-weird");
+    assert_eq!(gripopt::run::shell_quote("a\u{202e}b"), "$'a\\u202eb'");
+    let o = Command::new(GRIPOPT_BIN)
+        .current_dir(&d)
+        .args(["optimise", BOTTLE, "--out=-weird", "--pop", "4", "--generations", "1", "--record", "none"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let all = text(&o);
+    for (at, _) in all.match_indices("-weird") {
+        assert!(all[..at].ends_with("./"), "a command names `-weird` bare: {all}");
+    }
+    let show = Command::new(GRIPOPT_BIN).current_dir(&d).args(["show", "./-weird"]).output().unwrap();
+    assert_eq!(show.status.code(), Some(0), "{}", text(&show));
+}
+
+/// Issue 44 class 8: numbers in messages are compact: with `criteria.dx_max = 1e-300` every
+/// design fails the impact criterion by a violation of ~1e298, which the run's closing
+/// account of discards printed with 299 digits.
+#[test]
+fn numbers_in_messages_never_run_to_hundreds_of_digits() {
+    let d = scratch("i44-digits");
+    let p = d.join("p.toml");
+    let text_ = std::fs::read_to_string(BOTTLE).unwrap();
+    let edited: String = text_
+        .lines()
+        .map(|l| if l.starts_with("dx_max") { "dx_max = 1e-300".to_string() } else { l.to_string() })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&p, edited).unwrap();
+    let out = d.join("run");
+    let o = run(&[
+        "optimise",
+        p.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--pop",
+        "4",
+        "--generations",
+        "1",
+        "--record",
+        "none",
+    ]);
+    let all = text(&o);
+    assert!(all.contains("violation"), "{all}");
+    let longest = all.split(|c: char| !c.is_ascii_digit()).map(str::len).max().unwrap_or(0);
+    assert!(longest < 25, "a number of {longest} digits: {all}");
+    assert_eq!(gripopt::run::short_num(1.477_742_540_137_088e298, 4), "1.478e298");
+    assert_eq!(gripopt::run::short_num(0.12345, 4), "0.1235");
+    assert_eq!(gripopt::run::exact_num(1e-300), "1e-300");
+}
+
+/// Issue 44 class 3: writers of one file at the same moment (two exports to one `--out`)
+/// raced on its temporary file: one failed with "File exists" or "No such file", reported as
+/// bad input (exit 2). Now the temporary file is locked before it takes its name: each write
+/// either lands whole or fails as busy (exit 1), and the file always holds one whole write.
+#[test]
+fn writers_of_one_file_at_once_never_fail_as_bad_input() {
+    let d = scratch("i44-writers-race");
+    let f = d.join("out.txt");
+    let texts: Vec<String> = (0..4).map(|k| format!("{k}").repeat(200_000)).collect();
+    std::thread::scope(|s| {
+        for t in &texts {
+            let f = &f;
+            s.spawn(move || {
+                for _ in 0..50 {
+                    if let Err(e) = gripopt::write_atomic(f, t.as_bytes()) {
+                        assert_eq!(e.exit_code(), 1, "{e}");
+                    }
+                }
+            });
+        }
+    });
+    let got = std::fs::read_to_string(&f).unwrap();
+    assert!(texts.contains(&got), "a mixed or partial file");
+    let names: Vec<String> =
+        std::fs::read_dir(&d).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, vec!["out.txt".to_string()], "temporary files left");
+}

@@ -178,7 +178,8 @@ fn plot_keys_are_the_numeric_cells_each_stage_fills() {
         (Stage::Dynamic, SceneKind::Free, &["free_scene.object_max_displacement"][..]),
     ];
     for (stage, kind, defaults) in cases {
-        let problem = crate::common::bottle().in_scene(kind, None, Path::new(BOTTLE)).unwrap();
+        let scene = gripopt::SceneChoice { kind, x_off: None };
+        let problem = crate::common::bottle().in_scene(scene, Path::new(BOTTLE)).unwrap();
         let vary = vec![Vary::parse("tau=0.35:0.35:1").unwrap()];
         let spec = SweepSpec { design: problem.nominal, problem, vary, stage, hold_l_hand: false, psi_rule: false };
         let keys = plot_keys(&spec);

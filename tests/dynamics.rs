@@ -577,3 +577,19 @@ fn knuckle_contact_in_a_full_simulation() {
     }
     assert_eq!(verdicts[0], verdicts[1], "the verdict does not depend on the tolerance");
 }
+
+/// Issue 44 class 8: over the admissible range of `criteria.eta_stab` (down to its lower
+/// limit 1e-10) the stability time grows as the threshold falls, as it must (a smaller
+/// excess energy takes longer to reach); below ~1e-11 it no longer did (the threshold sank
+/// into the rounding noise of the excess energy), which is why the limit is there.
+#[test]
+fn t_stab_grows_as_eta_stab_falls_to_its_limit() {
+    let mut t = vec![];
+    for eta in [1e-3, 1e-5, 1e-7, 1e-9, 1e-10] {
+        let mut s = scene();
+        s.criteria.eta_stab = eta;
+        t.push(sim(&nominal(), &s, 1e-8).t_stab.expect("stabilises"));
+    }
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "t_stab {t:?}");
+    assert_eq!(gripopt::params::limit("criteria.eta_stab").lo, 1e-10);
+}

@@ -173,21 +173,17 @@ fn without_source(xml: &str) -> String {
 /// kitchen.toml's robust setup, the can's index and the first design drawn (seed `seed`)
 /// that passes stages 0–2 on the 1 l bottle (object 0) and not on the can, or
 /// (`holds_bottle` false) the other way round.
-fn kitchen_design(
-    seed: u64,
-    holds_bottle: bool,
-    what: &str,
-) -> (gripopt::eval::RobustSetup, usize, gripopt::params::Design) {
-    use gripopt::eval::{robust_start, RobustSetup};
+fn kitchen_design(seed: u64, holds_bottle: bool, what: &str) -> (gripopt::eval::Study, usize, gripopt::params::Design) {
+    use gripopt::eval::{EvalOptions, Study};
     use rand::SeedableRng;
     let p = gripopt::params::Problem::load(KITCHEN).unwrap();
-    let setup = RobustSetup::of(&p).unwrap();
-    let can = setup.spec.objects.iter().position(|o| o.name == "can").unwrap();
+    let setup = Study::of(&p, &EvalOptions::full(&p));
+    let can = (0..setup.objects()).position(|o| setup.object_name(o) == Some("can")).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let x = (0..20_000)
         .map(|_| p.bounds.sample(&mut rng))
         .find(|x| {
-            let s = robust_start(x, &setup);
+            let s = setup.start(x);
             let (bottle, on_can) = (matches!(s.objects[0], Some(Ok(_))), matches!(s.objects[can], Some(Ok(_))));
             bottle == holds_bottle && on_can != holds_bottle
         })

@@ -217,11 +217,11 @@ fn replay_of_a_scenario_takes_the_run_folders_lock() {
     let dir = tmp("trust-scenario-lock");
     optimise(&spec(&dir, 1, false)).unwrap();
     let held = gripopt::run::RunLock::acquire(&dir).unwrap();
-    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
+    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
     assert!(matches!(e, gripopt::Error::Locked { .. }), "{e}");
     drop(held);
     // without the lock held: the folder's own answer (not a robust run)
-    let e = gripopt::run::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
+    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
     assert!(e.contains("not a robust problem"), "{e}");
     let _ = PROBLEM;
 }
@@ -376,11 +376,13 @@ fn resume_sets_aside_a_foreign_file_named_like_a_later_shard() {
     let theirs = foreign_mcap(&rdir.join("gen-00004.mcap"));
     let o = cli(&["resume", &d, "--generations", "4"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
-    assert!(stderr(&o).contains("set aside as gen-00004.mcap.set-aside"), "{}", stderr(&o));
-    assert!(std::fs::read(rdir.join("gen-00004.mcap.set-aside")).unwrap() == theirs, "the user's file was changed");
+    assert!(stderr(&o).contains("set aside as set-aside/gen-00004.mcap"), "{}", stderr(&o));
+    assert!(std::fs::read(rdir.join("set-aside/gen-00004.mcap")).unwrap() == theirs, "the user's file was changed");
     let g4 = gripopt::record::read_index(&rdir).unwrap()[3].clone();
     assert!(g4.generation == 4 && g4.file == "gen-00004.mcap", "{g4:?}");
     assert!(gripopt::record::read_design(&dir, g4.first_id).is_ok());
+    // the foreign file out of the folders tools/check_mcap.py reads
+    std::fs::remove_dir_all(rdir.join("set-aside")).unwrap();
 }
 
 /// `gripopt ARGS…`, killed (and the test failed) if it runs for more than 60 s.
@@ -452,4 +454,141 @@ fn resume_stops_on_a_covered_shard_with_damaged_metadata_even_when_indexed() {
     assert!(files(&dir) == before, "a refused resume changed the folder");
     // the damaged shard out of the folders tools/check_mcap.py reads
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every file and symbolic link under `dir` with its bytes (links: their target's name).
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut m = BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        let meta = std::fs::symlink_metadata(&p).unwrap();
+        if meta.file_type().is_symlink() {
+            m.insert(p.clone(), std::fs::read_link(&p).unwrap().to_string_lossy().as_bytes().to_vec());
+        } else if meta.is_dir() {
+            m.extend(snapshot(&p));
+        } else if e.file_name() != ".lock" {
+            m.insert(p.clone(), std::fs::read(&p).unwrap());
+        }
+    }
+    m
+}
+
+/// Issue 44 class 1: a symbolic link at a file `resume` rewrites (the plot
+/// pareto_matrix.svg) made it write through the link into the file it names, outside the
+/// folder; a hard link (a file another name shares, as in a `cp -al` backup) had its
+/// content rewritten in both places. Now every file goes through one atomic, link-refusing
+/// write, and the run refuses before any work (exit 2, naming the file): the folder, the
+/// link's target and the backup keep every byte.
+#[test]
+fn a_link_at_a_file_the_run_rewrites_is_refused_before_any_work() {
+    let base = tmp("i44-links");
+    let dir = base.join("run");
+    std::fs::create_dir_all(&base).unwrap();
+    optimise(&spec(&dir, 2, false)).unwrap();
+    let d = dir.display().to_string();
+    let victim = base.join("victim.svg");
+    for (file, link) in [("pareto_matrix.svg", "symbolic"), ("hypervolume.svg", "hard"), ("pareto.csv", "hard")] {
+        std::fs::write(&victim, "the user's own file").unwrap();
+        let p = dir.join(file);
+        std::fs::remove_file(&p).unwrap();
+        match link {
+            "symbolic" => std::os::unix::fs::symlink(&victim, &p).unwrap(),
+            _ => std::fs::hard_link(&victim, &p).unwrap(),
+        }
+        let before = snapshot(&dir);
+        let o = cli(&["resume", &d, "--generations", "3"]);
+        let e = stderr(&o);
+        assert_eq!(code(&o), 2, "{file} ({link} link): {e}");
+        assert!(e.contains(file) && e.contains(if link == "symbolic" { "symbolic link" } else { "2 names" }), "{e}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "the user's own file", "{file}: written through");
+        assert!(snapshot(&dir) == before, "{file}: the refused resume changed the folder");
+        std::fs::remove_file(&p).unwrap();
+        std::fs::write(&p, "restored").unwrap();
+    }
+    // a `cp -al` backup: every file of the folder has two names; the run refuses, the
+    // backup keeps every byte (it used to see its SVGs and views rewritten)
+    let backup = base.join("backup");
+    let link_all = |from: &Path, to: &Path| {
+        fn walk(from: &Path, to: &Path) {
+            std::fs::create_dir_all(to).unwrap();
+            for e in std::fs::read_dir(from).unwrap().flatten() {
+                if e.path().is_dir() {
+                    walk(&e.path(), &to.join(e.file_name()));
+                } else {
+                    std::fs::hard_link(e.path(), to.join(e.file_name())).unwrap();
+                }
+            }
+        }
+        walk(from, to)
+    };
+    link_all(&dir, &backup);
+    let kept = snapshot(&backup);
+    let o = cli(&["resume", &d, "--generations", "3"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("names (hard links"), "{}", stderr(&o));
+    assert!(snapshot(&backup) == kept, "the backup was changed");
+}
+
+/// Issue 44 class 2: `optimise --out` into the folder of a run stopped before its first
+/// checkpoint took any gripopt-titled `pareto.csv` there for that run's own and deleted it
+/// (another run's table copied in, say). A title line proves nothing: such a file is set
+/// aside into `set-aside/` with a note, byte for byte, and the new run starts.
+#[test]
+fn optimise_sets_aside_a_view_it_cannot_prove_its_own() {
+    let dir = tmp("i44-earlier-view");
+    // the first checkpoint cannot be written: the run stops before it (run.json stays)
+    std::fs::create_dir_all(dir.join(".checkpoint.json.tmp/x")).unwrap();
+    assert!(optimise(&spec(&dir, 2, false)).is_err());
+    std::fs::remove_dir_all(dir.join(".checkpoint.json.tmp")).unwrap();
+    let theirs =
+        "# gripopt pareto.csv: the population's feasible non-dominated designs, by id\n# another run's table\nid\n7\n";
+    std::fs::write(dir.join("pareto.csv"), theirs).unwrap();
+    let d = dir.display().to_string();
+    let o = cli(&["optimise", PROBLEM, "--out", &d, "--pop", "8", "--generations", "1", "--record", "none"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert_eq!(read(&dir.join("set-aside/pareto.csv")), theirs, "the earlier table was not kept");
+    assert!(stderr(&o).contains("set aside as"), "{}", stderr(&o));
+    assert!(read(&dir.join("pareto.csv")).starts_with("# gripopt pareto.csv"));
+}
+
+/// Issue 44 class 1: every file gripopt writes goes through one atomic, link-refusing write
+/// (src/fsutil/atomic.rs): the run's plots (they were drawn straight into their path, so a
+/// link there was written through), a benchmark's tables (the same), and the library's
+/// atomic write (it replaced a link) each refuse a symbolic link and a file with a second
+/// name (a hard link), naming the file, and leave what the link names as it was.
+#[test]
+fn every_writer_refuses_a_link_at_its_file() {
+    let d = tmp("i44-writers");
+    std::fs::create_dir_all(&d).unwrap();
+    let victim = d.join("victim.txt");
+    type Writer = fn(&Path) -> gripopt::Result<()>;
+    let writers: [(&str, Writer); 3] = [
+        ("hypervolume plot", |p| gripopt::run::hypervolume(p, &[0.1, 0.2], &[0.1, 0.3], &[0.1, 0.3])),
+        ("bench table", |p| gripopt::bench::write_csv(&[], p)),
+        ("atomic write", |p| gripopt::write_atomic(p, b"new")),
+    ];
+    for (what, write) in writers {
+        for hard in [false, true] {
+            std::fs::write(&victim, "the user's own file").unwrap();
+            let out = d.join("out.file");
+            let _ = std::fs::remove_file(&out);
+            if hard {
+                std::fs::hard_link(&victim, &out).unwrap();
+            } else {
+                std::os::unix::fs::symlink(&victim, &out).unwrap();
+            }
+            let e = write(&out).expect_err(what).to_string();
+            assert!(
+                e.contains("out.file") && e.contains(if hard { "2 names" } else { "symbolic link" }),
+                "{what}: {e}"
+            );
+            assert_eq!(std::fs::read_to_string(&victim).unwrap(), "the user's own file", "{what} (hard {hard})");
+            assert_eq!(std::fs::read_to_string(&out).unwrap(), "the user's own file", "{what} (hard {hard})");
+        }
+        // and without a link it writes, leaving no temporary file
+        let out = d.join("out.file");
+        std::fs::remove_file(&out).unwrap();
+        write(&out).unwrap();
+        assert!(!d.join(".out.file.tmp").exists());
+    }
 }

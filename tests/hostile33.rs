@@ -34,7 +34,8 @@ fn evaluate_json(args: &[&str]) -> serde_json::Value {
 /// `evaluate --json` of a problem with `method = "auto"` printed the work counters (steps,
 /// jac_evals, …) of a simulation whose method it named nowhere (simulate --json says it):
 /// now a `method` key where the method is not RADAU5, the rest the library's record; the
-/// text says it on its first line. A file without the key, and --static-only, are unchanged.
+/// text says it on its first line. `method = "radau5"` and --static-only are unchanged; a
+/// file without the key runs the default, auto, and says so.
 #[test]
 fn evaluate_names_a_method_other_than_radau5() {
     let d = scratch("evaluate");
@@ -52,12 +53,16 @@ fn evaluate_names_a_method_other_than_radau5() {
         let first = String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or_default().to_string();
         assert!(first.ends_with(&format!("  method {method}")), "{first}");
     }
-    // no method key, or radau5: the record as before the key existed
+    // radau5: the record as before the key existed; no method key: the default, auto (session 38)
     let radau = with_method(BOTTLE_FILE, &d, "radau5.toml", "radau5");
-    for path in [BOTTLE_FILE, KITCHEN, &radau] {
-        assert!(evaluate_json(&[path]).get("method").is_none(), "{path}");
+    assert!(evaluate_json(&[&radau]).get("method").is_none(), "{radau}");
+    let o = run_gripopt(&["evaluate", &radau]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("method"), "{}", output_text(&o));
+    for path in [BOTTLE_FILE, KITCHEN] {
+        assert_eq!(evaluate_json(&[path])["method"], "auto", "{path}");
         let o = run_gripopt(&["evaluate", path]);
-        assert!(!String::from_utf8_lossy(&o.stdout).contains("method"), "{}", output_text(&o));
+        let first = String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or_default().to_string();
+        assert!(first.ends_with("  method auto"), "{first}");
     }
 }
 

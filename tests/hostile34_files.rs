@@ -78,7 +78,7 @@ fn refused(o: &Output, flag: &str, path: &Path, why: &str) {
 /// `--force` replaced whatever stood at the output path: a named pipe, a link to a device,
 /// the export's own problem file (named as itself, or through a link). Now each is refused
 /// (exit 2, naming the flag and the path) and left as it was; `--force` still replaces an
-/// earlier export, and a dangling link (it names nothing) needs `--force` as a file does.
+/// earlier export; a link, dangling or not, is refused even with `--force` (issue 44).
 #[test]
 fn force_replaces_an_earlier_output_and_nothing_else() {
     let d = scratch("force");
@@ -111,12 +111,14 @@ fn force_replaces_an_earlier_output_and_nothing_else() {
     refused(&export(&own, &sheet, false), "--out", &sheet, "add --force");
     let o = export(&own, &sheet, true);
     assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
-    // a dangling link: an existing name, replaced (the link, not what it names) with --force
+    // a dangling link: a link is never replaced nor written through, --force included
+    // (issue 44 class 1: it was replaced with --force)
     let dangling = d.join("dangling.json");
     std::os::unix::fs::symlink("nowhere.json", &dangling).unwrap();
-    refused(&export(&own, &dangling, false), "--out", &dangling, "add --force");
-    assert_eq!(export(&own, &dangling, true).status.code(), Some(0));
-    assert!(!is_link(&dangling) && dangling.is_file() && !d.join("nowhere.json").exists());
+    for force in [false, true] {
+        refused(&export(&own, &dangling, force), "--out", &dangling, "is a symbolic link to nowhere.json");
+    }
+    assert!(is_link(&dangling) && !d.join("nowhere.json").exists());
     // a named pipe: export --out and simulate --csv / --plot
     let pipe = d.join("pipe.csv");
     if !fifo(&pipe) {

@@ -138,20 +138,23 @@ fn a_robust_design_the_solver_aborted_replays_as_verified() {
 /// A front design whose fresh (out-of-sample) scenarios the solver aborted does not keep
 /// P(stay) ≥ p_min on that object, even where its P̂ (which counts the aborted scenarios as
 /// not staying) reaches p_min, and verify's report and verify_robust.csv (a `# aborted:`
-/// line) say which scenario and the solver's message. The run: the small kitchen optimised
-/// with the default step budget, then resumed (forced) with `max_steps = 2000`, with which
+/// line) say which scenario and the solver's message. The run: the small kitchen (RADAU5)
+/// optimised with the default step budget, then resumed (forced) with `max_steps = 2000`, with which
 /// 2 of 4 fresh scenarios of designs 0 and 8 end in a free scene the budget cut short and
 /// the other 2 stay (P̂ 0.5 = p_min: kept before the fix).
 #[test]
 fn verify_does_not_keep_a_design_whose_fresh_scenarios_the_solver_aborted() {
     let d = scratch("verify");
     let problem = d.join("small.toml");
-    std::fs::write(&problem, kitchen(200_000, true)).unwrap();
+    // with RADAU5 (the default before session 38), whose step counts the budget of 2000 cuts
+    let radau5 =
+        |steps: u64| set_line(&kitchen(steps, true), "max_steps", &format!("max_steps = {steps}\nmethod = \"radau5\""));
+    std::fs::write(&problem, radau5(200_000)).unwrap();
     let run = d.join("run");
     let (p, r) = (problem.to_str().unwrap(), run.to_str().unwrap());
     let opt = ["optimise", p, "--out", r, "--pop", "16", "--generations", "2", "--seed", "4", "--record", "none"];
     gripopt(&opt, 0);
-    std::fs::write(&problem, kitchen(2000, true)).unwrap();
+    std::fs::write(&problem, radau5(2000)).unwrap();
     gripopt(&["resume", r, "--generations", "3", "--force"], 0);
     let text = gripopt(&["verify", r], 0);
     let csv = std::fs::read_to_string(run.join("verify_robust.csv")).unwrap();

@@ -120,3 +120,59 @@ fn checkpoints_are_written_streaming_with_the_bytes_of_a_sorted_tree() {
     }
     assert_eq!(sum.len(), 64);
 }
+
+/// Issue 44 class 4: `resume --force` overrides a checksum, never a checkpoint's
+/// invariants. Hand-edited checkpoints made it panic (a design vector of length 1:
+/// src/optim/operators.rs indexed past it; a `next_id` near u64::MAX, on every later
+/// resume too) or hand out ids twice (`next_id` reset to 0: `show`'s replay and export
+/// commands then named another design). Each is now refused with exit 2, naming
+/// checkpoint.json and the field, the folder unchanged; `show` refuses it too.
+#[test]
+fn a_forced_resume_keeps_the_checkpoints_invariants() {
+    let base = tmp("i44-invariants");
+    let run = base.join("run");
+    let mut s = spec(&run, 2, 1);
+    s.pop = 8;
+    s.record = gripopt::record::RecordOptions::none();
+    optimise(&s).unwrap();
+    let original = std::fs::read(run.join("checkpoint.json")).unwrap();
+    let bin = env!("CARGO_BIN_EXE_gripopt");
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, &str, Edit); 6] = [
+        ("short vector", "state.population[0]", |v| v["state"]["population"][0]["x"] = serde_json::json!([0.05])),
+        ("a NaN", "not a finite number", |v| v["state"]["population"][1]["x"][2] = serde_json::json!("nan")),
+        ("next_id near u64::MAX", "state.next_id", |v| v["state"]["next_id"] = serde_json::json!(u64::MAX - 3)),
+        ("next_id reset", "not below `state.next_id` = 0", |v| v["state"]["next_id"] = serde_json::json!(0)),
+        ("an id twice", "appears twice", |v| {
+            let id = v["state"]["population"][0]["id"].clone();
+            v["state"]["population"][1]["id"] = id;
+        }),
+        ("the id budget", "beyond the recording's clock", |v| {
+            v["state"]["next_id"] = serde_json::json!(u64::MAX / 1_000_000_000 - 5);
+        }),
+    ];
+    for (what, needle, edit) in edits {
+        let mut v: serde_json::Value = serde_json::from_slice(&original).unwrap();
+        edit(&mut v);
+        std::fs::write(run.join("checkpoint.json"), serde_json::to_vec(&v).unwrap()).unwrap();
+        let before = std::fs::read(run.join("run.json")).unwrap();
+        for args in [
+            vec!["resume", run.to_str().unwrap(), "--force", "--generations", "4"],
+            vec!["show", run.to_str().unwrap()],
+        ] {
+            if what == "the id budget" && args[0] == "show" {
+                continue; // a checkpoint that only cannot go on shows
+            }
+            let o = std::process::Command::new(bin).args(&args).output().unwrap();
+            let e = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{what}, {args:?}: {e}");
+            assert!(
+                e.contains("checkpoint.json") && e.contains(needle) && !e.contains("panicked"),
+                "{what}, {args:?}: {e}"
+            );
+        }
+        assert_eq!(std::fs::read(run.join("run.json")).unwrap(), before, "{what}: run.json changed");
+    }
+    std::fs::write(run.join("checkpoint.json"), &original).unwrap();
+    gripopt::run::resume(&run, Some(3), false, Some(1)).unwrap();
+}

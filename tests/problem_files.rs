@@ -149,3 +149,30 @@ fn counts_are_whole_numbers_however_written() {
         assert!(e.contains("bad.toml") && e.contains(&format!("{section}.{key}")) && e.contains("whole"), "{e}");
     }
 }
+
+/// Issue 44 class 8: `criteria.eta_stab` below ~1e-11 let the stability event fire on the
+/// rounding noise of the excess energy (t_stab stopped growing as the threshold fell): the
+/// field's lower limit is 1e-10, and the error says why.
+#[test]
+fn eta_stab_below_its_noise_floor_is_refused_with_the_reason() {
+    let edit = |v: &str| base().replace("eta_stab = 2.5e-3", &format!("eta_stab = {v}"));
+    let e = err_of(&edit("1e-11"));
+    assert!(e.contains("criteria.eta_stab") && e.contains("1e-10") && e.contains("rounding noise"), "{e}");
+    assert!(Problem::from_toml_str(&edit("1e-10"), Path::new("ok.toml")).is_ok());
+}
+
+/// Issue 44 class 8: a problem file with a 400 000-level nested array echoed the whole
+/// 800 kB line in its error; what a message echoes of a file is cut to a readable length.
+#[test]
+fn a_huge_line_is_not_echoed_whole() {
+    let text =
+        base().replacen("name = ", &format!("deep = {}{}\nname = ", "[".repeat(400_000), "]".repeat(400_000)), 1);
+    let e = err_of(&text);
+    assert!(e.len() < 4000, "{} bytes of error", e.len());
+    assert!(e.contains("bad.toml") && e.contains("more characters"), "{}", &e[..e.len().min(600)]);
+    let d = crate::common::scratch_dir("problem-files", "i44-deep");
+    std::fs::write(d.join("deep.toml"), &text).unwrap();
+    let o = crate::common::run_gripopt(&["evaluate", d.join("deep.toml").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(o.stderr.len() < 4000, "{} bytes on stderr", o.stderr.len());
+}

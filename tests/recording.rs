@@ -2,9 +2,10 @@
 //! duplicates. Runs are written under target/mcap-check/ so that `make test` also checks
 //! every file with the independent Python reader (tools/check_mcap.py).
 use crate::common::check_dir;
+use gripopt::record::read_design;
 use gripopt::record::read_index;
-use gripopt::record::{read_design, replay};
 use gripopt::record::{RecordOptions, Resolution};
+use gripopt::replay;
 use gripopt::run::{optimise, resume, RunSpec};
 use std::path::Path;
 

@@ -3,10 +3,10 @@
 //! against hand and independent computations, the robust evaluator's determinism (threads,
 //! schedule, early stop), an optimisation that resumes exactly, and the out-of-sample verify.
 
-use gripopt::eval::{clopper_pearson, evaluate_record, EvalOptions, RobustSetup};
+use gripopt::eval::{clopper_pearson, evaluate_record, EvalOptions, Study};
 use gripopt::optim::{Batch, Evaluator, MooProblem};
 use gripopt::params::{Aggregation, Design, Problem};
-use gripopt::run::{GripperProblem, RobustScheduled, RunSpec};
+use gripopt::run::{GripperProblem, RunSpec, StudyScheduled};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 
@@ -36,12 +36,12 @@ pub(crate) fn tmp(name: &str) -> PathBuf {
 
 /// A few designs passing stages 0–2 on both objects (the nominal and random ones).
 fn designs(p: &Problem, n: usize) -> Vec<Design> {
-    let setup = RobustSetup::of(p).unwrap();
+    let setup = Study::of(p, &EvalOptions::full(p));
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let mut out = vec![p.nominal];
     while out.len() < n {
         let x = p.bounds.sample(&mut rng);
-        if gripopt::eval::robust_start(&x, &setup).passed() {
+        if setup.start(&x).passed() {
             out.push(x);
         }
     }
@@ -63,7 +63,7 @@ fn aggregations_match_hand_computed_values() {
     assert_eq!(Aggregation::Quantile(1.0).apply(&v), 0.050);
 
     let p = robust_problem();
-    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p), None);
+    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p));
     let rb = rec.robust.as_ref().unwrap();
     let (b, c) = (&rb.objects[0].objectives, &rb.objects[1].objectives);
     let o = rb.objectives;
@@ -95,7 +95,7 @@ fn every_design_sees_the_same_scenarios() {
     let r = p.robust.as_ref().unwrap();
     let ds = designs(&p, 3);
     let opts = EvalOptions::full(&p);
-    let recs: Vec<_> = ds.iter().map(|x| evaluate_record(&p, x, &opts, None)).collect();
+    let recs: Vec<_> = ds.iter().map(|x| evaluate_record(&p, x, &opts)).collect();
     for (o, k) in [(0usize, 0usize), (1, 0), (0, 1), (1, 1)] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         rng.set_stream(((o as u64) << 32) ^ k as u64);
@@ -109,9 +109,9 @@ fn every_design_sees_the_same_scenarios() {
         assert!((0.6..=1.4).contains(&sc.values[2]));
         for rec in &recs {
             if let Some(s) = rec.robust.as_ref().unwrap().scenarios.iter().find(|s| s.object == o && s.k == k) {
-                assert_eq!(s.inputs.x_off, x_off);
-                assert_eq!(s.inputs.restitution, e);
-                assert_eq!(s.inputs.mu_phalanx, sc.values[2]);
+                assert_eq!(s.inputs.get("x_off").unwrap(), x_off);
+                assert_eq!(s.inputs.get("restitution").unwrap(), e);
+                assert_eq!(s.inputs.get("mu_phalanx").unwrap(), sc.values[2]);
             }
         }
         assert_ne!(r.scenario(&p.scene, o, k, 1).values, sc.values, "the verify stream is another draw");
@@ -218,7 +218,7 @@ fn the_robust_evaluator_is_thread_count_independent() {
     let batch = Batch { xs: &xs, first_id: 0, generation: 1 };
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| RobustScheduled::default().evaluate(&gp, &batch).evaluated)
+        pool.install(|| StudyScheduled::default().evaluate(&gp, &batch).evaluated)
     };
     let (one, two) = (run(1), run(2));
     let seq: Vec<_> = xs.iter().map(|x| gp.evaluate(x)).collect();
@@ -256,9 +256,9 @@ fn the_robust_evaluator_runs_nothing_after_an_aborted_scenario() {
     let xs: Vec<Vec<f64>> = designs(&p, 3).iter().map(|d| d.to_array().to_vec()).collect();
     let batch = Batch { xs: &xs, first_id: 0, generation: 1 };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let mut ev = RobustScheduled::default();
+    let mut ev = StudyScheduled::default();
     let got = pool.install(|| ev.evaluate(&gp, &batch).evaluated);
-    let planned = RobustSetup::of(&p).unwrap().planned() as u64;
+    let planned = Study::of(&p, &EvalOptions::full(&p)).planned() as u64;
     assert_eq!(ev.tasks(), (3, 3 * (planned - 1)), "one scenario per design, the rest skipped");
     for (x, a) in xs.iter().zip(&got) {
         let b = gp.evaluate(x);
@@ -312,10 +312,10 @@ fn a_robust_run_resumes_exactly_and_verifies_out_of_sample() {
     let rec = pop.iter().find(|r| r.robust.get("bottle", "scenarios").is_some_and(|n| n > 0.0)).unwrap();
     let whole = folder.replay(rec.id).unwrap();
     assert!(whole.verified && whole.fresh.robust.is_some(), "{:?}", whole.fresh.verdict);
-    let r = gripopt::run::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
+    let r = gripopt::app::replay_scenario(&one, rec.id, "bottle", 0, true).unwrap();
     assert_eq!(r.verified, Some(true), "{r:?}");
     assert!(r.recording.as_ref().unwrap().is_file());
-    assert_eq!(r.scenario.inputs.x_off, r.record.x_off.unwrap());
+    assert_eq!(r.scenario.inputs.get("x_off").unwrap(), r.record.x_off.unwrap());
     let front = folder.front().unwrap();
     if front.is_empty() {
         return;
@@ -410,9 +410,10 @@ fn assert_mm(d: f64, reference_mm: f64, what: &str) {
 #[test]
 fn scenarios_reproduce_the_issues_nominal_figures() {
     let p = corners_problem("mu_phalanx = { list = [0.2, 1.0, 1.5] }");
-    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p), None);
+    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p));
     let sc = &rec.robust.as_ref().unwrap().scenarios;
-    let got: Vec<(f64, f64)> = sc.iter().map(|s| (s.inputs.mu_phalanx, s.max_displacement.unwrap())).collect();
+    let got: Vec<(f64, f64)> =
+        sc.iter().map(|s| (s.inputs.get("mu_phalanx").unwrap(), s.max_displacement.unwrap())).collect();
     assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [1.0, 0.2, 1.5], "centre, then the corners");
     for ((f, d), r) in got.iter().zip([0.26, 0.93, 0.17]) {
         assert_mm(*d, r, &format!("friction factor {f}"));
@@ -420,9 +421,9 @@ fn scenarios_reproduce_the_issues_nominal_figures() {
     assert!(sc.iter().all(|s| s.stays), "below Δx_max = 1 mm: stays");
 
     let p = corners_problem("x_off = { list = [0.0, 0.003, 0.004] }");
-    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p), None);
+    let rec = evaluate_record(&p, &p.nominal, &EvalOptions::full(&p));
     let rb = rec.robust.as_ref().unwrap();
-    let by_off = |x: f64| rb.scenarios.iter().find(|s| s.inputs.x_off == x).unwrap();
+    let by_off = |x: f64| rb.scenarios.iter().find(|s| s.inputs.get("x_off").unwrap() == x).unwrap();
     assert_mm(by_off(0.0).max_displacement.unwrap(), 0.26, "x_off 0");
     assert_mm(by_off(0.003).max_displacement.unwrap(), 1.19, "x_off 3 mm");
     assert_mm(by_off(0.004).max_displacement.unwrap(), 2.02, "x_off 4 mm");

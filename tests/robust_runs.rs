@@ -1,7 +1,7 @@
 //! Robust runs across a forced resume, and what a robust record reports for a design that
 //! is not form closed (hostile pass 32b).
 use crate::robust::{robust_problem, robust_text, spec, tmp, BOTTLE};
-use gripopt::eval::{evaluate_record, EvalOptions, RobustSetup};
+use gripopt::eval::{evaluate_record, EvalOptions, Study};
 use gripopt::optim::MooProblem;
 use gripopt::run::{GripperProblem, RunSpec};
 use rand::SeedableRng;
@@ -68,13 +68,13 @@ fn a_forced_resume_refuses_another_robust_object_list() {
 #[test]
 fn a_design_not_form_closed_has_no_robust_max_offset() {
     let p = robust_problem();
-    let setup = RobustSetup::of(&p).unwrap();
+    let setup = Study::of(&p, &EvalOptions::full(&p));
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let x = (0..20_000)
         .map(|_| p.bounds.sample(&mut rng))
         .find(|x| {
-            let flat = evaluate_record(&p, x, &EvalOptions::statics_only(), None);
-            flat.statics.form_closed == Some(false) && gripopt::eval::robust_start(x, &setup).passed()
+            let flat = evaluate_record(&p, x, &EvalOptions::statics_only());
+            flat.statics.form_closed == Some(false) && setup.start(x).passed()
         })
         .expect("a design passing stage 2 that is not form closed");
     let e = GripperProblem::new(p.clone()).evaluate(&x.to_array());
@@ -113,4 +113,61 @@ fn verify_of_a_robust_run_without_a_feasible_design_lists_the_discards() {
     assert_eq!(crate::robustness::code(&o), 2, "{e}");
     assert!(e.contains("nothing written") && e.contains("were discarded") && e.contains("at stage"), "{e}");
     assert!(!dir.join("verify_robust.csv").exists());
+}
+
+/// Issue 44 class 6: the size a run's checks count for a robust design's scenario record
+/// (`BYTES_PER_SCENARIO_JSON`) is at least what one takes as JSON, measured here on the
+/// longest record there can be: 17-digit negative numbers with a three-digit exponent in
+/// every field, the longest cause word, the largest counts.
+#[test]
+fn a_scenario_record_takes_no_more_json_than_the_size_checks_count() {
+    let long = -1.2345678901234567e-105;
+    let rec = gripopt::eval::ScenarioRecord {
+        object: 99_999,
+        k: 999_999,
+        inputs: gripopt::eval::ScenarioInputs([long; gripopt::params::N_INPUTS]),
+        stays: false,
+        cause: Some(gripopt::Cause::InitialPenetration),
+        t_stab: Some(long),
+        max_displacement: Some(long),
+        max_tilt_deg: Some(long),
+        rhs_evals: [u64::MAX; 2],
+        steps: [u64::MAX; 2],
+        abort: None,
+    };
+    let json = serde_json::to_string(&rec).unwrap();
+    assert!(json.len() as u64 <= gripopt::run::BYTES_PER_SCENARIO_JSON, "{} bytes: {json}", json.len());
+}
+
+/// Issue 44 class 6: the `--pop` check assumed ~1 MiB per design, but a robust record
+/// grows with objects × scenarios: kitchen.toml with K = 4096 (4 objects: 16384 scenario
+/// records, ~6.6 MB a design in the checkpoint) at `--pop 400` started a run whose
+/// checkpoint would pass the 4 GiB it is read back at, unresumable after hours. Now it is
+/// refused before anything is written (exit 2, naming `--pop`, with the estimate).
+#[test]
+fn a_robust_run_whose_records_would_not_fit_is_refused_before_it_starts() {
+    let d = crate::common::scratch_dir("robust-tests", "i44-size");
+    let kitchen = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml")).unwrap();
+    let p = d.join("k4096.toml");
+    std::fs::write(&p, kitchen.replace("scenarios = 8 ", "scenarios = 4096 ")).unwrap();
+    let out = d.join("run");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gripopt"))
+        .args(["optimise", p.to_str().unwrap(), "--out", out.to_str().unwrap(), "--pop", "400", "--generations", "2"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if t0.elapsed().as_secs() > 60 {
+            let _ = child.kill();
+            panic!("the run started");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--pop") && e.contains("16384 scenario records (4 objects × 4096 scenarios)"), "{e}");
+    assert!(!out.exists(), "the run folder was created");
 }

@@ -217,6 +217,32 @@ fn item12_ctrl_c_is_acknowledged_and_a_second_one_ends_at_once() {
     resume(&dir, Some(2), false, Some(2)).unwrap();
 }
 
+/// Issue 44 class 8: SIGTERM (a batch scheduler's walltime) and SIGHUP (a closed
+/// terminal) ended a run at once, where ctrl-c lets it finish the generation under way:
+/// each is now acknowledged as ctrl-c is, the run stops after the checkpoint of the
+/// generation it was in (exit 130, run.json `interrupted`) and resumes.
+#[test]
+fn sigterm_and_sighup_finish_the_generation_as_ctrl_c_does() {
+    for signal in ["TERM", "HUP"] {
+        let dir = tmp(&format!("i44-sig{signal}"));
+        let d = dir.display().to_string();
+        let args = ["--pop", "300", "--generations", "50", "--record", "none", "--threads", "1"];
+        let (mut child, lines) = spawn_collecting(&[&["optimise", PROBLEM, "--out", &d][..], &args[..]].concat());
+        wait_for("the first checkpoint", || checkpoint_generation(&dir) >= 1);
+        let at = checkpoint_generation(&dir);
+        let sig = format!("-{signal}");
+        assert!(Command::new("kill").args([sig.as_str(), &child.id().to_string()]).status().unwrap().success());
+        let rc = wait_at_most(&mut child, 300.0);
+        let text = lines.lock().unwrap().join("\n");
+        assert_eq!(rc, Some(130), "{signal}: {text}");
+        assert!(text.contains("stopping after this generation's checkpoint"), "{signal}: {text}");
+        let g = checkpoint_generation(&dir);
+        assert!(g > at && g < 50, "{signal}: stopped at generation {g} (signal during {})", at + 1);
+        assert!(read(&dir.join("run.json")).contains("\"interrupted\""), "{signal}");
+        resume(&dir, Some(g + 1), false, Some(2)).unwrap();
+    }
+}
+
 /// Item 12: `--record-every` needs `--record-full`; `--record none|designs` takes no
 /// trajectory flag.
 #[test]

@@ -232,7 +232,7 @@ fn item4_a_forced_resume_keeps_each_generations_problem() {
     let idx = read_index(&dir.join("recording")).unwrap();
     assert_eq!(idx.len(), 5);
     for e in &idx {
-        let r = gripopt::record::replay(&dir, e.first_id).unwrap();
+        let r = gripopt::replay(&dir, e.first_id).unwrap();
         assert!(r.verified, "generation {}: design {} replays with its own problem", e.generation, e.first_id);
     }
     // problem.toml edited by hand: replay and verify refuse it (naming the file)
@@ -314,4 +314,66 @@ fn item6_show_tells_a_killed_run_from_a_running_one() {
 /// A folder path with a space and a quote (item 12: printed paths are shell-quoted).
 pub(crate) fn odd_folder(name: &str) -> PathBuf {
     tmp(&format!("{name} it's here"))
+}
+
+/// Issue 44 class 2: `bench replay --out DIR` removed the whole folder once its run.json
+/// said "synthetic" (a user's files and whole run folders inside it were lost). Now it
+/// removes only files whose content proves the benchmark wrote them; anything else refuses
+/// it (exit 2, naming the file) and stays. A folder of its own is written, replayed and
+/// cleared as before.
+#[test]
+fn bench_replay_removes_only_its_own_files() {
+    let dir = tmp("i44-bench-replay");
+    std::fs::create_dir_all(dir.join("a-run/recording")).unwrap();
+    std::fs::write(dir.join("run.json"), r#"{"synthetic": true, "recording": {}, "problem_sha256": "x"}"#).unwrap();
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    std::fs::write(dir.join("a-run/run.json"), "{}").unwrap();
+    let d = dir.display().to_string();
+    let o = cli(&["bench", "replay", PROBLEM, "--designs", "2", "--per-shard", "1", "--out", &d]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("not written by `gripopt bench replay`"), "{}", stderr(&o));
+    assert_eq!(read(&dir.join("notes.txt")), "mine");
+    assert!(dir.join("a-run/run.json").is_file());
+    // a folder of its own: written, replayed and removed; kept with --keep, then replaced
+    let own = tmp("i44-bench-replay-own");
+    let o = own.display().to_string();
+    for keep in [true, true, false] {
+        let mut args = vec!["bench", "replay", PROBLEM, "--designs", "2", "--per-shard", "1", "--out", &o];
+        if keep {
+            args.push("--keep");
+        }
+        let r = cli(&args);
+        assert_eq!(code(&r), 0, "{}", stderr(&r));
+        assert_eq!(own.exists(), keep, "keep {keep}");
+    }
+}
+
+/// Issue 44 class 2: `bench scaling --out DIR` removed any folder named like `t1` in DIR.
+/// Now DIR must be new or empty: what it removes afterwards is only what it made.
+#[test]
+fn bench_scaling_never_removes_a_folder_it_did_not_make() {
+    let dir = tmp("i44-bench-scaling");
+    std::fs::create_dir_all(dir.join("t1")).unwrap();
+    std::fs::write(dir.join("t1/mine.txt"), "mine").unwrap();
+    let d = dir.display().to_string();
+    let o = cli(&[
+        "bench",
+        "scaling",
+        PROBLEM,
+        "--pop",
+        "4",
+        "--generations",
+        "1",
+        "--reps",
+        "1",
+        "--threads",
+        "1",
+        "--no-record",
+        "--no-ceiling",
+        "--out",
+        &d,
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("holds `t1`"), "{}", stderr(&o));
+    assert_eq!(read(&dir.join("t1/mine.txt")), "mine");
 }

@@ -5,7 +5,7 @@
 use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
 use gripopt::eval::{evaluate, EvalOptions, Record};
 use gripopt::params::Problem;
-use gripopt::sim::{Controls, Integration, Method};
+use gripopt::sim::{Integration, Method};
 
 /// `simulate --json` of the nominal design with `extra` flags, as JSON.
 fn simulate_json(extra: &[&str]) -> serde_json::Value {
@@ -34,11 +34,7 @@ fn the_switching_method_reports_its_switches_and_explicit_steps() {
     // every step was Dormand–Prince's)
     let p = Problem::load(BOTTLE_FILE).unwrap();
     let s = &p.solver;
-    let opts = EvalOptions {
-        dynamics: true,
-        integration: Integration::new(s.rtol, s.atol, s.max_steps).with_method(Method::Auto),
-        controls: Controls::PIPELINE,
-    };
+    let opts = EvalOptions::pipeline(Integration::new(s.rtol, s.atol, s.max_steps).with_method(Method::Auto));
     let r = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &opts));
     let w = &r.grasp.work;
     assert_eq!((w.switches, w.explicit_steps), (Some(0), w.steps), "{w:?}");
@@ -57,9 +53,13 @@ fn the_switching_method_reports_its_switches_and_explicit_steps() {
     let want = format!("steps {steps} (Dormand-Prince {explicit}, RADAU5 the rest; {switches} switch{plural})");
     assert!(text("auto").contains(&want), "{want} not in {}", text("auto"));
     assert!(!text("radau5").contains("the rest"), "{}", text("radau5"));
-    let radau = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &EvalOptions::full(&p)));
+    let radau_opts = EvalOptions { integration: Integration::new(s.rtol, s.atol, s.max_steps), ..opts };
+    let radau = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &radau_opts));
     let v = serde_json::to_value(&radau).unwrap();
     assert!(v.get("switches").is_none() && v.get("explicit_steps").is_none(), "{v}");
+    // bottle-1l.toml names no method: the default, the switching method, counts them too
+    let default = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &EvalOptions::full(&p)));
+    assert!(default.grasp.work.switches.is_some(), "{:?}", default.grasp.work);
 }
 
 /// Every method name the command line takes (`--method`, clap's values and its alias

@@ -4,7 +4,6 @@
 
 use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
 use gripopt::params::{Problem, SceneKind};
-use gripopt::sim::{Controls, Integration};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -33,13 +32,14 @@ fn rows(p: &Path) -> Vec<Vec<f64>> {
 fn the_streamed_csv_is_the_librarys_trajectory() {
     let d = scratch("same");
     let p = Problem::load(Path::new(BOTTLE_FILE)).unwrap();
-    let integ = Integration::from_solver(&p.solver);
     for (scene, kind) in [("centred", SceneKind::Centred), ("free", SceneKind::Free)] {
         let csv = d.join(format!("{scene}.csv"));
         let o = run_gripopt(&["simulate", BOTTLE_FILE, "--scene", scene, "--csv", csv.to_str().unwrap()]);
         let text = output_text(&o);
         assert_eq!(o.status.code(), Some(0), "{text}");
-        let sim = gripopt::simulate(&p, &p.nominal, Some((kind, None)), &integ, &Controls::DIAGNOSTIC).unwrap();
+        let choice = Some(gripopt::SceneChoice { kind, x_off: None });
+        let req = gripopt::SimulateRequest { scene: choice, ..Default::default() };
+        let sim = gripopt::simulate(&p, &p.nominal, &req).unwrap();
         let want: Vec<Vec<f64>> = if kind == SceneKind::Free {
             sim.poses.iter().map(|s| gripopt::pose_values(s).to_vec()).collect()
         } else {

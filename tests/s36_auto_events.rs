@@ -10,7 +10,7 @@
 //! on the first ground release.
 
 use gripopt::eval::{stage_kinematics, stage_statics};
-use gripopt::params::{Design, Problem, SceneKind};
+use gripopt::params::{Design, Problem};
 use gripopt::sim::{simulate, Controls, EventKind, EventNote, FreeResult, Integration, Method, SceneSpec, Sink};
 use std::path::Path;
 
@@ -44,7 +44,7 @@ impl Sink for Releases {
 fn free(method: Method, rtol: f64, t_end: Option<f64>) -> (FreeResult, Releases) {
     let file = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/can.toml");
     let p = Problem::load(file).expect("can.toml loads");
-    let p = p.in_scene(SceneKind::Free, Some(0.002), Path::new(file)).expect("free:0.002");
+    let p = p.in_scene(gripopt::SceneChoice::free(Some(0.002)), Path::new(file)).expect("free:0.002");
     let x = Design::parse_assignments(DESIGN).expect("design");
     let s = &p.scene;
     let k = stage_kinematics(&x, s).expect("kinematics");

@@ -137,3 +137,40 @@ fn centred_kind_replay_writes_no_free_file() {
         assert!(!run.join(format!("free-{id}.mcap")).exists());
     }
 }
+
+/// Origin: issue 44 class 7: `replay` of a free-kind run in a read-only folder failed with
+/// exit 1 and no verdict, because free-ID.mcap could not be written. The free scene's
+/// recording is a side effect: where it cannot be written the replay's verdict comes first,
+/// with exit 0, and says why the free scene was not recorded (as when another process holds
+/// the folder). The folder is made read-only, and (for a test run as root, whom permissions
+/// do not stop) a folder stands at the file's temporary name (`.free-ID.mcap.tmp`), so the
+/// write fails either way.
+#[test]
+fn a_free_scene_that_cannot_be_written_leaves_the_verdict() {
+    use std::os::unix::fs::PermissionsExt;
+    let problem = free_problem();
+    let run = tiny_run_in(check_dir("s36-free-replay-readonly"), &problem, 8, 1);
+    let reached = (0..8).find(|id| {
+        gripopt::record::read_design(&run, *id)
+            .is_ok_and(|r| r.record.free_scene.is_some_and(|f| f.object_final_displacement.is_some()))
+    });
+    let id = reached.expect("seed 16, pop 8: some design reaches the free scene");
+    let file = run.join(format!("free-{id}.mcap"));
+    let tmp = run.join(format!(".free-{id}.mcap.tmp"));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mode = std::fs::metadata(&run).unwrap().permissions().mode();
+    std::fs::set_permissions(&run, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let (code, v, text) = replay_json(&run, id);
+    let plain = run_gripopt(&["replay", run.to_str().unwrap(), "--design", &id.to_string()]);
+    std::fs::set_permissions(&run, std::fs::Permissions::from_mode(mode)).unwrap();
+    assert_eq!(code, 0, "{text}");
+    assert_eq!(v["verified"], true, "{text}");
+    let why = v["free_not_recorded"].as_str().unwrap_or_else(|| panic!("no reason: {text}"));
+    assert!(why.starts_with("free scene not recorded: "), "{why}");
+    assert!(v.get("free_recording").is_none() && !file.exists(), "{text}");
+    let said = output_text(&plain);
+    assert_eq!(plain.status.code(), Some(0), "{said}");
+    let verdict = said.find("verified").unwrap_or_else(|| panic!("no verdict: {said}"));
+    assert!(verdict < said.find("free scene not recorded").unwrap(), "the verdict first: {said}");
+    std::fs::remove_dir(&tmp).unwrap();
+}

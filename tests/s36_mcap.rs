@@ -88,7 +88,7 @@ fn offset_scene_draws_finger_2_touching_the_object() {
         }
         apart = apart.max(g2.abs());
         stable += 1;
-        let r = gripopt::record::replay(&run, rec["id"].as_u64().unwrap()).unwrap();
+        let r = gripopt::replay(&run, rec["id"].as_u64().unwrap()).unwrap();
         assert!(r.verified && r.max_difference == 0.0, "design {}: replay", rec["id"]);
     }
     assert!(
@@ -179,7 +179,7 @@ fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
     'designs: for id in 0..60 {
         for o in &robust.objects {
             for k in 0..2 {
-                if let Ok(r) = gripopt::run::replay_scenario(&run, id, &o.name, k, true) {
+                if let Ok(r) = gripopt::app::replay_scenario(&run, id, &o.name, k, true) {
                     files.extend(r.recording);
                 }
                 if files.len() >= 3 {
@@ -248,15 +248,15 @@ fn scenario_recordings_have_their_own_windows_and_say_which_scenario() {
     let (id, case) = src.strip_prefix("design ").unwrap().split_once(" scenario ").unwrap();
     let (object, k) = case.rsplit_once(':').unwrap();
     let (id, k): (u64, usize) = (id.parse().unwrap(), k.parse().unwrap());
-    let again = gripopt::run::replay_scenario(&run, id, object, k, true).unwrap();
+    let again = gripopt::app::replay_scenario(&run, id, object, k, true).unwrap();
     assert_eq!(again.recording.as_ref(), Some(&files[0]));
     std::fs::copy(&files[1], &files[0]).unwrap();
     let foreign = std::fs::read(&files[0]).unwrap();
-    let e = gripopt::run::replay_scenario(&run, id, object, k, true).unwrap_err().to_string();
+    let e = gripopt::app::replay_scenario(&run, id, object, k, true).unwrap_err().to_string();
     assert!(e.contains(files[0].file_name().unwrap().to_str().unwrap()) && e.contains("nothing was done"), "{e}");
     assert_eq!(std::fs::read(&files[0]).unwrap(), foreign, "the foreign file was changed");
     std::fs::remove_file(&files[0]).unwrap();
-    gripopt::run::replay_scenario(&run, id, object, k, true).unwrap();
+    gripopt::app::replay_scenario(&run, id, object, k, true).unwrap();
 }
 
 /// A free-kind run's shards draw the centred diagnostic grasp (object at x = 0) and say so:

@@ -12,9 +12,12 @@ use gripopt::sim::{Controls, Integration};
 fn offset_verdict(x_off: f64) -> gripopt::eval::Verdict {
     let p = bottle();
     let integ = Integration::from_solver(&p.solver);
-    let sim = gripopt::simulate(&p, &p.nominal, Some((SceneKind::Offset, Some(x_off))), &integ, &Controls::PIPELINE)
-        .expect("stages 0–2 pass");
-    sim.record.record.verdict
+    let scene = gripopt::SceneChoice { kind: SceneKind::Offset, x_off: Some(x_off) };
+    let p = p.in_scene(scene, std::path::Path::new("offset")).unwrap();
+    let spec = gripopt::sim::SceneSpec::of(&p.scene.setup);
+    let ev = gripopt::eval::simulate(&p.nominal, &p.scene, &spec, &integ, &Controls::PIPELINE, &mut ());
+    assert!(ev.scene.is_some(), "stages 0–2 pass");
+    gripopt::Record::from_eval(&ev).verdict
 }
 
 /// (1) Past the nominal's largest offset the static grasp at the offset does not exist (the
@@ -166,7 +169,7 @@ fn an_ensemble_of_two_has_a_median_below_its_p90() {
 /// showing an empty pair of backticks or accepting it silently.
 #[test]
 fn parse_scene_names_a_missing_or_padded_offset() {
-    use gripopt::parse_scene;
+    let parse_scene = gripopt::SceneChoice::parse;
     for kind in ["offset", "free"] {
         let missing = parse_scene(&format!("{kind}:")).unwrap_err().to_string();
         assert!(missing.contains(&format!("a number is missing after `{kind}:`")), "{missing}");
@@ -175,7 +178,10 @@ fn parse_scene_names_a_missing_or_padded_offset() {
         assert!(padded.contains(&format!("write `{kind}:0.01`")), "{padded}");
         assert!(parse_scene(&format!("{kind}:0.01 ")).is_ok(), "a blank after the whole value is the shell's");
     }
-    assert_eq!(parse_scene("offset:0.002").unwrap(), (SceneKind::Offset, Some(0.002)));
+    assert_eq!(
+        parse_scene("offset:0.002").unwrap(),
+        gripopt::SceneChoice { kind: SceneKind::Offset, x_off: Some(0.002) }
+    );
     let bad = parse_scene("offset:abc").unwrap_err().to_string();
     assert!(bad.contains("`abc` after `offset:` is not a number"), "{bad}");
 }

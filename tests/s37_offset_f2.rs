@@ -9,8 +9,9 @@
 use crate::common::{bottle, check_dir, copy_dir, offset_problem, run_gripopt, scratch_dir, tiny_run_in};
 use gripopt::model::Finger;
 use gripopt::params::{Problem, SceneKind};
-use gripopt::record::{read_design, read_index, replay, Finger2Columns, GraspSeries};
-use gripopt::sim::{Controls, FingerSample, Integration, Sample};
+use gripopt::record::{read_design, read_index, Finger2Columns, GraspSeries};
+use gripopt::replay;
+use gripopt::sim::{FingerSample, Sample};
 use nalgebra::Vector2;
 use prost::Message;
 use std::path::{Path, PathBuf};
@@ -19,9 +20,11 @@ type V = Vector2<f64>;
 
 /// The grasp samples of the nominal design in the offset scene at `x_off`.
 fn offset_samples(p: &Problem, x_off: f64) -> Vec<Sample> {
-    let integ = Integration::from_solver(&p.solver);
-    let scene = Some((SceneKind::Offset, Some(x_off)));
-    gripopt::simulate(p, &p.nominal, scene, &integ, &Controls::DIAGNOSTIC).unwrap().trajectory.samples
+    let scene = Some(gripopt::SceneChoice { kind: SceneKind::Offset, x_off: Some(x_off) });
+    gripopt::simulate(p, &p.nominal, &gripopt::SimulateRequest { scene, ..Default::default() })
+        .unwrap()
+        .trajectory
+        .samples
 }
 
 /// A phalanx (segment from `a`, direction `dir`, length `len`, a rod of radius `w`) against

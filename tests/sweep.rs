@@ -339,3 +339,64 @@ fn the_scene_fields_can_be_swept() {
     let e = sweep::set_field(&mut s.problem.clone(), "scene.ground_v_s", 1.0).unwrap_err().to_string();
     assert!(e.contains("scene.ground_v_d must stay > scene.ground_v_s"), "{e}");
 }
+
+/// `gripopt sweep` of r over 3 points (static stage) with `--y KEYS`, into `d`.
+fn small_sweep(d: &std::path::Path, ys: &[&str]) -> std::process::Output {
+    let mut args: Vec<String> = ["sweep", crate::common::BOTTLE_FILE, "--vary", "r=0.3:0.7:3", "--stage", "static"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for y in ys {
+        args.extend(["--y".to_string(), y.to_string()]);
+    }
+    args.extend(["--out".to_string(), d.display().to_string()]);
+    std::process::Command::new(env!("CARGO_BIN_EXE_gripopt")).args(&args).output().unwrap()
+}
+
+/// Issue 44 class 1: a sweep wrote its plots straight to their names: a symbolic link
+/// there (an earlier sweep's `line_alpha.svg` replaced by a link) made it write through
+/// into the file the link names, outside the folder. Now nothing is written through a link:
+/// the link, not what the earlier sweep wrote, is set aside (the link itself, into
+/// `set-aside/`), a new plot takes the name, and the file the link names is untouched.
+#[test]
+fn a_sweep_never_writes_through_a_link() {
+    let d = out_dir("i44-link");
+    let o = small_sweep(&d, &["alpha"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let victim = d.parent().unwrap().join("i44-victim.svg");
+    std::fs::write(&victim, "the user's own file").unwrap();
+    std::fs::remove_file(d.join("line_alpha.svg")).unwrap();
+    std::os::unix::fs::symlink(&victim, d.join("line_alpha.svg")).unwrap();
+    let o = small_sweep(&d, &["alpha"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "the user's own file");
+    assert_eq!(std::fs::read_link(d.join("set-aside/line_alpha.svg")).unwrap(), victim);
+    let plot = std::fs::symlink_metadata(d.join("line_alpha.svg")).unwrap();
+    assert!(plot.is_file() && std::fs::read_to_string(d.join("line_alpha.svg")).unwrap().starts_with("<svg"));
+    std::fs::remove_file(&victim).unwrap();
+}
+
+/// Issue 44 class 2: a new sweep into an earlier sweep's folder removed (or overwrote)
+/// every file the earlier sweep.csv listed, whatever it held by then (a plot the user had
+/// edited). Now sweep.csv records each file's SHA-256 once written: a listed file still
+/// as written is replaced or removed; one that changed is set aside into `set-aside/`,
+/// byte for byte.
+#[test]
+fn a_sweep_sets_aside_an_earlier_file_that_changed() {
+    let d = out_dir("i44-edited");
+    let o = small_sweep(&d, &["alpha", "max_offset"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(d.join("sweep.csv")).unwrap();
+    assert!(csv.contains("# sha256: line_alpha.svg="), "{csv}");
+    std::fs::write(d.join("line_alpha.svg"), "<svg>edited by hand</svg>").unwrap();
+    // the next sweep plots alpha only: max_offset's plot (unchanged) goes, alpha's edited
+    // plot is kept aside
+    let o = small_sweep(&d, &["alpha"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(d.join("set-aside/line_alpha.svg")).unwrap(), "<svg>edited by hand</svg>");
+    assert!(!d.join("line_max_offset.svg").exists() && !d.join("set-aside/line_max_offset.svg").exists());
+    assert!(std::fs::read_to_string(d.join("line_alpha.svg")).unwrap().starts_with("<svg"));
+    // and the folder, set-aside/ included, takes a third sweep
+    let o = small_sweep(&d, &["alpha"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -7,6 +7,7 @@
 mod common;
 
 mod architecture;
+mod certification;
 mod cli_exit;
 mod cli_outputs;
 mod constraints;

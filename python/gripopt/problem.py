@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,8 +38,9 @@ def _flag(name: str, value: Any) -> bool:
 
 
 def _refuse_complex(dtype: Any, name: str) -> None:
-    """Complex numbers are not designs (their imaginary part would be dropped)."""
-    if np.dtype(dtype).kind == "c":
+    """Complex numbers are not designs (their imaginary part would be dropped). Any dtype,
+    pandas' own (nullable ``Int64``, ``Float64``, ``string``, …) included."""
+    if pd.api.types.is_complex_dtype(dtype):
         raise InputError(f"{name}: complex numbers (dtype {dtype}); a design's values are real", field=name)
 
 
@@ -277,8 +277,8 @@ class Problem:
     @property
     def method(self) -> str:
         """The integration method of its grasp simulations, ``[solver] method``:
-        ``"radau5"`` (also when the file leaves it out), ``"auto"``, ``"trbdf2"`` or
-        ``"dopri5"`` (docs/problem-files.md)."""
+        ``"radau5"``, ``"auto"`` (also when the file leaves it out: the default solver, with
+        the default's tolerance scaling), ``"trbdf2"`` or ``"dopri5"`` (docs/problem-files.md)."""
         return self._native.method
 
     @property
@@ -341,7 +341,7 @@ class Problem:
         static_only = _flag("static_only", static_only)
         x = self._native.nominal if design is None else _one(design)
         _warn_outside(x[None, :], self._native.lower, self._native.upper)
-        return json.loads(self._native.record(x, static_only))
+        return self._native.record(x, static_only)
 
     def simulate(
         self,
@@ -360,7 +360,9 @@ class Problem:
             rtol: relative tolerance (None: the problem's ``solver.rtol``).
             method: ``"radau5"``, ``"auto"``, ``"trbdf2"`` (alias ``"tr-bdf2"``) or
                 ``"dopri5"``, the names ``gripopt simulate --method`` takes; None: the
-                problem's ``[solver] method`` (:attr:`method`; ``"radau5"`` when absent).
+                problem's ``[solver] method`` (:attr:`method`; absent, the default solver,
+                auto with the default's tolerance scaling; a method given here takes the
+                tolerances as given).
             object: a robust problem's object by name (its ``[[robust.objects]]``
                 ``name``), as ``gripopt simulate --object NAME``: the design on that object
                 (its cylinder and grip torque, the spring sized at ``[hand] tau``), in its
@@ -384,10 +386,7 @@ class Problem:
                 f"objects ({', '.join(objects)})"
             )
         _warn_outside(x[None, :], self._native.lower, self._native.upper)
-        text, samples, poses = self._native.simulate(x, scene, None if rtol is None else float(rtol), method, object)
-        record = json.loads(text)
-        if object is not None:
-            record = {"object": object, **record}
+        record, samples, poses = self._native.simulate(x, scene, None if rtol is None else float(rtol), method, object)
         grasp = frame(samples, SAMPLE_COLUMNS)
         trajectory = frame(poses, POSE_COLUMNS) if record.get("scene") == "free" else grasp
         return Simulation(record, trajectory, grasp)

@@ -38,11 +38,16 @@ import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem as _PymooProblem
 
+from . import _gripopt
 from .errors import InputError
 from .problem import Problem
 
-#: The objectives' names in ``F``'s order (minimisation form).
-OBJECTIVES: tuple[str, ...] = ("-max_offset", "alpha", "-mean_force", "t_stab")
+#: The objectives as the library's table has them: (name, unit, meaning, sense), in ``F``'s
+#: order; sense is ``"maximise"`` or ``"minimise"``.
+_TABLE: tuple[tuple[str, str, str, str], ...] = tuple(_gripopt.OBJECTIVES)
+
+#: The objectives' names in ``F``'s order (minimisation form: a maximised one negated).
+OBJECTIVES: tuple[str, ...] = tuple(("-" if sense == "maximise" else "") + name for name, _, _, sense in _TABLE)
 
 
 def constraint_violation(key: np.ndarray) -> np.ndarray:
@@ -57,8 +62,9 @@ def constraint_violation(key: np.ndarray) -> np.ndarray:
 def natural_objectives(F: np.ndarray) -> pd.DataFrame:
     """``F`` (minimisation form) back in the objectives' natural sense and units:
     max_offset [m], alpha [-], mean_force [N], t_stab [s]. A feasible design that is not
-    form closed at the centred object has max_offset = −Δ_off (``criteria.offset_step``),
-    the value gripopt ranks it by (MODEL.md §6.7); its row leaves max_offset empty."""
+    form closed at the centred object is ranked by max_offset = −Δ_off
+    (``criteria.offset_step``, MODEL.md §6.7), a placeholder, not a value: its max_offset
+    is NaN here, as every other output leaves it empty (a real max_offset is ≥ 0)."""
     try:
         F = np.asarray(F, dtype="float64")
     except (TypeError, ValueError) as e:
@@ -69,9 +75,12 @@ def natural_objectives(F: np.ndarray) -> pd.DataFrame:
         raise InputError(
             f"F: an array of shape {F.shape}, expected (n, 4) or (4,): {', '.join(OBJECTIVES)}", field="F"
         )
-    return pd.DataFrame(
-        {"max_offset": -F[:, 0], "alpha": F[:, 1], "mean_force": -F[:, 2], "t_stab": F[:, 3]}
-    )
+    natural = {
+        name: (-F[:, k] if sense == "maximise" else F[:, k]) for k, (name, _, _, sense) in enumerate(_TABLE)
+    }
+    # the −Δ_off placeholder of a design not form closed is no offset (Objectives::reported)
+    natural["max_offset"] = np.where(natural["max_offset"] >= 0, natural["max_offset"], np.nan)
+    return pd.DataFrame(natural)
 
 
 #: What GripperProblem sets in pymoo's ``Problem`` itself.

@@ -175,7 +175,7 @@ class Run:
     @property
     def info(self) -> dict[str, Any]:
         """run.json: settings, status, generations, evaluations, resumes."""
-        return json.loads(self._folder.info())
+        return self._folder.info()
 
     @property
     def status(self) -> str:
@@ -217,8 +217,8 @@ class Run:
         """Design ``id`` as recorded: its ``/designs`` record and grasp trajectory, read
         from the MCAP shard that holds it (one chunk read)."""
         id = design_id(id)
-        text, samples, resolution, file = self._folder.design(id)
-        return RecordedDesign(id, json.loads(text), frame(samples, SAMPLE_COLUMNS), resolution, Path(file))
+        record, samples, resolution, file = self._folder.design(id)
+        return RecordedDesign(id, record, frame(samples, SAMPLE_COLUMNS), resolution, Path(file))
 
     def replay(self, id: int) -> Replay:
         """Re-simulate design ``id`` from its recorded parameters and compare it with its
@@ -230,7 +230,7 @@ class Run:
             compared=r["compared"],
             values_compared=r["values_compared"],
             recomputed_feasible=r["recomputed_feasible"],
-            record=json.loads(r["fresh"]),
+            record=r["fresh"],
             file=Path(r["file"]),
             agrees_across_revisions=r["agrees_across_revisions"],
         )
@@ -261,13 +261,12 @@ def _callback(progress: Optional[ProgressCallback]) -> Optional[Callable[[dict[s
     return lambda report: progress(GenerationReport(**report))
 
 
-def _record(record: Union[bool, Mapping[str, Any]]) -> Optional[str]:
-    """``record`` for the native run: None (the defaults), "none", or a JSON object;
-    anything else is an :class:`InputError` naming ``record``."""
-    if record is True:
-        return None
-    if record is False:
-        return "none"
+def _record(record: Union[bool, Mapping[str, Any]]) -> Union[bool, dict[str, Any]]:
+    """``record`` for the native run: True (the defaults), False (nothing), or a dict of
+    options (the library checks each); anything else is an :class:`InputError` naming
+    ``record``."""
+    if record is True or record is False:
+        return record
     if not isinstance(record, Mapping):
         raise InputError(
             f"record = {record!r}: must be True, False or a mapping of recording options "
@@ -275,7 +274,8 @@ def _record(record: Union[bool, Mapping[str, Any]]) -> Optional[str]:
             field="record",
         )
     try:
-        return json.dumps(dict(record))
+        # plain values only (what run.json's `recording` holds)
+        return json.loads(json.dumps(dict(record)))
     except (TypeError, ValueError) as e:
         raise InputError(f"record = {record!r}: options must be plain values ({e})", field="record") from None
 

@@ -82,6 +82,28 @@ def test_cells_that_are_not_numbers_name_the_column_and_row(problem):
             problem.evaluate(bad, static_only=True)
 
 
+def test_nullable_and_string_columns_are_numbers_or_named_errors(problem):
+    """Origin: issue 44 class 8 (a raw TypeError from pandas' own dtypes). A design table in
+    pandas' nullable or string dtypes is evaluated as its numbers; a missing or non-numeric
+    cell is an InputError naming the column and the row, as docs/python.md promises."""
+    nominal = pd.DataFrame([problem.nominal] * 2).reset_index(drop=True)
+    want = problem.evaluate(nominal, static_only=True)
+    for dtype in ["Float64", "string"]:
+        got = problem.evaluate(nominal.astype(dtype), static_only=True)
+        pdt.assert_frame_equal(got, want, check_exact=True)
+    ints = nominal.copy()
+    ints["psi_deg"] = pd.array([130, 131], dtype="Int64")
+    assert len(problem.evaluate(ints, static_only=True)) == 2
+    ints.loc[1, "psi_deg"] = pd.NA
+    with pytest.raises(gripopt.InputError, match=r"^designs: row 1, `psi_deg` = NaN is not finite") as e:
+        problem.evaluate(ints, static_only=True)
+    assert e.value.field == "psi_deg"
+    text = nominal.astype("string")
+    text.loc[0, "b"] = "wide"
+    with pytest.raises(gripopt.InputError, match=r"^designs: row 0, `b` = 'wide' is not a number"):
+        problem.evaluate(text, static_only=True)
+
+
 def test_natural_objectives_take_one_design_or_many():
     from gripopt.pymoo import natural_objectives
 
@@ -89,6 +111,7 @@ def test_natural_objectives_take_one_design_or_many():
     one = natural_objectives(F)
     pdt.assert_frame_equal(one, natural_objectives(F[None, :]))
     assert one.iloc[0].tolist() == [0.002, 0.1, 5.0, 0.03]
+    assert list(one.columns) == ["max_offset", "alpha", "mean_force", "t_stab"]
     for bad in [np.zeros(3), np.zeros((2, 3)), np.zeros((1, 1, 4)), ["x"] * 4]:
         with pytest.raises(gripopt.InputError, match="^F: "):
             natural_objectives(bad)

@@ -63,7 +63,9 @@ def test_a_shard_of_another_run_is_refused_without_run_json(cli_run, other_run, 
         # opened after the damage: nothing pinned, the library's own check refuses
         with pytest.raises(gripopt.RunFolderError, match="run.json") as e:
             gripopt.Run(a).design(id)
-        assert "another run" in str(e.value) or "attributed" in str(e.value) or "this run's" in str(e.value)
+        said = str(e.value)
+        # a missing run.json: no run to open at all (issue 44 class 8)
+        assert any(w in said for w in ("another run", "attributed", "this run's", "not a run folder")), said
         (a / "run.json").write_text(text)
 
 
@@ -294,3 +296,49 @@ def test_empty_tables_have_the_columns_of_full_ones(problem, cli_run, tmp_path):
     )
     empty_history = gripopt.Run(e_dir).history
     assert len(empty_history) == 0 and empty_history.dtypes.to_dict() == history.dtypes.to_dict()
+
+
+def test_a_folder_without_a_run_is_refused_when_opened(tmp_path, cli_run):
+    """Origin: issue 44 class 8: `gripopt.Run(path)` of a folder that holds no run opened
+    fine and failed later, at a read, with another exception. It is a RunFolderError naming
+    the folder at once (an empty folder, a folder of other files; a run folder opens)."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("not a run")
+    for d in (empty, other):
+        with pytest.raises(gripopt.RunFolderError, match=r"not a run folder \(no run.json\)") as e:
+            gripopt.Run(d)
+        assert str(d) in str(e.value)
+    assert gripopt.Run(cli_run).info["completed_generations"] > 0
+
+
+def test_the_lock_held_by_this_process_is_not_named_as_another(tmp_path):
+    """Origin: issue 44 class 8: a run folder locked by another call in the same Python
+    process (a run in another thread) was said to be in use by "another gripopt process (pid
+    <this process>)". It says another call in this process holds it."""
+    import os
+    import threading
+
+    out = tmp_path / "held"
+    started, release = threading.Event(), threading.Event()
+
+    def hold(report):
+        started.set()
+        release.wait(60)
+
+    t = threading.Thread(
+        target=lambda: gripopt.optimise(BOTTLE, out, pop=8, generations=2, seed=1, record=False, progress=hold)
+    )
+    t.start()
+    try:
+        assert started.wait(120), "the run did not start"
+        with pytest.raises(gripopt.RunLockedError) as e:
+            gripopt.resume(out)
+        said = str(e.value)
+        assert "another call in this process" in said and f"pid {os.getpid()}" in said, said
+        assert "another gripopt process" not in said, said
+    finally:
+        release.set()
+        t.join(120)

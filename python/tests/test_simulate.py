@@ -69,18 +69,22 @@ def test_bad_scenes_and_discarded_designs_are_input_errors(problem):
 def test_the_problems_solver_method_is_the_default(problem, cli_json, tmp_path):
     """`[solver] method = "auto"`: Problem.method says it, simulate() uses it (the record of
     `gripopt simulate --json` on the same file), an explicit method overrides it; a file
-    without the key is radau5."""
+    without the key runs the default, auto with the default's tolerance scaling (session 38:
+    not the named auto's record)."""
     text = problem.toml.replace("\n[solver]\n", '\n[solver]\nmethod = "auto"\n', 1)
     path = tmp_path / "auto.toml"
     path.write_text(text)
     auto = gripopt.Problem.load(path)
-    assert (problem.method, auto.method) == ("radau5", "auto")
+    assert (problem.method, auto.method) == ("auto", "auto")
     sim = auto.simulate()
     assert sim.record["method"] == "auto"
     assert same_record(untimed(sim.record), untimed(cli_json("simulate", path, "--json")))
     radau = auto.simulate(method="radau5")
     assert radau.record["method"] == "radau5" and radau.record["steps"] != sim.record["steps"]
-    assert same_record(untimed(radau.record), untimed(problem.simulate().record))
+    assert same_record(untimed(radau.record), untimed(problem.simulate(method="radau5").record))
+    default = problem.simulate()
+    assert default.record["method"] == "auto" and default.record["steps"] != sim.record["steps"]
+    assert same_record(untimed(default.record), untimed(cli_json("simulate", "problems/bottle-1l.toml", "--json")))
     with pytest.raises(gripopt.ProblemError, match="solver.method"):
         gripopt.Problem.from_toml(text.replace('"auto"', '"euler"'))
 
@@ -105,9 +109,10 @@ def test_method_names_are_the_command_lines(problem, cli_json):
 
 def test_tr_bdf2_refuses_an_atol_its_error_estimate_cannot_meet(problem):
     """TR-BDF2 takes solver.atol >= 1e-11 (below it its steps collapse: hostile pass 34);
-    `method="trbdf2"` on a problem written for RADAU5 at 1e-13 says so, naming the method."""
+    `method="trbdf2"` on a problem at 1e-13 (which the default solver runs) says so, naming
+    the method."""
     tight = gripopt.Problem.from_toml(problem.toml.replace("atol = 1e-9", "atol = 1e-13", 1))
-    assert tight.simulate().record["method"] == "radau5"
+    assert tight.simulate().record["method"] == "auto"
     with pytest.raises(gripopt.InputError, match=r"trbdf2.*atol 1e-13.*>= 1e-11"):
         tight.simulate(method="trbdf2")
     with pytest.raises(gripopt.InputError, match=r"solver\.atol"):

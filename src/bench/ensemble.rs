@@ -70,7 +70,7 @@ pub fn work_precision_ensemble(
     let existed = csv.exists();
     write_designs(&out_dir.join("work_precision_ensemble_designs.csv"), cases.iter().map(|c| &c.design), out)?;
     let io = |e| Error::io(&csv, "cannot write", e);
-    let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).map_err(|e| Error::io(&csv, "cannot create", e))?);
+    let mut w = crate::fsutil::AtomicFile::create(&csv)?;
     writeln!(w, "method,rtol,designs,cpu_median_s,steps_median,rhs_median,err_t_stab_median,err_t_stab_p90,err_e_cyl_median,err_e_cyl_p90,verdicts_differing").map_err(io)?;
     say!(
         out,
@@ -124,7 +124,7 @@ pub fn work_precision_ensemble(
             );
         }
     }
-    w.flush().map_err(io)?;
+    w.commit()?;
     say!(out, "wrote {}{}", csv.display(), super::replaced_note(existed));
     Ok(
         serde_json::json!({ "bench": "work-precision-ensemble", "scene": "centred", "problem_scene": p.scene.setup.kind, "designs": cases.len(), "drawn": drawn, "seed": seed, "rows": summary, "csv": csv.display().to_string() }),
@@ -189,14 +189,14 @@ pub fn ensemble_cases(p: &Problem, n: usize, seed: u64) -> Result<Vec<Case>> {
 /// which runs two binaries on them).
 fn write_designs<'a>(csv: &Path, designs: impl Iterator<Item = &'a Design>, out: super::Out) -> Result<()> {
     let io = |e| Error::io(csv, "cannot write", e);
-    let mut w = std::io::BufWriter::new(std::fs::File::create(csv).map_err(|e| Error::io(csv, "cannot create", e))?);
+    let mut w = crate::fsutil::AtomicFile::create(csv)?;
     writeln!(w, "design").map_err(io)?;
     for d in designs {
         let x = d.to_array();
         let arg: Vec<String> = DESIGN_NAMES.iter().zip(x).map(|(n, v)| format!("{n}={v}")).collect();
         writeln!(w, "\"{}\"", arg.join(",")).map_err(io)?;
     }
-    w.flush().map_err(io)?;
+    w.commit()?;
     say!(out, "wrote {}", csv.display());
     Ok(())
 }

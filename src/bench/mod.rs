@@ -7,6 +7,8 @@
 //!
 //! The top layer of the library: it may use everything below it.
 
+mod accuracy;
+mod accuracy_table;
 mod ensemble;
 mod free;
 mod nsga;
@@ -17,6 +19,10 @@ mod static_eval;
 mod table;
 mod work_precision;
 
+pub use accuracy::{accuracy, AccuracyBench, Candidate, KITCHEN_FRONT_DESIGN, REFERENCE_ATOL, REFERENCE_RTOL};
+pub use accuracy_table::{
+    CandidateSummary, GraspOutcome, Kind, Outcomes, Quantity, RobustOutcome, ScenarioOutcome, RULE_MAX, RULE_P90,
+};
 pub use ensemble::{ensemble_cases, work_precision_ensemble, Case, EnsembleBench};
 pub use free::{free_scene, FreeBench, FreeRow, FREE_REFERENCE_RTOL, FREE_RTOLS};
 pub use nsga::nsga;

@@ -287,13 +287,16 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     if b.threads.first() != Some(&1) || !b.threads.windows(2).all(|w| w[0] < w[1]) {
         return bad(format!("thread counts {:?}: must be ascending and start with 1 (the reference)", b.threads));
     }
-    // the benchmark's own run folders go below `dir`; a `dir` holding anything else is refused,
-    // so that removing them afterwards can never delete data this benchmark did not write
-    let ours = |n: &str| n.starts_with('t') && n[1..].parse::<usize>().is_ok();
-    if let Ok(rd) = std::fs::read_dir(dir) {
-        if let Some(other) = rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).find(|n| !ours(n)) {
-            return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("holds `{other}`, which `gripopt bench scaling` did not write: choose another --out (nothing was deleted)") });
-        }
+    // the benchmark's own run folders go below `dir`, new or empty and locked while it runs:
+    // what it removes afterwards is only what this process made there (a name such as `t1`
+    // proves nothing: an earlier benchmark's leftovers are refused, never deleted)
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create the benchmark folder", e))?;
+    let lock = crate::fsutil::lock::RunLock::acquire(dir)?;
+    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, "cannot list", e))?;
+    if let Some(other) =
+        rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).find(|n| n != crate::fsutil::lock::LOCK_FILE)
+    {
+        return Err(Error::RunDir { path: dir.to_path_buf(), message: format!("holds `{other}`: `gripopt bench scaling` writes into a new or empty folder and removes only what it made (an earlier benchmark that did not finish left it? remove it yourself): choose another --out (nothing was deleted)") });
     }
     let mut rows = vec![];
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -370,6 +373,7 @@ pub fn scaling(problem: &Problem, b: &ScalingBench, dir: &Path, out: super::Out)
     for n in &b.threads {
         let _ = std::fs::remove_dir_all(dir.join(format!("t{n}")));
     }
+    drop(lock);
     let _ = std::fs::remove_dir(dir); // only if now empty
     say!(out, "(ceiling: T1 over the wall time of n independent 1-thread runs at once, the efficiency the machine itself allows, - at 1 thread where it is 100 % by definition; of ceil.: eff(min) / ceiling;");
     say!(out, " work: sum of the designs' evaluation times; eval: wall of the parallel evaluation; strag.: of it, waiting beyond the mean work per thread; serial: the solver's own step;");

@@ -39,19 +39,20 @@ impl Row {
     }
 }
 
-/// Writes the CSV file `path` (its folder created if need be): the `header` line, then
-/// each of `lines` (without their line breaks).
+/// Writes the CSV file `path` (its folder created if need be) atomically, never through a
+/// link ([`crate::fsutil::AtomicFile`]): the `header` line, then each of `lines` (without
+/// their line breaks).
 pub(super) fn write_csv_lines(path: &Path, header: &str, lines: impl IntoIterator<Item = String>) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create", e))?;
     }
     let io = |e| Error::io(path, "cannot write", e);
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| Error::io(path, "cannot create", e))?);
+    let mut w = crate::fsutil::AtomicFile::create(path)?;
     writeln!(w, "{header}").map_err(io)?;
     for line in lines {
         writeln!(w, "{line}").map_err(io)?;
     }
-    w.flush().map_err(io)
+    w.commit()
 }
 
 /// Writes `rows` as CSV to `path` (its folder created if need be).
@@ -147,8 +148,21 @@ pub fn plot(rows: &[Row], path: &Path) -> Result<()> {
 }
 
 /// A log–log work-precision chart (median CPU time against an error) with one line per
-/// `(label, points)` series, to the SVG file `path`; the axes cover at least `x0` and `y0`.
+/// `(label, points)` series, to the SVG file `path` (written atomically, never through a
+/// link); the axes cover at least `x0` and `y0`.
 pub fn work_precision_chart(
+    path: &Path,
+    caption: &str,
+    x_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    x0: (f64, f64),
+    y0: (f64, f64),
+) -> Result<()> {
+    crate::fsutil::write_rendered(path, |svg| draw_chart(svg, path, caption, x_desc, series, x0, y0))
+}
+
+fn draw_chart(
+    svg: &mut String,
     path: &Path,
     caption: &str,
     x_desc: &str,
@@ -158,7 +172,7 @@ pub fn work_precision_chart(
 ) -> Result<()> {
     use plotters::prelude::*;
     let e = |e| Error::bench_from(format!("plot {}", path.display()), e);
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
     let all = series.iter().flat_map(|(_, p)| p.iter());
     let (xmin, xmax, ymin, ymax) =

@@ -1,9 +1,10 @@
 //! `gripopt bench …`: the arguments of the speed figures (not tests); the benchmarks
-//! themselves are the library's `gripopt::bench`.
+//! themselves are the library's `gripopt::app::bench`.
 
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
-use gripopt::bench::{EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::app::bench::{AccuracyBench, EnsembleBench, FreeBench, ReplayBench, ScalingBench, WorkPrecision};
+use gripopt::app::RecordOptions;
 use std::path::PathBuf;
 
 /// The design a table is about, and where it is written (`bench work-precision`, `bench free`).
@@ -23,7 +24,7 @@ pub struct DesignTable {
 impl DesignTable {
     /// The problem and the design; for a robust problem a note that `bench` (its name)
     /// evaluates the reference object only.
-    fn load(&self, bench: &str) -> Result<(gripopt::params::Problem, gripopt::params::Design)> {
+    fn load(&self, bench: &str) -> Result<(gripopt::app::Problem, gripopt::app::Design)> {
         let p = super::load_problem(&self.problem)?;
         robust_note(&p, &self.problem, bench);
         let x = super::design_of(&p, &self.design)?;
@@ -33,7 +34,7 @@ impl DesignTable {
 
 /// As sweep and export say it: on a problem with [robust], a benchmark of one design's
 /// grasp runs the reference [object] and [scene] only (its verdict is not the robust one).
-fn robust_note(p: &gripopt::params::Problem, path: &std::path::Path, bench: &str) {
+fn robust_note(p: &gripopt::app::Problem, path: &std::path::Path, bench: &str) {
     if p.robust.is_some() {
         eprintln!(
             "note: {} has [robust]: bench {bench} evaluates the reference [object] and [scene] only; the robust objects and scenarios are not evaluated, and its verdict is not the robust one (`gripopt evaluate`, docs/robust.md)",
@@ -43,7 +44,7 @@ fn robust_note(p: &gripopt::params::Problem, path: &std::path::Path, bench: &str
 }
 
 /// A benchmark's progress as the CLI shows it (the library reports it,
-/// [`gripopt::bench::BenchProgress`]): an indicatif bar on stderr per phase, cleared when the
+/// [`gripopt::app::bench::BenchProgress`]): an indicatif bar on stderr per phase, cleared when the
 /// phase ends (drawn only on a terminal).
 #[derive(Default)]
 struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
@@ -56,7 +57,7 @@ impl Bars {
     }
 }
 
-impl gripopt::bench::BenchProgress for Bars {
+impl gripopt::app::bench::BenchProgress for Bars {
     fn begin(&self, label: &str, len: u64, unit: &str) {
         let pb = indicatif::ProgressBar::new(len);
         pb.set_style(
@@ -184,7 +185,7 @@ pub enum BenchCmd {
         #[arg(long)]
         atol: Option<f64>,
         /// Relative tolerances of the table, comma-separated (not for --sample).
-        #[arg(long, value_delimiter = ',', default_values_t = gripopt::bench::RTOLS, conflicts_with = "sample")]
+        #[arg(long, value_delimiter = ',', default_values_t = gripopt::app::bench::RTOLS, conflicts_with = "sample")]
         rtols: Vec<f64>,
     },
     /// The free scene (MODEL.md §14) of one design: CPU time, steps and evaluations against
@@ -201,11 +202,39 @@ pub enum BenchCmd {
         #[arg(long)]
         atol: Option<f64>,
         /// Relative tolerances, comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = gripopt::bench::FREE_RTOLS)]
+        #[arg(long, value_delimiter = ',', default_values_t = gripopt::app::bench::FREE_RTOLS)]
         rtols: Vec<f64>,
         /// Leave out the dense-Jacobian rows (RADAU5 and auto with the block Jacobian only).
         #[arg(long)]
         no_dense: bool,
+    },
+    /// The accuracy rule (docs/benchmarks.md): solver settings against RADAU5 at rtol 1e-10,
+    /// atol 1e-13 — verdicts over the grasp ensemble, its free scenes and a robust problem's
+    /// scenarios, and the objectives' relative errors (p90 <= 5e-5, max <= 2e-3); writes
+    /// accuracy.csv and accuracy_cases.csv (the reference is cached beside them).
+    Accuracy {
+        /// The grasp ensemble's problem.
+        #[arg(long, default_value = "problems/bottle-1l.toml")]
+        grasp_problem: PathBuf,
+        /// The robust problem.
+        #[arg(long, default_value = "problems/kitchen.toml")]
+        robust_problem: PathBuf,
+        /// Designs of the grasp ensemble (those of `bench work-precision --sample N`).
+        #[arg(long, default_value_t = 40)]
+        sample: usize,
+        /// Designs of the robust ensemble (the kitchen front design of issue 40 first).
+        #[arg(long, default_value_t = 30)]
+        designs: usize,
+        /// Seed of both ensembles.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Settings to check, comma-separated: `default` (each problem's own [solver]) or
+        /// METHOD:RTOL[:ATOL] (the problem's atol where left out).
+        #[arg(long, value_delimiter = ',', default_value = "default")]
+        candidates: Vec<String>,
+        /// Output folder.
+        #[arg(long, default_value = "results/bench")]
+        out: PathBuf,
     },
 }
 
@@ -218,7 +247,7 @@ fn check_scaling_flags(
     threads: &[usize],
     reps: usize,
 ) -> Result<()> {
-    let max = gripopt::run::MAX_THREADS;
+    let max = gripopt::app::MAX_THREADS;
     if pop < 4 {
         anyhow::bail!("--pop {pop}: must be at least 4");
     }
@@ -238,26 +267,46 @@ fn check_scaling_flags(
     Ok(())
 }
 
+/// The lock of a benchmark's output folder `dir` (created), held while the benchmark writes
+/// its tables there: a held one is refused, naming the holder.
+fn lock_out(dir: &std::path::Path) -> Result<gripopt::app::RunLock> {
+    std::fs::create_dir_all(dir).map_err(|e| gripopt::Error::io(dir, "cannot create the output folder", e))?;
+    Ok(gripopt::app::RunLock::acquire(dir)?)
+}
+
+/// The thread counts `bench scaling` times: those given (default: 1 to `max_threads`, else
+/// the cores), always with 1, sorted, once each.
+fn thread_counts(mut threads: Vec<usize>, max_threads: Option<usize>) -> Vec<usize> {
+    if threads.is_empty() {
+        let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        threads = (1..=max_threads.unwrap_or(cores)).collect();
+    }
+    threads.push(1);
+    threads.sort_unstable();
+    threads.dedup();
+    threads
+}
+
 /// Run a benchmark: its text report on stdout, or with `json` the report on stderr and
 /// the figures as one JSON object on stdout.
 pub fn run(b: BenchCmd, json: bool) -> Result<()> {
     let (mut stdout, mut stderr) = (std::io::stdout().lock(), std::io::stderr().lock());
-    let out: gripopt::bench::Out = if json { &mut stderr } else { &mut stdout };
+    let out: gripopt::app::bench::Out = if json { &mut stderr } else { &mut stdout };
     let bars = Bars::default();
     let summary = match b {
         BenchCmd::Static { problem, n, seed } => {
             at_least_one("--n", n)?;
             let p = super::load_problem(&problem)?;
             robust_note(&p, &problem, "static");
-            gripopt::bench::static_pipeline(&p, &problem, n, seed, out, &bars)?
+            gripopt::app::bench::static_pipeline(&p, &problem, n, seed, out, &bars)?
         }
         BenchCmd::Nsga { reps } => {
             at_least_one("--reps", reps)?;
-            gripopt::bench::nsga(reps, out)?
+            gripopt::app::bench::nsga(reps, out)?
         }
         BenchCmd::Replay { problem, designs, per_shard, out: dir, keep } => {
             let p = super::load_problem(&problem)?;
-            gripopt::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out, &bars)?
+            gripopt::app::bench::replay(&p, &ReplayBench { designs, per_shard, out: dir, keep }, out, &bars)?
         }
         BenchCmd::Scaling {
             problem,
@@ -273,41 +322,33 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         } => {
             check_scaling_flags(pop, generations, max_threads, &threads, reps)?;
             let p = super::load_problem(&problem)?;
-            let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-            let record = if no_record {
-                gripopt::record::RecordOptions::none()
-            } else {
-                gripopt::record::RecordOptions::default()
-            };
-            let mut threads = if threads.is_empty() { (1..=max_threads.unwrap_or(cores)).collect() } else { threads };
-            threads.push(1);
-            threads.sort_unstable();
-            threads.dedup();
             let b = ScalingBench {
                 pop,
                 generations,
                 seed,
-                threads,
+                threads: thread_counts(threads, max_threads),
                 reps,
-                record,
+                record: if no_record { RecordOptions::none() } else { RecordOptions::default() },
                 predict: vec![2, 16, 64],
                 ceiling: !no_ceiling,
             };
-            gripopt::bench::scaling(&p, &b, &dir, out)?
+            gripopt::app::bench::scaling(&p, &b, &dir, out)?
         }
         BenchCmd::WorkPrecision { sample: Some(0), .. } => anyhow::bail!("--sample 0: must be at least 1"),
         BenchCmd::WorkPrecision { target, sample: Some(n), seed, atol, .. } => {
-            gripopt::bench::check_atol(atol)?;
+            gripopt::app::bench::check_atol(atol)?;
             let p = super::load_problem(&target.problem)?;
             robust_note(&p, &target.problem, "work-precision");
+            let _lock = lock_out(&target.out)?;
             let b = EnsembleBench { sample: n, seed, out_dir: target.out, atol };
-            gripopt::bench::work_precision_ensemble(&p, &target.problem, &b, out, &bars)?
+            gripopt::app::bench::work_precision_ensemble(&p, &target.problem, &b, out, &bars)?
         }
         BenchCmd::WorkPrecision { target, reps, atol, rtols, .. } => {
             at_least_one("--reps", reps)?;
-            gripopt::bench::check_atol(atol)?;
+            gripopt::app::bench::check_atol(atol)?;
             let (p, x) = target.load("work-precision")?;
-            gripopt::bench::work_precision(
+            let _lock = lock_out(&target.out)?;
+            gripopt::app::bench::work_precision(
                 &p,
                 &x,
                 &WorkPrecision { out_dir: target.out, reps, atol, rtols },
@@ -318,8 +359,21 @@ pub fn run(b: BenchCmd, json: bool) -> Result<()> {
         BenchCmd::Free { target, reps, atol, rtols, no_dense } => {
             at_least_one("--reps", reps)?;
             let (p, x) = target.load("free")?;
+            let _lock = lock_out(&target.out)?;
             let table = WorkPrecision { out_dir: target.out, reps, atol, rtols };
-            gripopt::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out, &bars)?
+            gripopt::app::bench::free_scene(&p, &x, &FreeBench { table, dense: !no_dense }, out, &bars)?
+        }
+        BenchCmd::Accuracy { grasp_problem, robust_problem, sample, designs, seed, candidates, out: dir } => {
+            at_least_one("--sample", sample)?;
+            at_least_one("--designs", designs)?;
+            let candidates = candidates
+                .iter()
+                .map(|c| gripopt::app::bench::Candidate::parse(c))
+                .collect::<gripopt::Result<Vec<_>>>()?;
+            let gp = super::load_problem(&grasp_problem)?;
+            let rp = super::load_problem(&robust_problem)?;
+            let b = AccuracyBench { sample, robust_designs: designs, seed, candidates, out_dir: dir };
+            gripopt::app::bench::accuracy(&gp, &grasp_problem, &rp, &robust_problem, &b, out, &bars)?
         }
     };
     if json {

@@ -3,9 +3,6 @@
 //! files; this resolves the design and the scene (docs/export.md).
 
 use anyhow::{bail, Context, Result};
-use gripopt::eval::RobustSetup;
-use gripopt::export::{write_file, ExportScene, ExportedDesign, ObjectMode};
-use gripopt::params::{Design, Problem, SceneKind};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `gripopt export`.
@@ -95,94 +92,6 @@ fn format_name(f: FormatArg) -> &'static str {
     }
 }
 
-/// The design and problem of a run folder's design `id`, with a source text.
-fn run_design(dir: &Path, id: &Option<String>) -> Result<(Problem, Design, String)> {
-    let Some(id) = id else {
-        bail!("{}: a run folder needs --design ID (a design id of the run: pareto.csv, `gripopt show`)", dir.display());
-    };
-    let id: u64 = id.trim().parse().map_err(|_| {
-        gripopt::Error::Input(format!(
-            "--design `{id}`: with a run folder ({}) the design is its id, a whole number (pareto.csv, `gripopt show`)",
-            dir.display()
-        ))
-    })?;
-    // absent; anything else there (a pipe, a folder) is refused by its read, naming it
-    if std::fs::symlink_metadata(dir.join("problem.toml")).is_err() {
-        if std::fs::symlink_metadata(dir.join("run.json")).is_ok() {
-            return Err(missing_problem(dir).into());
-        }
-        return Err(gripopt::Error::Input(format!(
-            "{}: not a run folder (no problem.toml); give a folder written by `gripopt optimise`",
-            dir.display()
-        ))
-        .into());
-    }
-    // a recorded run: the design's record (any generation's); a run not recorded (`--record
-    // none`, run.json's `recording`): the design as its checkpoint holds it
-    let (generation, x, from) = match unrecorded_design(dir, id)? {
-        Some(found) => found,
-        None => {
-            let rec = gripopt::record::read_design(dir, id)?;
-            (rec.record.generation, rec.design(), format!("recorded in {}", rec.file.display()))
-        }
-    };
-    // the problem the design's generation was evaluated with (problem-G.toml after a forced
-    // resume with a changed problem), refused when edited since: the hand would be another
-    let run = gripopt::record::problem_of_generation(dir, generation)?;
-    if let Some(why) = run.edited() {
-        return Err(gripopt::Error::Input(format!(
-            "{}: {why}; design {id} was evaluated with the file the run recorded: restore it to export the design",
-            run.file.display()
-        ))
-        .into());
-    }
-    Ok((run.problem, x, format!("run folder {}, design {id} ({from})", dir.display())))
-}
-
-/// A run folder (run.json there) whose problem.toml was deleted: an input error saying so,
-/// with the file the run started from and the checksum that tells whether it is still the
-/// same (run.json's `problem_path`, `problem_sha256`), when run.json can be read.
-fn missing_problem(dir: &Path) -> gripopt::Error {
-    let started = gripopt::RunFolder::open(dir).and_then(|f| f.info()).ok().map_or(String::new(), |i| {
-        format!(
-            " (the run started from {}; it is the same file if its SHA-256 is run.json's problem_sha256 {})",
-            i.problem_path.display(),
-            i.problem_sha256
-        )
-    });
-    gripopt::Error::Input(format!(
-        "{}: problem.toml is missing from the run folder (run.json is there): restore it{started}; a run's designs are exported with the problem they were evaluated with",
-        dir.display()
-    ))
-}
-
-/// Design `id` of a run that recorded nothing (None: the run was recorded), from its
-/// checkpoint (population, archive), with its generation; an error when the checkpoint no
-/// longer holds it.
-fn unrecorded_design(dir: &Path, id: u64) -> Result<Option<(u64, Design, String)>> {
-    let folder = gripopt::RunFolder::open(dir)?;
-    if folder.info()?.recording.enabled {
-        return Ok(None);
-    }
-    let Some(t) = folder.checkpoint_tables()? else {
-        return Err(gripopt::Error::Input(format!(
-            "{}: design {id}: the run was not recorded (run.json: started with `--record none`) and has no checkpoint yet; nothing holds the design",
-            dir.display()
-        ))
-        .into());
-    };
-    let Some(row) = t.population.iter().chain(&t.archive).find(|r| r.id == id) else {
-        return Err(gripopt::Error::Input(format!(
-            "{}: design {id} is not in the run's checkpoint (its population and archive of generation {}), and the run was not recorded (run.json: started with `--record none`), so its other designs are not kept",
-            dir.display(),
-            t.generation
-        ))
-        .into());
-    };
-    let from = format!("from its checkpoint, generation {}; the run was not recorded", t.generation);
-    Ok(Some((row.generation, Design::from_array(&row.parameters()), from)))
-}
-
 /// `--out` inside the source run folder `run` (its run.json, checkpoint, problem files, a
 /// shard of recording/: even with --force, which replaces an earlier export, never a run's
 /// file), or in a folder that is a run folder (sweep's rule, [`gripopt::run_folder_file`])
@@ -214,44 +123,11 @@ fn refuse_out_in_run_folder(out: &Path, run: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// `x` to 4 significant digits, compactly (`0.001823`, `2.5e-7`).
-fn short(x: f64) -> String {
-    gripopt::params::fmt_num(format!("{x:.3e}").parse().unwrap_or(x))
-}
-
-/// An exported scene whose open hand already penetrates the object at t = 0 (an offset or
-/// free object placed into a finger): refused, as every simulated scene refuses to start
-/// there ("open finger penetrates the object at t = 0"), naming `--scene` (or the problem's
-/// `[scene]`), the offset, the finger and the depth, and the offset up to which the open hand
-/// clears the object (docs/export.md).
-fn refuse_open_penetration(e: &ExportedDesign, scene: Option<&str>) -> Result<()> {
-    let Some(pen) = e.open_penetration() else { return Ok(()) };
-    let x_off = e.placement.x_off;
-    let asked = match scene {
-        Some(arg) => format!("--scene {arg}"),
-        None => format!("the problem's [scene] ({}, x_off = {} m)", e.placement.name(), short(x_off)),
-    };
-    let fix = match e.clear_offset() {
-        None => "the open hand touches the object even centred (x_off = 0)".to_string(),
-        Some(clear) => format!(
-            "the open hand clears the object up to |x_off| = {} mm on this side: give a smaller offset",
-            short(clear.abs() * 1e3)
-        ),
-    };
-    bail!(
-        "{asked}: with the object at x_off = {} m the open finger {}'s {} phalanx penetrates it by {} mm at t = 0; the model would start with the object inside the finger, where a simulation refuses to start (\"open finger penetrates the object at t = 0\"); {fix} (docs/export.md)",
-        short(x_off),
-        pen.finger,
-        pen.phalanx,
-        short(pen.depth * 1e3),
-    )
-}
-
 /// `gripopt export SOURCE [--design ...] --format F --out FILE [--scene S] [--object NAME] [--force]`.
 pub fn run(a: ExportArgs) -> Result<()> {
     let format = format_of(&a)?;
     let (p, x, source) = if a.source.is_dir() {
-        run_design(&a.source, &a.design)?
+        gripopt::app::run_design(&a.source, a.design.as_deref())?
     } else {
         let p = super::load_problem(&a.source)?;
         let x = super::design_of(&p, &a.design)?;
@@ -276,23 +152,10 @@ pub fn run(a: ExportArgs) -> Result<()> {
         Some(arg) => super::scenes::apply_scene(&p, &a.source, arg)?,
         None => p,
     };
-    let setup = p.scene.setup;
-    let placement = match setup.kind {
-        SceneKind::Centred => ExportScene::centred(),
-        SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
-        SceneKind::Free => ExportScene::free(setup.x_off),
-    };
-    // (the free scene's g_eq = 0 is the library's rule: Problem::load and in_scene name the file and field)
-    let e = match (object, RobustSetup::of(&p)) {
-        // the robust evaluation's own per-object scene (its cylinder and grip torque) in the
-        // scene asked for; the spring sized at [hand] tau, as there
-        (Some(o), Some(setup)) => {
-            let source = format!("{source}, robust object {}", setup.spec.objects[o].name);
-            ExportedDesign::on_object(&x, &setup, o, placement, &source)?
-        }
-        _ => ExportedDesign::new(&x, &p.scene, placement, &source)?,
-    };
-    refuse_open_penetration(&e, a.scene.as_deref())?;
+    // the robust evaluation's own per-object scene (its cylinder and grip torque) in the
+    // scene asked for; the spring sized at [hand] tau, as there
+    let e = gripopt::app::exported_design(&p, &x, object, &source)?;
+    gripopt::app::check_open_hand(&e, a.scene.as_deref())?;
     let source = &e.source;
     let text = match format {
         FormatArg::Mjcf => e.mjcf(),
@@ -310,9 +173,9 @@ pub fn run(a: ExportArgs) -> Result<()> {
     let inputs: Vec<&Path> = std::iter::once(a.source.as_path()).chain(objects.iter().map(|f| f.as_path())).collect();
     gripopt::check_output_file("--out", &a.out, a.force, &inputs)?;
     check_extension(&a, format)?;
-    write_file(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
+    gripopt::app::write_export(&a.out, &text, a.force).with_context(|| format!("exporting {source}"))?;
     let kind = match format {
-        FormatArg::Mjcf => format!("MuJoCo model, scene {}", placement.name()),
+        FormatArg::Mjcf => format!("MuJoCo model, scene {}", e.placement.name()),
         FormatArg::Json => "build sheet (JSON)".into(),
         FormatArg::Csv => "build sheet (CSV)".into(),
     };

@@ -3,7 +3,7 @@
 //! the bounds.
 
 use anyhow::Result;
-use gripopt::params::{Design, Problem};
+use gripopt::app::{Design, Problem};
 use std::path::PathBuf;
 
 /// Load a problem, with the path in the error.
@@ -25,7 +25,7 @@ pub fn design_of(p: &Problem, d: &Option<String>) -> Result<Design> {
         if !(a[k] >= lo && a[k] <= hi) {
             eprintln!(
                 "warning: {} = {} is outside the problem's bounds [{}, {}]; evaluating it anyway",
-                gripopt::params::DESIGN_NAMES[k],
+                gripopt::app::DESIGN_NAMES[k],
                 compact(a[k]),
                 compact(lo),
                 compact(hi)

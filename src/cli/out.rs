@@ -8,7 +8,7 @@
 //! JSON object on stdout.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Exit code of a closed output pipe (128 + SIGPIPE), without a message.
 pub const EXIT_BROKEN_PIPE: i32 = 141;
@@ -31,7 +31,13 @@ pub fn error_message(e: &anyhow::Error) -> String {
             msg.push_str(s);
         }
     }
-    gripopt::run::printable(&msg)
+    // whatever a message echoes of a file, at most a screenful: long lines and many of them cut
+    let msg = gripopt::app::cap_lines(&msg, 2000);
+    let msg = match msg.char_indices().nth(8000) {
+        Some((at, _)) => format!("{}… (cut: the message is longer)", &msg[..at]),
+        None => msg,
+    };
+    gripopt::app::printable(&msg)
 }
 
 /// The message of clap's rendered usage error `text` on one line: its lines before the
@@ -101,7 +107,8 @@ pub fn report_error(e: &anyhow::Error, json: bool) -> i32 {
         return code;
     }
     let message = error_message(e);
-    eprintln!("error: {message}");
+    // never a panic when stderr is gone (a closed terminal: SIGHUP)
+    let _ = writeln!(std::io::stderr(), "error: {message}");
     if json {
         error_json(&message, code);
     }
@@ -113,7 +120,7 @@ pub fn failed(e: &std::io::Error) -> ! {
     if e.kind() == std::io::ErrorKind::BrokenPipe {
         std::process::exit(EXIT_BROKEN_PIPE);
     }
-    eprintln!("error: cannot write to standard output: {e}");
+    let _ = writeln!(std::io::stderr(), "error: cannot write to standard output: {e}");
     std::process::exit(1);
 }
 
@@ -146,19 +153,25 @@ macro_rules! out {
 /// A path as one shell word, to copy into a command (quoted where needed; control
 /// characters escaped).
 pub fn path(p: &Path) -> String {
-    gripopt::run::shell_quote(&p.to_string_lossy())
+    gripopt::app::shell_quote(&p.to_string_lossy())
 }
 
 /// A text from a file (a problem's name) with its control characters escaped.
 pub fn shown(s: &str) -> String {
-    gripopt::run::printable(s)
+    gripopt::app::printable(s)
 }
 
 /// The file `path` with its causes' I/O error, or `e` with `path` named: what a failed
 /// write of an output file reports (the file asked for, not the temporary file beside it).
 fn naming(path: &Path, e: anyhow::Error) -> anyhow::Error {
+    // the library's own error keeps what it says (a link refused, its action and kind)
+    let action = match e.chain().find_map(|c| c.downcast_ref::<gripopt::Error>()) {
+        Some(gripopt::Error::Io { action, .. }) => *action,
+        Some(_) => return e,
+        None => "cannot write",
+    };
     match e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
-        Some(io) => gripopt::Error::io(path, "cannot write", std::io::Error::new(io.kind(), io.to_string())).into(),
+        Some(io) => gripopt::Error::io(path, action, std::io::Error::new(io.kind(), io.to_string())).into(),
         None => e.context(format!("cannot write {}", path.display())),
     }
 }
@@ -170,24 +183,8 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     gripopt::write_atomic(path, bytes).map_err(|e| naming(path, e.into()))
 }
 
-/// Write the output file `path` through `write`, which writes the file it is given (a
-/// temporary file beside `path`, renamed into place once written and synced): as
-/// [`write_file`] for writers that take a path (the SVG plots).
+/// Write the output file `path` through `write`, a writer that writes it atomically itself
+/// (the SVG plots: [`gripopt::app::grasp_plot`]); its error names `path`.
 pub fn write_file_with(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
-    let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let tmp: PathBuf = path.with_file_name(format!(".{name}.tmp"));
-    // never written through a link (or into a file) left at the temporary name
-    if std::fs::symlink_metadata(&tmp).is_ok_and(|m| !m.is_dir()) {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    let written = write(&tmp).and_then(|_| {
-        std::fs::File::open(&tmp)?.sync_all()?;
-        std::fs::rename(&tmp, path)?;
-        Ok(())
-    });
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(naming(path, e));
-    }
-    Ok(())
+    write(path).map_err(|e| naming(path, e))
 }

@@ -1,11 +1,13 @@
-//! The run's progress as the CLI shows it (the library reports it, [`gripopt::run::Progress`]):
+//! The run's progress as the CLI shows it (the library reports it, [`gripopt::app::Progress`]):
 //! on a terminal an indicatif bar (generation, evaluations/s, feasible count, hypervolume,
 //! ETA); otherwise (a log file, a pipe) one line per generation on stderr. Notes and
-//! warnings go to stderr. The first ctrl-c sets the run's stop flag and says so on stderr
-//! (the run stops after the current generation's checkpoint); a second one ends the
-//! process at once (exit 130; the last checkpoint resumes it).
+//! warnings go to stderr. The first ctrl-c — or SIGTERM (a batch scheduler's walltime) or
+//! SIGHUP (a closed terminal) — sets the run's stop flag and says so on stderr (the run
+//! stops after the current generation's checkpoint); a second one ends the process at once
+//! (exit 130; the last checkpoint resumes it). Nothing written to stderr ends the run when
+//! stderr is gone (a closed terminal): those writes are never checked.
 
-use gripopt::run::{GenerationReport, Progress};
+use gripopt::app::{GenerationReport, Progress};
 use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -75,32 +77,41 @@ impl Progress for Bar {
         self.bar.set_position(s.generation);
         self.bar.set_message(format!("{rate:.0} evals/s, feasible {feas}/{pop}, HV {hv:.4}, ETA {eta:.0} s"));
         if self.log_lines {
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "generation {}/{}  evaluations {}  feasible {feas}/{pop}  hypervolume {hv:.4}  {rate:.0} evaluations/s  ETA {eta:.0} s",
-                s.generation, s.max_generations, s.evaluations
+                s.generation,
+                s.max_generations,
+                s.evaluations
             );
         }
         Ok(())
     }
     fn note(&mut self, message: &str) {
-        self.bar.suspend(|| eprintln!("{message}"));
+        self.bar.suspend(|| {
+            let _ = writeln!(std::io::stderr(), "{message}");
+        });
     }
 }
 
-/// A stop flag set by ctrl-c: the run stops after the current generation's checkpoint, which
-/// a line on stderr acknowledges; a second ctrl-c ends the process at once (exit 130).
+/// A stop flag set by ctrl-c, SIGTERM or SIGHUP (the `ctrlc` crate's `termination`
+/// feature): the run stops after the current generation's checkpoint, which a line on
+/// stderr acknowledges; a second signal ends the process at once (exit 130).
 pub fn ctrl_c_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
     // a second handler cannot be installed; the first one (this process's only run) stands
     let _ = ctrlc::set_handler(move || {
         if f.swap(true, Ordering::SeqCst) {
-            let _ = writeln!(std::io::stderr(), "\nctrl-c again: stopped now (the last checkpoint resumes the run)");
+            let _ = writeln!(
+                std::io::stderr(),
+                "\nctrl-c (or TERM/HUP) again: stopped now (the last checkpoint resumes the run)"
+            );
             std::process::exit(130);
         }
         let _ = writeln!(
             std::io::stderr(),
-            "\nctrl-c: stopping after this generation's checkpoint (ctrl-c again to stop now; the last checkpoint resumes the run)"
+            "\nctrl-c (or TERM/HUP): stopping after this generation's checkpoint (again to stop now; the last checkpoint resumes the run)"
         );
     });
     flag

@@ -2,8 +2,10 @@
 //! (shared with `simulate`).
 
 use anyhow::Result;
-use gripopt::eval::{EvalOptions, FreeSceneRecord, GraspRecord, ImpactRecord, WorkRecord};
-use gripopt::params::{fmt_num, Design, Problem};
+use gripopt::app::{
+    fmt_num, Design, FreeSceneRecord, GraspRecord, ImpactRecord, KinematicsRecord, Problem, Stages, StaticsRecord,
+    WorkRecord,
+};
 
 /// A value scaled, to `prec` decimals, or "—".
 pub fn opt(v: Option<f64>, scale: f64, prec: usize) -> String {
@@ -42,22 +44,52 @@ pub fn yes_no(v: Option<bool>) -> &'static str {
 
 /// `gripopt evaluate`.
 pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Result<()> {
-    let opts = if static_only { EvalOptions::statics_only() } else { EvalOptions::full(p) };
-    // a robust problem: the robust evaluation over every object and scenario; otherwise the
-    // single pipeline, with progress on stderr when the grasp simulation takes long
-    let rec = match gripopt::eval::RobustSetup::of(p) {
-        Some(setup) if opts.dynamics => gripopt::eval::evaluate_record(p, x, &opts, Some(&setup)),
-        _ => {
-            let ev = gripopt::eval::evaluate_into(x, &p.scene, &opts, &mut crate::cli::watch::Watch::new(false, false));
-            gripopt::eval::Record::from_eval(&ev)
-        }
-    };
+    let stages = Stages::of(static_only);
+    // the problem's study (a robust problem's objects and scenarios, or its one object in
+    // its scene), with progress on stderr when a simulation takes long
+    let rec = gripopt::app::evaluate_into(p, x, stages, &mut crate::cli::watch::Watch::new(false, false));
     if json {
-        let v = gripopt::EvaluationRecord::new(&rec, p.solver.method, opts.dynamics);
+        let v = gripopt::app::evaluation_record(p, &rec, stages);
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let (k, r) = (&rec.kinematics, &rec.statics);
+    print_head(p, x, static_only);
+    print_kinematics(p, &rec.kinematics);
+    print_statics(p, &rec.statics);
+    if !static_only {
+        print_dyn(&rec.grasp);
+        if let Some(f) = &rec.free_scene {
+            print_free(f, rec.x_off);
+        }
+    }
+    if let Some(rb) = &rec.robust {
+        out!("{}", gripopt::app::robust_summary(rb));
+    }
+    let v = &rec.verdict;
+    match (&v.failed_stage, &v.reason) {
+        (Some(s), Some(why)) => {
+            let why = with_hint(why, p);
+            let violation = gripopt::app::short_num(v.violation.unwrap_or(0.0), 4);
+            outln!("verdict    DISCARDED at stage {s}: {why} (violation {violation})")
+        }
+        _ => {
+            // the record's objectives: null (—) where not computed, e.g. max_offset of a
+            // design not form closed at the centred object
+            let [m, a, f, t] = rec.objectives();
+            outln!(
+                "verdict    FEASIBLE  objectives: max_offset {} mm, alpha {}, mean force {} N, t_stab {}",
+                opt(m, 1e3, 3),
+                opt(a, 1.0, 5),
+                dec4(f),
+                t.map_or("— (not computed)".to_string(), |t| format!("{t:.6} s"))
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The report's first line: the problem, the design, the method where not the default.
+fn print_head(p: &Problem, x: &Design, static_only: bool) {
     outln!(
         "problem {}  design l21={} b={} t22={} r={} p={} psi={:.3} deg  (l_hand {} m){}",
         crate::cli::out::shown(&p.name),
@@ -75,6 +107,10 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
             format!("  method {}", p.solver.method)
         }
     );
+}
+
+/// Stages 0–1 of a record.
+fn print_kinematics(p: &Problem, k: &KinematicsRecord) {
     outln!("stage 0/1  kinematics");
     outln!("  l11 {} mm  l22 {} mm  l12 {} mm", milli(k.l11), milli(k.l22), milli(k.l12));
     outln!(
@@ -92,6 +128,10 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         opt(k.min_margin_deg, 1.0, 3),
         p.scene.criteria.margin_sing.to_degrees()
     );
+}
+
+/// Stage 2 of a record.
+fn print_statics(p: &Problem, r: &StaticsRecord) {
     outln!("stage 2    statics (centred object, R = {} mm)", p.scene.object.radius * 1e3);
     outln!("  spring torque tau_s0 {} N·m (tau_s^min {})", opt(r.tau_s0, 1.0, 6), opt(r.tau_s_min, 1.0, 6));
     outln!(
@@ -117,35 +157,6 @@ pub fn evaluate(p: &Problem, x: &Design, json: bool, static_only: bool) -> Resul
         milli(r.max_offset),
         r.max_offset_ended_by.as_ref().map(|s| format!(" (scan ended by: {s})")).unwrap_or_default()
     );
-    if !static_only {
-        print_dyn(&rec.grasp);
-        if let Some(f) = &rec.free_scene {
-            print_free(f, rec.x_off);
-        }
-    }
-    if let Some(rb) = &rec.robust {
-        out!("{}", gripopt::eval::robust_summary(rb));
-    }
-    let v = &rec.verdict;
-    match (&v.failed_stage, &v.reason) {
-        (Some(s), Some(why)) => {
-            let why = with_hint(why, p);
-            outln!("verdict    DISCARDED at stage {s}: {why} (violation {:.4})", v.violation.unwrap_or(0.0))
-        }
-        _ => {
-            // the record's objectives: null (—) where not computed, e.g. max_offset of a
-            // design not form closed at the centred object
-            let [m, a, f, t] = rec.objectives();
-            outln!(
-                "verdict    FEASIBLE  objectives: max_offset {} mm, alpha {}, mean force {} N, t_stab {}",
-                opt(m, 1e3, 3),
-                opt(a, 1.0, 5),
-                dec4(f),
-                t.map_or("— (not computed)".to_string(), |t| format!("{t:.6} s"))
-            );
-        }
-    }
-    Ok(())
 }
 
 /// A discard's reason for the text report, with the setting behind it where that is one

@@ -2,12 +2,13 @@
 //! re-simulated, compared with its recording, recorded to MCAP (docs/robust.md).
 
 use anyhow::Result;
+use gripopt::app::NoSuchObject;
 use std::path::Path;
 
 /// Replay the scenario and report it (text or JSON; `--csv`: the free object's poses).
 pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&Path>) -> Result<i32> {
-    let (object, k) = gripopt::run::parse_scenario(arg)?;
-    let r = gripopt::run::replay_scenario(dir, id, &object, k, true)?;
+    let (object, k) = gripopt::app::parse_scenario(arg)?;
+    let r = gripopt::app::replay_scenario(dir, id, &object, k, true)?;
     if let Some(path) = csv {
         let mut s = String::from("t,x,y,z,qw,qx,qy,qz\n");
         for p in &r.poses {
@@ -23,12 +24,8 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
         outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
         let s = &r.scenario;
-        let i = &s.inputs;
         outln!("design {id}, object {object}, scenario {k} of {}", dir.display());
-        outln!(
-            "  inputs: x_off {:.3} mm, height offset {:.3} mm, phalanx friction x{:.3}, ground friction x{:.3}, restitution {:.3}, fill x{:.3}, torque x{:.4}",
-            i.x_off * 1e3, i.height_offset * 1e3, i.mu_phalanx, i.mu_ground, i.restitution, i.fill, i.tau
-        );
+        outln!("  inputs: {}", s.inputs.shown());
         outln!("  outcome: {}", outcome(s));
         match r.verified {
             Some(true) => outln!("  verified: the re-simulation equals the recorded scenario, bit for bit"),
@@ -53,7 +50,7 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
             outln!(
                 "  recorded to {} (open in Foxglove with {})",
                 m.display(),
-                dir.join(gripopt::record::VERIFY_LAYOUT_FILE).display()
+                dir.join(gripopt::app::VERIFY_LAYOUT_FILE).display()
             );
         }
     }
@@ -61,7 +58,7 @@ pub fn replay_scenario(dir: &Path, id: u64, arg: &str, json: bool, csv: Option<&
 }
 
 /// A scenario's outcome in words: stays or why not, and what was measured.
-fn outcome(s: &gripopt::eval::ScenarioRecord) -> String {
+fn outcome(s: &gripopt::app::ScenarioRecord) -> String {
     let mm = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.4} mm", v * 1e3));
     format!(
         "{} (max displacement {}, max tilt {}, t_stab {})",
@@ -73,7 +70,7 @@ fn outcome(s: &gripopt::eval::ScenarioRecord) -> String {
 }
 
 /// The robust objects' names of `p`, comma-separated (empty for a problem without [robust]).
-pub fn object_names(p: &gripopt::params::Problem) -> String {
+pub fn object_names(p: &gripopt::app::Problem) -> String {
     p.robust.iter().flat_map(|r| &r.objects).map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
 }
 
@@ -81,25 +78,23 @@ pub fn object_names(p: &gripopt::params::Problem) -> String {
 /// input error naming the flag when `p` has no [robust] (`without`: what the command does
 /// with the problem's one `[object]` instead) or no object of that name. `export --object`
 /// and `simulate --object`.
-pub fn object_index(p: &gripopt::params::Problem, name: &str, source: &str, without: &str) -> Result<usize> {
-    let found = p.robust.as_ref().and_then(|r| r.objects.iter().position(|o| o.name == name));
+pub fn object_index(p: &gripopt::app::Problem, name: &str, source: &str, without: &str) -> Result<usize> {
     // a name that reads as nothing (empty, blanks, control characters) quoted
-    let name = if name.trim().is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
+    let shown = if name.trim().is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
         format!("\"{}\"", crate::cli::out::shown(name))
     } else {
         name.to_string()
     };
-    if p.robust.is_none() {
-        return Err(gripopt::Error::Input(format!(
-            "--object {name}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which {without}; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
-        ))
-        .into());
-    }
-    found.ok_or_else(|| {
-        gripopt::Error::Input(format!(
-            "--object {name}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
-            object_names(p)
-        ))
-        .into()
+    gripopt::app::object_index(p, name).map_err(|why| {
+        let message = match why {
+            NoSuchObject::NotRobust => format!(
+                "--object {shown}: {source}: the problem is not robust (no [robust] section): it has one object, its [object], which {without}; --object picks one of a robust problem's [[robust.objects]] (docs/robust.md)"
+            ),
+            NoSuchObject::Unknown(names) => format!(
+                "--object {shown}: {source}: no such robust object; the problem's [[robust.objects]] are: {}",
+                names.join(", ")
+            ),
+        };
+        gripopt::Error::Input(message).into()
     })
 }

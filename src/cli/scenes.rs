@@ -2,23 +2,112 @@
 //! one simulation of a design in a scene (the library's), and its report (text, JSON, CSV,
 //! plot), in the same way for every scene.
 
+use crate::cli::args::{check_output, check_rtol, MethodArg};
 use crate::cli::csv_stream::CsvStream;
+use crate::cli::inputs::{design_of, load_problem};
 use crate::cli::report::{dec4, print_dyn, print_free, yes_no};
 use crate::cli::watch::{Streamed, Watch};
 use anyhow::{bail, Context, Result};
-use gripopt::eval::{Record, RobustSetup, SimulationRecord};
-use gripopt::params::{Design, Problem, SceneKind};
-use gripopt::sim::{Controls, Integration, Method, SceneSpec};
-use gripopt::{Column, POSE_COLUMNS};
+use gripopt::app::{
+    Column, Design, Method, Problem, Record, ReplayInScene, SceneChoice, SimulateRequest, SimulationRecord,
+    POSE_COLUMNS,
+};
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// `centred`, `offset:X` or `free[:X]` (metres; the library's [`gripopt::parse_scene`]) applied to the `[scene]` of problem `p`, read
+/// `centred`, `offset:X` or `free[:X]` (metres; the library's [`SceneChoice::parse`]) applied to the `[scene]` of problem `p`, read
 /// from `from` (checked by the library as a problem file's would be: the free scene needs
 /// g_eq = 0; an error names `from` and the flag).
 pub fn apply_scene(p: &Problem, from: &Path, arg: &str) -> Result<Problem> {
-    let (kind, x_off) = gripopt::parse_scene(arg).context("--scene")?;
-    Ok(p.in_scene(kind, x_off, Path::new(&format!("{} with --scene {arg}", from.display())))?)
+    let scene = SceneChoice::parse(arg).context("--scene")?;
+    Ok(p.in_scene(scene, Path::new(&format!("{} with --scene {arg}", from.display())))?)
+}
+
+/// Arguments of `gripopt simulate`.
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// Problem file (TOML).
+    pub problem: PathBuf,
+    /// Design as l21=..,b=..,t22=..,r=..,p=..,psi_deg=.. (default: the problem's nominal).
+    #[arg(long)]
+    pub design: Option<String>,
+    /// Relative tolerance (default: the problem's solver.rtol).
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Integration method (default: the problem's solver.method; absent there, the default
+    /// solver: auto with the default's tolerance scaling). A method given here takes the
+    /// tolerances as given.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Scene (MODEL.md §14): centred, offset:X or free[:X] (metres; default: the problem's [scene]).
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// A robust problem's object ([[robust.objects]] name) to grasp instead of the
+    /// reference [object]: its cylinder and grip torque, the spring sized at [hand] tau.
+    #[arg(long)]
+    pub object: Option<String>,
+    /// Print the evaluation record (stages 0–3, verdict, scene, method) as one JSON
+    /// object (docs/outputs.md).
+    #[arg(long)]
+    pub json: bool,
+    /// Write the trajectory (accepted steps and events) to this CSV file.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Close the finger on nothing (contacts off): shows where the linkage itself goes,
+    /// e.g. into a parallel singularity.
+    #[arg(long)]
+    pub no_contact: bool,
+    /// Print every located event to stderr.
+    #[arg(long)]
+    pub trace: bool,
+    /// Plot the grasp (joint angles, contact forces, raw and filtered hand force) to this SVG file.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Overwrite the --csv / --plot files if they exist (refused otherwise).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `gripopt simulate`: the outputs checked (never over an input: the problem file and a
+/// robust problem's object files), the scene and object applied, then the simulation.
+pub fn run(a: SimulateArgs) -> Result<()> {
+    let (csv, plot, force) = (a.csv.as_deref(), a.plot.as_deref(), a.force);
+    check_output("--csv", csv, force, &[&a.problem])?;
+    check_output("--plot", plot, force, &[&a.problem])?;
+    let mut p = load_problem(&a.problem)?;
+    // the robust objects' files are inputs too
+    let objects = p.object_files(&a.problem);
+    let inputs: Vec<&Path> = objects.iter().map(|f| f.as_path()).collect();
+    check_output("--csv", csv, force, &inputs)?;
+    check_output("--plot", plot, force, &inputs)?;
+    if let Some(sc) = &a.scene {
+        p = apply_scene(&p, &a.problem, sc)?;
+    }
+    let without = "simulate runs without --object";
+    if let Some(name) = &a.object {
+        super::robust::object_index(&p, name, &a.problem.display().to_string(), without)?;
+    }
+    if p.robust.is_some() && a.object.is_none() {
+        // as export and sweep say it; stderr, so that --json stays one JSON object
+        eprintln!(
+            "note: {} has [robust]: simulate runs the reference [object] only, not the robust objects or scenarios; --object NAME simulates the design on one of its objects ({}) (docs/robust.md)",
+            a.problem.display(),
+            super::robust::object_names(&p)
+        );
+    }
+    let x = design_of(&p, &a.design)?;
+    let o = SimulateOpts {
+        rtol: check_rtol(a.rtol)?,
+        method: a.method.map(MethodArg::to_method),
+        object: a.object.clone(),
+        contacts: !a.no_contact,
+        trace: a.trace,
+        json: a.json,
+        csv,
+        plot,
+        replay: None,
+    };
+    simulate_on(&p, &x, &o).with_context(|| format!("simulating {}", a.problem.display()))
 }
 
 /// How `simulate` (and `replay --scene`) runs a design and reports it.
@@ -27,6 +116,9 @@ pub struct SimulateOpts<'a> {
     pub rtol: Option<f64>,
     /// Integration method (None: the problem's `solver.method`).
     pub method: Option<Method>,
+    /// One of a robust problem's objects by name (`--object`, checked; None: the reference
+    /// `[object]`).
+    pub object: Option<String>,
     /// Contacts with the object (centred scene; false: the linkage alone).
     pub contacts: bool,
     /// Print every located event to stderr.
@@ -41,94 +133,53 @@ pub struct SimulateOpts<'a> {
     pub replay: Option<ReplayInScene>,
 }
 
-/// One of a robust problem's objects, picked by `simulate --object NAME`: the problem's
-/// robust setup and the object's index in it.
-pub struct PickedObject {
-    /// The problem's robust setup (the object's nominal scene, the spring's sizing scene).
-    pub setup: RobustSetup,
-    /// The object's index.
-    pub index: usize,
-}
-
-impl PickedObject {
-    /// `--object NAME` of problem `p` (from `source`): an input error naming the flag when `p`
-    /// has no [robust] or no object of that name.
-    pub fn of(p: &Problem, name: &str, source: &Path) -> Result<Self> {
-        let without = "simulate runs without --object";
-        let index = super::robust::object_index(p, name, &source.display().to_string(), without)?;
-        let setup = RobustSetup::of(p).ok_or_else(|| anyhow::anyhow!("--object {name}: no robust setup"))?;
-        Ok(PickedObject { setup, index })
-    }
-
-    /// The object's name.
-    pub fn name(&self) -> &str {
-        &self.setup.spec.objects[self.index].name
-    }
-}
-
-/// `gripopt simulate`: the diagnostic simulation of design `x` in the problem's scene.
-pub fn simulate_in_scene(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
-    simulate_on(p, x, None, o)
-}
-
 /// `gripopt simulate [--object NAME]`: the diagnostic simulation of design `x` in the
-/// problem's scene, on the reference `[object]` or on one of the robust objects (`object`:
-/// its cylinder and grip torque, the spring sized at `[hand] tau`, as the robust evaluation's
-/// stage 2 has them).
-pub fn simulate_on(p: &Problem, x: &Design, object: Option<&PickedObject>, o: &SimulateOpts<'_>) -> Result<()> {
+/// problem's scene, on the reference `[object]` or on one of the robust objects (its
+/// cylinder and grip torque, the spring sized at `[hand] tau`, as the robust evaluation's
+/// stage 2 has them): the library's simulation, reported here.
+pub fn simulate_on(p: &Problem, x: &Design, o: &SimulateOpts<'_>) -> Result<()> {
     let kind = p.scene.setup.kind;
-    if o.plot.is_some() && kind == SceneKind::Free {
+    if o.plot.is_some() && kind.is_free() {
         bail!("--plot: the free scene is not plotted (use --csv for its poses)");
     }
-    if !o.contacts && kind != SceneKind::Centred {
+    if !o.contacts && !kind.runs_without_contacts() {
         bail!("--no-contact: only the centred scene runs without contacts (the {kind} scene needs the object)");
     }
     let method = o.method.unwrap_or(p.solver.method);
     if let Err(rule) = method.check_atol(p.solver.atol) {
-        let atol = gripopt::params::fmt_num(p.solver.atol);
+        let atol = gripopt::app::fmt_num(p.solver.atol);
         bail!("--method {method}: the problem's solver.atol {atol}: {rule}");
     }
-    let integ =
-        Integration::new(o.rtol.unwrap_or(p.solver.rtol), p.solver.atol, p.solver.max_steps).with_method(method);
-    let ctl = Controls { contacts: o.contacts, ..Controls::DIAGNOSTIC };
-    let spec = SceneSpec::of(&p.scene.setup);
     // the samples kept only for a plot, streamed to the CSV; progress on stderr when it takes long
     let mut watch = Watch::new(o.plot.is_some(), o.trace);
-    watch.csv = match (o.csv, kind) {
-        (None, _) => None,
-        (Some(path), SceneKind::Free) => Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?)),
-        (Some(path), _) => {
+    watch.csv = match o.csv {
+        None => None,
+        Some(path) if kind.is_free() => Some(Streamed::Poses(CsvStream::create(path, POSES_TITLE, &POSE_COLUMNS)?)),
+        Some(path) => {
             // the offset scene's finger 2 moves on its own: its columns after finger 1's
-            let finger2 = kind == SceneKind::Offset;
-            let columns = gripopt::trajectory_columns(finger2);
+            let finger2 = kind.has_finger2();
+            let columns = gripopt::app::trajectory_columns(finger2);
             let title = if finger2 { SAMPLES_TITLE_OFFSET } else { SAMPLES_TITLE };
             Some(Streamed::Samples(CsvStream::create(path, title, &columns)?, finger2))
         }
     };
-    let ev = match object {
-        Some(ob) => gripopt::eval::simulate_object(x, &ob.setup, ob.index, &spec, &integ, &ctl, &mut watch),
-        None => gripopt::eval::simulate(x, &p.scene, &spec, &integ, &ctl, &mut watch),
-    };
+    let req =
+        SimulateRequest { scene: None, object: o.object.clone(), rtol: o.rtol, method: o.method, contacts: o.contacts };
+    let simulated = gripopt::app::simulate_into(p, x, &req, &mut watch);
     let (traj, csv) = (std::mem::take(&mut watch.traj), watch.csv.take());
     drop(watch);
-    if ev.scene.is_none() {
-        let d = ev.discard.expect("a design without statics was discarded");
-        bail!("the design is discarded at stage {} ({}); the grasp needs stages 0–2", d.stage, d.reason);
-    }
-    let record = Record::from_eval(&ev);
+    let s = simulated?;
     let rows = csv.map(|c| c.into_stream().finish()).transpose()?;
     if let Some(path) = o.plot {
         let title = format!("{}: grasp", p.name);
-        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::run::grasp_plot(tmp, &title, &traj.samples)?))?;
+        crate::cli::out::write_file_with(path, |tmp| Ok(gripopt::app::grasp_plot(tmp, &title, &traj.samples)?))?;
     }
     if o.json {
-        let object = object.map(PickedObject::name);
-        let v =
-            SimulateJson { object, rtol: o.rtol, sim: SimulationRecord { record, method }, replay: o.replay.as_ref() };
+        let v = SimulateJson { object: s.object.as_deref(), rtol: o.rtol, sim: s.record, replay: o.replay.as_ref() };
         outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    print_simulation(p, object.map(PickedObject::name), &record, method, integ.rtol);
+    print_simulation(p, s.object.as_deref(), &s.record.record, s.record.method, s.rtol);
     if let (Some(n), Some(path)) = (rows, o.csv) {
         outln!("trajectory: {n} samples written to {}", crate::cli::out::path(path));
     }
@@ -161,7 +212,7 @@ fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Metho
         method.as_str()
     );
     let g = &r.grasp;
-    if kind == SceneKind::Free {
+    if kind.is_free() {
         outln!("centred grasp (the criteria's prediction):");
     }
     print_dyn(g);
@@ -186,7 +237,7 @@ fn print_simulation(p: &Problem, object: Option<&str>, r: &Record, method: Metho
         print_free(f, r.x_off);
     }
     match &r.verdict.reason {
-        None => outln!("verdict    {}", if kind == SceneKind::Free { "the object barely moves" } else { "stable" }),
+        None => outln!("verdict    {}", kind.passing_words()),
         Some(why) => outln!("verdict    DISCARDED at stage 3: {}", crate::cli::report::with_hint(why, p)),
     }
 }
@@ -209,7 +260,7 @@ fn csv_head(title: &str, columns: &[Column]) -> String {
 pub fn write_samples_csv(
     path: &Path,
     title: &str,
-    samples: &[gripopt::sim::Sample],
+    samples: &[gripopt::app::Sample],
     fmt: fn(f64) -> String,
 ) -> Result<()> {
     // finger 2's columns where recorded (an offset run's; NaN where an older gripopt left some out)
@@ -222,41 +273,6 @@ pub fn write_samples_csv(
     }
     w.push('\n');
     crate::cli::out::write_file(path, w.as_bytes())
-}
-
-/// A scene as `--scene` spells it (`centred`, `offset:X`, `free:X`).
-fn scene_name(p: &Problem) -> String {
-    match p.scene.setup.kind {
-        SceneKind::Centred => "centred".into(),
-        k => format!("{k}:{}", p.scene.setup.x_off),
-    }
-}
-
-/// What `replay --scene` adds to `simulate --json`: where the design came from, and that a
-/// different scene cannot be verified.
-#[derive(Debug, Serialize)]
-pub struct ReplayInScene {
-    /// The run, design and shard.
-    pub replay: ReplaySource,
-    /// Always null: nothing was compared.
-    pub verified: Option<bool>,
-    /// Why.
-    pub note: String,
-}
-
-/// Where a replayed design came from.
-#[derive(Debug, Serialize)]
-pub struct ReplaySource {
-    /// The run folder.
-    pub run_dir: String,
-    /// The design id.
-    pub design: u64,
-    /// The shard it was read from.
-    pub file: String,
-    /// The run's scene.
-    pub recorded_scene: String,
-    /// The scene simulated.
-    pub scene: String,
 }
 
 /// `gripopt replay RUN_DIR --design ID --scene S`. When S is the run's own scene (its
@@ -272,38 +288,27 @@ pub fn replay_in_scene(
     csv: Option<&Path>,
     plot: Option<&Path>,
 ) -> Result<Option<i32>> {
-    let folder = gripopt::run::RunFolder::open(dir)?;
-    let run_problem = folder.problem()?;
-    let p = apply_scene(&run_problem, &dir.join("problem.toml"), scene)?;
-    let (ran, recorded) = (scene_name(&p), scene_name(&run_problem));
-    let (a, b) = (&p.scene.setup, &run_problem.scene.setup);
-    // numerically: free:-0 is the run's free:0
-    if a.kind == b.kind && (a.kind == SceneKind::Centred || a.x_off == b.x_off) {
+    let choice = SceneChoice::parse(scene).context("--scene")?;
+    let label = format!("{} with --scene {scene}", dir.join("problem.toml").display());
+    let Some(d) = gripopt::app::design_in_scene(dir, id, choice, Path::new(&label))? else {
         return Ok(None);
-    }
-    let rec = folder.design(id)?;
-    let x = rec.design();
-    let note = format!(
-        "design {id} of {} re-simulated in the {ran} scene; the run recorded the {recorded} scene, so a different scene cannot be verified against the recording (nothing compared)",
-        crate::cli::out::path(dir)
-    );
-    if !json {
-        outln!("{note}");
-    }
-    let replay = ReplayInScene {
-        replay: ReplaySource {
-            run_dir: dir.display().to_string(),
-            design: id,
-            file: rec.file.display().to_string(),
-            recorded_scene: recorded,
-            scene: ran.clone(),
-        },
-        verified: None,
-        note,
     };
-    let o =
-        SimulateOpts { rtol: None, method: None, contacts: true, trace: false, json, csv, plot, replay: Some(replay) };
-    simulate_in_scene(&p, &x, &o)
+    if !json {
+        outln!("{}", d.replay.note);
+    }
+    let ran = d.replay.replay.scene.clone();
+    let o = SimulateOpts {
+        rtol: None,
+        method: None,
+        object: None,
+        contacts: true,
+        trace: false,
+        json,
+        csv,
+        plot,
+        replay: Some(d.replay),
+    };
+    simulate_on(&d.problem, &d.design, &o)
         .with_context(|| format!("replaying design {id} of {} in the {ran} scene", dir.display()))?;
     Ok(Some(0))
 }

@@ -5,11 +5,11 @@
 //! typed (they are rewritten every generation, so a running run can be shown too).
 
 use crate::cli::out::path as quoted;
-use anyhow::{bail, Result};
-use gripopt::run::{CheckpointTables, DesignRow, RunFolder, RunInfo, RunState, DESIGN_COLUMNS};
+use anyhow::Result;
+use gripopt::app::{DesignRow, DesignView, RunInfo, RunState, RunView, ShowRequest, DESIGN_COLUMNS, OBJECTIVES};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `gripopt show`.
 #[derive(clap::Args)]
@@ -32,10 +32,6 @@ pub struct ShowArgs {
     /// One JSON object: the run's status and the designs, with units.
     #[arg(long)]
     pub(crate) json: bool,
-}
-
-fn unit(name: &str) -> &'static str {
-    DESIGN_COLUMNS.iter().find(|c| c.0 == name).map(|c| c.1).or_else(|| gripopt::run::robust_unit(name)).unwrap_or("")
 }
 
 /// A design as `show --json` lists it: its row's columns in the file's order (`reason` as
@@ -128,265 +124,197 @@ fn state_text(state: RunState, info: &RunInfo, dir: &std::path::Path, resumable:
     }
 }
 
-/// The objective `name` of a row.
-fn objective(r: &DesignRow, name: &str) -> Option<f64> {
-    match name {
-        "max_offset" => r.max_offset,
-        "alpha" => r.alpha,
-        "mean_force" => r.mean_force,
-        _ => r.t_stab,
-    }
+fn unit(name: &str) -> &'static str {
+    DESIGN_COLUMNS.iter().find(|c| c.0 == name).map(|c| c.1).or_else(|| gripopt::app::robust_unit(name)).unwrap_or("")
 }
 
-/// Design `id` and the table it is in: the checkpoint's front, archive or population (or,
-/// before the first checkpoint, the views pareto.csv, archive.csv, population.csv).
-fn find_design(
-    folder: &RunFolder,
-    tables: Option<&CheckpointTables>,
-    id: u64,
-) -> Result<Option<(DesignRow, &'static str)>> {
-    if let Some(t) = tables {
-        let found = [("pareto.csv", &t.front), ("archive.csv", &t.archive), ("population.csv", &t.population)]
-            .into_iter()
-            .find_map(|(f, rows)| rows.iter().find(|r| r.id == id).map(|r| (r.clone(), f)));
-        return Ok(found);
-    }
-    for (f, read) in [
-        ("pareto.csv", RunFolder::front as fn(&RunFolder) -> gripopt::Result<Vec<DesignRow>>),
-        ("archive.csv", RunFolder::archive),
-        ("population.csv", RunFolder::population),
-    ] {
-        // a file not written (yet) is skipped; a damaged one is an error
-        if !folder.dir().join(f).exists() {
-            continue;
-        }
-        if let Some(row) = read(folder)?.into_iter().find(|r| r.id == id) {
-            return Ok(Some((row, f)));
-        }
-    }
-    Ok(None)
+/// The replay command of design `id` of the run in `dir` (None: the run recorded nothing).
+fn replay_command(dir: &Path, recorded: bool, id: u64) -> Option<String> {
+    recorded.then(|| format!("gripopt replay {} --design {id}", quoted(dir)))
 }
+
+/// Said of a run that recorded nothing.
+const NOT_RECORDED: &str = "not recorded (run.json: the run was started with `--record none`), nothing to replay";
 
 /// `gripopt show`.
 pub fn run(a: ShowArgs) -> Result<()> {
-    let dir = &a.run_dir;
-    let objectives = [("max_offset", true), ("alpha", false), ("mean_force", true), ("t_stab", false)];
-    let Some(&(obj, maximise)) = objectives.iter().find(|o| o.0 == a.best) else {
-        bail!("--best {}: expected one of max_offset, alpha, mean_force, t_stab", a.best);
-    };
-    let folder = RunFolder::open(dir)?;
-    let file = if a.archive { "archive.csv" } else { "pareto.csv" };
-    let run = folder.info()?;
-    // a run recorded nothing (`--record none`): no design can be replayed
-    let replay = |id: u64| run.recording.enabled.then(|| format!("gripopt replay {} --design {id}", quoted(dir)));
-    let not_recorded = "not recorded (run.json: the run was started with `--record none`), nothing to replay";
-    // the designs of the run's state (its checkpoint), not the views a user may replace
-    let tables = folder.checkpoint_tables()?;
-    let mut warnings: Vec<String> = vec![];
-    if let Some(m) = tables.as_ref().and_then(|t| t.run_json_mismatch.as_ref()) {
-        warnings.push(format!("run.json {m}"));
-    }
-    if tables.is_none() && run.completed_generations > 0 {
-        warnings.push(format!(
-            "checkpoint.json is missing, but run.json records {} completed generations: the designs shown are the views' (pareto.csv, archive.csv), unchecked; restore checkpoint.json (e.g. from a backup)",
-            run.completed_generations
-        ));
-    }
+    let req = ShowRequest { best: a.best.clone(), archive: a.archive, limit: a.limit };
+    // the objective first, whatever is shown
+    gripopt::app::objective_named(&req.best)?;
     if let Some(id) = a.design {
-        let Some((row, f)) = find_design(&folder, tables.as_ref(), id)? else {
-            // ids are 0, 1, … in the order of evaluation: one the run never had is no older
-            // design, and replay would not find it either
-            let n = run.evaluations;
-            if id >= n {
-                let ids = if n == 0 {
-                    "it has evaluated no design yet".to_string()
-                } else {
-                    format!("its ids are 0 to {}", n - 1)
-                };
-                bail!(
-                    "--design {id}: the run {} has no design {id}: {ids} (run.json: {n} evaluations at its last checkpoint)",
-                    quoted(dir)
-                );
-            }
-            let older = match replay(id) {
-                Some(r) => format!("older designs: `{r}`"),
-                None => "older designs are not kept: the run was not recorded".into(),
-            };
-            bail!("--design {id}: not in pareto.csv, archive.csv or population.csv of {} ({older})", quoted(dir))
-        };
-        for w in &warnings {
+        let d = gripopt::app::show_design(&a.run_dir, id)?;
+        for w in &d.warnings {
             eprintln!("warning: {w}");
         }
-        let cells = row.text_cells();
-        if a.json {
-            let mut m: BTreeMap<String, serde_json::Value> = BTreeMap::new();
-            if let serde_json::Value::Object(values) = serde_json::to_value(&row)? {
-                for (k, value) in values {
-                    let u = unit(&k);
-                    m.insert(k, serde_json::to_value(WithUnit { value, unit: u })?);
-                }
-            }
-            m.insert("file".into(), f.into());
-            m.insert("replay".into(), replay(id).into());
-            outln!("{}", serde_json::to_string_pretty(&m)?);
-        } else {
-            // before the first checkpoint the views themselves; then the checkpoint, which
-            // they show
-            let from = if tables.is_some() { format!("the checkpoint, as in {f}") } else { f.to_string() };
-            outln!("design {id} (from {from})");
-            for (k, v) in &cells {
-                let u = unit(k);
-                let u = if matches!(u, "-" | "text" | "bool") { String::new() } else { format!(" {u}") };
-                outln!("  {k:<14} {}{u}", if v.is_empty() { "—" } else { v });
-            }
-            outln!("  replay: {}", replay(id).as_deref().unwrap_or(not_recorded));
-        }
-        return Ok(());
+        return if a.json { design_json(&a.run_dir, &d) } else { design_text(&a.run_dir, &d) };
     }
-    let state = folder.state()?;
-    let resumable = folder.resumable()?;
-    // a verify.csv that cannot be read (a pipe, a folder, a damaged `# run:` line) is a
-    // warning: the run itself is shown
-    let verified = folder.verified_generation().unwrap_or_else(|e| {
-        warnings.push(format!("not read: {e}"));
-        None
-    });
-    let verify_current =
-        |v: &gripopt::run::VerifiedGeneration| run.checkpoint_sha256.as_deref() == Some(&v.checkpoint_sha256);
-    let why_none = run.discards.explain();
-    // a run killed in its first generation has no table yet
-    let none_yet = tables.is_none() && run.completed_generations == 0 && !dir.join(file).exists();
-    let mut rows = match (&tables, none_yet, a.archive) {
-        (Some(t), ..) => {
-            let rows = if a.archive { t.archive.clone() } else { t.front.clone() };
-            // a running run's views follow its checkpoints at their own pace
-            if !matches!(state, RunState::Running(_)) {
-                warnings.extend(folder.view_differs(file, &rows, t.generation)?);
-            }
-            rows
-        }
-        (None, true, _) => vec![],
-        (None, false, true) => folder.archive()?,
-        (None, false, false) => folder.front()?,
-    };
-    rows.sort_by(|x, y| {
-        // designs without the value go last, whichever way the objective is better
-        let (a, b) = (objective(x, obj).filter(|v| !v.is_nan()), objective(y, obj).filter(|v| !v.is_nan()));
-        let o = match (a, b) {
-            (Some(a), Some(b)) if maximise => b.total_cmp(&a),
-            (Some(a), Some(b)) => a.total_cmp(&b),
-            (Some(_), None) => std::cmp::Ordering::Less,
-            (None, Some(_)) => std::cmp::Ordering::Greater,
-            (None, None) => std::cmp::Ordering::Equal,
-        };
-        o.then_with(|| x.id.cmp(&y.id))
-    });
-    if a.limit > 0 {
-        rows.truncate(a.limit);
-    }
+    let v = gripopt::app::show_run(&a.run_dir, &req)?;
     if a.json {
-        let v = ShowJson {
-            run_dir: dir.display().to_string(),
-            status: state.word(),
-            pid: match state {
-                RunState::Running(pid) => pid,
-                _ => None,
-            },
-            resumable,
-            completed_generations: run.completed_generations,
-            generations: run.generations,
-            evaluations: run.evaluations,
-            no_feasible_design: why_none,
-            verify: verified.as_ref().map(|v| VerifyJson { generation: v.generation, current: verify_current(v) }),
-            warnings,
-            source: if tables.is_some() { "checkpoint.json" } else { file },
-            file,
-            sorted_by: obj,
-            direction: if maximise { "maximise" } else { "minimise" },
-            units: DESIGN_COLUMNS
-                .iter()
-                .map(|c| (c.0.to_string(), c.1))
-                .chain(rows.first().map(|r| r.robust.columns()).unwrap_or_default())
-                .collect(),
-            designs: rows.iter().map(|r| Shown { row: r, replay: replay(r.id) }).collect(),
-        };
-        outln!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
+        return run_json(&a.run_dir, &v);
     }
-    outln!("{}: {}", quoted(dir), state_text(state, &run, dir, resumable));
-    for w in &warnings {
+    run_text(&a.run_dir, &v, a.archive);
+    Ok(())
+}
+
+/// `show --design ID --json`: every column with its unit, the table it is in, its replay.
+fn design_json(dir: &Path, d: &DesignView) -> Result<()> {
+    let mut m: BTreeMap<String, serde_json::Value> = BTreeMap::new();
+    if let serde_json::Value::Object(values) = serde_json::to_value(&d.row)? {
+        for (k, value) in values {
+            let u = unit(&k);
+            m.insert(k, serde_json::to_value(WithUnit { value, unit: u })?);
+        }
+    }
+    m.insert("file".into(), d.file.into());
+    m.insert("replay".into(), replay_command(dir, d.recorded, d.row.id).into());
+    outln!("{}", serde_json::to_string_pretty(&m)?);
+    Ok(())
+}
+
+/// `show --design ID`: every column with its unit, and its replay.
+fn design_text(dir: &Path, d: &DesignView) -> Result<()> {
+    // before the first checkpoint the views themselves; then the checkpoint, which they show
+    let from = if d.from_checkpoint { format!("the checkpoint, as in {}", d.file) } else { d.file.to_string() };
+    outln!("design {} (from {from})", d.row.id);
+    for (k, v) in &d.row.text_cells() {
+        let u = unit(k);
+        let u = if matches!(u, "-" | "text" | "bool") { String::new() } else { format!(" {u}") };
+        outln!("  {k:<14} {}{u}", if v.is_empty() { "—" } else { v });
+    }
+    outln!("  replay: {}", replay_command(dir, d.recorded, d.row.id).as_deref().unwrap_or(NOT_RECORDED));
+    Ok(())
+}
+
+/// `show --json`.
+fn run_json(dir: &Path, v: &RunView) -> Result<()> {
+    let recorded = v.info.recording.enabled;
+    let j = ShowJson {
+        run_dir: dir.display().to_string(),
+        status: v.state.word(),
+        pid: match v.state {
+            RunState::Running(pid) => pid,
+            _ => None,
+        },
+        resumable: v.resumable,
+        completed_generations: v.info.completed_generations,
+        generations: v.info.generations,
+        evaluations: v.info.evaluations,
+        no_feasible_design: v.no_feasible.clone(),
+        verify: v.verified.as_ref().map(|(g, current)| VerifyJson { generation: g.generation, current: *current }),
+        warnings: v.warnings.clone(),
+        source: if v.checkpoint_generation.is_some() { "checkpoint.json" } else { v.file },
+        file: v.file,
+        sorted_by: v.best.name,
+        direction: v.best.sense.word(),
+        units: DESIGN_COLUMNS
+            .iter()
+            .map(|c| (c.0.to_string(), c.1))
+            .chain(v.rows.first().map(|r| r.robust.columns()).unwrap_or_default())
+            .collect(),
+        designs: v.rows.iter().map(|r| Shown { row: r, replay: replay_command(dir, recorded, r.id) }).collect(),
+    };
+    outln!("{}", serde_json::to_string_pretty(&j)?);
+    Ok(())
+}
+
+/// `show`: the run's state, what does not agree, what verify checked, then its designs.
+fn run_text(dir: &Path, v: &RunView, archive: bool) {
+    outln!("{}: {}", quoted(dir), state_text(v.state, &v.info, dir, v.resumable));
+    for w in &v.warnings {
         outln!("warning: {w}");
     }
-    if let Some(v) = &verified {
-        let file = folder.verify_file().unwrap_or("verify.csv");
-        if verify_current(v) {
-            outln!("{file}: generation {}'s front (the run's current state)", v.generation);
+    if let Some((g, current)) = &v.verified {
+        if *current {
+            outln!("{}: generation {}'s front (the run's current state)", v.verify_file, g.generation);
         } else {
             outln!(
-                "{file}: generation {}'s front; the run has changed since (now {} generations): run `gripopt verify {}` again",
-                v.generation,
-                run.completed_generations,
+                "{}: generation {}'s front; the run has changed since (now {} generations): run `gripopt verify {}` again",
+                v.verify_file,
+                g.generation,
+                v.info.completed_generations,
                 quoted(dir)
             );
         }
     }
-    if none_yet {
+    if v.none_yet {
         outln!("no generation completed yet");
-        return Ok(());
+        return;
     }
-    if rows.is_empty() {
-        // the run's step budget, for an aborted simulation's line
-        let max_steps = folder.problem().ok().map(|p| p.solver.max_steps);
-        for l in why_none.iter().flatten() {
-            outln!("{}", crate::cli::report::with_steps_hint(l, max_steps));
+    if v.rows.is_empty() {
+        for l in v.no_feasible.iter().flatten() {
+            outln!("{}", crate::cli::report::with_steps_hint(l, v.max_steps));
         }
     }
-    let of = match (&tables, warnings.is_empty()) {
-        (Some(t), false) => {
-            format!("checkpoint.json's {} (generation {})", if a.archive { "archive" } else { "front" }, t.generation)
-        }
-        _ => file.to_string(),
+    let of = match (v.checkpoint_generation, v.warnings.is_empty()) {
+        (Some(g), false) => format!("checkpoint.json's {} (generation {g})", if archive { "archive" } else { "front" }),
+        _ => v.file.to_string(),
     };
     outln!(
-        "{} of {of}, sorted by {obj} ({}), best first",
-        gripopt::run::counted(rows.len() as u64, "design", "designs"),
-        if maximise { "higher is better" } else { "lower is better" }
+        "{} of {of}, sorted by {} ({} is better), best first",
+        gripopt::app::counted(v.rows.len() as u64, "design", "designs"),
+        v.best.name,
+        v.best.sense.better()
     );
-    if !run.recording.enabled {
-        outln!("replay: {not_recorded}");
+    if !v.info.recording.enabled {
+        outln!("replay: {NOT_RECORDED}");
     }
-    let shown = ["id", "max_offset", "alpha", "mean_force", "t_stab", "l21", "b", "t22", "r", "p", "psi_deg"];
-    let label = |n: &str| match n {
-        "max_offset" => "max_offset mm".to_string(),
-        "t_stab" => "t_stab ms".to_string(),
-        "mean_force" => "mean_force N".to_string(),
-        "psi_deg" => "psi deg".to_string(),
-        "l21" | "b" | "t22" => format!("{n} mm"),
-        _ => n.to_string(),
-    };
-    let line: Vec<String> = shown.iter().map(|n| format!(" {:>13}", label(n))).collect();
-    let replay_head = if run.recording.enabled { "  replay" } else { "" };
-    outln!("{}{replay_head}", line.join(""));
-    for r in &rows {
-        let x = r.parameters();
-        let values = [None, r.max_offset, r.alpha, r.mean_force, r.t_stab, Some(x[0]), Some(x[1]), Some(x[2])];
-        let values = values.into_iter().chain([Some(x[3]), Some(x[4]), Some(x[5])]);
-        let cells: Vec<String> = shown
-            .iter()
-            .zip(values)
-            .map(|(n, v)| {
-                let scale = match *n {
-                    "max_offset" | "t_stab" | "l21" | "b" | "t22" => 1e3,
-                    _ => 1.0,
-                };
-                match v {
-                    None if *n == "id" => format!(" {:>13}", r.id),
-                    // small values (alpha near isotropy) keep their significant digits
-                    Some(x) if x != 0.0 && (x * scale).abs() < 1e-3 => format!(" {:>13.4e}", x * scale),
-                    Some(x) => format!(" {:>13.5}", x * scale),
-                    None => format!(" {:>13}", "—"),
-                }
-            })
+    designs_table(dir, v);
+}
+
+/// A shown column: its label, where its value is in a row (an objective or a design
+/// variable, by index) and the factor to the shown unit.
+struct TableColumn {
+    label: String,
+    objective: bool,
+    index: usize,
+    scale: f64,
+}
+
+impl TableColumn {
+    fn value(&self, r: &DesignRow) -> Option<f64> {
+        if self.objective {
+            gripopt::app::row_objectives(r)[self.index]
+        } else {
+            Some(r.parameters()[self.index])
+        }
+    }
+}
+
+/// The table's columns after the id: the objectives (labels and display units of
+/// [`gripopt::app::OBJECTIVES`]), then the design (lengths in mm, ψ in degrees).
+fn table_columns() -> Vec<TableColumn> {
+    let objectives = OBJECTIVES.iter().enumerate().map(|(index, o)| {
+        let (unit, scale) = o.shown;
+        let label = if unit == "-" { o.name.to_string() } else { format!("{} {unit}", o.name) };
+        TableColumn { label, objective: true, index, scale }
+    });
+    let design = [("l21 mm", 1e3), ("b mm", 1e3), ("t22 mm", 1e3), ("r", 1.0), ("p", 1.0), ("psi deg", 1.0)];
+    let design = design.into_iter().enumerate().map(|(index, (label, scale))| TableColumn {
+        label: label.to_string(),
+        objective: false,
+        index,
+        scale,
+    });
+    objectives.chain(design).collect()
+}
+
+/// The designs as a table: id, objectives, design, replay command, a robust run's P(stay)
+/// per object.
+fn designs_table(dir: &Path, v: &RunView) {
+    let recorded = v.info.recording.enabled;
+    let columns = table_columns();
+    let head: Vec<String> =
+        std::iter::once(format!(" {:>13}", "id")).chain(columns.iter().map(|c| format!(" {:>13}", c.label))).collect();
+    let replay_head = if recorded { "  replay" } else { "" };
+    outln!("{}{replay_head}", head.join(""));
+    for r in &v.rows {
+        let cells: Vec<String> = std::iter::once(format!(" {:>13}", r.id))
+            .chain(columns.iter().map(|c| match c.value(r) {
+                // small values (alpha near isotropy) keep their significant digits
+                Some(x) if x != 0.0 && (x * c.scale).abs() < 1e-3 => format!(" {:>13.4e}", x * c.scale),
+                Some(x) => format!(" {:>13.5}", x * c.scale),
+                None => format!(" {:>13}", "—"),
+            }))
             .collect();
         // a robust run: each object's P(stay) (docs/robust.md)
         let p_stay: String = r
@@ -396,8 +324,7 @@ pub fn run(a: ShowArgs) -> Result<()> {
             .map(|o| format!("  {o} {}", r.robust.get(o, "p_stay").map_or("—".into(), |p| format!("{p:.3}"))))
             .collect();
         let p_stay = if p_stay.is_empty() { p_stay } else { format!("  P(stay):{p_stay}") };
-        let replay = replay(r.id).map(|c| format!("  {c}")).unwrap_or_default();
+        let replay = replay_command(dir, recorded, r.id).map(|c| format!("  {c}")).unwrap_or_default();
         outln!("{}{replay}{p_stay}", cells.join(""));
     }
-    Ok(())
 }

@@ -1,8 +1,8 @@
-//! `gripopt sweep`: a parameter study on a grid (see `gripopt::sweep`).
+//! `gripopt sweep`: a parameter study on a grid (see `gripopt::app::sweep_spec`).
 
 use anyhow::Result;
-use gripopt::params::{Design, Problem};
-use gripopt::sweep::{self, Stage, SweepSpec, Vary};
+use gripopt::app::sweeps::{Boundary, Row, Stage};
+use gripopt::app::SweepRequest;
 use std::path::{Path, PathBuf};
 
 /// The `sweep` subcommand's arguments.
@@ -66,60 +66,37 @@ pub enum StageArg {
     Dynamic,
 }
 
-/// Build the spec from the arguments (all checks that need no evaluation).
-pub fn spec_of(a: &SweepArgs) -> Result<SweepSpec> {
-    if a.vary.len() > 3 {
-        anyhow::bail!("--vary: at most 3 names, {} given", a.vary.len());
-    }
-    let problem = Problem::load(&a.problem)?;
-    let design = match &a.design {
-        None => problem.nominal,
-        Some(s) => Design::parse_assignments(s)?,
-    };
-    let vary = a.vary.iter().map(|s| Vary::parse(s)).collect::<Result<Vec<_>, _>>()?;
+/// The request of the arguments.
+fn request(a: &SweepArgs) -> SweepRequest {
     let stage = match a.stage {
         StageArg::Kinematics => Stage::Kinematics,
         StageArg::Static => Stage::Static,
         StageArg::Dynamic => Stage::Dynamic,
     };
-    let spec = SweepSpec { problem, design, vary, stage, hold_l_hand: a.hold_l_hand, psi_rule: a.psi_rule };
-    spec.validate()?;
-    for b in &a.bisect {
-        if !spec.vary.iter().any(|v| &v.name == b) {
-            anyhow::bail!(
-                "--bisect {b}: not one of the varied names ({})",
-                spec.vary.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
-            );
-        }
+    SweepRequest {
+        problem: a.problem.clone(),
+        vary: a.vary.clone(),
+        design: a.design.clone(),
+        stage,
+        hold_l_hand: a.hold_l_hand,
+        psi_rule: a.psi_rule,
+        color: a.color.clone(),
+        ys: a.ys.clone(),
+        bisect: a.bisect.clone(),
+        bisect_steps: a.bisect_steps,
+        threads: a.threads,
+        out: a.out.clone(),
     }
-    if a.threads == Some(0) {
-        anyhow::bail!("--threads 0: must be at least 1");
-    }
-    match a.bisect_steps {
-        Some(n) if a.bisect.is_empty() => anyhow::bail!("--bisect-steps {n}: only with --bisect NAME"),
-        Some(n) if !(1..=60).contains(&n) => anyhow::bail!("--bisect-steps {n}: 1 to 60"),
-        _ => {}
-    }
-    // the plotted keys, before anything is evaluated: one the stage computes, and the flag
-    // of the plots this grid draws (line plots for one varied name, else maps)
-    sweep::out::check_plot_keys(&spec, "--y", &a.ys)?;
-    sweep::out::check_plot_keys(&spec, "--color", &a.color)?;
-    let line = sweep::plot::is_line(&spec);
-    if line && !a.color.is_empty() {
-        anyhow::bail!("--color: maps are drawn for 2 or 3 varied names; this grid draws line plots (use --y KEY)");
-    }
-    if !line && !a.ys.is_empty() {
-        anyhow::bail!("--y: line plots are drawn for one varied name; this grid draws maps (use --color KEY)");
-    }
-    Ok(spec)
 }
 
 /// Run the sweep.
 pub fn run(a: SweepArgs) -> Result<()> {
-    let spec = spec_of(&a)?;
-    // the folder is checked before anything is evaluated (a run folder, a file a sweep did
-    // not write: refused); an earlier sweep's files are replaced
-    let earlier = sweep::out::check_out_folder(&a.out)?;
+    let req = request(&a);
+    // every check that needs no evaluation, then the folder, locked, before anything is
+    // evaluated (a run folder, a file a sweep did not write: refused); an earlier sweep's
+    // files are replaced
+    let spec = gripopt::app::sweep_spec(&req)?;
+    let (_lock, earlier) = gripopt::app::open_sweep_folder(&a.out)?;
     if spec.problem.robust.is_some() {
         // said before anything runs: a sweep evaluates the single-object pipeline
         eprintln!(
@@ -127,59 +104,29 @@ pub fn run(a: SweepArgs) -> Result<()> {
             crate::cli::out::path(&a.problem)
         );
     }
-    let late = sweep::stage3_only_names(&spec);
-    if spec.stage != Stage::Dynamic && !late.is_empty() {
+    let late = gripopt::app::unused_names(&spec);
+    if !late.is_empty() {
         eprintln!(
             "warning: --vary {}: only stage 3 (the simulated grasp) uses it, and --stage {} stops before it: every point is the same in it (--stage dynamic)",
             late.join(", "),
             if spec.stage == Stage::Static { "static" } else { "kinematics" }
         );
     }
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        b = b.num_threads(t);
-    }
-    let pool = b.build()?;
     let pb = indicatif::ProgressBar::new(spec.len() as u64);
     pb.set_style(
         indicatif::ProgressStyle::with_template("sweep [{bar:30}] {pos}/{len} points, ETA {eta}").expect("template"),
     );
-    let rows = pool.install(|| sweep::run(&spec, &|| pb.inc(1)))?;
+    let swept = gripopt::app::run_sweep(&spec, &req, &|| pb.inc(1))?;
     pb.finish_and_clear();
-    let mut bounds = Vec::new();
-    for name in &a.bisect {
-        bounds.extend(pool.install(|| sweep::bisect(&spec, &rows, name, a.bisect_steps.unwrap_or(20)))?);
+    for (flag, v) in gripopt::app::empty_plots(&req, &swept.rows) {
+        eprintln!("warning: {flag} {v}: no point of the sweep has a value (each was discarded before the stage that computes it, or it was not finite); its plot is empty");
     }
-    for (flag, v) in a.ys.iter().map(|v| ("--y", v)).chain(a.color.iter().map(|v| ("--color", v))) {
-        if v.split('+').all(|k| rows.iter().all(|r| r.num(k).is_none())) {
-            eprintln!("warning: {flag} {v}: no point of the sweep has a value (each was discarded before the stage that computes it, or it was not finite); its plot is empty");
-        }
-    }
-    let ys: Vec<String> = if !a.ys.is_empty() {
-        a.ys.clone()
-    } else {
-        match spec.stage {
-            Stage::Dynamic => vec!["e_cyl+e_lim".into(), "t_stab".into()],
-            Stage::Static => vec!["alpha".into(), "mean_force".into(), "max_offset".into()],
-            Stage::Kinematics => vec!["min_margin_deg".into()],
-        }
-    };
-    // sweep.csv first, listing every file this sweep writes (a sweep stopped halfway
-    // leaves nothing a later one cannot attribute)
-    let mut planned = sweep::plot::planned(&spec, &ys, &a.color);
-    if !a.bisect.is_empty() {
-        planned.push(sweep::out::BOUNDARIES_FILE.into());
-    }
-    sweep::write_outputs(&a.out, &spec, &rows, &earlier, &planned)?;
-    if !a.bisect.is_empty() {
-        sweep::write_boundaries(&a.out, &spec, &bounds)?;
-    }
-    let files = sweep::plot::plot_all(&a.out, &spec, &rows, &ys, &a.color, &bounds)?;
-    summary(&a.out, &rows, &bounds, &files);
+    let files = gripopt::app::write_sweep(&spec, &req, &swept, &earlier)?;
+    summary(&a.out, &swept.rows, &swept.bounds, &files);
     Ok(())
 }
 
-fn summary(out: &Path, rows: &[sweep::Row], bounds: &[sweep::Boundary], files: &[PathBuf]) {
+fn summary(out: &Path, rows: &[Row], bounds: &[Boundary], files: &[PathBuf]) {
     let mut counts: Vec<(&str, usize)> = Vec::new();
     for r in rows {
         match counts.iter_mut().find(|c| c.0 == r.verdict) {

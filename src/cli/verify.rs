@@ -2,7 +2,7 @@
 
 use crate::cli::out::path as quoted;
 use anyhow::{bail, Context, Result};
-use gripopt::run::{check_sample, verify, Confusion, VerifySource};
+use gripopt::app::{Confusion, Verified, VerifyRequest, VerifySource, VerifySummary};
 use std::path::PathBuf;
 
 /// Arguments of `gripopt verify`.
@@ -67,7 +67,7 @@ fn x_off_of(scene: &str) -> Result<Option<f64>> {
         None if scene == "free" => Ok(None),
         Some(("free", x)) => {
             let v: f64 = x.parse().with_context(|| format!("--scene free:{x}: not a number"))?;
-            gripopt::params::limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene free:{x}: {r}"))?;
+            gripopt::app::limit("scene.x_off").check(v).map_err(|r| anyhow::anyhow!("--scene free:{x}: {r}"))?;
             Ok(Some(v))
         }
         _ => bail!("--scene {scene}: verify measures in the free scene: free or free:X (metres)"),
@@ -83,7 +83,8 @@ fn print_table(c: &Confusion) {
 
 /// Run `gripopt verify`.
 pub fn run(a: VerifyArgs) -> Result<()> {
-    if gripopt::run::is_robust_run(&a.run_dir) {
+    let robust = gripopt::app::is_robust_run(&a.run_dir);
+    if robust {
         check_robust_flags(&a)?;
     }
     let x_off = x_off_of(a.scene.as_deref().unwrap_or("free"))?;
@@ -94,30 +95,13 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if a.seed.is_some() && a.sample.is_none() {
         bail!("--seed: only with --sample N (the designs of the run are not drawn)");
     }
-    if let Some(n) = a.sample {
-        // the recording's share follows the free scene's duration (a problem.toml that does
-        // not load is the library's error to report, after this check)
-        let problem = gripopt::Problem::load(a.run_dir.join("problem.toml")).ok();
-        let t_obs = problem.map(|p| p.scene.setup.t_obs.min(p.scene.criteria.t_max));
-        check_sample(n, t_obs.filter(|_| record))?; // before the lock (the library checks again)
-    }
     let source = match a.sample {
         Some(n) => VerifySource::Sample { n, seed: a.seed.unwrap_or(1) },
         None if a.all => VerifySource::All,
         None => VerifySource::Pareto,
     };
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        b = b.num_threads(t);
-    }
-    let pool = b.build()?;
-    if gripopt::run::is_robust_run(&a.run_dir) {
-        // a robust run: the front out of sample (docs/robust.md)
-        let s = pool.install(|| gripopt::run::verify_robust(&a.run_dir))?;
-        out!("{}", s.report());
-        return Ok(());
-    }
-    let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+    // (a robust run's verify reports no progress)
+    let pb = if std::io::IsTerminal::is_terminal(&std::io::stderr()) && !robust {
         indicatif::ProgressBar::new(0)
     } else {
         indicatif::ProgressBar::hidden()
@@ -125,8 +109,24 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     pb.set_style(
         indicatif::ProgressStyle::with_template("verify [{bar:30}] {pos}/{len} designs, ETA {eta}").expect("template"),
     );
-    let s = pool.install(|| verify(&a.run_dir, source, x_off, record, &|n| pb.set_length(n as u64), &|| pb.inc(1)))?;
+    let req = VerifyRequest { source, x_off, record, threads: a.threads };
+    let verified = gripopt::app::verify(&a.run_dir, &req, &|n| pb.set_length(n as u64), &|| pb.inc(1))?;
     pb.finish_and_clear();
+    let s = match verified {
+        // a robust run: the front out of sample (docs/robust.md)
+        Verified::Robust(s) => {
+            out!("{}", s.report());
+            return Ok(());
+        }
+        Verified::Designs(s) => s,
+    };
+    report(&a, source, &s);
+    Ok(())
+}
+
+/// What a single-object run's verify found: the file, the recording, the 2×2 table and the
+/// counts.
+fn report(a: &VerifyArgs, source: VerifySource, s: &VerifySummary) {
     let c = s.confusion;
     let agree = c.pred_moved + c.ok_stayed;
     let plural = |n: usize| if n == 1 { "" } else { "s" };
@@ -145,7 +145,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         outln!(
             "recorded to {} (open in Foxglove with {}, see docs/recording.md)",
             quoted(r),
-            quoted(&a.run_dir.join(gripopt::record::VERIFY_LAYOUT_FILE))
+            quoted(&a.run_dir.join(gripopt::app::VERIFY_LAYOUT_FILE))
         );
     }
     if !s.skipped.is_empty() {
@@ -171,7 +171,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if c.total() > 0 {
         outln!("  agreement {agree}/{} ({:.1} %); too strict (predicted moves, stayed) {}; too lax (predicted stays, moved) {}", c.total(), 100.0 * agree as f64 / c.total() as f64, c.pred_stayed, c.ok_moved);
     }
-    let n = |f: &dyn Fn(&gripopt::run::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
+    let n = |f: &dyn Fn(&gripopt::app::VerifyRow) -> bool| s.rows.iter().filter(|r| f(r)).count();
     outln!(
         "  toppled {}  escaped {}  rim_contact {}  impact criterion fails {}  force criterion fails {}",
         n(&|r| r.toppled == Some(true)),
@@ -183,5 +183,4 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if let Some((t, r)) = s.median_energy_ratio {
         outln!("  object peak kinetic energy during the first contact / §9.1: median E_trans ratio {t:.3}, E_rot ratio {r:.3}");
     }
-    Ok(())
 }

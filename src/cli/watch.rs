@@ -6,7 +6,7 @@
 //! `contact.v_s` with a large `solver.max_steps`) is never silent: ctrl-c stops it.
 
 use crate::cli::csv_stream::CsvStream;
-use gripopt::sim::{EventNote, Point, PoseSample, Sample, Sink, Trajectory};
+use gripopt::app::{EventNote, Point, PoseSample, Sample, Sink, Trajectory};
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
@@ -111,7 +111,7 @@ impl Sink for Watch {
         }
         if at != Point::Grid {
             if let Some(Streamed::Samples(c, finger2)) = self.csv.as_mut() {
-                c.row(&gripopt::trajectory_row(s, *finger2));
+                c.row(&gripopt::app::trajectory_row(s, *finger2));
             }
             self.tick(s.t);
         }
@@ -122,7 +122,7 @@ impl Sink for Watch {
         }
         if at != Point::Grid {
             if let Some(Streamed::Poses(c)) = self.csv.as_mut() {
-                c.row(&gripopt::pose_values(s));
+                c.row(&gripopt::app::pose_values(s));
             }
             self.tick(s.t);
         }

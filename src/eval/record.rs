@@ -205,6 +205,18 @@ impl<'a> EvaluationRecord<'a> {
 }
 
 impl Record {
+    /// This record with the parts a record of scene `kind` holds beside the grasp, empty
+    /// where it has none (the offset scene's `offset_scene`, the free scene's `free_scene`):
+    /// the keys a sweep of that scene tabulates.
+    pub fn with_scene_parts(mut self, kind: SceneKind) -> Self {
+        match kind {
+            SceneKind::Offset => self.offset_scene = Some(self.offset_scene.unwrap_or_default()),
+            SceneKind::Free => self.free_scene = Some(self.free_scene.unwrap_or(FreeSceneRecord::from_result(None))),
+            SceneKind::Centred => {}
+        }
+        self
+    }
+
     /// The record of an evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
         let x = &ev.design;
@@ -335,6 +347,15 @@ impl Record {
     /// Form closed at the centred object (the offset scan admits x_off = 0, MODEL.md §6.7).
     pub fn form_closed(&self) -> Option<bool> {
         self.statics.form_closed
+    }
+}
+
+impl Record {
+    /// The object of a robust design's discard ([`RobustRecord::failed_object`]); None for a
+    /// single-object problem's record and for a feasible design.
+    pub fn failed_object(&self) -> Option<usize> {
+        let v = &self.verdict;
+        self.robust.as_ref()?.failed_object(v.failed_stage, v.cause)
     }
 }
 

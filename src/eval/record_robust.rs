@@ -6,40 +6,48 @@
 use super::objectives::Objectives;
 use super::scene_record::fin;
 use super::stages::{Cause, Evaluation};
-use crate::params::Scenario;
+use crate::params::{input_slot, Scenario, INPUTS, N_INPUTS};
 use serde::{Deserialize, Serialize};
 
-/// The drawn inputs of a scenario (nominal where not uncertain).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct ScenarioInputs {
-    /// Object offset along the palm (m).
-    pub x_off: f64,
-    /// Grasp height offset (m).
-    pub height_offset: f64,
-    /// Factor on the phalanx friction.
-    pub mu_phalanx: f64,
-    /// Factor on the ground friction.
-    pub mu_ground: f64,
-    /// Restitution.
-    pub restitution: f64,
-    /// Factor on the object's density.
-    pub fill: f64,
-    /// Factor on the grip torque.
-    pub tau: f64,
-}
+/// The drawn inputs of a scenario (nominal where not uncertain), one value per row of
+/// [`INPUTS`], written as an object keyed by the rows' names in their order.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ScenarioInputs(pub [f64; N_INPUTS]);
 
 impl ScenarioInputs {
     /// From a scenario's values.
-    pub fn of(v: &[f64; 7]) -> Self {
-        ScenarioInputs {
-            x_off: v[0],
-            height_offset: v[1],
-            mu_phalanx: v[2],
-            mu_ground: v[3],
-            restitution: v[4],
-            fill: v[5],
-            tau: v[6],
+    pub fn of(v: &[f64; N_INPUTS]) -> Self {
+        ScenarioInputs(*v)
+    }
+    /// The value of input `name` (a row of [`INPUTS`]).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        input_slot(name).map(|i| self.0[i])
+    }
+    /// The inputs as `gripopt replay --scenario` shows them, comma-separated.
+    pub fn shown(&self) -> String {
+        INPUTS.iter().zip(self.0).map(|(row, v)| (row.shown)(v)).collect::<Vec<_>>().join(", ")
+    }
+}
+
+impl Serialize for ScenarioInputs {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(N_INPUTS))?;
+        for (row, v) in INPUTS.iter().zip(self.0) {
+            m.serialize_entry(row.name, &v)?;
         }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for ScenarioInputs {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let m = std::collections::BTreeMap::<String, f64>::deserialize(d)?;
+        let mut v = [0.0; N_INPUTS];
+        for (slot, row) in v.iter_mut().zip(INPUTS.iter()) {
+            *slot = *m.get(row.name).ok_or_else(|| serde::de::Error::missing_field(row.name))?;
+        }
+        Ok(ScenarioInputs(v))
     }
 }
 
@@ -193,6 +201,22 @@ impl RobustRecord {
     /// This record as a recording reads it back: every scenario [`ScenarioRecord::as_written`].
     pub fn as_written(&self) -> Self {
         RobustRecord { scenarios: self.scenarios.iter().map(ScenarioRecord::as_written).collect(), ..self.clone() }
+    }
+
+    /// The object that decided a discard at `stage` with `cause`, read from the typed
+    /// sub-record (never from the reason's words): at stage 2 the first object whose statics
+    /// failed (its objectives unknown); at stage 3 the first aborted scenario's object for a
+    /// solver failure, else the first object that fails P(stay) ≥ p_min. None at stages 0–1
+    /// (the hand itself failed) and for a feasible design.
+    pub fn failed_object(&self, stage: Option<u8>, cause: Option<Cause>) -> Option<usize> {
+        match stage? {
+            2 => self.objects.iter().position(|o| o.objectives.mean_force.is_none()),
+            3 if matches!(cause, Some(Cause::Aborted | Cause::FreeSceneAborted)) => {
+                self.scenarios.iter().find(|s| s.aborted()).map(|s| s.object)
+            }
+            3 => self.objects.iter().position(|o| o.meets_p_min == Some(false)),
+            _ => None,
+        }
     }
 }
 

@@ -12,7 +12,7 @@
 //! centred scene.
 
 use super::stages::{evaluate_statics, Discard, EvalOptions, Evaluation, ObjectMotion, Reason, StaticsResult};
-use crate::params::{Design, Problem, SceneKind, SceneParams};
+use crate::params::{Design, Problem, SceneParams};
 use crate::sim::{
     force_margin, r_area, Controls, DynOutcome, DynamicsResult, FreeResult, Integration, Mode, SceneResult, SceneSpec,
     Sink,
@@ -48,7 +48,7 @@ pub fn evaluate_dynamics<K: Sink + ?Sized>(
     sink: &mut K,
 ) -> Evaluation {
     let spec = SceneSpec::of(&s.setup);
-    stage3(ev, s, &spec, &opts.integration, &opts.controls, false, sink)
+    stage3(ev, s, &spec, &opts.integration, &opts.controls, opts.measure_always, sink)
 }
 
 /// Simulate design `x` in scene `spec` of the problem's `s`: stages 0–2, then the scene
@@ -122,7 +122,7 @@ fn grasp(r: SceneResult) -> DynamicsResult {
 /// criterion (MODEL.md §9.3). Only orders work (a cost hint); the verdict is stage 3's own.
 pub fn stage3_ends_at_once(st: &StaticsResult, s: &SceneParams, opts: &EvalOptions) -> bool {
     opts.controls.mode == Mode::Pipeline
-        && s.setup.kind == SceneKind::Centred
+        && s.setup.kind.is_centred()
         && force_margin(s, r_area(s), nalgebra::Vector2::new(st.grasp.hand0[0], st.grasp.hand0[1])) < 0.0
 }
 

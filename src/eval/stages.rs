@@ -332,17 +332,21 @@ impl Evaluation {
     pub fn feasible(&self) -> bool {
         self.discard.is_none()
     }
+    /// Objectives in their natural sense as the optimiser ranks them (max_offset, α, F̃,
+    /// t_stab; max_offset −Δ_off where not form closed, MODEL.md §6.7); None where not
+    /// computed, t_stab only for a design no stage discarded.
+    pub fn natural_objectives(&self) -> [Option<f64>; 4] {
+        let s = self.statics.as_ref();
+        let t = match (&self.dynamics, &self.discard) {
+            (Some(d), None) => d.t_stab,
+            _ => None,
+        };
+        [s.map(|s| s.max_offset), s.map(|s| s.alpha), s.map(|s| s.mean_force), t]
+    }
     /// Objectives in minimisation form (−max_offset, α, −F̃, t_stab); NaN where not computed.
     pub fn objectives(&self) -> [f64; 4] {
-        let (a, b, c) = match &self.statics {
-            Some(s) => (-s.max_offset, s.alpha, -s.mean_force),
-            None => (f64::NAN, f64::NAN, f64::NAN),
-        };
-        let t = match (&self.dynamics, &self.discard) {
-            (Some(d), None) => d.t_stab.unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        };
-        [a, b, c, t]
+        let o = self.natural_objectives();
+        std::array::from_fn(|k| o[k].map_or(f64::NAN, |v| super::objectives::OBJECTIVES[k].sense.sign() * v))
     }
 }
 
@@ -355,6 +359,10 @@ pub struct EvalOptions {
     pub integration: Integration,
     /// The run controls of stage 3 (pipeline mode).
     pub controls: Controls,
+    /// In the free kind, measure the free scene even when the finger's own criteria discard
+    /// the design (a diagnostic simulation, `verify`); false in the pipeline, which stops at
+    /// the first failing criterion.
+    pub measure_always: bool,
 }
 
 impl EvalOptions {
@@ -364,11 +372,23 @@ impl EvalOptions {
             dynamics: false,
             integration: Integration::new(1e-6, 1e-9, 200_000),
             controls: Controls::PIPELINE,
+            measure_always: false,
         }
     }
     /// All four stages with the problem's solver settings, stopping at the first violated criterion.
     pub fn full(p: &Problem) -> Self {
-        EvalOptions { dynamics: true, integration: Integration::from_solver(&p.solver), controls: Controls::PIPELINE }
+        Self::pipeline(Integration::from_solver(&p.solver))
+    }
+    /// All four stages with the numerics `integration`, stopping at the first violated criterion.
+    pub fn pipeline(integration: Integration) -> Self {
+        EvalOptions { dynamics: true, integration, controls: Controls::PIPELINE, measure_always: false }
+    }
+    /// A diagnostic simulation with the problem's solver settings: every criterion run to
+    /// its end, the free scene measured whatever the finger's criteria say (`gripopt
+    /// simulate`, `verify`).
+    pub fn diagnostic(p: &Problem) -> Self {
+        let integration = Integration::from_solver(&p.solver);
+        EvalOptions { dynamics: true, integration, controls: Controls::DIAGNOSTIC, measure_always: true }
     }
 }
 

@@ -16,10 +16,10 @@ pub use mjcf::{mjcf, MujocoSettings, MUJOCO};
 pub use sheet::{build_sheet, BuildSheet, SheetRow};
 pub use xml::XmlWriter;
 
-use crate::eval::{robust_start, RobustSetup};
+use crate::error::{Error, Result};
+use crate::eval::Study;
 use crate::model::{spring_preload, Finger};
-use crate::params::{Design, SceneParams};
-use crate::{Error, Result};
+use crate::params::{Design, SceneKind, SceneParams, SceneSetup};
 
 /// What the object does in the exported scene (MODEL.md §8, §14).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,6 +47,15 @@ impl ExportScene {
     /// The free scene with the object at offset `x_off`.
     pub fn free(x_off: f64) -> Self {
         ExportScene { object: ObjectMode::Free, x_off }
+    }
+    /// Where a problem's `[scene]` puts the object: the centred scene's at x = 0, the offset
+    /// scene's fixed at its x_off, the free scene's free on the ground at its x_off.
+    pub fn of(setup: &SceneSetup) -> Self {
+        match setup.kind {
+            SceneKind::Centred => ExportScene::centred(),
+            SceneKind::Offset => ExportScene { object: ObjectMode::Fixed, x_off: setup.x_off },
+            SceneKind::Free => ExportScene::free(setup.x_off),
+        }
     }
     /// `centred`, `offset:X` or `free:X`, as `--scene` spells scenes (X as [`num`] writes it:
     /// `free:1e-320`, not 320 digits).
@@ -93,25 +102,26 @@ impl ExportedDesign {
     }
 
     /// Design `x` of a robust problem on its object `o` (`--object`, docs/export.md): the
-    /// object's nominal scene as the robust evaluation builds it
-    /// ([`RobustSetup::object_scenes`]: its cylinder and its grip torque τ), the spring sized
-    /// once at the problem's `[hand] tau` as there (a spring is hardware), and the object's
-    /// own stage 0–2 verdict from the robust evaluation's [`robust_start`].
-    pub fn on_object(x: &Design, setup: &RobustSetup, o: usize, placement: ExportScene, source: &str) -> Result<Self> {
-        let Some(scene) = setup.object_scenes.get(o) else {
+    /// object's nominal scene as its study builds it ([`Study::objects`]: its cylinder and
+    /// its grip torque τ), the spring sized once at the problem's `[hand] tau` as there (a
+    /// spring is hardware), and the object's own stage 0–2 verdict from [`Study::start`].
+    pub fn on_object(x: &Design, study: &Study, o: usize, placement: ExportScene, source: &str) -> Result<Self> {
+        let Some(object) = study.objects.get(o) else {
             return Err(Error::Input(format!("{source}: the problem has no robust object {o}")));
         };
-        let name = &setup.spec.objects[o].name;
-        let start = robust_start(x, setup);
+        let name = object.name.as_deref().unwrap_or("the problem's [object]");
+        let start = study.start(x);
         let statics_discard = match (&start.discard, &start.objects[o]) {
-            (Some((stage, reason, ..)), _) if *stage < 2 => Some(format!("discarded at stage {stage}: {reason}")),
+            (Some(d), _) if d.stage() < 2 => Some(format!("discarded at stage {}: {}", d.stage(), d.reason(study))),
             (_, Some(Err(d))) => Some(format!("discarded at stage 2 on object {name}: {}", d.reason)),
-            (Some((stage, reason, ..)), _) => Some(format!(
-                "passes stages 0-2 on object {name}; the robust design is discarded at stage {stage} ({reason})"
+            (Some(d), _) => Some(format!(
+                "passes stages 0-2 on object {name}; the robust design is discarded at stage {} ({})",
+                d.stage(),
+                d.reason(study)
             )),
             (None, _) => None,
         };
-        Self::build(x, scene, &setup.base, placement, source, statics_discard)
+        Self::build(x, &object.scene, &study.base, placement, source, statics_discard)
     }
 
     /// The finger of `x` in scene `s`, its spring sized in `spring_scene` (its `[hand] tau`).

@@ -2,7 +2,7 @@
 //! (shared by the loader and the `[robust]` section's checks).
 
 use super::limits::{limit, num};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// Checks fields of the problem file `file`.

@@ -1,7 +1,7 @@
 //! The design vector, its names and the design bounds (MODEL.md §1.2).
 
+use crate::error::{Error, Result};
 use crate::math::deg;
-use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Design vector `x = (l21, b, t22, r, p, ψ)` (MODEL.md §1.2). ψ in radians.

@@ -1,7 +1,7 @@
 //! Problem files: TOML with the sections `[hand]`, `[object]`, `[contact]`,
 //! `[environment]`, `[criteria]`, `[scene]`, `[solver]`, `[nominal]` and `[bounds]`. Every key is
-//! required but `solver.method` (absent: RADAU5, the method of every problem written before
-//! the key existed) and unknown keys are rejected. Errors name the file and the field.
+//! required but `solver.method` (absent: the default method, [`Method::PROBLEM_DEFAULT`]; it
+//! was RADAU5 before session 38) and unknown keys are rejected. Errors name the file and the field.
 
 use super::checker::Checker;
 use super::design::{Bounds, Design, DESIGN_NAMES};
@@ -10,9 +10,9 @@ use super::method::Method;
 use super::robust::Robust;
 use super::robust_load::RawRobust;
 use super::scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
-use super::scene_kind::{SceneKind, SceneSetup};
+use super::scene_kind::{SceneChoice, SceneKind, SceneSetup};
+use crate::error::{Error, Result};
 use crate::math::deg;
-use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
 use std::path::Path;
@@ -27,10 +27,15 @@ pub struct SolverSettings {
     pub atol: f64,
     /// Maximum number of accepted + rejected steps before a discard.
     pub max_steps: u64,
-    /// Integration method (`solver.method`; absent: RADAU5). Left out when serialised as
-    /// RADAU5, so that a problem without the key serialises as it did before the key.
+    /// Integration method (`solver.method`; absent: [`Method::PROBLEM_DEFAULT`]). Left out when
+    /// serialised as RADAU5, the type's default.
     #[serde(default, skip_serializing_if = "Method::is_default")]
     pub method: Method,
+    /// The file names `solver.method` (false: `method` is the default, whose tolerances the
+    /// simulator scales, `sim::Scaling::DEFAULT`; a resumed run of a problem without the key
+    /// takes the method its checkpoint records, [`Problem::with_run_method`]).
+    #[serde(skip)]
+    pub method_named: bool,
 }
 
 /// A loaded and validated problem.
@@ -82,7 +87,8 @@ struct RawSolver {
     rtol: f64,
     atol: f64,
     max_steps: f64,
-    /// Optional: absent is RADAU5 (files written before the key existed keep their results).
+    /// Optional: absent is the default method (RADAU5 before session 38; a run folder of
+    /// then resumes with it, [`Problem::with_run_method`]).
     #[serde(default)]
     method: Option<String>,
 }
@@ -183,6 +189,18 @@ macro_rules! checked {
 }
 
 impl Problem {
+    /// This problem as a run resumes it whose checkpoint records the method `recorded` (its
+    /// options' `method`; None: RADAU5, the method of a checkpoint that names none): where the
+    /// file names no `solver.method`, the run keeps the method it started with (a run folder
+    /// of a gripopt before session 38 ran RADAU5 there, not today's default). A file that
+    /// names its method keeps it.
+    pub fn with_run_method(mut self, recorded: Option<Method>) -> Self {
+        if !self.solver.method_named {
+            self.solver.method = recorded.unwrap_or_default();
+        }
+        self
+    }
+
     /// The files the problem read besides itself: the robust objects' `file = "…"`, each
     /// resolved against the folder of `problem_path` (the file it was loaded from), as the
     /// loader reads them. Outputs must never replace them (`gripopt::check_output_file`).
@@ -234,7 +252,8 @@ impl Problem {
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self> {
         let raw: RawFile = toml::from_str(text)
             .map_err(|e| {
-                let mut message = e.to_string().trim_end().to_string();
+                // what toml echoes of the file (a line of 800 kB) cut to a readable length
+                let mut message = crate::error::cap_lines(e.to_string().trim_end(), 200);
                 if message.contains("missing field `force_model`") {
                     // files written before MODEL.md v2 (D22), e.g. the copy in an older run folder
                     message.push_str("\n(problem files from before MODEL.md v2 lack `criteria.force_model`: add `force_model = \"frictionless\"` to reproduce a run as it was computed, or \"mobilised\" for the thesis's forces, D22)");
@@ -249,7 +268,7 @@ impl Problem {
         let cr = &raw.criteria;
         let sc = &raw.scene;
         let setup = SceneSetup {
-            kind: SceneKind::parse(&sc.kind).ok_or_else(|| {
+            kind: sc.kind.parse::<SceneKind>().map_err(|()| {
                 c.fail(
                     "scene.kind",
                     format!("{:?}", sc.kind),
@@ -362,7 +381,7 @@ impl Problem {
         c.check("solver.rtol", s.rtol)?;
         c.check("solver.atol", s.atol)?;
         let method = match s.method.as_deref() {
-            None => Method::Radau5,
+            None => Method::PROBLEM_DEFAULT,
             Some(m) => Method::parse(m).ok_or_else(|| {
                 c.fail(
                     "solver.method",
@@ -377,6 +396,7 @@ impl Problem {
             atol: s.atol,
             max_steps: c.whole("solver.max_steps", s.max_steps)? as u64,
             method,
+            method_named: s.method.is_some(),
         };
         let n = &raw.nominal;
         let nominal = Design {
@@ -418,13 +438,13 @@ impl Problem {
         })
     }
 
-    /// This problem with stage 3 in scene `kind` at object offset `x_off` (None: the
-    /// problem's), checked as a problem file's `[scene]` is (`path`: where the request came
+    /// This problem with stage 3 in `scene` (its kind, and its object offset where given;
+    /// None keeps the problem's), checked as a problem file's `[scene]` is (`path`: where the request came
     /// from, for the error; e.g. the command line).
-    pub fn in_scene(&self, kind: SceneKind, x_off: Option<f64>, path: &Path) -> Result<Problem> {
+    pub fn in_scene(&self, scene: SceneChoice, path: &Path) -> Result<Problem> {
         let mut p = self.clone();
-        p.scene.setup.kind = kind;
-        if let Some(x) = x_off {
+        p.scene.setup.kind = scene.kind;
+        if let Some(x) = scene.x_off {
             p.scene.setup.x_off = Checker { file: path }.check("scene.x_off", x)?;
         }
         check_scene(&p.scene, path)?;
@@ -436,14 +456,14 @@ impl Problem {
 /// and a ground that bears the object (its static sink under its weight at most
 /// [`MAX_GROUND_SINK`]).
 fn check_scene(scene: &SceneParams, path: &Path) -> Result<()> {
-    if scene.setup.kind == SceneKind::Free && scene.env.g_eq != 0.0 {
+    if scene.setup.kind.is_free() && scene.env.g_eq != 0.0 {
         return Err(Checker { file: path }.fail(
             "environment.g_eq",
             super::limits::num(scene.env.g_eq),
             "must be 0 for the free scene ([scene] kind = \"free\": the hand horizontal, MODEL.md §14.1)",
         ));
     }
-    if scene.setup.kind == SceneKind::Free {
+    if scene.setup.kind.is_free() {
         // Hertz points K_g δ^1.5 share the weight: δ = (m g / (n K_g))^(2/3)
         let st = &scene.setup;
         let per_point = scene.object.mass() * scene.env.g / st.ground_points as f64;

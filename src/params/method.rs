@@ -4,11 +4,13 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Integration method.
+/// Integration method. A problem without `solver.method` runs [`Method::PROBLEM_DEFAULT`]
+/// (auto, since session 38); the `Default` of the type is RADAU5, what a checkpoint, record
+/// or serialised problem that names no method was run with (the default before session 38).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Radau IIA order 5 (default; stiff, L-stable, stiffly accurate).
+    /// Radau IIA order 5 (stiff, L-stable, stiffly accurate; the default before session 38).
     #[default]
     Radau5,
     /// TR-BDF2 (stiff, L-stable, order 2; the thesis' method).
@@ -21,6 +23,11 @@ pub enum Method {
 }
 
 impl Method {
+    /// The method of a problem without `solver.method`: the stiffness-switching method
+    /// (docs/benchmarks.md, "The default solver"; the simulator reads its tolerances with
+    /// the default's scaling, `sim::Scaling::DEFAULT`).
+    pub const PROBLEM_DEFAULT: Method = Method::Auto;
+
     /// Every method, in the order the docs and errors list them.
     pub const ALL: [Method; 4] = [Method::Radau5, Method::Auto, Method::TrBdf2, Method::Dopri5];
 
@@ -92,8 +99,10 @@ impl Method {
             self.as_str()
         ))
     }
-    /// Whether this is the default, RADAU5 (what a problem file without `solver.method` gets;
-    /// such a problem serialises without the key, as it did before the key existed).
+    /// Whether this is RADAU5, the type's default: what a checkpoint's options, a record or a
+    /// serialised problem that names no method ran with (a problem file without
+    /// `solver.method` got it before session 38; such a record or checkpoint is written as
+    /// before the key existed).
     pub fn is_default(&self) -> bool {
         *self == Method::Radau5
     }

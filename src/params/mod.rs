@@ -20,8 +20,9 @@ pub use limits::{limit, Limit, LIMITS, MAX_FILE_BYTES, MAX_R_SING};
 pub use load::{Problem, SolverSettings};
 pub use method::Method;
 pub use robust::{
-    corner_count, describe, Aggregation, ObjectCase, Robust, Sampling, Scenario, STREAM_OPTIMISE, STREAM_VERIFY,
+    corner_count, describe, Aggregation, Certify, Robust, Sampling, Scenario, STREAM_CERTIFY, STREAM_OPTIMISE,
+    STREAM_VERIFY,
 };
-pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, SceneParams};
-pub use scene_kind::{SceneKind, SceneSetup};
-pub use uncertainty::{phi, phi_inv, Dist, Uncertainty, INPUTS, INPUT_MEANINGS};
+pub use scene::{ContactLaw, Criteria, Environment, ForceModel, Hand, Object, ObjectCase, SceneParams};
+pub use scene_kind::{scene_kinds_using, SceneChoice, SceneKind, SceneSetup};
+pub use uncertainty::{input_slot, phi, phi_inv, Dist, InputRow, Uncertainty, INPUTS, N_INPUTS};

@@ -4,8 +4,8 @@
 //! every design; or a deterministic centre-plus-corners design), how each objective is
 //! aggregated over them and the constraint P(object barely moves) ≥ p_min per object.
 
-use super::scene::{Object, SceneParams};
-use super::uncertainty::{Dist, Uncertainty};
+use super::scene::{ObjectCase, SceneParams};
+use super::uncertainty::{Dist, Uncertainty, INPUTS, N_INPUTS};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
@@ -13,20 +13,54 @@ use serde::{Deserialize, Serialize};
 pub const STREAM_OPTIMISE: u64 = 0;
 /// The out-of-sample stream of `gripopt verify` on a robust run.
 pub const STREAM_VERIFY: u64 = 1;
+/// The stream of the certification of a robust run's front (issue 41): scenarios neither
+/// the search nor `verify` uses.
+pub const STREAM_CERTIFY: u64 = 2;
 
-/// One object of a robust problem: its cylinder, grasp height and grip torque.
+/// `[robust.certify]`: how a robust run certifies its front on fresh scenarios — a
+/// group-sequential one-sided exact binomial test per object of H₀: P(stay) < p_min, at
+/// level 1 − `confidence` split evenly over the looks (docs/robust.md, "Certification").
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ObjectCase {
-    /// Its name (CSV columns `NAME.p_stay`, …).
-    pub name: String,
-    /// The cylinder and where it is grasped.
-    pub object: Object,
-    /// The grip torque τ the controller applies to this object (N·m; the spring preload is
-    /// sized once, at `[hand] tau`).
-    pub tau: f64,
-    /// The problem file its cylinder was taken from, as written (None: given inline).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub file: Option<String>,
+pub struct Certify {
+    /// Certify the front (false: pareto.csv is the search front, uncertified).
+    pub enabled: bool,
+    /// 1 − α of the test (e.g. 0.95).
+    pub confidence: f64,
+    /// Scenarios per object at each look, increasing (e.g. [24, 48]).
+    pub looks: Vec<usize>,
+}
+
+impl Certify {
+    /// The default plan for `p_min` at `confidence`: two looks, the first the fewest
+    /// scenarios that can certify an object that stayed in all of them at level α/2
+    /// (n₁ = ⌈ln(α/2) / ln p_min⌉), the second twice as many. None when p_min is 0 (nothing
+    /// to certify) or 1 (no finite sample certifies).
+    pub fn default_looks(p_min: f64, confidence: f64) -> Option<Vec<usize>> {
+        if !(p_min > 0.0 && p_min < 1.0) {
+            return None;
+        }
+        let alpha = (1.0 - confidence) / 2.0;
+        let n1 = (alpha.ln() / p_min.ln()).ceil().max(1.0) as usize;
+        Some(vec![n1, 2 * n1])
+    }
+
+    /// Why this plan cannot certify any object at `p_min` (None: it can): at its last look
+    /// an object that stayed in every scenario must reject H₀ at α/L, i.e. p_minⁿ ≤ α/L.
+    pub fn check(&self, p_min: f64) -> Result<(), String> {
+        let Some(&n) = self.looks.last() else {
+            return Err("must name at least one look".into());
+        };
+        let a = (1.0 - self.confidence) / self.looks.len() as f64;
+        if p_min >= 1.0 || p_min.powi(n as i32) > a {
+            let need = if p_min < 1.0 { format!("{}", (a.ln() / p_min.ln()).ceil()) } else { "infinitely many".into() };
+            return Err(format!(
+                "cannot certify any design at p_min {p_min}: even {n} of {n} staying leaves P(stay) < p_min possible at level {a:.4} (α {:.3} split over {} looks); the last look needs at least {need} scenarios (or set [robust.certify] enabled = false)",
+                1.0 - self.confidence,
+                self.looks.len()
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// How the scenarios are chosen.
@@ -105,6 +139,8 @@ pub struct Robust {
     pub early_stop: bool,
     /// Scenarios per object of `gripopt verify`'s out-of-sample draw.
     pub verify_scenarios: usize,
+    /// How the front is certified on fresh scenarios.
+    pub certify: Certify,
 }
 
 /// One scenario: an object and the values of every uncertain input (nominal where fixed).
@@ -116,9 +152,8 @@ pub struct Scenario {
     pub k: usize,
     /// The stream it was drawn from (0: optimisation, 1: verify).
     pub stream: u64,
-    /// x_off (m), height_offset (m), mu_phalanx, mu_ground (factors), restitution, fill,
-    /// tau (factors), in the order of [`INPUTS`](super::INPUTS).
-    pub values: [f64; 7],
+    /// Each input's value, in the order of [`INPUTS`].
+    pub values: [f64; N_INPUTS],
 }
 
 impl Scenario {
@@ -126,27 +161,26 @@ impl Scenario {
     /// free scene at the drawn offset, the object's cylinder filled and raised as drawn, the
     /// frictions scaled, the restitution and the grip torque as drawn.
     pub fn scene(&self, base: &SceneParams, o: &ObjectCase) -> SceneParams {
-        let v = &self.values;
         let mut s = base.clone();
         s.object = o.object;
-        s.object.grasp_height += v[1];
-        s.object.density *= v[5];
-        s.contact.mu_s *= v[2];
-        s.contact.mu_d *= v[2];
-        s.env.mu_g *= v[3];
-        s.contact.restitution = v[4];
-        s.hand.tau = o.tau * v[6];
-        s.setup.kind = super::SceneKind::Free;
-        s.setup.x_off = v[0];
+        s.setup = s.setup.to_free();
+        for (row, v) in INPUTS.iter().zip(self.values) {
+            (row.apply)(&mut s, o, v);
+        }
         s
+    }
+
+    /// The value of input `name` (a row of [`INPUTS`]).
+    pub fn value(&self, name: &str) -> Option<f64> {
+        super::input_slot(name).map(|i| self.values[i])
     }
 }
 
 impl Robust {
     /// The nominal value of each input for problem scene `base` (x_off from `[scene]`,
-    /// restitution from `[contact]`, no height offset, factors 1).
-    pub fn nominal_values(base: &SceneParams) -> [f64; 7] {
-        [base.setup.x_off, 0.0, 1.0, 1.0, base.contact.restitution, 1.0, 1.0]
+    /// restitution from `[contact]`, no height offset, factors 1: each row's own).
+    pub fn nominal_values(base: &SceneParams) -> [f64; N_INPUTS] {
+        INPUTS.map(|row| (row.nominal)(base))
     }
 
     /// Number of scenarios per object of `stream` (the optimisation's K, or verify's count).
@@ -154,6 +188,7 @@ impl Robust {
         match (self.sampling, stream) {
             (Sampling::Corners, STREAM_OPTIMISE) => corner_count(self.uncertainty.uncertain().len()),
             (_, STREAM_OPTIMISE) => self.scenarios,
+            (_, STREAM_CERTIFY) => self.certify.looks.last().copied().unwrap_or(0),
             _ => self.verify_scenarios,
         }
     }

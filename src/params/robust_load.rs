@@ -2,11 +2,10 @@
 //! uncertain inputs are the ones listed), errors naming the file and the field.
 
 use super::checker::Checker;
-use super::robust::{corner_count, Aggregation, ObjectCase, Robust, Sampling};
-use super::scene::{Object, SceneParams};
-use super::uncertainty::{phi, Dist, Uncertainty, INPUTS};
-use super::SceneKind;
-use crate::Result;
+use super::robust::{corner_count, Aggregation, Certify, Robust, Sampling};
+use super::scene::{Object, ObjectCase, SceneParams};
+use super::uncertainty::{input_slot, phi, Dist, Uncertainty, INPUTS};
+use crate::error::Result;
 use serde::Deserialize;
 
 /// Most objects of a robust problem.
@@ -27,6 +26,17 @@ pub(super) struct RawRobust {
     aggregate: RawAggregate,
     objects: Vec<RawObjectCase>,
     uncertainty: RawUncertainty,
+    #[serde(default)]
+    certify: RawCertify,
+}
+
+/// `[robust.certify]` as written: every key optional (defaults from p_min).
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawCertify {
+    enabled: Option<bool>,
+    confidence: Option<f64>,
+    looks: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -57,17 +67,11 @@ struct RawObjectCase {
     tau: f64,
 }
 
+/// `[robust.uncertainty]` as written: a distribution per input named by its row of
+/// [`INPUTS`] (an unknown name is refused naming the known ones).
 #[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct RawUncertainty {
-    x_off: Option<RawDist>,
-    height_offset: Option<RawDist>,
-    mu_phalanx: Option<RawDist>,
-    mu_ground: Option<RawDist>,
-    restitution: Option<RawDist>,
-    fill: Option<RawDist>,
-    tau: Option<RawDist>,
-}
+#[serde(transparent)]
+struct RawUncertainty(std::collections::BTreeMap<String, RawDist>);
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -80,7 +84,7 @@ struct RawDist {
 impl RawRobust {
     /// The checked `[robust]` of a problem whose other sections are `scene`.
     pub(super) fn validate(&self, scene: &SceneParams, c: &Checker<'_>) -> Result<Robust> {
-        if scene.setup.kind != SceneKind::Free {
+        if !scene.setup.kind.is_free() {
             return Err(c.fail(
                 "scene.kind",
                 format!("{:?}", scene.setup.kind.as_str()),
@@ -110,6 +114,7 @@ impl RawRobust {
         ];
         let objects = self.objects(scene, c)?;
         let uncertainty = self.uncertainty.validate(c)?;
+        let certify = self.certify.validate(p_min, c)?;
         let robust = Robust {
             objects,
             uncertainty,
@@ -121,6 +126,7 @@ impl RawRobust {
             confidence: self.confidence,
             early_stop: self.early_stop,
             verify_scenarios,
+            certify,
         };
         check_supports(&robust, scene, c)?;
         if sampling == Sampling::Corners {
@@ -219,22 +225,69 @@ impl RawRobust {
     }
 }
 
+impl RawCertify {
+    fn validate(&self, p_min: f64, c: &Checker<'_>) -> Result<Certify> {
+        let confidence = self.confidence.unwrap_or(0.95);
+        if !(confidence > 0.0 && confidence < 1.0) {
+            return Err(c.fail("robust.certify.confidence", format!("{confidence}"), "must be in (0, 1), e.g. 0.95"));
+        }
+        // p_min 0 has no chance constraint to certify, p_min 1 no finite sample certifies:
+        // certification is on by default in between
+        let enabled = self.enabled.unwrap_or(p_min > 0.0 && p_min < 1.0);
+        if enabled && p_min == 0.0 {
+            return Err(c.fail(
+                "robust.certify.enabled",
+                "true".into(),
+                "p_min = 0 sets no chance constraint to certify (leave [robust.certify] out)",
+            ));
+        }
+        let looks = match (&self.looks, Certify::default_looks(p_min, confidence)) {
+            (Some(v), _) => {
+                let mut looks = Vec::with_capacity(v.len());
+                for (i, &n) in v.iter().enumerate() {
+                    let n = whole(c, &format!("robust.certify.looks[{i}]"), n, 1.0, 4096.0)?;
+                    if looks.last().is_some_and(|&m| n <= m) {
+                        return Err(c.fail(
+                            "robust.certify.looks",
+                            format!("{v:?}"),
+                            "must increase (scenarios per object at each look)",
+                        ));
+                    }
+                    looks.push(n);
+                }
+                if looks.is_empty() || looks.len() > 8 {
+                    return Err(c.fail("robust.certify.looks", format!("{v:?}"), "must hold 1 to 8 looks"));
+                }
+                looks
+            }
+            (None, Some(d)) => d,
+            // p_min 0 (no chance constraint) or 1 (no sample certifies): nothing to plan
+            (None, None) => vec![],
+        };
+        let plan = Certify { enabled, confidence, looks };
+        if enabled {
+            if let Err(why) = plan.check(p_min) {
+                return Err(c.fail("robust.certify.looks", format!("{:?}", plan.looks), &why));
+            }
+        }
+        Ok(plan)
+    }
+}
+
 impl RawUncertainty {
     fn validate(&self, c: &Checker<'_>) -> Result<Uncertainty> {
-        let raw = [
-            &self.x_off,
-            &self.height_offset,
-            &self.mu_phalanx,
-            &self.mu_ground,
-            &self.restitution,
-            &self.fill,
-            &self.tau,
-        ];
         let mut u = Uncertainty::default();
-        for (i, r) in raw.iter().enumerate() {
-            if let Some(r) = r {
-                u.inputs[i] = Some(r.validate(c, &format!("robust.uncertainty.{}", INPUTS[i]))?);
-            }
+        for (name, r) in &self.0 {
+            let field = format!("robust.uncertainty.{name}");
+            let Some(i) = input_slot(name) else {
+                let known: Vec<&str> = INPUTS.iter().map(|r| r.name).collect();
+                return Err(c.fail(
+                    &field,
+                    "{…}".into(),
+                    &format!("is not an uncertain input (known: {})", known.join(", ")),
+                ));
+            };
+            u.inputs[i] = Some(r.validate(c, &field)?);
         }
         Ok(u)
     }
@@ -310,7 +363,7 @@ fn check_corner_centres(r: &Robust, c: &Checker<'_>) -> Result<()> {
         let ((lo, hi), centre) = (d.support(), d.centre());
         if !(lo..=hi).contains(&centre) {
             return Err(c.fail(
-                &format!("robust.uncertainty.{}", INPUTS[i]),
+                &format!("robust.uncertainty.{}", INPUTS[i].name),
                 super::robust::describe(d),
                 &format!(
                     "with sampling = \"corners\" the centre scenario takes the mean {centre}, which must lie within the bounds [{lo}, {hi}]"
@@ -322,57 +375,16 @@ fn check_corner_centres(r: &Robust, c: &Checker<'_>) -> Result<()> {
 }
 
 /// Every value a draw can take keeps each object's inputs in their admissible range (no
-/// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …).
+/// negative friction, restitution in [0.01, 0.99], the grasp on the cylinder's side, …: each
+/// input's own rule, [`InputRow::admissible`](super::InputRow)).
 fn check_supports(r: &Robust, scene: &SceneParams, c: &Checker<'_>) -> Result<()> {
-    for (i, d) in r.uncertainty.inputs.iter().enumerate() {
+    for (row, d) in INPUTS.iter().zip(&r.uncertainty.inputs) {
         let Some(d) = d else { continue };
         let (lo, hi) = d.support();
-        let field = format!("robust.uncertainty.{}", INPUTS[i]);
-        let bad = |rule: String| c.fail(&field, format!("draws in [{lo}, {hi}]"), &rule);
-        match INPUTS[i] {
-            "x_off" => {
-                if lo < -0.1 || hi > 0.1 {
-                    return Err(bad("must keep the offset in [-0.1, 0.1] m".into()));
-                }
-            }
-            "restitution" => {
-                if lo < 0.01 || hi > 0.99 {
-                    return Err(bad("must keep the restitution in [0.01, 0.99]".into()));
-                }
-            }
-            name => {
-                if name != "height_offset" && !(lo > 0.0) {
-                    let what = match name {
-                        "mu_phalanx" | "mu_ground" => {
-                            "a friction factor must be > 0 (no negative or zero friction draws)"
-                        }
-                        "fill" => "a fill factor must be > 0 (an object has mass)",
-                        _ => "a torque factor must be > 0",
-                    };
-                    return Err(bad(what.into()));
-                }
-                for o in &r.objects {
-                    let (limit, v) = match name {
-                        "height_offset" => {
-                            let h = (o.object.grasp_height + lo, o.object.grasp_height + hi);
-                            if !(h.0 >= scene.hand.w) || h.1 >= o.object.length {
-                                return Err(bad(format!(
-                                    "keeps object {}'s grasp height {} + offset on its side, in [hand.w {}, {}) (the fingers clear the floor and stay below the top)",
-                                    o.name, o.object.grasp_height, scene.hand.w, o.object.length
-                                )));
-                            }
-                            continue;
-                        }
-                        "mu_phalanx" => ("contact.mu_s", scene.contact.mu_s.max(scene.contact.mu_d) * hi),
-                        "mu_ground" => ("environment.mu_g", scene.env.mu_g * hi),
-                        "fill" => ("object.density", o.object.density * hi),
-                        _ => ("hand.tau", o.tau * hi),
-                    };
-                    if let Err(rule) = super::limits::limit(limit).check(v) {
-                        return Err(bad(format!("gives {limit} = {v} for object {}: {rule}", o.name)));
-                    }
-                }
-            }
+        let field = format!("robust.uncertainty.{}", row.name);
+        for o in &r.objects {
+            (row.admissible)(lo, hi, o, scene)
+                .map_err(|rule| c.fail(&field, format!("draws in [{lo}, {hi}]"), &rule))?;
         }
     }
     Ok(())

@@ -159,3 +159,18 @@ pub struct SceneParams {
     /// `[scene]` (MODEL.md §14).
     pub setup: super::scene_kind::SceneSetup,
 }
+
+/// One object of a robust problem: its cylinder, grasp height and grip torque.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectCase {
+    /// Its name (CSV columns `NAME.p_stay`, …).
+    pub name: String,
+    /// The cylinder and where it is grasped.
+    pub object: Object,
+    /// The grip torque τ the controller applies to this object (N·m; the spring preload is
+    /// sized once, at `[hand] tau`).
+    pub tau: f64,
+    /// The problem file its cylinder was taken from, as written (None: given inline).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+}

@@ -3,6 +3,7 @@
 //! that every input has its own fixed slot in a scenario's random stream (common random
 //! numbers: adding or removing one uncertain input changes no other input's draws).
 
+use super::scene::{ObjectCase, SceneParams};
 use serde::{Deserialize, Serialize};
 
 /// A distribution of one uncertain input.
@@ -113,31 +114,159 @@ pub fn phi_inv(p: f64) -> f64 {
     x - u / (1.0 + 0.5 * x * u)
 }
 
-/// The uncertain inputs, in their slot order (the order of a scenario's uniform numbers).
-pub const INPUTS: [&str; 7] = ["x_off", "height_offset", "mu_phalanx", "mu_ground", "restitution", "fill", "tau"];
+/// One uncertain input of a grasp: a row of [`INPUTS`]. Everything about the input is here —
+/// its key in `[robust.uncertainty]` and in a scenario's record, what it means, its nominal
+/// value, how a drawn value enters a scenario's scene, which draws are admissible and how it
+/// is shown — so adding an input is adding a row.
+#[derive(Clone, Copy)]
+pub struct InputRow {
+    /// The key (`[robust.uncertainty] NAME`, the record's `inputs.NAME`).
+    pub name: &'static str,
+    /// What it means (docs, errors).
+    pub meaning: &'static str,
+    /// Its value when not uncertain, in the problem's scene.
+    pub nominal: fn(&SceneParams) -> f64,
+    /// A scenario's scene with value `v` of this input (the object's case `o`).
+    pub apply: fn(&mut SceneParams, &ObjectCase, f64),
+    /// Why draws in [lo, hi] are not admissible for object `o` of the problem's scene, if they
+    /// are not (the rule, for the error naming the field).
+    pub admissible: fn(f64, f64, &ObjectCase, &SceneParams) -> Result<(), String>,
+    /// How a value is shown (`gripopt replay --scenario`'s inputs line).
+    pub shown: fn(f64) -> String,
+}
 
-/// What each input means (docs, errors).
-pub const INPUT_MEANINGS: [&str; 7] = [
-    "object offset along the palm (m; replaces [scene] x_off)",
-    "object lowered (−) or raised (+) against the finger plane (m; added to the grasp height)",
-    "factor on the object–phalanx friction mu_s and mu_d",
-    "factor on the object–ground friction mu_g",
-    "restitution e object–phalanx (the value itself)",
-    "fill level: factor on the object's density (its mass)",
-    "factor on the object's grip torque (motor torque tolerance)",
+impl std::fmt::Debug for InputRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+/// The uncertain inputs, in their slot order (the order of a scenario's uniform numbers: a new
+/// input goes at the end, so that no other input's draws change).
+pub const INPUTS: [InputRow; 7] = [
+    InputRow {
+        name: "x_off",
+        meaning: "object offset along the palm (m; replaces [scene] x_off)",
+        nominal: |s| s.setup.x_off,
+        apply: |s, _, v| s.setup.x_off = v,
+        admissible: |lo, hi, _, _| within(lo, hi, -0.1, 0.1, "must keep the offset in [-0.1, 0.1] m"),
+        shown: |v| format!("x_off {:.3} mm", v * 1e3),
+    },
+    InputRow {
+        name: "height_offset",
+        meaning: "object lowered (−) or raised (+) against the finger plane (m; added to the grasp height)",
+        nominal: |_| 0.0,
+        apply: |s, _, v| s.object.grasp_height += v,
+        admissible: |lo, hi, o, scene| {
+            let h = (o.object.grasp_height + lo, o.object.grasp_height + hi);
+            if !(h.0 >= scene.hand.w) || h.1 >= o.object.length {
+                return Err(format!(
+                    "keeps object {}'s grasp height {} + offset on its side, in [hand.w {}, {}) (the fingers clear the floor and stay below the top)",
+                    o.name, o.object.grasp_height, scene.hand.w, o.object.length
+                ));
+            }
+            Ok(())
+        },
+        shown: |v| format!("height offset {:.3} mm", v * 1e3),
+    },
+    InputRow {
+        name: "mu_phalanx",
+        meaning: "factor on the object–phalanx friction mu_s and mu_d",
+        nominal: |_| 1.0,
+        apply: |s, _, v| {
+            s.contact.mu_s *= v;
+            s.contact.mu_d *= v;
+        },
+        admissible: |lo, hi, o, scene| {
+            positive(lo, "a friction factor must be > 0 (no negative or zero friction draws)")?;
+            scaled("contact.mu_s", scene.contact.mu_s.max(scene.contact.mu_d) * hi, o)
+        },
+        shown: |v| format!("phalanx friction x{v:.3}"),
+    },
+    InputRow {
+        name: "mu_ground",
+        meaning: "factor on the object–ground friction mu_g",
+        nominal: |_| 1.0,
+        apply: |s, _, v| s.env.mu_g *= v,
+        admissible: |lo, hi, o, scene| {
+            positive(lo, "a friction factor must be > 0 (no negative or zero friction draws)")?;
+            scaled("environment.mu_g", scene.env.mu_g * hi, o)
+        },
+        shown: |v| format!("ground friction x{v:.3}"),
+    },
+    InputRow {
+        name: "restitution",
+        meaning: "restitution e object–phalanx (the value itself)",
+        nominal: |s| s.contact.restitution,
+        apply: |s, _, v| s.contact.restitution = v,
+        admissible: |lo, hi, _, _| within(lo, hi, 0.01, 0.99, "must keep the restitution in [0.01, 0.99]"),
+        shown: |v| format!("restitution {v:.3}"),
+    },
+    InputRow {
+        name: "fill",
+        meaning: "fill level: factor on the object's density (its mass)",
+        nominal: |_| 1.0,
+        apply: |s, _, v| s.object.density *= v,
+        admissible: |lo, hi, o, _| {
+            positive(lo, "a fill factor must be > 0 (an object has mass)")?;
+            scaled("object.density", o.object.density * hi, o)
+        },
+        shown: |v| format!("fill x{v:.3}"),
+    },
+    InputRow {
+        name: "tau",
+        meaning: "factor on the object's grip torque (motor torque tolerance)",
+        nominal: |_| 1.0,
+        apply: |s, o, v| s.hand.tau = o.tau * v,
+        admissible: |lo, hi, o, _| {
+            positive(lo, "a torque factor must be > 0")?;
+            scaled("hand.tau", o.tau * hi, o)
+        },
+        shown: |v| format!("torque x{v:.4}"),
+    },
 ];
+
+/// Number of uncertain inputs (the rows of [`INPUTS`]).
+pub const N_INPUTS: usize = INPUTS.len();
+
+/// The slot of input `name` in [`INPUTS`].
+pub fn input_slot(name: &str) -> Option<usize> {
+    INPUTS.iter().position(|r| r.name == name)
+}
+
+fn within(lo: f64, hi: f64, a: f64, b: f64, rule: &str) -> Result<(), String> {
+    if lo < a || hi > b {
+        return Err(rule.into());
+    }
+    Ok(())
+}
+
+fn positive(lo: f64, rule: &str) -> Result<(), String> {
+    if !(lo > 0.0) {
+        return Err(rule.into());
+    }
+    Ok(())
+}
+
+/// A scaled value of object `o` within `limit`'s admissible range.
+fn scaled(limit: &str, v: f64, o: &ObjectCase) -> Result<(), String> {
+    super::limits::limit(limit)
+        .check(v)
+        .map(|_| ())
+        .map_err(|rule| format!("gives {limit} = {v} for object {}: {rule}", o.name))
+}
 
 /// `[robust.uncertainty]`: a distribution per uncertain input; `None` = fixed at its nominal.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Uncertainty {
     /// One per input of [`INPUTS`], in that order.
-    pub inputs: [Option<Dist>; 7],
+    pub inputs: [Option<Dist>; N_INPUTS],
 }
 
 impl Uncertainty {
     /// The inputs that are uncertain (slot indices).
     pub fn uncertain(&self) -> Vec<usize> {
-        (0..INPUTS.len()).filter(|&i| self.inputs[i].is_some()).collect()
+        (0..N_INPUTS).filter(|&i| self.inputs[i].is_some()).collect()
     }
 }
 

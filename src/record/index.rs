@@ -3,8 +3,8 @@
 //! evaluated with), read and written whole; and which problem file of a run folder
 //! evaluated which generations ([`ProblemUse`], kept in run.json).
 
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -13,9 +13,11 @@
 //! * plots with axis labels (`xAxisLabel`, `yAxisLabel`), the legend on the left (it never
 //!   covers the curves), x-axis "Path (current)" against the design's own simulated time.
 
+use super::proto::MEAN_FORCE_FIELD;
+use crate::error::Result;
 use crate::fsutil::write_atomic;
-use crate::params::{Problem, SceneKind};
-use crate::Result;
+use crate::params::Problem;
+use crate::sim::series_field;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -112,15 +114,21 @@ fn plot<C: AsRef<str>, L: AsRef<str>>(
     titled(p, title)
 }
 
-/// Plot columns from finger 1's series fields and labels; with `finger2`, each labelled
-/// "finger 1 …", followed by finger 2's own (`finger2_` + the field: the offset scene's
-/// series).
+/// The `/grasp/series` field of the trajectory column `name` (the vocabulary of
+/// `sim::SAMPLE_COLUMNS`).
+fn field(name: &str) -> String {
+    series_field(name).unwrap_or_else(|| panic!("{name}: not a trajectory column")).to_string()
+}
+
+/// Plot columns (series field, label) of finger 1's trajectory columns `columns` (name,
+/// label); with `finger2`, each labelled "finger 1 …", followed by finger 2's own (its
+/// `finger2_` column: the offset scene's series).
 fn finger_columns(columns: &[(&str, &str)], finger2: bool) -> Vec<(String, String)> {
     if !finger2 {
-        return columns.iter().map(|&(f, l)| (f.to_string(), l.to_string())).collect();
+        return columns.iter().map(|&(c, l)| (field(c), l.to_string())).collect();
     }
-    let ones = columns.iter().map(|&(f, l)| (f.to_string(), format!("finger 1 {l}")));
-    ones.chain(columns.iter().map(|&(f, l)| (format!("finger2_{f}"), format!("finger 2 {l}")))).collect()
+    let ones = columns.iter().map(|&(c, l)| (field(c), format!("finger 1 {l}")));
+    ones.chain(columns.iter().map(|&(c, l)| (field(&format!("finger2_{c}")), format!("finger 2 {l}")))).collect()
 }
 
 fn raw_messages(topic: &str, title: &str) -> Value {
@@ -151,14 +159,14 @@ pub fn layout(scene: bool, finger2: bool) -> Value {
     let s = "/grasp/series";
     let mut forces = finger_columns(
         &[
-            ("proximal_normal_force", "proximal normal"),
-            ("distal_normal_force", "distal normal"),
-            ("proximal_friction_force", "proximal friction"),
-            ("distal_friction_force", "distal friction"),
+            ("fn_1", "proximal normal"),
+            ("fn_2", "distal normal"),
+            ("ft_1", "proximal friction"),
+            ("ft_2", "distal friction"),
         ],
         finger2,
     );
-    forces.push(("mean_force_objective".into(), "F~ (objective)".into()));
+    forces.push((MEAN_FORCE_FIELD.into(), "F~ (objective)".into()));
     let angles =
         finger_columns(&[("q11", "q11 (actuated)"), ("q21", "q21 = theta1"), ("theta2", "theta2 (distal)")], finger2);
     let fingers = if finger2 { "both fingers" } else { "finger 1" };
@@ -173,7 +181,7 @@ pub fn layout(scene: bool, finger2: bool) -> Value {
         s,
         "Hand force on the object along y (y clipped to -25..25 N)",
         "F_hand,y (N)",
-        &[("hand_force", "raw"), ("filtered_hand_force", "low-pass T_f")],
+        &[(field("hand_fy"), "raw"), (field("filtered_fy"), "low-pass T_f")],
         Some((-25.0, 25.0)),
     );
     let joints = plot(s, &format!("Joint angles of {fingers}"), "angle (rad)", &angles, None);
@@ -262,7 +270,7 @@ pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
 /// returns its path.
 pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions, problem: &Problem) -> Result<PathBuf> {
     let path = run_dir.join(LAYOUT_FILE);
-    let finger2 = problem.scene.setup.kind == SceneKind::Offset;
+    let finger2 = problem.scene.setup.kind.has_finger2();
     let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0, finger2)).expect("the layout serialises");
     write_atomic(&path, text.as_bytes())?;
     Ok(path)

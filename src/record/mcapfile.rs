@@ -1,18 +1,19 @@
 //! The MCAP file setup shared by the shard writer and the verify recording: an in-memory
 //! writer with gripopt's options (zstd chunks, summary with statistics, chunk and message
-//! indexes), written to a temporary file with one call, synced and renamed into place.
+//! indexes), written with one call through the one atomic, link-refusing write
+//! ([`crate::fsutil::write_atomic`]: a temporary file synced and renamed into place).
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use mcap::records::MessageHeader;
-use std::io::{Cursor, Write as _};
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 /// An MCAP writer framing the file in memory.
 pub(super) type MemWriter = mcap::Writer<Cursor<Vec<u8>>>;
 
-/// The temporary file beside `path` that [`finish`] renames into place.
+/// The temporary file beside `path` that [`finish`] renames into place (`.NAME.tmp`).
 pub(super) fn temporary(path: &Path) -> PathBuf {
-    path.with_extension("mcap.tmp")
+    crate::fsutil::atomic::temporary(path)
 }
 
 /// An MCAP error while writing `path`'s temporary file.
@@ -79,21 +80,11 @@ where
     Ok(())
 }
 
-/// Finish `w`, write its bytes to `tmp` with one call, sync, and rename to `path`; the size
-/// in bytes.
+/// Finish `w` and write its bytes to `path` atomically with one call (`tmp` names the
+/// file in the errors of the finish); the size in bytes.
 pub(super) fn finish(mut w: MemWriter, tmp: &Path, path: &Path) -> Result<u64> {
     w.finish().map_err(error(tmp))?;
     let bytes = w.into_inner().into_inner();
-    let written = (|| {
-        let mut f = std::fs::File::create(tmp).map_err(|e| Error::io(tmp, "cannot create", e))?;
-        f.write_all(&bytes).map_err(|e| Error::io(tmp, "cannot write", e))?;
-        f.sync_all().map_err(|e| Error::io(tmp, "cannot sync", e))?;
-        drop(f);
-        std::fs::rename(tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary recording into place", e))
-    })();
-    if written.is_err() {
-        let _ = std::fs::remove_file(tmp); // nothing half-written left behind
-    }
-    written?;
+    crate::fsutil::write_atomic(path, &bytes)?;
     Ok(bytes.len() as u64)
 }

@@ -3,9 +3,12 @@
 
 use super::entry::DesignEntry;
 use super::options::{RecordOptions, Resolution};
-use super::proto::GraspSeries;
+use super::proto::{GraspSeries, MEAN_FORCE_FIELD};
 use super::schema::{DesignMessage, DesignParameters, StageSeconds, Window};
-use crate::sim::{FingerSample, Sample};
+use crate::sim::{
+    finger_from_values, finger_values, sample_from_values, sample_series_fields, sample_values, FingerSample, Sample,
+    FINGER_COLUMNS,
+};
 
 pub use super::scene::{
     discarded_scene, drawn_scene, frames, free_fingers, free_frames, free_static_scene, scene, static_scene,
@@ -90,43 +93,33 @@ pub fn series(
         simulated_samples: simulated as u32,
         ..Default::default()
     };
+    // the columns by the trajectory's vocabulary: a sample's values after the time, each
+    // into its `/grasp/series` field
+    let columns: Vec<&str> = sample_series_fields().collect();
     if kept.is_empty() {
         m.t.push(0.0);
-        for c in m.value_columns_mut() {
-            c.push(f64::NAN);
+        for c in columns.iter().copied().chain([MEAN_FORCE_FIELD]) {
+            m.column_mut(c).expect("a series field").push(f64::NAN);
         }
         if finger2 {
-            for c in m.finger2_columns_mut() {
-                c.push(f64::NAN);
+            for c in &FINGER_COLUMNS {
+                m.column_mut(c.finger2_series).expect("a series field").push(f64::NAN);
             }
         }
         return m;
     }
     let f_tilde = d.record.objectives()[2].map_or(f64::NAN, |f| at_precision(f, r));
-    for &k in kept {
-        let s = &samples[k];
-        let p = |x: f64| at_precision(x, r);
-        m.t.push(s.t);
-        m.q11.push(p(s.q[0]));
-        m.q21.push(p(s.q[1]));
-        m.q11_dot.push(p(s.qd[0]));
-        m.q21_dot.push(p(s.qd[1]));
-        m.theta2.push(p(s.theta2));
-        m.proximal_penetration.push(p(s.delta[0]));
-        m.distal_penetration.push(p(s.delta[1]));
-        m.proximal_normal_force.push(p(s.normal[0]));
-        m.distal_normal_force.push(p(s.normal[1]));
-        m.proximal_friction_force.push(p(s.friction[0]));
-        m.distal_friction_force.push(p(s.friction[1]));
-        m.hand_force.push(p(s.hand_fy));
-        m.filtered_hand_force.push(p(s.filtered_fy));
-        m.energy.push(p(s.energy));
-        m.energy_excess.push(p(s.energy_excess));
-        m.mean_force_objective.push(f_tilde);
-        if let Some(f2) = &s.finger2 {
-            for (c, v) in m.finger2_columns_mut().into_iter().zip(f2.values()) {
-                c.push(p(v));
-            }
+    let p = |x: f64| at_precision(x, r);
+    let rows: Vec<[f64; 16]> = kept.iter().map(|&k| sample_values(&samples[k])).collect();
+    m.t = rows.iter().map(|v| v[0]).collect();
+    for (j, c) in columns.iter().enumerate() {
+        *m.column_mut(c).expect("a series field") = rows.iter().map(|v| p(v[1 + j])).collect();
+    }
+    m.mean_force_objective = vec![f_tilde; rows.len()];
+    let finger2: Vec<[f64; 11]> = kept.iter().filter_map(|&k| samples[k].finger2.as_ref().map(finger_values)).collect();
+    for (j, c) in FINGER_COLUMNS.iter().enumerate() {
+        if !finger2.is_empty() {
+            *m.column_mut(c.finger2_series).expect("a series field") = finger2.iter().map(|v| p(v[j])).collect();
         }
     }
     m
@@ -180,23 +173,8 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
         return Some(vec![]);
     }
     let n = m.t.len();
-    let cols = [
-        &m.q11,
-        &m.q21,
-        &m.q11_dot,
-        &m.q21_dot,
-        &m.theta2,
-        &m.proximal_penetration,
-        &m.distal_penetration,
-        &m.proximal_normal_force,
-        &m.distal_normal_force,
-        &m.proximal_friction_force,
-        &m.distal_friction_force,
-        &m.hand_force,
-        &m.filtered_hand_force,
-        &m.energy,
-        &m.energy_excess,
-    ];
+    let cols: Vec<&Vec<f64>> =
+        sample_series_fields().map(|f| m.column(f).expect("the vocabulary's fields are the series'")).collect();
     if cols.iter().any(|c| c.len() != n) {
         return None;
     }
@@ -214,24 +192,17 @@ pub fn samples_from(m: &GraspSeries) -> Option<Vec<Sample>> {
             for (x, c) in v.iter_mut().zip(&f2[..cols]) {
                 *x = c[k];
             }
-            FingerSample::from_values(v)
+            finger_from_values(&v)
         })
     };
     Some(
         (0..n)
-            .map(|k| Sample {
-                t: m.t[k],
-                q: [m.q11[k], m.q21[k]],
-                qd: [m.q11_dot[k], m.q21_dot[k]],
-                theta2: m.theta2[k],
-                delta: [m.proximal_penetration[k], m.distal_penetration[k]],
-                normal: [m.proximal_normal_force[k], m.distal_normal_force[k]],
-                friction: [m.proximal_friction_force[k], m.distal_friction_force[k]],
-                hand_fy: m.hand_force[k],
-                filtered_fy: m.filtered_hand_force[k],
-                energy: m.energy[k],
-                energy_excess: m.energy_excess[k],
-                finger2: finger2_at(k),
+            .map(|k| {
+                let mut v = [m.t[k]; 16];
+                for (x, c) in v[1..].iter_mut().zip(&cols) {
+                    *x = c[k];
+                }
+                sample_from_values(&v, finger2_at(k))
             })
             .collect(),
     )

@@ -241,8 +241,8 @@ impl RunMetadata {
             scene_kind: m
                 .get("scene_kind")
                 .map(|v| {
-                    SceneKind::parse(v)
-                        .ok_or_else(|| format!("metadata `scene_kind` is {v:?}, not centred, offset or free"))
+                    v.parse::<SceneKind>()
+                        .map_err(|()| format!("metadata `scene_kind` is {v:?}, not centred, offset or free"))
                 })
                 .transpose()?,
             x_off: f("x_off")?,

@@ -1,4 +1,6 @@
-//! Recording every evaluated design and its grasp to MCAP, and replaying designs.
+//! Recording every evaluated design and its grasp to MCAP, and reading designs back (`read`)
+//! and comparing them, typed, with a re-evaluation (`compare`; the replay itself, which
+//! re-runs a design through its study, is the app layer's).
 //!
 //! Layout of `RUN_DIR/recording/`: one MCAP shard per generation (`gen-00001.mcap`, …),
 //! written to a temporary file and renamed when complete, so a run killed mid-generation
@@ -20,6 +22,7 @@
 //! front ([`write_front`]). Every recording draws one physical scene (`scene`: `world` z up,
 //! the hand horizontal at the grasp height, the object standing on the ground).
 
+mod compare;
 mod entry;
 mod front;
 mod index;
@@ -30,13 +33,14 @@ mod messages;
 mod metadata;
 mod options;
 mod proto;
+mod read;
 mod recover;
-mod replay;
 mod scene;
 mod schema;
 mod verify_rec;
 mod writer;
 
+pub use compare::{compare_grasp, compare_robust, AcrossRevisions, Comparison};
 pub use entry::{DesignEntry, Recordable};
 pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
 pub use index::{read_index, ProblemUse, ShardEntry};
@@ -50,9 +54,12 @@ pub use options::{
     RecordOptions, Resolution, TrajectoryKeep, COMPACT_DT, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS,
 };
 pub use proto::{GraspSeries, SERIES_NAME};
-pub use recover::{index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, Recovery};
-pub use replay::{problem_of_generation, read_design, replay, AcrossRevisions, Recorded, Replay, RunProblem};
+pub use read::{problem_of_generation, read_design, run_recording, Recorded, RunProblem};
+pub use recover::{
+    index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, shard_metadata, Recovery,
+};
 pub use scene::{HAND, OBJECT, WORLD};
+pub use schema::design as design_schema;
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};
 pub use verify_rec::{
     band_s, free_window, keep_poses, parameters as verify_parameters, scenario_window, verify_schema,

@@ -116,9 +116,9 @@ impl RecordOptions {
     /// `--zstd-level`, `--zstd-threads`, `--record-full`): every ≥ 1 and only with a
     /// full-resolution recording of trajectories, full resolution only with trajectories,
     /// a finite scene interval ≥ 0, zstd levels 1 to 22, at most 256 zstd threads.
-    pub fn validate(&self) -> crate::Result<()> {
+    pub fn validate(&self) -> crate::error::Result<()> {
         let bad = |field: &str, value: String, rule: &str| {
-            Err(crate::Error::InvalidField {
+            Err(crate::error::Error::InvalidField {
                 file: "command line".into(),
                 field: field.into(),
                 value,

@@ -1,9 +1,11 @@
 //! gripopt's own protobuf message, `gripopt.GraspSeries` (one per design on
 //! `/grasp/series`): prost encodes and decodes it; its schema (a serialized
-//! `FileDescriptorSet`, as MCAP's protobuf profile wants) is built from the same field
-//! table, [`SERIES_FIELDS`], so the two cannot drift apart silently (a unit test decodes a
-//! message field by field against the table).
+//! `FileDescriptorSet`, as MCAP's protobuf profile wants) is built from the trajectory's
+//! vocabulary (`sim::SAMPLE_COLUMNS` and `FINGER_COLUMNS`, each column's `/grasp/series`
+//! field), [`series_fields`], so the two cannot drift apart silently (a unit test fills every
+//! column by its name and decodes the message field by field against the table).
 
+use crate::sim::{sample_series_fields, FINGER_COLUMNS, TIME};
 use prost::Message;
 use prost_types::field_descriptor_proto::{Label, Type};
 use prost_types::{DescriptorProto, FieldDescriptorProto, FileDescriptorProto, FileDescriptorSet};
@@ -115,107 +117,90 @@ pub struct GraspSeries {
     pub finger2_distal_friction_force: Vec<f64>,
 }
 
+/// `column` and `column_mut`: a repeated double field of [`GraspSeries`] by its name (the
+/// one place the message's fields are named besides their declaration).
+macro_rules! columns_by_name {
+    ($($field:ident),* $(,)?) => {
+        impl GraspSeries {
+            /// The column of the repeated field `name` (None: no such field).
+            pub fn column(&self, name: &str) -> Option<&Vec<f64>> {
+                match name {
+                    $(stringify!($field) => Some(&self.$field),)*
+                    _ => None,
+                }
+            }
+            /// The column of the repeated field `name`, mutable.
+            pub fn column_mut(&mut self, name: &str) -> Option<&mut Vec<f64>> {
+                match name {
+                    $(stringify!($field) => Some(&mut self.$field),)*
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+
+columns_by_name!(
+    t,
+    q11,
+    q21,
+    q11_dot,
+    q21_dot,
+    theta2,
+    proximal_penetration,
+    distal_penetration,
+    proximal_normal_force,
+    distal_normal_force,
+    proximal_friction_force,
+    distal_friction_force,
+    hand_force,
+    filtered_hand_force,
+    energy,
+    energy_excess,
+    mean_force_objective,
+    finger2_q11,
+    finger2_q21,
+    finger2_q11_dot,
+    finger2_q21_dot,
+    finger2_theta2,
+    finger2_proximal_penetration,
+    finger2_distal_penetration,
+    finger2_proximal_normal_force,
+    finger2_distal_normal_force,
+    finger2_proximal_friction_force,
+    finger2_distal_friction_force,
+);
+
+/// The field after a sample's values: the design's F̃ repeated on every sample.
+pub const MEAN_FORCE_FIELD: &str = "mean_force_objective";
+
 impl GraspSeries {
-    /// Finger 2's columns (offset scene), in tag order: [`FINGER2_FIELDS`].
+    /// Finger 2's columns (offset scene), in the order of `sim::FINGER_COLUMNS`.
     pub fn finger2_columns(&self) -> [&Vec<f64>; 11] {
-        [
-            &self.finger2_q11,
-            &self.finger2_q21,
-            &self.finger2_q11_dot,
-            &self.finger2_q21_dot,
-            &self.finger2_theta2,
-            &self.finger2_proximal_penetration,
-            &self.finger2_distal_penetration,
-            &self.finger2_proximal_normal_force,
-            &self.finger2_distal_normal_force,
-            &self.finger2_proximal_friction_force,
-            &self.finger2_distal_friction_force,
-        ]
-    }
-
-    /// Finger 2's columns, mutable.
-    pub(crate) fn finger2_columns_mut(&mut self) -> [&mut Vec<f64>; 11] {
-        [
-            &mut self.finger2_q11,
-            &mut self.finger2_q21,
-            &mut self.finger2_q11_dot,
-            &mut self.finger2_q21_dot,
-            &mut self.finger2_theta2,
-            &mut self.finger2_proximal_penetration,
-            &mut self.finger2_distal_penetration,
-            &mut self.finger2_proximal_normal_force,
-            &mut self.finger2_distal_normal_force,
-            &mut self.finger2_proximal_friction_force,
-            &mut self.finger2_distal_friction_force,
-        ]
-    }
-
-    /// Every value column (all but `t`), in tag order.
-    pub(crate) fn value_columns_mut(&mut self) -> [&mut Vec<f64>; 16] {
-        [
-            &mut self.q11,
-            &mut self.q21,
-            &mut self.q11_dot,
-            &mut self.q21_dot,
-            &mut self.theta2,
-            &mut self.proximal_penetration,
-            &mut self.distal_penetration,
-            &mut self.proximal_normal_force,
-            &mut self.distal_normal_force,
-            &mut self.proximal_friction_force,
-            &mut self.distal_friction_force,
-            &mut self.hand_force,
-            &mut self.filtered_hand_force,
-            &mut self.energy,
-            &mut self.energy_excess,
-            &mut self.mean_force_objective,
-        ]
+        FINGER_COLUMNS.map(|c| self.column(c.finger2_series).expect("finger 2's fields are the series'"))
     }
 }
 
-/// (name, number, type, repeated) of every field of [`GraspSeries`], in tag order.
-pub const SERIES_FIELDS: [(&str, i32, Type, bool); 20] = [
-    ("design_id", 1, Type::Uint64, false),
-    ("full_resolution", 2, Type::Bool, false),
-    ("simulated_samples", 3, Type::Uint32, false),
-    ("t", 4, Type::Double, true),
-    ("q11", 5, Type::Double, true),
-    ("q21", 6, Type::Double, true),
-    ("q11_dot", 7, Type::Double, true),
-    ("q21_dot", 8, Type::Double, true),
-    ("theta2", 9, Type::Double, true),
-    ("proximal_penetration", 10, Type::Double, true),
-    ("distal_penetration", 11, Type::Double, true),
-    ("proximal_normal_force", 12, Type::Double, true),
-    ("distal_normal_force", 13, Type::Double, true),
-    ("proximal_friction_force", 14, Type::Double, true),
-    ("distal_friction_force", 15, Type::Double, true),
-    ("hand_force", 16, Type::Double, true),
-    ("filtered_hand_force", 17, Type::Double, true),
-    ("energy", 18, Type::Double, true),
-    ("energy_excess", 19, Type::Double, true),
-    ("mean_force_objective", 20, Type::Double, true),
-];
+/// (name, number, type, repeated) of every field of [`GraspSeries`], in tag order: the
+/// design's id, resolution and sample count, the time, a sample's values named by the
+/// trajectory vocabulary (`sim::SAMPLE_COLUMNS`, each its `/grasp/series` field) and the
+/// design's F̃; with `finger2` (a shard of the offset scene) finger 2's own values after them
+/// (their angles since session 36, the rest since session 37).
+pub fn series_fields(finger2: bool) -> Vec<(&'static str, i32, Type, bool)> {
+    let head = [
+        ("design_id", Type::Uint64, false),
+        ("full_resolution", Type::Bool, false),
+        ("simulated_samples", Type::Uint32, false),
+        (TIME.series, Type::Double, true),
+    ];
+    let values = sample_series_fields().chain([MEAN_FORCE_FIELD]).map(|f| (f, Type::Double, true));
+    let f2 = FINGER_COLUMNS.iter().filter(|_| finger2).map(|c| (c.finger2_series, Type::Double, true));
+    head.into_iter().chain(values).chain(f2).zip(1..).map(|((name, ty, rep), tag)| (name, tag, ty, rep)).collect()
+}
 
-/// The fields of finger 2's own state and contacts (offset scene), after [`SERIES_FIELDS`]:
-/// its angles (since session 36), then its rates, θ2 and contacts (since session 37).
-pub const FINGER2_FIELDS: [(&str, i32, Type, bool); 11] = [
-    ("finger2_q11", 21, Type::Double, true),
-    ("finger2_q21", 22, Type::Double, true),
-    ("finger2_q11_dot", 23, Type::Double, true),
-    ("finger2_q21_dot", 24, Type::Double, true),
-    ("finger2_theta2", 25, Type::Double, true),
-    ("finger2_proximal_penetration", 26, Type::Double, true),
-    ("finger2_distal_penetration", 27, Type::Double, true),
-    ("finger2_proximal_normal_force", 28, Type::Double, true),
-    ("finger2_distal_normal_force", 29, Type::Double, true),
-    ("finger2_proximal_friction_force", 30, Type::Double, true),
-    ("finger2_distal_friction_force", 31, Type::Double, true),
-];
-
-/// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3): [`SERIES_FIELDS`],
-/// and with `finger2` (a shard of the offset scene) [`FINGER2_FIELDS`] too — a centred run's
-/// shards keep the schema, and so the bytes, they always had.
+/// The serialized `FileDescriptorSet` of `gripopt.GraspSeries` (proto3): [`series_fields`]
+/// (finger 2's only with `finger2`, a shard of the offset scene — a centred run's shards
+/// keep the schema, and so the bytes, they always had).
 pub fn series_descriptor(finger2: bool) -> Vec<u8> {
     let field = |(name, number, ty, repeated): (&str, i32, Type, bool)| FieldDescriptorProto {
         name: Some(name.into()),
@@ -227,7 +212,7 @@ pub fn series_descriptor(finger2: bool) -> Vec<u8> {
     };
     let msg = DescriptorProto {
         name: Some("GraspSeries".into()),
-        field: SERIES_FIELDS.into_iter().chain(FINGER2_FIELDS.into_iter().filter(|_| finger2)).map(field).collect(),
+        field: series_fields(finger2).into_iter().map(field).collect(),
         ..Default::default()
     };
     let file = FileDescriptorProto {
@@ -246,14 +231,14 @@ mod tests {
 
     #[test]
     fn descriptor_matches_the_encoding() {
-        // every field gets a distinct value; decode the bytes by hand with the table
+        // every column gets a distinct value through its name; decode the bytes by hand with
+        // the table built from the vocabulary
         let mut m = GraspSeries { design_id: 7, full_resolution: true, simulated_samples: 3, ..Default::default() };
-        m.t.push(0.5);
-        for (k, c) in m.value_columns_mut().into_iter().enumerate() {
-            c.push(k as f64 + 1.5);
-        }
-        for (k, c) in m.finger2_columns_mut().into_iter().enumerate() {
-            c.push(k as f64 + 17.5);
+        let fields = series_fields(true);
+        for (name, tag, ty, _) in &fields {
+            if *ty == Type::Double {
+                m.column_mut(name).unwrap_or_else(|| panic!("{name}: not a field")).push(*tag as f64 - 3.5);
+            }
         }
         let b = m.encode_to_vec();
         let mut i = 0;
@@ -270,8 +255,7 @@ mod tests {
                 }
             }
             let (tag, wire) = ((key >> 3) as i32, (key & 7) as u8);
-            let (_, _, ty, rep) =
-                SERIES_FIELDS.iter().chain(&FINGER2_FIELDS).find(|f| f.1 == tag).copied().expect("field in the table");
+            let (_, _, ty, rep) = fields.iter().find(|f| f.1 == tag).copied().expect("field in the table");
             match (ty, rep) {
                 (Type::Double, true) => {
                     assert_eq!((wire, b[i]), (2, 8), "packed double");
@@ -287,6 +271,11 @@ mod tests {
             seen.push(tag);
         }
         assert_eq!(seen, (1..=31).collect::<Vec<_>>());
+        // the fields of every recording written keep their names and tags
+        for pinned in [("t", 4), ("proximal_penetration", 10), ("energy_excess", 19), ("mean_force_objective", 20)] {
+            assert!(fields.iter().any(|f| (f.0, f.1) == pinned), "{pinned:?}");
+        }
+        assert!(fields.iter().any(|f| (f.0, f.1) == ("finger2_distal_friction_force", 31)));
         // the centred scene's schema is the one of older recordings: the offset fields only with `finger2`
         let (plain, with2) = (series_descriptor(false), series_descriptor(true));
         let names = |b: &[u8]| {

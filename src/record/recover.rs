@@ -7,7 +7,8 @@
 //! after the checkpoint (left by a generation that was being recorded when the run stopped)
 //! are removed when they are provably this run's (their metadata names it); one that
 //! cannot be read, is not a regular file, or that another run or program wrote, is set
-//! aside (renamed, never deleted). gripopt's temporary files (`*.tmp`) are removed. A
+//! aside (moved into `recording/set-aside/`, never deleted), and so is a temporary file
+//! (`*.tmp`: its content proves nothing, a name is no proof). A
 //! covered shard whose summary or metadata cannot be read (listed in the index or not), or
 //! that another run or program wrote, stops the recovery before anything is changed (its
 //! designs would silently leave the index, or be taken for this run's); a covered
@@ -23,7 +24,7 @@
 
 use super::index::ShardEntry;
 use super::metadata::{RunMetadata, RUN_METADATA};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// What recovery did to a recording folder.
@@ -33,12 +34,15 @@ pub struct Recovery {
     pub index: Vec<ShardEntry>,
     /// Index lines rebuilt from shards (the index was missing, corrupt or lacked them).
     pub rebuilt: Vec<String>,
-    /// Files removed (this run's shards of generations after the checkpoint, temporary
-    /// files).
+    /// Files removed: this run's shards of generations after the checkpoint (their metadata
+    /// names the run).
     pub removed: Vec<String>,
-    /// Files set aside (renamed to `NAME.set-aside`): shards of generations after the
-    /// checkpoint that cannot be read or that another run wrote.
+    /// Files set aside (moved into `recording/set-aside/`): shards of generations after the
+    /// checkpoint that cannot be read or that another run wrote, temporary files.
     pub set_aside: Vec<String>,
+    /// Where each of `set_aside` went, relative to the recording folder
+    /// (`set-aside/NAME`, `set-aside/NAME.1` when taken).
+    pub set_aside_as: Vec<String>,
     /// Generations the checkpoint covers that have no shard (moved away or lost): their
     /// designs are not in the recording; the index keeps the gap in ids, which
     /// [`read_design`](super::read_design) names.
@@ -67,8 +71,13 @@ impl Recovery {
             };
             out.push(format!("{}: {gens} no shard ({files}): those designs are not in the recording; restore the file(s) and resume again to index them", dir.display()));
         }
-        for f in &self.set_aside {
-            out.push(format!("{}: {f} is not this run's shard (unreadable, not a regular file, or written by another run or program) and lies after the checkpoint: set aside as {f}.set-aside", dir.display()));
+        for (f, to) in self.set_aside.iter().zip(&self.set_aside_as) {
+            let what = if f.ends_with(".tmp") {
+                "is a temporary file (a write the run did not finish; its content proves nothing)"
+            } else {
+                "is not this run's shard (unreadable, not a regular file, or written by another run or program) and lies after the checkpoint"
+            };
+            out.push(format!("{}: {f} {what}: set aside as {to} (never deleted)", dir.display()));
         }
         out
     }
@@ -118,6 +127,48 @@ fn origin(e: &ShardEntry, gripopt: bool) -> String {
     }
 }
 
+/// The MCAP summary of the shard `path` mapped as `buf` (an error naming it when the file
+/// is truncated or damaged).
+fn summary_of(path: &Path, buf: &[u8]) -> Result<mcap::Summary> {
+    mcap::Summary::read(buf)
+        .map_err(|source| Error::DamagedRecording {
+            path: path.to_path_buf(),
+            what: "cannot read the MCAP summary (the file is truncated or damaged)".into(),
+            source: source.into(),
+        })?
+        .ok_or_else(|| Error::Recording {
+            path: path.to_path_buf(),
+            message: "no MCAP summary; the file is truncated or corrupt".into(),
+        })
+}
+
+/// The `gripopt.run` metadata record of the shard `path` (mapped as `buf`, its `summary`
+/// read); None: it has none (another program's MCAP).
+fn metadata_of(path: &Path, buf: &[u8], summary: &mcap::Summary) -> Result<Option<RunMetadata>> {
+    let mut meta = None;
+    for mi in summary.metadata_indexes.iter().filter(|m| m.name == RUN_METADATA) {
+        let m = mcap::read::metadata(buf, mi).map_err(|source| Error::DamagedRecording {
+            path: path.to_path_buf(),
+            what: "cannot read the metadata record".into(),
+            source: source.into(),
+        })?;
+        meta = Some(
+            RunMetadata::from_map(&m.metadata)
+                .map_err(|message| Error::Recording { path: path.to_path_buf(), message })?,
+        );
+    }
+    Ok(meta)
+}
+
+/// The `gripopt.run` metadata record of the MCAP file `path` (only its summary and that
+/// record read): what a cleanup decides from (the run, or the benchmark, that wrote it);
+/// None: another program's MCAP; an error when it cannot be read.
+pub fn shard_metadata(path: &Path) -> Result<Option<RunMetadata>> {
+    let buf = map_shard(path)?;
+    let summary = summary_of(path, &buf)?;
+    metadata_of(path, &buf, &summary)
+}
+
 /// Rebuild the index line of one shard from the file (see the module doc).
 pub fn index_entry_from_shard(path: &Path) -> Result<ShardEntry> {
     read_shard(path).map(|(e, _)| e)
@@ -128,22 +179,8 @@ fn read_shard(path: &Path) -> Result<(ShardEntry, bool)> {
     let file = path.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string();
     let bad = |message: String| Error::Recording { path: path.to_path_buf(), message };
     let buf = map_shard(path)?;
-    let summary = mcap::Summary::read(&buf)
-        .map_err(|source| Error::DamagedRecording {
-            path: path.to_path_buf(),
-            what: "cannot read the MCAP summary (the file is truncated or damaged)".into(),
-            source: source.into(),
-        })?
-        .ok_or_else(|| bad("no MCAP summary; the file is truncated or corrupt".into()))?;
-    let mut meta = None;
-    for mi in summary.metadata_indexes.iter().filter(|m| m.name == RUN_METADATA) {
-        let m = mcap::read::metadata(&buf, mi).map_err(|source| Error::DamagedRecording {
-            path: path.to_path_buf(),
-            what: "cannot read the metadata record".into(),
-            source: source.into(),
-        })?;
-        meta = Some(RunMetadata::from_map(&m.metadata).map_err(bad)?);
-    }
+    let summary = summary_of(path, &buf)?;
+    let meta = metadata_of(path, &buf, &summary)?;
     let gripopt = meta.is_some();
     let meta = meta.unwrap_or_default();
     let (generation, first, last, count) =
@@ -238,9 +275,10 @@ pub fn recover(dir: &Path, completed: u64) -> Result<Recovery> {
 
 /// Recover the recording folder `dir` of run `run_id` whose checkpoint covers generations
 /// `1..=completed`: keep every shard of those generations in the index (rebuilding lines
-/// the index lacks or gets wrong), remove this run's shards of later generations and `.tmp`
-/// files, set aside later shards that are not provably this run's. Writes nothing else;
-/// the caller writes the returned index.
+/// the index lacks or gets wrong), remove this run's shards of later generations (their
+/// metadata names `run_id`), set aside ([`crate::fsutil::set_aside`]) later shards that
+/// are not provably this run's and `.tmp` files. Writes nothing else; the caller writes the
+/// returned index.
 ///
 /// A shard of a covered generation that another run wrote (its metadata's `run_id`; an MCAP
 /// without a `gripopt.run` metadata record is another program's), or whose summary and
@@ -258,7 +296,8 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
     let (mut remove, mut aside) = (vec![], vec![]);
     for n in &names {
         if n.ends_with(".tmp") {
-            remove.push(n.clone());
+            // a name proves nothing: set aside, never deleted
+            aside.push(n.clone());
             continue;
         }
         let Some(g) = shard_generation(n) else { continue };
@@ -266,7 +305,8 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
         let read = read_shard(&p);
         if g > completed {
             match read {
-                Ok((e, gripopt)) if !foreign(run_id, &e, gripopt) => remove.push(n.clone()),
+                // removed only when its metadata names this run (no run id to compare: set aside)
+                Ok((e, gripopt)) if run_id.is_some() && !foreign(run_id, &e, gripopt) => remove.push(n.clone()),
                 _ => aside.push(n.clone()),
             }
             continue;
@@ -312,23 +352,15 @@ pub fn recover_run(dir: &Path, completed: u64, run_id: Option<&str>) -> Result<R
     out.missing = (1..=completed).filter(|g| !out.index.iter().any(|e| e.generation == *g)).collect();
     for n in remove {
         let p = dir.join(&n);
-        let what = if n.ends_with(".tmp") {
-            "cannot remove the temporary file"
-        } else {
-            "cannot remove the shard of a generation after the checkpoint"
-        };
-        std::fs::remove_file(&p).map_err(|e| Error::io(&p, what, e))?;
+        std::fs::remove_file(&p)
+            .map_err(|e| Error::io(&p, "cannot remove the shard of a generation after the checkpoint", e))?;
         out.removed.push(n);
     }
     for n in aside {
-        // a name not taken: nothing is overwritten
-        let to = (0..)
-            .map(|k| dir.join(if k == 0 { format!("{n}.set-aside") } else { format!("{n}.set-aside.{k}") }))
-            .find(|t| !t.exists())
-            .expect("a free name");
-        let p = dir.join(&n);
-        std::fs::rename(&p, &to).map_err(|e| Error::io(&p, "cannot set aside the unreadable or foreign shard", e))?;
+        let to = crate::fsutil::set_aside(dir, &n)?;
+        let rel = to.strip_prefix(dir).unwrap_or(&to).to_string_lossy().into_owned();
         out.set_aside.push(n);
+        out.set_aside_as.push(rel);
     }
     Ok(out)
 }

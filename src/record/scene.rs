@@ -16,7 +16,7 @@
 use super::entry::DesignEntry;
 use crate::math::V2;
 use crate::model::{closed_pose, singularity_sweep, Finger, SweepFailure};
-use crate::params::{Design, Problem, SceneKind, SceneParams};
+use crate::params::{Design, Problem, SceneParams};
 use crate::sim::Sample;
 use foxglove::messages::{
     line_primitive, scene_entity_deletion, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
@@ -92,12 +92,12 @@ pub fn frames(t_ns: u64, sc: &SceneParams) -> FrameTransforms {
 /// at y = R touching the palm (at x = x_off in the offset scene), standing on the ground
 /// (its base at z = −h_c).
 pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
-    let x = if sc.setup.kind == SceneKind::Offset { sc.setup.x_off } else { 0.0 };
+    let x = if sc.setup.kind.has_finger2() { sc.setup.x_off } else { 0.0 };
     [x, sc.object.radius, sc.object.length / 2.0 - sc.object.grasp_height]
 }
 
 /// The scene a design's picture is drawn in: the problem's, except for a robust design that
-/// stage 2 discarded on another of its objects (its reason "object NAME: …"): then that
+/// stage 2 discarded on another of its objects ([`crate::eval::Record::failed_object`]): then that
 /// object's cylinder (radius and length), standing on the ground under the reference's hand
 /// plane, so that the red closed pose that failed is drawn on the object it failed on; and
 /// for a design of the offset scene discarded at stages 0–2, whose statics are the centred
@@ -105,15 +105,15 @@ pub fn object_centre(sc: &SceneParams) -> [f64; 3] {
 /// closed pose was computed.
 pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, SceneParams> {
     let sc = &problem.scene;
-    if sc.setup.kind == SceneKind::Offset && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
+    if sc.setup.kind.has_finger2() && matches!(d.record.verdict.failed_stage, Some(0..=2)) {
         let mut centred = sc.clone();
-        centred.setup.kind = SceneKind::Centred;
+        centred.setup = centred.setup.to_centred();
         return Cow::Owned(centred);
     }
-    let failed_on =
-        (d.record.verdict.failed_stage == Some(2)).then_some(d.record.verdict.reason.as_deref()).flatten().and_then(
-            |why| problem.robust.as_ref()?.objects.iter().find(|o| why.starts_with(&format!("object {}: ", o.name))),
-        );
+    let failed_on = (d.record.verdict.failed_stage == Some(2))
+        .then(|| d.record.failed_object())
+        .flatten()
+        .and_then(|o| problem.robust.as_ref()?.objects.get(o));
     match failed_on {
         Some(o) if (o.object.radius, o.object.length) != (sc.object.radius, sc.object.length) => {
             let mut drawn = sc.clone();
@@ -155,7 +155,7 @@ pub const LABEL_MAX_CHARS: usize = 120;
 /// verify`): "k (gen g) centred grasp; free scene's verdict: …".
 pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
     let head = format!("{} (gen {})", d.id, d.generation);
-    if sc.setup.kind == SceneKind::Free && d.record.free_scene.is_some() {
+    if sc.setup.kind.is_free() && d.record.free_scene.is_some() {
         verdict_after(d, format!("{head} centred grasp; free scene's verdict:"))
     } else {
         verdict_after(d, head)

@@ -139,12 +139,17 @@ fn free_scene_properties(method: Method) -> Value {
     keys.as_object().expect("an object").keys().map(|k| (k.clone(), type_of(k))).collect()
 }
 
+/// An object of numbers with `keys`.
+fn nums(keys: &[&str]) -> Value {
+    Value::Object(keys.iter().map(|k| (k.to_string(), num())).collect())
+}
+
 /// The robust sub-record (issue 22): one type per key, arrays with typed items.
 fn robust_schema() -> Value {
-    let nums = |keys: &[&str]| -> Value { Value::Object(keys.iter().map(|k| (k.to_string(), num())).collect()) };
     let pair = json!({"type": "array", "items": int()});
-    let mut object =
-        nums(&["max_offset", "alpha", "mean_force", "t_stab", "p_stay", "p_stay_lo", "p_stay_hi", "max_displacement"]);
+    let keys =
+        crate::eval::objective_names().into_iter().chain(["p_stay", "p_stay_lo", "p_stay_hi", "max_displacement"]);
+    let mut object = nums(&keys.collect::<Vec<_>>());
     object["name"] = json!({"type": "string"});
     object["scenarios"] = int();
     object["stays"] = int();
@@ -152,7 +157,8 @@ fn robust_schema() -> Value {
     let mut scenario = nums(&["t_stab", "max_displacement", "max_tilt_deg"]);
     scenario["object"] = int();
     scenario["k"] = int();
-    scenario["inputs"] = obj(nums(&crate::params::INPUTS), &[]);
+    let inputs: Vec<&str> = crate::params::INPUTS.iter().map(|r| r.name).collect();
+    scenario["inputs"] = obj(nums(&inputs), &[]);
     scenario["stays"] = json!({"type": "boolean"});
     scenario["cause"] = json!({"type": "string"});
     scenario["rhs_evals"] = pair.clone();
@@ -161,7 +167,7 @@ fn robust_schema() -> Value {
         "type": "object",
         "description": "robust problems only (docs/robust.md): the aggregated objectives, per object P(stay) and its Clopper-Pearson interval, per scenario (object, k) its drawn inputs and outcome",
         "properties": {
-            "objectives": obj(nums(&["max_offset", "alpha", "mean_force", "t_stab"]), &[]),
+            "objectives": obj(nums(&crate::eval::objective_names()), &[]),
             "objects": {"type": "array", "items": obj(object, &[])},
             "scenarios_planned": int(),
             "scenarios_run": int(),
@@ -193,7 +199,7 @@ pub fn design(method: Method) -> Value {
             "failed_stage": int(),
             "reason": {"type": "string"},
             "violation": num(),
-            "objectives": obj(json!({"max_offset": num(), "alpha": num(), "mean_force": num(), "t_stab": num()}), &[]),
+            "objectives": obj(nums(&crate::eval::objective_names()), &[]),
             "stage_seconds": obj(json!({"stages_0_1": num(), "stage_2": num(), "stage_3": num()}), &["stages_0_1", "stage_2", "stage_3"]),
             "sim_steps": int(),
             "sim_rhs_evals": int(),

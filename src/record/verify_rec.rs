@@ -12,10 +12,10 @@
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::messages::{free_fingers, free_frames, free_static_scene, log_time, window_end_ns, window_start_ns};
 use super::metadata::{RunMetadata, ScenarioTag};
+use crate::error::Result;
 use crate::model::Finger;
 use crate::params::{Design, Problem};
 use crate::sim::{FreeEnd, PoseSample};
-use crate::Result;
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
 use mcap::records::Metadata;

@@ -5,9 +5,9 @@ use super::index::{write_index, ShardEntry};
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::metadata::{RunMetadata, RUN_METADATA};
 use super::{messages, proto, schema, RecordOptions};
+use crate::error::{Error, Result};
 use crate::model::Finger;
 use crate::params::{Design, Problem};
-use crate::{Error, Result};
 use foxglove::messages::{FrameTransforms, SceneUpdate};
 use foxglove::Encode;
 use mcap::records::Metadata;
@@ -64,15 +64,9 @@ pub fn write_shard<R: Recordable>(
     // the scene of stage 3 (absent: centred, as in every recording before session 36); a
     // free-kind run's shards draw the centred diagnostic grasp, the label its free verdict
     let setup = &problem.scene.setup;
-    if setup.kind != crate::params::SceneKind::Centred {
+    if let Some(drawn) = setup.kind.drawn_in_recordings() {
         meta.scene_kind = Some(setup.kind);
         meta.x_off = Some(setup.x_off);
-        let drawn = match setup.kind {
-            crate::params::SceneKind::Free => {
-                "centred grasp (object at x = 0); the label gives the free scene's verdict"
-            }
-            _ => "the offset scene's grasp (object at x_off)",
-        };
         meta.scene_drawn = Some(drawn.into());
     }
     meta.epoch_s = Some(opts.epoch_s);
@@ -110,7 +104,7 @@ pub fn write_shard<R: Recordable>(
 /// Whether the problem's shards carry finger 2's own angles (the offset scene, where finger 2
 /// is not finger 1's mirror image).
 fn has_finger2(problem: &Problem) -> bool {
-    problem.scene.setup.kind == crate::params::SceneKind::Offset
+    problem.scene.setup.kind.has_finger2()
 }
 
 /// All messages of one design as (channel, log time, bytes), in time order: at the window

@@ -167,7 +167,7 @@ impl Discards {
         for c in causes {
             let share = 100.0 * c.count as f64 / self.evaluated as f64;
             let share = if share < 1.0 { "<1".to_string() } else { format!("{share:.0}") };
-            let v = c.violation.map_or(String::new(), |v| format!(", violation {v:.4}"));
+            let v = c.violation.map_or(String::new(), |v| format!(", violation {}", crate::error::short_num(v, 4)));
             let d = c.detail.as_ref().map_or(String::new(), |d| format!(", {d}"));
             out.push(format!(
                 "  {share} % at stage {} by {} ({}): {}; closest to passing: design {}{v}{d}",

@@ -7,7 +7,7 @@
 //! pair (naming run.json), `show` says so.
 
 use super::info::{RunInfo, RunStatus, RUN_FILE};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 fn short(s: &str) -> &str {

@@ -184,6 +184,19 @@ pub(crate) fn field_differences(
     out
 }
 
+/// The integration method a run's checkpoint at `path` records (its options' `method`;
+/// None inside: RADAU5, a checkpoint that names none), or None where the run has no
+/// checkpoint (or one that cannot be read: the caller then goes on with the problem file as
+/// it is). Only the options are read.
+pub fn recorded_method(path: &Path) -> Option<Option<Method>> {
+    #[derive(Deserialize)]
+    struct OptionsOnly {
+        options: RunOptions,
+    }
+    let bytes = crate::fsutil::read_regular(path, crate::fsutil::caps::CHECKPOINT).ok()?;
+    serde_json::from_slice::<OptionsOnly>(&bytes).ok().map(|c| c.options.method)
+}
+
 /// Hash of settings and options (canonical JSON).
 pub fn settings_hash(settings: &Nsga2Settings, options: &RunOptions) -> String {
     let v = serde_json::json!({ "settings": settings, "options": options });
@@ -221,7 +234,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         self
     }
 
-    /// Save atomically, with the content checksum `sha256`.
+    /// Save atomically, with the content checksum `sha256`. A checkpoint larger than it is
+    /// read back at ([`crate::fsutil::caps::CHECKPOINT`]) is refused (the earlier one stays).
     pub fn save(&self, path: &Path) -> Result<()> {
         write_atomic(path, &self.to_bytes(path)?)
     }
@@ -237,6 +251,16 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
         // streamed twice, never as a tree: the content into its hash, then the file's bytes
         // with the hash at its sorted place (`,"sha256":"…"`)
         let (sum, len) = checkpoint_json::sha256_of(self, SORTED_STRUCTS).map_err(ser)?;
+        if len as u64 > crate::fsutil::caps::CHECKPOINT {
+            // it could never be read back: the earlier checkpoint stays the run's last
+            return Err(Error::Checkpoint {
+                file: path.to_path_buf(),
+                message: format!(
+                    "would be {len} bytes, more than the {} bytes a checkpoint is read back at: not written (the earlier checkpoint resumes the run); the population and archive hold too many robust scenario records (fewer designs, scenarios or objects)",
+                    crate::fsutil::caps::CHECKPOINT
+                ),
+            });
+        }
         let mut c = Canonical::new(Vec::with_capacity(len + 12 + sum.len()), SORTED_STRUCTS).with_field("sha256", &sum);
         self.serialize(&mut c).map_err(ser)?;
         Ok((c.into_inner(), sum))
@@ -318,6 +342,8 @@ impl<I: Serialize + DeserializeOwned> Checkpoint<I> {
                 "field `state` is inconsistent (population, ranks, generation and history disagree)".into(),
             ));
         }
+        // what no checksum overrides (`resume --force` included)
+        super::invariants::check_invariants(&cp.state, cp.archive.as_ref(), path)?;
         Ok((cp, computed, mismatch))
     }
 }

@@ -1,20 +1,33 @@
 //! What a run folder holds, and what `optimise` and `resume` may do with it: `optimise --out`
 //! takes a new or empty folder, or one left by a run that never reached its first
-//! checkpoint, whose files it can prove that run wrote (run.json names the run; the shards'
-//! metadata name it too; problem.toml has the hash run.json recorded; the layout is
-//! gripopt's; the CSV views start with gripopt's title line). A folder with recorded
-//! generations is never taken for an empty one, and `resume` says why there is nothing to
-//! resume, or which file is missing.
+//! checkpoint. Of that run's files, only those whose content proves they are its own are
+//! removed (the shards whose metadata name the run run.json names; problem.toml with the
+//! hash run.json recorded; the layout byte for byte as gripopt writes it; index lines naming
+//! the run); what a name or a title line alone attributes (the CSV views, temporary files)
+//! is set aside into `set-aside/` ([`crate::fsutil::set_aside`]), never removed. A folder
+//! with recorded generations is never taken for an empty one, and `resume` says why there
+//! is nothing to resume, or which file is missing.
 
 use super::info::{RunInfo, RunStatus, RUN_FILE};
 use super::lock::LOCK_FILE;
 use crate::error::shell_quote;
-use crate::record::{index_entry_from_shard, layout, shard_generation, LAYOUT_FILE};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
+use crate::fsutil::SET_ASIDE_DIR;
+use crate::record::{index_entry_from_shard, layout, shard_generation, ShardEntry, LAYOUT_FILE};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).
 const VIEWS: [&str; 5] = super::outputs::VIEW_FILES;
+
+/// What `optimise` does with the files of an earlier attempt that never reached its first
+/// checkpoint, before it starts (see the module doc).
+#[derive(Debug, Default)]
+pub(crate) struct EarlierAttempt {
+    /// Files whose content proves they are the earlier attempt's own: removed.
+    pub remove: Vec<PathBuf>,
+    /// Files only their name attributes: set aside (folder, name).
+    pub set_aside: Vec<(PathBuf, String)>,
+}
 
 /// What a run folder holds, as far as `optimise` and `resume` care.
 pub(crate) struct Scan {
@@ -111,12 +124,13 @@ impl Scan {
     }
 
     /// `optimise --out`: the folder is new or empty, or holds only what a run that never
-    /// reached its first checkpoint wrote (provably: see the module doc). Returns that
-    /// run's files, which the new run removes before it starts (everything but run.json,
-    /// which it rewrites, and the lock's pid file).
+    /// reached its first checkpoint wrote (see the module doc). Returns what the new run
+    /// removes (content proves it the earlier attempt's) and sets aside (only a name or a
+    /// title attributes it) before it starts; run.json, which it rewrites, the lock's pid
+    /// file and `set-aside/` stay.
     /// `problem` is the problem file given: when it is the folder's own `problem.toml` (a
     /// problem given as text, written there by the caller), it is the run's input, kept.
-    pub fn check_new_run_folder(&self, problem: &Path) -> Result<Vec<PathBuf>> {
+    pub fn check_new_run_folder(&self, problem: &Path) -> Result<EarlierAttempt> {
         if self.checkpoint {
             return Err(self.err(format!(
                 "already holds a run (checkpoint.json); use `gripopt resume {}` or another --out",
@@ -136,7 +150,7 @@ impl Scan {
             return Err(self.lost_checkpoint(i));
         }
         let rec = self.dir.join("recording");
-        let mut earlier = vec![];
+        let mut earlier = EarlierAttempt::default();
         for s in &self.shards {
             let p = rec.join(s);
             let e = index_entry_from_shard(&p);
@@ -157,17 +171,23 @@ impl Scan {
                     message: format!("recorded designs ({why}): a folder with recorded generations ({} in recording/) is not an empty folder; resume its run, or give another --out", self.shards_text()),
                 });
             }
-            earlier.push(p);
+            earlier.remove.push(p);
         }
         for n in &self.recording_other {
             let tmp = n.ends_with(".tmp");
+            if n == SET_ASIDE_DIR && rec.join(n).is_dir() {
+                continue;
+            }
             if !(tmp || (n == "index.jsonl" && info.is_some())) {
                 return Err(Error::RunDir {
                     path: rec.join(n),
                     message: "not a file of a run that never reached its first checkpoint; give a new or empty folder as --out".into(),
                 });
             }
-            earlier.push(rec.join(n));
+            match info {
+                Some(i) if !tmp && index_names_only(&rec.join(n), &i.run_id) => earlier.remove.push(rec.join(n)),
+                _ => earlier.set_aside.push((rec.clone(), n.clone())),
+            }
         }
         let mut foreign = vec![];
         for n in &self.names {
@@ -180,16 +200,17 @@ impl Scan {
             if n == "problem.toml" && same_file(&p, problem) {
                 continue;
             }
-            let ours = match n.as_str() {
-                LOCK_FILE | RUN_FILE => true,
-                "recording" => p.is_dir(),
-                n if n.starts_with('.') && n.ends_with(".tmp") => true,
-                _ => info.is_some_and(|i| self.proven(n, i)),
-            };
-            match ours {
-                false => foreign.push(n.as_str()),
-                true if ![LOCK_FILE, RUN_FILE, "recording"].contains(&n.as_str()) => earlier.push(p),
-                true => {}
+            let kept = [LOCK_FILE, RUN_FILE].contains(&n.as_str())
+                || (["recording", SET_ASIDE_DIR].contains(&n.as_str()) && p.is_dir());
+            if kept {
+                continue;
+            }
+            let tmp = n.starts_with('.') && n.ends_with(".tmp");
+            match info.map(|i| self.proven(n, i)) {
+                Some(Proof::Content) => earlier.remove.push(p),
+                Some(Proof::Title) => earlier.set_aside.push((self.dir.clone(), n.clone())),
+                _ if tmp => earlier.set_aside.push((self.dir.clone(), n.clone())),
+                _ => foreign.push(n.as_str()),
             }
         }
         if foreign.is_empty() {
@@ -203,22 +224,50 @@ impl Scan {
         )))
     }
 
-    /// `n` beside run.json `i` (of a run with no checkpoint) is provably that run's file.
-    fn proven(&self, n: &str, i: &RunInfo) -> bool {
+    /// What attributes `n` beside run.json `i` (of a run with no checkpoint) to that run.
+    fn proven(&self, n: &str, i: &RunInfo) -> Proof {
         let p = self.dir.join(n);
+        if !std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_file()) {
+            return Proof::None; // a link, folder, pipe: nothing gripopt wrote
+        }
         let text = || crate::fsutil::read_regular_string(&p, crate::fsutil::caps::TABLE).unwrap_or_default();
+        let proof = |content: bool| if content { Proof::Content } else { Proof::None };
         match n {
-            "problem.toml" => crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256,
+            "problem.toml" => proof(crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256),
             LAYOUT_FILE => {
                 let written = |s, f2| serde_json::to_string_pretty(&layout(s, f2)).is_ok_and(|l| l == text());
-                [(true, false), (false, false), (true, true), (false, true)].iter().any(|&(s, f2)| written(s, f2))
+                proof(
+                    [(true, false), (false, false), (true, true), (false, true)].iter().any(|&(s, f2)| written(s, f2)),
+                )
             }
-            n if VIEWS.contains(&n) => text().starts_with(&format!("# gripopt {n}")),
+            // a title line names no run: any gripopt view (another run's, copied in) has it
+            n if VIEWS.contains(&n) && text().starts_with(&format!("# gripopt {n}")) => Proof::Title,
             // written beside the first checkpoint by a gripopt before issue 24
-            "archive.json" => i.run_id.is_empty(),
-            _ => false,
+            "archive.json" if i.run_id.is_empty() => Proof::Title,
+            _ => Proof::None,
         }
     }
+}
+
+/// What attributes a file to a run that never reached its first checkpoint.
+enum Proof {
+    /// Its content: it is byte for byte what the run wrote (or names the run).
+    Content,
+    /// Only its name and gripopt's title line (another run's file would have them too).
+    Title,
+    /// Nothing.
+    None,
+}
+
+/// Every line of the recording index `path` parses and names run `run_id` (an index only
+/// that run wrote).
+fn index_names_only(path: &Path, run_id: &str) -> bool {
+    let Ok(text) = crate::fsutil::read_regular_string(path, crate::fsutil::caps::INDEX) else { return false };
+    !run_id.is_empty()
+        && text
+            .lines()
+            .filter(|l| !l.trim().is_empty())
+            .all(|l| serde_json::from_str::<ShardEntry>(l).is_ok_and(|e| e.run_id.as_deref() == Some(run_id)))
 }
 
 /// `a` and `b` are the same file (both exist and resolve to one path).

@@ -1,6 +1,6 @@
 //! Reading a run folder back, typed ([`RunFolder`]): run.json, the CSV tables (read with
 //! the csv crate into the rows they were written from), the recorded designs (their
-//! `/designs` record and trajectory from the MCAP shards) and replay; the run's state
+//! `/designs` record and trajectory from the MCAP shards; its replay is the app layer's); the run's state
 //! (running, stopped, interrupted, finished: run.json and the folder's lock) and its problem
 //! files, checked against the hashes run.json recorded. What `gripopt show`, `verify` and
 //! the Python package read.
@@ -8,9 +8,9 @@
 use super::info::{RunInfo, RunStatus};
 use super::lock::{LockHolder, RunLock};
 use super::outputs::{DesignRow, HistoryRow, DESIGN_COLUMNS, HISTORY_COLUMNS};
-use super::robust_columns::{OBJECT_COLUMNS, ROBUST_COLUMNS};
+use super::robust_columns::is_robust_column;
 use crate::params::Problem;
-use crate::record::{problem_of_generation, read_design, replay, Recorded, Replay, RunProblem};
+use crate::record::{problem_of_generation, read_design, Recorded, RunProblem};
 use crate::{Error, Result};
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -155,7 +155,11 @@ impl RunFolder {
     /// problem, the earlier `problem-G.toml` for the generations before it), checked
     /// against the hash run.json recorded: an edited file is an error naming it.
     pub fn problem_of_generation(&self, g: u64) -> Result<Problem> {
-        self.of_run(|| self.checked_problem(g)).map(|(p, _)| p)
+        self.problem_file_of_generation(g).map(|(p, _)| p)
+    }
+    /// [`RunFolder::problem_of_generation`] with its file.
+    pub fn problem_file_of_generation(&self, g: u64) -> Result<(Problem, PathBuf)> {
+        self.of_run(|| self.checked_problem(g))
     }
     fn checked_problem(&self, g: u64) -> Result<(Problem, PathBuf)> {
         let p: RunProblem = problem_of_generation(&self.dir, g)?;
@@ -164,7 +168,12 @@ impl RunFolder {
                 path: p.file,
                 message: format!("{why}: restore it (replay and verify need the problem the run used)"),
             }),
-            None => Ok((p.problem, p.file)),
+            // a problem without `solver.method` as the run evaluated it: with the method its
+            // checkpoint records (RADAU5 for a run of before session 38)
+            None => match super::checkpoint::recorded_method(&self.dir.join("checkpoint.json")) {
+                Some(m) => Ok((p.problem.with_run_method(m), p.file)),
+                None => Ok((p.problem, p.file)),
+            },
         }
     }
     /// pareto.csv: the population's feasible non-dominated designs.
@@ -187,10 +196,6 @@ impl RunFolder {
     pub fn design(&self, id: u64) -> Result<Recorded> {
         self.of_run(|| read_design(&self.dir, id))
     }
-    /// Re-simulate design `id` and compare it with its recording.
-    pub fn replay(&self, id: u64) -> Result<Replay> {
-        self.of_run(|| replay(&self.dir, id))
-    }
 }
 
 /// The rows of pareto.csv, archive.csv or population.csv ([`read_table`]), whose header
@@ -202,11 +207,7 @@ pub fn read_design_table(path: &Path) -> Result<Vec<DesignRow>> {
         if h.len() < fixed.len() || h.iter().zip(fixed).any(|(a, b)| *a != b) {
             return Err(format!("expected the columns {}", fixed.join(",")));
         }
-        let robust = |c: &str| {
-            ROBUST_COLUMNS.iter().any(|r| r.0 == c)
-                || c.rsplit_once('.').is_some_and(|(o, col)| !o.is_empty() && OBJECT_COLUMNS.iter().any(|r| r.0 == col))
-        };
-        match h.iter().skip(fixed.len()).find(|c| !robust(c)) {
+        match h.iter().skip(fixed.len()).find(|c| !is_robust_column(c)) {
             Some(c) => Err(format!(
                 "column `{c}` is not one of a design table (after {}, only a robust problem's columns)",
                 fixed.join(",")

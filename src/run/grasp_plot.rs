@@ -1,15 +1,20 @@
 //! SVG plot of one grasp (thesis figs 4.11–4.12): joint angles, contact normal forces, and
 //! the hand force with its low-pass filtered value of the force criterion, against time.
 
+use crate::error::{Error, Result};
 use crate::sim::Sample;
-use crate::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Plot `samples` (one design's trajectory) into the SVG file `path` under `title`.
+/// Plot `samples` (one design's trajectory) into the SVG file `path` under `title`
+/// (written atomically, never through a link: [`crate::fsutil::write_rendered`]).
 pub fn grasp_plot(path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
+    crate::fsutil::write_rendered(path, |svg| draw(svg, path, title, samples))
+}
+
+fn draw(svg: &mut String, path: &Path, title: &str, samples: &[Sample]) -> Result<()> {
     let e = |x: &dyn std::fmt::Display| Error::Plot { path: path.to_path_buf(), source: x.to_string().into() };
-    let root = SVGBackend::new(path, (900, 1000)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (900, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let panels = root.split_evenly((3, 1));
     let tmax = samples.last().map_or(1e-3, |x| x.t).max(1e-6) * 1e3;

@@ -2,10 +2,7 @@
 //! (l21, b, t22, r, p, ψ°) with objectives (−max_offset, α, −F̃, t_stab) (MODEL.md §10),
 //! and how its individuals are handed to the recorder ([`Recordable`]).
 
-use crate::eval::{
-    evaluate_dynamics, evaluate_statics, fold, robust_record_ranked, robust_start, run_scenario, stage3_ends_at_once,
-    EvalOptions, Evaluation, Record, RobustSetup, RobustStart,
-};
+use crate::eval::{stage3_ends_at_once, DesignStart, EvalOptions, Evaluation, Folded, Record, ScenarioRecord, Study};
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
 use crate::record::{DesignEntry, KeptTrajectory, RecordOptions, Recordable};
@@ -74,56 +71,86 @@ pub struct GripperProblem {
     /// (`trajectories`, when `enabled`), reduced to the samples these options record
     /// ([`KeptTrajectory`]). Nothing is kept by default ([`RecordOptions::none`]).
     pub recording: RecordOptions,
-    /// A robust problem's objects and scenarios (None: one object, nominal inputs).
-    pub robust: Option<std::sync::Arc<RobustSetup>>,
+    /// What every design is evaluated on: the problem's objects and scenarios (a
+    /// single-object problem's one object in its scene; for stages 0–2 alone, a robust
+    /// problem's reference object).
+    pub study: Arc<Study>,
     lo: Vec<f64>,
     hi: Vec<f64>,
 }
 
 impl GripperProblem {
-    /// Wrap a problem file.
+    /// Wrap a problem file (all four stages, the problem's solver settings).
     pub fn new(problem: Problem) -> Self {
         let options = EvalOptions::full(&problem);
-        let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
-        let robust = RobustSetup::of(&problem).map(std::sync::Arc::new);
-        GripperProblem { problem, options, recording: RecordOptions::none(), robust, lo, hi }
+        Self::with_options(problem, options)
     }
 
-    /// The evaluation of a robust design from its stages 0–2 and its scenarios.
-    pub fn robust_evaluated(
+    /// Wrap a problem file evaluated through `options`' stages.
+    pub fn with_options(problem: Problem, options: EvalOptions) -> Self {
+        let (lo, hi) = (problem.bounds.lo.to_vec(), problem.bounds.hi.to_vec());
+        let study = Arc::new(Study::of(&problem, &options));
+        GripperProblem { problem, options, recording: RecordOptions::none(), study, lo, hi }
+    }
+
+    /// The evaluation of a design from its stages 0–2 and its scenarios (in their order, each
+    /// with its evaluation where the study keeps it), with the recorder's trajectory.
+    pub fn evaluated(
         &self,
-        setup: &RobustSetup,
-        start: &RobustStart,
-        scen: Vec<crate::eval::ScenarioRecord>,
+        start: &DesignStart,
+        scen: Vec<(ScenarioRecord, Option<Evaluation>)>,
+        trajectory: Option<KeptTrajectory>,
     ) -> Evaluated<GripperInfo> {
-        let mut seconds = start.base.stage_seconds;
-        seconds[3] = 0.0;
-        let (record, ranked_offset) = robust_record_ranked(setup, start, scen);
+        let seconds = scen.first().and_then(|s| s.1.as_ref()).map_or_else(
+            || {
+                let mut s = start.base.stage_seconds;
+                s[3] = 0.0;
+                s
+            },
+            |ev| ev.stage_seconds,
+        );
+        let Folded { record, minimised } = self.study.fold(start, scen);
         let v = &record.verdict;
         let cv = match v.failed_stage {
             None => Infeasibility::FEASIBLE,
             Some(stage) => Infeasibility { stages_short: 4 - stage, violation: v.violation.unwrap_or(1e3) },
         };
-        // the record's max_offset is None where not form closed; the ranking keeps −Δ_off
-        let mut o = record.objectives();
-        o[0] = ranked_offset;
-        let ph = self.placeholders();
-        let f = (0..4).map(|k| o[k].map(|v| if k == 0 || k == 2 { -v } else { v }).unwrap_or(ph[k])).collect();
-        Evaluated { f, cv, info: GripperInfo { record: Arc::new(record), stage_seconds: seconds, trajectory: None } }
+        let info =
+            GripperInfo { record: Arc::new(record), stage_seconds: seconds, trajectory: trajectory.map(Arc::new) };
+        Evaluated { f: minimised.to_vec(), cv, info }
     }
 
-    /// The finite placeholders of MODEL.md §10 for missing objectives (minimisation form).
-    fn placeholders(&self) -> [f64; 4] {
-        [self.problem.scene.criteria.offset_step, 1e6, 0.0, self.problem.scene.criteria.t_max]
+    /// Which trajectory the recorder keeps of a design, if any.
+    pub fn keeps_trajectory(&self) -> TrajectoryKeep {
+        if self.recording.enabled && self.study.is_single() && self.options.dynamics {
+            self.recording.trajectories
+        } else {
+            TrajectoryKeep::None
+        }
     }
 
-    /// Objectives used for ranking: feasible designs have all four; missing values are the
-    /// finite placeholders of MODEL.md §10 (they are never compared: only feasible designs
-    /// are ranked by objectives).
-    pub fn minimisation_objectives(&self, ev: &Evaluation) -> Vec<f64> {
-        let o = ev.objectives();
-        let ph = self.placeholders();
-        (0..4).map(|k| if o[k].is_finite() { o[k] } else { ph[k] }).collect()
+    /// Scenario k of object o of a started design, its samples kept for the recorder as
+    /// [`GripperProblem::keeps_trajectory`] says: its record, its evaluation where the study
+    /// keeps it (the 1 × 1 study's), and the kept trajectory.
+    pub fn run_scenario(
+        &self,
+        start: &DesignStart,
+        o: usize,
+        k: usize,
+    ) -> (ScenarioRecord, Option<Evaluation>, Option<KeptTrajectory>) {
+        let keep = self.keeps_trajectory();
+        let mut tr = crate::sim::Trajectory::default();
+        let (rec, ev) = match keep {
+            TrajectoryKeep::None => self.study.run_scenario(start, o, k, &self.options, &mut ()),
+            _ => self.study.run_scenario(start, o, k, &self.options, &mut tr),
+        };
+        let kept = match keep {
+            TrajectoryKeep::None => None,
+            _ if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) => None,
+            // the full trajectory is dropped here: only the recorded samples wait
+            _ => Some(KeptTrajectory::of(&tr, &self.recording)),
+        };
+        (rec, self.study.is_single().then_some(ev), kept)
     }
 
     /// Ideal and reference points for the progress hypervolume (minimisation form):
@@ -155,68 +182,27 @@ impl MooProblem for GripperProblem {
     /// objectives (more stage-2 values, e.g. spring preload, contact angles and forces,
     /// ordered worse on the bottle problem: too many features for the few rows of the
     /// first generations).
-    type Started = Started;
-    fn start(&self, x: &[f64]) -> (Started, CostHint) {
-        // stages 0–2 only (`--static-only`, Python's `static_only=True`): a robust problem's
-        // reference object, as `gripopt evaluate --static-only` and `gripopt::evaluate`
-        if let Some(setup) = self.robust.as_ref().filter(|_| self.options.dynamics) {
-            let st = robust_start(&design_of(x), setup);
-            let hint = robust_hint(x, &st);
-            return (Started::Robust(st), hint);
-        }
-        let ev = evaluate_statics(&design_of(x), &self.problem.scene);
-        let hint = match (&ev.kin, &ev.statics) {
-            (Some(k), Some(st))
-                if self.options.dynamics && !stage3_ends_at_once(st, &self.problem.scene, &self.options) =>
-            {
-                let f = &k.finger;
-                let mut v = x.to_vec();
-                v.extend([f.l11, f.l12, f.l22, st.alpha, st.mean_force, st.max_offset]);
-                CostHint::Costly(v)
-            }
-            _ => CostHint::Cheap,
-        };
-        (Started::Nominal(ev), hint)
+    type Started = DesignStart;
+    fn start(&self, x: &[f64]) -> (DesignStart, CostHint) {
+        let st = self.study.start(&design_of(x));
+        let hint = self.cost_hint(x, &st);
+        (st, hint)
     }
-    /// Stage 3 (the simulation in the problem's scene), keeping what the recorder uses of
-    /// the trajectory as `recording` says.
-    fn finish(&self, _x: &[f64], started: Started) -> Evaluated<GripperInfo> {
-        let started = match (started, &self.robust) {
-            (Started::Nominal(ev), _) => ev,
-            (Started::Robust(st), Some(setup)) => {
-                let scen = if st.passed() {
-                    fold(setup, |o, k| run_scenario(&st, setup, o, k, &self.options, &mut ()).0)
-                } else {
-                    vec![]
-                };
-                return self.robust_evaluated(setup, &st, scen);
-            }
-            (Started::Robust(_), None) => unreachable!("a robust start comes from a robust problem"),
+    /// Stage 3: the design's scenarios in their order (a single-object problem's one
+    /// simulation in its scene), keeping what the recorder uses of the trajectory as
+    /// `recording` says.
+    fn finish(&self, _x: &[f64], started: DesignStart) -> Evaluated<GripperInfo> {
+        let mut kept = None;
+        let scen = if started.passed() && self.options.dynamics {
+            self.study.run_in_order(|o, k| {
+                let (rec, ev, tr) = self.run_scenario(&started, o, k);
+                kept = kept.take().or(tr);
+                (rec, ev)
+            })
+        } else {
+            vec![]
         };
-        let (scene, opts) = (&self.problem.scene, &self.options);
-        let keep = if self.recording.enabled { self.recording.trajectories } else { TrajectoryKeep::None };
-        let (ev, traj) = match keep {
-            _ if !opts.dynamics => (started, None),
-            TrajectoryKeep::None => (evaluate_dynamics(started, scene, opts, &mut ()), None),
-            keep => {
-                let mut tr = crate::sim::Trajectory::default();
-                let ev = evaluate_dynamics(started, scene, opts, &mut tr);
-                let tr = if ev.dynamics.is_none() || (keep == TrajectoryKeep::Feasible && ev.discard.is_some()) {
-                    None
-                } else {
-                    // the full trajectory is dropped here: only the recorded samples wait
-                    Some(KeptTrajectory::of(&tr, &self.recording))
-                };
-                (ev, tr)
-            }
-        };
-        let cv = match ev.discard {
-            None => Infeasibility::FEASIBLE,
-            Some(d) => Infeasibility { stages_short: 4 - d.stage, violation: d.violation },
-        };
-        let mut info = GripperInfo::from_eval(&ev);
-        info.trajectory = traj.map(Arc::new);
-        Evaluated { f: self.minimisation_objectives(&ev), cv, info }
+        self.evaluated(&started, scen, kept)
     }
     /// The simulations' right-hand-side evaluations (deterministic; proportional to their
     /// time within a few per cent): the centred scene's, plus for a free-kind problem the
@@ -240,26 +226,30 @@ impl MooProblem for GripperProblem {
     }
 }
 
-/// What [`GripperProblem::start`] leaves for [`GripperProblem::finish`].
-#[derive(Debug)]
-pub enum Started {
-    /// Stages 0–2 of a single-object problem.
-    Nominal(Evaluation),
-    /// Stages 0–2 on every object of a robust problem.
-    Robust(RobustStart),
-}
-
-/// The cost hint of a robust design: costly (its design vector and derived lengths as
-/// features) when its scenarios will run.
-fn robust_hint(x: &[f64], st: &RobustStart) -> CostHint {
-    match (&st.base.kin, st.passed()) {
-        (Some(k), true) => {
-            let f = &k.finger;
-            let mut v = x.to_vec();
-            v.extend([f.l11, f.l12, f.l22]);
-            CostHint::Costly(v)
+impl GripperProblem {
+    /// The cost hint of a started design. In a single-object problem stages 0–2 (tens of µs)
+    /// tell a design they discard, or whose stage 3 ends before its simulation, cheap; one
+    /// that is simulated (ms) is costly, described for the solver's cost model by its design
+    /// vector, derived lengths l11, l12, l22 and the stage-2 objectives (more stage-2 values,
+    /// e.g. spring preload, contact angles and forces, ordered worse on the bottle problem:
+    /// too many features for the few rows of the first generations). A design on drawn
+    /// scenarios is costly when its scenarios will run, described by its design vector and
+    /// derived lengths (the cost model learns the work per scenario).
+    fn cost_hint(&self, x: &[f64], st: &DesignStart) -> CostHint {
+        let (Some(k), true, true) = (&st.base.kin, st.passed(), self.options.dynamics) else { return CostHint::Cheap };
+        let f = &k.finger;
+        let mut v = x.to_vec();
+        v.extend([f.l11, f.l12, f.l22]);
+        if !self.study.is_single() {
+            return CostHint::Costly(v);
         }
-        _ => CostHint::Cheap,
+        match &st.base.statics {
+            Some(s) if !stage3_ends_at_once(s, &self.problem.scene, &self.options) => {
+                v.extend([s.alpha, s.mean_force, s.max_offset]);
+                CostHint::Costly(v)
+            }
+            _ => CostHint::Cheap,
+        }
     }
 }
 

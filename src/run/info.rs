@@ -3,10 +3,10 @@
 //! checkpoint (completed generations, evaluations, the checkpoint's hash), and at the end.
 
 use super::archive::Discards;
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::optim::Nsga2Settings;
 use crate::record::{ProblemUse, RecordOptions};
-use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! recording's id space, checked before anything is allocated, with the estimate in the
 //! error (docs/cli.md, "Limits of the command-line flags").
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Memory per design of the population, without trajectories (bytes): parents, offspring,
 /// the merged population while sorting, the last evaluated generation, the checkpoint's
@@ -116,6 +116,88 @@ pub fn check_population(pop: usize, generations: u64, recording: bool) -> Result
         return Err(field("--pop × --generations", format!("{pop} × {generations}"), format!("at most {MAX_EVALUATIONS} evaluations (design ids are the recording's time windows of 1 s on a u64 nanosecond clock)")));
     }
     Ok(())
+}
+
+/// Bytes a robust design's record takes in the checkpoint (and a shard's design record) per
+/// scenario it holds: one compact scenario record as JSON, its numbers at full precision
+/// (the longest there can be: 559 bytes, tests/robust.rs; a typical one ~320 bytes).
+pub const BYTES_PER_SCENARIO_JSON: u64 = 576;
+
+/// Copies of a design's record a run holds in memory at once: parents, offspring, the
+/// last generation for the recorder, the archive.
+const RECORD_COPIES: u64 = 4;
+
+/// A checkpoint's bytes per design besides its scenarios (the record, the vector, rank and
+/// crowding: ~3 kB, rounded up).
+const CHECKPOINT_BYTES_PER_DESIGN: u64 = 4 << 10;
+
+/// The scenario records each design of `problem`'s run holds: objects × scenarios per
+/// object (0 for a problem without `[robust]`).
+pub fn scenario_records(problem: &crate::params::Problem) -> u64 {
+    problem.robust.as_ref().map_or(0, |r| r.objects.len() as u64 * r.count(crate::params::STREAM_OPTIMISE) as u64)
+}
+
+/// Check, before a run (or resume) of `problem` with population `pop` starts, that what its
+/// designs' records hold fits: a robust record grows with objects × scenarios (K = 4096 ×
+/// 16 objects: ~26 MB a design). The memory for the records ([`RECORD_COPIES`] in memory
+/// and twice as JSON: the checkpoint's and the shard's text) within half of the available
+/// memory, and the checkpoint of the population and an archive as large, within the size
+/// a checkpoint is read back at ([`crate::fsutil::caps::CHECKPOINT`]): a run is never
+/// started that cannot be resumed. The error gives the estimates and the largest population
+/// that fits. A note (for the caller to show) when that checkpoint would take more than half
+/// of the cap: an archive that grows to several times the population would reach it, and a
+/// checkpoint past the cap is never written (the run stops at the last one that fits).
+pub fn check_record_size(problem: &crate::params::Problem, pop: usize, recording: bool) -> Result<Option<String>> {
+    let n = scenario_records(problem);
+    if n == 0 {
+        return Ok(None);
+    }
+    let per_record =
+        n * (RECORD_COPIES * std::mem::size_of::<crate::eval::ScenarioRecord>() as u64 + 2 * BYTES_PER_SCENARIO_JSON);
+    let per =
+        BYTES_PER_DESIGN as f64 + if recording { 2.0 * BYTES_PER_TRAJECTORY as f64 } else { 0.0 } + per_record as f64;
+    let (avail, known) = available_memory().map_or((64.0 * (1u64 << 30) as f64, false), |a| (a as f64, true));
+    let checkpoint_per = (CHECKPOINT_BYTES_PER_DESIGN + n * BYTES_PER_SCENARIO_JSON) as f64;
+    let cap = crate::fsutil::caps::CHECKPOINT as f64;
+    let checkpoint = 2.0 * pop as f64 * checkpoint_per;
+    let robust = problem.robust.as_ref().expect("a robust problem");
+    let what = format!(
+        "a robust record holds {n} scenario records ({} objects × {} scenarios), about {} a design",
+        robust.objects.len(),
+        robust.count(crate::params::STREAM_OPTIMISE),
+        gib(checkpoint_per)
+    );
+    let bad = |rule: String| Error::InvalidField {
+        file: "command line".into(),
+        field: "--pop".into(),
+        value: pop.to_string(),
+        rule,
+    };
+    if checkpoint > cap {
+        let max = (cap / (2.0 * checkpoint_per)).floor() as u64;
+        return Err(bad(format!(
+            "{what}: the checkpoint of the population and an archive as large would take about {}, more than the {} a checkpoint is read back at (the run could not be resumed); at most {max} here, or fewer scenarios or objects",
+            gib(checkpoint),
+            gib(cap)
+        )));
+    }
+    if pop as f64 * per > avail / 2.0 {
+        let max = (avail / 2.0 / per).floor() as u64;
+        return Err(bad(format!(
+            "{what}: the population needs about {} of memory, more than half of the {} {}; at most {max} here, or fewer scenarios or objects",
+            gib(pop as f64 * per),
+            gib(avail),
+            if known { "available" } else { "assumed (memory unknown)" }
+        )));
+    }
+    Ok((checkpoint > cap / 2.0).then(|| {
+        format!(
+            "note: {what}: the checkpoint of the population and an archive as large takes about {}; an archive {:.1} times the population would pass the {} a checkpoint is read back at, and the run would stop at its last checkpoint that fits (fewer scenarios or objects, or a smaller --pop, leave room)",
+            gib(checkpoint),
+            cap / (pop as f64 * checkpoint_per) - 1.0,
+            gib(cap)
+        )
+    }))
 }
 
 /// Memory per design of `--sample N` (bytes), without a recording: the drawn batch, the

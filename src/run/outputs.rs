@@ -16,6 +16,7 @@ use super::archive::{reported_front, Archive};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::robust_columns::{float_cell, line_with_floats, RobustColumns};
 use crate::cells::{line, Floats, RawCell};
+use crate::eval::OBJECTIVES;
 use crate::fsutil::write_atomic;
 use crate::optim::Individual;
 use crate::optim::Nsga2State;
@@ -49,10 +50,10 @@ pub const DESIGN_COLUMNS: [Column; 25] = [
     ("l22", "m", "derived length"),
     ("l_hand", "m", "hand length b + 2 t22 + 2 l21"),
     ("form_closed", "bool", "form closed at the centred object (false: max_offset is empty)"),
-    ("max_offset", "m", "objective, MAXIMISE: largest object offset still form closed"),
-    ("alpha", "-", "objective, MINIMISE: force isotropy (force model in force_model)"),
-    ("mean_force", "N", "objective, MAXIMISE: mean contact force"),
-    ("t_stab", "s", "objective, MINIMISE: time to stability"),
+    OBJECTIVES[0].column(),
+    OBJECTIVES[1].column(),
+    OBJECTIVES[2].column(),
+    OBJECTIVES[3].column(),
     ("sim_steps", "-", "accepted steps of the grasp simulation"),
     ("sim_rhs_evals", "-", "right-hand-side evaluations of the grasp simulation"),
     ("force_model", "text", "forces defining alpha and mean_force (mobilised or frictionless)"),
@@ -247,7 +248,8 @@ fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> Strin
     for (n, u) in &extra {
         let _ = write!(s, " {n} [{u}]");
     }
-    s.push_str("\n# objectives: max_offset maximise, alpha minimise, mean_force maximise, t_stab minimise\n");
+    let senses: Vec<String> = OBJECTIVES.iter().map(|o| format!("{} {}", o.name, o.sense.word())).collect();
+    let _ = writeln!(s, "\n# objectives: {}", senses.join(", "));
     if !extra.is_empty() {
         s.push_str("# robust problem: the objectives are aggregated over the objects and scenarios (docs/robust.md); NAME.* are per object\n");
     }
@@ -260,14 +262,6 @@ fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> Strin
 /// One row of [`DESIGN_COLUMNS`].
 fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>) {
     s.push_str(&DesignRow::of(ind, rank).csv_line());
-}
-
-/// The population's feasible non-dominated designs, sorted by id (pareto.csv reports
-/// [`reported_front`] since issue 42).
-pub fn final_front(st: &Nsga2State<GripperInfo>) -> Vec<&Individual<GripperInfo>> {
-    let mut f = st.feasible_front();
-    f.sort_by_key(|p| p.id);
-    f
 }
 
 /// Rewrite the CSV files of state `st` (and the archive) in `out`, each atomically.

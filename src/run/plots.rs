@@ -1,10 +1,14 @@
 //! SVG plots of a run: 4-objective scatter matrix and hypervolume per generation.
 
 use super::gripper::{GripperInfo, GripperProblem};
+use crate::eval::OBJECTIVES;
 use crate::optim::Nsga2State;
 use crate::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
+
+/// A plot drawn into a text ([`crate::fsutil::write_rendered`] writes it atomically).
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
 /// The error of drawing into `path`.
 fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl Fn(E) -> Error + '_ {
@@ -15,19 +19,21 @@ fn plot_error<E: std::error::Error + Send + Sync + 'static>(path: &Path) -> impl
 /// the non-dominated front in red, other feasible designs in grey, the problem's nominal
 /// design as a blue cross; axis names say which way is better.
 pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
-    let names = [
-        "max_offset (mm), higher better",
-        "alpha, lower better",
-        "mean force (N), higher better",
-        "t_stab (ms), lower better",
-    ];
+    let draw = |svg: &mut String| {
+        draw_pareto_matrix(SVGBackend::with_string(svg, (1000, 1000)).into_drawing_area(), path, gp, st)
+    };
+    crate::fsutil::write_rendered(path, draw)
+}
+
+fn draw_pareto_matrix(root: Area<'_>, path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>) -> Result<()> {
+    let names = OBJECTIVES.map(|o| o.axis());
+    let scale = OBJECTIVES.map(|o| o.shown.1);
     let nominal = {
         use crate::optim::MooProblem;
         let ev = gp.evaluate(&gp.problem.nominal.to_array());
         let o = ev.info.record.objectives();
-        [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * [1e3, 1.0, 1.0, 1e3][k])
+        [0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k])
     };
-    let scale = [1e3, 1.0, 1.0, 1e3];
     let pts: Vec<([f64; 4], bool)> = st
         .population
         .iter()
@@ -38,7 +44,6 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
             ([0, 1, 2, 3].map(|k| o[k].unwrap_or(f64::NAN) * scale[k]), *r == 0)
         })
         .collect();
-    let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_error(path))?;
     let title = format!(
         "generation {}: {} feasible; red = Pareto front ({}), grey = dominated, blue cross = nominal design",
@@ -74,10 +79,10 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
         let mut mesh = chart.configure_mesh();
         mesh.x_labels(3).y_labels(3);
         if row == 3 {
-            mesh.x_desc(names[col]);
+            mesh.x_desc(names[col].as_str());
         }
         if col == 0 {
-            mesh.y_desc(names[row]);
+            mesh.y_desc(names[row].as_str());
         }
         mesh.draw().map_err(plot_error(path))?;
         if row == col {
@@ -108,7 +113,15 @@ pub fn pareto_matrix(path: &Path, gp: &GripperProblem, st: &Nsga2State<GripperIn
 /// (never falls) and the reported front, pareto.csv (the archive's best designs, at most
 /// the population size; its generations before issue 42 are not drawn).
 pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64], pareto_hv: &[f64]) -> Result<()> {
-    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
+    let draw = |svg: &mut String| {
+        let root = SVGBackend::with_string(svg, (800, 500)).into_drawing_area();
+        draw_hypervolume(root, path, [hv, archive_hv, pareto_hv])
+    };
+    crate::fsutil::write_rendered(path, draw)
+}
+
+/// The three curves of [`hypervolume`]: the population's, the archive's, pareto.csv's.
+fn draw_hypervolume(root: Area<'_>, path: &Path, [hv, archive_hv, pareto_hv]: [&[f64]; 3]) -> Result<()> {
     root.fill(&WHITE).map_err(plot_error(path))?;
     let ymax = hv.iter().chain(archive_hv).cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
     let green = RGBColor(0, 140, 60);

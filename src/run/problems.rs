@@ -6,10 +6,10 @@
 //! file edited by hand: that is refused, naming it).
 
 use super::info::RunInfo;
+use crate::error::{Error, Result};
 use crate::fsutil::{sha256_hex, write_atomic};
 use crate::params::Problem;
 use crate::record::ProblemUse;
-use crate::{Error, Result};
 use std::path::Path;
 
 /// The file name of the problem in force.

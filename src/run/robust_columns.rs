@@ -30,6 +30,29 @@ pub const OBJECT_COLUMNS: [Column; 10] = [
     ("t_stab", "s", "t_stab aggregated over this object's scenarios"),
 ];
 
+/// The design-level columns a certified design adds (pareto.csv of a robust run that
+/// certifies its front, issue 41): its objective columns are then the fresh estimate.
+pub const CERTIFIED_COLUMNS: [Column; 2] = [
+    ("cert_scenarios", "-", "fresh scenarios its certification ran (all objects; objectives estimated on them)"),
+    ("search_t_stab", "s", "t_stab aggregated over the search's scenarios (t_stab: over the fresh ones)"),
+];
+
+/// The per-object columns a certified design adds, each `NAME.column`.
+pub const CERTIFIED_OBJECT_COLUMNS: [Column; 3] = [
+    ("cert_stays", "-", "fresh scenarios of the certification in which the object stayed"),
+    ("cert_scenarios", "-", "fresh scenarios of the certification on this object"),
+    ("p_stay_lower", "-", "one-sided lower confidence bound on P(stay) from them (certified: >= p_min)"),
+];
+
+/// Whether `c` names a robust column of a design table: a design-level one, or an object's
+/// `NAME.column` (the search's or a certified design's).
+pub fn is_robust_column(c: &str) -> bool {
+    ROBUST_COLUMNS.iter().chain(&CERTIFIED_COLUMNS).any(|r| r.0 == c)
+        || c.rsplit_once('.').is_some_and(|(o, col)| {
+            !o.is_empty() && OBJECT_COLUMNS.iter().chain(&CERTIFIED_OBJECT_COLUMNS).any(|r| r.0 == col)
+        })
+}
+
 /// The robust cells of a row, in column order (empty for a single-object problem).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RobustColumns(pub Vec<(String, Option<f64>)>);
@@ -63,6 +86,38 @@ impl RobustColumns {
         RobustColumns(c)
     }
 
+    /// These cells with a certified design's: the design-level certification columns after
+    /// the search's, then each object's after its own (`search_t_stab`: the search's
+    /// aggregated t_stab, the row's objective now the fresh estimate).
+    pub fn with_certification(self, c: &crate::eval::CertificationRecord, search_t_stab: Option<f64>) -> Self {
+        let n = |v: usize| Some(v as f64);
+        let mut out = vec![];
+        let mut cells = self.0.into_iter().peekable();
+        while let Some((k, _)) = cells.peek() {
+            if k.contains('.') {
+                break;
+            }
+            out.push(cells.next().expect("peeked"));
+        }
+        out.push(("cert_scenarios".into(), n(c.scenarios_run)));
+        out.push(("search_t_stab".into(), search_t_stab));
+        for o in &c.objects {
+            let prefix = format!("{}.", o.name);
+            while let Some((k, _)) = cells.peek() {
+                if !k.starts_with(&prefix) {
+                    break;
+                }
+                out.push(cells.next().expect("peeked"));
+            }
+            let vals = [n(o.stays), n(o.scenarios), Some(o.p_stay_lower)];
+            for (col, v) in CERTIFIED_OBJECT_COLUMNS.iter().zip(vals) {
+                out.push((format!("{prefix}{}", col.0), v));
+            }
+        }
+        out.extend(cells);
+        RobustColumns(out)
+    }
+
     /// The value of `column` of object `object` (None: not computed or no such column).
     pub fn get(&self, object: &str, column: &str) -> Option<f64> {
         let key = format!("{object}.{column}");
@@ -86,7 +141,8 @@ impl RobustColumns {
     /// object's `p_stay`, `p_stay_lo`, `p_stay_hi`, `max_displacement` and objectives (the
     /// CSV writes them with a decimal point, see [`float_cell`]).
     pub fn is_float(&self, key: &str) -> bool {
-        const COUNTS: [&str; 4] = ["scenarios_run", "scenarios_saved", "stays", "scenarios"];
+        const COUNTS: [&str; 6] =
+            ["scenarios_run", "scenarios_saved", "stays", "scenarios", "cert_stays", "cert_scenarios"];
         let base = key.rsplit('.').next().unwrap_or(key);
         !COUNTS.contains(&base) && self.0.iter().any(|(k, _)| k == key)
     }
@@ -124,7 +180,8 @@ pub(crate) fn line_with_floats<T: Serialize + ?Sized>(row: &T, is_float: impl Fn
 /// (None: not a robust column).
 pub fn robust_unit(name: &str) -> Option<&'static str> {
     let base = name.rsplit('.').next().unwrap_or(name);
-    ROBUST_COLUMNS.iter().chain(&OBJECT_COLUMNS).find(|c| c.0 == base).map(|c| c.1)
+    let columns = ROBUST_COLUMNS.iter().chain(&OBJECT_COLUMNS).chain(&CERTIFIED_COLUMNS);
+    columns.chain(&CERTIFIED_OBJECT_COLUMNS).find(|c| c.0 == base).map(|c| c.1)
 }
 
 impl Serialize for RobustColumns {

@@ -18,10 +18,10 @@ use super::observers::{OutputsObserver, Progress, ProgressObserver};
 use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
+use crate::error::{Error, Result};
 use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators, Survival, Variation};
 use crate::params::Problem;
 use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
-use crate::{Error, Result};
 use argmin::core::State;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -148,6 +148,10 @@ fn recorded_problem_path(given: &Path) -> PathBuf {
     resolved(&absolute).unwrap_or(absolute)
 }
 
+/// The files of a run folder a run or resume rewrites besides its views (checked with
+/// them before any work: [`crate::fsutil::check_rewritable`]).
+const STATE_FILES: [&str; 4] = ["checkpoint.json", "run.json", "problem.toml", "recording/index.jsonl"];
+
 /// [`optimise`] with the caller's progress, stop flag or evaluator.
 ///
 /// run.json is written first (under the folder's lock), so that every other file of the
@@ -156,6 +160,8 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     spec.validate()?;
     let problem = Problem::load(&spec.problem_path)?;
     problem.check_self_contained(&spec.problem_path)?;
+    // what the designs' records hold, before anything is written
+    let size_note = super::limits::check_record_size(&problem, spec.pop, spec.record.enabled)?;
     if spec.out.exists() && !spec.out.is_dir() {
         return Err(Error::RunDir {
             path: spec.out.clone(),
@@ -164,14 +170,33 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     refuse_run_inside_run(&spec.out)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
+    // a folder another process holds is refused naming it, before its files (changing as
+    // that process writes them) are looked at
+    if let super::lock::LockHolder::Held(pid) = RunLock::holder(&spec.out)? {
+        return Err(Error::Locked { path: spec.out.clone(), pid });
+    }
     // refused before the lock's pid file is written into a folder that is not ours
     Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
     let lock = RunLock::acquire(&spec.out)?;
     // again under the lock: another process may have started meanwhile
-    for f in Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)? {
-        // files of the earlier attempt that never reached its first checkpoint (proven)
-        std::fs::remove_file(&f).map_err(|e| Error::io(&f, "cannot remove a file of the earlier attempt", e))?;
+    let earlier = Scan::of(&spec.out)?.check_new_run_folder(&spec.problem_path)?;
+    let mut notes: Vec<String> = size_note.into_iter().collect();
+    for f in &earlier.remove {
+        // files of the earlier attempt that never reached its first checkpoint (content proven)
+        std::fs::remove_file(f).map_err(|e| Error::io(f, "cannot remove a file of the earlier attempt", e))?;
     }
+    for (folder, name) in &earlier.set_aside {
+        // attributed only by a name or a title line: moved, never removed
+        let to = crate::fsutil::set_aside(folder, name)?;
+        notes.push(format!(
+            "note: {} is not provably the earlier attempt's (a name or title line proves nothing): set aside as {}",
+            folder.join(name).display(),
+            to.display()
+        ));
+    }
+    // a link at a name the run rewrites is refused before any work (never replaced)
+    crate::fsutil::check_rewritable(&spec.out, &super::outputs::REWRITTEN_FILES)?;
+    crate::fsutil::check_rewritable(&spec.out, &STATE_FILES)?;
     let gp = GripperProblem::new(problem);
     let settings = settings_for(&gp, spec.pop, spec.seed);
     let problem_sha256 = sha256_hex(gp.problem.source_text.as_bytes());
@@ -205,7 +230,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
     let (survival, variation) = (Some(Survival::default()), Some(Variation::default()));
-    let start = Start { recorder, archive: Archive::default(), notes: vec![], wall_before: 0.0, survival, variation };
+    let start = Start { recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
     drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
@@ -238,6 +263,7 @@ pub fn resume_with(
     }
     let lock = RunLock::acquire(dir)?;
     crate::fsutil::check_rewritable(dir, &super::outputs::REWRITTEN_FILES)?;
+    crate::fsutil::check_rewritable(dir, &STATE_FILES)?;
     let scan = Scan::of(dir)?;
     if !scan.checkpoint {
         return Err(scan.no_checkpoint());
@@ -254,6 +280,12 @@ pub fn resume_with(
     };
     let cp_path = dir.join("checkpoint.json");
     let (cp, cp_sha256, mismatch) = Checkpoint::<GripperInfo>::load_unverified(&cp_path)?;
+    super::invariants::check_design_length(
+        &cp.state,
+        cp.archive.as_ref(),
+        &cp_path,
+        crate::params::DESIGN_NAMES.len(),
+    )?;
     let mut notes = vec![];
     if let Some(m) = mismatch {
         if !force {
@@ -312,7 +344,9 @@ pub fn resume_with(
     // the problem: the file the run started with, or the run's copy if it is gone
     let original = original_problem(&info);
     let problem_path = original.clone().unwrap_or_else(|| dir.join("problem.toml"));
-    let problem = Problem::load(&problem_path)?;
+    // a problem without `solver.method` keeps the method the run started with (RADAU5 for
+    // a checkpoint that names none: the default before session 38)
+    let problem = Problem::load(&problem_path)?.with_run_method(cp.options.method);
     problem.check_self_contained(&problem_path)?;
     check_copy(dir, &info, &problem)?;
     if original.is_none() {
@@ -347,6 +381,8 @@ pub fn resume_with(
     }
     let total = generations.unwrap_or(info.generations);
     super::limits::check_population(cp.settings.pop_size, total, info.recording.enabled)?;
+    super::invariants::check_id_budget(&cp.state, cp.settings.pop_size, &cp_path, total)?;
+    let size_note = super::limits::check_record_size(&problem, cp.settings.pop_size, info.recording.enabled)?;
     if total < cp.state.generation {
         return Err(Error::Input(format!(
             "--generations {total}: the run already has {} generations",
@@ -366,7 +402,7 @@ pub fn resume_with(
         forced: problem_changed || notes.iter().any(|n| n.starts_with("forced")),
         note: notes.join("; "),
     });
-    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).collect();
+    let notes: Vec<String> = notes.into_iter().map(|n| format!("note: {n}")).chain(size_note).collect();
     info.generations = total;
     info.status = RunStatus::Running;
     info.completed_generations = at;
@@ -556,7 +592,7 @@ fn drive(
 fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
     RunMetadata {
         gripopt_version: Some(env!("CARGO_PKG_VERSION").to_string()),
-        simulator_revision: Some(crate::sim::SIMULATOR_REVISION),
+        simulator_revision: Some(crate::sim::revision_of(&gp.problem.solver)),
         run_id: Some(info.run_id.clone()),
         problem: Some(gp.problem.name.clone()),
         problem_sha256: Some(info.problem_sha256.clone()),
@@ -599,7 +635,10 @@ fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path
     let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
     let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
     let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
-    if let Ok(problem) = Problem::load(&problem_path) {
+    // a checkpoint naming no method ran RADAU5 (a problem without `solver.method` of before
+    // session 38); one naming a method is compared with the file's (or the default)
+    let legacy = |p: Problem| if cp.options.method.is_none() { p.with_run_method(None) } else { p };
+    if let Ok(problem) = Problem::load(&problem_path).map(legacy) {
         let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
         let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
         let source = |f: &str| match f {

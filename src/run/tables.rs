@@ -11,7 +11,7 @@ use super::folder::{read_table, RunFolder};
 use super::gripper::GripperInfo;
 use super::lock::{LockHolder, RunLock};
 use super::outputs::DesignRow;
-use crate::Result;
+use crate::error::Result;
 
 /// The designs of a run's checkpoint, as pareto.csv, archive.csv and population.csv write
 /// them (the same rows, in the same order).
@@ -43,6 +43,12 @@ impl RunFolder {
         }
         let info = self.info()?;
         let (cp, sha256) = Checkpoint::<GripperInfo>::load_with_sha256(&path)?;
+        super::invariants::check_design_length(
+            &cp.state,
+            cp.archive.as_ref(),
+            &path,
+            crate::params::DESIGN_NAMES.len(),
+        )?;
         let st = &cp.state;
         let running = matches!(RunLock::holder(self.dir())?, LockHolder::Held(_));
         let front = reported_front(st, cp.archive.as_ref()).into_iter().map(|i| DesignRow::of(i, Some(0))).collect();
@@ -68,7 +74,7 @@ impl RunFolder {
         // the damaged or truncated file's error, naming the line
         read_table::<DesignRow>(&path)?;
         let text = crate::fsutil::read_regular_string(&path, crate::fsutil::caps::TABLE)
-            .map_err(|e| crate::Error::io(&path, "cannot read", e))?;
+            .map_err(|e| crate::error::Error::io(&path, "cannot read", e))?;
         let data: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).skip(1).collect();
         let expected: Vec<String> = rows.iter().map(DesignRow::csv_line).collect();
         let same =

@@ -12,12 +12,12 @@ use super::gripper::GripperInfo;
 use super::info::RunInfo;
 use super::outputs::DesignRow;
 use crate::cells::{line, Floats};
-use crate::eval::{evaluate, simulate, EvalOptions};
+use crate::error::{Error, Result};
+use crate::eval::{evaluate, EvalOptions, Study};
 use crate::optim::Individual;
 use crate::params::{Design, DesignParameters, Problem};
 use crate::record::{keep_poses, ProblemUse, VerifyMeasure};
-use crate::sim::{Controls, FreeEnd, Integration, PoseSample, SceneSpec};
-use crate::{Error, Result};
+use crate::sim::{FreeEnd, PoseSample};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
@@ -200,15 +200,20 @@ pub fn verify_design_poses(
     x: &Design,
     scene_dt: Option<f64>,
 ) -> Option<(VerifyRow, Vec<PoseSample>)> {
-    let s = &p.scene;
-    let integ = Integration::from_solver(&p.solver);
-    let spec = SceneSpec::free(s.setup.x_off);
-    let ctl = Controls::DIAGNOSTIC;
+    // the 1 × 1 study of the problem's object in the free scene, diagnosed to its end
+    let mut scene = p.scene.clone();
+    scene.setup = scene.setup.to_free();
+    let study = Study::single(scene);
+    let opts = EvalOptions::diagnostic(p);
+    let start = study.start(x);
+    if !start.passed() {
+        return None;
+    }
     let mut all_poses: Vec<PoseSample> = vec![];
-    let ev = if scene_dt.is_some() {
-        simulate(x, s, &spec, &integ, &ctl, &mut all_poses)
+    let (_, ev) = if scene_dt.is_some() {
+        study.run_scenario(&start, 0, 0, &opts, &mut all_poses)
     } else {
-        simulate(x, s, &spec, &integ, &ctl, &mut ())
+        study.run_scenario(&start, 0, 0, &opts, &mut ())
     };
     let poses = scene_dt.map(|dt| keep_poses(&all_poses, dt)).unwrap_or_default();
     Some((row_of(id, x, &ev)?, poses))

@@ -7,13 +7,13 @@
 //! two designs.
 
 use super::verify::{VerifyRow, VerifySource};
+use crate::error::Result;
 use crate::params::Problem;
 use crate::record::{
     band_s, verify_parameters, write_verify, write_verify_layout, RunMetadata, ScenarioTag, VerifyEntry, VerifyRecord,
     VerifyRecordOptions, WindowStart, DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL,
 };
 use crate::sim::PoseSample;
-use crate::Result;
 use std::path::{Path, PathBuf};
 
 /// The recording of the verify designs of a run.

@@ -1,20 +1,21 @@
 //! `gripopt verify RUN_DIR` on a robust run (issue 22): the out-of-sample check. Every design
-//! of the run's front (from its checkpoint) is re-evaluated on a fresh, larger draw of scenarios — the problem's
+//! of the run's front (from its checkpoint) is evaluated on another study — the problem's
 //! `verify_scenarios` per object from another ChaCha stream (`STREAM_VERIFY`) than the
-//! optimisation's, every scenario run (no early stop) — and each object's P(stay) is compared
-//! with `p_min`: how many front designs keep it, i.e. whether the optimiser overfitted its K
-//! scenarios. Writes `RUN_DIR/verify_robust.csv` (one row per design and object) atomically,
+//! optimisation's, every scenario run (no early stop); the problem its generation was
+//! evaluated with, so that both figures concern the same objects — and each object's
+//! P(stay) is compared with `p_min`: how many front designs keep it, i.e. whether the
+//! optimiser overfitted its K scenarios. Writes `RUN_DIR/verify_robust.csv` (one row per design and object) atomically,
 //! under the run folder's lock; the rows do not depend on the thread count.
 
 use super::folder::RunFolder;
 use super::lock::RunLock;
 use super::robust_columns::line_with_floats;
 use super::verify::{run_line, CheckedState, CHECKPOINT_FILE};
-use crate::eval::{robust_record, robust_start, run_scenario, EvalOptions, RobustSetup, ScenarioRecord};
+use crate::error::{Error, Result};
+use crate::eval::{DesignStart, EvalOptions, ScenarioRecord, Study};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem, STREAM_VERIFY};
 use crate::record::ProblemUse;
-use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -174,28 +175,44 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         };
         return Err(Error::RunDir { path: dir.join(CHECKPOINT_FILE), message });
     }
-    let setup = RobustSetup::with_stream(&p, &r, STREAM_VERIFY, r.verify_scenarios, false);
+    // each design on the verify study of the problem its generation was evaluated with
+    let files = info.problem_files();
+    let problem_of = |g: u64| ProblemUse::of_generation(&files, g).map_or(1, |f| f.first_generation);
+    let mut studies: Vec<(u64, Study)> = vec![];
+    for row in &front {
+        let g = problem_of(row.generation);
+        if !studies.iter().any(|(h, _)| *h == g) {
+            let pg = folder.problem_of_generation(row.generation)?;
+            let rg = pg.robust.clone().ok_or_else(|| Error::RunDir {
+                path: file.clone(),
+                message: format!("generation {}'s problem is not a robust problem (no [robust])", row.generation),
+            })?;
+            studies.push((g, Study::drawn(&pg, &rg, STREAM_VERIFY, rg.verify_scenarios, false)));
+        }
+    }
+    let study_of = |row: &super::outputs::DesignRow| {
+        let g = problem_of(row.generation);
+        &studies.iter().find(|(h, _)| *h == g).expect("a study per generation's problem").1
+    };
     let opts = EvalOptions::full(&p);
-    let starts: Vec<_> =
-        front.par_iter().map(|row| robust_start(&Design::from_array(&row.parameters()), &setup)).collect();
-    let seq: Vec<(usize, usize)> = setup.sequence().collect();
-    let tasks: Vec<(usize, usize)> = (0..starts.len())
+    let starts: Vec<DesignStart> =
+        front.par_iter().map(|row| study_of(row).start(&Design::from_array(&row.parameters()))).collect();
+    let tasks: Vec<(usize, usize, usize)> = (0..starts.len())
         .filter(|&d| starts[d].passed())
-        .flat_map(|d| seq.iter().map(move |&(o, k)| (d, o, k)))
-        .map(|(d, o, k)| (d, o * setup.k + k))
+        .flat_map(|d| study_of(&front[d]).sequence().map(move |(o, k)| (d, o, k)).collect::<Vec<_>>())
         .collect();
     let done: Vec<ScenarioRecord> = tasks
         .par_iter()
         .with_max_len(1)
-        .map(|&(d, i)| run_scenario(&starts[d], &setup, i / setup.k, i % setup.k, &opts, &mut ()).0)
+        .map(|&(d, o, k)| study_of(&front[d]).run_scenario(&starts[d], o, k, &opts, &mut ()).0)
         .collect();
     let mut rows = vec![];
     let mut keep_all = 0;
     let mut aborted = vec![];
     for (d, row) in front.iter().enumerate() {
-        let scen: Vec<ScenarioRecord> =
-            tasks.iter().zip(&done).filter(|((td, _), _)| *td == d).map(|(_, s)| s.clone()).collect();
-        let rec = robust_record(&setup, &starts[d], scen);
+        let scen: Vec<(ScenarioRecord, _)> =
+            tasks.iter().zip(&done).filter(|((td, ..), _)| *td == d).map(|(_, s)| (s.clone(), None)).collect();
+        let rec = study_of(row).fold(&starts[d], scen).record;
         let rb = rec.robust.as_ref().expect("a robust record");
         let mut all = starts[d].passed();
         for (oi, o) in rb.objects.iter().enumerate() {
@@ -231,11 +248,10 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         }
         keep_all += usize::from(all);
     }
-    let files = info.problem_files();
     let in_force: Vec<&ProblemUse> = files.iter().filter(|f| f.file == "problem.toml").collect();
     let mut csv = format!(
         "# gripopt verify_robust.csv: the front re-evaluated out of sample ({} fresh scenarios per object, stream {STREAM_VERIFY}; p_min {}, Clopper-Pearson {} %)\n{}# units: p_stay_* [-] scenarios_* [-] stays_out [-] max_displacement_out [m] keeps [bool]\n",
-        setup.k,
+        r.verify_scenarios,
         r.p_min,
         r.confidence * 100.0,
         // which run state it checked, as verify.csv says it (show tells when it is stale)
@@ -257,7 +273,7 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         designs: front.len(),
         keep_all,
         p_min: r.p_min,
-        scenarios: setup.k,
+        scenarios: r.verify_scenarios,
         rows,
         aborted,
     })

@@ -16,10 +16,10 @@ use super::verify::{
 };
 use super::verify_rec::VerifyRecording;
 use super::verify_robust::VERIFY_ROBUST_FILE;
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::params::{Design, Problem, SceneKind};
+use crate::params::{Design, Problem, SceneChoice};
 use crate::record::ProblemUse;
-use crate::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -79,7 +79,7 @@ pub fn verify(
     // every problem file the designs need, checked, in the free scene
     let free = |f: &ProblemUse| -> Result<Problem> {
         let file = dir.join(&f.file);
-        folder.problem_of_generation(f.first_generation)?.in_scene(SceneKind::Free, x_off, &file)
+        folder.problem_of_generation(f.first_generation)?.in_scene(SceneChoice::free(x_off), &file)
     };
     let current = free(files.last().expect("a problem file"))?;
     // the run's designs come from its checkpoint (the state verify.csv is attributed to)

@@ -10,9 +10,10 @@
 //! the grasp scenes share), `equilibrium` (§8.9) and `criteria` (§9) → `driver` (the step
 //! loop, generic over a scene) → `simulate` (the one entry: a finger in a [`SceneSpec`]).
 //! `settings` holds the numerics and run controls, `sink` where samples and events go,
-//! `result` what a simulation gives. Nothing here imports the evaluation pipeline, the
+//! `result` what a simulation gives, `columns` the names of a trajectory's values. Nothing here imports the evaluation pipeline, the
 //! optimiser, the recorder or the CLI.
 
+mod columns;
 mod contact3d;
 mod criteria;
 mod driver;
@@ -28,6 +29,11 @@ mod simulate;
 mod sink;
 mod tracking;
 
+pub use columns::{
+    finger_from_values, finger_values, pose_values, sample_from_values, sample_series_fields, sample_values,
+    series_field, trajectory_columns, trajectory_row, Column, FingerColumn, PoseColumn, SceneColumn, FINGER2_COLUMNS,
+    FINGER_COLUMNS, HAND_COLUMNS, POSE_COLUMNS, POSE_TABLE, SAMPLE_COLUMNS, TIME,
+};
 pub use contact3d::{closest_segments, quat_matrix, V3};
 pub use criteria::{force_margin, impact, impact_limits, r_area, u_min, Impact};
 pub use driver::drive;
@@ -51,7 +57,10 @@ pub use scene::free::{
 };
 pub use scene::offset::{OffsetResult, OffsetScene, PairEval, StartFailure, OFFSET_EVENTS};
 pub use scene::{End, Response, Run, Scene};
-pub use settings::{Controls, Integration, Method, Mode, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
+pub use settings::{
+    revision_of, Controls, Integration, Method, Mode, Scaling, ACROSS_REVISIONS_RTOL, DEFAULT_AUTO_REVISION,
+    SIMULATOR_REVISION,
+};
 pub use simulate::{diagnostic_grasp, simulate, SceneResult, SceneSpec};
 pub use sink::{EventNote, Point, Sink};
 pub use tracking::{EndValues, GraspLimits, Tracker};

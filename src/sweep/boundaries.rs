@@ -4,8 +4,8 @@
 //! `verdict_lo`, `verdict_hi`; its units line names the same columns in the same order.
 
 use super::{eval_row, out::BOUNDARIES_FILE, Row, SweepSpec};
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::{Error, Result};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;

@@ -14,7 +14,7 @@
 //! * scene and solver fields by dotted name (`hand.tau`, `object.density`) or by the last
 //!   component when it is unique (`tau`, `density`, `grasp_height`, `radius`, `restitution`).
 //!   A `[scene]` field the problem's scene kind does not simulate is refused
-//!   ([`scene_kinds_using`]: `scene.x_off` needs the offset or free scene, `scene.t_obs` and
+//!   ([`crate::params::scene_kinds_using`]: `scene.x_off` needs the offset or free scene, `scene.t_obs` and
 //!   the ground's fields the free scene), as every point would be the same design in the same
 //!   scene.
 //!
@@ -29,19 +29,18 @@ mod spec;
 pub use boundaries::{bisect, boundaries_csv, write_boundaries, Boundary};
 pub(crate) use spec::ARRAY_KEYS;
 pub use spec::{
-    psi_thesis, resolve, scene_kinds_using, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS,
-    MAX_N, MAX_POINTS,
+    psi_thesis, resolve, set_field, stage3_only_names, Knob, Stage, SweepSpec, Vary, INTEGER_FIELDS, MAX_N, MAX_POINTS,
 };
 
 use crate::cells::{cells, Floats};
+use crate::error::{Error, Result};
 use crate::eval::{evaluate, evaluate_kinematics, Cause, EvalOptions, Evaluation, Record};
 use crate::fsutil::write_atomic;
 use crate::params::{Design, Problem};
-use crate::{Error, Result};
-use out::{record_unit, SWEEP_FILE, SWEEP_TITLE};
+use out::{record_unit, EarlierFile, SWEEP_FILE, SWEEP_TITLE};
 use rayon::prelude::*;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The verdict class of an evaluation: `pass` or what discarded it, as a short word (the
 /// record's [`Cause`]: `singular_open`, `singular_closing`, `mode_change`, `impact`, `force`, …).
@@ -182,25 +181,57 @@ pub fn sweep_csv(spec: &SweepSpec, rows: &[Row], files: &[String]) -> String {
     s
 }
 
-/// Write DIR/sweep.csv alone (see [`write_outputs`]).
+/// Write DIR/sweep.csv alone (see [`write_outputs`]), holding the folder's lock.
 pub fn write_csv(dir: &Path, spec: &SweepSpec, rows: &[Row]) -> Result<()> {
-    let earlier = out::check_out_folder(dir)?;
-    write_outputs(dir, spec, rows, &earlier, &[])
+    let (_lock, earlier) = out::open_out_folder(dir)?;
+    write_outputs(dir, spec, rows, &earlier, &[])?;
+    seal(dir, spec, rows, &[])
 }
 
-/// Start a sweep's output folder `dir`: create it, remove the `earlier` sweep's files that
-/// this one does not write again ([`out::check_out_folder`] found them), and write
-/// sweep.csv (atomically) listing itself and `files` (names in `dir`), which the caller
-/// writes next.
-pub fn write_outputs(dir: &Path, spec: &SweepSpec, rows: &[Row], earlier: &[PathBuf], files: &[String]) -> Result<()> {
+/// Start a sweep's output folder `dir` (the caller holds its lock: [`out::open_out_folder`]):
+/// of the `earlier` sweep's files, set aside those whose content is not provably what that
+/// sweep wrote, remove the proven ones this sweep does not write again, and write sweep.csv
+/// (atomically) listing itself and `files` (names in `dir`), which the caller writes next,
+/// then [`seal`]s.
+pub fn write_outputs(
+    dir: &Path,
+    spec: &SweepSpec,
+    rows: &[Row],
+    earlier: &[EarlierFile],
+    files: &[String],
+) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "cannot create the output folder", e))?;
     let mut all = vec![SWEEP_FILE.to_string()];
     all.extend(files.iter().cloned());
     for f in earlier {
-        let keep = f.file_name().is_some_and(|n| all.iter().any(|a| n == a.as_str()));
-        if !keep {
-            std::fs::remove_file(f).map_err(|e| Error::io(f, "cannot remove the earlier sweep's file", e))?;
+        let name = f.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if !f.proven {
+            // edited since, or never sealed: kept for the user, out of the new sweep's way
+            crate::fsutil::set_aside(dir, &name)?;
+        } else if !all.contains(&name) {
+            std::fs::remove_file(&f.path)
+                .map_err(|e| Error::io(&f.path, "cannot remove the earlier sweep's file", e))?;
         }
     }
     write_atomic(&dir.join(SWEEP_FILE), sweep_csv(spec, rows, &all).as_bytes())
+}
+
+/// Seal a finished sweep: rewrite sweep.csv with the SHA-256 of every file it lists
+/// (`files`: the names the caller wrote besides sweep.csv), so that a later sweep into the
+/// folder knows which files are still what this one wrote.
+pub fn seal(dir: &Path, spec: &SweepSpec, rows: &[Row], files: &[String]) -> Result<()> {
+    let mut all = vec![SWEEP_FILE.to_string()];
+    all.extend(files.iter().cloned());
+    let mut text = sweep_csv(spec, rows, &all);
+    let mut sums = vec![];
+    for f in files {
+        let p = dir.join(f);
+        let bytes = crate::fsutil::read_regular(&p, crate::fsutil::caps::TABLE)
+            .map_err(|e| Error::io(&p, "cannot read back", e))?;
+        sums.push(format!("{f}={}", crate::fsutil::sha256_hex(&bytes)));
+    }
+    // after the `# files:` line (its `#` lines come before the table)
+    let at = text.find("\n# files: ").and_then(|i| text[i + 1..].find('\n').map(|j| i + 1 + j + 1)).unwrap_or(0);
+    text.insert_str(at, &format!("{}{}\n", out::SHA256_LINE, sums.join(", ")));
+    write_atomic(&dir.join(SWEEP_FILE), text.as_bytes())
 }

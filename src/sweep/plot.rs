@@ -2,7 +2,7 @@
 //! chosen record value for two, and one map per slice of the third name for three.
 
 use super::{Boundary, Row, SweepSpec};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -70,7 +70,8 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
-/// Draw every plot for the sweep; returns the files written.
+/// Draw every plot for the sweep, each written atomically and never through a link
+/// ([`crate::fsutil::write_rendered`]); returns the files written.
 pub fn plot_all(
     dir: &Path,
     spec: &SweepSpec,
@@ -84,14 +85,14 @@ pub fn plot_all(
     if is_line(spec) {
         for (y, name) in ys.iter().zip(&names) {
             let f = dir.join(name);
-            line(&f, spec, rows, y, bounds)?;
+            crate::fsutil::write_rendered(&f, |svg| line(svg, &f, spec, rows, y, bounds))?;
             out.push(f);
         }
     } else {
         let cs = std::iter::once(None).chain(colours.iter().map(|c| Some(c.as_str())));
         for (c, name) in cs.zip(&names) {
             let f = dir.join(name);
-            maps(&f, spec, rows, c)?;
+            crate::fsutil::write_rendered(&f, |svg| maps(svg, &f, spec, rows, c))?;
             out.push(f);
         }
     }
@@ -113,14 +114,14 @@ pub fn planned(spec: &SweepSpec, ys: &[String], colours: &[String]) -> Vec<Strin
 }
 
 /// Line plot of the `+`-separated keys `ys` against the one varied name; markers coloured by verdict.
-fn line(path: &Path, spec: &SweepSpec, rows: &[Row], ys: &str, bounds: &[Boundary]) -> Result<()> {
+fn line(svg: &mut String, path: &Path, spec: &SweepSpec, rows: &[Row], ys: &str, bounds: &[Boundary]) -> Result<()> {
     let e = pe(path);
     let keys: Vec<&str> = ys.split('+').collect();
     let xs: Vec<f64> = rows.iter().map(|r| r.values[0]).collect();
     let (x0, x1) = range(xs.iter().copied());
     let (y0, y1) = range(keys.iter().flat_map(|k| rows.iter().filter_map(move |r| r.num(k))));
     let pad = 0.05 * (y1 - y0);
-    let root = SVGBackend::new(path, (800, 520)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (800, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(&e)?;
     let verdicts = distinct(rows);
     let title = format!(
@@ -175,13 +176,13 @@ fn distinct(rows: &[Row]) -> Vec<&'static str> {
 }
 
 /// One map (2 names) or one map per value of the third name, coloured by verdict or by `key`.
-fn maps(path: &Path, spec: &SweepSpec, rows: &[Row], key: Option<&str>) -> Result<()> {
+fn maps(svg: &mut String, path: &Path, spec: &SweepSpec, rows: &[Row], key: Option<&str>) -> Result<()> {
     let e = pe(path);
     let n3 = if spec.vary.len() == 3 { spec.vary[2].n } else { 1 };
     let panels: Vec<usize> = if n3 <= 12 { (0..n3).collect() } else { (0..12).map(|i| i * (n3 - 1) / 11).collect() };
     let cols = (panels.len() as f64).sqrt().ceil() as usize;
     let nrows = panels.len().div_ceil(cols);
-    let root = SVGBackend::new(path, (420 * cols as u32 + 170, 380 * nrows as u32 + 40)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (420 * cols as u32 + 170, 380 * nrows as u32 + 40)).into_drawing_area();
     root.fill(&WHITE).map_err(&e)?;
     let (vmin, vmax) = match key {
         Some(k) => range(rows.iter().filter_map(|r| r.num(k))),

@@ -2,8 +2,8 @@
 //! values ([`Vary`]), the whole grid with its stages ([`SweepSpec`]: checked, its points, the
 //! problem and design at a point), and the record keys a sweep flattens ([`ARRAY_KEYS`]).
 
-use crate::params::{limit, Design, Problem, SceneKind, DESIGN_NAMES, LIMITS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
+use crate::params::{limit, scene_kinds_using, Design, Problem, DESIGN_NAMES, LIMITS};
 
 /// Problem-file fields that are whole numbers: swept over whole values only.
 pub const INTEGER_FIELDS: [&str; 2] = ["scene.ground_points", "solver.max_steps"];
@@ -344,20 +344,6 @@ impl SweepSpec {
             x[5] = psi_thesis(x[4]);
         }
         Ok((p, Design::from_array(&x)))
-    }
-}
-
-/// The scene kinds whose stage 3 uses the `[scene]` field `field` (MODEL.md §14): the
-/// object's offset `scene.x_off` the offset and free scenes, the observation time and the
-/// ground (`scene.t_obs`, `scene.ground_*`) the free scene only; None for a field outside
-/// `[scene]` (used whatever the scene).
-pub fn scene_kinds_using(field: &str) -> Option<&'static [SceneKind]> {
-    match field {
-        "scene.x_off" => Some(&[SceneKind::Offset, SceneKind::Free]),
-        "scene.t_obs" | "scene.ground_points" | "scene.ground_k" | "scene.ground_v_s" | "scene.ground_v_d" => {
-            Some(&[SceneKind::Free])
-        }
-        _ => None,
     }
 }
 

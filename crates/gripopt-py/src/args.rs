@@ -61,8 +61,8 @@ arguments! {
     first_id: u64 = "first_id", 0, i64::MAX as u64;
     /// A number of designs to draw: an (n, 6) float64 array must be addressable.
     design_count: usize = "n", 0, (isize::MAX as u64) / 48;
-    /// A thread count: 1 to `gripopt::run::MAX_THREADS`.
-    thread_count: usize = "threads", 1, gripopt::run::MAX_THREADS as u64;
+    /// A thread count: 1 to `gripopt::app::MAX_THREADS`.
+    thread_count: usize = "threads", 1, gripopt::app::MAX_THREADS as u64;
 }
 
 /// A thread count or None (all cores).

@@ -320,16 +320,16 @@ mod tests {
     #[test]
     fn a_trajectory_has_finger_2s_columns_where_its_samples_do() {
         let p = gripopt::Problem::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../problems/bottle-1l.toml")).unwrap();
-        let integ = gripopt::Integration::from_solver(&p.solver);
         let names = |scene| {
-            let sim = gripopt::simulate(&p, &p.nominal, scene, &integ, &gripopt::Controls::DIAGNOSTIC).unwrap();
+            let req = gripopt::SimulateRequest { scene, ..Default::default() };
+            let sim = gripopt::simulate(&p, &p.nominal, &req).unwrap();
             let t = Table::of_samples(&sim.trajectory.samples);
             assert!(t.rows() > 100 && t.cols.iter().all(|c| c.len() == t.rows()));
             t.cols.iter().map(|c| c.name.clone()).collect::<Vec<_>>()
         };
         let centred = names(None);
         assert_eq!(centred, gripopt::SAMPLE_COLUMNS.map(|c| c.0));
-        let offset = names(Some((gripopt::SceneKind::Offset, Some(0.002))));
+        let offset = names(Some(gripopt::SceneChoice::parse("offset:0.002").unwrap()));
         assert_eq!(offset[..16], centred[..]);
         assert_eq!(offset[16..], gripopt::FINGER2_COLUMNS.map(|c| c.0));
     }

@@ -1,14 +1,16 @@
 //! `gripopt._gripopt`, the native module of the `gripopt` Python package (python/gripopt):
-//! the library's facade for Python — problems evaluated and simulated with the GIL
-//! released, runs started and resumed with a progress callback and ctrl-c, run folders read
-//! back — handing tables over as typed columns that the Python side turns into pandas
-//! DataFrames. Errors become the exceptions of `gripopt.errors`. docs/python.md.
+//! the library's application layer for Python — problems evaluated and simulated with the
+//! GIL released, runs started and resumed with a progress callback and ctrl-c, run folders
+//! read back — handing tables over as typed columns that the Python side turns into pandas
+//! DataFrames, and records as Python objects. Errors become the exceptions of
+//! `gripopt.errors`. docs/python.md.
 
 mod args;
 mod errors;
 mod fork;
 mod frame;
 mod problem;
+mod records;
 mod run;
 mod toml_field;
 
@@ -34,8 +36,14 @@ fn _gripopt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("FINGER2_COLUMNS", columns(&gripopt::FINGER2_COLUMNS))?;
     m.add("POSE_COLUMNS", columns(&gripopt::POSE_COLUMNS))?;
     // a robust problem's design-table columns: these, then each object's `NAME.column`
-    m.add("ROBUST_COLUMNS", gripopt::run::ROBUST_COLUMNS.to_vec())?;
-    m.add("OBJECT_COLUMNS", gripopt::run::OBJECT_COLUMNS.to_vec())?;
+    m.add("ROBUST_COLUMNS", gripopt::app::ROBUST_COLUMNS.to_vec())?;
+    m.add("OBJECT_COLUMNS", gripopt::app::OBJECT_COLUMNS.to_vec())?;
+    // the four objectives: (name, unit, meaning, sense), sense "maximise" or "minimise"
+    let objectives: Vec<_> =
+        gripopt::app::OBJECTIVES.iter().map(|o| (o.name, o.unit, o.meaning, o.sense.word())).collect();
+    m.add("OBJECTIVES", objectives)?;
+    // the JSON schema of a recorded design's `/designs` message (the keys of RunFolder.design's record)
+    m.add("DESIGN_SCHEMA", records::to_python(m.py(), &gripopt::app::design_schema(gripopt::Method::Radau5))?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,10 +1,12 @@
-//! `_gripopt.Problem`: a problem file, evaluated and simulated through the library's facade
-//! with the GIL released (the Python side, `gripopt.Problem`, makes the DataFrames).
+//! `_gripopt.Problem`: a problem file, evaluated and simulated through the library's
+//! application layer with the GIL released (the Python side, `gripopt.Problem`, makes the
+//! DataFrames).
 
 use crate::args;
 use crate::errors::{argument, input, problem_error, IntoPy};
 use crate::frame::Table;
-use gripopt::{DesignParameters, Integration, Method, Problem, Stages, DESIGN_NAMES};
+use gripopt::app::{EvaluatedRow, NoSuchObject, SceneChoice, SimulateRequest};
+use gripopt::{DesignParameters, Method, Problem, Stages, DESIGN_NAMES};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
@@ -52,32 +54,13 @@ fn design_of(a: &PyReadonlyArray1<'_, f64>) -> PyResult<DesignParameters> {
     Ok(DesignParameters::from_array(&x))
 }
 
-fn stages(static_only: bool) -> Stages {
-    if static_only {
-        Stages::Static
-    } else {
-        Stages::All
-    }
-}
-
-/// The rows as columns; no row: the columns and types of one (the nominal design's, its
-/// stages 0-2, with a robust problem's columns where `stages` simulates), with no values:
-/// an empty batch has the columns of any other, a robust problem's `NAME.*` included.
-fn rows_table(p: &Problem, rows: &[gripopt::EvaluatedRow], stages: Stages) -> gripopt::Result<Table> {
+/// The rows as columns; no row: the columns and types of one (the library's template row
+/// of the batch: the nominal design's stages 0-2, with a robust problem's columns where
+/// `stages` simulates), with no values: an empty batch has the columns of any other.
+fn rows_table(p: &Problem, rows: &[EvaluatedRow], stages: Stages) -> gripopt::Result<Table> {
     let table = if rows.is_empty() {
-        let nominal = [DesignParameters::from_array(&p.nominal.to_array())];
-        let template = gripopt::evaluate_rows(p, &nominal, 0, Stages::Static, Some(1))?;
-        Table::of_or_like(&[], || {
-            let mut row = template.into_iter().next()?.row;
-            if let (Some(robust), Stages::All) = (&p.robust, stages) {
-                let design = gripopt::run::ROBUST_COLUMNS.iter().map(|c| (c.0.to_string(), None));
-                let objects = robust.objects.iter().flat_map(|o| {
-                    gripopt::run::OBJECT_COLUMNS.iter().map(move |c| (format!("{}.{}", o.name, c.0), None))
-                });
-                row.robust = gripopt::run::RobustColumns(design.chain(objects).collect());
-            }
-            Some(row)
-        })
+        let template = gripopt::app::row_template(p, stages)?;
+        Table::of_or_like(&[], || Some(template))
     } else {
         Table::of(rows.iter().map(|r| &r.row))
     };
@@ -100,7 +83,7 @@ fn evaluate_interruptibly(
     first_id: u64,
     stages: Stages,
     threads: Option<usize>,
-) -> PyResult<Vec<gripopt::EvaluatedRow>> {
+) -> PyResult<Vec<EvaluatedRow>> {
     let pool = crate::fork::Pool::new();
     let workers = threads.unwrap_or_else(|| pool.run(rayon::current_num_threads)).max(1);
     let mut rows = Vec::with_capacity(xs.len());
@@ -124,95 +107,35 @@ fn evaluate_interruptibly(
 
 /// The index of the robust object `name` of `p`: else an input error naming `object`.
 fn object_index(p: &Problem, name: &str) -> PyResult<usize> {
-    let Some(robust) = &p.robust else {
-        let why = "the problem is not robust (no [robust] section): its one object is its [object]";
-        return Err(argument(
-            "object",
-            format!("object = {name:?}: {why}; object= picks one of a robust problem's [[robust.objects]]"),
-        ));
-    };
-    robust.objects.iter().position(|o| o.name == name).ok_or_else(|| {
-        let names: Vec<&str> = robust.objects.iter().map(|o| o.name.as_str()).collect();
-        argument(
+    gripopt::app::object_index(p, name).map_err(|why| match why {
+        NoSuchObject::NotRobust => {
+            let why = "the problem is not robust (no [robust] section): its one object is its [object]";
+            argument(
+                "object",
+                format!("object = {name:?}: {why}; object= picks one of a robust problem's [[robust.objects]]"),
+            )
+        }
+        NoSuchObject::Unknown(names) => argument(
             "object",
             format!(
                 "object = {name:?}: no such robust object; the problem's [[robust.objects]] are: {}",
                 names.join(", ")
             ),
-        )
+        ),
     })
 }
 
-/// `gripopt simulate --object NAME`: design `x` simulated on robust object `o` of `problem`
-/// (its cylinder and grip torque, the spring sized at `[hand] tau`, as the robust
-/// evaluation's stage 2 has them) in `scene` (None: the problem's), diagnostic mode.
-fn simulate_object(
-    problem: &Problem,
-    x: &gripopt::Design,
-    scene: Option<(gripopt::SceneKind, Option<f64>)>,
-    o: usize,
-    integration: &Integration,
-) -> gripopt::Result<gripopt::Simulation> {
-    let p = match scene {
-        Some((kind, x_off)) => problem.in_scene(kind, x_off, Path::new("the simulation's scene"))?,
-        None => problem.clone(),
-    };
-    let setup = gripopt::eval::RobustSetup::of(&p).ok_or_else(|| gripopt::Error::Input("no [robust]".into()))?;
-    let spec = gripopt::sim::SceneSpec::of(&p.scene.setup);
-    let (mut trajectory, mut poses) = (gripopt::Trajectory::default(), Vec::new());
-    let ctl = gripopt::Controls::DIAGNOSTIC;
-    let ev = gripopt::eval::simulate_object(x, &setup, o, &spec, integration, &ctl, &mut (&mut trajectory, &mut poses));
-    if ev.scene.is_none() {
-        let d = ev.discard.expect("a design that did not reach its scene was discarded");
-        let name = &setup.spec.objects[o].name;
-        return Err(gripopt::Error::Input(format!(
-            "the design is discarded on object {name} at stage {} ({}); a simulation needs stages 0–2",
-            d.stage, d.reason
-        )));
-    }
-    let record = gripopt::SimulationRecord { record: gripopt::Record::from_eval(&ev), method: integration.method };
-    Ok(gripopt::Simulation { record, trajectory, poses })
-}
-
-fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
-    serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
-}
-
-/// The object tables of `[[robust.objects]]` in a problem's TOML (parsed as written).
-fn object_tables(doc: &mut toml::Table) -> Option<&mut Vec<toml::Value>> {
-    doc.get_mut("robust")?.as_table_mut()?.get_mut("objects")?.as_array_mut()
-}
-
-/// `text` parsed as a TOML table (it parsed when the problem was loaded).
-fn toml_table(text: &str) -> PyResult<toml::Table> {
-    text.parse::<toml::Table>().map_err(|e| input(format!("problem text: {e}")))
+/// A simulation's record as `gripopt simulate --json --object NAME` has it: the object
+/// first (absent: the reference `[object]`), then the record.
+#[derive(serde::Serialize)]
+struct SimulationJson<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    object: Option<&'a str>,
+    #[serde(flatten)]
+    record: &'a gripopt::SimulationRecord,
 }
 
 impl PyProblem {
-    /// The problem's text with each robust object given by `file = "…"` written inline, its
-    /// cylinder as loaded (None: no object is given by a file). A problem made from it
-    /// holds the same objects wherever and whenever it is made: the object files are not
-    /// read again (they may be elsewhere, or edited since).
-    fn inlined_text(&self) -> PyResult<Option<String>> {
-        let Some(robust) = &self.problem.robust else { return Ok(None) };
-        if robust.objects.iter().all(|o| o.file.is_none()) {
-            return Ok(None);
-        }
-        let mut doc = toml_table(&self.problem.source_text)?;
-        let tables = object_tables(&mut doc).ok_or_else(|| input("problem text: no [[robust.objects]]"))?;
-        for (case, t) in robust.objects.iter().zip(tables.iter_mut()) {
-            let Some(t) = t.as_table_mut().filter(|_| case.file.is_some()) else { continue };
-            t.remove("file");
-            let o = &case.object;
-            for (key, v) in
-                [("radius", o.radius), ("length", o.length), ("density", o.density), ("grasp_height", o.grasp_height)]
-            {
-                t.insert(key.into(), toml::Value::Float(v));
-            }
-        }
-        toml::to_string(&doc).map(Some).map_err(|e| input(format!("problem text: {e}")))
-    }
-
     /// The problem of a file.
     pub fn from_file(path: &Path) -> PyResult<Self> {
         let problem = Problem::load(path).map_err(|e| {
@@ -245,7 +168,7 @@ impl PyProblem {
     /// `file = "…"` written inline (None: no such object).
     #[getter]
     fn inlined_toml(&self) -> PyResult<Option<String>> {
-        self.inlined_text()
+        gripopt::app::inlined_text(&self.problem).py()
     }
 
     /// The problem a pickle carried: `text` itself, or (`inlined` given) the problem of the
@@ -256,14 +179,7 @@ impl PyProblem {
     fn unpickled(text: &str, inlined: Option<&str>, path: Option<PathBuf>) -> PyResult<Self> {
         let Some(inlined) = inlined else { return Self::from_toml(text, path) };
         let shown = path.clone().unwrap_or_else(|| PathBuf::from(TEXT));
-        let mut problem = Problem::from_toml_str(inlined, &shown).py()?;
-        let mut doc = toml_table(text)?;
-        if let (Some(robust), Some(tables)) = (problem.robust.as_mut(), object_tables(&mut doc)) {
-            for (case, t) in robust.objects.iter_mut().zip(tables.iter()) {
-                case.file = t.get("file").and_then(|f| f.as_str()).map(String::from);
-            }
-        }
-        problem.source_text = text.to_string();
+        let problem = gripopt::app::from_inlined(text, inlined, &shown).py()?;
         Ok(PyProblem { problem, path })
     }
 
@@ -292,7 +208,8 @@ impl PyProblem {
     fn upper<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.problem.bounds.hi)
     }
-    /// The integration method of its grasp simulations (`solver.method`: radau5 when absent).
+    /// The integration method of its grasp simulations (`solver.method`; absent: the default,
+    /// auto with the default's tolerance scaling).
     #[getter]
     fn method(&self) -> &'static str {
         self.problem.solver.method.as_str()
@@ -329,10 +246,10 @@ impl PyProblem {
             }
         }
         let p = &self.problem;
-        let rows = evaluate_interruptibly(py, p, &xs, first_id, stages(static_only), threads)?;
+        let rows = evaluate_interruptibly(py, p, &xs, first_id, Stages::of(static_only), threads)?;
         let (table, f, k) = py
             .detach(|| -> gripopt::Result<_> {
-                let table = crate::fork::fork_safe(|| rows_table(p, &rows, stages(static_only)))?;
+                let table = crate::fork::fork_safe(|| rows_table(p, &rows, Stages::of(static_only)))?;
                 let (mut f, mut k) = (Vec::with_capacity(4 * rows.len()), Vec::with_capacity(2 * rows.len()));
                 for r in &rows {
                     f.extend(r.minimised);
@@ -347,18 +264,23 @@ impl PyProblem {
         Ok((table.into_py(py)?, f, k))
     }
 
-    /// The evaluation record of one design (the JSON text of `gripopt evaluate --json`).
+    /// The evaluation record of one design (`gripopt evaluate --json`), as Python objects.
     #[pyo3(signature = (design, static_only=false))]
-    fn record(&self, py: Python<'_>, design: PyReadonlyArray1<'_, f64>, static_only: bool) -> PyResult<String> {
+    fn record<'py>(
+        &self,
+        py: Python<'py>,
+        design: PyReadonlyArray1<'py, f64>,
+        static_only: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let x = design_of(&design)?.design();
-        let p = &self.problem;
-        let r = py.detach(|| crate::fork::fork_safe(|| gripopt::evaluate(p, &x, stages(static_only))));
-        json(&gripopt::EvaluationRecord::new(&r, p.solver.method, !static_only))
+        let (p, stages) = (&self.problem, Stages::of(static_only));
+        let r = py.detach(|| crate::fork::fork_safe(|| gripopt::evaluate(p, &x, stages)));
+        crate::records::to_python(py, &gripopt::app::evaluation_record(p, &r, stages))
     }
 
     /// Simulate one design in a scene (None: the problem's) in diagnostic mode, as
-    /// `gripopt simulate --json --csv` does: the record's JSON text, the grasp samples and
-    /// (free scene) the object's poses as columns. `object`: one of a robust problem's
+    /// `gripopt simulate --json --csv` does: the record (Python objects), the grasp samples
+    /// and (free scene) the object's poses as columns. `object`: one of a robust problem's
     /// objects by name (`simulate --object NAME`; None: the reference `[object]`).
     #[pyo3(signature = (design, scene=None, rtol=None, method=None, object=None))]
     #[allow(clippy::type_complexity)]
@@ -370,39 +292,35 @@ impl PyProblem {
         rtol: Option<f64>,
         method: Option<&str>,
         object: Option<&str>,
-    ) -> PyResult<(String, Bound<'py, PyList>, Bound<'py, PyList>)> {
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyList>, Bound<'py, PyList>)> {
         let x = design_of(&design)?.design();
         let p = &self.problem;
-        let scene = scene.map(gripopt::parse_scene).transpose().py()?;
+        let scene = scene.map(SceneChoice::parse).transpose().py()?;
         // None: the problem's solver.method
         let method = match method {
-            None => p.solver.method,
+            None => None,
             Some(m) => {
-                Method::parse(m).ok_or_else(|| input(format!("method `{m}`: must be {}", Method::accepted())))?
+                Some(Method::parse(m).ok_or_else(|| input(format!("method `{m}`: must be {}", Method::accepted())))?)
             }
         };
         if let Some(r) = rtol {
-            let limit = gripopt::params::limit("solver.rtol");
-            limit.check(r).map_err(|rule| argument("rtol", format!("rtol = {r}: {rule}")))?;
+            gripopt::app::check_rtol(r).map_err(|rule| argument("rtol", format!("rtol = {r}: {rule}")))?;
         }
         let s = &p.solver;
-        method.check_atol(s.atol).map_err(|rule| {
-            input(format!("method `{method}`: the problem's solver.atol {}: {rule}", gripopt::params::fmt_num(s.atol)))
+        let m = method.unwrap_or(s.method);
+        m.check_atol(s.atol).map_err(|rule| {
+            input(format!("method `{m}`: the problem's solver.atol {}: {rule}", gripopt::app::fmt_num(s.atol)))
         })?;
-        let integ = Integration::new(rtol.unwrap_or(s.rtol), s.atol, s.max_steps).with_method(method);
-        let object = object.map(|name| object_index(p, name)).transpose()?;
-        let sim = py
-            .detach(|| {
-                crate::fork::fork_safe(|| match object {
-                    None => gripopt::simulate(p, &x, scene, &integ, &gripopt::Controls::DIAGNOSTIC),
-                    Some(o) => simulate_object(p, &x, scene, o, &integ),
-                })
-            })
-            .py()?;
+        if let Some(name) = object {
+            object_index(p, name)?;
+        }
+        let req = SimulateRequest { scene, object: object.map(String::from), rtol, method, contacts: true };
+        let sim = py.detach(|| crate::fork::fork_safe(|| gripopt::simulate(p, &x, &req))).py()?;
         let traj = Table::of_samples(&sim.trajectory.samples);
         let names = gripopt::POSE_COLUMNS.map(|c| c.0);
         let poses = Table::of_numbers(&names, sim.poses.iter().map(gripopt::pose_values));
-        Ok((json(&sim.record)?, traj.into_py(py)?, poses.into_py(py)?))
+        let record = SimulationJson { object: sim.object.as_deref(), record: &sim.record };
+        Ok((crate::records::to_python(py, &record)?, traj.into_py(py)?, poses.into_py(py)?))
     }
 
     /// `n` designs (n, 6) drawn uniformly in the bounds from `seed`'s stream (those of

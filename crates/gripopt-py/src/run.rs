@@ -1,13 +1,15 @@
-//! Runs from Python: `optimise` / `resume` through the facade's `Optimiser` (a progress
-//! callback, the stop flag set by ctrl-c or by the callback's exception) and
-//! `_gripopt.RunFolder`, a run folder read back through the library's reader.
+//! Runs from Python: `optimise` / `resume` through the application layer's `Optimiser` (a
+//! progress callback, the stop flag set by ctrl-c or by the callback's exception; a run of a
+//! problem held in memory as `app::ProblemRun` decides) and `_gripopt.RunFolder`, a run folder
+//! read back through the library's reader.
 
 use crate::args;
-use crate::errors::{input, to_py, IntoPy};
+use crate::errors::{input, IntoPy};
 use crate::frame::Table;
 use crate::problem::PyProblem;
-use gripopt::run::{DesignRow, HistoryRow};
-use gripopt::{GenerationReport, Optimiser, Progress, RecordOptions, RunFolder, RunSummary};
+use crate::records::to_python;
+use gripopt::app::ProblemRun;
+use gripopt::{GenerationReport, HistoryRow, Optimiser, Progress, RecordOptions, RunFolder, RunSummary};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
@@ -145,104 +147,17 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     }))
 }
 
-/// Recording options: None = the defaults, "none" = nothing recorded, else a JSON object
-/// of fields over the defaults (`gripopt optimise --record-*`; checked by the library).
-fn record_options(record: Option<&str>) -> PyResult<RecordOptions> {
-    let Some(text) = record else { return Ok(RecordOptions::default()) };
-    if text == "none" {
-        return Ok(RecordOptions::none());
+/// Recording options: None = the defaults, False = nothing recorded, else a mapping of
+/// run.json's `recording` fields over the defaults (`gripopt optimise --record-*`; checked
+/// by the library).
+fn record_options(record: Option<&Bound<'_, PyAny>>) -> PyResult<RecordOptions> {
+    let Some(record) = record.filter(|r| !r.is_none()) else { return Ok(RecordOptions::default()) };
+    if record.is_instance_of::<pyo3::types::PyBool>() {
+        return Ok(if record.extract::<bool>()? { RecordOptions::default() } else { RecordOptions::none() });
     }
-    let bad = |m: String| input(format!("record: {m}"));
-    let mut v = serde_json::to_value(RecordOptions::default()).map_err(|e| bad(e.to_string()))?;
-    let given: serde_json::Map<String, serde_json::Value> =
-        serde_json::from_str(text).map_err(|e| bad(format!("not a mapping of options: {e}")))?;
-    let fields = v.as_object_mut().expect("options are an object");
-    for (k, x) in given {
-        if !fields.contains_key(&k) {
-            let known: Vec<&str> = fields.keys().map(String::as_str).filter(|k| *k != "epoch_s").collect();
-            return Err(bad(format!("unknown option `{k}` (known: {})", known.join(", "))));
-        }
-        fields.insert(k, x);
-    }
-    let options: RecordOptions = serde_json::from_value(v).map_err(|e| bad(e.to_string()))?;
-    options.validate().py()?;
-    Ok(options)
-}
-
-/// The problem file a run of `problem` starts from, and records as its source: the file it
-/// was loaded from where that file still holds exactly the problem's text (as `gripopt
-/// optimise FILE`: run.json names the file, a resume follows its edits); otherwise (text,
-/// a name with no such file, a file edited since, or other text named after a file) the
-/// problem's own text written into `out` as problem.toml, which `out` must then be new or
-/// empty for: the run records that copy as its source, never a file whose content it did
-/// not run. The second value is a note for the caller where a file was set aside.
-fn problem_file(problem: &PyProblem, out: &Path) -> PyResult<(PathBuf, Option<String>)> {
-    let text = &problem.problem.source_text;
-    let mut note = None;
-    if let Some(p) = &problem.path {
-        match std::fs::read(p) {
-            Ok(bytes) if bytes == text.as_bytes() => return Ok((p.clone(), None)),
-            Ok(_) => {
-                note = Some(format!(
-                    "{}: the file's content is not the problem's text (edited since the problem was loaded, or the text was only named after it); the run uses the problem's text, written to {} as its source",
-                    p.display(),
-                    out.join(gripopt::run::PROBLEM_FILE).display()
-                ))
-            }
-            Err(_) => {}
-        }
-    }
-    let empty = match std::fs::read_dir(out) {
-        Ok(mut rd) => rd.next().is_none(),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => true,
-        Err(e) => return Err(to_py(gripopt::Error::io(out, "cannot list the run folder", e))),
-    };
-    if !empty {
-        let why = match &problem.path {
-            None => "a problem given as text".to_string(),
-            Some(p) => {
-                format!("a problem whose text is not the content of {} (no such file, or another text)", p.display())
-            }
-        };
-        return Err(to_py(gripopt::Error::RunDir {
-            path: out.to_path_buf(),
-            message: format!("not empty: {why} starts a run only in a new or empty folder (its text is written there as problem.toml); load the problem from its file instead"),
-        }));
-    }
-    std::fs::create_dir_all(out).map_err(|e| to_py(gripopt::Error::io(out, "cannot create the run folder", e)))?;
-    let file = out.join(gripopt::run::PROBLEM_FILE);
-    std::fs::write(&file, text).map_err(|e| to_py(gripopt::Error::io(&file, "cannot write", e)))?;
-    Ok((file, note))
-}
-
-/// A run that stopped before it wrote run.json (a problem refused by the run, say) leaves
-/// nothing of its own in `out`: the problem's copy written for it is taken back, and the
-/// folder if this call created it, so that the same call can be made again.
-fn take_back_copy(file: &Path, out: &Path, created: bool) {
-    if out.join(gripopt::run::RUN_FILE).exists() {
-        return;
-    }
-    let _ = std::fs::remove_file(file);
-    if created {
-        let _ = std::fs::remove_dir(out); // only if empty
-    }
-}
-
-/// After a run from the problem's own file: the file the run read (its copy in `out`)
-/// must be the problem's text; a file replaced between the check and the run's start is
-/// named, so that a run of other text is never returned as the problem's.
-fn check_ran_text(problem: &PyProblem, file: &Path, out: &Path) -> PyResult<()> {
-    let copy = out.join(gripopt::run::PROBLEM_FILE);
-    match std::fs::read(&copy) {
-        Ok(bytes) if bytes == problem.problem.source_text.as_bytes() => Ok(()),
-        _ => Err(to_py(gripopt::Error::RunDir {
-            path: out.to_path_buf(),
-            message: format!(
-                "{} changed while the run started: the run (attributed to that file, as its run.json says) is not of the problem given",
-                file.display()
-            ),
-        })),
-    }
+    let fields: serde_json::Map<String, serde_json::Value> =
+        pythonize::depythonize(record).map_err(|e| input(format!("record: not a mapping of options: {e}")))?;
+    gripopt::app::record_options(&fields).py()
 }
 
 /// A `GripoptWarning` with `message`, reported at the caller's line (the first frame
@@ -264,31 +179,22 @@ pub fn optimise<'py>(
     #[pyo3(from_py_with = args::generations)] generations: u64,
     #[pyo3(from_py_with = args::seed)] seed: u64,
     #[pyo3(from_py_with = args::threads)] threads: Option<usize>,
-    record: Option<&str>,
+    record: Option<Bound<'py, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let rec = record_options(record)?;
-    gripopt::run::check_population(pop, generations, rec.enabled).py()?;
-    let created = !out.exists();
-    let (file, note) = problem_file(problem, &out)?;
-    let copied = problem.path.as_deref() != Some(file.as_path());
-    let mut opt = Optimiser::new(&file, &out).pop(pop).generations(generations).seed(seed).record(rec);
-    if let Some(t) = threads {
-        opt = opt.threads(t);
-    }
-    let ran = note.map_or(Ok(()), |n| warn(py, &n)).and_then(|()| drive(py, opt, progress, &out));
+    let rec = record_options(record.as_ref())?;
+    gripopt::app::check_population(pop, generations, rec.enabled).py()?;
+    let run = ProblemRun::prepare(&problem.problem, problem.path.as_deref(), &out).py()?;
+    let opt =
+        Optimiser::new(run.file(), &out).pop(pop).generations(generations).seed(seed).record(rec).threads(threads);
+    let ran = run.note.as_deref().map_or(Ok(()), |n| warn(py, n)).and_then(|()| drive(py, opt, progress, &out));
     let s = match ran {
-        Ok(s) => s,
+        Ok(s) => run.finish(Ok(s)).py()?,
         Err(e) => {
-            if copied {
-                take_back_copy(&file, &out, created);
-            }
+            run.abandon();
             return Err(e);
         }
     };
-    if !copied {
-        check_ran_text(problem, &file, &out)?;
-    }
     summary_dict(py, &s)
 }
 
@@ -303,12 +209,9 @@ pub fn resume<'py>(
     force: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut opt = Optimiser::resume(&path).force(force);
+    let mut opt = Optimiser::resume(&path).force(force).threads(threads);
     if let Some(g) = generations {
         opt = opt.generations(g);
-    }
-    if let Some(t) = threads {
-        opt = opt.threads(t);
     }
     let s = drive(py, opt, progress, &path)?;
     summary_dict(py, &s)
@@ -320,26 +223,6 @@ pub fn resume<'py>(
 #[pyclass(name = "RunFolder", module = "gripopt._gripopt", frozen)]
 pub struct PyRunFolder {
     folder: RunFolder,
-}
-
-/// Why the view `file` (of table `name`) does not hold the designs of the run's checkpoint,
-/// and the checkpoint's rows of the table (None: it does, there is no checkpoint yet, or a
-/// process runs the run).
-fn view_differs(f: &RunFolder, name: &str, file: &str) -> gripopt::Result<Option<(String, Vec<DesignRow>)>> {
-    if matches!(f.state()?, gripopt::run::RunState::Running(_)) {
-        return Ok(None);
-    }
-    let Some(t) = f.checkpoint_tables()? else { return Ok(None) };
-    let rows = match name {
-        "front" => t.front,
-        "archive" => t.archive,
-        _ => t.population,
-    };
-    Ok(f.view_differs(file, &rows, t.generation)?.map(|why| (why, rows)))
-}
-
-fn json<T: serde::Serialize>(v: &T) -> PyResult<String> {
-    serde_json::to_string(v).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
 }
 
 /// `rows` as columns; none: the columns of `template()` (a row of the same table), with
@@ -356,16 +239,16 @@ fn columns<'py, T: serde::Serialize + serde::de::DeserializeOwned>(
 impl PyRunFolder {
     #[new]
     fn new(path: PathBuf) -> PyResult<Self> {
-        Ok(PyRunFolder { folder: RunFolder::open_pinned(path).py()? })
+        Ok(PyRunFolder { folder: gripopt::app::open_run(&path).py()? })
     }
     /// The folder.
     #[getter]
     fn path(&self) -> PathBuf {
         self.folder.dir().to_path_buf()
     }
-    /// run.json as JSON text.
-    fn info(&self) -> PyResult<String> {
-        json(&self.folder.info().py()?)
+    /// run.json, as Python objects.
+    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.folder.info().py()?)
     }
     /// The run's problem in force (its copy in the folder), checked against the hash
     /// run.json recorded: an edited copy is an error naming it (as replay and verify).
@@ -385,48 +268,38 @@ impl PyRunFolder {
     /// show` does (not while a process runs the run: its views follow its checkpoints).
     fn table<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyList>> {
         let f = &self.folder;
-        let (rows, file) = match name {
-            "front" => (f.front().py()?, "pareto.csv"),
-            "population" => (f.population().py()?, "population.csv"),
-            "archive" => (f.archive().py()?, "archive.csv"),
-            "history" => {
-                let template = HistoryRow {
-                    generation: 0,
-                    evaluations: 0,
-                    feasible: 0,
-                    hypervolume: 0.0,
-                    archive_hypervolume: None,
-                    pareto_hypervolume: None,
-                };
-                return columns(py, &f.history().py()?, || Some(template));
-            }
-            _ => return Err(input(format!("table `{name}`: must be front, population, archive or history"))),
-        };
-        let rows = match py.detach(|| view_differs(f, name, file)).py()? {
-            Some((why, checkpoint_rows)) => {
-                warn(py, &format!("{}: {why}", f.dir().display()))?;
-                checkpoint_rows
-            }
-            None => rows,
-        };
+        if name == "history" {
+            let template = HistoryRow {
+                generation: 0,
+                evaluations: 0,
+                feasible: 0,
+                hypervolume: 0.0,
+                archive_hypervolume: None,
+                pareto_hypervolume: None,
+            };
+            return columns(py, &f.history().py()?, || Some(template));
+        }
+        let (rows, why) = py.detach(|| gripopt::app::design_table(f, name)).py()?;
+        if let Some(why) = why {
+            warn(py, &why)?;
+        }
         // an empty front or archive has the columns of the population's rows (a robust
         // problem's included)
         let template = || f.population().ok().and_then(|p| p.into_iter().next());
         columns(py, &rows, template)
     }
-    /// Design `id` as recorded: its `/designs` message (JSON text), its trajectory as
+    /// Design `id` as recorded: its `/designs` message (Python objects), its trajectory as
     /// columns, the resolution and the shard.
     #[allow(clippy::type_complexity)]
     fn design<'py>(
         &self,
         py: Python<'py>,
         #[pyo3(from_py_with = args::design_id)] id: u64,
-    ) -> PyResult<(String, Bound<'py, PyList>, String, PathBuf)> {
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyList>, Bound<'py, PyAny>, PathBuf)> {
         let f = &self.folder;
         let rec = py.detach(|| f.design(id)).py()?;
         let traj = Table::of_samples(&rec.samples);
-        let res = serde_json::to_value(rec.resolution).ok().and_then(|v| v.as_str().map(String::from));
-        Ok((json(&rec.record)?, traj.into_py(py)?, res.unwrap_or_default(), rec.file))
+        Ok((to_python(py, &rec.record)?, traj.into_py(py)?, to_python(py, &rec.resolution)?, rec.file))
     }
     /// Re-simulate design `id` and compare it with its recording.
     fn replay<'py>(
@@ -442,7 +315,7 @@ impl PyRunFolder {
             "compared" => r.compared,
             "values_compared" => r.values_compared,
             "recomputed_feasible" => r.recomputed_feasible,
-            "fresh" => json(&r.fresh)?,
+            "fresh" => to_python(py, &r.fresh)?,
             "file" => &r.recorded.file,
             // a recording by another simulator revision: agreement within the tolerance
             "agrees_across_revisions" => r.across_revisions.as_ref().map(|a| a.agrees()),

@@ -32,6 +32,30 @@ pub struct Dopri5<const N: usize> {
     last_rejected: bool,
 }
 
+/// (Σ_j c_j k_j)·h, the sum taken left to right, component by component.
+#[inline(always)]
+fn scaled<const N: usize, const M: usize>(h: f64, k: [&SVector<f64, N>; M], c: [f64; M]) -> SVector<f64, N> {
+    SVector::from_fn(|i, _| {
+        let mut s = k[0][i] * c[0];
+        for j in 1..M {
+            s += k[j][i] * c[j];
+        }
+        s * h
+    })
+}
+
+/// y + (Σ_j c_j k_j)·h, component by component.
+#[inline(always)]
+fn stage<const N: usize, const M: usize>(
+    y: &SVector<f64, N>,
+    h: f64,
+    k: [&SVector<f64, N>; M],
+    c: [f64; M],
+) -> SVector<f64, N> {
+    let d = scaled(h, k, c);
+    SVector::from_fn(|i, _| y[i] + d[i])
+}
+
 /// The PI controller's β (Hairer's DOPRI5: 0.04) and the exponent of the error, 1/5 − 0.75 β.
 const BETA: f64 = 0.04;
 const EXPO: f64 = 0.2 - 0.75 * BETA;
@@ -52,33 +76,25 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
                 return Err(StepError::StepTooSmall);
             }
             let k1 = *f;
+            // each stage's state in one pass over the components (the same operations in the
+            // same order as the vector expressions y + (Σ c_j k_j)·h: bit for bit their values)
             let r = (|| {
-                let k2 = sys.eval(t + h / 5.0, &(y + k1 * (h / 5.0)))?;
-                let k3 = sys.eval(t + 0.3 * h, &(y + (k1 * (3.0 / 40.0) + k2 * (9.0 / 40.0)) * h))?;
+                let k2 = sys.eval(t + h / 5.0, &SVector::from_fn(|i, _| y[i] + k1[i] * (h / 5.0)))?;
+                let k3 = sys.eval(t + 0.3 * h, &stage(y, h, [&k1, &k2], [3.0 / 40.0, 9.0 / 40.0]))?;
                 let k4 =
-                    sys.eval(t + 0.8 * h, &(y + (k1 * (44.0 / 45.0) - k2 * (56.0 / 15.0) + k3 * (32.0 / 9.0)) * h))?;
-                let k5 = sys.eval(
-                    t + 8.0 / 9.0 * h,
-                    &(y + (k1 * (19372.0 / 6561.0) - k2 * (25360.0 / 2187.0) + k3 * (64448.0 / 6561.0)
-                        - k4 * (212.0 / 729.0))
-                        * h),
-                )?;
-                let y6 = y
-                    + (k1 * (9017.0 / 3168.0) - k2 * (355.0 / 33.0) + k3 * (46732.0 / 5247.0) + k4 * (49.0 / 176.0)
-                        - k5 * (5103.0 / 18656.0))
-                        * h;
+                    sys.eval(t + 0.8 * h, &stage(y, h, [&k1, &k2, &k3], [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0]))?;
+                let a5 = [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0];
+                let k5 = sys.eval(t + 8.0 / 9.0 * h, &stage(y, h, [&k1, &k2, &k3, &k4], a5))?;
+                let a6 = [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0];
+                let y6 = stage(y, h, [&k1, &k2, &k3, &k4, &k5], a6);
                 let k6 = sys.eval(t + h, &y6)?;
-                let y1 = y
-                    + (k1 * (35.0 / 384.0) + k3 * (500.0 / 1113.0) + k4 * (125.0 / 192.0) - k5 * (2187.0 / 6784.0)
-                        + k6 * (11.0 / 84.0))
-                        * h;
+                let b = [35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0];
+                let y1 = stage(y, h, [&k1, &k3, &k4, &k5, &k6], b);
                 let (k7, _) = sys.eval_accepted(t + h, &y1)?;
-                let e = (k1 * (71.0 / 57600.0) - k3 * (71.0 / 16695.0) + k4 * (71.0 / 1920.0)
-                    - k5 * (17253.0 / 339200.0)
-                    + k6 * (22.0 / 525.0)
-                    - k7 * (1.0 / 40.0))
-                    * h;
-                let dense = (k1 * D[0] + k3 * D[1] + k4 * D[2] + k5 * D[3] + k6 * D[4] + k7 * D[5]) * h;
+                let ce =
+                    [71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
+                let e = scaled(h, [&k1, &k3, &k4, &k5, &k6, &k7], ce);
+                let dense = scaled(h, [&k1, &k3, &k4, &k5, &k6, &k7], D);
                 let den = (y1 - y6).norm_squared();
                 let h_lambda = if den > 0.0 { h * ((k7 - k6).norm_squared() / den).sqrt() } else { 0.0 };
                 Some((y1, k7, e, h_lambda, dense))

@@ -36,8 +36,10 @@ pub struct Switching<const N: usize> {
     edge: (u32, u32),
     /// Implicit steps in a row that could be explicit.
     calm: u32,
-    /// ρ(J) bound of the Jacobian with this version.
-    radius: (u64, f64),
+    /// The Jacobian version whose spectral radius bounds these are: a lower bound (cheap,
+    /// [`spectral_lower_bound`]) and Gelfand's upper bound, computed only where the lower one
+    /// does not decide ([`spectral_bound`]).
+    radius: (u64, f64, Option<f64>),
     /// Switches made (to RADAU5, back to Dormand–Prince).
     pub switches: (u32, u32),
 }
@@ -52,7 +54,7 @@ impl<const N: usize> Switching<N> {
             last_implicit: false,
             edge: (0, 0),
             calm: 0,
-            radius: (0, 0.0),
+            radius: (0, 0.0, None),
             switches: (0, 0),
         }
     }
@@ -85,9 +87,14 @@ impl<const N: usize> Switching<N> {
             return;
         }
         if self.radius.0 != jc.version {
-            self.radius = (jc.version, spectral_bound(&jc.jac));
+            self.radius = (jc.version, spectral_lower_bound(&jc.jac), None);
         }
-        if h * self.radius.1 < NONSTIFF_H_RHO {
+        // h·ρ ≥ h·(lower bound) beyond the threshold (with room for the bounds' rounding):
+        // not calm, whatever Gelfand's bound, which is then not computed (it costs four
+        // products of N×N matrices); otherwise the decision is Gelfand's bound's, as always
+        let calm = h * self.radius.1 <= NONSTIFF_H_RHO * (1.0 + 1e-6)
+            && h * *self.radius.2.get_or_insert_with(|| spectral_bound(&jc.jac)) < NONSTIFF_H_RHO;
+        if calm {
             self.calm += 1;
         } else {
             self.calm = 0;
@@ -100,6 +107,28 @@ impl<const N: usize> Switching<N> {
             self.edge = (0, 0);
         }
     }
+}
+
+/// A lower bound of the spectral radius ρ of `a`: the traces of a and a² are the sums of the
+/// eigenvalues and of their squares, so ρ ≥ |tr a| / N and ρ² ≥ |tr a²| / N; each trace is
+/// taken less the bound of its rounding (N² + 2 ulps of its terms' magnitudes), so that the
+/// bound holds in floating point. O(N²), against the N³ products of [`spectral_bound`].
+fn spectral_lower_bound<const N: usize>(a: &SMatrix<f64, N, N>) -> f64 {
+    let (mut t1, mut m1, mut t2, mut m2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for i in 0..N {
+        t1 += a[(i, i)];
+        m1 += a[(i, i)].abs();
+        for j in 0..N {
+            let p = a[(i, j)] * a[(j, i)];
+            t2 += p;
+            m2 += p.abs();
+        }
+    }
+    let n = N as f64;
+    let slack = (n * n + 2.0) * f64::EPSILON;
+    let l1 = (t1.abs() - slack * m1).max(0.0) / n;
+    let l2 = ((t2.abs() - slack * m2).max(0.0) / n).sqrt();
+    l1.max(l2)
 }
 
 /// An upper bound of the spectral radius of `a`: ‖a^16‖_F^(1/16) (Gelfand's formula, four
@@ -239,5 +268,29 @@ mod tests {
         let r = spectral_bound(&b);
         assert!((6993.0..10500.0).contains(&r), "{r}");
         assert_eq!(spectral_bound(&Matrix3::<f64>::zeros()), 0.0);
+    }
+
+    /// The cheap lower bound lies below the spectral radius (and so below Gelfand's upper
+    /// bound, which then alone decides a switch back) for random matrices, oscillators and
+    /// nilpotent ones, and is within a factor √N of it for a single dominant oscillation.
+    #[test]
+    fn spectral_lower_bound_is_below_the_radius() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..500 {
+            let a =
+                SMatrix::<f64, 6, 6>::from_fn(|_, _| rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-3..4)));
+            let rho = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+            let low = spectral_lower_bound(&a);
+            assert!(low <= rho * (1.0 + 1e-9), "{low} > {rho} for {a}");
+            assert!(low <= spectral_bound(&a) * (1.0 + 1e-9));
+        }
+        // nilpotent: ρ = 0, and the bound is 0 despite the large entry
+        let n = Matrix2::new(0.0, 1e10, 0.0, 0.0);
+        assert_eq!(spectral_lower_bound(&n), 0.0);
+        // ±7000 i: tr a² = −2·49e6, so the bound is 7000
+        let b = Matrix2::new(0.0, 1.0, -49e6, 0.0);
+        let low = spectral_lower_bound(&b);
+        assert!((6999.0..=7000.0).contains(&low), "{low}");
     }
 }

@@ -357,10 +357,13 @@ impl CentredScene<'_> {
     }
 }
 
-/// Tolerances of the centred scene's state.
+/// Tolerances of the centred scene's state: the problem's, times the grasp scenes' factor of
+/// `integ.scaling`.
 pub fn tolerances(integ: &Integration) -> Tol<NS> {
     // The filter state is in N: an absolute tolerance of 1e4·atol (1e-5 N at atol 1e-9).
-    Tol { rtol: integ.rtol, atol: State::from([integ.atol, integ.atol, integ.atol, integ.atol, integ.atol * 1e4]) }
+    let c = integ.scaling.grasp;
+    let (rtol, atol) = (integ.rtol * c, integ.atol * c);
+    Tol { rtol, atol: State::from([atol, atol, atol, atol, atol * 1e4]) }
 }
 
 /// Simulate the grasp of the design's finger on the centred object, reporting to `sink`

@@ -328,10 +328,12 @@ impl OffsetScene<'_> {
 
 /// Tolerances of the offset scene (the filter states in N: 1e4·atol).
 fn tolerances(integ: &Integration) -> Tol<NO> {
-    let mut atol = St::repeat(integ.atol);
-    atol[8] = integ.atol * 1e4;
-    atol[9] = integ.atol * 1e4;
-    Tol { rtol: integ.rtol, atol }
+    let c = integ.scaling.grasp;
+    let a = integ.atol * c;
+    let mut atol = St::repeat(a);
+    atol[8] = a * 1e4;
+    atol[9] = a * 1e4;
+    Tol { rtol: integ.rtol * c, atol }
 }
 
 /// Simulate the grasp of the design's fingers on the fixed object at world offset `x_off`,

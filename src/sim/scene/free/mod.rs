@@ -541,11 +541,19 @@ impl FreeScene<'_> {
 }
 
 /// Tolerances of the free scene: fingers as the centred scene, the object's position and
-/// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol.
+/// orientation at atol·1e-1 m (the ground's pre-sink is ≈ 1 µm), velocities at atol; the
+/// fingers' and the object's rates' absolute tolerances times the factors of `integ.scaling`.
 pub fn free_tolerances(integ: &Integration) -> Tol<NF> {
+    let sc = integ.scaling;
     let mut atol = St::repeat(integ.atol);
+    for a in atol.iter_mut().take(G0) {
+        *a *= sc.free_fingers_atol;
+    }
     for j in 0..7 {
         atol[G0 + j] = integ.atol * 0.1;
+    }
+    for a in atol.iter_mut().skip(V0) {
+        *a *= sc.free_object_rates_atol;
     }
     Tol { rtol: integ.rtol, atol }
 }

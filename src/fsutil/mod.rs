@@ -1,8 +1,17 @@
-//! File-system helpers shared by the layers that write files (record, run). No layer
-//! dependencies besides the error type.
+//! File-system helpers shared by the layers that write files (record, run, sweep, bench).
+//! No layer dependencies besides the error type: every file written goes through
+//! [`atomic`] (one atomic, link-refusing write), every folder written into is held by a
+//! [`lock`], and what a cleanup cannot prove is its own is set aside ([`aside`]), never
+//! deleted.
+
+pub mod aside;
+pub mod atomic;
+pub mod lock;
+
+pub use aside::{set_aside, SET_ASIDE_DIR};
+pub use atomic::{check_replaceable, link_at, write_atomic, write_rendered, AtomicFile};
 
 use crate::{Error, Result};
-use std::io::Write;
 use std::path::Path;
 
 /// SHA-256 of `data` as 64 lowercase hex digits (what run folders record of their files).
@@ -36,8 +45,8 @@ pub fn check_new_file(flag: &str, path: &Path, force: bool) -> Result<()> {
 /// link), or for an input that is a folder an existing file inside it (links resolved: the
 /// run's run.json, checkpoint, shards, problem copies, …), is refused even with `force`,
 /// which replaces an earlier output and nothing else; a new file may be written inside the
-/// folder. A dangling link counts as an existing file (`force` replaces the link, never
-/// anything it named).
+/// folder. A link (symbolic, dangling included, or a file with several names) is refused
+/// even with `force`: gripopt never writes through one nor replaces it.
 pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path]) -> Result<()> {
     let refuse = |why: String| Err(Error::Input(format!("{flag} {}: {why}", path.display())));
     let exists = std::fs::symlink_metadata(path).is_ok();
@@ -76,6 +85,10 @@ pub fn check_output_file(flag: &str, path: &Path, force: bool, inputs: &[&Path])
             input.display()
         ));
     }
+    // a link is never written through nor replaced, --force included ([`atomic`])
+    if let Some(why) = link_at(path) {
+        return refuse(why);
+    }
     if !force {
         return refuse("the file exists; add --force to overwrite it".into());
     }
@@ -97,13 +110,17 @@ pub fn run_folder_around(path: &Path) -> Option<(std::path::PathBuf, &'static st
 }
 
 /// Refuse, before any work, files a command rewrites in a folder (a run's views at every
-/// generation, verify's table) where something other than a regular file stands: a folder,
-/// pipe or device there would fail the write's rename only after the work, and again on
-/// every retry. Absent files and regular files (links to them) pass.
+/// generation, verify's table) where something other than a regular file of one name
+/// stands: a folder, pipe or device there would fail the write's rename only after the
+/// work, and again on every retry; a link (symbolic or hard) is never replaced
+/// ([`check_replaceable`]). Absent files and regular files pass.
 pub fn check_rewritable(dir: &Path, files: &[&str]) -> Result<()> {
     for f in files {
         let path = dir.join(f);
-        let Ok(m) = std::fs::metadata(&path) else { continue };
+        let Ok(m) = std::fs::metadata(&path) else {
+            check_replaceable(&path)?; // a dangling link
+            continue;
+        };
         if !m.is_file() {
             return Err(Error::RunDir {
                 path,
@@ -113,6 +130,7 @@ pub fn check_rewritable(dir: &Path, files: &[&str]) -> Result<()> {
                 ),
             });
         }
+        check_replaceable(&path)?;
     }
     Ok(())
 }
@@ -238,39 +256,6 @@ pub fn read_regular(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
 pub fn read_regular_string(path: &Path, cap: u64) -> std::io::Result<String> {
     String::from_utf8(read_regular(path, cap)?)
         .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text ({e})")))
-}
-
-/// Write `bytes` to `path` atomically: a temporary file in the same folder, fsync, rename,
-/// fsync of the folder. Errors name the file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|s| s.to_str()).unwrap_or("checkpoint")));
-    let written = (|| {
-        // a new file, never one opened through a link (or a file) left at the temporary
-        // name: that name is removed first (a link, not its target), and create-new fails
-        // on anything that appears there meanwhile
-        if std::fs::symlink_metadata(&tmp).is_ok_and(|m| !m.is_dir()) {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        let mut f = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(|e| Error::io(&tmp, "cannot create", e))?;
-        f.write_all(bytes).map_err(|e| Error::io(&tmp, "cannot write", e))?;
-        f.sync_all().map_err(|e| Error::io(&tmp, "cannot sync", e))?;
-        drop(f);
-        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, "cannot rename the temporary file into place", e))
-    })();
-    if written.is_err() {
-        // no temporary file left behind (the file at `path`, if any, is untouched)
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written?;
-    if let Ok(d) = std::fs::File::open(dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -1,60 +1,27 @@
-//! A robust design's record (issue 22, docs/robust.md): the flat part, the `robust`
-//! sub-record folded from its scenarios (per object P(stay) with its Clopper–Pearson
-//! interval, the aggregated objectives) and the verdict over all objects; and the record of
-//! one design of any problem, robust or not.
+//! The record of a design on a chance-constrained study (a robust problem, docs/robust.md):
+//! the flat part, the `robust` sub-record folded from its scenarios (per object P(stay) with
+//! its Clopper–Pearson interval, the aggregated objectives) and the verdict over all objects.
 
 use super::binomial::clopper_pearson;
 use super::objectives::Objectives;
 use super::record::{Record, Verdict};
 use super::record_robust::{ObjectRecord, RobustRecord, ScenarioRecord};
-use super::robust::{decided, evaluate_sequential, Decided, RobustSetup, RobustStart};
+use super::scenario::DesignStart;
 use super::scene_record::fin;
-use super::stage3::evaluate;
-use super::stages::{Cause, EvalOptions};
-use crate::params::{Design, Problem, SceneKind};
+use super::stages::Cause;
+use super::stop::{decided, Decided};
+use super::study::Study;
 
-/// The record of design `x` of problem `p` through `opts`' stages: for a robust problem with
-/// stage 3 the robust evaluation (`setup`: the problem's, computed once by the caller, or
-/// None to compute it here), otherwise the single-object pipeline's.
-pub fn evaluate_record(p: &Problem, x: &Design, opts: &EvalOptions, setup: Option<&RobustSetup>) -> Record {
-    let own;
-    let setup = match (setup, opts.dynamics) {
-        (Some(s), true) => Some(s),
-        (None, true) => {
-            own = RobustSetup::of(p);
-            own.as_ref()
-        }
-        _ => None,
-    };
-    match setup {
-        Some(setup) => {
-            let (st, scen) = evaluate_sequential(x, setup, opts);
-            robust_record(setup, &st, scen)
-        }
-        None => Record::from_eval(&evaluate(x, &p.scene, opts)),
-    }
-}
-
-/// The record of a robust design: the flat part from stages 0–1 and the first object's stage
-/// 2, the robust sub-record, and the verdict over all objects and scenarios.
-pub fn robust_record(setup: &RobustSetup, start: &RobustStart, scen: Vec<ScenarioRecord>) -> Record {
-    robust_record_ranked(setup, start, scen).0
-}
-
-/// [`robust_record`] and the aggregated max_offset the optimiser ranks (m): an object not
-/// form closed at 0 counts as −Δ_off there (MODEL.md §6.7), a placeholder the record never
+/// The record of a design on a chance-constrained study, and the aggregated max_offset the
+/// optimiser ranks (m): an object not form closed at 0 counts as −Δ_off there (MODEL.md §6.7), a placeholder the record never
 /// carries (its max_offset, the object's and the aggregate where negative, is None).
-pub fn robust_record_ranked(
-    setup: &RobustSetup,
-    start: &RobustStart,
-    scen: Vec<ScenarioRecord>,
-) -> (Record, Option<f64>) {
-    let spec = &setup.spec;
+pub(super) fn chance_record(study: &Study, start: &DesignStart, scen: Vec<ScenarioRecord>) -> (Record, Option<f64>) {
+    let spec = study.chance().expect("a chance-constrained study");
     let mut rec = Record::from_eval(&start.base);
-    let n = setup.objects();
-    let fmax = setup.failures_allowed();
+    let n = study.objects();
+    let fmax = study.failures_allowed();
     let agg = &spec.aggregate;
-    let t_max = setup.base.criteria.t_max;
+    let t_max = study.base.criteria.t_max;
     let mut objects = Vec::with_capacity(n);
     let mut all_t = vec![];
     let mut raw_offsets = Vec::with_capacity(n);
@@ -74,7 +41,7 @@ pub fn robust_record_ranked(
         let (lo, hi) = clopper_pearson(stays as u64, runs as u64, spec.confidence);
         let meets = if runs - stays > fmax {
             Some(false)
-        } else if runs == setup.k {
+        } else if runs == study.k {
             Some(true)
         } else {
             None
@@ -124,7 +91,7 @@ pub fn robust_record_ranked(
             [a[0] + v[0], a[1] + v[1]]
         })
     };
-    let planned = if start.passed() { setup.planned() } else { 0 };
+    let planned = if start.passed() { study.planned() } else { 0 };
     let rr = RobustRecord {
         objectives,
         scenarios_planned: planned,
@@ -135,9 +102,10 @@ pub fn robust_record_ranked(
         objects,
         scenarios: scen,
     };
-    rec.verdict = verdict(setup, start, &rr);
+    rec.verdict = verdict(study, start, &rr);
     if start.passed() {
-        (rec.scene, rec.x_off) = (Some(SceneKind::Free), None);
+        // the scene its scenarios ran in (their offsets are drawn: none is the design's)
+        (rec.scene, rec.x_off) = (Some(study.scenario(0, 0).scene.setup.kind), None);
     }
     rec.robust = Some(rr);
     (rec, ranked_offset)
@@ -150,20 +118,20 @@ pub fn robust_record_ranked(
 /// it (the single-object discard's cause and violation, the reason naming the object and the
 /// scenario), else the P(stay) failure, violation Σ_o max(0, p_min − P̂_o) over the
 /// scenarios run.
-fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdict {
-    if let Some((stage, reason, violation, cause)) = &start.discard {
+fn verdict(study: &Study, start: &DesignStart, rr: &RobustRecord) -> Verdict {
+    if let Some(d) = &start.discard {
         return Verdict {
             feasible: false,
-            failed_stage: Some(*stage),
-            reason: Some(reason.clone()),
-            violation: Some(*violation),
-            cause: *cause,
+            failed_stage: Some(d.stage()),
+            reason: Some(d.reason(study)),
+            violation: Some(d.violation),
+            cause: d.cause(),
         };
     }
-    if let Some(Decided::Aborted(j)) = decided(setup, &rr.scenarios) {
-        return aborted_verdict(setup, rr, j);
+    if let Some(Decided::Aborted(j)) = decided(study, &rr.scenarios) {
+        return aborted_verdict(study, rr, j);
     }
-    let spec = &setup.spec;
+    let spec = study.chance().expect("a chance-constrained study");
     let failing: Vec<&ObjectRecord> = rr.objects.iter().filter(|o| o.meets_p_min == Some(false)).collect();
     let Some(first) = failing.first() else { return Verdict { feasible: true, ..Verdict::default() } };
     let violation: f64 = rr.objects.iter().filter_map(|o| o.p_stay).map(|p| (spec.p_min - p).max(0.0)).sum();
@@ -193,9 +161,9 @@ fn verdict(setup: &RobustSetup, start: &RobustStart, rr: &RobustRecord) -> Verdi
 /// The discard of a design whose scenario at position `j` (in the order run) the solver
 /// aborted: as the single-object pipeline's (stage 3, its cause and violation), the reason
 /// naming the object, the scenario and the solver's message.
-fn aborted_verdict(setup: &RobustSetup, rr: &RobustRecord, j: usize) -> Verdict {
+fn aborted_verdict(study: &Study, rr: &RobustRecord, j: usize) -> Verdict {
     let r = &rr.scenarios[j];
-    let name = &setup.spec.objects[r.object].name;
+    let name = study.object_name(r.object).unwrap_or_default();
     // a record read back has no message: its cause's word, and stage 3's violation of one
     let (message, violation) = match &r.abort {
         Some(a) => (a.message.clone(), a.violation),

@@ -1,17 +1,18 @@
-//! Replay: find one design in a run's recording through the index and the MCAP summary
-//! (one chunk read), re-simulate it from its recorded parameters and the run's scene, and
-//! verify that the new trajectory equals the recorded one.
+//! Reading a recorded design back: find it through the index and the MCAP summary (one
+//! chunk read), its `/designs` message and its trajectory, typed; and the problem file the
+//! run evaluated its generation with. Nothing is evaluated here: a replay (the app layer)
+//! re-runs the design through its study and compares with `compare`.
 
 use super::index::{read_index, ProblemUse, ShardEntry};
-use super::messages::{at_precision, samples_from, window_start_ns, Finger2Columns};
+use super::messages::{samples_from, window_start_ns, Finger2Columns};
 use super::metadata::{RunMetadata, RUN_METADATA};
 use super::proto::GraspSeries;
 use super::schema::DesignMessage;
 use super::{RecordOptions, Resolution};
-use crate::eval::{evaluate_into, EvalOptions, Record};
+use crate::error::{Error, Result};
+use crate::eval::ScenarioRecord;
 use crate::params::{Design, Problem};
-use crate::sim::{Sample, Trajectory, ACROSS_REVISIONS_RTOL, SIMULATOR_REVISION};
-use crate::{Error, Result};
+use crate::sim::Sample;
 use prost::Message;
 use std::path::{Path, PathBuf};
 
@@ -42,111 +43,11 @@ impl Recorded {
     pub fn design(&self) -> Design {
         Design::from_array(&self.record.parameters.to_array())
     }
-}
 
-/// Result of a replay.
-#[derive(Debug, Clone)]
-pub struct Replay {
-    /// What was recorded.
-    pub recorded: Recorded,
-    /// Recomputed trajectory, selected and rounded as recorded, equals the recorded one
-    /// (bitwise for the same build; else within 1e-12 relative for a full-resolution
-    /// recording, within one f32 unit, 1.2e-7 relative, for a compact one).
-    pub verified: bool,
-    /// Largest relative difference found.
-    pub max_difference: f64,
-    /// Samples compared.
-    pub compared: usize,
-    /// Values of the `/designs` record compared with the re-evaluation (failing stage,
-    /// reason, violation, objectives, simulation steps and RHS evaluations): what verifies a
-    /// design recorded without a trajectory (discarded before stage 3, or a scene whose
-    /// trajectory is not recorded).
-    pub values_compared: usize,
-    /// Verdict recomputed.
-    pub recomputed_feasible: bool,
-    /// The re-evaluation's record.
-    pub fresh: Record,
-    /// The run's problem file the design was re-simulated with (the one its generation was
-    /// evaluated with, run.json's `problems`).
-    pub problem_file: PathBuf,
-    /// Why the re-simulation cannot verify the recording whatever it gives: the problem
-    /// file (the one run.json records) is not the one the design's shard names. A problem
-    /// file edited since the run is refused instead ([`replay`]).
-    pub problem_note: Option<String>,
-    /// For a recording made by another simulator revision that this one does not reproduce
-    /// bit for bit: whether the re-evaluation agrees with it within the integration tolerance.
-    pub across_revisions: Option<AcrossRevisions>,
-}
-
-/// A recording compared with a re-evaluation by another simulator revision: the verdict
-/// (feasibility, failing stage, reason) must be the same, the objectives and the violation
-/// within [`ACROSS_REVISIONS_RTOL`] relative, and a full-resolution trajectory must end at the
-/// same time within it (its samples are not compared: the steps differ).
-#[derive(Debug, Clone, PartialEq)]
-pub struct AcrossRevisions {
-    /// The revision that recorded the design.
-    pub recorded: u32,
-    /// This build's revision.
-    pub current: u32,
-    /// Largest relative difference of the objectives and the violation.
-    pub max_difference: f64,
-    /// What differs beyond the tolerance (None: they agree).
-    pub differs: Option<String>,
-}
-
-impl AcrossRevisions {
-    /// The recording and the re-evaluation agree within the tolerance.
-    pub fn agrees(&self) -> bool {
-        self.differs.is_none()
-    }
-
-    /// Compare `recorded` (by revision `recorded.simulator_revision`) with `fresh`, this
-    /// build's re-evaluation.
-    pub fn compare(recorded: &Recorded, fresh: &Record) -> AcrossRevisions {
-        let rec = &recorded.record;
-        let mut out = AcrossRevisions {
-            recorded: recorded.simulator_revision,
-            current: SIMULATOR_REVISION,
-            max_difference: 0.0,
-            differs: None,
-        };
-        let verdict = |f: bool, s: Option<u8>, r: Option<&str>| (f, s, r.map(str::to_owned));
-        if verdict(rec.feasible, rec.failed_stage, rec.reason.as_deref())
-            != verdict(fresh.verdict.feasible, fresh.verdict.failed_stage, fresh.verdict.reason.as_deref())
-        {
-            out.differs = Some(format!(
-                "the verdict differs (recorded feasible {}, stage {:?}; now feasible {}, stage {:?})",
-                rec.feasible, rec.failed_stage, fresh.verdict.feasible, fresh.verdict.failed_stage
-            ));
-            return out;
-        }
-        // an older gripopt wrote max_offset's −Δ_off sentinel where it was not computed
-        let (r_o, o) = (rec.objectives.reported(), fresh.reported_objectives());
-        let mut pairs = vec![
-            ("max_offset", r_o.max_offset, o.max_offset),
-            ("alpha", r_o.alpha, o.alpha),
-            ("mean_force", r_o.mean_force, o.mean_force),
-            ("t_stab", r_o.t_stab, o.t_stab),
-            ("violation", rec.violation, fresh.verdict.violation),
-        ];
-        if recorded.resolution == Resolution::Full && !recorded.samples.is_empty() {
-            pairs.push(("trajectory end", recorded.samples.last().map(|s| s.t), fresh.grasp.t_end));
-        }
-        for (what, a, b) in pairs {
-            match (a, b) {
-                (Some(a), Some(b)) => {
-                    let d = rel(a, b);
-                    out.max_difference = out.max_difference.max(d);
-                    if d > ACROSS_REVISIONS_RTOL && out.differs.is_none() {
-                        out.differs = Some(format!("{what}: recorded {a}, now {b}"));
-                    }
-                }
-                (None, None) => {}
-                (a, b) if out.differs.is_none() => out.differs = Some(format!("{what}: recorded {a:?}, now {b:?}")),
-                _ => {}
-            }
-        }
-        out
+    /// What the recording says of scenario `k` of object `o` (None: not a robust design's
+    /// record, or its scenarios stopped early before it).
+    pub fn scenario(&self, o: usize, k: usize) -> Option<&ScenarioRecord> {
+        self.record.robust.as_ref()?.scenarios.iter().find(|s| s.object == o && s.k == k)
     }
 }
 
@@ -216,50 +117,6 @@ pub fn problem_of_generation(run_dir: &Path, generation: u64) -> Result<RunProbl
     let problem = Problem::load(&file)?;
     let sha256 = crate::fsutil::sha256_hex(problem.source_text.as_bytes());
     Ok(RunProblem { problem, file, recorded_sha256: entry.sha256.clone(), sha256 })
-}
-
-/// Compare the recorded `/designs` message with the re-evaluation's record `fresh`:
-/// (values compared, all present on both sides alike, largest relative difference of the
-/// numbers). The values: objectives, violation, failing stage, reason, the grasp
-/// simulation's steps and right-hand-side evaluations.
-fn compare_values(rec: &DesignMessage, fresh: &Record) -> (usize, bool, f64) {
-    // the optimiser's negative max_offset placeholder (MODEL.md §6.7) is not a value
-    let fresh_obj = fresh.reported_objectives().to_array();
-    let rec_obj = rec.objectives.reported().to_array();
-    let (mut n, mut alike, mut maxd) = (0usize, true, 0.0f64);
-    let mut num = |a: Option<f64>, b: Option<f64>| match (a, b) {
-        (Some(a), Some(b)) => {
-            n += 1;
-            maxd = maxd.max(rel(a, b));
-        }
-        (None, None) => {}
-        _ => {
-            n += 1;
-            alike = false;
-        }
-    };
-    for (a, b) in fresh_obj.into_iter().zip(rec_obj) {
-        num(a, b);
-    }
-    let v = &fresh.verdict;
-    num(v.violation, rec.violation);
-    let w = fresh.sim_work();
-    let ints = [
-        (v.failed_stage.map(u64::from), rec.failed_stage.map(u64::from)),
-        (w.map(|w| w[0]), rec.sim_steps),
-        (w.map(|w| w[1]), rec.sim_rhs_evals),
-    ];
-    for (a, b) in ints {
-        if a.is_some() || b.is_some() {
-            n += 1;
-            alike &= a == b;
-        }
-    }
-    if v.reason.is_some() || rec.reason.is_some() {
-        n += 1;
-        alike &= v.reason == rec.reason;
-    }
-    (n, alike, maxd)
 }
 
 /// The run id run.json of `run_dir` records (empty in run folders of a gripopt before
@@ -536,127 +393,8 @@ pub fn read_design(run_dir: &Path, id: u64) -> Result<Recorded> {
     Ok(Recorded { file: path, record, samples, finger2_columns, resolution, problem_sha256, simulator_revision })
 }
 
-/// The largest relative difference between fresh sample `a` (shaped as recorded) and the
-/// recorded `b`: finger 1's values, the hand force and energy, and finger 2's where recorded
-/// (a value NaN on one side only, or finger 2 on one side only, differs infinitely).
-fn sample_difference(a: &Sample, b: &Sample) -> f64 {
-    let (fa, fb) = (a.finger1().values(), b.finger1().values());
-    let rest = [(a.t, b.t), (a.hand_fy, b.hand_fy), (a.filtered_fy, b.filtered_fy), (a.energy, b.energy)];
-    let one = rest.into_iter().chain([(a.energy_excess, b.energy_excess)]).chain(fa.into_iter().zip(fb));
-    let mut d = one.map(|(u, v)| rel(u, v)).fold(0.0, f64::max);
-    match (a.finger2, b.finger2) {
-        (Some(u), Some(v)) => {
-            let nan_apart = |(x, y): (f64, f64)| if x.is_nan() != y.is_nan() { f64::INFINITY } else { rel(x, y) };
-            d = u.values().into_iter().zip(v.values()).map(nan_apart).fold(d, f64::max);
-        }
-        (None, None) => {}
-        _ => d = f64::INFINITY,
-    }
-    d
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    if a.to_bits() == b.to_bits() {
-        0.0
-    } else {
-        (a - b).abs() / a.abs().max(b.abs()).max(1e-300)
-    }
-}
-
-/// Replay design `id`: read it, re-simulate it with the run's problem of its generation
-/// (`problem.toml`, or after a forced resume with another problem the earlier
-/// `problem-G.toml`, as run.json's `problems` say) and the run's recording options, and
-/// compare. A problem file edited since the run used it (its hash is not the one run.json
-/// recorded) is refused, naming it, before anything is evaluated (as `resume` refuses it);
-/// one that the run recorded but the design's shard does not name is used, and the replay
-/// is then not verified ([`Replay::problem_note`]).
-pub fn replay(run_dir: &Path, id: u64) -> Result<Replay> {
-    let recorded = read_design(run_dir, id)?;
-    let run = problem_of_generation(run_dir, recorded.record.generation)?;
-    if let Some(why) = run.edited() {
-        return Err(Error::RunDir {
-            path: run.file,
-            message: format!(
-                "{why}: restore it to replay design {id} (a replay re-evaluates with the problem the run used)"
-            ),
-        });
-    }
-    let opts = run_json(run_dir)?.recording;
-    let problem_note = recorded.problem_sha256.as_deref().filter(|s| *s != run.sha256).map(|shard| {
-        format!(
-            "{} (sha256 {}) is not the problem design {id} was recorded with (sha256 {}, its shard says)",
-            run.file.display(),
-            &run.sha256[..12],
-            &shard[..shard.len().min(12)]
-        )
-    });
-    let problem = run.problem.clone();
-    let design = recorded.design();
-    if problem.robust.is_some() {
-        // a robust design (docs/robust.md): no trajectory; its scenarios compared instead
-        let fresh = crate::eval::evaluate_record(&problem, &design, &EvalOptions::full(&problem), None);
-        let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh);
-        // an older gripopt wrote the −Δ_off placeholder for max_offset in the robust record
-        let recorded_robust = recorded.record.robust.as_ref().map(|r| r.without_offset_placeholder());
-        // compared as written: a scenario's solver account (`abort`) is not in the recording
-        let fresh_robust = fresh.robust.as_ref().map(|r| r.as_written());
-        let verified = alike && vmaxd == 0.0 && recorded_robust == fresh_robust && problem_note.is_none();
-        return Ok(Replay {
-            compared: 0,
-            values_compared,
-            verified,
-            max_difference: if alike { vmaxd } else { f64::INFINITY },
-            recomputed_feasible: fresh.verdict.feasible,
-            recorded,
-            fresh,
-            problem_file: run.file,
-            problem_note,
-            across_revisions: None,
-        });
-    }
-    let mut traj = Trajectory::default();
-    let ev = evaluate_into(&design, &problem.scene, &EvalOptions::full(&problem), &mut traj);
-    let tr = ev.dynamics.is_some().then_some(traj);
-    let fresh: Vec<Sample> = match tr {
-        Some(t) => {
-            // rounded as recorded (t exact), finger 2 left as the recording has it
-            let round = |s: &Sample| recorded.finger2_columns.shape(&s.map(|x| at_precision(x, recorded.resolution)));
-            let opts = RecordOptions { resolution: recorded.resolution, ..opts };
-            opts.kept_samples(&t.samples).into_iter().map(|k| round(&t.samples[k])).collect()
-        }
-        None => vec![],
-    };
-    let recorded_has_traj = !recorded.samples.is_empty();
-    let fresh = if recorded_has_traj { fresh } else { vec![] };
-    let mut maxd = 0.0f64;
-    let same_len = fresh.len() == recorded.samples.len();
-    for (a, b) in fresh.iter().zip(&recorded.samples) {
-        maxd = maxd.max(sample_difference(a, b));
-    }
-    let feasible_rec = recorded.record.feasible;
-    // same build: 0 (bitwise); another build may differ in the last bits, then by at most
-    // one unit of the recorded precision
-    let tol = match recorded.resolution {
-        Resolution::Full => 1e-12,
-        Resolution::Compact => f32::EPSILON as f64,
-    };
-    let fresh_record = Record::from_eval(&ev);
-    let (values_compared, alike, vmaxd) = compare_values(&recorded.record, &fresh_record);
-    let verified =
-        same_len && maxd <= tol && feasible_rec == ev.feasible() && alike && vmaxd <= tol && problem_note.is_none();
-    let maxd = maxd.max(vmaxd);
-    let across_revisions = (!verified && problem_note.is_none() && recorded.simulator_revision != SIMULATOR_REVISION)
-        .then(|| AcrossRevisions::compare(&recorded, &fresh_record));
-    Ok(Replay {
-        compared: fresh.len().min(recorded.samples.len()),
-        values_compared,
-        recorded,
-        verified,
-        max_difference: if same_len && alike { maxd } else { f64::INFINITY },
-        recomputed_feasible: ev.feasible(),
-        fresh: fresh_record,
-        problem_file: run.file,
-        problem_note,
-        across_revisions,
-    })
+/// The recording options run.json of `run_dir` records (what a replay selects and rounds
+/// the re-simulated trajectory with, as the run recorded it).
+pub fn run_recording(run_dir: &Path) -> Result<RecordOptions> {
+    Ok(run_json(run_dir)?.recording)
 }
