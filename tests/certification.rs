@@ -111,3 +111,83 @@ fn a_front_is_certified_as_the_test_defines_whatever_the_threads() {
         }
     }
 }
+
+/// The ids of a design table's rows (`#` lines and the column names skipped).
+fn table_ids(path: &std::path::Path) -> Vec<u64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect()
+}
+
+/// The data lines of a design table (its `#` lines dropped: the title differs by file).
+fn table_data(path: &std::path::Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines().filter(|l| !l.starts_with('#')).map(String::from).collect()
+}
+
+/// A robust run ends with its certification stage: pareto.csv holds exactly the certified
+/// front that certification.json names (each of its designs certified, mutually
+/// non-dominated by the fresh objectives the row shows), search_pareto.csv the front that
+/// the same run without certification reports as pareto.csv, `show` takes the certified
+/// front from the checkpoint without calling the view different; the stage gives the same
+/// bytes at 1 and 2 threads and when the finished run is resumed (as after a kill during
+/// the stage).
+#[test]
+fn a_robust_run_reports_its_certified_front() {
+    use crate::robust::{robust_text, spec, tmp};
+    let dir = tmp("certified-run");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (file, off) = (dir.join("robust.toml"), dir.join("off.toml"));
+    std::fs::write(&file, robust_text("")).unwrap();
+    std::fs::write(&off, robust_text("[robust.certify]\nenabled = false\n")).unwrap();
+    let runs = [dir.join("t1"), dir.join("t2"), dir.join("off")];
+    let s1 = gripopt::run::optimise(&spec(&file, &runs[0], 1)).unwrap();
+    gripopt::run::optimise(&spec(&file, &runs[1], 2)).unwrap();
+    let s_off = gripopt::run::optimise(&spec(&off, &runs[2], 1)).unwrap();
+    assert!(s_off.certification.is_none() && !runs[2].join("certification.json").exists());
+    let c = s1.certification.expect("a robust run with p_min 0.5 certifies");
+    let cert: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(runs[0].join("certification.json")).unwrap()).unwrap();
+    let front: Vec<u64> = cert["front"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert_eq!(front, c.front);
+    assert!(c.tested > 0 && !front.is_empty(), "the small problem certifies some design: {c:?}");
+    assert_eq!(table_ids(&runs[0].join("pareto.csv")), front);
+    for id in &front {
+        assert_eq!(cert["designs"][id.to_string()]["certified"], true, "design {id}");
+    }
+    // the fresh objectives the rows show are certification.json's, mutually non-dominated
+    let rows = gripopt::run::RunFolder::open(&runs[0]).unwrap().front().unwrap();
+    let crit = robust_problem().scene.criteria;
+    let f: Vec<[f64; 4]> = rows
+        .iter()
+        .map(|r| {
+            let o = &cert["designs"][r.id.to_string()]["objectives"];
+            let v = |k: &str| o[k].as_f64().unwrap_or(f64::NAN);
+            let want = [v("max_offset"), v("alpha"), v("mean_force"), v("t_stab")];
+            let got = [r.max_offset, r.alpha, r.mean_force, r.t_stab];
+            assert_eq!(want.map(f64::to_bits), got.map(|x| x.unwrap_or(f64::NAN).to_bits()), "design {}", r.id);
+            minimised(got, &crit)
+        })
+        .collect();
+    let dominates = |a: &[f64; 4], b: &[f64; 4]| a.iter().zip(b).all(|(x, y)| x <= y) && a != b;
+    assert!(f.iter().all(|a| f.iter().all(|b| !dominates(a, b))));
+    // the search's front is what pareto.csv is without certification
+    assert_eq!(table_data(&runs[0].join("search_pareto.csv")), table_data(&runs[2].join("pareto.csv")));
+    // threads, and a resume of the finished run, give the same bytes
+    let bytes = |d: &std::path::Path| {
+        ["pareto.csv", "search_pareto.csv", "certification.json"].map(|f| std::fs::read(d.join(f)).unwrap())
+    };
+    assert_eq!(bytes(&runs[0]), bytes(&runs[1]));
+    let before = bytes(&runs[0]);
+    std::fs::remove_file(runs[0].join("certification.json")).unwrap();
+    gripopt::run::resume(&runs[0], None, false, Some(2)).unwrap();
+    assert_eq!(bytes(&runs[0]), before, "the stage again after a resume: the same bytes");
+    // show: the certified front from the checkpoint, no view called different
+    let o = crate::common::run_gripopt(&["show", runs[0].to_str().unwrap()]);
+    let said = crate::common::output_text(&o);
+    assert_eq!(o.status.code(), Some(0), "{said}");
+    assert!(!said.contains("does not hold"), "{said}");
+}

@@ -462,10 +462,11 @@ fn make_kitchen_verifies_its_front_out_of_sample() {
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(format!("{root}/problems/kitchen.toml")).unwrap();
     let small = text.replacen("scenarios = 8 ", "scenarios = 2 ", 1).replacen(
-        "verify_scenarios = 32",
+        "verify_scenarios = 128",
         "verify_scenarios = 4",
         1,
     );
+    assert!(small.contains("verify_scenarios = 4"), "kitchen.toml's verify_scenarios changed: update this test");
     let mut small = small.replacen("p_min = 0.85", "p_min = 0.5", 1);
     // the stiffness-switching integrator: the same pipeline at about half the test's time
     // (the default integrator's robust run and its verify: a_robust_run_resumes_exactly_and_verifies_out_of_sample)

@@ -131,7 +131,8 @@ class Run:
         archive_hypervolume, interrupted, wall_s. ``front_size`` and ``hypervolume`` are
         pareto.csv's (the reported front; history.csv's ``pareto_hypervolume``, or for a run
         folder of a gripopt before issue 42, whose pareto.csv was the population's front,
-        its ``hypervolume``).
+        its ``hypervolume``; a robust run that certifies: ``hypervolume`` is the search's
+        front's, search_pareto.csv).
 
         For the run an :func:`optimise` / :func:`resume` call returned, that call's report
         (``wall_s``: that call's wall time). For a run opened from its folder, the same

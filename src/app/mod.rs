@@ -71,10 +71,11 @@ pub use crate::record::{
     DEFAULT_SCENE_DT, DEFAULT_ZSTD_LEVEL, DEFAULT_ZSTD_THREADS, VERIFY_LAYOUT_FILE,
 };
 pub use crate::run::{
-    check_population, check_threads, grasp_plot, is_robust_run, robust_unit, CheckpointTables, Column, Confusion,
-    DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RobustColumns, RobustVerifySummary, RunFolder,
-    RunInfo, RunState, RunSummary, VerifiedGeneration, VerifyRow, VerifySource, VerifySummary, DESIGN_COLUMNS,
-    HISTORY_COLUMNS, MAX_THREADS, OBJECT_COLUMNS, PROBLEM_FILE, ROBUST_COLUMNS,
+    check_population, check_threads, grasp_plot, is_robust_run, robust_unit, CertificationSummary, CheckpointTables,
+    Column, Confusion, DesignRow, GenerationReport, GripperProblem, HistoryRow, Progress, RobustColumns,
+    RobustVerifySummary, RunFolder, RunInfo, RunState, RunSummary, VerifiedGeneration, VerifyRow, VerifySource,
+    VerifySummary, DESIGN_COLUMNS, HISTORY_COLUMNS, MAX_THREADS, OBJECT_COLUMNS, PROBLEM_FILE, ROBUST_COLUMNS,
+    SEARCH_FRONT_FILE,
 };
 pub use crate::sim::{
     pose_values, sample_values, series_field, trajectory_columns, trajectory_row, Controls, EventNote, FingerSample,

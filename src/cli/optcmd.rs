@@ -265,6 +265,33 @@ struct SummaryJson<'a> {
     exit_code: i32,
     /// Why no design is feasible (null when one is).
     no_feasible_design: Option<Vec<String>>,
+    /// A robust run's certification: designs tested, certified, the reported front's ids and
+    /// why none is certified (null: the problem does not certify, or the run was interrupted).
+    certification: Option<CertificationJson>,
+}
+
+/// `optimise --json`'s certification stage.
+#[derive(serde::Serialize)]
+struct CertificationJson {
+    tested: usize,
+    certified: usize,
+    front: Vec<u64>,
+    why_none: Option<String>,
+}
+
+/// The certification stage's line of the text summary.
+fn certification_line(c: &gripopt::app::CertificationSummary) -> String {
+    let n = gripopt::app::counted;
+    let head = format!(
+        "certified on fresh scenarios: {} of {} tested; {} on the certified front (pareto.csv; the search's front: search_pareto.csv; certification.json)",
+        c.certified,
+        n(c.tested as u64, "design", "designs"),
+        c.front.len()
+    );
+    match &c.why_none {
+        Some(why) => format!("{head}\n{why}"),
+        None => head,
+    }
 }
 
 /// Print where the results are (text, or one JSON object with `--json`), and when no design
@@ -285,6 +312,12 @@ pub fn summary(s: &gripopt::app::RunSummary, json: bool) -> Result<i32> {
             wall_s: s.wall_s,
             exit_code: code,
             no_feasible_design: s.discards.explain(),
+            certification: s.certification.as_ref().map(|c| CertificationJson {
+                tested: c.tested,
+                certified: c.certified,
+                front: c.front.clone(),
+                why_none: c.why_none.clone(),
+            }),
         };
         outln!("{}", serde_json::to_string(&v)?);
         return Ok(code);
@@ -307,6 +340,9 @@ pub fn summary(s: &gripopt::app::RunSummary, json: bool) -> Result<i32> {
             s.front_size,
             s.hv
         );
+    }
+    if let Some(c) = &s.certification {
+        outln!("{}", certification_line(c));
     }
     if let Some(lines) = s.discards.explain() {
         // the run's step budget, for an aborted simulation's line

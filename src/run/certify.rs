@@ -180,6 +180,9 @@ pub const CERTIFICATION_FILE: &str = "certification.json";
 /// certification.json: what the certification stage found, as written.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct CertificationFile {
+    /// The generation of the run's state certified (the last of the search).
+    #[serde(default)]
+    pub generation: u64,
     /// P(stay) ≥ p_min, the constraint certified.
     pub p_min: f64,
     /// 1 − α of the test.
@@ -202,6 +205,7 @@ impl CertifiedFront {
     pub fn file(&self) -> Option<CertificationFile> {
         let plan = self.plan.as_ref()?;
         Some(CertificationFile {
+            generation: 0,
             p_min: plan.p_min,
             confidence: plan.confidence,
             looks: plan.looks.clone(),

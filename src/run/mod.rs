@@ -9,6 +9,7 @@
 mod archive;
 mod attribution;
 mod certify;
+mod certify_stage;
 mod checkpoint;
 mod checkpoint_json;
 mod contents;
@@ -39,6 +40,7 @@ pub use certify::{
     certification_study, certified_row, certify_front, read_certification, write_certification, CertificationFile,
     CertifiedFront, CERTIFICATION_FILE,
 };
+pub use certify_stage::{certify_run, checkpoint_front, CertificationSummary, SEARCH_FRONT_FILE};
 pub use checkpoint::{settings_hash, sha256_hex, Checkpoint, ChecksumMismatch, RunOptions, FORMAT, PIPELINE, VERSION};
 pub use folder::{read_table, RunFolder, RunState};
 pub use grasp_plot::grasp_plot;

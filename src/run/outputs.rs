@@ -239,7 +239,7 @@ pub fn header(title: &str, columns: &[Column]) -> String {
 
 /// The `#` header lines of a design table, with a robust problem's columns after `columns`
 /// (those of `robust`, a row of the table).
-fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> String {
+pub(super) fn header_with(title: &str, columns: &[Column], robust: &RobustColumns) -> String {
     let extra = robust.columns();
     let mut s = format!("# gripopt {title}\n# units:");
     for (n, u, _) in columns {

@@ -78,11 +78,14 @@ pub struct RunSummary {
     pub generations: u64,
     /// Evaluations.
     pub evaluations: u64,
-    /// Designs on the reported front (pareto.csv).
+    /// Designs on the reported front (pareto.csv; the certified front where the run
+    /// certifies).
     pub front_size: usize,
     /// Feasible members of the final population.
     pub feasible: usize,
-    /// Normalised hypervolume of the reported front (pareto.csv).
+    /// Normalised hypervolume of the search's reported front (pareto.csv; of a robust run
+    /// that certifies, search_pareto.csv: the certified designs' objectives are estimated
+    /// on other scenarios).
     pub hv: f64,
     /// Designs in the archive (every feasible non-dominated design evaluated).
     pub archive_size: usize,
@@ -95,6 +98,9 @@ pub struct RunSummary {
     /// Every design of the run counted by what discarded it ([`Discards::explain`] says why
     /// a run has no feasible design).
     pub discards: Discards,
+    /// A robust run's certification stage (None: the problem does not certify, or the run
+    /// was interrupted before it).
+    pub certification: Option<super::CertificationSummary>,
 }
 
 fn settings_for(p: &GripperProblem, pop: usize, seed: u64) -> Nsga2Settings {
@@ -565,7 +571,14 @@ fn drive(
     let archive = archive.lock().expect("archive").clone();
     info.discards = archive.discards.clone();
     write_outputs(out, &gp, &st, &archive)?;
-    let front: Vec<u64> = super::archive::reported_front(&st, Some(&archive)).iter().map(|p| p.id).collect();
+    let search = super::archive::reported_front(&st, Some(&archive));
+    // a robust run that certifies reports the certified front (its stage after the search)
+    let certification =
+        if interrupted { None } else { pool.install(|| super::certify_run(out, &gp, &st, &archive, &search))? };
+    let front: Vec<u64> = match &certification {
+        Some(c) => c.front.clone(),
+        None => search.iter().map(|p| p.id).collect(),
+    };
     let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
     crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
     lock.check()?;
@@ -584,6 +597,7 @@ fn drive(
         interrupted,
         wall_s: start.elapsed().as_secs_f64(),
         discards: archive.discards,
+        certification,
     })
 }
 

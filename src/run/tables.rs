@@ -19,7 +19,8 @@ use crate::error::Result;
 pub struct CheckpointTables {
     /// The checkpoint's generation.
     pub generation: u64,
-    /// pareto.csv's rows: the reported front ([`super::reported_front`]), by id.
+    /// pareto.csv's rows: the reported front ([`super::reported_front`]), by id (a robust
+    /// run certified at this generation: the certified front's rows).
     pub front: Vec<DesignRow>,
     /// archive.csv's rows: every feasible non-dominated design of the run, by id.
     pub archive: Vec<DesignRow>,
@@ -51,7 +52,13 @@ impl RunFolder {
         )?;
         let st = &cp.state;
         let running = matches!(RunLock::holder(self.dir())?, LockHolder::Held(_));
-        let front = reported_front(st, cp.archive.as_ref()).into_iter().map(|i| DesignRow::of(i, Some(0))).collect();
+        // a robust run certified at this state reports its certified front (certification.json)
+        let certification = super::certify::read_certification(self.dir())?;
+        let certified = super::certify_stage::checkpoint_front(certification.as_ref(), st, cp.archive.as_ref());
+        let front =
+            certified.unwrap_or_else(|| {
+            reported_front(st, cp.archive.as_ref()).into_iter().map(|i| DesignRow::of(i, Some(0))).collect()
+        });
         let archive =
             cp.archive.as_ref().map_or(vec![], |a| a.members.iter().map(|i| DesignRow::of(i, None)).collect());
         let mut order: Vec<usize> = (0..st.population.len()).collect();

@@ -321,7 +321,7 @@ pub(crate) const CHECKPOINT_FILE: &str = "checkpoint.json";
 
 /// The run state a verify checks: the folder's checkpoint, loaded and its checksum verified.
 pub(crate) struct CheckedState {
-    checkpoint: Checkpoint<GripperInfo>,
+    pub(crate) checkpoint: Checkpoint<GripperInfo>,
     path: PathBuf,
     sha256: String,
 }

@@ -1,5 +1,6 @@
 //! `gripopt verify RUN_DIR` on a robust run (issue 22): the out-of-sample check. Every design
-//! of the run's front (from its checkpoint) is evaluated on another study — the problem's
+//! of the run's front (from its checkpoint; the certified front where the run certified it)
+//! is evaluated on another study — the problem's
 //! `verify_scenarios` per object from another ChaCha stream (`STREAM_VERIFY`) than the
 //! optimisation's, every scenario run (no early stop); the problem its generation was
 //! evaluated with, so that both figures concern the same objects — and each object's
@@ -166,7 +167,11 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
     // the front of the run's state (its checkpoint), not pareto.csv, a view a user may edit
     let info = folder.info()?;
     let checked = CheckedState::load(dir, &info)?;
-    let front = checked.front_rows();
+    // a run certified at this state: its certified front (certification.json)
+    let certification = super::certify::read_certification(dir)?;
+    let (st, archive) = (&checked.checkpoint.state, checked.checkpoint.archive.as_ref());
+    let certified = super::certify_stage::checkpoint_front(certification.as_ref(), st, archive);
+    let front = certified.unwrap_or_else(|| checked.front_rows());
     if front.is_empty() {
         // why, as verify says it for a single-object run (the run's discard counts)
         let message = match info.discards.explain() {

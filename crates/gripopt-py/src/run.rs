@@ -144,6 +144,8 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
         "archive_hypervolume" => s.archive_hv,
         "interrupted" => s.interrupted,
         "wall_s" => s.wall_s,
+        "certified" => s.certification.as_ref().map(|c| c.certified),
+        "certification_tested" => s.certification.as_ref().map(|c| c.tested),
     }))
 }
 
