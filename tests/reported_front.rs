@@ -1,9 +1,8 @@
-//! Issue 42: the front a run reports (pareto.csv, `show`, front.mcap, `verify`) is the best
-//! of the archive, at most the population size; the optimiser's survival and variation are
-//! stated in every checkpoint, and a checkpoint without them (a run started before issue 42)
-//! resumes with NSGA-II's.
-use gripopt::optim::{execute, Nsga2, Nsga2State, Survival, Variation};
-use gripopt::run::{optimise, resume, Checkpoint, GripperInfo, GripperProblem, RunSpec};
+//! The front a run reports (pareto.csv, `gripopt show`, `verify`'s designs, front.mcap):
+//! the best non-dominated designs of the run's archive, at most the population size, chosen
+//! by hypervolume (docs/outputs.md "pareto.csv, the reported front"), and history.csv's
+//! `pareto_hypervolume`, checked against independent hypervolumes of the CSVs' objectives.
+use gripopt::run::{optimise, Checkpoint, GripperInfo, RunSpec};
 use std::path::{Path, PathBuf};
 
 fn read(p: &Path) -> String {
@@ -17,7 +16,7 @@ fn rows(p: &Path) -> Vec<String> {
 
 /// A run of bottle-1l with population `pop`, nothing recorded.
 fn run(name: &str, pop: usize, generations: u64) -> PathBuf {
-    let d = crate::common::scratch_dir("s38-front", name);
+    let d = crate::common::scratch_dir("reported-front", name);
     let spec = RunSpec {
         pop,
         record: gripopt::record::RecordOptions::none(),
@@ -69,7 +68,7 @@ fn normalised(dir: &Path, file: &str) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// A pop-6 run whose archive outgrows six designs: pareto.csv holds six of archive.csv's
+/// Issue 42: a pop-6 run whose archive outgrows six designs: pareto.csv holds six of archive.csv's
 /// rows (the same lines but `rank`), its hypervolume (history.csv's `pareto_hypervolume`, checked by
 /// inclusion–exclusion from the CSV's objectives) lies between the population's and the
 /// archive's and is the best of every six-design subset's but for at most the greedy's
@@ -110,7 +109,8 @@ fn pareto_csv_is_the_best_of_the_archive_at_most_the_population_size() {
     assert_eq!(first[4], first[5], "generation 1: {}", hist[0]);
 }
 
-/// `show`'s front (the checkpoint's designs) and `verify`'s designs are pareto.csv's.
+/// Issue 42: `show`'s front (the checkpoint's designs) and `verify`'s designs are
+/// pareto.csv's.
 #[test]
 fn show_and_verify_report_pareto_csvs_designs() {
     let d = run("views", 6, 12);
@@ -126,42 +126,8 @@ fn show_and_verify_report_pareto_csvs_designs() {
     assert!(tables.archive.len() > tables.front.len());
 }
 
-/// A new run's checkpoint states its survival and variation (the defaults).
-#[test]
-fn a_new_runs_checkpoint_states_its_algorithm() {
-    let d = run("options", 6, 2);
-    let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
-    assert_eq!(cp.options.survival, Some(Survival::Hypervolume));
-    assert_eq!(cp.options.variation, Some(Variation::DifferentialEvolution { f: 0.5, cr: 0.5 }));
-    let text = read(&d.join("checkpoint.json"));
-    assert!(text.contains(r#""survival":"hypervolume""#), "the option's word");
-    assert!(text.contains(r#""variation":{"cr":0.5,"f":0.5,"kind":"differential_evolution"}"#), "{}", &text[..300]);
-}
-
-/// A checkpoint of session 36 (no survival, no variation) resumes as NSGA-II: its next
-/// generation is the one NSGA-II makes from its state, not the default algorithm's.
-#[test]
-fn an_old_checkpoint_resumes_with_nsga2() {
-    let fixture = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36/radau5"));
-    let d = crate::common::scratch_dir("s38-front", "s36");
-    crate::common::copy_dir(&fixture, &d);
-    resume(&d, Some(2), false, Some(1)).unwrap();
-    let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
-    assert_eq!((cp.options.survival, cp.options.variation), (None, None), "the options it started with");
-    let old = Checkpoint::<GripperInfo>::load(&fixture.join("checkpoint.json")).unwrap();
-    let next = |solver: Nsga2| {
-        let gp = GripperProblem::new(gripopt::params::Problem::load(&fixture.join("problem.toml")).unwrap());
-        let state: Nsga2State<GripperInfo> = old.state.clone().with_max_generations(2);
-        let (_, st) = execute(gp, solver, state, |e| e).unwrap();
-        st.population.iter().map(|p| p.x.clone()).collect::<Vec<_>>()
-    };
-    let resumed: Vec<Vec<f64>> = cp.state.population.iter().map(|p| p.x.clone()).collect();
-    assert_eq!(resumed, next(Nsga2::new(old.settings.clone()).nsga2()));
-    assert_ne!(resumed, next(Nsga2::new(old.settings.clone())), "the default would make another generation");
-}
-
-/// A history.csv of a gripopt before issue 42 (no `pareto_hypervolume`) still reads, the
-/// column empty.
+/// Issue 42: a history.csv of a gripopt before issue 42 (no `pareto_hypervolume`, here
+/// session 36's) still reads, the column empty.
 #[test]
 fn an_old_history_csv_reads_without_pareto_hypervolume() {
     let fixture = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36/radau5"));
