@@ -135,3 +135,35 @@ fn an_old_history_csv_reads_without_pareto_hypervolume() {
     let h = gripopt::RunFolder::open(&fixture).unwrap().history().unwrap();
     assert!(!h.is_empty() && h.iter().all(|r| r.pareto_hypervolume.is_none()));
 }
+
+/// Issue 42: a checkpoint whose reported front names a design the archive does not hold, or
+/// more designs than the population has, is refused naming the field (never reported
+/// short or misattributed).
+#[test]
+fn a_front_naming_designs_outside_the_archive_is_refused() {
+    let d = run("edited", 6, 3);
+    let path = d.join("checkpoint.json");
+    let original: serde_json::Value = serde_json::from_str(&read(&path)).unwrap();
+    let ids: Vec<u64> =
+        original["archive"]["front"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert!(!ids.is_empty());
+    let members: Vec<u64> =
+        original["archive"]["members"].as_array().unwrap().iter().map(|m| m["id"].as_u64().unwrap()).collect();
+    let absent = (1..).find(|id| !members.contains(id)).unwrap();
+    let mut seven = members.clone();
+    seven.resize(7, 0);
+    for (front, why) in [
+        (vec![absent], format!("design id {absent} is not in `archive.members`")),
+        (ids.iter().rev().copied().collect::<Vec<_>>(), "not ascending".to_string()),
+        (seven, "more than the population's 6".to_string()),
+    ] {
+        if front.len() < 2 && why.contains("ascending") {
+            continue;
+        }
+        let mut v = original.clone();
+        v["archive"]["front"] = serde_json::json!(front);
+        std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+        let e = Checkpoint::<GripperInfo>::load(&path).unwrap_err().to_string();
+        assert!(e.contains("archive.front") && e.contains(&why), "{why}: {e}");
+    }
+}

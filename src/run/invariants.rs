@@ -51,7 +51,10 @@ pub(crate) fn check_invariants<I>(st: &Nsga2State<I>, archive: Option<&Archive<I
 fn check_front<I>((front, members): (&Vec<u64>, &Vec<Individual<I>>), pop: usize) -> std::result::Result<(), String> {
     let at = "field `archive.front`";
     if front.len() > pop {
-        return Err(format!("{at}: {} ids, more than the population's {pop} (the file was edited or damaged)", front.len()));
+        return Err(format!(
+            "{at}: {} ids, more than the population's {pop} (the file was edited or damaged)",
+            front.len()
+        ));
     }
     if let Some(w) = front.windows(2).find(|w| w[0] >= w[1]) {
         return Err(format!("{at}: ids not ascending ({} before {}; the file was edited or damaged)", w[0], w[1]));

@@ -54,8 +54,7 @@ pub use limits::{
 pub use lock::{LockHolder, RunLock, LOCK_FILE};
 pub use observers::{GenerationReport, OutputsObserver, Progress};
 pub use outputs::{
-    header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS,
-    HISTORY_COLUMNS,
+    header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS, HISTORY_COLUMNS,
 };
 pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};

@@ -55,8 +55,7 @@ impl RunFolder {
         // a robust run certified at this state reports its certified front (certification.json)
         let certification = super::certify::read_certification(self.dir())?;
         let certified = super::certify_stage::checkpoint_front(certification.as_ref(), st, cp.archive.as_ref());
-        let front =
-            certified.unwrap_or_else(|| {
+        let front = certified.unwrap_or_else(|| {
             reported_front(st, cp.archive.as_ref()).into_iter().map(|i| DesignRow::of(i, Some(0))).collect()
         });
         let archive =
