@@ -141,7 +141,7 @@ fn an_old_history_csv_reads_without_pareto_hypervolume() {
 /// short or misattributed).
 #[test]
 fn a_front_naming_designs_outside_the_archive_is_refused() {
-    let d = run("edited", 6, 3);
+    let d = run("edited", 6, 12);
     let path = d.join("checkpoint.json");
     let original: serde_json::Value = serde_json::from_str(&read(&path)).unwrap();
     let ids: Vec<u64> =
