@@ -5,9 +5,9 @@
 //! [`CertifyPlan`](crate::eval::CertifyPlan), and non-dominated among the certified ones by
 //! their objectives estimated on the fresh scenarios.
 //!
-//! Which designs are tested: the run's feasible designs (population and archive) are
-//! candidates; the non-dominated set of those not rejected (certified ones by their fresh
-//! objectives, untested ones by their search objectives) is taken, its untested members
+//! Which designs are tested: the candidates (a run's: the search's front); the
+//! non-dominated set of those not rejected (certified ones by their fresh objectives,
+//! untested ones by their search objectives) is taken, its untested members
 //! certified (in parallel, (design, scenario) tasks), the rejected dropped, and this repeated
 //! until every member of the set is certified: the reported front is exactly the
 //! non-dominated set of the certified designs, and a design dominated by a certified one is

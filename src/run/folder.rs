@@ -176,7 +176,8 @@ impl RunFolder {
             },
         }
     }
-    /// pareto.csv: the population's feasible non-dominated designs.
+    /// pareto.csv: the run's reported front (the best non-dominated designs it found;
+    /// docs/outputs.md).
     pub fn front(&self) -> Result<Vec<DesignRow>> {
         self.of_run(|| read_design_table(&self.dir.join("pareto.csv")))
     }

@@ -102,6 +102,20 @@ pub struct RobustVerifySummary {
 }
 
 impl RobustVerifySummary {
+    /// Designs whose every object's interval lies at or above p_min (demonstrably keep), and
+    /// those with some object's interval wholly below it (demonstrably below), at the
+    /// problem's confidence; the rest the fresh draw cannot tell apart.
+    pub fn demonstrably(&self) -> (usize, usize) {
+        let mut ids: Vec<u64> = self.rows.iter().map(|r| r.id).collect();
+        ids.dedup();
+        let rows = |id: u64| self.rows.iter().filter(move |r| r.id == id);
+        let keep = ids.iter().filter(|&&id| rows(id).all(|r| r.p_stay_out_lo.is_some_and(|l| l >= self.p_min)));
+        let below = ids.iter().filter(|&&id| rows(id).any(|r| r.p_stay_out_hi.is_some_and(|h| h < self.p_min)));
+        (keep.count(), below.count())
+    }
+}
+
+impl RobustVerifySummary {
     /// The report `gripopt verify` prints.
     pub fn report(&self) -> String {
         let mut s = format!(
@@ -113,6 +127,10 @@ impl RobustVerifySummary {
         s.push_str(&format!(
             "  {} of {} keep P(stay) >= p_min {} on every object\n",
             self.keep_all, self.designs, self.p_min
+        ));
+        let (keep, below) = self.demonstrably();
+        s.push_str(&format!(
+            "  {keep} demonstrably keep (every object's Clopper-Pearson interval at or above p_min), {below} demonstrably below (some object's interval wholly below it)\n"
         ));
         for a in &self.aborted {
             s.push_str(&format!("  {}\n", a.line()));
@@ -282,4 +300,50 @@ pub fn verify_robust(dir: &Path) -> Result<RobustVerifySummary> {
         rows,
         aborted,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(id: u64, object: &str, lo: f64, hi: f64) -> RobustVerifyRow {
+        RobustVerifyRow {
+            id,
+            object: object.into(),
+            p_stay_in: None,
+            scenarios_in: None,
+            p_stay_out: Some((lo + hi) / 2.0),
+            p_stay_out_lo: Some(lo),
+            p_stay_out_hi: Some(hi),
+            stays_out: 0,
+            scenarios_out: 128,
+            max_displacement_out: None,
+            keeps: false,
+        }
+    }
+
+    /// A design keeps demonstrably when every object's interval is at or above p_min, is
+    /// demonstrably below when one object's interval is wholly below it; the rest neither.
+    #[test]
+    fn demonstrably_keep_and_below_are_read_from_the_intervals() {
+        let rows = vec![
+            row(1, "a", 0.86, 0.99),
+            row(1, "b", 0.90, 1.0),
+            row(2, "a", 0.86, 0.99),
+            row(2, "b", 0.70, 0.84),
+            row(3, "a", 0.80, 0.95),
+            row(3, "b", 0.90, 1.0),
+        ];
+        let s = RobustVerifySummary {
+            file: PathBuf::new(),
+            rows,
+            designs: 3,
+            keep_all: 0,
+            p_min: 0.85,
+            scenarios: 128,
+            aborted: vec![],
+        };
+        assert_eq!(s.demonstrably(), (1, 1));
+        assert!(s.report().contains("1 demonstrably keep") && s.report().contains("1 demonstrably below"));
+    }
 }
