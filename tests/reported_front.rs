@@ -144,8 +144,7 @@ fn a_front_naming_designs_outside_the_archive_is_refused() {
     let d = run("edited", 6, 12);
     let path = d.join("checkpoint.json");
     let original: serde_json::Value = serde_json::from_str(&read(&path)).unwrap();
-    let ids: Vec<u64> =
-        original["archive"]["front"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    let ids: Vec<u64> = original["archive"]["front"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
     assert!(!ids.is_empty());
     let members: Vec<u64> =
         original["archive"]["members"].as_array().unwrap().iter().map(|m| m["id"].as_u64().unwrap()).collect();
