@@ -463,7 +463,7 @@ fn an_old_checkpoint_resumes_with_nsga2() {
     let old = Checkpoint::<GripperInfo>::load(&fixture.join("checkpoint.json")).unwrap();
     let next = |solver: Nsga2| {
         // evaluated as the resume evaluates (the method the run started with)
-        let problem = Problem::load(&fixture.join("problem.toml")).unwrap().with_run_method(old.options.method);
+        let problem = Problem::load(fixture.join("problem.toml")).unwrap().with_run_method(old.options.method);
         let gp = GripperProblem::new(problem);
         let state: Nsga2State<GripperInfo> = old.state.clone().with_max_generations(2);
         let (_, st) = execute(gp, solver, state, |e| e).unwrap();
