@@ -520,7 +520,7 @@ fn every_writer_refuses_a_link_at_its_file() {
     let victim = d.join("victim.txt");
     type Writer = fn(&Path) -> gripopt::Result<()>;
     let writers: [(&str, Writer); 3] = [
-        ("hypervolume plot", |p| gripopt::run::hypervolume(p, &[0.1, 0.2], &[0.1, 0.3])),
+        ("hypervolume plot", |p| gripopt::run::hypervolume(p, &[0.1, 0.2], &[0.1, 0.3], &[0.1, 0.3])),
         ("bench table", |p| gripopt::bench::write_csv(&[], p)),
         ("atomic write", |p| gripopt::write_atomic(p, b"new")),
     ];

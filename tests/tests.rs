@@ -32,6 +32,7 @@ mod recording_scene;
 mod replay;
 mod replay_free;
 mod replay_recorded;
+mod reported_front;
 mod robust;
 mod robust_runs;
 mod robust_verdicts;

@@ -128,7 +128,11 @@ class Run:
     def summary(self) -> Optional[dict[str, Any]]:
         """What the run did: out (the run folder, a :class:`pathlib.Path`), generations
         (completed), evaluations, front_size, feasible, hypervolume, archive_size,
-        archive_hypervolume, interrupted, wall_s.
+        archive_hypervolume, interrupted, wall_s. ``front_size`` and ``hypervolume`` are
+        pareto.csv's (the reported front; history.csv's ``pareto_hypervolume``, or for a run
+        folder of a gripopt before issue 42, whose pareto.csv was the population's front,
+        its ``hypervolume``; a robust run that certifies: ``hypervolume`` is the search's
+        front's, search_pareto.csv).
 
         For the run an :func:`optimise` / :func:`resume` call returned, that call's report
         (``wall_s``: that call's wall time). For a run opened from its folder, the same
@@ -145,13 +149,16 @@ class Run:
         history = self.history
         last = history[history["generation"] == done]
         hv = lambda column: float(last[column].iloc[-1]) if len(last) else float("nan")  # noqa: E731
+        # pareto.csv's hypervolume; a gripopt before issue 42 reported the population's front
+        reported = "pareto_hypervolume" in history and len(last) and pd.notna(last["pareto_hypervolume"].iloc[-1])
+        front_hv = "pareto_hypervolume" if reported else "hypervolume"
         return {
             "out": self.path,
             "generations": done,
             "evaluations": int(info["evaluations"]),
             "front_size": len(self.front),
             "feasible": int(last["feasible"].iloc[-1]) if len(last) else None,
-            "hypervolume": hv("hypervolume"),
+            "hypervolume": hv(front_hv),
             "archive_size": len(self.archive),
             "archive_hypervolume": hv("archive_hypervolume"),
             "interrupted": info["status"] == "interrupted",
@@ -188,7 +195,8 @@ class Run:
 
     @property
     def front(self) -> pd.DataFrame:
-        """pareto.csv: the population's feasible non-dominated designs, by id."""
+        """pareto.csv: the run's front, by id: the best non-dominated designs it found (its
+        archive's, at most the population size, chosen by hypervolume; docs/outputs.md)."""
         return frame(self._folder.table("front"), DESIGN_COLUMNS)
 
     @property

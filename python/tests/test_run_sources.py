@@ -132,7 +132,8 @@ def test_a_run_opened_from_its_folder_has_its_summary(cli_run):
     assert s["evaluations"] == RUN_SETTINGS["pop"] * RUN_SETTINGS["generations"]
     assert s["front_size"] == len(csv("pareto.csv")) and s["archive_size"] == len(csv("archive.csv"))
     assert s["feasible"] == history["feasible"].iloc[-1]
-    assert s["hypervolume"] == history["hypervolume"].iloc[-1]
+    # pareto.csv's hypervolume (the reported front), at least the population's front's
+    assert s["hypervolume"] == history["pareto_hypervolume"].iloc[-1] >= history["hypervolume"].iloc[-1]
     assert s["archive_hypervolume"] == history["archive_hypervolume"].iloc[-1]
     assert s["interrupted"] is False and s["wall_s"] == info["wall_s"]
 

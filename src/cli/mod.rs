@@ -74,9 +74,10 @@ enum Cmd {
     },
     /// A run's front sorted by an objective, with units and each design's replay command.
     Show(show::ShowArgs),
-    /// Validate the optimiser on standard problems (ZDT1-3, DTLZ2, BNH, TNK, OSY, C2DTLZ2):
-    /// hypervolume and IGD of the final feasible non-dominated set; exit 3 when a problem's
-    /// hypervolume median lies outside the reference band.
+    /// Validate the optimiser's NSGA-II (crowding survival, SBX: the reference
+    /// implementation's algorithm, not the default) on standard problems (ZDT1-3, DTLZ2,
+    /// BNH, TNK, OSY, C2DTLZ2): hypervolume and IGD of the final feasible non-dominated set;
+    /// exit 3 when a problem's hypervolume median lies outside the reference band.
     MooTest {
         /// Problem name, or `all`.
         name: String,

@@ -332,7 +332,7 @@ pub fn summary(s: &gripopt::app::RunSummary, json: bool) -> Result<i32> {
     } else {
         let n = gripopt::app::counted;
         outln!(
-            "finished: {}, {} in {:.1} s; {} in the final population, {} on the Pareto front (hypervolume {:.4})",
+            "finished: {}, {} in {:.1} s; {} in the final population, {} on the reported front, pareto.csv (hypervolume {:.4})",
             n(s.generations, "generation", "generations"),
             n(s.evaluations, "evaluation", "evaluations"),
             s.wall_s,

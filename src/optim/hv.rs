@@ -39,6 +39,12 @@ pub fn hypervolume(points: &[Vec<f64>], r: &[f64]) -> f64 {
     hv_slices(inside, r)
 }
 
+/// Hypervolume of points already strictly inside the box of `r` (any order, dominated ones
+/// allowed): [`hypervolume`] without its filter.
+pub(super) fn hv_inside(pts: Vec<&[f64]>, r: &[f64]) -> f64 {
+    hv_slices(pts, r)
+}
+
 /// Hypervolume of points already strictly inside the box of `r` (any order, dominated ones allowed).
 fn hv_slices(mut pts: Vec<&[f64]>, r: &[f64]) -> f64 {
     let d = r.len();

@@ -1,13 +1,19 @@
-//! Multi-objective optimisation: NSGA-II with constrained domination, in the
-//! Problem / Algorithm / Termination vocabulary of pymoo and run by argmin's `Executor`.
+//! Multi-objective optimisation: a generational evolutionary algorithm with constrained
+//! domination (NSGA-II, or by default hypervolume survival with differential evolution), in
+//! the Problem / Algorithm / Termination vocabulary of pymoo and run by argmin's `Executor`.
 //!
 //! - [`MooProblem`]: what is optimised (bounds, objectives in minimisation form, staged
 //!   infeasibility, per-design info kept for reports);
 //! - `nsga2`: the algorithm (argmin `Solver`) and its state (argmin `State`);
+//! - `survival`: which of parents and offspring survive ([`Survival`]: crowding or
+//!   hypervolume contribution); `variation`: how offspring are made ([`Variation`]: SBX or
+//!   differential evolution);
 //! - `sort`: non-dominated sorting and crowding; `operators`: SBX, polynomial mutation;
 //! - `evaluator`: batch evaluation, the problem side's ([`Evaluator`]); `schedule`: its
 //!   default ([`Scheduled`]: two passes ordered by cost hints and a learnt cost model);
-//! - `hv`: exact hypervolume and IGD; `testproblems`: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
+//! - `hv`: exact hypervolume and IGD; `hvc`: exclusive hypervolume contributions, greedy
+//!   least-contributor removal and greedy hypervolume subset selection;
+//! - `testproblems`: ZDT, DTLZ2, BNH, TNK, OSY, C2-DTLZ2;
 //! - `serde_f64`: exact (bit-preserving) serialisation of floats, so a state can be saved
 //!   and restored.
 //!
@@ -16,12 +22,15 @@
 
 mod evaluator;
 mod hv;
+mod hvc;
 mod nsga2;
 mod operators;
 mod schedule;
 mod serde_f64;
 mod sort;
+mod survival;
 mod testproblems;
+mod variation;
 
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::cmp::Ordering;
@@ -156,9 +165,12 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
 
 pub use evaluator::{Batch, Evaluations, Evaluator, GenTiming};
 pub use hv::{hypervolume, igd, nondominated_below};
+pub use hvc::{contributions, greedy_subset, least_contributor_selection};
 pub use nsga2::{execute, observe, Nsga2, Nsga2Settings, Nsga2State};
 pub use operators::{polynomial_mutation, sbx, Operators};
 pub use schedule::{CostHint, CostModel, Scheduled};
 pub use serde_f64::{deserialize, serialize};
 pub use sort::{constrained_ranks, crowding, pareto_ranks, rank_and_crowding, survivors, survivors_with_attributes};
-pub use testproblems::{c2_constraint, reference_settings, run_test, Test, TestProblem, TestRun};
+pub use survival::{survive, Normalisation, Survival, SURVIVAL_REFERENCE};
+pub use testproblems::{c2_constraint, reference_settings, run_test, run_test_with, Test, TestProblem, TestRun};
+pub use variation::Variation;

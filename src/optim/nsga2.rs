@@ -1,13 +1,19 @@
-//! NSGA-II (Deb et al. 2002) with constrained domination, as an argmin `Solver` whose
-//! `State` holds everything a run needs to continue: population, ranks, counters and
-//! history. Variation draws from per-mating ChaCha streams derived from the seed, the
-//! generation and the mating index, so a run is fixed by its seed, independent of the
-//! thread count, and resumes exactly from a saved state without any RNG state.
+//! The generational optimiser, as an argmin `Solver` whose `State` holds everything a run
+//! needs to continue: population, ranks, measures, counters and history. Each generation
+//! makes as many offspring as the population has members (binary tournaments, then the
+//! [`Variation`]) and keeps the best of parents and offspring (the [`Survival`]); with
+//! [`Nsga2::nsga2`] (crowding survival, SBX) it is NSGA-II (Deb et al. 2002), with the
+//! defaults (hypervolume survival, differential evolution) a generational SMS-EMOA with DE
+//! variation (docs/benchmarks.md "Optimiser: selection and variation"). Constraint
+//! domination throughout. Variation draws from per-mating ChaCha streams derived from the
+//! seed, the generation and the mating index, so a run is fixed by its seed, independent of
+//! the thread count, and resumes exactly from a saved state without any RNG state.
 
 use super::evaluator::{Batch, Evaluator, GenTiming};
-use super::operators::{polynomial_mutation, sbx, Operators};
+use super::operators::Operators;
 use super::schedule::Scheduled;
-use super::sort::{rank_and_crowding, survivors_with_attributes};
+use super::survival::{attributes, survive, Normalisation, Survival};
+use super::variation::Variation;
 use super::{hv::hypervolume, Evaluated, Individual, MooProblem};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error, Executor, Problem, Solver, State, TerminationReason, TerminationStatus, KV};
@@ -44,7 +50,9 @@ pub struct Nsga2Settings {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "I: Serialize + DeserializeOwned")]
 pub struct Nsga2State<I> {
-    /// Crowding distance of each member.
+    /// Each member's measure within its front, which the tournaments prefer larger: its
+    /// crowding distance ([`Survival::Crowding`]) or its exclusive hypervolume contribution
+    /// ([`Survival::Hypervolume`]); ∞ for infeasible members.
     #[serde(with = "super::serde_f64")]
     pub crowding: Vec<f64>,
     /// Evaluations so far.
@@ -178,8 +186,9 @@ impl<I> State for Nsga2State<I> {
     }
 }
 
-/// The NSGA-II solver, evaluating each generation's designs with `E` (by default
-/// [`Scheduled`]).
+/// The optimiser, evaluating each generation's designs with `E` (by default
+/// [`Scheduled`]); its survival and variation are the defaults unless set
+/// ([`Nsga2::nsga2`]: NSGA-II's).
 #[derive(Debug, Clone)]
 pub struct Nsga2<E = Scheduled> {
     /// Settings.
@@ -190,6 +199,11 @@ pub struct Nsga2<E = Scheduled> {
     /// When set, the run stops after the current generation (its checkpoint is written)
     /// with argmin's `TerminationReason::Interrupt` (ctrl-c, a caller's stop button).
     pub stop: Option<Arc<AtomicBool>>,
+    /// How each generation's survivors are chosen (a run keeps the one it started with: a
+    /// checkpoint's run options state it).
+    pub survival: Survival,
+    /// How offspring are made (a run keeps the one it started with, as the survival).
+    pub variation: Variation,
 }
 
 fn stream(seed: u64, generation: u64, k: u64) -> ChaCha8Rng {
@@ -236,7 +250,26 @@ impl Nsga2 {
 impl<E> Nsga2<E> {
     /// New solver evaluating with `evaluator`.
     pub fn with_evaluator(settings: Nsga2Settings, evaluator: E) -> Self {
-        Nsga2 { settings, evaluator, stop: None }
+        Nsga2 { settings, evaluator, stop: None, survival: Survival::default(), variation: Variation::default() }
+    }
+    /// Make offspring with `variation`.
+    pub fn with_variation(mut self, variation: Variation) -> Self {
+        self.variation = variation;
+        self
+    }
+    /// The NSGA-II of the reference implementation (pymoo's): crowding survival, SBX
+    /// (`moo-test` validates it against the reference's hypervolume bands).
+    pub fn nsga2(self) -> Self {
+        self.with_survival(Survival::Crowding).with_variation(Variation::Sbx)
+    }
+    /// Choose the survivors with `survival`.
+    pub fn with_survival(mut self, survival: Survival) -> Self {
+        self.survival = survival;
+        self
+    }
+    /// The hypervolume normalisation of the settings, for the survival.
+    fn normalisation(&self) -> Normalisation<'_> {
+        Normalisation { ideal: &self.settings.hv_ideal, reference: &self.settings.hv_ref }
     }
     /// Stop after the current generation once `flag` is set.
     pub fn stop_on(mut self, flag: Arc<AtomicBool>) -> Self {
@@ -303,7 +336,8 @@ impl<E> Nsga2<E> {
     }
 
     /// Binary tournament between members `a` and `b`: smaller infeasibility key if either is
-    /// infeasible; for two feasible members domination, then larger crowding, then a coin.
+    /// infeasible; for two feasible members domination, then the larger measure (crowding
+    /// distance or hypervolume contribution), then a coin.
     fn tournament<I>(state: &Nsga2State<I>, a: usize, b: usize, rng: &mut ChaCha8Rng) -> usize {
         let (pa, pb) = (&state.population[a].eval, &state.population[b].eval);
         if !(pa.cv.is_feasible() && pb.cv.is_feasible()) {
@@ -364,7 +398,11 @@ fn permutation_candidates(rng: &mut ChaCha8Rng, n: usize, count: usize) -> Vec<u
 
 impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E> {
     fn name(&self) -> &str {
-        "NSGA-II"
+        match (self.survival, self.variation) {
+            (Survival::Crowding, Variation::Sbx) => "NSGA-II",
+            (Survival::Hypervolume, _) => "hypervolume survival",
+            _ => "crowding survival",
+        }
     }
 
     /// Generation 1: a random population (idempotent: a state that already has a
@@ -398,7 +436,7 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         let (rank, crowd) = {
             let f: Vec<&[f64]> = pop.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = pop.iter().map(|p| p.eval.cv).collect();
-            rank_and_crowding(&f, &cv)
+            attributes(self.survival, &f, &cv, self.normalisation())
         };
         let mut state = self.finish_generation(state, pop, rank, crowd, evaluated);
         state.timing =
@@ -430,6 +468,7 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         // candidates for 2 tournaments (of 2) per mating; extra rounds if duplicates force more
         let mut cand_rng = stream(s.seed, g, u32::MAX as u64);
         let mut cand = permutation_candidates(&mut cand_rng, n, 4 * matings);
+        let parents: Vec<&[f64]> = state.population.iter().map(|p| p.x.as_slice()).collect();
         let mut k = 0u64;
         while xs.len() < n {
             let mut rng = stream(s.seed, g, k);
@@ -440,9 +479,8 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
             k += 1;
             let a = Self::tournament(&state, cand[base], cand[base + 1], &mut rng);
             let b = Self::tournament(&state, cand[base + 2], cand[base + 3], &mut rng);
-            let (c1, c2) = sbx(&mut rng, &state.population[a].x, &state.population[b].x, lo, hi, &s.operators);
-            for mut c in [c1, c2] {
-                polynomial_mutation(&mut rng, &mut c, lo, hi, &s.operators);
+            let children = self.variation.offspring(&mut rng, &parents, (a, b), (lo, hi), &s.operators);
+            for c in children {
                 // duplicates of a member or of an earlier child are dropped and replaced by
                 // further matings (after 100 rounds of matings they are accepted)
                 if s.eliminate_duplicates && (k as usize) < 100 * matings && !seen.insert(bits(&c)) {
@@ -463,7 +501,7 @@ impl<P: MooProblem, E: Evaluator<P>> Solver<P, Nsga2State<P::Info>> for Nsga2<E>
         let (keep, rank, crowd) = {
             let f: Vec<&[f64]> = merged.iter().map(|p| p.eval.f.as_slice()).collect();
             let cv: Vec<_> = merged.iter().map(|p| p.eval.cv).collect();
-            survivors_with_attributes(&f, &cv, n)
+            survive(self.survival, &f, &cv, n, self.normalisation())
         };
         let mut slots: Vec<Option<Individual<P::Info>>> = merged.into_iter().map(Some).collect();
         let pop: Vec<_> = keep.iter().map(|&i| slots[i].take().expect("each survivor once")).collect();

@@ -1,6 +1,6 @@
 //! Standard test problems (as defined in pymoo) with analytic Pareto fronts for IGD.
 
-use super::{Evaluated, Infeasibility, MooProblem};
+use super::{Evaluated, Infeasibility, MooProblem, Survival, Variation};
 use std::f64::consts::PI;
 
 /// The test problems of `gripopt moo-test`.
@@ -290,14 +290,29 @@ pub fn reference_settings(which: TestProblem, seed: u64, pop: usize) -> super::n
     }
 }
 
-/// Run NSGA-II on a test problem and measure HV and IGD of the final feasible front.
+/// Run NSGA-II (crowding survival, SBX: the reference implementation's algorithm, whose
+/// hypervolume bands `moo-test` checks) on a test problem and measure HV and IGD of the
+/// final feasible front.
 pub fn run_test(which: TestProblem, seed: u64, pop: usize, generations: Option<u64>) -> TestRun {
+    run_test_with(which, seed, pop, generations, Survival::Crowding, Variation::Sbx)
+}
+
+/// [`run_test`] with another survival and variation (e.g. gripopt's defaults,
+/// docs/benchmarks.md).
+pub fn run_test_with(
+    which: TestProblem,
+    seed: u64,
+    pop: usize,
+    generations: Option<u64>,
+    survival: Survival,
+    variation: Variation,
+) -> TestRun {
     let t0 = std::time::Instant::now();
     let settings = reference_settings(which, seed, pop);
     use argmin::core::State;
     let state = super::nsga2::Nsga2State::new().with_max_generations(generations.unwrap_or(which.generations()));
-    let (_, st) =
-        super::nsga2::execute(which.instance(), super::Nsga2::new(settings), state, |e| e).expect("test problem run");
+    let solver = super::Nsga2::new(settings).with_survival(survival).with_variation(variation);
+    let (_, st) = super::nsga2::execute(which.instance(), solver, state, |e| e).expect("test problem run");
     let wall_s = t0.elapsed().as_secs_f64();
     let front: Vec<Vec<f64>> = st.feasible_front().iter().map(|p| p.eval.f.clone()).collect();
     TestRun {

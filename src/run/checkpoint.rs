@@ -7,7 +7,7 @@
 use super::archive::Archive;
 use super::checkpoint_json::{self, Canonical};
 use crate::fsutil::write_atomic;
-use crate::optim::{Nsga2Settings, Nsga2State};
+use crate::optim::{Nsga2Settings, Nsga2State, Survival, Variation};
 use crate::params::{Method, SolverSettings};
 use crate::record::RecordOptions;
 use crate::{Error, Result};
@@ -94,10 +94,19 @@ pub struct RunOptions {
     /// The integration method, where not the default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub method: Option<Method>,
+    /// How the optimiser chooses each generation's survivors; absent in a checkpoint of a
+    /// gripopt before issue 42, whose run resumes with the selection it started with,
+    /// [`Survival::Crowding`] (NSGA-II).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub survival: Option<Survival>,
+    /// How the optimiser makes offspring; absent as `survival` (then [`Variation::Sbx`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variation: Option<Variation>,
 }
 
 impl RunOptions {
-    /// The options of a run of a problem with solver settings `s`, recording `rec`.
+    /// The options of a new run of a problem with solver settings `s`, recording `rec` (the
+    /// default survival).
     pub fn of(s: &SolverSettings, rec: &RecordOptions) -> Self {
         RunOptions {
             pipeline: Some(PIPELINE.into()),
@@ -106,6 +115,8 @@ impl RunOptions {
             max_steps: Some(s.max_steps),
             recording: Some(*rec),
             method: (!s.method.is_default()).then_some(s.method),
+            survival: Some(Survival::default()),
+            variation: Some(Variation::default()),
         }
     }
     /// As a JSON tree (for comparing field by field: [`field_differences`]).

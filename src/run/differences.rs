@@ -31,7 +31,9 @@ pub(super) fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo,
             "options.pipeline" => "this gripopt".to_string(),
             _ => file.clone(),
         };
-        let expected = RunOptions::of(&problem.solver, &info.recording);
+        // the algorithm is the run's own (its first checkpoint's), not the problem file's
+        let (survival, variation) = (cp.options.survival, cp.options.variation);
+        let expected = RunOptions { survival, variation, ..RunOptions::of(&problem.solver, &info.recording) };
         // the run's options leave out the default method (RADAU5): name it beside a
         // checkpoint's `method`
         let mut named = expected.clone();

@@ -176,7 +176,8 @@ impl RunFolder {
             },
         }
     }
-    /// pareto.csv: the population's feasible non-dominated designs.
+    /// pareto.csv: the run's reported front (the best non-dominated designs it found;
+    /// docs/outputs.md).
     pub fn front(&self) -> Result<Vec<DesignRow>> {
         self.of_run(|| read_design_table(&self.dir.join("pareto.csv")))
     }
@@ -217,11 +218,14 @@ pub fn read_design_table(path: &Path) -> Result<Vec<DesignRow>> {
     })
 }
 
-/// The rows of history.csv ([`read_table`]), whose header must be [`HISTORY_COLUMNS`].
+/// The rows of history.csv ([`read_table`]), whose header must be [`HISTORY_COLUMNS`] (or, of a
+/// gripopt before issue 42, its columns but the last: `pareto_hypervolume` empty).
 pub fn read_history(path: &Path) -> Result<Vec<HistoryRow>> {
     read_table_with_header(path, |h| {
         let names = HISTORY_COLUMNS.map(|c| c.0);
-        (h.len() == names.len() && h.iter().zip(names).all(|(a, b)| *a == b))
+        // a history.csv of a gripopt before issue 42 ends before `pareto_hypervolume`
+        let of = |n: usize| h.len() == n && h.iter().zip(names).all(|(a, b)| *a == b);
+        (of(names.len()) || of(names.len() - 1))
             .then_some(())
             .ok_or_else(|| format!("expected the columns {}", names.join(",")))
     })

@@ -4,7 +4,9 @@
 //! hand out an id twice), designs created no later than the checkpoint's generation, and
 //! design vectors of one length of finite numbers (the optimiser's operators index them);
 //! and, for a run to continue, the id budget: `next_id` plus the evaluations still to come
-//! within the recording's clock ([`super::limits::MAX_EVALUATIONS`]).
+//! within the recording's clock ([`super::limits::MAX_EVALUATIONS`]); the reported front's
+//! ids (the archive's `front`, pareto.csv) ascending, each an archive member's, at most the
+//! population size.
 
 use super::archive::Archive;
 use crate::optim::{Individual, Nsga2State};
@@ -21,6 +23,9 @@ pub(crate) fn check_invariants<I>(st: &Nsga2State<I>, archive: Option<&Archive<I
             st.next_id,
             super::limits::MAX_EVALUATIONS
         )));
+    }
+    if let Some(front) = archive.and_then(|a| a.front.as_ref().map(|f| (f, &a.members))) {
+        check_front(front, st.population.len()).map_err(&bad)?;
     }
     let archive = archive.map_or(&[][..], |a| &a.members[..]);
     // the run's vector length: the one most designs have (an edited design is the odd one)
@@ -39,6 +44,27 @@ pub(crate) fn check_invariants<I>(st: &Nsga2State<I>, archive: Option<&Archive<I
         }
     }
     Ok(())
+}
+
+/// The reported front's ids `front` against the archive's `members` and the population size
+/// `pop`: ascending, each a member's, at most `pop` of them.
+fn check_front<I>((front, members): (&Vec<u64>, &Vec<Individual<I>>), pop: usize) -> std::result::Result<(), String> {
+    let at = "field `archive.front`";
+    if front.len() > pop {
+        return Err(format!(
+            "{at}: {} ids, more than the population's {pop} (the file was edited or damaged)",
+            front.len()
+        ));
+    }
+    if let Some(w) = front.windows(2).find(|w| w[0] >= w[1]) {
+        return Err(format!("{at}: ids not ascending ({} before {}; the file was edited or damaged)", w[0], w[1]));
+    }
+    let mut ids: Vec<u64> = members.iter().map(|m| m.id).collect();
+    ids.sort_unstable();
+    match front.iter().find(|id| ids.binary_search(id).is_err()) {
+        Some(id) => Err(format!("{at}: design id {id} is not in `archive.members` (the file was edited or damaged)")),
+        None => Ok(()),
+    }
 }
 
 /// One design `m` (index `k` of `field`) against `next_id`, the checkpoint's `generation`

@@ -36,7 +36,7 @@ mod verify_robust;
 mod verify_run;
 
 pub use crate::error::{cap_lines, counted, exact_num, hidden, printable, shell_quote, short_num};
-pub use archive::{Archive, DiscardCause, Discards};
+pub use archive::{front_cap, reported_front, Archive, DiscardCause, Discards};
 pub use certify::{
     certification_study, certified_row, certify_front, read_certification, write_certification, CertificationFile,
     CertifiedFront, CERTIFICATION_FILE,
@@ -55,8 +55,7 @@ pub use limits::{
 pub use lock::{LockHolder, RunLock, LOCK_FILE};
 pub use observers::{GenerationReport, OutputsObserver, Progress};
 pub use outputs::{
-    final_front, header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS,
-    HISTORY_COLUMNS,
+    header, write_outputs, write_tables, Column, DesignRow, HistoryRow, TimingRow, DESIGN_COLUMNS, HISTORY_COLUMNS,
 };
 pub use persist::{CheckpointSpec, Committed, PersistHooks, PersistStats, Persister, VIEWS_MIN_INTERVAL};
 pub use plots::{hypervolume, pareto_matrix};

@@ -1,8 +1,9 @@
 //! The result files of a run folder, rewritten atomically as generations finish (at most every
 //! 250 ms, see `persist::VIEWS_MIN_INTERVAL`, and after the last one) so that a
-//! running run can be watched: `pareto.csv` (the population's feasible non-dominated
-//! designs, deterministic), `archive.csv` (every feasible non-dominated design ever
-//! evaluated), `population.csv` (the whole population with discard stages and reasons; the
+//! running run can be watched: `pareto.csv` (the reported front: the best non-dominated
+//! designs the run found, at most the population size, chosen from the archive:
+//! [`super::archive::reported_front`]; deterministic), `archive.csv` (every feasible
+//! non-dominated design ever evaluated), `population.csv` (the whole population with discard stages and reasons; the
 //! same design columns as pareto.csv), `pareto_timings.csv` (wall-clock stage timings, not
 //! deterministic), `history.csv`; at the end the plots `pareto_matrix.svg` and
 //! `hypervolume.svg`.
@@ -11,7 +12,7 @@
 //! direction of each column (`pandas.read_csv(path, comment='#')` skips them); the table
 //! [`DESIGN_COLUMNS`] is the one source of both, also listed in docs/outputs.md.
 
-use super::archive::Archive;
+use super::archive::{reported_front, Archive};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::robust_columns::{float_cell, line_with_floats, RobustColumns};
 use crate::cells::{line, Floats, RawCell};
@@ -33,7 +34,7 @@ pub type Column = (&'static str, &'static str, &'static str);
 pub const DESIGN_COLUMNS: [Column; 25] = [
     ("id", "-", "design id (replay with `gripopt replay RUN --design ID`)"),
     ("generation", "-", "generation that created the design (1 = initial population)"),
-    ("rank", "-", "non-domination rank in the population (0 = front; empty in archive.csv)"),
+    ("rank", "-", "non-domination rank (pareto.csv: 0; population.csv: in the population; empty in archive.csv)"),
     ("feasible", "bool", "no stage discarded the design"),
     ("failed_stage", "-", "stage that discarded it (0-3; empty when feasible)"),
     ("violation", "stage units", "how far the failing criterion was missed (MODEL.md §10)"),
@@ -66,7 +67,8 @@ pub struct DesignRow {
     pub id: u64,
     /// Generation that created it.
     pub generation: u64,
-    /// Non-domination rank in the population (None in archive.csv).
+    /// Non-domination rank: 0 in pareto.csv, the population's in population.csv (None in
+    /// archive.csv).
     pub rank: Option<usize>,
     /// No stage discarded it.
     pub feasible: bool,
@@ -201,6 +203,10 @@ pub struct HistoryRow {
     pub hypervolume: f64,
     /// Normalised hypervolume of the archive.
     pub archive_hypervolume: Option<f64>,
+    /// Normalised hypervolume of the reported front (pareto.csv; empty for the generations
+    /// of a gripopt before issue 42, and in a history.csv it wrote).
+    #[serde(default)]
+    pub pareto_hypervolume: Option<f64>,
 }
 
 /// One row of pareto_timings.csv (wall seconds, not deterministic).
@@ -217,12 +223,13 @@ pub struct TimingRow {
 }
 
 /// Columns of history.csv.
-pub const HISTORY_COLUMNS: [Column; 5] = [
+pub const HISTORY_COLUMNS: [Column; 6] = [
     ("generation", "-", "generation"),
     ("evaluations", "-", "designs evaluated up to this generation"),
     ("feasible", "-", "feasible designs in the population"),
     ("hypervolume", "-", "normalised hypervolume of the population's feasible front (can dip)"),
     ("archive_hypervolume", "-", "normalised hypervolume of archive.csv (never falls)"),
+    ("pareto_hypervolume", "-", "normalised hypervolume of pareto.csv, the reported front (the archive's best designs, at most the population size)"),
 ];
 
 /// The `#` header lines of a CSV with `columns`.
@@ -257,13 +264,6 @@ fn design_row(s: &mut String, ind: &Individual<GripperInfo>, rank: Option<usize>
     s.push_str(&DesignRow::of(ind, rank).csv_line());
 }
 
-/// The population's feasible non-dominated designs, sorted by id.
-pub fn final_front(st: &Nsga2State<GripperInfo>) -> Vec<&Individual<GripperInfo>> {
-    let mut f = st.feasible_front();
-    f.sort_by_key(|p| p.id);
-    f
-}
-
 /// Rewrite the CSV files of state `st` (and the archive) in `out`, each atomically.
 pub fn write_tables(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<()> {
     write_tables_timed(out, st, archive).map(|_| ())
@@ -275,15 +275,17 @@ pub fn write_tables(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive)
 pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<[f64; 5]> {
     use rayon::prelude::*;
     const FILES: [&str; 5] = VIEW_FILES;
-    let front = final_front(st);
+    let front = reported_front(st, Some(archive));
     // a robust problem's columns, named by its objects (every row of a run has the same)
     let robust = st.population.first().map(|p| RobustColumns::of(&p.eval.info.record)).unwrap_or_default();
     let dheader = |title: &str, columns: &[Column]| header_with(title, columns, &robust);
     let build = |k: usize| -> String {
         match k {
             0 => {
-                let mut csv =
-                    dheader("pareto.csv: the population's feasible non-dominated designs, by id", &DESIGN_COLUMNS);
+                let mut csv = dheader(
+                    "pareto.csv: the run's front (the best non-dominated designs it found), by id",
+                    &DESIGN_COLUMNS,
+                );
                 for ind in &front {
                     design_row(&mut csv, ind, Some(0));
                 }
@@ -326,6 +328,7 @@ pub fn write_tables_timed(out: &Path, st: &Nsga2State<GripperInfo>, archive: &Ar
                         feasible: *fe,
                         hypervolume: *hv,
                         archive_hypervolume: archive.hv_history.get(g).copied().filter(|v| v.is_finite()),
+                        pareto_hypervolume: archive.front_hv_history.get(g).copied().filter(|v| v.is_finite()),
                     };
                     hist.push_str(&line(&row, Floats::Display));
                 }
@@ -362,7 +365,12 @@ pub const REWRITTEN_FILES: [&str; 7] =
 pub fn write_outputs(out: &Path, gp: &GripperProblem, st: &Nsga2State<GripperInfo>, archive: &Archive) -> Result<()> {
     write_tables(out, st, archive)?;
     super::plots::pareto_matrix(&out.join("pareto_matrix.svg"), gp, st)?;
-    super::plots::hypervolume(&out.join("hypervolume.svg"), &st.hv_history, &archive.hv_history)?;
+    super::plots::hypervolume(
+        &out.join("hypervolume.svg"),
+        &st.hv_history,
+        &archive.hv_history,
+        &archive.front_hv_history,
+    )?;
     Ok(())
 }
 
@@ -403,7 +411,14 @@ mod tests {
         let row = plain_row();
         let names: Vec<&str> = DESIGN_COLUMNS.iter().map(|c| c.0).collect();
         assert_eq!(crate::cells::header(&row), names);
-        let h = HistoryRow { generation: 1, evaluations: 4, feasible: 0, hypervolume: 0.0, archive_hypervolume: None };
+        let h = HistoryRow {
+            generation: 1,
+            evaluations: 4,
+            feasible: 0,
+            hypervolume: 0.0,
+            archive_hypervolume: None,
+            pareto_hypervolume: None,
+        };
         let names: Vec<&str> = HISTORY_COLUMNS.iter().map(|c| c.0).collect();
         assert_eq!(crate::cells::header(&h), names);
         // a row read back from its own line is the row

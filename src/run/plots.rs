@@ -109,18 +109,22 @@ fn draw_pareto_matrix(root: Area<'_>, path: &Path, gp: &GripperProblem, st: &Nsg
 }
 
 /// Normalised hypervolume per generation: the population's feasible front (can dip when
-/// crowding drops a front member) and the archive of every feasible non-dominated design
-/// (never falls).
-pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
+/// the survival drops a front member), the archive of every feasible non-dominated design
+/// (never falls) and the reported front, pareto.csv (the archive's best designs, at most
+/// the population size; its generations before issue 42 are not drawn).
+pub fn hypervolume(path: &Path, hv: &[f64], archive_hv: &[f64], pareto_hv: &[f64]) -> Result<()> {
     let draw = |svg: &mut String| {
-        draw_hypervolume(SVGBackend::with_string(svg, (800, 500)).into_drawing_area(), path, hv, archive_hv)
+        let root = SVGBackend::with_string(svg, (800, 500)).into_drawing_area();
+        draw_hypervolume(root, path, [hv, archive_hv, pareto_hv])
     };
     crate::fsutil::write_rendered(path, draw)
 }
 
-fn draw_hypervolume(root: Area<'_>, path: &Path, hv: &[f64], archive_hv: &[f64]) -> Result<()> {
+/// The three curves of [`hypervolume`]: the population's, the archive's, pareto.csv's.
+fn draw_hypervolume(root: Area<'_>, path: &Path, [hv, archive_hv, pareto_hv]: [&[f64]; 3]) -> Result<()> {
     root.fill(&WHITE).map_err(plot_error(path))?;
     let ymax = hv.iter().chain(archive_hv).cloned().filter(|v| v.is_finite()).fold(1e-6, f64::max) * 1.1;
+    let green = RGBColor(0, 140, 60);
     let mut chart = ChartBuilder::on(&root)
         .caption("hypervolume (normalised objectives; higher is better)", ("sans-serif", 18))
         .margin(12)
@@ -135,7 +139,7 @@ fn draw_hypervolume(root: Area<'_>, path: &Path, hv: &[f64], archive_hv: &[f64])
             BLUE.stroke_width(2),
         ))
         .map_err(plot_error(path))?
-        .label("population's front")
+        .label("population's front (history.csv's hypervolume)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLUE));
     chart
         .draw_series(LineSeries::new(
@@ -143,8 +147,16 @@ fn draw_hypervolume(root: Area<'_>, path: &Path, hv: &[f64], archive_hv: &[f64])
             RED.stroke_width(2),
         ))
         .map_err(plot_error(path))?
-        .label("archive (every non-dominated design found)")
+        .label("archive.csv (every non-dominated design found)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RED));
+    chart
+        .draw_series(LineSeries::new(
+            pareto_hv.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(g, v)| (g as f64 + 1.0, *v)),
+            green.stroke_width(2),
+        ))
+        .map_err(plot_error(path))?
+        .label("pareto.csv (the reported front: the archive's best, at most the population size)")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], green));
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::LowerRight)

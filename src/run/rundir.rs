@@ -20,7 +20,7 @@ use super::outputs::write_outputs;
 use super::persist::{CheckpointSpec, Committed, PersistHooks, Persister};
 use super::problems::{check_copy, check_same_objects, switch, write_current};
 use crate::error::{Error, Result};
-use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators};
+use crate::optim::{execute, observe, Evaluator, Nsga2, Nsga2Settings, Nsga2State, Operators, Survival, Variation};
 use crate::params::Problem;
 use crate::record::{ProblemUse, RecordOptions, Recorder, RunMetadata};
 use argmin::core::State;
@@ -79,11 +79,14 @@ pub struct RunSummary {
     pub generations: u64,
     /// Evaluations.
     pub evaluations: u64,
-    /// Size of the final feasible front.
+    /// Designs on the reported front (pareto.csv; the certified front where the run
+    /// certifies).
     pub front_size: usize,
     /// Feasible members of the final population.
     pub feasible: usize,
-    /// Final normalised hypervolume of the population's feasible front.
+    /// Normalised hypervolume of the search's reported front (pareto.csv; of a robust run
+    /// that certifies, search_pareto.csv: the certified designs' objectives are estimated
+    /// on other scenarios).
     pub hv: f64,
     /// Designs in the archive (every feasible non-dominated design evaluated).
     pub archive_size: usize,
@@ -233,7 +236,9 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    let start = Start { settings, state, recorder, archive: Archive::default(), notes, wall_before: 0.0 };
+    let (survival, variation) = (Some(Survival::default()), Some(Variation::default()));
+    let start =
+        Start { settings, state, recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
     drive(gp, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
@@ -416,7 +421,10 @@ pub fn resume_with(
     write_json(&run_json, &info)?;
     write_current(dir, &info, &gp.problem)?;
     let state = cp.state.with_max_generations(total);
-    let start = Start { settings: cp.settings, state, recorder, archive, notes, wall_before: cp.wall_s };
+    // the algorithm the run started with (absent: NSGA-II's, a run from before issue 42)
+    let (survival, variation) = (cp.options.survival, cp.options.variation);
+    let start =
+        Start { settings: cp.settings, state, recorder, archive, notes, wall_before: cp.wall_s, survival, variation };
     drive(gp, info, dir, threads, hooks, lock, start)
 }
 
@@ -439,6 +447,10 @@ struct Start {
     archive: Archive,
     notes: Vec<String>,
     wall_before: f64,
+    /// The run's survival, as its checkpoints state it (None: crowding).
+    survival: Option<Survival>,
+    /// The run's variation, as its checkpoints state it (None: SBX).
+    variation: Option<Variation>,
 }
 
 /// Run the optimiser from `begin` in the locked folder `out`: the persister writes each
@@ -461,14 +473,17 @@ fn drive(
     if info.recording.enabled {
         gp.recording = info.recording;
     }
-    let Start { settings, state, recorder, archive, notes, wall_before } = begin;
+    let Start { settings, state, recorder, archive, notes, wall_before, survival, variation } = begin;
+    let options = RunOptions { survival, variation, ..RunOptions::of(&gp.problem.solver, &info.recording) };
     let recorder = tell_notes(&progress, &notes, recorder, settings.pop_size, info.threads);
     let archive = Arc::new(Mutex::new(archive));
     let d = Driver { out, lock: Arc::new(lock), start, wall_before, archive, recorder };
-    let (persister, committed) = d.start_persister(&gp, &settings, &info)?;
+    let (persister, committed) = d.start_persister(&gp, &settings, options, &info)?;
     let (pers2, prog2) = (persister.clone(), progress.clone());
     let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
-    let mut solver = Nsga2::with_evaluator(settings, evaluator);
+    let mut solver = Nsga2::with_evaluator(settings, evaluator)
+        .with_survival(survival.unwrap_or(Survival::Crowding))
+        .with_variation(variation.unwrap_or(Variation::Sbx));
     solver.stop = hooks.stop;
     let mut result = pool.install(|| execute(gp, solver, state, move |e| observe(observe(e, pers2), prog2)));
     if let Ok((_, st)) = &mut result {
@@ -537,6 +552,7 @@ impl Driver<'_> {
         &self,
         gp: &GripperProblem,
         settings: &Nsga2Settings,
+        options: RunOptions,
         info: &RunInfo,
     ) -> Result<(Persister, Arc<Mutex<RunInfo>>)> {
         let out = self.out;
@@ -546,7 +562,7 @@ impl Driver<'_> {
             path: out.join("checkpoint.json"),
             problem_hash: sha256_hex(gp.problem.source_text.as_bytes()),
             settings: settings.clone(),
-            options: RunOptions::of(&gp.problem.solver, &info.recording),
+            options,
             wall_before: self.wall_before,
             start: self.start,
         };
@@ -620,7 +636,7 @@ impl Driver<'_> {
         let archive = self.archive.lock().expect("archive").clone();
         info.discards = archive.discards.clone();
         write_outputs(out, gp, st, &archive)?;
-        let search = super::outputs::final_front(st);
+        let search = super::archive::reported_front(st, Some(&archive));
         // a robust run that certifies reports the certified front (its stage after the search)
         let certification =
             if interrupted { None } else { pool.install(|| super::certify_run(out, gp, st, &archive, &search))? };
@@ -637,9 +653,11 @@ impl Driver<'_> {
             out: out.to_path_buf(),
             generations: st.generation,
             evaluations: st.evaluations,
-            front_size: st.feasible_front().len(),
+            front_size: front.len(),
             feasible: st.population.iter().filter(|p| p.eval.cv.is_feasible()).count(),
-            hv: st.hv_history.last().copied().unwrap_or(f64::NAN),
+            hv: if archive.front.is_some() { archive.front_hv_history.last() } else { st.hv_history.last() }
+                .copied()
+                .unwrap_or(f64::NAN),
             archive_size: archive.members.len(),
             archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
             interrupted,

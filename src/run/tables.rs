@@ -4,12 +4,13 @@
 //! and a user may copy an older one in, or edit one; `gripopt show` takes the designs from
 //! here and says when a view differs ([`RunFolder::view_differs`]).
 
+use super::archive::reported_front;
 use super::attribution::run_json_mismatch;
 use super::checkpoint::Checkpoint;
 use super::folder::{read_table, RunFolder};
 use super::gripper::GripperInfo;
 use super::lock::{LockHolder, RunLock};
-use super::outputs::{final_front, DesignRow};
+use super::outputs::DesignRow;
 use crate::error::Result;
 
 /// The designs of a run's checkpoint, as pareto.csv, archive.csv and population.csv write
@@ -18,7 +19,7 @@ use crate::error::Result;
 pub struct CheckpointTables {
     /// The checkpoint's generation.
     pub generation: u64,
-    /// pareto.csv's rows: the population's feasible non-dominated designs, by id (a robust
+    /// pareto.csv's rows: the reported front ([`super::reported_front`]), by id (a robust
     /// run certified at this generation: the certified front's rows).
     pub front: Vec<DesignRow>,
     /// archive.csv's rows: every feasible non-dominated design of the run, by id.
@@ -54,8 +55,9 @@ impl RunFolder {
         // a robust run certified at this state reports its certified front (certification.json)
         let certification = super::certify::read_certification(self.dir())?;
         let certified = super::certify_stage::checkpoint_front(certification.as_ref(), st, cp.archive.as_ref());
-        let front =
-            certified.unwrap_or_else(|| final_front(st).into_iter().map(|i| DesignRow::of(i, Some(0))).collect());
+        let front = certified.unwrap_or_else(|| {
+            reported_front(st, cp.archive.as_ref()).into_iter().map(|i| DesignRow::of(i, Some(0))).collect()
+        });
         let archive =
             cp.archive.as_ref().map_or(vec![], |a| a.members.iter().map(|i| DesignRow::of(i, None)).collect());
         let mut order: Vec<usize> = (0..st.population.len()).collect();

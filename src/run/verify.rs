@@ -272,7 +272,7 @@ pub fn read_design_rows(path: &Path) -> Result<Vec<DesignRow>> {
 /// The run's designs to verify, taken from its checkpoint (the run's state, not the CSV views
 /// of it, which a user may have edited): with `all` every feasible design of the population
 /// and the archive (population.csv's and archive.csv's feasible rows), otherwise the
-/// population's feasible non-dominated ones (pareto.csv's); each with the generation that
+/// reported front (pareto.csv's: [`super::reported_front`]); each with the generation that
 /// created it, in id order. `path`: the checkpoint's file, named by the error for a design
 /// that has not six values.
 pub fn checkpoint_designs(cp: &Checkpoint<GripperInfo>, all: bool, path: &Path) -> Result<Vec<(u64, u64, Design)>> {
@@ -280,7 +280,7 @@ pub fn checkpoint_designs(cp: &Checkpoint<GripperInfo>, all: bool, path: &Path) 
         let archive = cp.archive.iter().flat_map(|a| a.members.iter());
         cp.state.population.iter().chain(archive).filter(|i| i.eval.cv.is_feasible()).collect()
     } else {
-        cp.state.feasible_front()
+        super::archive::reported_front(&cp.state, cp.archive.as_ref())
     };
     let mut m = BTreeMap::new();
     for ind in chosen {
@@ -352,9 +352,11 @@ impl CheckedState {
     /// The front as pareto.csv's rows (built from the same individuals pareto.csv is written
     /// from), in id order.
     pub(crate) fn front_rows(&self) -> Vec<DesignRow> {
-        let mut front = self.checkpoint.state.feasible_front();
-        front.sort_by_key(|i| i.id);
-        front.into_iter().map(|i| DesignRow::of(i, Some(0))).collect()
+        let cp = &self.checkpoint;
+        super::archive::reported_front(&cp.state, cp.archive.as_ref())
+            .into_iter()
+            .map(|i| DesignRow::of(i, Some(0)))
+            .collect()
     }
 
     /// The state as verify.csv's `# run:` line names it.

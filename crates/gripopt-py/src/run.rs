@@ -271,8 +271,14 @@ impl PyRunFolder {
     fn table<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyList>> {
         let f = &self.folder;
         if name == "history" {
-            let template =
-                HistoryRow { generation: 0, evaluations: 0, feasible: 0, hypervolume: 0.0, archive_hypervolume: None };
+            let template = HistoryRow {
+                generation: 0,
+                evaluations: 0,
+                feasible: 0,
+                hypervolume: 0.0,
+                archive_hypervolume: None,
+                pareto_hypervolume: None,
+            };
             return columns(py, &f.history().py()?, || Some(template));
         }
         let (rows, why) = py.detach(|| gripopt::app::design_table(f, name)).py()?;
