@@ -4,7 +4,7 @@
 //! individuals), so this layer never names them.
 
 use super::kept::KeptTrajectory;
-use super::scenario_scene::ScenarioScene;
+use super::scenario_kept::ScenarioScene;
 use crate::eval::Record;
 
 /// One design as the recorder writes it.

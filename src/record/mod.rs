@@ -35,6 +35,7 @@ mod options;
 mod proto;
 mod read;
 mod recover;
+mod scenario_kept;
 mod scenario_scene;
 mod scenario_series;
 mod scene;
@@ -61,7 +62,8 @@ pub use read::{problem_of_generation, read_design, run_recording, Recorded, RunP
 pub use recover::{
     index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, shard_metadata, Recovery,
 };
-pub use scenario_scene::{ScenarioMotion, ScenarioScene, SceneMessage, ShownScenario};
+pub use scenario_kept::{ScenarioMotion, ScenarioScene, SCENARIO_DT};
+pub use scenario_scene::{SceneMessage, ShownScenario};
 pub use scenario_series::{scenario_series_descriptor, ScenarioSeries, SCENARIO_FIELDS, SCENARIO_SERIES_NAME};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::design as design_schema;
