@@ -3,7 +3,7 @@
 //! height, the object standing on the ground touching the palm, the fingers in the hand
 //! plane, every base joint at (±b/2, 0) of the design), a design without a grasp clears the
 //! plots and shows its open (and failing) linkage, every window ends with a /tf message,
-//! `recording/gen-NNNNN.front.mcap` beside each shard marks the final front, also after a
+//! `recording/front-NNNNN.mcap` for each shard marks the final front, also after a
 //! resume, and a robust design is drawn in the scenario that decided its verdict. Decoded with the
 //! Foxglove SDK's own decoders and compared with the problem file and the design parameters;
 //! the runs live under target/mcap-check/ so that `make test` also runs the independent
@@ -119,7 +119,7 @@ fn shards_draw_the_simulated_scene_in_world_coordinates() {
     assert!(grasps > 0 && open_only > 0 && failing > 0, "{grasps} {open_only} {failing}");
 }
 
-/// The final front is known only when the run ends: a front file beside each shard is
+/// The final front is known only when the run ends: a front file for each shard is
 /// written then (also for the generations written before a crash), each covering exactly
 /// its shard's designs inside the shard's own time range (opened with it, the timeline is the
 /// shard's: issue 43's E1), together saying exactly what pareto.csv says; a file at the old
@@ -131,7 +131,7 @@ fn front_recording_marks_the_final_front_after_a_resume() {
     assert!(crate::common::optimise_crashing_after(&s, 2).is_err());
     let index = read_index(&run.join("recording")).unwrap();
     assert!(
-        index.iter().all(|e| !run.join("recording").join(front_file(&e.file)).exists()),
+        index.iter().all(|e| !run.join("recording").join(front_file(e.generation)).exists()),
         "no front before the run ends"
     );
     std::fs::write(run.join("recording/front.mcap"), b"the user's own file").unwrap();
@@ -143,7 +143,7 @@ fn front_recording_marks_the_final_front_after_a_resume() {
     for e in read_index(&run.join("recording")).unwrap() {
         let shard = std::fs::read(run.join("recording").join(&e.file)).unwrap();
         let stats = mcap::Summary::read(&shard).unwrap().unwrap().stats.unwrap();
-        let buf = std::fs::read(run.join("recording").join(front_file(&e.file))).unwrap();
+        let buf = std::fs::read(run.join("recording").join(front_file(e.generation))).unwrap();
         let mut mine = vec![];
         for m in mcap::MessageStream::new(&buf).unwrap().map(|m| m.unwrap()) {
             let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();

@@ -1,5 +1,5 @@
-"""The front files of a finished run (`recording/gen-NNNNN.front.mcap`, one beside each
-shard), checked as a viewer would open them with their shards. Knows nothing of gripopt's
+"""The front files of a finished run (`recording/front-NNNNN.mcap`, one for each
+shard gen-NNNNN.mcap), checked as a viewer would open them with their shards. Knows nothing of gripopt's
 code: it reads what tools/check_mcap.py decoded of each file (its `gripopt.front` metadata,
 its /front messages, the shards' ids, time ranges and /designs records) and pareto.csv.
 """
@@ -8,7 +8,7 @@ import math
 
 def check_fronts(run, r):
     """The front information of a finished run: one front file per shard
-    (`gen-NNNNN.front.mcap`, its metadata naming the shard's generation), its /front messages
+    (`front-NNNNN.mcap`, its metadata naming the shard's generation), its /front messages
     exactly the shard's designs and inside the shard's time range (opened together, the
     timeline is the shard's: it starts at the shard's first design and is not stretched); the
     members those of pareto.csv, feasible and mutually non-dominated. A whole-run front file
@@ -25,8 +25,8 @@ def check_fronts(run, r):
             shard = shards.get(g)
             if shard is None:
                 raise ValueError(f"{f.path.name} annotates generation {g}, which has no shard")
-            if f.path.name != shard.path.name.replace(".mcap", ".front.mcap"):
-                raise ValueError(f"{f.path.name} annotates {shard.path.name}: its name must be the shard's with .front.mcap")
+            if f.path.name != shard.path.name.replace("gen-", "front-", 1):
+                raise ValueError(f"{f.path.name} annotates {shard.path.name}: its name must be the shard's with front- for gen-")
             if set(f.front) != shard.ids:
                 raise ValueError(f"{f.path.name} does not cover exactly the designs of {shard.path.name}")
             if f.start < shard.start or f.end > shard.end:

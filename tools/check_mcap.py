@@ -577,7 +577,7 @@ def check_run_folder(run, r):
         status = json.loads((run / "run.json").read_text())
     finished = status.get("status") == "finished" and status.get("completed_generations") == status.get("generations")
     if r["shards"] and not r["fronts"] and finished and status.get("recording", {}).get("enabled"):
-        raise ValueError("the run finished but recording/ has no front files (gen-NNNNN.front.mcap)")
+        raise ValueError("the run finished but recording/ has no front files (front-NNNNN.mcap)")
     if r["fronts"]:
         done.append(check_fronts(run, r))
     layout = run / "foxglove-layout.json"
@@ -585,6 +585,10 @@ def check_run_folder(run, r):
         rec = merged([*r["shards"], *r["fronts"]])
         if not r["fronts"]:
             rec.messages.setdefault("/front", [{"id": 0, "on_final_front": False}])  # not written yet: the run has not finished
+        if any(i.robust for i in r["shards"]) and not any(i.scenario_windows for i in r["shards"]):
+            # no design of this run draws a scenario (none reached its scenarios, or the run
+            # keeps no trajectory of them): the scenario panel has nothing to show yet
+            rec.messages["/designs"].append({"shown_scenario": {}})
         done.append(f"{check_layout(layout, rec)} layout paths of {layout.name}")
     vlayout = run / "foxglove-verify-layout.json"
     for v in r["verify"]:

@@ -112,8 +112,7 @@ def main(dirs):
     all_designs = 0
     all_bytes = 0
     # the optimisation shards only (not their front files or verify recordings)
-    shards = (q for d in dirs for q in pathlib.Path(d).rglob("gen-*.mcap") if not q.name.endswith(".front.mcap"))
-    for p in sorted(shards):
+    for p in sorted(q for d in dirs for q in pathlib.Path(d).rglob("gen-*.mcap")):
         all_bytes += p.stat().st_size
         with open(p, "rb") as f:
             reader = make_reader(f)

@@ -220,10 +220,10 @@ def front_cases():
     shard = SimpleNamespace(meta={"generation": "2"}, ids={40, 41}, start=40 * s, end=42 * s - 1, path=pathlib.Path("gen-00002.mcap"), designs={40: (True, {}), 41: (False, {})})
 
     def run(start, end):
-        front = SimpleNamespace(meta={"generation": "2"}, front={40: True, 41: False}, start=start, end=end, path=pathlib.Path("gen-00002.front.mcap"))
+        front = SimpleNamespace(meta={"generation": "2"}, front={40: True, 41: False}, start=start, end=end, path=pathlib.Path("front-00002.mcap"))
         with tempfile.TemporaryDirectory() as d:
-            (pathlib.Path(d) / "gen-00002.front.mcap").write_bytes(b"")
-            front.path = pathlib.Path(d) / "gen-00002.front.mcap"
+            (pathlib.Path(d) / "front-00002.mcap").write_bytes(b"")
+            front.path = pathlib.Path(d) / "front-00002.mcap"
             return check_fronts(pathlib.Path(d), {"shards": [shard], "fronts": [front]})
     run(40 * s, 41 * s)
     print("ok   accepts a front file inside its shard's time range")

@@ -1,5 +1,5 @@
-//! Which recorded designs are on the run's final Pareto front: one small file beside each
-//! shard, `RUN_DIR/recording/gen-NNNNN.front.mcap` (the front information of shard
+//! Which recorded designs are on the run's final Pareto front: one small file for each
+//! shard, `RUN_DIR/recording/front-NNNNN.mcap` (the front information of shard
 //! `gen-NNNNN.mcap`), written with the run's final outputs (at the end of `optimise` and of
 //! every `resume`, replacing the previous ones), because the front is known only when the
 //! last generation is done, long after the shards of the earlier generations were written.
@@ -29,11 +29,13 @@ use std::path::{Path, PathBuf};
 /// per-shard files, [`front_file`]).
 pub const FRONT_FILE: &str = "front.mcap";
 
-/// The front file of shard `shard` (`gen-NNNNN.mcap` → `gen-NNNNN.front.mcap`).
-pub fn front_file(shard: &str) -> String {
-    format!("{}.front.mcap", shard.strip_suffix(".mcap").unwrap_or(shard))
+/// The front file of the shard of generation `generation` (`gen-NNNNN.mcap` →
+/// `front-NNNNN.mcap`: not matched by `gen-*.mcap`, the shards' pattern).
+pub fn front_file(generation: u64) -> String {
+    format!("front-{generation:05}.mcap")
 }
-/// Name of its metadata record.
+
+/// Name of the front files' metadata record.
 pub const FRONT_METADATA: &str = "gripopt.front";
 
 /// The `/front` message of one design.
@@ -59,7 +61,7 @@ pub fn front_schema() -> Value {
     })
 }
 
-/// Write the front file of every shard of the recording's index (`gen-NNNNN.front.mcap`,
+/// Write the front file of every shard of the recording's index (`front-NNNNN.mcap`,
 /// [`front_file`]), with `front` the ids of the final front; `meta` is added to the metadata
 /// records (e.g. the run's `status`). Removes the run folder's own whole-run `front.mcap` of an
 /// earlier version (its `gripopt.front` metadata has this run's epoch), which the new files
@@ -79,7 +81,7 @@ pub fn write_front(
     let on_front: BTreeSet<u64> = front.iter().copied().collect();
     let mut written = vec![];
     for e in read_index(&dir)? {
-        let path = dir.join(front_file(&e.file));
+        let path = dir.join(front_file(e.generation));
         let meta = RunMetadata { generation: Some(e.generation), ..meta.clone() };
         write_front_file(&path, opts, &on_front, e.first_id..=e.last_id, generations, &meta)?;
         written.push(path);

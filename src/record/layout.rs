@@ -1,5 +1,5 @@
 //! The Foxglove layouts written beside the recordings: `foxglove-layout.json` in every run
-//! folder (the optimisation shards and their front files `recording/gen-NNNNN.front.mcap`) and
+//! folder (the optimisation shards and their front files `recording/front-NNNNN.mcap`) and
 //! `foxglove-verify-layout.json` (`gripopt verify`'s file). Both are the layout JSON of the
 //! Foxglove family (`configById`, `layout`, `globalVariables`, `userNodes`,
 //! `playbackConfig`), read the same way by Foxglove and Lichtblick (Layouts → Import from
@@ -167,14 +167,14 @@ fn raw_messages(topic: &str, title: &str) -> Value {
 }
 
 /// Whether the design under the playhead is on the run's final front: `/front` of the shard's
-/// front file (`gen-NNNNN.front.mcap`, written when the run ends).
+/// front file (`front-NNNNN.mcap`, written when the run ends).
 fn front_indicator() -> Value {
     titled(
         json!({
             "path": "/front.on_final_front",
             "style": "background",
             "fallbackColor": "#707070",
-            "fallbackLabel": "final front unknown: seek once (after a layout import the viewer redraws at the next seek), or open gen-NNNNN.front.mcap with its shard (written when the run ends)",
+            "fallbackLabel": "final front unknown: seek once (after a layout import the viewer redraws at the next seek), or open front-NNNNN.mcap with its shard (written when the run ends)",
             "rules": [
                 {"operator": "=", "rawValue": "true", "color": "#2e9c3a", "label": "on the final Pareto front"},
                 {"operator": "=", "rawValue": "false", "color": "#505050", "label": "not on the final front"}

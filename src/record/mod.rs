@@ -18,7 +18,7 @@
 //!
 //! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
 //! scene's object pose as a moving frame (see `verify_rec`), in a time band after the run's
-//! designs. When the run ends, `recording/gen-NNNNN.front.mcap` beside each shard says which
+//! designs. When the run ends, `recording/front-NNNNN.mcap` for each shard says which
 //! of its designs are on the final front ([`write_front`]). Every recording draws one physical scene (`scene`: `world` z up,
 //! the hand horizontal at the grasp height, the object standing on the ground).
 
