@@ -118,7 +118,7 @@ run: build
 	$(BIN) optimise $(PROBLEM) --out $(OUT) --pop $(POP) --generations $(GENERATIONS) --seed $(SEED)
 	$(BIN) evaluate $(PROBLEM) --json > $(OUT)/nominal.json
 	@echo "Pareto front: $(OUT)/pareto.csv; plots: $(OUT)/pareto_matrix.svg, $(OUT)/hypervolume.svg"
-	@echo "Recording (open the shards and front.mcap in Foxglove or Lichtblick with the layout $(OUT)/foxglove-layout.json, see docs/recording.md): $(OUT)/recording/gen-*.mcap, $(OUT)/recording/front.mcap"
+	@echo "Recording (import the layout $(OUT)/foxglove-layout.json in Foxglove or Lichtblick, then open a shard with its front file, see docs/recording.md): $(OUT)/recording/gen-NNNNN.mcap and front-NNNNN.mcap"
 	@id=$$(grep -v "^#" $(OUT)/pareto.csv | sed -n 2p | cut -d, -f1); if [ -n "$$id" ]; then echo "Replay a Pareto design: $(BIN) replay $(OUT) --design $$id"; fi
 
 # The robust multi-object job (docs/robust.md): problems/kitchen.toml — the 1 l bottle full

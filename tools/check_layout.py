@@ -8,7 +8,10 @@ Panel types and the keys holding paths or frames (the only ones the shipped layo
 unknown panel type fails, so that a new panel cannot go unchecked):
   3D          followTf, transforms "frame:NAME", topics (keys), layers[].frameId
   Plot        paths[].value (a number is a reference line), xAxisPath.value; each y path and
-              the x path must give numbers, and equally many in every message
+              the x path must give numbers, and equally many in every message; no two series
+              in one colour (over 7, the viewers' palette, each its own `color`), legend labels
+              that fit `sidebarDimension`, reference lines inside fixed y limits, off the top
+              edge and not on one another
   RawMessages topicPath
   Indicator   path (a boolean, number or string)
 Every panel must carry its title under both viewers' keys (foxglovePanelTitle,
@@ -128,6 +131,41 @@ def leaves(node):
     return []
 
 
+PALETTE_SIZE = 7  # the viewers' default series colours (Lichtblick/Foxglove Plot); an 8th series repeats the 1st
+CHAR_PX = 6.6  # legend text, px per character
+SWATCH_PX = 40  # the legend's colour swatch and padding
+
+
+def check_plot_look(cfg, where):
+    """What a reader sees of a Plot: no two series in one colour (more than the palette's 7
+    need explicit, distinct `color`s), legend labels that fit the legend's width, and every
+    reference line inside fixed y limits, away from the top edge, no two at one value (the
+    second hidden)."""
+    paths = cfg["paths"]
+    colors = [p.get("color") for p in paths]
+    given = [c for c in colors if c]
+    if len(given) != len(set(given)) or (len(paths) > PALETTE_SIZE and len(given) != len(paths)):
+        raise ValueError(f"{where}: {len(paths)} series on a {PALETTE_SIZE}-colour palette with colours {colors}: two series would share a colour")
+    fits = int((cfg.get("sidebarDimension", 0) - SWATCH_PX) / CHAR_PX)
+    if cfg.get("legendDisplay") in ("left", "top") or cfg.get("legendDisplay") is None:
+        for p in paths:
+            label = p.get("label") or p["value"]
+            if cfg.get("legendDisplay") == "left" and len(label) > fits:
+                raise ValueError(f"{where}: legend label {label!r} ({len(label)} characters) is cut at {cfg.get('sidebarDimension')} px ({fits} fit)")
+    lines = []
+    for p in paths:
+        try:
+            lines.append(float(p["value"]))
+        except ValueError:
+            pass
+    if lines:
+        lo, hi = cfg.get("minYValue"), cfg.get("maxYValue")
+        if lo is None or hi is None:
+            raise ValueError(f"{where}: reference lines {lines} without fixed y limits: the automatic range puts a line the curves stay under on the plot's top edge")
+        if any(not (float(lo) < v < float(hi) - 0.1 * (float(hi) - float(lo))) for v in lines) or len(set(lines)) != len(lines):
+            raise ValueError(f"{where}: reference lines {lines} on or near the edge of y {lo}..{hi}, or two at one value")
+
+
 def check_layout(layout_path, rec):
     """Check one layout file against a recording; the number of paths and frames checked."""
     layout = json.loads(open(layout_path).read())
@@ -155,6 +193,7 @@ def check_layout(layout_path, rec):
                     raise ValueError(f"{where}: topic {t!r} is not in the recording")
             checked += len(frames) + len(cfg.get("topics", {}))
         elif kind == "Plot":
+            check_plot_look(cfg, where)
             x = cfg["xAxisPath"]["value"] if cfg.get("xAxisVal") in ("custom", "currentCustom") else None
             xs = check_path(rec, x, "number", where)[1] if x else None
             for p in cfg["paths"]:

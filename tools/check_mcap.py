@@ -59,6 +59,8 @@ import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from check_layout import Recording, check_layout  # noqa: E402
+from check_front import check_fronts  # noqa: E402
+from check_scenario import check_robust_window, check_scenario_hands  # noqa: E402
 from mcap_scene import Scene  # noqa: E402
 
 import jsonschema
@@ -193,6 +195,10 @@ class FileInfo:
         self.ids = set()
         self.contacts = 0  # drawn contacts checked against the series' forces
         self.meta = {}  # the gripopt.* metadata record
+        self.robust = False  # a robust run's shard (/scenario/series)
+        self.scenario_hands = {}  # object -> {hand height - height offset} of its drawn scenarios
+        self.scenario_windows = set()  # designs whose window draws their deciding scenario
+        self.ref_hands = set()  # world -> hand of the other windows
 
 
 def check(path):
@@ -232,6 +238,7 @@ def check(path):
         window_start = lambda t: (t - epoch) % NS == 0  # noqa: E731
         info.scene = Scene(window_start)
         scene_topics = any(ch.topic == "/scene" for ch in summary.channels.values())
+        info.robust = any(ch.topic == "/scenario/series" for ch in summary.channels.values())
         n = 0
         by_design = {}
         for schema, channel, message, decoded in reader.iter_decoded_messages():
@@ -258,7 +265,7 @@ def check(path):
         if [ids[0], ids[-1], len(ids)] != [int(run[first]), int(run[last]), int(run["designs"])]:
             raise ValueError(f"designs {ids[0]}..{ids[-1]} ({len(ids)}) disagree with the metadata {run[first]}..{run[last]} ({run['designs']})")
         for d, msgs in by_design.items():
-            info.contacts += per_design(d, epoch + d * NS, msgs, scene_topics) or 0
+            info.contacts += per_design(d, epoch + d * NS, msgs, scene_topics, info) or 0
         info.ids = set(ids)
         if scene_topics:
             info.geometry = info.scene.finish()
@@ -295,22 +302,26 @@ def repeated(f):
     return rep if rep is not None else f.label == f.LABEL_REPEATED
 
 
-LABEL_MAX_CHARS = 120  # 11 px text, ~6.6 px a character: 790 px, a 3-D panel of half a 1920 px screen
+LABEL_MAX_CHARS = 120  # 13 px text, ~7.5 px a character: 900 px, a 3-D panel of half a 1920 px screen
+LABEL_MIN_PX = 12  # at 11 px a 0 read as a 9
+LABEL_MIN_Z = 0.01  # m above the ground: a text facing the camera is centred on its pose; lower, the ground and grid cross it
 
 
 def check_label(what, st):
-    """The label (one line) fits the 3-D panel."""
+    """The label (one line) fits the 3-D panel, is readable and clears the ground."""
     for e in st.entities:
         for t in e.texts:
             if len(t.text) > LABEL_MAX_CHARS or "\n" in t.text:
                 raise ValueError(f"{what}: label of {len(t.text)} characters (at most {LABEL_MAX_CHARS} on one line fit a 3-D panel of half a screen): {t.text[:60]}...")
+            if t.font_size < LABEL_MIN_PX or (e.frame_id == "world" and t.pose.position.z < LABEL_MIN_Z):
+                raise ValueError(f"{what}: label of {t.font_size} px at {t.pose.position.z * 1e3:.1f} mm above the ground (at least {LABEL_MIN_PX} px and {LABEL_MIN_Z * 1e3:.0f} mm: the ground and its grid cross a lower one)")
 
 
 def window_end(t0):
     return t0 + NS - 1
 
 
-def check_design(d, t0, msgs, scene):
+def check_design(d, t0, msgs, scene, info):
     at = lambda topic: [(t, m) for tp, t, m in msgs if tp == topic]  # noqa: E731
     designs, series = at("/designs"), at("/grasp/series")
     if len(designs) != 1 or designs[0][0] != t0 or designs[0][1]["id"] != d:
@@ -332,6 +343,11 @@ def check_design(d, t0, msgs, scene):
     placeholder = s.simulated_samples == 0
     if placeholder and (len(t) != 1 or not all(math.isnan(c[0]) for c in cols[1:])):
         raise ValueError(f"design {d}: a design without a grasp must have one placeholder sample (t = 0, NaN values)")
+    if info.robust:
+        drawn = check_robust_window(d, t0, designs[0][1], msgs, scene, info, check_label)
+        if drawn is not None:
+            return drawn
+        info.ref_hands.update(hand_keys(at("/tf")))
     if not scene:
         return
     tf, static, fingers = at("/tf"), at("/scene/static"), at("/scene")
@@ -456,7 +472,13 @@ def check_fingers_touch(d, t0, s, st, drawn, feasible):
     return checked
 
 
-def check_verify_design(d, t0, msgs, scene):
+def hand_keys(tf):
+    """The world -> hand transforms of `/tf` messages (for the folder's one-world check)."""
+    from mcap_scene import transform_key
+    return {transform_key(x) for _, m in tf for x in m.transforms if (x.parent_frame_id, x.child_frame_id) == ("world", "hand")}
+
+
+def check_verify_design(d, t0, msgs, scene, info):
     at = lambda topic: [(t, m) for tp, t, m in msgs if tp == topic]  # noqa: E731
     rec, series = at("/verify"), at("/verify/series")
     if len(rec) != 1 or rec[0][0] != t0 or rec[0][1]["window"] != d:
@@ -502,23 +524,23 @@ def check_verify_design(d, t0, msgs, scene):
         raise ValueError(f"window {d}: the last finger pose is at {drawn[-1][0] - t0} ns, the last object pose at {times[-1] - t0} ns")
 
 
-def check_front_design(d, t0, msgs, scene):
+def check_front_design(d, t0, msgs, scene, info):
     if len(msgs) != 1 or msgs[0][0] != "/front" or msgs[0][1] != t0 or msgs[0][2]["id"] != d:
         raise ValueError(f"design {d}: /front must hold one message for this design at its window start")
 
 
 # ---------------------------------------------------------------- run folders
 def run_folders(infos):
-    """run folder -> {"shards": [...], "front": info or None, "verify": [...]}."""
+    """run folder -> {"shards": [...], "fronts": [...], "verify": [...]}."""
     runs = {}
     for info in infos:
         p = info.path
         run = p.parent.parent if p.parent.name == "recording" else p.parent
-        r = runs.setdefault(run, {"shards": [], "front": None, "verify": []})
+        r = runs.setdefault(run, {"shards": [], "fronts": [], "verify": []})
         if info.kind == "shard":
             r["shards"].append(info)
         elif info.kind == "front":
-            r["front"] = info
+            r["fronts"].append(info)
         else:
             r["verify"].append(info)
     return runs
@@ -529,8 +551,10 @@ def check_run_folder(run, r):
     done = []
     scenes = [i for i in r["shards"] + r["verify"] if i.scene is not None and i.scene.world_hand is not None]
     scenarios = [i for i in scenes if scenario_height(i) is not None]
-    common = [i for i in scenes if scenario_height(i) is None]
-    frames = {(tuple(sorted(i.scene.world_hands)), round(i.scene.ground_top, 12)) for i in common}
+    # a robust shard's windows that draw a scenario have the hand at the scenario's height
+    common = [i for i in scenes if scenario_height(i) is None and not (i.robust and not i.ref_hands)]
+    hands = lambda i: i.ref_hands if i.robust else i.scene.world_hands  # noqa: E731
+    frames = {(tuple(sorted(hands(i))), round(i.scene.ground_top, 12)) for i in common}
     if len(frames) > 1:
         raise ValueError(f"the world frame differs between files: {sorted(frames)} ({[str(i.path.name) for i in common]})")
     if common:
@@ -539,6 +563,9 @@ def check_run_folder(run, r):
         check_scenario_frame(run, i, frames)
     if scenarios:
         done.append(f"{len(scenarios)} scenario files with the hand at their scenario's height")
+    drawn = [i for i in r["shards"] if i.scenario_hands]
+    if drawn:
+        done.append(check_scenario_hands(run, drawn))
     ranges = [(i.path.name, i.start, i.end) for i in r["verify"]]
     if r["shards"]:
         ranges.insert(0, ("the shards", min(i.start for i in r["shards"]), max(i.end for i in r["shards"])))
@@ -549,29 +576,19 @@ def check_run_folder(run, r):
     if (run / "run.json").is_file():
         status = json.loads((run / "run.json").read_text())
     finished = status.get("status") == "finished" and status.get("completed_generations") == status.get("generations")
-    if r["shards"] and r["front"] is None and finished and status.get("recording", {}).get("enabled"):
-        raise ValueError("the run finished but recording/front.mcap is missing")
-    if r["front"] is not None:
-        shard_ids = set().union(*(i.ids for i in r["shards"])) if r["shards"] else set()
-        if set(r["front"].front) != shard_ids:
-            raise ValueError("front.mcap does not cover exactly the shards' designs")
-        members = {i for i, on in r["front"].front.items() if on}
-        designs = {k: v for i in r["shards"] for k, v in i.designs.items()}
-        check_front_members(members, designs)
-        pareto_csv = run / "pareto.csv"
-        if pareto_csv.is_file() and pareto_csv.stat().st_mtime_ns <= r["front"].path.stat().st_mtime_ns:
-            rows = [l for l in pareto_csv.read_text().splitlines() if l and not l.startswith("#")]
-            pareto = {int(l.split(",")[0]) for l in rows[1:]}
-            if members != pareto:
-                raise ValueError(f"front.mcap marks {sorted(members)} on the final front, pareto.csv holds {sorted(pareto)}")
-            done.append(f"front of {len(members)} designs = pareto.csv")
-        else:
-            done.append(f"front of {len(members)} designs (pareto.csv edited after it: not compared)")
+    if r["shards"] and not r["fronts"] and finished and status.get("recording", {}).get("enabled"):
+        raise ValueError("the run finished but recording/ has no front files (front-NNNNN.mcap)")
+    if r["fronts"]:
+        done.append(check_fronts(run, r))
     layout = run / "foxglove-layout.json"
     if layout.is_file() and r["shards"]:
-        rec = merged([*r["shards"], *([r["front"]] if r["front"] else [])])
-        if r["front"] is None:
+        rec = merged([*r["shards"], *r["fronts"]])
+        if not r["fronts"]:
             rec.messages.setdefault("/front", [{"id": 0, "on_final_front": False}])  # not written yet: the run has not finished
+        if any(i.robust for i in r["shards"]) and not any(i.scenario_windows for i in r["shards"]):
+            # no design of this run draws a scenario (none reached its scenarios, or the run
+            # keeps no trajectory of them): the scenario panel has nothing to show yet
+            rec.messages["/designs"].append({"shown_scenario": {}})
         done.append(f"{check_layout(layout, rec)} layout paths of {layout.name}")
     vlayout = run / "foxglove-verify-layout.json"
     for v in r["verify"]:
@@ -623,23 +640,6 @@ def check_scenario_frame(run, info, frames):
             raise ValueError(f"{info.path.name}: scenario object {m['scenario_object']!r} is not one of problem.toml's [[robust.objects]]")
         if "grasp_height" in o and o["grasp_height"] != float(m["object_grasp_height"]):
             raise ValueError(f"{info.path.name}: object_grasp_height {m['object_grasp_height']}, problem.toml gives {m['scenario_object']} grasp_height {o['grasp_height']}")
-
-
-def check_front_members(members, designs):
-    """The designs front.mcap marks must be feasible and mutually non-dominated in the four
-    objectives of their /designs records (max_offset and mean_force maximised, alpha and
-    t_stab minimised; a design not form closed has no max_offset: the worst)."""
-    sense = {"max_offset": 1, "alpha": -1, "mean_force": 1, "t_stab": -1}
-    vec = {}
-    for i in members:
-        feasible, objectives = designs[i]
-        if not feasible:
-            raise ValueError(f"front.mcap marks design {i} on the front, its /designs record says infeasible")
-        vec[i] = [s * objectives.get(k, -math.inf if s > 0 else math.inf) for k, s in sense.items()]
-    for a in members:
-        for b in members:
-            if all(x >= y for x, y in zip(vec[b], vec[a])) and any(x > y for x, y in zip(vec[b], vec[a])):
-                raise ValueError(f"front.mcap marks designs {a} and {b} on the front, but {b} dominates {a}")
 
 
 def merged(infos):

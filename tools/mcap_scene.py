@@ -122,7 +122,9 @@ class Scene:
                     raise ValueError(f"/tf at {t}: world -> hand changed within a design's window ({key} vs {self.world_hand})")
                 self.world_hands.add(key)
         if "object" in self.frames and any(p[1] == "object" for p in pairs):
-            self._object_frame_above_ground(t)
+            # checked once the entities of this instant are drawn: a window's first /tf may
+            # come before its /scene/static, which says which object this window draws
+            self.object_moved = t
 
     def to_world(self, frame, t):
         """The transform world <- frame at the current time, composed from the latest /tf."""
@@ -140,6 +142,12 @@ class Scene:
     def _draw(self):
         t, pending = self.now, self.pending
         self.pending = []
+        self._draw_entities(t, pending)
+        if getattr(self, "object_moved", None) is not None:
+            self._object_frame_above_ground(self.object_moved)
+            self.object_moved = None
+
+    def _draw_entities(self, t, pending):
         for topic, msg in pending:
             for e in msg.entities:
                 if not e.frame_locked:

@@ -15,8 +15,14 @@ built here from the official Foxglove message classes (foxglove-schemas-protobuf
 * a scenario file (`replay --scenario`) whose hand is not at its scenario's height, over
   another ground, or naming a grasp height problem.toml does not give; two scenario files in
   one time window;
+* a robust shard's window: the scenario shown not the deciding one (recomputed from the
+  record), a feasible design whose window draws no grasp, a finger drawn where a vertical
+  object would touch it while the free object is tilted 10 deg (the contact is checked in 3-D
+  with the object where /tf has it); a front file with a message outside its shard's time
+  range; a label of 11 px, or 2 mm above the ground (its grid crossed it);
 * a layout naming a topic or a field the recording lacks, a panel titled for one viewer only,
-  an unknown panel type;
+  an unknown panel type, a plot of 9 series on the 7-colour palette, a legend label cut by the
+  legend's width, limit lines on the plot's top edge or on one another;
 and accept the scene and layout as gripopt now writes them.
 """
 import math
@@ -28,7 +34,9 @@ from types import SimpleNamespace
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from check_layout import Recording, check_layout  # noqa: E402
-from check_mcap import check_disjoint, check_fingers_touch, check_scenario_frame  # noqa: E402
+from check_front import check_fronts  # noqa: E402
+from check_mcap import check_disjoint, check_fingers_touch, check_label, check_scenario_frame  # noqa: E402
+from check_scenario import SERIES_COLUMNS, check_robust_window, check_touch, deciding  # noqa: E402
 from mcap_scene import Scene  # noqa: E402
 from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms  # noqa: E402
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate  # noqa: E402
@@ -147,6 +155,91 @@ def scenario_cases():
                    lambda: check_disjoint([("scenario-68-can-0.mcap", 3000 * s, 3001 * s - 1), ("scenario-68-bottle-full-0.mcap", 3000 * s, 3001 * s - 1)]), "overlap")
 
 
+def robust_cases():
+    """Which scenario a robust design's window draws, and its fingers on the free object."""
+    def sc(o, k, stays, disp=None, cause=None):
+        r = {"object": o, "k": k, "stays": stays}
+        if disp is not None:
+            r["max_displacement"] = disp
+        if cause:
+            r["cause"] = cause
+        return r
+    objects = [{"name": "bottle", "meets_p_min": True}, {"name": "can", "meets_p_min": False}]
+    runs = [sc(0, 0, True, 1e-4), sc(1, 0, True, 3e-4), sc(0, 1, False, 2e-3, "object_moved"), sc(1, 1, False, None, "fold"), sc(1, 2, False, 5e-3, "object_moved")]
+    feasible = {"feasible": True, "robust": {"objects": objects, "scenarios": runs}}
+    pstay = {"feasible": False, "failed_stage": 3, "reason": "object can: stays in 1 of 3 scenarios", "robust": {"objects": objects, "scenarios": runs}}
+    aborted = {**pstay, "reason": "object can: scenario 1: aborted: step budget exhausted", "robust": {"objects": objects, "scenarios": [runs[0], sc(1, 1, False, None, "aborted")]}}
+    assert deciding(feasible) == ("can", 2, "worst displacement")
+    assert deciding(pstay) == ("can", 1, "first failure")  # the can's first failure, not the bottle's earlier one
+    assert deciding(aborted) == ("can", 1, "aborted")
+    assert deciding({"feasible": False, "failed_stage": 2, "robust": {"objects": objects, "scenarios": []}}) is None
+    print("ok   recomputes the deciding scenario: the worst displacement, the failing object's first failure, the aborted scenario")
+
+    info = SimpleNamespace(meta={"recording": json.dumps({"trajectories": "all"})}, scenario_windows=set(), scenario_hands={})
+    series = SimpleNamespace(t=[0.0], design_id=4, simulated_samples=0, **{c: [math.nan] for c in SERIES_COLUMNS})
+    msgs = [("/scenario/series", 0, series)]
+    assert check_robust_window(4, 0, {"feasible": False, "failed_stage": 2, "robust": {"objects": objects, "scenarios": []}}, msgs, True, info, check_label) is None
+    expect_failure("a feasible robust design whose window draws no grasp",
+                   lambda: check_robust_window(4, 0, feasible, msgs, True, info, check_label), "draws no grasp")
+
+    # a free object tilted 10 deg about y at G = (0, R, 0) of the hand frame: a phalanx along y
+    # in the hand plane at x touches its capsule (radius R, rods of half thickness w) at
+    # x cos(10 deg) = R + w - delta; drawn where a vertical object is touched, it is 0.8 mm inside
+    w, th, delta = 0.005, math.radians(10.0), 2e-6
+    pose = FrameTransforms()
+    x = pose.transforms.add(parent_frame_id="hand", child_frame_id="object")
+    x.translation.y = R
+    x.rotation.y, x.rotation.w = math.sin(th / 2), math.cos(th / 2)
+    obj = SceneUpdate()
+    cyl = obj.entities.add(id="object", frame_id="object", frame_locked=True).cylinders.add()
+    cyl.size.x, cyl.size.y, cyl.size.z = 2 * R, 2 * R, L
+    cyl.pose.orientation.w = 1.0
+
+    def touch(xf):
+        m = SceneUpdate()
+        e = m.entities.add(id="fingers", frame_id="hand", frame_locked=True)
+        for sign in (1, -1):
+            line = e.lines.add(thickness=2 * w)
+            for px, py in [(sign * (xf + 0.03), 2 * R + 0.03), (sign * xf, 2 * R), (sign * xf, 0.0)]:
+                line.points.add(x=px, y=py, z=0.0)
+        cols = {c: [0.0] for c in SERIES_COLUMNS}
+        for f in ("finger1", "finger2"):
+            cols[f"{f}_proximal_normal_force"], cols[f"{f}_proximal_penetration"] = [3.0], [delta]
+        s = SimpleNamespace(t=[0.0], free_scene=True, **cols)
+        return check_touch(9, 0, s, obj, [(0, m)], {0: pose})
+
+    assert touch((R + w - delta) / math.cos(th)) == 2
+    print("ok   accepts both fingers touching a tilted free object where the series has a contact force")
+    expect_failure("a finger drawn where a vertical object would touch it (the free object tilted 10 deg)",
+                   lambda: touch(R + w - delta), "inside the object")
+
+
+def front_cases():
+    """A front file annotates its own shard, inside the shard's time range."""
+    s = 1_000_000_000
+    shard = SimpleNamespace(meta={"generation": "2"}, ids={40, 41}, start=40 * s, end=42 * s - 1, path=pathlib.Path("gen-00002.mcap"), designs={40: (True, {}), 41: (False, {})})
+
+    def run(start, end):
+        front = SimpleNamespace(meta={"generation": "2"}, front={40: True, 41: False}, start=start, end=end, path=pathlib.Path("front-00002.mcap"))
+        with tempfile.TemporaryDirectory() as d:
+            (pathlib.Path(d) / "front-00002.mcap").write_bytes(b"")
+            front.path = pathlib.Path(d) / "front-00002.mcap"
+            return check_fronts(pathlib.Path(d), {"shards": [shard], "fronts": [front]})
+    run(40 * s, 41 * s)
+    print("ok   accepts a front file inside its shard's time range")
+    expect_failure("a front file with a message outside its shard (the whole run's front.mcap stretched the timeline)",
+                   lambda: run(0, 41 * s), "outside")
+
+    def label(px, z):
+        m = SceneUpdate()
+        t = m.entities.add(id="label", frame_id="world", frame_locked=True).texts.add(text="12 (gen 1) feasible", font_size=px)
+        t.pose.position.z = z
+        return check_label("design 12", m)
+    label(13.0, 0.012)
+    expect_failure("an 11 px label (a 0 read as a 9)", lambda: label(11.0, 0.012), "px")
+    expect_failure("a label 2 mm above the ground (the ground and grid crossed it)", lambda: label(13.0, 0.002), "above the ground")
+
+
 def run_scene(messages, level_hand=False):
     s = Scene(lambda t: t % 1_000_000_000 == 0, level_hand)
     for topic, t, m in messages:
@@ -193,13 +286,16 @@ def main():
 
     contact_cases()
     scenario_cases()
+    robust_cases()
+    front_cases()
 
     # layouts against a recording holding /grasp/series-like JSON and the frames
     rec = Recording()
     rec.add("/tf", tf(0, now[0], now[1]))
     rec.add("/series", {"t": [0.0, 0.1], "f": [1.0, 2.0]})
     rec.add("/scene", fingers(finger))
-    plot = {"paths": [{"value": "/series.f[:]"}, {"value": "9.5"}], "xAxisVal": "currentCustom", "xAxisPath": {"value": "/series.t[:]"}}
+    plot = {"paths": [{"value": "/series.f[:]"}, {"value": "9.5"}], "xAxisVal": "currentCustom", "xAxisPath": {"value": "/series.t[:]"},
+            "minYValue": 0, "maxYValue": 20, "legendDisplay": "left", "sidebarDimension": 200}
     three = {"followTf": "world", "transforms": {"frame:hand": {}}, "topics": {"/scene": {}}, "layers": {}}
 
     def layout(configs):
@@ -223,6 +319,16 @@ def main():
     del doc["configById"]["Plot!a"]["lichtblickPanelTitle"]
     expect_failure("a title only Foxglove reads", lambda: check(doc), "lichtblickPanelTitle")
     expect_failure("an unknown panel type", lambda: check(layout({"Gauge!x": {"path": "/series.f[0]"}})), "unknown")
+    nine = [{"value": "/series.f[:]", "label": f"s{k}"} for k in range(9)]
+    check(layout({"Plot!a": {**plot, "paths": [{**p, "color": f"#00000{k}"} for k, p in enumerate(nine)]}}))
+    expect_failure("9 series on the 7-colour palette (the offset layout's contact forces)",
+                   lambda: check(layout({"Plot!a": {**plot, "paths": nine}})), "share a colour")
+    expect_failure("a legend label cut at 200 px",
+                   lambda: check(layout({"Plot!a": {**plot, "paths": [{"value": "/series.f[:]", "label": "finger 2 proximal friction force"}]}})), "is cut")
+    expect_failure("a limit line on the plot's top edge (automatic y range)",
+                   lambda: check(layout({"Plot!a": {k: v for k, v in plot.items() if k != "maxYValue"}})), "top edge")
+    expect_failure("two limit lines at one value (1 mm and 1 deg)",
+                   lambda: check(layout({"Plot!a": {**plot, "paths": plot["paths"] + [{"value": "9.5"}]}})), "one value")
     print("checker self-test: all passed")
     return 0
 

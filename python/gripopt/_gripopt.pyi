@@ -43,7 +43,8 @@ class Objectives(TypedDict):
 class DesignRecord(TypedDict):
     """A recorded design's `/designs` message (``DESIGN_SCHEMA``): the schema's required keys
     always hold a value; the others are None where not computed (``robust``: absent outside
-    a robust run)."""
+    a robust run; ``shown_scenario``: absent unless the design's window draws the scenario
+    that decided its verdict, docs/recording.md)."""
 
     id: int
     generation: int
@@ -65,6 +66,7 @@ class DesignRecord(TypedDict):
     sim_rhs_evals: Optional[int]
     free_scene: Optional[dict[str, Any]]
     robust: NotRequired[dict[str, Any]]
+    shown_scenario: NotRequired[dict[str, Any]]
     trajectory_samples: int
 
 __version__: str

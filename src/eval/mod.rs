@@ -32,7 +32,9 @@ pub use objectives::{minimised, objective_names, Objective, Objectives, Sense, O
 pub use record::{
     Derived, EvaluationRecord, KinematicsRecord, OffsetEnd, Record, SimulationRecord, StaticsRecord, Verdict,
 };
-pub use record_robust::{robust_summary, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord, SolverAbort};
+pub use record_robust::{
+    robust_summary, Decides, ObjectRecord, RobustRecord, ScenarioInputs, ScenarioRecord, SolverAbort,
+};
 pub use scenario::{DesignStart, StartDiscard};
 pub use scene_record::{FreeSceneRecord, GraspRecord, ImpactRecord, OffsetSceneRecord, Phalanx, WorkRecord};
 pub use stage3::{

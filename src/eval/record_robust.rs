@@ -220,6 +220,66 @@ impl RobustRecord {
     }
 }
 
+/// Why a scenario is the one that explains a robust design's verdict (the one its recording
+/// draws, [`RobustRecord::deciding`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Decides {
+    /// A feasible design: the scenario in which the free object moved most (its worst).
+    WorstDisplacement,
+    /// A feasible design none of whose scenarios measured a displacement: its first.
+    FirstScenario,
+    /// A P(stay) failure: the first scenario, in the order run, in which the failing object
+    /// did not stay.
+    FirstFailure,
+    /// A solver failure: the scenario the solver aborted.
+    Aborted,
+}
+
+impl Decides {
+    /// The words shown (label, `/designs`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Decides::WorstDisplacement => "worst displacement",
+            Decides::FirstScenario => "first scenario",
+            Decides::FirstFailure => "first failure",
+            Decides::Aborted => "aborted",
+        }
+    }
+}
+
+impl RobustRecord {
+    /// The scenario that explains the verdict of a design that reached its scenarios (its
+    /// position in `scenarios`, and why): a feasible design's worst by the free object's
+    /// largest displacement (the first of equals), a P(stay) failure's first scenario, in the
+    /// order run, in which the object that fails its constraint ([`RobustRecord::failed_object`])
+    /// did not stay, a solver failure's aborted scenario. None when no scenario ran or the
+    /// verdict is not a scenario's (stages 0–2).
+    pub fn deciding(&self, stage: Option<u8>, cause: Option<Cause>) -> Option<(usize, Decides)> {
+        if self.scenarios.is_empty() {
+            return None;
+        }
+        match stage {
+            None => {
+                let worst = self.scenarios.iter().enumerate().filter_map(|(j, s)| s.max_displacement.map(|d| (j, d)));
+                let worst = worst.fold(None, |a: Option<(usize, f64)>, (j, d)| match a {
+                    Some((_, m)) if m >= d => a,
+                    _ => Some((j, d)),
+                });
+                Some(worst.map_or((0, Decides::FirstScenario), |(j, _)| (j, Decides::WorstDisplacement)))
+            }
+            Some(3) if is_abort(cause) => {
+                self.scenarios.iter().position(|s| s.aborted()).map(|j| (j, Decides::Aborted))
+            }
+            Some(3) => {
+                let o = self.failed_object(stage, cause)?;
+                self.scenarios.iter().position(|s| s.object == o && !s.stays).map(|j| (j, Decides::FirstFailure))
+            }
+            _ => None,
+        }
+    }
+}
+
 /// The robust part of `gripopt evaluate`'s report: per object its static objectives,
 /// P(stay) with its interval and the scenarios run.
 pub fn robust_summary(r: &RobustRecord) -> String {
@@ -253,4 +313,58 @@ pub fn robust_summary(r: &RobustRecord) -> String {
         o(a.t_stab, 1e3, 3)
     ));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(object: usize, k: usize, stays: bool, disp: Option<f64>, cause: Option<Cause>) -> ScenarioRecord {
+        ScenarioRecord {
+            object,
+            k,
+            inputs: ScenarioInputs::default(),
+            stays,
+            cause,
+            t_stab: None,
+            max_displacement: disp,
+            max_tilt_deg: None,
+            rhs_evals: [0; 2],
+            steps: [0; 2],
+            abort: None,
+        }
+    }
+
+    fn record(scenarios: Vec<ScenarioRecord>, meets: [Option<bool>; 2]) -> RobustRecord {
+        let objects = meets.iter().map(|m| ObjectRecord { meets_p_min: *m, ..ObjectRecord::default() }).collect();
+        RobustRecord { objects, scenarios, ..RobustRecord::default() }
+    }
+
+    /// The scenario drawn of a robust design, by hand: a feasible design's largest
+    /// displacement (the first of two equal ones), the failing object's first failure (not an
+    /// earlier failure of an object that meets p_min), the aborted scenario; none before the
+    /// scenarios or without any.
+    #[test]
+    fn the_deciding_scenario_is_the_worst_the_first_failure_or_the_abort() {
+        let moved = Some(Cause::ObjectMoved);
+        let runs = vec![
+            run(0, 0, true, Some(1e-4), None),
+            run(1, 0, true, Some(3e-4), None),
+            run(0, 1, false, Some(2e-3), moved),
+            run(1, 1, false, Some(2e-3), moved),
+            run(1, 2, false, None, Some(Cause::Fold)),
+        ];
+        let feasible = record(runs.clone(), [Some(true), Some(true)]);
+        assert_eq!(feasible.deciding(None, None), Some((2, Decides::WorstDisplacement)));
+        let failing = record(runs.clone(), [Some(true), Some(false)]);
+        assert_eq!(failing.deciding(Some(3), Some(Cause::PStay)), Some((3, Decides::FirstFailure)));
+        let mut aborted = runs.clone();
+        aborted[4].cause = Some(Cause::Aborted);
+        let aborted = record(aborted, [Some(true), Some(false)]);
+        assert_eq!(aborted.deciding(Some(3), Some(Cause::Aborted)), Some((4, Decides::Aborted)));
+        let unmeasured = record(vec![run(1, 0, false, None, Some(Cause::Fold))], [None, None]);
+        assert_eq!(unmeasured.deciding(None, None), Some((0, Decides::FirstScenario)));
+        assert_eq!(feasible.deciding(Some(2), None), None);
+        assert_eq!(record(vec![], [None, None]).deciding(None, None), None);
+    }
 }

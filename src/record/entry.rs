@@ -4,6 +4,7 @@
 //! individuals), so this layer never names them.
 
 use super::kept::KeptTrajectory;
+use super::scenario_kept::ScenarioScene;
 use crate::eval::Record;
 
 /// One design as the recorder writes it.
@@ -21,6 +22,9 @@ pub struct DesignEntry<'a> {
     pub stage_seconds: [f64; 4],
     /// The stage-3 trajectory, if kept (the samples its recording uses).
     pub trajectory: Option<&'a KeptTrajectory>,
+    /// A robust design's deciding scenario, if kept: what its window draws instead of the
+    /// reference object's pictures.
+    pub scenario: Option<&'a ScenarioScene>,
 }
 
 /// Something the recorder can write as one design.

@@ -1,5 +1,5 @@
 //! The Foxglove layouts written beside the recordings: `foxglove-layout.json` in every run
-//! folder (the optimisation shards and `recording/front.mcap`) and
+//! folder (the optimisation shards and their front files `recording/front-NNNNN.mcap`) and
 //! `foxglove-verify-layout.json` (`gripopt verify`'s file). Both are the layout JSON of the
 //! Foxglove family (`configById`, `layout`, `globalVariables`, `userNodes`,
 //! `playbackConfig`), read the same way by Foxglove and Lichtblick (Layouts → Import from
@@ -74,10 +74,22 @@ fn three_d(top: bool, frames: &[&str], title: &str) -> Value {
     )
 }
 
+/// Colours of a plot's series, in order: every series of the shipped layouts has its own
+/// (the viewers' default palette has 7 colours and repeats after them, so a plot of more
+/// series drew two in one colour).
+const PALETTE: [&str; 10] =
+    ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"];
+
+/// Width (px) of the plots' legend beside the chart: a label of [`LEGEND_MAX_CHARS`] fits.
+const LEGEND_PX: u32 = 200;
+/// The most characters of a legend label (about 6.6 px each, and the colour swatch).
+pub const LEGEND_MAX_CHARS: usize = 24;
+
 /// A Plot panel of the arrays `columns` (path suffix, legend label) of topic `topic` against
 /// its array `t`, x-axis "Path (current)": the arrays of the latest message, i.e. the design
-/// under the playhead. A column that parses as a number is a horizontal reference line.
-/// `y_range`: fixed limits of the y axis (None: automatic).
+/// under the playhead; each series in its own colour of [`PALETTE`]. A column that parses as
+/// a number is a horizontal reference line. `y_range`: fixed limits of the y axis (None:
+/// automatic).
 fn plot<C: AsRef<str>, L: AsRef<str>>(
     topic: &str,
     title: &str,
@@ -87,10 +99,11 @@ fn plot<C: AsRef<str>, L: AsRef<str>>(
 ) -> Value {
     let paths: Vec<Value> = columns
         .iter()
-        .map(|(c, label)| {
+        .zip(PALETTE.iter().cycle())
+        .map(|((c, label), color)| {
             let (c, label) = (c.as_ref(), label.as_ref());
             let value = if c.parse::<f64>().is_ok() { c.to_string() } else { format!("{topic}.{c}[:]") };
-            json!({"value": value, "enabled": true, "timestampMethod": "receiveTime", "label": label})
+            json!({"value": value, "enabled": true, "timestampMethod": "receiveTime", "label": label, "color": color})
         })
         .collect();
     let mut p = json!({
@@ -101,7 +114,7 @@ fn plot<C: AsRef<str>, L: AsRef<str>>(
         "yAxisLabel": y_label,
         "showLegend": true,
         "legendDisplay": "left",
-        "sidebarDimension": 190,
+        "sidebarDimension": LEGEND_PX,
         "showPlotValuesInLegend": false,
         "showXAxisLabels": true,
         "showYAxisLabels": true,
@@ -114,6 +127,21 @@ fn plot<C: AsRef<str>, L: AsRef<str>>(
     titled(p, title)
 }
 
+/// A plot of one motion column against its limit `limit` as a horizontal line, the y axis
+/// from 0 to 2.5 × the limit (the line at 40 % of the height, not on the plot's edge; a motion
+/// far past the limit runs off the top: its maximum is in the record).
+fn motion_plot(topic: &str, title: &str, column: &str, label: &str, unit: &str, limit: f64) -> Value {
+    let line = format!("{limit}");
+    let line_label = format!("limit {line} {unit}");
+    plot(
+        topic,
+        &format!("{title} (y clipped to 0..{} {unit}; the limit {line} {unit} drawn)", 2.5 * limit),
+        &format!("{label} ({unit})"),
+        &[(column, label), (line.as_str(), line_label.as_str())],
+        Some((0.0, 2.5 * limit)),
+    )
+}
+
 /// The `/grasp/series` field of the trajectory column `name` (the vocabulary of
 /// `sim::SAMPLE_COLUMNS`).
 fn field(name: &str) -> String {
@@ -121,20 +149,38 @@ fn field(name: &str) -> String {
 }
 
 /// Plot columns (series field, label) of finger 1's trajectory columns `columns` (name,
-/// label); with `finger2`, each labelled "finger 1 …", followed by finger 2's own (its
-/// `finger2_` column: the offset scene's series).
+/// label); with `finger2`, each labelled "F1 …", followed by finger 2's own (its `finger2_`
+/// column: the offset scene's series), labelled "F2 …".
 fn finger_columns(columns: &[(&str, &str)], finger2: bool) -> Vec<(String, String)> {
     if !finger2 {
         return columns.iter().map(|&(c, l)| (field(c), l.to_string())).collect();
     }
-    let ones = columns.iter().map(|&(c, l)| (field(c), format!("finger 1 {l}")));
-    ones.chain(columns.iter().map(|&(c, l)| (field(&format!("finger2_{c}")), format!("finger 2 {l}")))).collect()
+    let ones = columns.iter().map(|&(c, l)| (field(c), format!("F1 {l}")));
+    ones.chain(columns.iter().map(|&(c, l)| (field(&format!("finger2_{c}")), format!("F2 {l}")))).collect()
 }
 
 fn raw_messages(topic: &str, title: &str) -> Value {
     titled(
         json!({"topicPath": topic, "diffEnabled": false, "diffMethod": "custom", "diffTopicPath": "", "showFullMessageForDiff": false, "expansion": "all"}),
         title,
+    )
+}
+
+/// Whether the design under the playhead is on the run's final front: `/front` of the shard's
+/// front file (`front-NNNNN.mcap`, written when the run ends).
+fn front_indicator() -> Value {
+    titled(
+        json!({
+            "path": "/front.on_final_front",
+            "style": "background",
+            "fallbackColor": "#707070",
+            "fallbackLabel": "final front unknown: seek once (after a layout import the viewer redraws at the next seek), or open front-NNNNN.mcap with its shard (written when the run ends)",
+            "rules": [
+                {"operator": "=", "rawValue": "true", "color": "#2e9c3a", "label": "on the final Pareto front"},
+                {"operator": "=", "rawValue": "false", "color": "#505050", "label": "not on the final front"}
+            ]
+        }),
+        "Final front",
     )
 }
 
@@ -151,7 +197,7 @@ fn document(config_by_id: Value, tree: Value) -> Value {
 
 /// The layout of a run folder: the oblique and the top 3-D views (left; left out when the
 /// recording has no scene channels, `scene` false); on the right whether the design is on
-/// the final front (`/front` of `recording/front.mcap`), the contact forces at the scale of
+/// the final front (`/front` of the shards' front files), the contact forces at the scale of
 /// the holding force, the hand force, the joint angles and the `/designs` record. With
 /// `finger2` (the offset scene, whose series carries finger 2's own columns) the contact
 /// force and joint angle plots show both fingers.
@@ -185,21 +231,8 @@ pub fn layout(scene: bool, finger2: bool) -> Value {
         Some((-25.0, 25.0)),
     );
     let joints = plot(s, &format!("Joint angles of {fingers}"), "angle (rad)", &angles, None);
-    let front = titled(
-        json!({
-            "path": "/front.on_final_front",
-            "style": "background",
-            "fallbackColor": "#707070",
-            "fallbackLabel": "final front unknown: open recording/front.mcap too (written when the run ends)",
-            "rules": [
-                {"operator": "=", "rawValue": "true", "color": "#2e9c3a", "label": "on the final Pareto front"},
-                {"operator": "=", "rawValue": "false", "color": "#505050", "label": "not on the final front"}
-            ]
-        }),
-        "Final front",
-    );
     let mut configs = json!({
-        "Indicator!front": front,
+        "Indicator!front": front_indicator(),
         "Plot!contact": contact,
         "Plot!hand": hand,
         "Plot!joints": joints,
@@ -232,46 +265,151 @@ pub fn layout(scene: bool, finger2: bool) -> Value {
 }
 
 /// The layout of verify recordings: the oblique and top 3-D views of the free scene (the
-/// object's frame shown), the object's displacement and tilt against simulated time with
-/// the verdict's limits `dx_max_mm` and `theta_max_deg` as lines, and the `/verify` record.
+/// object's frame shown), the object's displacement and its tilt against simulated time, each
+/// in its own plot with the verdict's limit (`dx_max_mm`, `theta_max_deg`) as a line, and the
+/// `/verify` record.
 pub fn verify_layout(dx_max_mm: f64, theta_max_deg: f64) -> Value {
-    let (dx, th) = (format!("{dx_max_mm}"), format!("{theta_max_deg}"));
-    let (dx_label, th_label) = (format!("limit {dx} mm"), format!("limit {th} deg"));
-    let motion = plot(
-        "/verify/series",
-        "Free object: horizontal displacement of G and tilt",
-        "displacement (mm) / tilt (deg)",
-        &[
-            ("displacement_mm", "displacement mm"),
-            ("tilt_deg", "tilt deg"),
-            (dx.as_str(), dx_label.as_str()),
-            (th.as_str(), th_label.as_str()),
-        ],
-        None,
-    );
+    let s = "/verify/series";
+    let displacement =
+        motion_plot(s, "Free object: horizontal displacement of G", "displacement_mm", "displacement", "mm", dx_max_mm);
+    let tilt = motion_plot(s, "Free object: tilt", "tilt_deg", "tilt", "deg", theta_max_deg);
     document(
         json!({
             "3D!oblique": three_d(false, &["hand", "object"], "Free scene: oblique view from behind the palm (world, z up)"),
             "3D!top": three_d(true, &["hand", "object"], "Free scene: top view of the hand plane"),
-            "Plot!motion": motion,
+            "Plot!displacement": displacement,
+            "Plot!tilt": tilt,
             "RawMessages!verify": raw_messages("/verify", "Verify record (/verify)")
         }),
         json!({
             "direction": "row",
             "splitPercentage": 55,
             "first": {"direction": "column", "splitPercentage": 58, "first": "3D!oblique", "second": "3D!top"},
-            "second": {"direction": "column", "splitPercentage": 45, "first": "Plot!motion", "second": "RawMessages!verify"}
+            "second": {
+                "direction": "column", "splitPercentage": 27, "first": "Plot!displacement",
+                "second": {"direction": "column", "splitPercentage": 37, "first": "Plot!tilt", "second": "RawMessages!verify"}
+            }
         }),
     )
 }
 
+/// The layout of a robust run's shards: each design that reached its scenarios is drawn in
+/// the scenario that decided its verdict (`/scenario/series`, `/designs` → `shown_scenario`).
+/// The oblique and top 3-D views (a free scene's object moves with the frame `object`),
+/// whether the design is on the final front, the object's displacement and tilt against the
+/// limits (`dx_max_mm`, `theta_max_deg`), both fingers' normal forces and joint angles, the
+/// scenario shown (its title names the command that records any other), and the `/designs`
+/// record. Without scene channels (`scene` false) no 3-D panel.
+pub fn robust_layout(scene: bool, dx_max_mm: f64, theta_max_deg: f64) -> Value {
+    let s = "/scenario/series";
+    let displacement = motion_plot(
+        s,
+        "Scenario shown: horizontal displacement of the free object",
+        "displacement_mm",
+        "displacement",
+        "mm",
+        dx_max_mm,
+    );
+    let tilt = motion_plot(s, "Scenario shown: tilt of the free object", "tilt_deg", "tilt", "deg", theta_max_deg);
+    let forces = plot(
+        s,
+        "Scenario shown: normal forces of both fingers (y clipped to -5..25 N; impacts run off the top)",
+        "normal force (N)",
+        &[
+            ("finger1_proximal_normal_force", "F1 proximal"),
+            ("finger1_distal_normal_force", "F1 distal"),
+            ("finger2_proximal_normal_force", "F2 proximal"),
+            ("finger2_distal_normal_force", "F2 distal"),
+        ],
+        Some((-5.0, 25.0)),
+    );
+    let joints = plot(
+        s,
+        "Scenario shown: joint angles of both fingers",
+        "angle (rad)",
+        &[
+            ("finger1_q11", "F1 q11 (actuated)"),
+            ("finger1_q21", "F1 q21 = theta1"),
+            ("finger2_q11", "F2 q11 (actuated)"),
+            ("finger2_q21", "F2 q21 = theta1"),
+        ],
+        None,
+    );
+    let mut configs = json!({
+        "Indicator!front": front_indicator(),
+        "Plot!displacement": displacement,
+        "Plot!tilt": tilt,
+        "Plot!forces": forces,
+        "Plot!joints": joints,
+        "RawMessages!scenario": raw_messages(
+            "/designs.shown_scenario",
+            "Scenario shown (any other: gripopt replay RUN_DIR --design ID --scenario OBJECT:K)"
+        ),
+        "RawMessages!designs": raw_messages("/designs", "Design record (/designs)")
+    });
+    let right = json!({
+        "direction": "column", "splitPercentage": 7, "first": "Indicator!front",
+        "second": {
+            "direction": "column", "splitPercentage": 17, "first": "Plot!displacement",
+            "second": {
+                "direction": "column", "splitPercentage": 20, "first": "Plot!tilt",
+                "second": {
+                    "direction": "column", "splitPercentage": 25, "first": "Plot!forces",
+                    "second": {
+                        "direction": "column", "splitPercentage": 33, "first": "Plot!joints",
+                        "second": {"direction": "column", "splitPercentage": 35, "first": "RawMessages!scenario", "second": "RawMessages!designs"}
+                    }
+                }
+            }
+        }
+    });
+    if !scene {
+        return document(configs, right);
+    }
+    // the frame `object` exists only in the windows of a free scene (a run may have none):
+    // the panels show the hand's axes only
+    let frames = ["hand"];
+    configs["3D!oblique"] = three_d(false, &frames, "Scenario shown: oblique view from behind the palm (world, z up)");
+    configs["3D!top"] = three_d(true, &frames, "Scenario shown: top view of the hand plane (x right, object up)");
+    document(
+        configs,
+        json!({
+            "direction": "row",
+            "splitPercentage": 50,
+            "first": {"direction": "column", "splitPercentage": 58, "first": "3D!oblique", "second": "3D!top"},
+            "second": right
+        }),
+    )
+}
+
+/// The layouts gripopt may have written into a run folder of `problem` (None: any
+/// single-object one): with and without scene channels, both fingers or not, or a robust
+/// problem's.
+pub fn run_layouts(problem: Option<&Problem>) -> Vec<Value> {
+    let mut out: Vec<Value> = [(true, false), (false, false), (true, true), (false, true)]
+        .iter()
+        .map(|&(scene, finger2)| layout(scene, finger2))
+        .collect();
+    if let Some(p) = problem.filter(|p| p.robust.is_some()) {
+        let c = &p.scene.criteria;
+        out.extend([true, false].map(|scene| robust_layout(scene, c.dx_max * 1e3, c.theta_max.to_degrees())));
+    }
+    out
+}
+
 /// Write [`layout`] for a run of `problem` recorded with `opts` (both fingers plotted in the
-/// offset scene) to `RUN_DIR/foxglove-layout.json`;
+/// offset scene; a robust problem's: [`robust_layout`]) to `RUN_DIR/foxglove-layout.json`;
 /// returns its path.
 pub fn write_layout(run_dir: &Path, opts: &super::RecordOptions, problem: &Problem) -> Result<PathBuf> {
     let path = run_dir.join(LAYOUT_FILE);
     let finger2 = problem.scene.setup.kind.has_finger2();
-    let text = serde_json::to_string_pretty(&layout(opts.scene_dt > 0.0, finger2)).expect("the layout serialises");
+    let scene = opts.scene_dt > 0.0;
+    let c = &problem.scene.criteria;
+    let l = match problem.robust {
+        Some(_) => robust_layout(scene, c.dx_max * 1e3, c.theta_max.to_degrees()),
+        None => layout(scene, finger2),
+    };
+    let text = serde_json::to_string_pretty(&l).expect("the layout serialises");
     write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
@@ -299,6 +437,8 @@ mod tests {
             ("run without scene", layout(false, false)),
             ("offset run", layout(true, true)),
             ("verify", verify_layout(1.0, 1.0)),
+            ("robust", robust_layout(true, 1.0, 1.0)),
+            ("robust without scene", robust_layout(false, 1.0, 1.0)),
         ] {
             let configs = l["configById"].as_object().unwrap();
             assert!(l["playbackConfig"]["speed"].as_f64().unwrap() <= 0.05, "{name}: a grasp must be watchable");
@@ -350,7 +490,7 @@ mod tests {
         for id in ["Plot!contact", "Plot!joints"] {
             let (two, one) = (paths(&offset, id), paths(&centred, id));
             let f2: Vec<_> = two.iter().filter(|(v, _)| v.starts_with("/grasp/series.finger2_")).collect();
-            assert!(!f2.is_empty() && f2.iter().all(|(_, l)| l.starts_with("finger 2 ")), "{id}: {two:?}");
+            assert!(!f2.is_empty() && f2.iter().all(|(_, l)| l.starts_with("F2 ")), "{id}: {two:?}");
             for (v, _) in &f2 {
                 let own = v.replace("finger2_", "");
                 assert!(one.iter().any(|(w, _)| *w == own), "{id}: {v} has no finger-1 field {own}");

@@ -57,6 +57,7 @@ pub fn design(i: &DesignEntry<'_>, problem: &str, t0_ns: u64, epoch_s: u64) -> D
         sim_rhs_evals: r.sim_work().map(|w| w[1]),
         free_scene: r.free_scene.clone(),
         robust: r.robust.clone(),
+        shown_scenario: i.scenario.map(|s| s.shown(i)),
         trajectory_samples: i.trajectory.map_or(0, |t| t.simulated as u64),
     }
 }

@@ -18,8 +18,8 @@
 //!
 //! `gripopt verify` records too ([`write_verify`]): one file per verify run, the free
 //! scene's object pose as a moving frame (see `verify_rec`), in a time band after the run's
-//! designs. When the run ends, `recording/front.mcap` says which designs are on the final
-//! front ([`write_front`]). Every recording draws one physical scene (`scene`: `world` z up,
+//! designs. When the run ends, `recording/front-NNNNN.mcap` for each shard says which
+//! of its designs are on the final front ([`write_front`]). Every recording draws one physical scene (`scene`: `world` z up,
 //! the hand horizontal at the grasp height, the object standing on the ground).
 
 mod compare;
@@ -35,6 +35,9 @@ mod options;
 mod proto;
 mod read;
 mod recover;
+mod scenario_kept;
+mod scenario_scene;
+mod scenario_series;
 mod scene;
 mod schema;
 mod verify_rec;
@@ -42,11 +45,12 @@ mod writer;
 
 pub use compare::{compare_grasp, compare_robust, AcrossRevisions, Comparison};
 pub use entry::{DesignEntry, Recordable};
-pub use front::{front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
+pub use front::{front_file, front_schema, write_front, FrontRecord, FRONT_FILE, FRONT_METADATA};
 pub use index::{read_index, ProblemUse, ShardEntry};
 pub use kept::{scene_samples, KeptTrajectory};
 pub use layout::{
-    layout, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
+    layout, robust_layout, run_layouts, verify_layout, write_layout, write_verify_layout, LAYOUT_FILE,
+    LEGEND_MAX_CHARS, PLAYBACK_SPEED, VERIFY_LAYOUT_FILE,
 };
 pub use messages::{samples_from, window_start_ns, Finger2Columns};
 pub use metadata::{RunMetadata, ScenarioTag, RUN_METADATA};
@@ -58,6 +62,9 @@ pub use read::{problem_of_generation, read_design, run_recording, Recorded, RunP
 pub use recover::{
     index_entry_from_shard, index_or_rebuilt, recover, recover_run, shard_generation, shard_metadata, Recovery,
 };
+pub use scenario_kept::{ScenarioMotion, ScenarioScene, SCENARIO_DT};
+pub use scenario_scene::{SceneMessage, ShownScenario};
+pub use scenario_series::{scenario_series_descriptor, ScenarioSeries, SCENARIO_FIELDS, SCENARIO_SERIES_NAME};
 pub use scene::{HAND, OBJECT, WORLD};
 pub use schema::design as design_schema;
 pub use schema::{Derived, DesignMessage, DesignParameters, Objectives, StageSeconds, Window};

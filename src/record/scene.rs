@@ -129,23 +129,36 @@ pub fn drawn_scene<'a>(problem: &'a Problem, d: &DesignEntry<'_>) -> Cow<'a, Sce
 /// previous design on this topic, then draws the ground (`world`), the palm and the fixed
 /// object (`hand`) and the design's verdict as a text label above the scene (`world`).
 pub fn static_scene(t_ns: u64, d: &DesignEntry<'_>, sc: &SceneParams) -> SceneUpdate {
-    let design = Design::from_array(&d.parameters);
+    static_scene_with(t_ns, d.id, &Design::from_array(&d.parameters), sc, &scene_verdict(d, sc))
+}
+
+/// [`static_scene`] of design `id` (`design`) with the text `label`.
+pub fn static_scene_with(t_ns: u64, id: u64, design: &Design, sc: &SceneParams, label: &str) -> SceneUpdate {
     let [x, y, z] = object_centre(sc);
-    let object = object_entity(t_ns, HAND, d.id, sc, at(x, y, z));
+    let object = object_entity(t_ns, HAND, id, sc, at(x, y, z));
     SceneUpdate {
         deletions: delete_all(t_ns),
         entities: vec![
-            ground_entity(t_ns, d.id),
-            palm_entity(t_ns, d.id, &design, sc.hand.w),
+            ground_entity(t_ns, id),
+            palm_entity(t_ns, id, design, sc.hand.w),
             object,
-            label_entity(t_ns, d.id, &scene_verdict(d, sc)),
+            label_entity(t_ns, id, label),
         ],
     }
 }
 
-/// The most characters of a label: 120 characters of the label's 11 px font (about 6.6 px
-/// each, 790 px) fit a 3-D panel of half a 1920 px screen, the layouts' 3-D views.
+/// The most characters of a label: 120 characters of the label's 13 px font (about 7.5 px
+/// each, 900 px) fit a 3-D panel of half a 1920 px screen, the layouts' 3-D views.
 pub const LABEL_MAX_CHARS: usize = 120;
+
+/// The label's font size (px, scale invariant): 13 px (11 px until session 38, where a 0 read
+/// as a 9).
+pub const LABEL_FONT_PX: f64 = 13.0;
+
+/// Height of the label's centre above the ground (m): the text faces the camera, so half of
+/// it hung below the ground and its grid at 2 mm (until session 38); at 12 mm a 13 px line
+/// (about 7 mm tall in the oblique view at 0.38 m) clears them.
+pub const LABEL_HEIGHT: f64 = 0.012;
 
 /// The label of design `d` in the problem's scene `sc`: one short line saying what became of
 /// it, feasible with its objectives, or where and why it was discarded; at most
@@ -163,7 +176,7 @@ pub fn scene_verdict(d: &DesignEntry<'_>, sc: &SceneParams) -> String {
 }
 
 /// The verdict of `d` after the words `head`.
-fn verdict_after(d: &DesignEntry<'_>, head: String) -> String {
+pub(super) fn verdict_after(d: &DesignEntry<'_>, head: String) -> String {
     match d.record.verdict.failed_stage {
         Some(s) => fit_label(
             &format!("{head} stage {s}: "),
@@ -248,14 +261,14 @@ fn object_entity(t_ns: u64, frame: &str, id: u64, sc: &SceneParams, pose: Option
     object
 }
 
-/// A text label (frame `world`) on the ground 8 cm behind the palm, facing the camera: below
-/// the hand in both views of the layouts, never over a finger.
+/// A text label (frame `world`) just above the ground ([`LABEL_HEIGHT`]) 8 cm behind the
+/// palm, facing the camera: below the hand in both views of the layouts, never over a finger.
 fn label_entity(t_ns: u64, id: u64, text: &str) -> SceneEntity {
     let mut label = entity(t_ns, WORLD, "label", id);
     label.texts.push(TextPrimitive {
-        pose: at(0.0, -0.08, 0.002),
+        pose: at(0.0, -0.08, LABEL_HEIGHT),
         billboard: true,
-        font_size: 11.0,
+        font_size: LABEL_FONT_PX,
         scale_invariant: true,
         color: rgba(1.0, 1.0, 1.0, 1.0),
         text: text.into(),

@@ -77,6 +77,10 @@ pub struct DesignMessage {
     /// P(stay), per scenario its drawn inputs and outcome (absent otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<crate::eval::RobustRecord>,
+    /// A robust design's window: the scenario drawn (the one that decided its verdict) and
+    /// how to record any other (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shown_scenario: Option<super::scenario_scene::ShownScenario>,
     /// Trajectory samples simulated (the recorded ones may be a subset).
     pub trajectory_samples: u64,
 }
@@ -179,6 +183,20 @@ fn robust_schema() -> Value {
     })
 }
 
+/// The scenario a robust design's window draws (`shown_scenario`).
+fn shown_scenario_schema() -> Value {
+    let mut props = nums(&["max_displacement", "height_offset", "x_off"]);
+    for k in ["object", "why", "replay"] {
+        props[k] = json!({"type": "string"});
+    }
+    props["k"] = int();
+    props["free_scene"] = json!({"type": "boolean"});
+    props["stays"] = json!({"type": "boolean"});
+    let mut s = obj(props, &["object", "k", "why", "free_scene", "stays", "replay"]);
+    s["description"] = "robust problems only (docs/recording.md): the scenario drawn in the design's window (the one that decided its verdict), and the command that records any other".into();
+    s
+}
+
 /// `gripopt.Design` on `/designs`, of a problem integrated with `method` (the free scene's
 /// keys of the switching method's work are listed only for it: the schema of every other
 /// method's recording is as before).
@@ -209,6 +227,7 @@ pub fn design(method: Method) -> Value {
                 "properties": free_scene_properties(method)
             },
             "robust": robust_schema(),
+            "shown_scenario": shown_scenario_schema(),
             "trajectory_samples": int()
         }),
         &[

@@ -4,6 +4,8 @@ use super::entry::{DesignEntry, Recordable};
 use super::index::{write_index, ShardEntry};
 use super::mcapfile::{add_channels, add_foxglove_schema, add_json_schema, write_designs};
 use super::metadata::{RunMetadata, RUN_METADATA};
+use super::scenario_scene::SceneMessage;
+use super::scenario_series::{scenario_series_descriptor, ScenarioSeries, SCENARIO_SERIES_NAME};
 use super::{messages, proto, schema, RecordOptions};
 use crate::error::{Error, Result};
 use crate::model::Finger;
@@ -16,8 +18,8 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Channels of a shard, in the order of [`Ch`].
-const TOPICS: [&str; 5] = ["/designs", "/grasp/series", "/tf", "/scene/static", "/scene"];
+/// Channels of a shard, in the order of [`Ch`]: a robust run's shards have the sixth.
+const TOPICS: [&str; 6] = ["/designs", "/grasp/series", "/tf", "/scene/static", "/scene", "/scenario/series"];
 
 /// Channel index into [`TOPICS`].
 #[derive(Clone, Copy)]
@@ -27,6 +29,7 @@ enum Ch {
     Tf = 2,
     Static = 3,
     Scene = 4,
+    Scenario = 5,
 }
 
 fn fx<T: Encode>(m: &T) -> Vec<u8> {
@@ -69,6 +72,9 @@ pub fn write_shard<R: Recordable>(
         meta.x_off = Some(setup.x_off);
         meta.scene_drawn = Some(drawn.into());
     }
+    if problem.robust.is_some() {
+        meta.scene_drawn = Some(ROBUST_DRAWN.into());
+    }
     meta.epoch_s = Some(opts.epoch_s);
     meta.resolution = Some(opts.resolution);
     meta.time_convention = Some(
@@ -82,17 +88,34 @@ pub fn write_shard<R: Recordable>(
     let series_schema = w.add_schema(proto::SERIES_NAME, "protobuf", &proto::series_descriptor(finger2)).map_err(mc)?;
     let tf_schema = add_foxglove_schema(&mut w, FrameTransforms::get_schema(), &tmp)?;
     let scene_schema = add_foxglove_schema(&mut w, SceneUpdate::get_schema(), &tmp)?;
+    let scenario_schema = if problem.robust.is_some() {
+        w.add_schema(SCENARIO_SERIES_NAME, "protobuf", &scenario_series_descriptor()).map_err(mc)?
+    } else {
+        0
+    };
     let schema_of = [
         (design_schema, "json"),
         (series_schema, "protobuf"),
         (tf_schema, "protobuf"),
         (scene_schema, "protobuf"),
         (scene_schema, "protobuf"),
+        (scenario_schema, "protobuf"),
     ];
-    // without scene frames, no channels for them (their ids stay 0: no messages)
-    let topics = if opts.scene_dt <= 0.0 { &TOPICS[..Ch::Tf as usize] } else { &TOPICS[..] };
-    let mut chans = add_channels(&mut w, topics, &schema_of, &tmp)?;
-    chans.resize(TOPICS.len(), 0);
+    // without scene frames, no channels for them; `/scenario/series` in robust shards only
+    // (a channel not added keeps id 0: it has no messages)
+    let wanted = |c: usize| match c {
+        2..=4 => opts.scene_dt > 0.0,
+        5 => problem.robust.is_some(),
+        _ => true,
+    };
+    let used: Vec<usize> = (0..TOPICS.len()).filter(|&c| wanted(c)).collect();
+    let topics: Vec<&str> = used.iter().map(|&c| TOPICS[c]).collect();
+    let schemas: Vec<(u16, &str)> = used.iter().map(|&c| schema_of[c]).collect();
+    let added = add_channels(&mut w, &topics, &schemas, &tmp)?;
+    let mut chans = vec![0; TOPICS.len()];
+    for (&c, id) in used.iter().zip(added) {
+        chans[c] = id;
+    }
     // encode every design's messages in parallel, then write them in order
     let encoded: Vec<Vec<(Ch, u64, Vec<u8>)>> =
         designs.par_iter().map(|d| encode_design(&d.entry(), problem, opts)).collect();
@@ -122,7 +145,19 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     let record = messages::design(d, &problem.name, t0, opts.epoch_s).to_json();
     let series = messages::series(d, samples, kept, simulated, opts, has_finger2(problem)).encode_to_vec();
     let mut out = vec![(Ch::Designs, t0, record), (Ch::Series, t0, series)];
+    if problem.robust.is_some() {
+        let s = d.scenario.map_or_else(|| placeholder_scenario(d.id), |s| s.series(d, opts.resolution));
+        out.push((Ch::Scenario, t0, s.encode_to_vec()));
+    }
     if opts.scene_dt <= 0.0 {
+        return out;
+    }
+    if let Some(s) = d.scenario {
+        out.extend(s.scene_messages(d, t0).into_iter().map(|m| match m {
+            SceneMessage::Tf(t, m) => (Ch::Tf, t, fx(&m)),
+            SceneMessage::Static(t, m) => (Ch::Static, t, fx(&m)),
+            SceneMessage::Scene(t, m) => (Ch::Scene, t, fx(&m)),
+        }));
         return out;
     }
     let design = Design::from_array(&d.parameters);
@@ -148,6 +183,17 @@ fn encode_design(d: &DesignEntry<'_>, problem: &Problem, opts: &RecordOptions) -
     }
     out.push((Ch::Tf, end, fx(&messages::frames(end, sc))));
     out
+}
+
+/// What a robust run's shards draw (their `scene_drawn` metadata).
+const ROBUST_DRAWN: &str = "a design that reached its scenarios: the scenario that decided its verdict (/designs shown_scenario), its free scene or, where that did not run, its centred grasp; other designs: the reference object's pictures";
+
+/// `/scenario/series` of a robust design without a drawn scenario: one placeholder sample
+/// (t = 0, NaN), so a Plot panel redraws empty.
+fn placeholder_scenario(id: u64) -> ScenarioSeries {
+    let mut m = ScenarioSeries { design_id: id, ..Default::default() };
+    m.push(0.0, [f64::NAN; 14]);
+    m
 }
 
 /// Records each generation's evaluated designs into one shard of `RUN_DIR/recording/` and

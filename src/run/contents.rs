@@ -13,7 +13,7 @@ use super::lock::LOCK_FILE;
 use crate::error::shell_quote;
 use crate::error::{Error, Result};
 use crate::fsutil::SET_ASIDE_DIR;
-use crate::record::{index_entry_from_shard, layout, shard_generation, ShardEntry, LAYOUT_FILE};
+use crate::record::{index_entry_from_shard, run_layouts, shard_generation, ShardEntry, LAYOUT_FILE};
 use std::path::{Path, PathBuf};
 
 /// The CSV views a run writes every generation (before its first checkpoint too).
@@ -235,10 +235,10 @@ impl Scan {
         match n {
             "problem.toml" => proof(crate::fsutil::sha256_hex(text().as_bytes()) == i.problem_sha256),
             LAYOUT_FILE => {
-                let written = |s, f2| serde_json::to_string_pretty(&layout(s, f2)).is_ok_and(|l| l == text());
-                proof(
-                    [(true, false), (false, false), (true, true), (false, true)].iter().any(|&(s, f2)| written(s, f2)),
-                )
+                // a robust run's layout carries its problem's limits
+                let problem = crate::params::Problem::load(self.dir.join("problem.toml")).ok();
+                let layouts = run_layouts(problem.as_ref());
+                proof(layouts.iter().any(|l| serde_json::to_string_pretty(l).is_ok_and(|l| l == text())))
             }
             // a title line names no run: any gripopt view (another run's, copied in) has it
             n if VIEWS.contains(&n) && text().starts_with(&format!("# gripopt {n}")) => Proof::Title,

@@ -5,7 +5,7 @@
 use crate::eval::{stage3_ends_at_once, DesignStart, EvalOptions, Evaluation, Folded, Record, ScenarioRecord, Study};
 use crate::optim::{CostHint, Evaluated, Individual, Infeasibility, MooProblem};
 use crate::params::{Design, Problem};
-use crate::record::{DesignEntry, KeptTrajectory, RecordOptions, Recordable};
+use crate::record::{DesignEntry, KeptTrajectory, RecordOptions, Recordable, ScenarioMotion, ScenarioScene};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -25,6 +25,10 @@ pub struct GripperInfo {
     /// evaluation and kept only until the recorder has written it (never checkpointed).
     #[serde(skip)]
     pub trajectory: Option<Arc<KeptTrajectory>>,
+    /// A robust design's deciding scenario as the recording draws it, re-simulated after its
+    /// verdict and kept only until the recorder has written it (never checkpointed).
+    #[serde(skip)]
+    pub scenario: Option<Arc<ScenarioScene>>,
 }
 
 /// Serde of the shared record: as the record itself.
@@ -42,7 +46,12 @@ mod shared_record {
 impl GripperInfo {
     /// From a pipeline evaluation.
     pub fn from_eval(ev: &Evaluation) -> Self {
-        GripperInfo { record: Arc::new(Record::from_eval(ev)), stage_seconds: ev.stage_seconds, trajectory: None }
+        GripperInfo {
+            record: Arc::new(Record::from_eval(ev)),
+            stage_seconds: ev.stage_seconds,
+            trajectory: None,
+            scenario: None,
+        }
     }
 }
 
@@ -56,6 +65,7 @@ impl Recordable for Individual<GripperInfo> {
             record: &i.record,
             stage_seconds: i.stage_seconds,
             trajectory: i.trajectory.as_deref(),
+            scenario: i.scenario.as_deref(),
         }
     }
 }
@@ -115,9 +125,57 @@ impl GripperProblem {
             None => Infeasibility::FEASIBLE,
             Some(stage) => Infeasibility { stages_short: 4 - stage, violation: v.violation.unwrap_or(1e3) },
         };
-        let info =
-            GripperInfo { record: Arc::new(record), stage_seconds: seconds, trajectory: trajectory.map(Arc::new) };
+        let info = GripperInfo {
+            record: Arc::new(record),
+            stage_seconds: seconds,
+            trajectory: trajectory.map(Arc::new),
+            scenario: None,
+        };
         Evaluated { f: minimised.to_vec(), cv, info }
+    }
+
+    /// Keep for the recorder the scenario that decided the verdict of `e` (a robust design
+    /// that reached its scenarios, started as `start`; [`crate::eval::RobustRecord::deciding`]),
+    /// re-simulated, where the run records trajectories of such a design (`--record all`, or
+    /// `feasible` and the design is feasible). Re-running a scenario gives the bits the
+    /// evaluation gave, so nothing of the verdict changes.
+    pub fn keep_deciding_scenario(&self, start: &DesignStart, e: &mut Evaluated<GripperInfo>) {
+        let r = &self.recording;
+        let wanted = match r.trajectories {
+            TrajectoryKeep::All => true,
+            TrajectoryKeep::Feasible => e.info.record.verdict.failed_stage.is_none(),
+            TrajectoryKeep::None => false,
+        };
+        if !(r.enabled && wanted && self.options.dynamics && !self.study.is_single() && start.passed()) {
+            return;
+        }
+        let rec = &e.info.record;
+        let Some((j, decides)) =
+            rec.robust.as_ref().and_then(|rb| rb.deciding(rec.verdict.failed_stage, rec.verdict.cause))
+        else {
+            return;
+        };
+        let ran = &rec.robust.as_ref().expect("a robust record").scenarios[j];
+        let (o, k) = (ran.object, ran.k);
+        let mut sink = (crate::sim::Trajectory::default(), Vec::<crate::sim::PoseSample>::new());
+        let (again, ev) = self.study.run_scenario(start, o, k, &self.options, &mut sink);
+        debug_assert_eq!(again.as_written(), ran.as_written(), "a scenario re-run gives the same record");
+        let motion = if ev.free.is_some() {
+            ScenarioMotion::free(&sink.1, r)
+        } else {
+            ScenarioMotion::Centred(KeptTrajectory::of(&sink.0, r))
+        };
+        let sc = self.study.scenario(o, k);
+        e.info.scenario = Some(Arc::new(ScenarioScene {
+            object: o,
+            name: self.study.object_name(o).unwrap_or_default().to_string(),
+            k,
+            decides,
+            scene: sc.scene.clone(),
+            height_offset: sc.scenario.value("height_offset").unwrap_or(0.0),
+            study: (self.study.objects(), self.study.k),
+            motion,
+        }));
     }
 
     /// Which trajectory the recorder keeps of a design, if any.
@@ -202,7 +260,9 @@ impl MooProblem for GripperProblem {
         } else {
             vec![]
         };
-        self.evaluated(&started, scen, kept)
+        let mut e = self.evaluated(&started, scen, kept);
+        self.keep_deciding_scenario(&started, &mut e);
+        e
     }
     /// The simulations' right-hand-side evaluations (deterministic; proportional to their
     /// time within a few per cent): the centred scene's, plus for a free-kind problem the
@@ -210,7 +270,7 @@ impl MooProblem for GripperProblem {
     /// A member of the population keeps its record (shared) and timings, not the recording's
     /// trajectory: that waits in the generation's evaluated designs until its shard is written.
     fn member_info(&self, info: &GripperInfo) -> GripperInfo {
-        GripperInfo { record: info.record.clone(), stage_seconds: info.stage_seconds, trajectory: None }
+        GripperInfo { record: info.record.clone(), stage_seconds: info.stage_seconds, trajectory: None, scenario: None }
     }
     fn work(&self, e: &Evaluated<GripperInfo>) -> Option<f64> {
         let r = &e.info.record;

@@ -106,7 +106,7 @@ impl Evaluator<GripperProblem> for StudyScheduled {
         let progress = self.run_tasks(p, &starts, &order);
         let mut costs = Vec::with_capacity(xs.len());
         let mut start_costs = Vec::with_capacity(xs.len());
-        let evaluated: Vec<_> = starts
+        let mut evaluated: Vec<_> = starts
             .iter()
             .zip(progress)
             .map(|((st, _, secs), mut prog)| {
@@ -128,6 +128,8 @@ impl Evaluator<GripperProblem> for StudyScheduled {
                 p.evaluated(st, scen, kept)
             })
             .collect();
+        // the recorder's deciding scenario of each robust design, re-simulated in parallel
+        evaluated.par_iter_mut().zip(&starts).for_each(|(e, (st, _, _))| p.keep_deciding_scenario(st, e));
         for (h, e) in hints.iter().zip(&evaluated) {
             let runs = e.info.record.robust.as_ref().map_or(1, |r| r.scenarios_run);
             if let (CostHint::Costly(f), Some(w)) = (h, p.work(e)) {

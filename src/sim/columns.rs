@@ -467,6 +467,8 @@ mod tests {
             tilt: 0.1,
             fingers: [8.0, 9.0, 10.0, 11.0],
             energy: 12.0,
+            delta: [13.0; 4],
+            normal: [14.0; 4],
         };
         let v = pose_values(&p);
         let at = |name: &str| v[POSE_COLUMNS.iter().position(|c| c.0 == name).unwrap()];

@@ -330,6 +330,11 @@ pub struct PoseSample {
     pub fingers: [f64; 4],
     /// Total energy (J).
     pub energy: f64,
+    /// Penetration δ of the phalanx contacts (m): finger 1 proximal, distal, finger 2
+    /// proximal, distal (≤ 0: apart).
+    pub delta: [f64; 4],
+    /// Their normal forces (N), in the same order.
+    pub normal: [f64; 4],
 }
 
 /// A recorded trajectory.

@@ -505,6 +505,8 @@ impl Scene<NF, EF> for FreeScene<'_> {
             tilt: ev.tilt,
             fingers: [y[0], y[1], y[4], y[5]],
             energy: ev.energy,
+            delta: std::array::from_fn(|k| ev.c[k].delta),
+            normal: std::array::from_fn(|k| ev.c[k].normal),
         };
         sink.pose(at, &pose);
     }
