@@ -67,6 +67,9 @@ pub struct RunHooks {
     pub stop: Option<Arc<AtomicBool>>,
     /// The batch evaluator (None: the problem's default, `GripperProblem::default_evaluator`).
     pub evaluator: Option<Box<dyn Evaluator<GripperProblem>>>,
+    /// A new run's survival and variation (None: the defaults; e.g. NSGA-II's, crowding and
+    /// SBX, to compare with a run of before issue 42). A resume keeps its checkpoint's.
+    pub algorithm: Option<(Survival, Variation)>,
 }
 
 /// Summary returned to the CLI.
@@ -235,7 +238,8 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    let (survival, variation) = (Some(Survival::default()), Some(Variation::default()));
+    let (survival, variation) = hooks.algorithm.unwrap_or_default();
+    let (survival, variation) = (Some(survival), Some(variation));
     let start = Start { recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
     drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
 }
