@@ -3,8 +3,9 @@
 //! a persister that is behind; ctrl-c during a resume with nothing to do leaves a finished
 //! run finished; `show` takes the designs from the checkpoint, not from a view copied in or
 //! edited; a run recorded with `--record none` is shown and exported from its checkpoint; a
-//! `.lock` that is a link is never written through; `replay --scenario` takes the lock.
+//! `.lock` that is a link is never written through.
 
+use crate::common::folder_bytes;
 use crate::robustness::{cli, code, read, stderr, tmp, PROBLEM};
 use gripopt::run::{optimise, resume, resume_with, RunHooks, RunSpec};
 use std::collections::BTreeMap;
@@ -14,20 +15,6 @@ use std::sync::Arc;
 
 fn out(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stdout).to_string()
-}
-
-/// Every file under `dir` (but the lock's pid file) with its bytes.
-fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut m = BTreeMap::new();
-    for e in std::fs::read_dir(dir).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            m.extend(files(&p));
-        } else if e.file_name() != ".lock" {
-            m.insert(p.clone(), std::fs::read(&p).unwrap());
-        }
-    }
-    m
 }
 
 fn spec(out: &Path, generations: u64, record: bool) -> RunSpec {
@@ -49,7 +36,7 @@ fn an_older_run_json_beside_a_newer_checkpoint_is_refused() {
     crate::common::copy_dir(&b5, &w);
     resume(&w, Some(10), false, Some(1)).unwrap();
     std::fs::copy(b5.join("run.json"), w.join("run.json")).unwrap();
-    let before = files(&w);
+    let before = folder_bytes(&w);
     let d = w.display().to_string();
     for args in [vec!["resume", &d, "--generations", "12"], vec!["verify", &d, "--record", "none"]] {
         let o = cli(&args);
@@ -58,7 +45,7 @@ fn an_older_run_json_beside_a_newer_checkpoint_is_refused() {
         assert!(e.contains("run.json") && e.contains("does not match checkpoint.json"), "{args:?}: {e}");
         assert!(e.contains("generation 10"), "{args:?}: {e}");
     }
-    assert!(files(&w) == before, "a refused resume or verify changes no file");
+    assert!(folder_bytes(&w) == before, "a refused resume or verify changes no file");
     let s = out(&cli(&["show", &d]));
     assert!(s.contains("run.json does not match checkpoint.json"), "{s}");
     // run.json one generation behind, status running (killed between checkpoint 10 and its
@@ -210,22 +197,6 @@ fn a_lock_file_that_is_a_link_is_never_written_through() {
     assert!(std::fs::symlink_metadata(dir.join(".lock")).unwrap().file_type().is_symlink());
 }
 
-/// Finding 7: `replay --scenario` writes into the run folder under its lock: refused while
-/// another process holds it.
-#[test]
-fn replay_of_a_scenario_takes_the_run_folders_lock() {
-    let dir = tmp("trust-scenario-lock");
-    optimise(&spec(&dir, 1, false)).unwrap();
-    let held = gripopt::run::RunLock::acquire(&dir).unwrap();
-    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err();
-    assert!(matches!(e, gripopt::Error::Locked { .. }), "{e}");
-    drop(held);
-    // without the lock held: the folder's own answer (not a robust run)
-    let e = gripopt::app::replay_scenario(&dir, 0, "bottle", 0, true).unwrap_err().to_string();
-    assert!(e.contains("not a robust problem"), "{e}");
-    let _ = PROBLEM;
-}
-
 /// A library caller's `optimise` into a path that is a file is refused naming it as a file,
 /// and the file is kept (it used to fail with the OS's "File exists").
 #[test]
@@ -237,20 +208,6 @@ fn optimise_into_a_file_is_refused_as_a_file() {
     let e = optimise(&spec(&file, 1, false)).unwrap_err().to_string();
     assert!(e.contains("not-a-folder") && e.contains("is a file, not a folder"), "{e}");
     assert_eq!(std::fs::read(&file).unwrap(), b"keep");
-}
-
-/// `verify --sample N` from the library: an N whose designs cannot fit in memory is refused
-/// before anything is drawn or written (the CLI checks it too, before the lock).
-#[test]
-fn a_library_verify_sample_beyond_memory_is_refused() {
-    let dir = tmp("trust-sample");
-    let run = dir.join("run");
-    optimise(&spec(&run, 1, false)).unwrap();
-    let before = files(&run);
-    let source = gripopt::run::VerifySource::Sample { n: usize::MAX / 2, seed: 1 };
-    let e = gripopt::run::verify(&run, source, None, false, &|_| {}, &|| {}).unwrap_err().to_string();
-    assert!(e.contains("--sample") && e.contains("needs about"), "{e}");
-    assert_eq!(files(&run), before);
 }
 
 // Hostile pass 32: the recording shards a run folder reads are attributed to the run.
@@ -353,7 +310,7 @@ fn resume_never_indexes_an_mcap_another_program_wrote() {
         if drop_index {
             std::fs::remove_file(rdir.join("index.jsonl")).unwrap();
         }
-        let before = files(&dir);
+        let before = folder_bytes(&dir);
         let o = cli(&["resume", &d, "--generations", "4"]);
         assert_eq!(code(&o), 2, "{}", stderr(&o));
         let e = stderr(&o);
@@ -361,7 +318,7 @@ fn resume_never_indexes_an_mcap_another_program_wrote() {
             e.contains("gen-00002.mcap") && e.contains("written by another run") && e.contains("gripopt.run"),
             "{e}"
         );
-        assert!(files(&dir) == before, "a refused resume changed the folder");
+        assert!(folder_bytes(&dir) == before, "a refused resume changed the folder");
     }
     // the foreign file out of the folders tools/check_mcap.py reads
     std::fs::remove_dir_all(&dir).unwrap();
@@ -447,11 +404,11 @@ fn resume_stops_on_a_covered_shard_with_damaged_metadata_even_when_indexed() {
         *b ^= 0xFF;
     }
     std::fs::write(&shard, bytes).unwrap();
-    let before = files(&dir);
+    let before = folder_bytes(&dir);
     let o = cli(&["resume", &d, "--generations", "4"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("gen-00002.mcap") && stderr(&o).contains("metadata"), "{}", stderr(&o));
-    assert!(files(&dir) == before, "a refused resume changed the folder");
+    assert!(folder_bytes(&dir) == before, "a refused resume changed the folder");
     // the damaged shard out of the folders tools/check_mcap.py reads
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -439,7 +439,7 @@ fn the_default_beats_the_reference_nsga2_on_dtlz2() {
 /// Issue 42: a new run's checkpoint states its survival and variation (the defaults).
 #[test]
 fn a_new_runs_checkpoint_states_its_algorithm() {
-    let d = crate::common::scratch_dir("optimiser-algorithm", "options");
+    let d = crate::common::scratch("algorithm-options");
     let spec = RunSpec { pop: 6, record: RecordOptions::none(), ..crate::common::bottle_spec(&d, 2, 5, 1) };
     optimise(&spec).unwrap();
     let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();
@@ -455,7 +455,7 @@ fn a_new_runs_checkpoint_states_its_algorithm() {
 #[test]
 fn an_old_checkpoint_resumes_with_nsga2() {
     let fixture = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/checkpoint-s36/radau5"));
-    let d = crate::common::scratch_dir("optimiser-algorithm", "s36");
+    let d = crate::common::scratch("algorithm-s36");
     crate::common::copy_dir(&fixture, &d);
     resume(&d, Some(2), false, Some(1)).unwrap();
     let cp = Checkpoint::<GripperInfo>::load(&d.join("checkpoint.json")).unwrap();

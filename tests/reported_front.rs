@@ -16,7 +16,7 @@ fn rows(p: &Path) -> Vec<String> {
 
 /// A run of bottle-1l with population `pop`, nothing recorded.
 fn run(name: &str, pop: usize, generations: u64) -> PathBuf {
-    let d = crate::common::scratch_dir("reported-front", name);
+    let d = crate::common::scratch(name);
     let spec = RunSpec {
         pop,
         record: gripopt::record::RecordOptions::none(),

@@ -1,5 +1,6 @@
-//! Robust runs across a forced resume, and what a robust record reports for a design that
-//! is not form closed (hostile pass 32b).
+//! Robust runs across a forced resume, what a robust record reports for a design that is not
+//! form closed (hostile pass 32b), and the size checks of a robust run's records.
+
 use crate::robust::{robust_problem, robust_text, spec, tmp, BOTTLE};
 use gripopt::eval::{evaluate_record, EvalOptions, Study};
 use gripopt::optim::MooProblem;
@@ -94,27 +95,6 @@ fn a_design_not_form_closed_has_no_robust_max_offset() {
     assert_eq!(e.f[0], p.scene.criteria.offset_step);
 }
 
-/// `verify` on a robust run without a feasible design says why, as for a single-object run
-/// (docs/cli.md: the discard causes), not only that there is nothing to verify.
-#[test]
-fn verify_of_a_robust_run_without_a_feasible_design_lists_the_discards() {
-    let dir = tmp("verify-none-feasible");
-    let _ = std::fs::remove_dir_all(&dir);
-    let kitchen = Path::new(BOTTLE).with_file_name("kitchen.toml");
-    let run = |args: &[&str]| crate::robustness::cli(args);
-    let d = dir.display().to_string();
-    let k = kitchen.display().to_string();
-    let o = run(&["optimise", &k, "--out", &d, "--pop", "8", "--generations", "1", "--seed", "1", "--threads", "1"]);
-    assert_eq!(crate::robustness::code(&o), 0, "{}", crate::robustness::stderr(&o));
-    let shown: serde_json::Value = serde_json::from_slice(&run(&["show", &d, "--json"]).stdout).unwrap();
-    assert!(shown["no_feasible_design"].is_array(), "the run has a feasible design: {shown}");
-    let o = run(&["verify", &d]);
-    let e = crate::robustness::stderr(&o);
-    assert_eq!(crate::robustness::code(&o), 2, "{e}");
-    assert!(e.contains("nothing written") && e.contains("were discarded") && e.contains("at stage"), "{e}");
-    assert!(!dir.join("verify_robust.csv").exists());
-}
-
 /// Issue 44 class 6: the size a run's checks count for a robust design's scenario record
 /// (`BYTES_PER_SCENARIO_JSON`) is at least what one takes as JSON, measured here on the
 /// longest record there can be: 17-digit negative numbers with a three-digit exponent in
@@ -146,7 +126,7 @@ fn a_scenario_record_takes_no_more_json_than_the_size_checks_count() {
 /// refused before anything is written (exit 2, naming `--pop`, with the estimate).
 #[test]
 fn a_robust_run_whose_records_would_not_fit_is_refused_before_it_starts() {
-    let d = crate::common::scratch_dir("robust-tests", "i44-size");
+    let d = crate::common::scratch("i44-size");
     let kitchen = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml")).unwrap();
     let p = d.join("k4096.toml");
     std::fs::write(&p, kitchen.replace("scenarios = 8 ", "scenarios = 4096 ")).unwrap();

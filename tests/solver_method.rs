@@ -3,20 +3,18 @@
 //! method with the default's tolerance scaling, session 38, within the accuracy rule of
 //! docs/benchmarks.md against a tight reference); an unknown value refused naming the file
 //! and the field; a run whose problem file's method was edited refused on resume, and a run
-//! of before the default (RADAU5) resuming and replaying with RADAU5.
+//! of before the default (RADAU5) resuming and replaying with RADAU5. The method as the
+//! outputs name it (`evaluate --json`, the switching method's counts), the command line's
+//! spellings, and TR-BDF2's atol floor.
 
-use crate::common::{copy_dir, nominal, output_text, run_gripopt, scratch_dir, untimed, BOTTLE_FILE};
+use crate::common::{
+    copy_dir, nominal, output_text, run_gripopt, scratch, untimed, with_solver_method, BOTTLE_FILE, KITCHEN_FILE,
+};
 use gripopt::eval::{evaluate, EvalOptions, Record};
 use gripopt::params::Problem;
 use gripopt::sim::{Controls, Integration, Method, Scaling};
+use gripopt::Stages;
 use std::path::{Path, PathBuf};
-
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/solver-method")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// bottle-1l.toml with `rtol = RTOL` and, when given, `method = METHOD` in `[solver]`,
 /// written to `dir/name`.
@@ -198,7 +196,7 @@ fn the_default_meets_the_tight_reference() {
 fn a_run_of_before_the_default_resumes_and_replays_with_radau5() {
     use gripopt::optim::{Survival, Variation};
     use gripopt::run::{optimise_with, resume, RunFolder, RunHooks, RunSpec};
-    let d = scratch_dir("solver-method", "old-run");
+    let d = scratch("old-run");
     let old = d.join("old");
     copy_dir(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/run-64f5714")), &old);
     resume(&old, Some(3), false, Some(1)).unwrap();
@@ -303,4 +301,155 @@ fn resume_refuses_a_run_whose_method_was_edited() {
     std::fs::write(&file, original).unwrap();
     let o = run_gripopt(&["resume", &out, "--generations", "2", "--threads", "1"]);
     assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+}
+
+/// `simulate --json` of the nominal design with `extra` flags, as JSON.
+fn simulate_json(extra: &[&str]) -> serde_json::Value {
+    let o = run_gripopt(&[&["simulate", BOTTLE_FILE, "--json"], extra].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// An auto run of the nominal problem switches (its settling tail is stiff for
+/// Dormand–Prince: docs/benchmarks.md) and says how many of its accepted steps were
+/// explicit; a RADAU5 run's record has neither key, as before the keys existed.
+/// Origin: session 34, small user-facing gaps.
+#[test]
+fn the_switching_method_reports_its_switches_and_explicit_steps() {
+    let auto = simulate_json(&["--method", "auto"]);
+    assert_eq!(auto["method"], "auto");
+    let steps = auto["steps"].as_u64().unwrap();
+    let switches = auto["switches"].as_u64().unwrap_or_else(|| panic!("no switches in {auto}"));
+    let explicit = auto["explicit_steps"].as_u64().unwrap_or_else(|| panic!("no explicit_steps in {auto}"));
+    assert!(switches >= 1, "the nominal's settling tail switches to RADAU5: {auto}");
+    assert!(explicit > 0 && explicit <= steps, "explicit {explicit} of {steps} steps");
+    // the implicit part did the rest: it computed Jacobians, which Dormand–Prince never does
+    assert!(explicit < steps && auto["jac_evals"].as_u64().unwrap() > 0, "{auto}");
+
+    // the library's pipeline record counts them too (evaluate with an explicit Method::Auto;
+    // the nominal is discarded at its first impact, before the stiff tail: no switch, so
+    // every step was Dormand–Prince's)
+    let p = Problem::load(BOTTLE_FILE).unwrap();
+    let s = &p.solver;
+    let opts = EvalOptions::pipeline(Integration::new(s.rtol, s.atol, s.max_steps).with_method(Method::Auto));
+    let r = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &opts));
+    let w = &r.grasp.work;
+    assert_eq!((w.switches, w.explicit_steps), (Some(0), w.steps), "{w:?}");
+    assert_eq!((w.jac_evals, r.verdict.failed_stage), (Some(0), Some(3)), "{w:?}");
+
+    for method in ["radau5", "trbdf2", "dopri5"] {
+        let v = simulate_json(&["--method", method]);
+        assert_eq!(v["method"], method);
+        for key in ["switches", "explicit_steps"] {
+            assert!(v.get(key).is_none(), "{method}: `{key}` in {v}");
+        }
+    }
+    // the text report says them on its work line, for auto only
+    let text = |m: &str| output_text(&run_gripopt(&["simulate", BOTTLE_FILE, "--method", m]));
+    let plural = if switches == 1 { "" } else { "es" };
+    let want = format!("steps {steps} (Dormand-Prince {explicit}, RADAU5 the rest; {switches} switch{plural})");
+    assert!(text("auto").contains(&want), "{want} not in {}", text("auto"));
+    assert!(!text("radau5").contains("the rest"), "{}", text("radau5"));
+    let radau_opts = EvalOptions { integration: Integration::new(s.rtol, s.atol, s.max_steps), ..opts };
+    let radau = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &radau_opts));
+    let v = serde_json::to_value(&radau).unwrap();
+    assert!(v.get("switches").is_none() && v.get("explicit_steps").is_none(), "{v}");
+    // bottle-1l.toml names no method: the default, the switching method, counts them too
+    let default = Record::from_eval(&evaluate(&crate::common::nominal(), &p.scene, &EvalOptions::full(&p)));
+    assert!(default.grasp.work.switches.is_some(), "{:?}", default.grasp.work);
+}
+
+/// Every method name the command line takes (`--method`, clap's values and its alias
+/// `tr-bdf2`) is one that the library's parser takes too (problem files' `solver.method`,
+/// Python's `method=`), meaning the same method; the accepted list names the alias.
+/// Origin: session 34, small user-facing gaps.
+#[test]
+fn the_command_lines_method_spellings_are_the_librarys() {
+    let v = simulate_json(&["--method", "tr-bdf2"]);
+    assert_eq!(v["method"], "trbdf2");
+    for m in Method::ALL {
+        assert_eq!(Method::parse(m.as_str()), Some(m));
+    }
+    assert_eq!(Method::parse("tr-bdf2"), Some(Method::TrBdf2));
+    assert!(Method::accepted().contains("\"tr-bdf2\""), "{}", Method::accepted());
+}
+
+fn evaluate_json(args: &[&str]) -> serde_json::Value {
+    let o = run_gripopt(&[&["evaluate", "--json"], args].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// `evaluate --json` of a problem with `method = "auto"` printed the work counters (steps,
+/// jac_evals, …) of a simulation whose method it named nowhere (simulate --json says it):
+/// now a `method` key where the method is not RADAU5, the rest the library's record; the
+/// text says it on its first line. `method = "radau5"` and --static-only are unchanged; a
+/// file without the key runs the default, auto, and says so.
+/// Origin: hostile pass of session 33.
+#[test]
+fn evaluate_names_a_method_other_than_radau5() {
+    let d = scratch("evaluate");
+    for (file, method) in [(BOTTLE_FILE, "auto"), (BOTTLE_FILE, "trbdf2"), (KITCHEN_FILE, "auto")] {
+        let path = with_solver_method(file, &d, &format!("{method}.toml"), method);
+        let p = Problem::load(&path).unwrap();
+        let mut cli = evaluate_json(&[&path]);
+        assert_eq!(cli["method"], method, "{path}");
+        cli.as_object_mut().unwrap().remove("method");
+        let lib = serde_json::to_value(gripopt::evaluate(&p, &p.nominal, Stages::All)).unwrap();
+        assert_eq!(untimed(cli), untimed(lib), "{path}: the rest is the library's record");
+        // stages 0-2 simulate nothing: no method
+        assert!(evaluate_json(&[&path, "--static-only"]).get("method").is_none(), "{path}");
+        let o = run_gripopt(&["evaluate", &path]);
+        let first = String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or_default().to_string();
+        assert!(first.ends_with(&format!("  method {method}")), "{first}");
+    }
+    // radau5: the record as before the key existed; no method key: the default, auto (session 38)
+    let radau = with_solver_method(BOTTLE_FILE, &d, "radau5.toml", "radau5");
+    assert!(evaluate_json(&[&radau]).get("method").is_none(), "{radau}");
+    let o = run_gripopt(&["evaluate", &radau]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("method"), "{}", output_text(&o));
+    for path in [BOTTLE_FILE, KITCHEN_FILE] {
+        assert_eq!(evaluate_json(&[path])["method"], "auto", "{path}");
+        let o = run_gripopt(&["evaluate", path]);
+        let first = String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or_default().to_string();
+        assert!(first.ends_with("  method auto"), "{first}");
+    }
+}
+
+/// TR-BDF2 below atol 1e-11 collapsed its steps (1e-15: "step size underflow" at t = 0) or ran
+/// for millions of steps (1e-13, the offset scene): the problem file refuses it, naming
+/// `solver.atol` and the method; 1e-11 is taken.
+/// Origin: hostile pass of session 34, the CLI.
+#[test]
+fn tr_bdf2_needs_an_atol_its_error_estimate_can_meet() {
+    let dir = scratch("trbdf2-atol");
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    for (atol, code) in [("1e-12", 2), ("1e-11", 0)] {
+        let file = dir.join(format!("trbdf2-{atol}.toml"));
+        let solver = "\n[solver]\nmethod = \"trbdf2\"\n";
+        let edited = text.replacen("\n[solver]\n", solver, 1).replacen("atol = 1e-9", &format!("atol = {atol}"), 1);
+        assert!(edited.contains(&format!("atol = {atol}")), "bottle-1l.toml's atol is 1e-9");
+        std::fs::write(&file, edited).unwrap();
+        let o = run_gripopt(&["evaluate", file.to_str().unwrap(), "--static-only"]);
+        assert_eq!(o.status.code(), Some(code), "{atol}: {}", output_text(&o));
+        if code == 2 {
+            let e = output_text(&o);
+            assert!(e.contains("solver.atol") && e.contains(">= 1e-11") && e.contains("trbdf2"), "{e}");
+        }
+    }
+}
+
+/// `simulate --method trbdf2` on a problem written for RADAU5 at atol 1e-13 is refused as
+/// the file would be (exit 2, naming the flag, solver.atol and the floor).
+/// Origin: hostile pass of session 34, the CLI.
+#[test]
+fn simulate_method_tr_bdf2_checks_the_files_atol() {
+    let dir = scratch("radau5-atol");
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap().replacen("atol = 1e-9", "atol = 1e-13", 1);
+    let file = dir.join("radau5-1e-13.toml");
+    std::fs::write(&file, text).unwrap();
+    let o = run_gripopt(&["simulate", file.to_str().unwrap(), "--method", "trbdf2"]);
+    let e = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--method trbdf2") && e.contains("solver.atol 1e-13") && e.contains(">= 1e-11"), "{e}");
 }

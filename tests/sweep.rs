@@ -1,10 +1,10 @@
 //! `gripopt sweep` (issue 14): grid, CSV from the evaluation record, derived relations,
 //! bisection, bad input. Grids are tiny; expected values are computed independently.
 
-use crate::common::{bottle, close_rel};
+use crate::common::{bottle, close_rel, output_text, run_gripopt, scratch, BOTTLE_FILE};
 use gripopt::params::Design;
 use gripopt::sweep::{self, Stage, SweepSpec, Vary};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn spec(vary: &[&str], stage: Stage) -> SweepSpec {
     let p = bottle();
@@ -399,4 +399,56 @@ fn a_sweep_sets_aside_an_earlier_file_that_changed() {
     // and the folder, set-aside/ included, takes a third sweep
     let o = small_sweep(&d, &["alpha"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// bottle-1l with `[scene] kind` replaced, written into `dir`.
+fn bottle_of_kind(dir: &Path, kind: &str) -> PathBuf {
+    let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    let text = text.replacen("kind = \"centred\"", &format!("kind = \"{kind}\""), 1);
+    assert!(text.contains(&format!("kind = \"{kind}\"")));
+    let p = dir.join(format!("bottle-{kind}.toml"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// `sweep --vary scene.x_off` on a centred problem varied nothing (every row the same, the
+/// record's x_off 0 beside a varied column of ±2 mm); so did the ground's fields and t_obs
+/// outside the free scene. Refused (exit 2, nothing written) naming the field and the kind.
+/// Origin: hostile pass of session 35 on the CLI.
+#[test]
+fn sweep_refuses_a_scene_field_the_scene_kind_does_not_simulate() {
+    let d = scratch("sweep");
+    let offset = bottle_of_kind(&d, "offset");
+    let cases = [
+        (BOTTLE_FILE.to_string(), "scene.x_off=-0.002:0.002:3", "scene.x_off", "centred"),
+        (BOTTLE_FILE.to_string(), "x_off=0:0.002:2", "scene.x_off", "centred"),
+        (BOTTLE_FILE.to_string(), "scene.ground_points=3:5:3", "scene.ground_points", "centred"),
+        (BOTTLE_FILE.to_string(), "ground_k=1e8:2e8:2", "scene.ground_k", "centred"),
+        (offset.display().to_string(), "scene.t_obs=0.05:0.1:2", "scene.t_obs", "offset"),
+        (offset.display().to_string(), "scene.ground_v_d=3e-4:4e-4:2", "scene.ground_v_d", "offset"),
+    ];
+    for (problem, vary, field, kind) in cases {
+        let out = d.join("out");
+        let o =
+            run_gripopt(&["sweep", &problem, "--vary", vary, "--stage", "kinematics", "--out", out.to_str().unwrap()]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{vary}: {text}");
+        assert!(text.contains(field) && text.contains(&format!("scene kind \"{kind}\"")), "{vary}: {text}");
+        assert!(!out.exists(), "{vary}: nothing written");
+    }
+    // the offset scene uses x_off: swept (a warning says a static sweep stops before it)
+    let out = d.join("ok");
+    let o = run_gripopt(&[
+        "sweep",
+        offset.to_str().unwrap(),
+        "--vary",
+        "scene.x_off=0:0.002:2",
+        "--stage",
+        "static",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = output_text(&o);
+    assert!(o.status.success() && out.join("sweep.csv").exists(), "{text}");
+    assert!(text.contains("warning: --vary scene.x_off: only stage 3"), "{text}");
 }

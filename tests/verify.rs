@@ -2,9 +2,17 @@
 //! an independent `gripopt simulate --scene free --json` of the design read from pareto.csv
 //! (verify itself takes the designs from the checkpoint: an edited pareto.csv changes nothing),
 //! the printed confusion table adds up to the rows and matches the CSV, the CSV does not
-//! depend on the thread count, and bad folders are refused with exit 2, nothing deleted.
+//! depend on the thread count, and bad folders are refused with exit 2, nothing deleted;
+//! verify.csv's and the `/verify` message's columns, what is not observed left out, and the
+//! limits and refusals around a verify. A robust run's verify: verify_robust.rs; verify's
+//! recording: verify_record.rs.
 
-use gripopt::run::RunLock;
+use crate::common::{
+    cli_tiny_run, fifo, folder_bytes, is_fifo, output_text, run_gripopt, run_limited, scratch, BOTTLE_FILE,
+};
+use crate::robustness::{cli, code, read, stderr, tmp};
+use crate::robustness_folders::stdout;
+use gripopt::run::{optimise, resume, RunLock};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -199,4 +207,264 @@ fn verify_refuses_bad_folders() {
         assert!(dir.join(&f).exists(), "{f:?} deleted");
     }
     assert!(!dir.join("verify.csv").exists());
+}
+
+/// `verify` of a run whose problem.toml was deleted says that file is missing (run.json is
+/// there), not "not a run folder".
+/// Origin: hostile pass of session 35 on the CLI.
+#[test]
+fn verify_names_a_missing_problem_toml() {
+    let d = scratch("verify-no-problem");
+    let run = cli_tiny_run(&d);
+    std::fs::remove_file(run.join("problem.toml")).unwrap();
+    let o = run_gripopt(&["verify", run.to_str().unwrap(), "--record", "none"]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("problem.toml is missing from the run folder (run.json is there)"), "{text}");
+}
+
+/// Origin: the hostile-user review of the scene commands.
+#[test]
+fn verify_without_observation_and_with_nothing_to_verify() {
+    let dir = crate::common::tiny_run("scene-cli-verify", Path::new(BOTTLE_FILE), 8, 2);
+    let d = dir.display().to_string();
+    // --seed without --sample: refused
+    let o = run_gripopt(&["verify", &d, "--seed", "3"]);
+    assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+    assert!(!dir.join("verify.csv").exists());
+
+    // x_off = 20 mm: every design's open finger overlaps the object, nothing is observed
+    let o = run_gripopt(&["verify", &d, "--scene", "free:0.02", "--threads", "1"]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    let csv = std::fs::read_to_string(dir.join("verify.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let c = |n: &str| head.iter().position(|h| *h == n).unwrap_or_else(|| panic!("no column {n}"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(!rows.is_empty());
+    for r in &rows {
+        assert_ne!(r[c("free_end")], "t_obs", "{r:?}");
+        for k in ["moved", "toppled", "escaped", "agrees", "peak_e_trans_ratio", "peak_e_rot_ratio"] {
+            assert_eq!(r[c(k)], "", "{k} must be empty: {r:?}");
+        }
+    }
+    let t = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        t.contains(&format!("not observed (the free scene ended before t_obs; left out of the table): {}", rows.len())),
+        "{t}"
+    );
+    assert!(!t.contains("agreement"), "nothing observed, no agreement: {t}");
+    assert!(t.contains(&format!("verified {} design{}", rows.len(), if rows.len() == 1 { "" } else { "s" })), "{t}");
+    // the recording: no verdict on /verify, but free_end
+    let buf = std::fs::read(dir.join("verify.mcap")).unwrap();
+    let recs: Vec<serde_json::Value> = mcap::MessageStream::new(&buf)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == "/verify")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect();
+    assert_eq!(recs.len(), rows.len());
+    for v in &recs {
+        assert!(
+            v.get("moved").is_none()
+                && v.get("agrees").is_none()
+                && v["free_end"].as_str().is_some_and(|e| e != "t_obs"),
+            "{v}"
+        );
+    }
+
+    // an empty front (a problem no design can meet: stability within 1 ms): refused, naming
+    // the checkpoint the designs come from and why none is feasible, nothing written
+    let problem = dir.parent().unwrap().join("scene-cli-no-front.toml");
+    let text0 = std::fs::read_to_string(BOTTLE_FILE).unwrap();
+    assert!(text0.contains("t_max = 0.3 "));
+    std::fs::write(&problem, text0.replacen("t_max = 0.3 ", "t_max = 0.001 ", 1)).unwrap();
+    let none = crate::common::tiny_run("scene-cli-verify-no-front", &problem, 8, 1);
+    let o = run_gripopt(&["verify", &none.display().to_string()]);
+    assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+    assert!(
+        output_text(&o).contains("checkpoint.json") && output_text(&o).contains("nothing to verify"),
+        "{}",
+        output_text(&o)
+    );
+    assert!(!none.join("verify.csv").exists() && !none.join("verify.mcap").exists());
+}
+
+/// Origin: the third hostile pass over the CLI.
+#[test]
+fn verify_sample_beyond_memory_is_refused_before_the_lock() {
+    let d = crate::common::tiny_run("cli-outputs-verify-sample", Path::new(BOTTLE_FILE), 8, 2);
+    let ds = d.display().to_string();
+    for record in ["all", "none"] {
+        // the old code aborted allocating it (exit 134), leaving RUN/.lock behind
+        let o = run_gripopt(&["verify", &ds, "--sample", "100000000000", "--record", record]);
+        let t = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        assert!(t.contains("--sample") && t.contains("of memory") && t.contains("at most"), "{t}");
+        assert!(!d.join(".lock").exists(), "{t}");
+        assert!(!d.join("verify_sample.csv").exists());
+    }
+    let o = run_gripopt(&["verify", &ds, "--sample", "0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", output_text(&o));
+    // hidden: --help says nothing of it
+    let help = output_text(&run_gripopt(&["verify", "--help"]));
+    assert!(!help.contains("sample"), "{help}");
+}
+
+/// `verify --sample N` from the library: an N whose designs cannot fit in memory is refused
+/// before anything is drawn or written (the CLI checks it too, before the lock).
+/// Origin: hostile pass of session 31, run folders put together by hand.
+#[test]
+fn a_library_verify_sample_beyond_memory_is_refused() {
+    let dir = tmp("trust-sample");
+    let run = dir.join("run");
+    let mut spec = crate::common::bottle_spec(&run, 1, 5, 1);
+    spec.record = gripopt::record::RecordOptions::none();
+    optimise(&spec).unwrap();
+    let before = folder_bytes(&run);
+    let source = gripopt::run::VerifySource::Sample { n: usize::MAX / 2, seed: 1 };
+    let e = gripopt::run::verify(&run, source, None, false, &|_| {}, &|| {}).unwrap_err().to_string();
+    assert!(e.contains("--sample") && e.contains("needs about"), "{e}");
+    assert_eq!(folder_bytes(&run), before);
+}
+
+/// Item 12: verify.csv says which generation's front (and which checkpoint and problem) it
+/// checked; `show` says when it no longer matches the run.
+#[test]
+fn item12_verify_csv_names_the_generation_it_checked() {
+    let dir = tmp("i12-verify-generation");
+    let d = dir.display().to_string();
+    optimise(&crate::common::bottle_spec(&dir, 2, 16, 2)).unwrap();
+    let o = cli(&["verify", &d, "--record", "none"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = read(&dir.join("verify.csv"));
+    let run_line = v.lines().find(|l| l.starts_with("# run:")).unwrap_or_else(|| panic!("{v}"));
+    assert!(run_line.contains("generation 2") && run_line.contains("checkpoint sha256"), "{run_line}");
+    assert!(stdout(&cli(&["show", &d])).contains("verify.csv: generation 2"));
+    resume(&dir, Some(3), false, Some(2)).unwrap();
+    let s = stdout(&cli(&["show", &d]));
+    assert!(s.contains("verify.csv") && s.contains("generation 2") && s.contains("gripopt verify"), "{s}");
+}
+
+/// `show` said nothing (`"verify": null`, no warning) of a named pipe or folder where
+/// verify.csv stands: it now shows the run with a warning naming the file.
+/// Origin: hostile pass of session 34, files.
+#[test]
+fn show_warns_of_a_verify_csv_it_cannot_read() {
+    let d = scratch("show-verify");
+    let run = crate::common::tiny_run("hostile34-show-verify", Path::new(BOTTLE_FILE), 8, 1);
+    let csv = run.join("verify.csv");
+    let _ = std::fs::remove_file(&csv);
+    if !fifo(&csv) {
+        return;
+    }
+    let r = run.to_str().unwrap();
+    let o = run_limited(&d, &["show", r]);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("warning: not read:") && text.contains("verify.csv") && text.contains("named pipe"),
+        "{text}"
+    );
+    let o = run_limited(&d, &["show", r, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let warned = v["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("verify.csv"));
+    assert!(warned && v["verify"].is_null(), "{v}");
+    assert!(is_fifo(&csv), "left as it was");
+}
+
+fn verify_row(observed: bool) -> gripopt::run::VerifyRow {
+    use gripopt::sim::FreeEnd;
+    gripopt::run::VerifyRow {
+        id: 7,
+        design: crate::common::nominal(),
+        impact_ratio: Some(0.5),
+        e_trans_rot: Some((2e-3, 0.0)),
+        force_margin: f64::INFINITY,
+        stable: true,
+        predicted_moves: false,
+        max_displacement: 1e-4,
+        max_tilt_deg: 0.25,
+        peak_e: (1e-3, 2e-4),
+        moved: observed.then_some(false),
+        toppled: observed.then_some(false),
+        escaped: observed.then_some(false),
+        rim_contact: false,
+        end: if observed { FreeEnd::Observed } else { FreeEnd::StepBudget },
+        t_end: 0.1,
+    }
+}
+
+/// Origin: issue 21 (session 37), gripopt's own files read into types; older versions still load.
+#[test]
+fn verify_csv_columns_are_the_column_table() {
+    use gripopt::run::{verify_csv, VERIFY_COLUMNS};
+    let csv = verify_csv(&[verify_row(true), verify_row(false)], 0.0);
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let names: Vec<&str> = VERIFY_COLUMNS.iter().map(|c| c.0).collect();
+    assert_eq!(header, names, "the units table lists verify.csv's columns in order");
+    let cell = |line: &str, col: &str| {
+        let k = names.iter().position(|n| *n == col).unwrap();
+        line.split(',').nth(k).unwrap().to_string()
+    };
+    let (seen, unseen) = (lines.next().unwrap(), lines.next().unwrap());
+    assert_eq!(cell(seen, "free_end"), "t_obs");
+    assert_eq!(cell(unseen, "free_end"), "aborted: step budget exhausted", "the enum's words");
+    assert_eq!(cell(seen, "force_margin"), "inf", "the CSV writes every number");
+    // E_rot = 0: the rotational ratio is infinite, the translational 0.5
+    assert_eq!((cell(seen, "peak_e_trans_ratio").as_str(), cell(seen, "peak_e_rot_ratio").as_str()), ("0.5", "inf"));
+    for col in ["moved", "agrees", "peak_e_trans_ratio"] {
+        assert_eq!(cell(unseen, col), "", "{col}: not observed, an empty cell");
+    }
+}
+
+/// Origin: issue 21 (session 37), gripopt's own files read into types; older versions still load.
+#[test]
+fn a_verify_message_leaves_out_what_was_not_computed_and_its_schema_names_every_field() {
+    use gripopt::record::{verify_parameters, verify_schema, VerifyRecord, VerifyScenario, WindowStart};
+    let rec = |row: &gripopt::run::VerifyRow, scenario: Option<VerifyScenario>| VerifyRecord {
+        window: 1,
+        window_start: WindowStart { sec: 5, nsec: 0 },
+        window_start_s: 1.0,
+        epoch_s: 4,
+        id: row.id,
+        parameters: verify_parameters(&row.design),
+        x_off: 0.0,
+        measure: row.measure(),
+        t_end: row.t_end,
+        poses: 3,
+        scenario,
+    };
+    let json = |r: &VerifyRecord| -> serde_json::Map<String, serde_json::Value> {
+        let bytes = r.to_json();
+        let text = String::from_utf8(bytes).unwrap();
+        let keys: Vec<String> = serde_json::from_str::<serde_json::Map<_, _>>(&text).unwrap().keys().cloned().collect();
+        let mut sorted = keys.clone();
+        sorted.sort();
+        assert_eq!(keys, sorted, "keys written sorted");
+        serde_json::from_str(&text).unwrap()
+    };
+    let seen = json(&rec(&verify_row(true), None));
+    assert!(!seen.contains_key("force_margin"), "not finite: left out");
+    assert!(!seen.contains_key("peak_e_rot_ratio"), "not finite: left out");
+    assert_eq!(seen["peak_e_trans_ratio"], 0.5);
+    assert_eq!(seen["free_end"], "t_obs");
+    assert!(!seen.contains_key("scenario_object"));
+    let s = VerifyScenario { scenario_object: "can".into(), scenario_index: 2, height_offset: -0.004 };
+    let unseen = json(&rec(&verify_row(false), Some(s)));
+    for k in ["moved", "toppled", "escaped", "agrees", "peak_e_trans_ratio"] {
+        assert!(!unseen.contains_key(k), "{k}: not observed, left out");
+    }
+    assert_eq!((unseen["scenario_object"].as_str(), unseen["scenario_index"].as_u64()), (Some("can"), Some(2)));
+    // the schema names every field a message can have, and requires those every one has
+    let schema = verify_schema();
+    let props = schema["properties"].as_object().unwrap();
+    for k in seen.keys().chain(unseen.keys()) {
+        assert!(props.contains_key(k), "{k} is in the schema");
+    }
+    for k in schema["required"].as_array().unwrap() {
+        let k = k.as_str().unwrap();
+        assert!(seen.contains_key(k) && unseen.contains_key(k), "required {k} is in every message");
+    }
 }

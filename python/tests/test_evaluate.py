@@ -86,7 +86,7 @@ def test_the_full_record_equals_the_cli_json(problem, cli_json):
 def test_the_record_of_an_auto_problem_names_its_method(problem, cli_json, tmp_path):
     """`[solver] method = "auto"`: Problem.record, as `gripopt evaluate --json`, says which
     method did the simulation's work (`method`); stages 0-2 and a file naming radau5 have no
-    such key (docs/cli.md, Hostile pass 33); a file without the key runs the default, auto."""
+    such key (CHANGELOG.md, Hostile pass 33); a file without the key runs the default, auto."""
     path = tmp_path / "auto.toml"
     path.write_text(problem.toml.replace("\n[solver]\n", '\n[solver]\nmethod = "auto"\n', 1))
     auto = gripopt.Problem.load(path)

@@ -13,6 +13,7 @@ mod certify_stage;
 mod checkpoint;
 mod checkpoint_json;
 mod contents;
+mod differences;
 mod folder;
 mod grasp_plot;
 mod gripper;

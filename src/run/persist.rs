@@ -344,12 +344,15 @@ impl Observe<Nsga2State<GripperInfo>> for Persister {
     }
 }
 
+/// A written shard's index entry and seconds (None: nothing recorded), or its error.
+type ShardResult = Result<Option<(ShardEntry, f64)>>;
+
 /// A generation handed to the pool, waiting for its shard and its checkpoint's bytes
 /// before it is committed.
 struct Pending {
     generation: u64,
     /// None while the shard is being written (Some(Ok(None)): nothing to record).
-    shard: Option<Result<Option<(ShardEntry, f64)>>>,
+    shard: Option<ShardResult>,
     evaluations: u64,
     wall_s: f64,
     discards: Discards,
@@ -418,172 +421,36 @@ fn write_skipped_views(
     Ok(())
 }
 
+/// The persister thread: handle generations and the pool's reports until closed and
+/// drained, then stop (after waiting for every task still in the pool), keeping the first
+/// error for the optimiser.
 fn persist_loop(
     outputs: Option<OutputsObserver>,
     recorder: Option<Arc<Mutex<Recorder>>>,
     pool: rayon::ThreadPool,
     sp: CheckpointSpec,
     shared: SharedState,
-    mut hooks: PersistHooks,
+    hooks: PersistHooks,
 ) {
-    let max_pending = pool.current_num_threads() + 1;
-    let mut pending: VecDeque<Pending> = VecDeque::new();
-    let (mut last_views, mut stale_views): (Option<Instant>, Option<Nsga2State<GripperInfo>>) = (None, None);
-    let res = (|| -> Result<()> {
-        // skipped views are written once VIEWS_MIN_INTERVAL has passed since the last write,
-        // by the next generation or, if none comes by then, on their own
-        let views_due = |last: Option<Instant>, stale: bool| last.filter(|_| stale).map(|t| t + VIEWS_MIN_INTERVAL);
-        while let Some(next) =
-            next_msg(&shared, pending.len(), max_pending, views_due(last_views, stale_views.is_some()))
-        {
-            let msg = match next {
-                Next::Msg(msg) => msg,
-                Next::Views => {
-                    if let (Some(st), Some(o)) = (stale_views.take(), &outputs) {
-                        write_skipped_views(&st, o, &pool, &shared, &hooks)?;
-                    }
-                    last_views = Some(Instant::now());
-                    continue;
-                }
-            };
-            match msg {
-                Msg::Job(mut job) => {
-                    let g = job.state.generation;
-                    let t0 = Instant::now();
-                    let mut skipped = false;
-                    let archive: Option<Archive> = match &outputs {
-                        // in the persister's pool: the archive's hypervolume is measured in parallel
-                        Some(o) => {
-                            let ta = Instant::now();
-                            let a = pool.install(|| o.update_archive(&job.state));
-                            shared.0.lock().expect("persister lock").stats.archive_s += ta.elapsed().as_secs_f64();
-                            Some(a)
-                        }
-                        None => None,
-                    };
-                    // the shard's designs (with their trajectories) leave the state here
-                    let designs: Vec<Individual<GripperInfo>> = std::mem::take(&mut job.state.last_evaluated);
-                    if let Some(o) = &outputs {
-                        // the views were rewritten moments ago: a later generation (or the
-                        // deadline, or the end) rewrites them; a persister that is behind
-                        // still rewrites them every VIEWS_MIN_INTERVAL
-                        if last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
-                            skipped = true;
-                            stale_views = Some(job.state.clone());
-                        } else {
-                            hooks.check()?;
-                            let tv = Instant::now();
-                            let files = pool.install(|| o.write_views(&job.state))?;
-                            shared
-                                .0
-                                .lock()
-                                .expect("persister lock")
-                                .stats
-                                .add_views(tv.elapsed().as_secs_f64(), &files);
-                            last_views = Some(Instant::now());
-                            stale_views = None;
-                        }
-                    }
-                    let out_s = t0.elapsed().as_secs_f64();
-                    let task = recorder.as_ref().and_then(|r| r.lock().expect("recorder lock").task(g));
-                    let shard = match task {
-                        Some(task) => {
-                            let sh = shared.clone();
-                            let guard = hooks.guard.clone();
-                            spawn_counted(&pool, &shared, move || {
-                                let refs: Vec<&Individual<GripperInfo>> = designs.iter().collect();
-                                let result = guard.map_or(Ok(()), |g| g()).and_then(|_| task.write(&refs));
-                                drop(refs);
-                                drop(designs);
-                                let (m, cv) = &*sh;
-                                m.lock().expect("persister lock").inbox.push_back(Msg::Shard { generation: g, result });
-                                cv.notify_all();
-                            });
-                            None
-                        }
-                        None => Some(Ok(None)),
-                    };
-                    let mut s = shared.0.lock().expect("persister lock");
-                    s.stats.outputs_s += out_s;
-                    s.stats.views_skipped += skipped as u64;
-                    drop(s);
-                    // the checkpoint is serialised in the pool too; only its write is serial
-                    let (evaluations, discards) =
-                        (job.state.evaluations, archive.as_ref().map(|a| a.discards.clone()).unwrap_or_default());
-                    let (sh, spc, state, wall_s) = (shared.clone(), sp.clone(), job.state, job.wall_s);
-                    let run_id = hooks.run_id.clone();
-                    spawn_counted(&pool, &shared, move || {
-                        let t = Instant::now();
-                        let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s)
-                            .of_run(run_id, archive)
-                            .to_bytes_and_sha256(&spc.path);
-                        let (m, cv) = &*sh;
-                        m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint {
-                            generation: g,
-                            result,
-                            secs: t.elapsed().as_secs_f64(),
-                        });
-                        cv.notify_all();
-                    });
-                    pending.push_back(Pending {
-                        generation: g,
-                        shard,
-                        evaluations,
-                        wall_s,
-                        discards,
-                        checkpoint: None,
-                    });
-                }
-                Msg::Shard { generation, result } => {
-                    if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {
-                        p.shard = Some(result);
-                    }
-                }
-                Msg::Checkpoint { generation, result, secs } => {
-                    shared.0.lock().expect("persister lock").stats.checkpoint_pool_s += secs;
-                    if let Some(p) = pending.iter_mut().find(|p| p.generation == generation && p.checkpoint.is_none()) {
-                        p.checkpoint = Some(result);
-                    }
-                }
-            }
-            // commit, in generation order, every generation whose shard is durable and whose
-            // checkpoint is serialised
-            while pending.front().is_some_and(|p| p.shard.is_some() && p.checkpoint.is_some()) {
-                let p = pending.pop_front().expect("front");
-                let t = Instant::now();
-                let shard = p.shard.expect("checked")?;
-                // nothing of generation k is committed unless its checkpoint can follow
-                let (checkpoint, checkpoint_sha256) = p.checkpoint.expect("checked")?;
-                hooks.check()?;
-                if let (Some((entry, secs)), Some(r)) = (shard, &recorder) {
-                    let mut s = shared.0.lock().expect("persister lock");
-                    s.stats.record_s += secs;
-                    drop(s);
-                    r.lock().expect("recorder lock").commit(entry, secs)?;
-                }
-                // again right before the checkpoint: the recorder's commit takes a while
-                hooks.check()?;
-                write_atomic(&sp.path, &checkpoint)?;
-                if let Some(f) = hooks.on_commit.as_mut() {
-                    let (generation, evaluations, wall_s) = (p.generation, p.evaluations, p.wall_s);
-                    f(&Committed { generation, evaluations, wall_s, checkpoint_sha256, discards: p.discards })?;
-                }
-                let (m, cv) = &*shared;
-                let mut s = m.lock().expect("persister lock");
-                s.stats.checkpoint_s += t.elapsed().as_secs_f64();
-                s.done = p.generation;
-                s.stats.generations += 1;
-                cv.notify_all();
-            }
-        }
-        // the views of the last generation, if they were skipped
-        let final_views = shared.0.lock().expect("persister lock").final_views;
-        if let (Some(st), Some(o), true) = (stale_views.take(), &outputs, final_views) {
-            write_skipped_views(&st, o, &pool, &shared, &hooks)?;
-        }
-        Ok(())
-    })();
-    let (m, cv) = &*shared;
+    let mut worker = Worker {
+        outputs,
+        recorder,
+        pool,
+        sp,
+        shared: shared.clone(),
+        hooks,
+        pending: VecDeque::new(),
+        last_views: None,
+        stale_views: None,
+    };
+    let res = worker.run();
+    stop(&shared, res);
+}
+
+/// Mark the thread stopped once every task it handed to its pool has reported, keeping
+/// `res`'s error.
+fn stop(shared: &SharedState, res: Result<()>) {
+    let (m, cv) = &**shared;
     let mut s = m.lock().expect("persister lock");
     // after an error, shards and checkpoints of later generations may still be in the pool:
     // wait for them (their results are dropped), so that none writes after the run returned
@@ -596,4 +463,203 @@ fn persist_loop(
     }
     s.stopped = true;
     cv.notify_all();
+}
+
+/// The persister thread's state: what it writes with, and the generations in hand.
+struct Worker {
+    outputs: Option<OutputsObserver>,
+    recorder: Option<Arc<Mutex<Recorder>>>,
+    pool: rayon::ThreadPool,
+    sp: CheckpointSpec,
+    shared: SharedState,
+    hooks: PersistHooks,
+    /// Generations handed to the pool, in order, until they are committed.
+    pending: VecDeque<Pending>,
+    /// When the CSV views were last written.
+    last_views: Option<Instant>,
+    /// The latest generation whose views were skipped (written later).
+    stale_views: Option<Nsga2State<GripperInfo>>,
+}
+
+impl Worker {
+    /// Handle messages until closed and drained; then the views of the last generation, if
+    /// they were skipped and the caller does not write them.
+    fn run(&mut self) -> Result<()> {
+        let max_pending = self.pool.current_num_threads() + 1;
+        while let Some(next) = next_msg(&self.shared, self.pending.len(), max_pending, self.views_due()) {
+            match next {
+                Next::Views => {
+                    self.write_stale_views()?;
+                    continue;
+                }
+                Next::Msg(Msg::Job(job)) => self.take_generation(*job)?,
+                Next::Msg(Msg::Shard { generation, result }) => {
+                    if let Some(p) = self.pending.iter_mut().find(|p| p.generation == generation && p.shard.is_none()) {
+                        p.shard = Some(result);
+                    }
+                }
+                Next::Msg(Msg::Checkpoint { generation, result, secs }) => {
+                    self.shared.0.lock().expect("persister lock").stats.checkpoint_pool_s += secs;
+                    let p = self.pending.iter_mut().find(|p| p.generation == generation && p.checkpoint.is_none());
+                    if let Some(p) = p {
+                        p.checkpoint = Some(result);
+                    }
+                }
+            }
+            self.commit_ready()?;
+        }
+        let final_views = self.shared.0.lock().expect("persister lock").final_views;
+        if let (Some(st), Some(o), true) = (self.stale_views.take(), &self.outputs, final_views) {
+            write_skipped_views(&st, o, &self.pool, &self.shared, &self.hooks)?;
+        }
+        Ok(())
+    }
+
+    /// Skipped views are written once VIEWS_MIN_INTERVAL has passed since the last write, by
+    /// the next generation or, if none comes by then, on their own: when that is.
+    fn views_due(&self) -> Option<Instant> {
+        self.last_views.filter(|_| self.stale_views.is_some()).map(|t| t + VIEWS_MIN_INTERVAL)
+    }
+
+    /// The views' deadline passed with nothing to handle: write the skipped views now.
+    fn write_stale_views(&mut self) -> Result<()> {
+        if let (Some(st), Some(o)) = (self.stale_views.take(), &self.outputs) {
+            write_skipped_views(&st, o, &self.pool, &self.shared, &self.hooks)?;
+        }
+        self.last_views = Some(Instant::now());
+        Ok(())
+    }
+
+    /// Generation `job`: update the archive and the views on this thread, hand its shard and
+    /// its checkpoint to the pool, and keep it pending until both are done.
+    fn take_generation(&mut self, mut job: Job) -> Result<()> {
+        let g = job.state.generation;
+        let t0 = Instant::now();
+        let archive = self.update_archive(&job.state);
+        // the shard's designs (with their trajectories) leave the state here
+        let designs: Vec<Individual<GripperInfo>> = std::mem::take(&mut job.state.last_evaluated);
+        let skipped = self.write_views_unless_recent(&job.state)?;
+        let out_s = t0.elapsed().as_secs_f64();
+        let shard = self.spawn_shard(g, designs);
+        let mut s = self.shared.0.lock().expect("persister lock");
+        s.stats.outputs_s += out_s;
+        s.stats.views_skipped += skipped as u64;
+        drop(s);
+        let (evaluations, discards) =
+            (job.state.evaluations, archive.as_ref().map(|a| a.discards.clone()).unwrap_or_default());
+        let wall_s = job.wall_s;
+        self.spawn_checkpoint(g, job.state, wall_s, archive);
+        self.pending.push_back(Pending { generation: g, shard, evaluations, wall_s, discards, checkpoint: None });
+        Ok(())
+    }
+
+    /// The archive updated with `state` (None without an outputs observer), in the
+    /// persister's pool: its hypervolume is measured in parallel.
+    fn update_archive(&self, state: &Nsga2State<GripperInfo>) -> Option<Archive> {
+        let o = self.outputs.as_ref()?;
+        let ta = Instant::now();
+        let a = self.pool.install(|| o.update_archive(state));
+        self.shared.0.lock().expect("persister lock").stats.archive_s += ta.elapsed().as_secs_f64();
+        Some(a)
+    }
+
+    /// Rewrite the views of `state`, unless they were rewritten moments ago (true: skipped):
+    /// a later generation (or the deadline, or the end) rewrites them; a persister that is
+    /// behind still rewrites them every VIEWS_MIN_INTERVAL.
+    fn write_views_unless_recent(&mut self, state: &Nsga2State<GripperInfo>) -> Result<bool> {
+        let Some(o) = &self.outputs else {
+            return Ok(false);
+        };
+        if self.last_views.is_some_and(|t: Instant| t.elapsed() < VIEWS_MIN_INTERVAL) {
+            self.stale_views = Some(state.clone());
+            return Ok(true);
+        }
+        self.hooks.check()?;
+        let tv = Instant::now();
+        let files = self.pool.install(|| o.write_views(state))?;
+        self.shared.0.lock().expect("persister lock").stats.add_views(tv.elapsed().as_secs_f64(), &files);
+        self.last_views = Some(Instant::now());
+        self.stale_views = None;
+        Ok(false)
+    }
+
+    /// Hand generation `g`'s shard to the pool (None: it reports when written), or
+    /// Some(Ok(None)) when nothing is recorded.
+    fn spawn_shard(&self, g: u64, designs: Vec<Individual<GripperInfo>>) -> Option<ShardResult> {
+        let task = self.recorder.as_ref().and_then(|r| r.lock().expect("recorder lock").task(g));
+        let Some(task) = task else {
+            return Some(Ok(None));
+        };
+        let sh = self.shared.clone();
+        let guard = self.hooks.guard.clone();
+        spawn_counted(&self.pool, &self.shared, move || {
+            let refs: Vec<&Individual<GripperInfo>> = designs.iter().collect();
+            let result = guard.map_or(Ok(()), |g| g()).and_then(|_| task.write(&refs));
+            drop(refs);
+            drop(designs);
+            let (m, cv) = &*sh;
+            m.lock().expect("persister lock").inbox.push_back(Msg::Shard { generation: g, result });
+            cv.notify_all();
+        });
+        None
+    }
+
+    /// Hand generation `g`'s checkpoint to the pool to be serialised (only its write is
+    /// serial); it reports its bytes.
+    fn spawn_checkpoint(&self, g: u64, state: Nsga2State<GripperInfo>, wall_s: f64, archive: Option<Archive>) {
+        let (sh, spc) = (self.shared.clone(), self.sp.clone());
+        let run_id = self.hooks.run_id.clone();
+        spawn_counted(&self.pool, &self.shared, move || {
+            let t = Instant::now();
+            let result = Checkpoint::new(spc.problem_hash, spc.settings, spc.options, state, wall_s)
+                .of_run(run_id, archive)
+                .to_bytes_and_sha256(&spc.path);
+            let (m, cv) = &*sh;
+            m.lock().expect("persister lock").inbox.push_back(Msg::Checkpoint {
+                generation: g,
+                result,
+                secs: t.elapsed().as_secs_f64(),
+            });
+            cv.notify_all();
+        });
+    }
+
+    /// Commit, in generation order, every generation whose shard is durable and whose
+    /// checkpoint is serialised.
+    fn commit_ready(&mut self) -> Result<()> {
+        while self.pending.front().is_some_and(|p| p.shard.is_some() && p.checkpoint.is_some()) {
+            let p = self.pending.pop_front().expect("front");
+            self.commit(p)?;
+        }
+        Ok(())
+    }
+
+    /// Generation `p`: its index line, then its checkpoint, then the caller's `on_commit`.
+    fn commit(&mut self, p: Pending) -> Result<()> {
+        let t = Instant::now();
+        let shard = p.shard.expect("checked")?;
+        // nothing of generation k is committed unless its checkpoint can follow
+        let (checkpoint, checkpoint_sha256) = p.checkpoint.expect("checked")?;
+        self.hooks.check()?;
+        if let (Some((entry, secs)), Some(r)) = (shard, &self.recorder) {
+            let mut s = self.shared.0.lock().expect("persister lock");
+            s.stats.record_s += secs;
+            drop(s);
+            r.lock().expect("recorder lock").commit(entry, secs)?;
+        }
+        // again right before the checkpoint: the recorder's commit takes a while
+        self.hooks.check()?;
+        write_atomic(&self.sp.path, &checkpoint)?;
+        if let Some(f) = self.hooks.on_commit.as_mut() {
+            let (generation, evaluations, wall_s) = (p.generation, p.evaluations, p.wall_s);
+            f(&Committed { generation, evaluations, wall_s, checkpoint_sha256, discards: p.discards })?;
+        }
+        let (m, cv) = &*self.shared;
+        let mut s = m.lock().expect("persister lock");
+        s.stats.checkpoint_s += t.elapsed().as_secs_f64();
+        s.done = p.generation;
+        s.stats.generations += 1;
+        cv.notify_all();
+        Ok(())
+    }
 }

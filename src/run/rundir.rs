@@ -11,6 +11,7 @@
 use super::archive::{Archive, Discards};
 use super::checkpoint::{field_differences, settings_hash, sha256_hex, Checkpoint, RunOptions};
 use super::contents::Scan;
+use super::differences::{original_problem, settings_differences};
 use super::gripper::{GripperInfo, GripperProblem};
 use super::info::{new_run_id, write_json, Resume, RunInfo, RunStatus, RUN_FILE};
 use super::lock::RunLock;
@@ -240,8 +241,9 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     let state = Nsga2State::new().with_max_generations(spec.generations);
     let (survival, variation) = hooks.algorithm.unwrap_or_default();
     let (survival, variation) = (Some(survival), Some(variation));
-    let start = Start { recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
-    drive(gp, settings, state, info, &spec.out, spec.threads, hooks, lock, start)
+    let start =
+        Start { settings, state, recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
+    drive(gp, info, &spec.out, spec.threads, hooks, lock, start)
 }
 
 /// Continue a stopped, killed or finished run; `generations` is the new total.
@@ -425,8 +427,9 @@ pub fn resume_with(
     let state = cp.state.with_max_generations(total);
     // the algorithm the run started with (absent: NSGA-II's, a run from before issue 42)
     let (survival, variation) = (cp.options.survival, cp.options.variation);
-    let start = Start { recorder, archive, notes, wall_before: cp.wall_s, survival, variation };
-    drive(gp, cp.settings, state, info, dir, threads, hooks, lock, start)
+    let start =
+        Start { settings: cp.settings, state, recorder, archive, notes, wall_before: cp.wall_s, survival, variation };
+    drive(gp, info, dir, threads, hooks, lock, start)
 }
 
 /// The recorder of run `info` in `out` (None when recording is off), recovering the
@@ -439,8 +442,11 @@ fn open_recorder(out: &Path, gp: &GripperProblem, info: &RunInfo, completed: u64
     Recorder::open(out, gp.problem.clone(), meta, info.recording, completed).map(Some)
 }
 
-/// What `drive` starts from besides the optimiser's state.
+/// What `drive` starts from: the optimiser's settings and state, the recorder, the archive,
+/// the notes to tell and the wall seconds of earlier processes.
 struct Start {
+    settings: Nsga2Settings,
+    state: Nsga2State<GripperInfo>,
     recorder: Option<Recorder>,
     archive: Archive,
     notes: Vec<String>,
@@ -451,11 +457,11 @@ struct Start {
     variation: Option<Variation>,
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Run the optimiser from `begin` in the locked folder `out`: the persister writes each
+/// generation (outputs, shard, checkpoint, run.json) while the next evaluates; then the final
+/// outputs, or run.json's `interrupted` and the error that stopped it.
 fn drive(
     gp: GripperProblem,
-    settings: Nsga2Settings,
-    state: Nsga2State<GripperInfo>,
     info: RunInfo,
     out: &Path,
     threads: Option<usize>,
@@ -464,65 +470,19 @@ fn drive(
     begin: Start,
 ) -> Result<RunSummary> {
     let progress = ProgressObserver(Arc::new(Mutex::new(hooks.progress.unwrap_or_else(|| Box::new(())))));
-    let note = |m: &str| progress.0.lock().expect("progress lock").note(m);
     let start = Instant::now();
     let pool = pool(threads)?;
-    let wall_before = begin.wall_before;
-    let mut info = info;
+    let (mut gp, mut info) = (gp, info);
     info.threads = pool.current_num_threads();
-    let problem_hash = sha256_hex(gp.problem.source_text.as_bytes());
-    let (survival, variation) = (begin.survival, begin.variation);
-    let options = RunOptions { survival, variation, ..RunOptions::of(&gp.problem.solver, &info.recording) };
-    let mut gp = gp;
     if info.recording.enabled {
         gp.recording = info.recording;
     }
-    for n in &begin.notes {
-        note(n);
-    }
-    let recorder = begin.recorder.map(|r| {
-        for w in &r.warnings {
-            note(&format!("warning: {w}"));
-        }
-        Arc::new(Mutex::new(r))
-    });
-    if let Some(n) = super::limits::threads_note(settings.pop_size, info.threads) {
-        note(&n);
-    }
-    let lock = Arc::new(lock);
-    let archive = Arc::new(Mutex::new(begin.archive));
-    let outputs = OutputsObserver { out: out.to_path_buf(), settings: settings.clone(), archive: archive.clone() };
-    // outputs and archive, shard k, then checkpoint k, in that order on a background thread
-    // while k+1 evaluates (src/run/persist.rs); run.json follows each checkpoint
-    let ckpt = CheckpointSpec {
-        path: out.join("checkpoint.json"),
-        problem_hash,
-        settings: settings.clone(),
-        options,
-        wall_before,
-        start,
-    };
-    let shared = Arc::new(Mutex::new(info.clone()));
-    let (run_file, sh, commit_lock) = (out.join(RUN_FILE), shared.clone(), lock.clone());
-    let on_commit = move |c: &Committed| -> Result<()> {
-        // the folder may have been moved since the checkpoint was written: never write
-        // run.json into the folder that replaced it
-        commit_lock.check()?;
-        let mut i = sh.lock().expect("run.json");
-        i.completed_generations = c.generation;
-        i.evaluations = c.evaluations;
-        i.wall_s = c.wall_s;
-        i.checkpoint_sha256 = Some(c.checkpoint_sha256.clone());
-        i.discards = c.discards.clone();
-        write_json(&run_file, &*i)
-    };
-    let guard_lock = lock.clone();
-    let persist_hooks = PersistHooks {
-        run_id: info.run_id.clone(),
-        guard: Some(Arc::new(move || guard_lock.check())),
-        on_commit: Some(Box::new(on_commit)),
-    };
-    let persister = Persister::start_with(Some(outputs), recorder.clone(), ckpt, info.threads, persist_hooks)?;
+    let Start { settings, state, recorder, archive, notes, wall_before, survival, variation } = begin;
+    let options = RunOptions { survival, variation, ..RunOptions::of(&gp.problem.solver, &info.recording) };
+    let recorder = tell_notes(&progress, &notes, recorder, settings.pop_size, info.threads);
+    let archive = Arc::new(Mutex::new(archive));
+    let d = Driver { out, lock: Arc::new(lock), start, wall_before, archive, recorder };
+    let (persister, committed) = d.start_persister(&gp, &settings, options, &info)?;
     let (pers2, prog2) = (persister.clone(), progress.clone());
     let evaluator = hooks.evaluator.unwrap_or_else(|| gp.default_evaluator());
     let mut solver = Nsga2::with_evaluator(settings, evaluator)
@@ -542,67 +502,174 @@ fn drive(
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
     };
-    // the committed generations, as run.json has them
-    let mut info = shared.lock().expect("run.json").clone();
-    if let Some(r) = &recorder {
-        let r = r.lock().expect("recorder");
-        info.recording_bytes += r.bytes;
-        info.recording_s += r.seconds;
-    }
+    let info = d.committed_info(&committed);
     // the folder moved away or replaced: nothing more is written at its path
-    lock.check()?;
-    let (gp, st) = match result {
-        Ok(r) => r,
-        Err(e) => {
-            info.status = RunStatus::Interrupted;
-            info.wall_s = wall_before + start.elapsed().as_secs_f64();
-            let _ = write_json(&out.join(RUN_FILE), &info);
-            return Err(if out.join("checkpoint.json").exists() {
-                Error::Stopped { path: out.to_path_buf(), source: Box::new(e) }
-            } else {
-                Error::StoppedBeforeCheckpoint { path: out.to_path_buf(), source: Box::new(e) }
-            });
+    d.lock.check()?;
+    match result {
+        Ok((gp, st)) => d.finish(&gp, &st, info, &pool),
+        Err(e) => Err(d.stopped(info, e)),
+    }
+}
+
+/// Tell the run's notes, the recorder's warnings and the threads note (in that order); the
+/// recorder, shared with the persister.
+fn tell_notes(
+    progress: &ProgressObserver,
+    notes: &[String],
+    recorder: Option<Recorder>,
+    pop_size: usize,
+    threads: usize,
+) -> Option<Arc<Mutex<Recorder>>> {
+    let note = |m: &str| progress.0.lock().expect("progress lock").note(m);
+    for n in notes {
+        note(n);
+    }
+    let recorder = recorder.map(|r| {
+        for w in &r.warnings {
+            note(&format!("warning: {w}"));
         }
-    };
-    // a stop asked for once every requested generation is done (ctrl-c during a resume
-    // with nothing left to do, or after the last generation) interrupted nothing
-    let interrupted = matches!(st.get_termination_reason(), Some(argmin::core::TerminationReason::Interrupt))
-        && st.generation < st.max_generations;
-    info.completed_generations = st.generation;
-    info.evaluations = st.evaluations;
-    info.wall_s = wall_before + start.elapsed().as_secs_f64();
-    info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
-    let archive = archive.lock().expect("archive").clone();
-    info.discards = archive.discards.clone();
-    write_outputs(out, &gp, &st, &archive)?;
-    let search = super::archive::reported_front(&st, Some(&archive));
-    // a robust run that certifies reports the certified front (its stage after the search)
-    let certification =
-        if interrupted { None } else { pool.install(|| super::certify_run(out, &gp, &st, &archive, &search))? };
-    let front: Vec<u64> = match &certification {
-        Some(c) => c.front.clone(),
-        None => search.iter().map(|p| p.id).collect(),
-    };
-    let status = RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
-    crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
-    lock.check()?;
-    write_json(&out.join(RUN_FILE), &info)?;
-    Ok(RunSummary {
-        out: out.to_path_buf(),
-        generations: st.generation,
-        evaluations: st.evaluations,
-        front_size: front.len(),
-        feasible: st.population.iter().filter(|p| p.eval.cv.is_feasible()).count(),
-        hv: if archive.front.is_some() { archive.front_hv_history.last() } else { st.hv_history.last() }
-            .copied()
-            .unwrap_or(f64::NAN),
-        archive_size: archive.members.len(),
-        archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
-        interrupted,
-        wall_s: start.elapsed().as_secs_f64(),
-        discards: archive.discards,
-        certification,
-    })
+        Arc::new(Mutex::new(r))
+    });
+    if let Some(n) = super::limits::threads_note(pop_size, threads) {
+        note(&n);
+    }
+    recorder
+}
+
+/// A run being driven: its folder and lock, its clocks, and what the persister shares.
+struct Driver<'a> {
+    out: &'a Path,
+    lock: Arc<RunLock>,
+    /// This process's start.
+    start: Instant,
+    /// Wall seconds of earlier processes.
+    wall_before: f64,
+    archive: Arc<Mutex<Archive>>,
+    recorder: Option<Arc<Mutex<Recorder>>>,
+}
+
+impl Driver<'_> {
+    /// The persister (outputs and archive, shard k, then checkpoint k, in that order on a
+    /// background thread while k+1 evaluates: src/run/persist.rs), and run.json as its last
+    /// commit left it (run.json follows each checkpoint).
+    fn start_persister(
+        &self,
+        gp: &GripperProblem,
+        settings: &Nsga2Settings,
+        options: RunOptions,
+        info: &RunInfo,
+    ) -> Result<(Persister, Arc<Mutex<RunInfo>>)> {
+        let out = self.out;
+        let outputs =
+            OutputsObserver { out: out.to_path_buf(), settings: settings.clone(), archive: self.archive.clone() };
+        let ckpt = CheckpointSpec {
+            path: out.join("checkpoint.json"),
+            problem_hash: sha256_hex(gp.problem.source_text.as_bytes()),
+            settings: settings.clone(),
+            options,
+            wall_before: self.wall_before,
+            start: self.start,
+        };
+        let shared = Arc::new(Mutex::new(info.clone()));
+        let (run_file, sh, commit_lock) = (out.join(RUN_FILE), shared.clone(), self.lock.clone());
+        let on_commit = move |c: &Committed| -> Result<()> {
+            // the folder may have been moved since the checkpoint was written: never write
+            // run.json into the folder that replaced it
+            commit_lock.check()?;
+            let mut i = sh.lock().expect("run.json");
+            i.completed_generations = c.generation;
+            i.evaluations = c.evaluations;
+            i.wall_s = c.wall_s;
+            i.checkpoint_sha256 = Some(c.checkpoint_sha256.clone());
+            i.discards = c.discards.clone();
+            write_json(&run_file, &*i)
+        };
+        let guard_lock = self.lock.clone();
+        let persist_hooks = PersistHooks {
+            run_id: info.run_id.clone(),
+            guard: Some(Arc::new(move || guard_lock.check())),
+            on_commit: Some(Box::new(on_commit)),
+        };
+        let persister = Persister::start_with(Some(outputs), self.recorder.clone(), ckpt, info.threads, persist_hooks)?;
+        Ok((persister, shared))
+    }
+
+    /// run.json of the committed generations, with this process's recording counters added.
+    fn committed_info(&self, committed: &Mutex<RunInfo>) -> RunInfo {
+        let mut info = committed.lock().expect("run.json").clone();
+        if let Some(r) = &self.recorder {
+            let r = r.lock().expect("recorder");
+            info.recording_bytes += r.bytes;
+            info.recording_s += r.seconds;
+        }
+        info
+    }
+
+    /// A run stopped by `e`: run.json says `interrupted`; the error says whether a
+    /// checkpoint resumes it.
+    fn stopped(&self, mut info: RunInfo, e: Error) -> Error {
+        let out = self.out;
+        info.status = RunStatus::Interrupted;
+        info.wall_s = self.wall_before + self.start.elapsed().as_secs_f64();
+        let _ = write_json(&out.join(RUN_FILE), &info);
+        if out.join("checkpoint.json").exists() {
+            Error::Stopped { path: out.to_path_buf(), source: Box::new(e) }
+        } else {
+            Error::StoppedBeforeCheckpoint { path: out.to_path_buf(), source: Box::new(e) }
+        }
+    }
+
+    /// The final outputs of the state `st` (tables, plots, front.mcap, run.json) and the
+    /// run's summary.
+    fn finish(
+        &self,
+        gp: &GripperProblem,
+        st: &Nsga2State<GripperInfo>,
+        mut info: RunInfo,
+        pool: &rayon::ThreadPool,
+    ) -> Result<RunSummary> {
+        let out = self.out;
+        // a stop asked for once every requested generation is done (ctrl-c during a resume
+        // with nothing left to do, or after the last generation) interrupted nothing
+        let interrupted = matches!(st.get_termination_reason(), Some(argmin::core::TerminationReason::Interrupt))
+            && st.generation < st.max_generations;
+        info.completed_generations = st.generation;
+        info.evaluations = st.evaluations;
+        info.wall_s = self.wall_before + self.start.elapsed().as_secs_f64();
+        info.status = if interrupted { RunStatus::Interrupted } else { RunStatus::Finished };
+        let archive = self.archive.lock().expect("archive").clone();
+        info.discards = archive.discards.clone();
+        write_outputs(out, gp, st, &archive)?;
+        let search = super::archive::reported_front(st, Some(&archive));
+        // a robust run that certifies reports the certified front (its stage after the search)
+        let certification =
+            if interrupted { None } else { pool.install(|| super::certify_run(out, gp, st, &archive, &search))? };
+        let front: Vec<u64> = match &certification {
+            Some(c) => c.front.clone(),
+            None => search.iter().map(|p| p.id).collect(),
+        };
+        let status =
+            RunMetadata { status: Some(format!("{:?}", info.status).to_lowercase()), ..RunMetadata::default() };
+        crate::record::write_front(out, &info.recording, &front, st.generation, &status)?;
+        self.lock.check()?;
+        write_json(&out.join(RUN_FILE), &info)?;
+        Ok(RunSummary {
+            out: out.to_path_buf(),
+            generations: st.generation,
+            evaluations: st.evaluations,
+            front_size: front.len(),
+            feasible: st.population.iter().filter(|p| p.eval.cv.is_feasible()).count(),
+            hv: if archive.front.is_some() { archive.front_hv_history.last() } else { st.hv_history.last() }
+                .copied()
+                .unwrap_or(f64::NAN),
+            archive_size: archive.members.len(),
+            archive_hv: archive.hv_history.last().copied().unwrap_or(f64::NAN),
+            interrupted,
+            wall_s: self.start.elapsed().as_secs_f64(),
+            discards: archive.discards,
+            certification,
+        })
+    }
 }
 
 /// Metadata written into every shard of the recording: the run (its id, problem and the
@@ -639,53 +706,4 @@ fn refuse_run_inside_run(out: &Path) -> Result<()> {
         }),
         None => Ok(()),
     }
-}
-
-/// The problem file a run started with, when it is still there (else the run uses its copy).
-fn original_problem(info: &RunInfo) -> Option<PathBuf> {
-    info.problem_path.is_absolute().then(|| info.problem_path.clone()).filter(|p| p.exists())
-}
-
-/// Why a checkpoint's `settings` or `options` are not the run's: each field that differs,
-/// with the checkpoint's value and the run's (run.json's settings and recording, the
-/// problem file's `[solver]` table), or, when none does, its `settings_hash`.
-fn settings_differences(cp: &Checkpoint<GripperInfo>, info: &RunInfo, dir: &Path) -> Vec<String> {
-    let value = |s: &Nsga2Settings| serde_json::to_value(s).unwrap_or_default();
-    let mut found = field_differences("settings", &value(&cp.settings), &value(&info.settings), &|_| RUN_FILE.into());
-    let problem_path = original_problem(info).unwrap_or_else(|| dir.join("problem.toml"));
-    // a checkpoint naming no method ran RADAU5 (a problem without `solver.method` of before
-    // session 38); one naming a method is compared with the file's (or the default)
-    let legacy = |p: Problem| if cp.options.method.is_none() { p.with_run_method(None) } else { p };
-    if let Ok(problem) = Problem::load(&problem_path).map(legacy) {
-        let changed = sha256_hex(problem.source_text.as_bytes()) != cp.problem_hash;
-        let file = format!("{}{}", problem_path.display(), if changed { ", changed since the checkpoint" } else { "" });
-        let source = |f: &str| match f {
-            f if f.starts_with("options.recording") => RUN_FILE.to_string(),
-            "options.pipeline" => "this gripopt".to_string(),
-            _ => file.clone(),
-        };
-        // the algorithm is the run's own (its first checkpoint's), not the problem file's
-        let (survival, variation) = (cp.options.survival, cp.options.variation);
-        let expected = RunOptions { survival, variation, ..RunOptions::of(&problem.solver, &info.recording) };
-        // the run's options leave out the default method (RADAU5): name it beside a
-        // checkpoint's `method`
-        let mut named = expected.clone();
-        if cp.options.method.is_some() {
-            named.method.get_or_insert(problem.solver.method);
-        }
-        let ours = cp.options.to_value();
-        let mut options = field_differences("options", &ours, &named.to_value(), &source);
-        if options.is_empty() {
-            options = field_differences("options", &ours, &expected.to_value(), &source);
-        }
-        found.extend(options);
-    }
-    if found.is_empty() {
-        let hash = settings_hash(&cp.settings, &cp.options);
-        found.push(format!(
-            "field `settings_hash` {:?} is not the hash of its fields `settings` and `options` ({:?})",
-            cp.settings_hash, hash
-        ));
-    }
-    found
 }

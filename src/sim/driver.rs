@@ -40,50 +40,19 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
     sink: &mut K,
 ) -> Run<N, Sc::Eval> {
     let mut t = 0.0;
-    let mut y = scene.initial_state();
-    let mut run =
-        Run { end: End::Undefined, t: 0.0, y, last: None, events: 0, stats: Stats::default(), locate_evals: 0 };
-    let Some(mut ev) = scene.evaluate(&y) else {
+    let mut run = Run {
+        end: End::Undefined,
+        t: 0.0,
+        y: scene.initial_state(),
+        last: None,
+        events: 0,
+        stats: Stats::default(),
+        locate_evals: 0,
+    };
+    let Some(Begun { mut y, mut ev, mut g, mut search }) = begin(scene, &mut run, sink) else {
         run.stats = stepper.stats();
         return run;
     };
-    let mut g = scene.event_values(&y, &ev);
-    if !scene.begin(&y, &ev, &g) {
-        run.end = End::Declined;
-        run.stats = stepper.stats();
-        return run;
-    }
-    // `begin` may set contact memories (the free scene's ground points, pre-sunk at rest, are
-    // in contact from the start): the initial derivative, event values and sample are those
-    // of the state as it begins, as after an event's response
-    let Some(ev0) = scene.evaluate(&y) else {
-        run.stats = stepper.stats();
-        return run;
-    };
-    ev = ev0;
-    g = scene.event_values(&y, &ev);
-    let mut search = EventSearch::new(scene.events());
-    // a contact that starts past δ = 0 within `begin`'s allowance has its onset at t = 0⁺
-    // (MODEL.md §8.7), for the reason `stranded_onsets` gives
-    let start = if any_stranded(scene, &search, &g) {
-        stranded_onsets(scene, &search, t, &y, &mut ev, &mut g, &mut run.events, sink)
-    } else {
-        Ok(Response { restart: false, stop: false })
-    };
-    match start {
-        Ok(r) if !r.stop => {}
-        Ok(_) => {
-            run.end = End::Stopped;
-            run.last = Some(ev);
-            run.stats = stepper.stats();
-            return run;
-        }
-        Err(end) => {
-            run.end = end;
-            run.stats = stepper.stats();
-            return run;
-        }
-    }
     let mut fy = scene.derivative(&y, &ev);
     let record = sink.wants_samples();
     let mut grid_next = 0.0;
@@ -130,13 +99,7 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
         let t_stop = best.map(|b| b.0).unwrap_or(acc.t);
         if record {
             if let Some(dt) = ctl.grid_dt {
-                while grid_next <= t_stop {
-                    let yg = interp(grid_next);
-                    if let Some(evg) = scene.evaluate(&yg) {
-                        scene.sample(Point::Grid, grid_next, &yg, &evg, sink);
-                    }
-                    grid_next += dt;
-                }
+                grid_samples(scene, &interp, &mut grid_next, dt, t_stop, sink);
             }
         }
         let Some((te, k)) = best else {
@@ -195,6 +158,74 @@ pub fn drive<const N: usize, const E: usize, Sc: Scene<N, E>, St: Stepper<N>, K:
     run.stats = stepper.stats();
     run.locate_evals = search.evals;
     run
+}
+
+/// Where the step loop starts: the state as the scene begins, its evaluation and event
+/// values, and the event search over the scene's events.
+struct Begun<const N: usize, const E: usize, Ev> {
+    y: SVector<f64, N>,
+    ev: Ev,
+    g: EventValues<E>,
+    search: EventSearch<E>,
+}
+
+/// Begin the run at `run.y` (the initial state): the scene's `begin`, then the state as it
+/// begins and, for a contact that starts past δ = 0 within `begin`'s allowance, its onset at
+/// t = 0⁺ (MODEL.md §8.7, for the reason [`stranded_onsets`] gives). None: the run ended
+/// before its first step (`run.end`, and `run.last` when the scene stopped it, set).
+fn begin<const N: usize, const E: usize, Sc: Scene<N, E>, K: Sink + ?Sized>(
+    scene: &mut Sc,
+    run: &mut Run<N, Sc::Eval>,
+    sink: &mut K,
+) -> Option<Begun<N, E, Sc::Eval>> {
+    let y = run.y;
+    let ev = scene.evaluate(&y)?;
+    let g = scene.event_values(&y, &ev);
+    if !scene.begin(&y, &ev, &g) {
+        run.end = End::Declined;
+        return None;
+    }
+    // `begin` may set contact memories (the free scene's ground points, pre-sunk at rest, are
+    // in contact from the start): the initial derivative, event values and sample are those
+    // of the state as it begins, as after an event's response
+    let mut ev = scene.evaluate(&y)?;
+    let mut g = scene.event_values(&y, &ev);
+    let search = EventSearch::new(scene.events());
+    if any_stranded(scene, &search, &g) {
+        match stranded_onsets(scene, &search, 0.0, &y, &mut ev, &mut g, &mut run.events, sink) {
+            Ok(r) if !r.stop => {}
+            Ok(_) => {
+                run.end = End::Stopped;
+                run.last = Some(ev);
+                return None;
+            }
+            Err(end) => {
+                run.end = end;
+                return None;
+            }
+        }
+    }
+    Some(Begun { y, ev, g, search })
+}
+
+/// The uniform grid's samples from `*next` up to `t_stop` (inside the accepted part of a
+/// step), the state at each from `interp`; `*next` moves past them by `dt`.
+#[inline]
+fn grid_samples<const N: usize, const E: usize, Sc: Scene<N, E>, K: Sink + ?Sized>(
+    scene: &Sc,
+    interp: &impl Fn(f64) -> SVector<f64, N>,
+    next: &mut f64,
+    dt: f64,
+    t_stop: f64,
+    sink: &mut K,
+) {
+    while *next <= t_stop {
+        let yg = interp(*next);
+        if let Some(evg) = scene.evaluate(&yg) {
+            scene.sample(Point::Grid, *next, &yg, &evg, sink);
+        }
+        *next += dt;
+    }
 }
 
 /// Onsets of contacts stranded past their threshold at an event's state (time `t`, state `y`,

@@ -69,6 +69,9 @@ pub fn tiny_run_in(
 /// The default problem file, bottle-1l.
 pub const BOTTLE_FILE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
 
+/// The robust kitchen problem file (four objects, the free scene).
+pub const KITCHEN_FILE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
+
 /// The centred grasp of finger `f` (statics `st`) with `integ` under the controls `ctl`,
 /// and its trajectory (through the library's one simulation call).
 pub fn grasp_traj(
@@ -100,9 +103,23 @@ pub fn optimise_crashing_after(spec: &gripopt::run::RunSpec, k: u64) -> gripopt:
     gripopt::run::optimise_with(spec, hooks)
 }
 
-/// A fresh, empty folder `target/AREA/NAME` for a test's files (removed first if left over).
-pub fn scratch_dir(area: &str, name: &str) -> std::path::PathBuf {
-    let d = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target")).join(area).join(name);
+/// A fresh, empty folder `target/tests/FILE/NAME` for a test's files (removed first if left
+/// over), FILE the stem of the test file that asks for it (`replay` for tests/replay.rs): the
+/// one scratch-folder helper of the tests. Each folder is handed out once per test binary, so
+/// that tests running in parallel never share one: a second request for the same folder
+/// panics (give the test its own NAME).
+#[track_caller]
+pub fn scratch(name: &str) -> std::path::PathBuf {
+    use std::sync::Mutex;
+    static HANDED_OUT: Mutex<Vec<std::path::PathBuf>> = Mutex::new(Vec::new());
+    let file = std::path::Path::new(std::panic::Location::caller().file());
+    let area = file.file_stem().and_then(|s| s.to_str()).expect("a test file's name");
+    let d = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/tests")).join(area).join(name);
+    {
+        let mut given = HANDED_OUT.lock().unwrap_or_else(|e| e.into_inner());
+        assert!(!given.contains(&d), "scratch folder {} requested twice: give each test its own name", d.display());
+        given.push(d.clone());
+    }
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -161,6 +178,25 @@ pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
     }
 }
 
+/// Every file under `dir` (but the lock's pid file) with its bytes.
+pub fn folder_bytes(dir: &std::path::Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    let mut m = std::collections::BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            m.extend(folder_bytes(&p));
+        } else if e.file_name() != ".lock" {
+            m.insert(p.clone(), std::fs::read(&p).unwrap());
+        }
+    }
+    m
+}
+
+/// A command's stdout as one JSON object (the panic shows its output when it is not).
+pub fn json_stdout(o: &std::process::Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", output_text(o)))
+}
+
 /// A JSON value without its CPU times (`cpu_s` at any depth: the only values that differ
 /// between two runs of the same evaluation).
 pub fn untimed(mut v: serde_json::Value) -> serde_json::Value {
@@ -200,4 +236,145 @@ pub fn offset_problem(dir: &std::path::Path) -> std::path::PathBuf {
     let p = dir.join("offset.toml");
     std::fs::write(&p, src).unwrap();
     p
+}
+
+/// The folder `name` of the runs recorded by the gripopt of 5d2a08e (tests/fixtures).
+pub fn recorded_fixture(name: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/recorded-5d2a08e")).join(name)
+}
+
+/// Run the gripopt binary with `args`, assert its exit code is `code`, and return its output
+/// as text.
+#[track_caller]
+pub fn gripopt_exits(args: &[&str], code: i32) -> String {
+    let o = run_gripopt(args);
+    let text = output_text(&o);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: {text}");
+    text
+}
+
+/// Run the gripopt binary with `args`, assert its exit code is `code`, and parse its stdout
+/// as one JSON object.
+#[track_caller]
+pub fn json_exits(args: &[&str], code: i32) -> serde_json::Value {
+    let o = run_gripopt(args);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: {}", output_text(&o));
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: stdout is one JSON object: {e}"))
+}
+
+/// [`json_exits`] of a command that succeeds (exit 0).
+#[track_caller]
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    json_exits(args, 0)
+}
+
+/// A tiny run through the command line (bottle-1l, population 4, one generation: ids 0 to 3)
+/// in `dir/run`.
+pub fn cli_tiny_run(dir: &std::path::Path) -> std::path::PathBuf {
+    let run = dir.join("run");
+    let o = run_gripopt(&["optimise", BOTTLE_FILE, "--out", run.to_str().unwrap(), "--pop", "4", "--generations", "1"]);
+    assert!(o.status.success(), "{}", output_text(&o));
+    run
+}
+
+/// `text` with its line starting with `key =` replaced by `line` (exactly one such line).
+pub fn set_line(text: impl AsRef<str>, key: &str, line: &str) -> String {
+    let text = text.as_ref();
+    let hits = text.lines().filter(|l| l.starts_with(&format!("{key} ="))).count();
+    assert_eq!(hits, 1, "one `{key} =` line");
+    text.lines().map(|l| if l.starts_with(&format!("{key} =")) { line } else { l }).collect::<Vec<_>>().join("\n")
+        + "\n"
+}
+
+/// kitchen.toml's text with `edit` applied, written to `dir/name`; its path.
+pub fn kitchen_with(dir: &std::path::Path, name: &str, edit: impl Fn(String) -> String) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, edit(std::fs::read_to_string(KITCHEN_FILE).unwrap())).unwrap();
+    path.display().to_string()
+}
+
+/// `text` without its `[robust]` sections (they close kitchen.toml): a single-object problem.
+pub fn without_robust(text: String) -> String {
+    let at = text.find("\n[robust]").expect("kitchen.toml has [robust]");
+    let rest = text[at + 1..].lines().filter(|l| l.starts_with('['));
+    assert!(
+        rest.clone().all(|l| l.starts_with("[robust") || l.starts_with("[[robust")),
+        "{:?}",
+        rest.collect::<Vec<_>>()
+    );
+    text[..at + 1].to_string()
+}
+
+/// kitchen.toml with `[solver] max_steps = steps` and, with `small`, only its first object
+/// (bottle-full), K = 4, 4 verify scenarios, p_min 0.5 and no certification stage (a quick
+/// run with a feasible front: verify then checks the search's front, which certification on
+/// fresh scenarios a small step budget cuts short would empty).
+pub fn kitchen_with_max_steps(steps: u64, small: bool) -> String {
+    let mut t = std::fs::read_to_string(KITCHEN_FILE).unwrap();
+    if small {
+        let first = t.find("[[robust.objects]]").unwrap();
+        let second = first + 1 + t[first + 1..].find("[[robust.objects]]").unwrap();
+        let uncertainty = t.find("[robust.uncertainty]").unwrap();
+        t = format!("{}{}", &t[..second], &t[uncertainty..]);
+        t = set_line(&t, "scenarios", "scenarios = 4");
+        t = set_line(&t, "verify_scenarios", "verify_scenarios = 4");
+        t = set_line(&t, "p_min", "p_min = 0.5");
+        t.push_str("\n[robust.certify]\nenabled = false\n");
+    }
+    set_line(&t, "max_steps", &format!("max_steps = {steps}"))
+}
+
+/// `file` with `method = METHOD` added to its `[solver]`, written to `dir/name`; its path.
+pub fn with_solver_method(file: &str, dir: &std::path::Path, name: &str, method: &str) -> String {
+    let text = std::fs::read_to_string(file).unwrap();
+    assert!(text.contains("\n[solver]\n"), "{file} has a [solver] section");
+    let path = dir.join(name);
+    std::fs::write(&path, text.replacen("\n[solver]\n", &format!("\n[solver]\nmethod = \"{method}\"\n"), 1)).unwrap();
+    path.display().to_string()
+}
+
+/// A named pipe at `path` (false: `mkfifo` is not available here; the caller skips).
+pub fn fifo(path: &std::path::Path) -> bool {
+    let made = std::process::Command::new("mkfifo").arg(path).status().is_ok_and(|s| s.success());
+    if !made {
+        eprintln!("skipped: mkfifo is not available");
+    }
+    made
+}
+
+/// Whether `path` is a named pipe (not followed if a link).
+pub fn is_fifo(path: &std::path::Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+/// Run gripopt with `args`, its memory limited to 2 GiB and its time to 120 s (killed then:
+/// the test fails, it does not hang); stdout and stderr through files in `dir`.
+pub fn run_limited(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    use std::process::{Command, Output, Stdio};
+    use std::time::{Duration, Instant};
+    let (out, err) = (dir.join(".stdout"), dir.join(".stderr"));
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 2097152; exec \"$0\" \"$@\"")
+        .arg(GRIPOPT_BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).unwrap())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("gripopt {args:?} did not end in 120 s (killed): {}", std::fs::read_to_string(&err).unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    Output { status, stdout: std::fs::read(&out).unwrap(), stderr: std::fs::read(&err).unwrap() }
 }

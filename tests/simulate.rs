@@ -1,15 +1,16 @@
-//! `simulate --csv` streams its rows to the file while the simulation runs (no trajectory
-//! held in memory): the file holds exactly the library's trajectory, appears only when
-//! complete, and nothing is left behind when the simulation fails or is interrupted.
+//! `gripopt simulate`: `--csv` streams its rows to the file while the simulation runs (no
+//! trajectory held in memory; the file holds exactly the library's trajectory, appears only
+//! when complete, nothing is left behind on failure or ctrl-c), `--object` simulates one
+//! object of a robust problem, and `--json` carries the flags that change the record.
 
-use crate::common::{output_text, run_gripopt, BOTTLE_FILE};
+use crate::common::{
+    json_of, json_stdout, kitchen_with, output_text, run_gripopt, scratch, untimed, without_robust, BOTTLE_FILE,
+    KITCHEN_FILE,
+};
 use gripopt::params::{Problem, SceneKind};
-use std::path::{Path, PathBuf};
+use serde_json::Value;
+use std::path::Path;
 use std::time::{Duration, Instant};
-
-fn scratch(name: &str) -> PathBuf {
-    crate::common::scratch_dir("s35-csv", name)
-}
 
 fn names(d: &Path) -> Vec<String> {
     let mut v: Vec<String> =
@@ -28,6 +29,7 @@ fn rows(p: &Path) -> Vec<Vec<f64>> {
 
 /// The streamed CSV of the centred and the free scene holds, row for row, the samples the
 /// library's own `simulate` keeps in memory (parsed back from `{:e}`, exact for f64).
+/// Origin: session 35, simulate --csv streamed to the file.
 #[test]
 fn the_streamed_csv_is_the_librarys_trajectory() {
     let d = scratch("same");
@@ -54,6 +56,7 @@ fn the_streamed_csv_is_the_librarys_trajectory() {
 }
 
 /// A design that never reaches its scene writes no CSV and leaves no temporary file.
+/// Origin: session 35, simulate --csv streamed to the file.
 #[test]
 fn a_discarded_design_leaves_nothing() {
     let d = scratch("discarded");
@@ -68,6 +71,7 @@ fn a_discarded_design_leaves_nothing() {
 
 /// ctrl-c during a long `simulate --csv` ends it (exit 130) without a CSV or its temporary
 /// file.
+/// Origin: session 35, simulate --csv streamed to the file.
 #[test]
 fn ctrl_c_leaves_no_csv() {
     let d = scratch("ctrl-c");
@@ -99,6 +103,7 @@ fn ctrl_c_leaves_no_csv() {
 
 /// A link left at an output's temporary name (`.NAME.tmp`) is never written through: the
 /// plot and the CSV are written, the link's target is untouched.
+/// Origin: session 35, simulate --csv streamed to the file.
 #[test]
 fn a_link_at_the_temporary_name_is_not_followed() {
     let d = scratch("tmp-link");
@@ -118,6 +123,7 @@ fn a_link_at_the_temporary_name_is_not_followed() {
 /// The free scene's first pose is the state as the scene begins, its ground points pre-sunk
 /// and in contact: its energy is the record's E(0), ground springs included (the first row
 /// used to leave out their 4.4 µJ).
+/// Origin: session 35, simulate --csv streamed to the file.
 #[test]
 fn the_free_scenes_first_pose_has_the_records_initial_energy() {
     let d = scratch("first-pose");
@@ -130,4 +136,81 @@ fn the_free_scenes_first_pose_has_the_records_initial_energy() {
     let energy = first[gripopt::POSE_COLUMNS.iter().position(|c| c.0 == "energy").unwrap()];
     assert_eq!(first[0], 0.0);
     assert!((energy - e0).abs() <= 1e-12 * e0, "first row {energy} J, record {e0} J");
+}
+
+/// `simulate` of a robust problem ran the reference `[object]` without a word (export and
+/// sweep say so) and could not run any of its objects, while docs/robust.md said `file =`
+/// objects work for simulate. Now `--object NAME` simulates the design on that object —
+/// the same as simulating a single-object problem made of that object — and without it a
+/// note on stderr names the objects and the flag (stdout stays one JSON object).
+/// Origin: hostile pass of session 34, robust design.
+#[test]
+fn simulate_object_grasps_the_named_robust_object() {
+    let d = scratch("simulate");
+    // kitchen's can as the [object] of a problem without [robust] (its tau = [hand] tau)
+    let can = kitchen_with(&d, "can-single.toml", |t| {
+        let t = without_robust(t);
+        let (a, b) = (t.find("[object]\n").unwrap(), t.find("[contact]").unwrap());
+        let obj = "[object]\nradius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\n\n";
+        format!("{}{obj}{}", &t[..a], &t[b..])
+    });
+    let mut on_can = json_of(&["simulate", KITCHEN_FILE, "--object", "can", "--json"]);
+    assert_eq!(on_can["object"], "can");
+    on_can.as_object_mut().unwrap().remove("object");
+    let single = json_of(&["simulate", &can, "--json"]);
+    assert_eq!(untimed(on_can.clone()), untimed(single), "--object can = the can's own problem");
+
+    let o = run_gripopt(&["simulate", KITCHEN_FILE, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    let reference: Value = serde_json::from_slice(&o.stdout).expect("stdout is one JSON object");
+    assert!(reference.get("object").is_none());
+    let note = String::from_utf8_lossy(&o.stderr);
+    for w in ["note:", "reference [object]", "--object", "bottle-full, bottle-half, can, small-bottle"] {
+        assert!(note.contains(w), "{w}: {note}");
+    }
+    // E_lim = min(μ_g m_c g Δx_max, …): 1.34 mJ for the can, 3.94 mJ for the bottle
+    // (docs/robust.md, "The can"); the finger's own impact energy hardly changes
+    let e_lim = |v: &Value| v["e_lim"].as_f64().unwrap() * 1e3;
+    assert!((e_lim(&on_can) - 1.34).abs() < 0.005, "{}", e_lim(&on_can));
+    assert!((e_lim(&reference) - 3.94).abs() < 0.005, "{}", e_lim(&reference));
+    assert_ne!(on_can["f0_1"], reference["f0_1"]);
+    assert_ne!(on_can["t_first_contact"], reference["t_first_contact"]);
+
+    // --object without a note; the text report names the object
+    let o = run_gripopt(&["simulate", KITCHEN_FILE, "--object", "can"]);
+    assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("note:"), "{}", output_text(&o));
+    let first = String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or_default().to_string();
+    assert!(first.contains("object can"), "{first}");
+}
+
+/// An unknown object, or `--object` on a problem without [robust], is an input error
+/// (exit 2) naming the flag, as `export --object`'s.
+/// Origin: hostile pass of session 34, robust design.
+#[test]
+fn simulate_object_refuses_unknown_names() {
+    let bottle = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/bottle-1l.toml");
+    for (file, says) in [(KITCHEN_FILE, "no such robust object"), (bottle, "not robust")] {
+        for json in [false, true] {
+            let mut args = vec!["simulate", file, "--object", "mug"];
+            if json {
+                args.push("--json");
+            }
+            let o = run_gripopt(&args);
+            let text = output_text(&o);
+            assert_eq!(o.status.code(), Some(2), "{text}");
+            assert!(text.contains("--object mug") && text.contains(says), "{text}");
+        }
+    }
+}
+
+/// `simulate --json --rtol R` did not carry R: it does, and a run at the problem's rtol
+/// prints the record as before (no `rtol` key).
+/// Origin: hostile pass of session 34, the CLI.
+#[test]
+fn simulate_json_names_an_rtol_set_on_the_command_line() {
+    let v = json_stdout(&run_gripopt(&["simulate", BOTTLE_FILE, "--json", "--rtol", "1e-5"]));
+    assert_eq!(v["rtol"].as_f64(), Some(1e-5), "{v}");
+    let v = json_stdout(&run_gripopt(&["simulate", BOTTLE_FILE, "--json"]));
+    assert!(v.get("rtol").is_none(), "{v}");
 }

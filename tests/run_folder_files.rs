@@ -1,67 +1,16 @@
-//! Hostile pass 34, files (docs/cli.md "Hostile pass 34"): `--force` replaced a pipe, a
-//! device or the command's own input file; a run folder's file that is not a regular file
-//! (a pipe, a link to /dev/zero, a folder) hung a command or filled the memory; `replay`
-//! re-evaluated with an edited problem.toml and printed two verdicts. Each test fails
-//! without its fix. Pipes are made only under target/hostile34 (skipped where `mkfifo` is
-//! unavailable); /dev/zero is only ever read, through a link, by a process limited to
-//! 2 GiB of memory.
+//! What gripopt reads and writes in and beside run folders: `--force` replaces an earlier
+//! output and nothing else (never a pipe, a device, a link, the command's own input, another
+//! run's file or a robust problem's object file); a run folder's file that is not a regular
+//! file is refused, never read or waited on; a folder where a rewritten file goes is refused
+//! before any work; no run is created inside another run's folder. Pipes are made only in
+//! the tests' scratch folders (skipped where `mkfifo` is unavailable); /dev/zero is only ever
+//! read, through a link, by a process limited to 2 GiB of memory.
 
-use crate::common::{output_text, BOTTLE_FILE, GRIPOPT_BIN};
+use crate::common::{
+    cli_tiny_run, fifo, is_fifo, output_text, run_gripopt, run_limited, scratch, BOTTLE_FILE, KITCHEN_FILE,
+};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
-
-const KITCHEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kitchen.toml");
-
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/hostile34")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// A named pipe at `path` (false: `mkfifo` is not available here; the caller skips).
-fn fifo(path: &Path) -> bool {
-    let made = Command::new("mkfifo").arg(path).status().is_ok_and(|s| s.success());
-    if !made {
-        eprintln!("skipped: mkfifo is not available");
-    }
-    made
-}
-
-/// Run gripopt with `args`, its memory limited to 2 GiB and its time to 120 s (killed then:
-/// the test fails, it does not hang); stdout and stderr through files in `dir`.
-fn run_limited(dir: &Path, args: &[&str]) -> Output {
-    let (out, err) = (dir.join(".stdout"), dir.join(".stderr"));
-    let mut child = Command::new("sh")
-        .arg("-c")
-        .arg("ulimit -v 2097152; exec \"$0\" \"$@\"")
-        .arg(GRIPOPT_BIN)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(std::fs::File::create(&out).unwrap())
-        .stderr(std::fs::File::create(&err).unwrap())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if t0.elapsed() > Duration::from_secs(120) {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("gripopt {args:?} did not end in 120 s (killed): {}", std::fs::read_to_string(&err).unwrap());
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    Output { status, stdout: std::fs::read(&out).unwrap(), stderr: std::fs::read(&err).unwrap() }
-}
-
-fn is_fifo(path: &Path) -> bool {
-    use std::os::unix::fs::FileTypeExt;
-    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
-}
+use std::process::Output;
 
 fn is_link(path: &Path) -> bool {
     std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink())
@@ -79,6 +28,7 @@ fn refused(o: &Output, flag: &str, path: &Path, why: &str) {
 /// the export's own problem file (named as itself, or through a link). Now each is refused
 /// (exit 2, naming the flag and the path) and left as it was; `--force` still replaces an
 /// earlier export; a link, dangling or not, is refused even with `--force` (issue 44).
+/// Origin: hostile pass of session 34, files.
 #[test]
 fn force_replaces_an_earlier_output_and_nothing_else() {
     let d = scratch("force");
@@ -92,7 +42,7 @@ fn force_replaces_an_earlier_output_and_nothing_else() {
     };
     // the export's own problem file, and a link to it
     let own = d.join("own.toml");
-    std::fs::copy(KITCHEN, &own).unwrap();
+    std::fs::copy(KITCHEN_FILE, &own).unwrap();
     let before = std::fs::read(&own).unwrap();
     refused(&export(&own, &own, true), "--out", &own, "is the command's input");
     let link = d.join("link.json");
@@ -157,6 +107,7 @@ fn replace(run: &Path, file: &str, what: &str, big: u64) -> bool {
 /// command ends with exit 2 naming the file and saying "not a regular file"; a file far
 /// larger than gripopt writes is refused before it is read; a recording index that cannot
 /// be read is rebuilt from the shards (replay of design 3 verifies).
+/// Origin: hostile pass of session 34, files.
 #[test]
 fn run_folder_files_are_read_only_when_regular_files() {
     let base = run_folder("folder");
@@ -202,31 +153,10 @@ fn run_folder_files_are_read_only_when_regular_files() {
     }
 }
 
-/// `replay` after the run's problem.toml was edited re-evaluated the design with the edited
-/// problem, exited 3 and printed two verdicts, the second contradicting the first. Now it
-/// is refused as `resume` refuses it: exit 2, one message naming the file, nothing
-/// evaluated (nothing on stdout).
-#[test]
-fn replay_refuses_an_edited_problem_file() {
-    let run = run_folder("edited");
-    let problem = run.join("problem.toml");
-    let mut text = std::fs::read_to_string(&problem).unwrap();
-    text.push_str("# edited by hand\n");
-    std::fs::write(&problem, text).unwrap();
-    let r = run.to_str().unwrap();
-    let dir = run.parent().unwrap();
-    for args in [&["replay", r, "--design", "3"][..], &["replay", r, "--design", "3", "--json"], &["resume", r]] {
-        let o = run_limited(dir, args);
-        let err = output_text(&o);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", output_text(&o));
-        assert!(err.contains(&format!("{}: edited after the run", problem.display())), "{args:?}: {err}");
-        assert!(!output_text(&o).contains("verified"), "{args:?}: a verdict: {}", output_text(&o));
-    }
-}
-
 /// `simulate P --csv P --force` overwrote its own problem file, and `replay RUN --csv
 /// RUN/run.json --force` the run's run.json. Now both are refused (exit 2, the file left as
 /// it was); a new file inside the run folder is still written.
+/// Origin: hostile pass of session 34, files.
 #[test]
 fn simulate_and_replay_never_write_over_their_inputs() {
     let d = scratch("inputs");
@@ -255,6 +185,7 @@ fn simulate_and_replay_never_write_over_their_inputs() {
 /// folder too, and `replay` into another run), and a robust problem's object file
 /// (`file = "can2.toml"`, then `--csv can2.toml --force`), which broke the problem. Both
 /// are refused now, the files unchanged; a new file beside a run's is still written.
+/// Origin: hostile pass of session 34, files.
 #[test]
 fn force_never_replaces_a_run_folders_file_or_an_object_file() {
     let d = scratch("run-files");
@@ -279,13 +210,13 @@ fn force_never_replaces_a_run_folders_file_or_an_object_file() {
     assert_eq!(o.status.code(), Some(0), "{}", output_text(&o));
 
     // a robust problem whose can comes from a file beside it
-    let kitchen = std::fs::read_to_string(KITCHEN).unwrap();
+    let kitchen = std::fs::read_to_string(KITCHEN_FILE).unwrap();
     let inline = "name = \"can\"             # as can.toml: a 330 ml can, 0.34 kg\nradius = 0.030\nlength = 0.115\ndensity = 1050.0\ngrasp_height = 0.040\n";
     assert!(kitchen.contains(inline), "kitchen.toml's can is inline");
     let problem = d.join("k-file.toml");
     std::fs::write(&problem, kitchen.replacen(inline, "name = \"can\"\nfile = \"can2.toml\"\n", 1)).unwrap();
     let can = d.join("can2.toml");
-    std::fs::copy(Path::new(KITCHEN).with_file_name("can.toml"), &can).unwrap();
+    std::fs::copy(Path::new(KITCHEN_FILE).with_file_name("can.toml"), &can).unwrap();
     let can_text = std::fs::read(&can).unwrap();
     let p = problem.to_str().unwrap();
     let o = run_limited(&d, &["simulate", p, "--object", "can", "--csv", can.to_str().unwrap(), "--force"]);
@@ -302,6 +233,7 @@ fn force_never_replaces_a_run_folders_file_or_an_object_file() {
 /// and then fail on the rename, again on every retry (history.csv already a generation
 /// ahead of the checkpoint); a folder at verify.csv failed `verify` after all its work. Both
 /// are refused before any work now, the folder as it was.
+/// Origin: hostile pass of session 34, files.
 #[test]
 fn a_folder_where_a_rewritten_file_goes_is_refused_before_any_work() {
     let d = scratch("rewritten");
@@ -327,28 +259,55 @@ fn a_folder_where_a_rewritten_file_goes_is_refused_before_any_work() {
     assert!(e.contains("verify.csv") && e.contains("not a regular file (a folder)"), "{e}");
 }
 
-/// `show` said nothing (`"verify": null`, no warning) of a named pipe or folder where
-/// verify.csv stands: it now shows the run with a warning naming the file.
+/// `optimise --out RUN/recording/sub` (or `RUN/sub`) created a run inside another run's
+/// folder; refused (exit 2) like export and sweep refuse to write into a run folder, with
+/// nothing created.
+/// Origin: hostile pass of session 35 on the CLI.
 #[test]
-fn show_warns_of_a_verify_csv_it_cannot_read() {
-    let d = scratch("show-verify");
-    let run = crate::common::tiny_run("hostile34-show-verify", Path::new(BOTTLE_FILE), 8, 1);
-    let csv = run.join("verify.csv");
-    let _ = std::fs::remove_file(&csv);
-    if !fifo(&csv) {
-        return;
+fn optimise_refuses_a_run_inside_another_runs_folder() {
+    let d = scratch("nested");
+    let run = cli_tiny_run(&d);
+    for sub in ["recording/sub", "sub", "sub/deeper"] {
+        let out = run.join(sub);
+        let o =
+            run_gripopt(&["optimise", BOTTLE_FILE, "--out", out.to_str().unwrap(), "--pop", "4", "--generations", "1"]);
+        let text = output_text(&o);
+        assert_eq!(o.status.code(), Some(2), "{sub}: {text}");
+        assert!(text.contains("inside the run folder") && text.contains("holds run.json"), "{sub}: {text}");
+        assert!(!out.exists() && !run.join("sub").exists(), "{sub}: nothing created");
     }
-    let r = run.to_str().unwrap();
-    let o = run_limited(&d, &["show", r]);
-    let text = output_text(&o);
-    assert_eq!(o.status.code(), Some(0), "{text}");
-    assert!(
-        text.contains("warning: not read:") && text.contains("verify.csv") && text.contains("named pipe"),
-        "{text}"
-    );
-    let o = run_limited(&d, &["show", r, "--json"]);
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let warned = v["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("verify.csv"));
-    assert!(warned && v["verify"].is_null(), "{v}");
-    assert!(is_fifo(&csv), "left as it was");
+    // beside the run: a new run as before
+    let o = run_gripopt(&[
+        "optimise",
+        BOTTLE_FILE,
+        "--out",
+        d.join("other").to_str().unwrap(),
+        "--pop",
+        "4",
+        "--generations",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", output_text(&o));
+}
+
+/// The library refuses it too (Python's `optimise` and any Rust caller go through
+/// `run::optimise`, not the CLI's check): nothing is created inside the run.
+/// Origin: hostile pass of session 35 on the CLI.
+#[test]
+fn the_library_refuses_a_run_inside_another_runs_folder() {
+    let d = scratch("nested-lib");
+    let run = cli_tiny_run(&d);
+    let out = run.join("recording").join("sub");
+    let spec = gripopt::run::RunSpec {
+        problem_path: PathBuf::from(BOTTLE_FILE),
+        out: out.clone(),
+        pop: 4,
+        generations: 1,
+        seed: 1,
+        threads: Some(1),
+        record: gripopt::record::RecordOptions::default(),
+    };
+    let e = gripopt::run::optimise(&spec).unwrap_err().to_string();
+    assert!(e.contains("inside the run folder") && e.contains("holds run.json"), "{e}");
+    assert!(!out.exists());
 }

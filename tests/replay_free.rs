@@ -3,18 +3,17 @@
 //! crate and the Foxglove SDK's decoder against the run's own recording (the shards' log
 //! times, the record's measured final displacement), never against the writer's numbers.
 
-use crate::common::{check_dir, output_text, run_gripopt, tiny_run_in, BOTTLE_FILE};
+use crate::common::{check_dir, output_text, run_gripopt, scratch, tiny_run_in, BOTTLE_FILE};
 use foxglove::messages::FrameTransforms;
 use foxglove::Decode;
 use std::path::{Path, PathBuf};
 
-/// bottle-1l with `[scene] kind = "free"`, written under target/.
-fn free_problem() -> PathBuf {
+/// bottle-1l with `[scene] kind = "free"`, written into the scratch folder `name`.
+fn free_problem(name: &str) -> PathBuf {
     let text = std::fs::read_to_string(BOTTLE_FILE).unwrap();
     let text = text.replacen("kind = \"centred\"", "kind = \"free\"", 1);
     assert!(text.contains("kind = \"free\""));
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/s36-free-replay"));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch(name);
     let path = dir.join("bottle-free.toml");
     std::fs::write(&path, text).unwrap();
     path
@@ -60,9 +59,10 @@ fn drawn_final_displacement(path: &Path) -> f64 {
     (b.1 - a.1).hypot(b.2 - a.2)
 }
 
+/// Origin: session 36, replay of a free-kind run.
 #[test]
 fn free_kind_replay_records_the_free_scene_in_its_own_window() {
-    let problem = free_problem();
+    let problem = free_problem("free-window");
     let run = tiny_run_in(check_dir("s36-free-replay"), &problem, 8, 1);
     let ids: Vec<u64> = (0..8).collect();
     let recs: Vec<_> = ids.iter().map(|id| gripopt::record::read_design(&run, *id).unwrap()).collect();
@@ -127,6 +127,7 @@ fn free_kind_replay_records_the_free_scene_in_its_own_window() {
     std::fs::write(&file, &bytes).unwrap(); // the run folder as the replay left it, for check_mcap
 }
 
+/// Origin: session 36, replay of a free-kind run.
 #[test]
 fn centred_kind_replay_writes_no_free_file() {
     let run = tiny_run_in(check_dir("s36-free-replay-centred"), Path::new(BOTTLE_FILE), 8, 1);
@@ -145,10 +146,11 @@ fn centred_kind_replay_writes_no_free_file() {
 /// the folder). The folder is made read-only, and (for a test run as root, whom permissions
 /// do not stop) a folder stands at the file's temporary name (`.free-ID.mcap.tmp`), so the
 /// write fails either way.
+/// Origin: session 36, replay of a free-kind run.
 #[test]
 fn a_free_scene_that_cannot_be_written_leaves_the_verdict() {
     use std::os::unix::fs::PermissionsExt;
-    let problem = free_problem();
+    let problem = free_problem("unwritable");
     let run = tiny_run_in(check_dir("s36-free-replay-readonly"), &problem, 8, 1);
     let reached = (0..8).find(|id| {
         gripopt::record::read_design(&run, *id)
