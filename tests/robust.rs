@@ -370,7 +370,7 @@ fn the_shipped_kitchen_problem() {
         assert_eq!(r.objects[i].object, Problem::load(format!("{dir}/{f}.toml")).unwrap().scene.object, "{f}");
     }
     assert!(k.source_text.lines().all(|l| !l.trim_start().starts_with("file")), "objects inline");
-    assert_eq!((r.scenarios, r.count(1)), (8, 32));
+    assert_eq!((r.scenarios, r.count(1)), (8, 128));
     // the can alone is feasible in the free scene (its file says why not in the centred one)
     let can = Problem::load(format!("{dir}/can.toml")).unwrap();
     assert_eq!(can.scene.setup.kind, gripopt::params::SceneKind::Free);

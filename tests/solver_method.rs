@@ -188,11 +188,14 @@ fn the_default_meets_the_tight_reference() {
 /// A run folder of the gripopt before the default (tests/fixtures/run-64f5714: bottle-1l.toml,
 /// no `solver.method`, so RADAU5; population 16, seed 4, 2 generations, recorded; its problem
 /// file's original path gone) resumes with RADAU5, its checkpoint naming no method: the run
-/// equals, bit for bit, a run of the problem with `method = "radau5"`, and not one with the
-/// default; every design, recorded by revision 4 or by the resume, replays verified.
+/// equals, bit for bit, a run of the problem with `method = "radau5"` (with NSGA-II, the
+/// algorithm the old run resumes with since issue 42; history.csv's `pareto_hypervolume`
+/// from the resume on), and not one with the default; every design, recorded by revision 4
+/// or by the resume, replays verified.
 #[test]
 fn a_run_of_before_the_default_resumes_and_replays_with_radau5() {
-    use gripopt::run::{optimise, resume, RunFolder, RunSpec};
+    use gripopt::optim::{Survival, Variation};
+    use gripopt::run::{optimise_with, resume, RunFolder, RunHooks, RunSpec};
     let d = scratch("old-run");
     let old = d.join("old");
     copy_dir(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/run-64f5714")), &old);
@@ -211,14 +214,28 @@ fn a_run_of_before_the_default_resumes_and_replays_with_radau5() {
             threads: Some(1),
             record: gripopt::record::RecordOptions::default(),
         };
-        optimise(&spec).unwrap();
+        let nsga2 = RunHooks { algorithm: Some((Survival::Crowding, Variation::Sbx)), ..Default::default() };
+        optimise_with(&spec, nsga2).unwrap();
         out
     };
     let named = run("radau5", text.replace("max_steps = 200000\n", "max_steps = 200000\nmethod = \"radau5\"\n"));
     let default = run("default", text);
     let csv = |dir: &std::path::Path, f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
-    for f in ["population.csv", "archive.csv", "pareto.csv", "history.csv"] {
+    for f in ["population.csv", "archive.csv", "pareto.csv"] {
         assert_eq!(csv(&old, f), csv(&named, f), "{f}: the resumed run is RADAU5's");
+    }
+    // history.csv: the same but for the old run's generations, which reported no
+    // pareto_hypervolume (their pareto.csv was the population's front)
+    let history = |dir: &std::path::Path| -> Vec<Vec<String>> {
+        let text = csv(dir, "history.csv");
+        text.lines().filter(|l| !l.starts_with('#')).map(|l| l.split(',').map(String::from).collect()).collect()
+    };
+    let (h_old, h_named) = (history(&old), history(&named));
+    assert_eq!(h_old.len(), h_named.len());
+    for (k, (a, b)) in h_old.iter().zip(&h_named).enumerate() {
+        let all = k == 0 || k == h_old.len() - 1;
+        let n = if all { a.len() } else { a.len() - 1 };
+        assert_eq!(a[..n], b[..n], "history.csv line {k}: the resumed run is RADAU5's");
     }
     assert_ne!(csv(&old, "archive.csv"), csv(&default, "archive.csv"), "the default integrates otherwise");
     let cp: serde_json::Value = serde_json::from_slice(&std::fs::read(old.join("checkpoint.json")).unwrap()).unwrap();

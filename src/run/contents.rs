@@ -274,3 +274,23 @@ fn index_names_only(path: &Path, run_id: &str) -> bool {
 fn same_file(a: &Path, b: &Path) -> bool {
     matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }
+
+/// A new run's folder is never created inside another run's folder (its recording/ or any
+/// folder below it): the nearest existing ancestor of `out` must not be, or lie inside, a run
+/// folder (`crate::run_folder_around`; `out` itself being a run is the resume's case,
+/// refused by the folder scan with its own message).
+pub(super) fn refuse_run_inside_run(out: &Path) -> Result<()> {
+    let existing =
+        out.ancestors().skip(1).map(|a| if a.as_os_str().is_empty() { Path::new(".") } else { a }).find(|a| a.is_dir());
+    let Some(dir) = existing else { return Ok(()) };
+    match crate::fsutil::run_folder_around(&dir.join("_")) {
+        Some((run, mark)) => Err(Error::RunDir {
+            path: out.to_path_buf(),
+            message: format!(
+                "inside the run folder {} (it holds {mark}): a run is never created inside another run's folder; give a folder outside it",
+                run.display()
+            ),
+        }),
+        None => Ok(()),
+    }
+}

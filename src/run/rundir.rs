@@ -68,6 +68,9 @@ pub struct RunHooks {
     pub stop: Option<Arc<AtomicBool>>,
     /// The batch evaluator (None: the problem's default, `GripperProblem::default_evaluator`).
     pub evaluator: Option<Box<dyn Evaluator<GripperProblem>>>,
+    /// A new run's survival and variation (None: the defaults; e.g. NSGA-II's, crowding and
+    /// SBX, to compare with a run of before issue 42). A resume keeps its checkpoint's.
+    pub algorithm: Option<(Survival, Variation)>,
 }
 
 /// Summary returned to the CLI.
@@ -175,7 +178,7 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
             message: "is a file, not a folder: give a new or empty folder for the run".into(),
         });
     }
-    refuse_run_inside_run(&spec.out)?;
+    super::contents::refuse_run_inside_run(&spec.out)?;
     std::fs::create_dir_all(&spec.out).map_err(|e| Error::io(&spec.out, "cannot create the run folder", e))?;
     // a folder another process holds is refused naming it, before its files (changing as
     // that process writes them) are looked at
@@ -236,7 +239,8 @@ pub fn optimise_with(spec: &RunSpec, hooks: RunHooks) -> Result<RunSummary> {
     }
     let recorder = open_recorder(&spec.out, &gp, &info, 0)?;
     let state = Nsga2State::new().with_max_generations(spec.generations);
-    let (survival, variation) = (Some(Survival::default()), Some(Variation::default()));
+    let (survival, variation) = hooks.algorithm.unwrap_or_default();
+    let (survival, variation) = (Some(survival), Some(variation));
     let start =
         Start { settings, state, recorder, archive: Archive::default(), notes, wall_before: 0.0, survival, variation };
     drive(gp, info, &spec.out, spec.threads, hooks, lock, start)
@@ -681,25 +685,5 @@ fn recording_metadata(gp: &GripperProblem, info: &RunInfo) -> RunMetadata {
         settings: Some(serde_json::to_string(&info.settings).expect("settings serialise")),
         recording: Some(serde_json::to_string(&info.recording).expect("recording options serialise")),
         ..RunMetadata::default()
-    }
-}
-
-/// A new run's folder is never created inside another run's folder (its recording/ or any
-/// folder below it): the nearest existing ancestor of `out` must not be, or lie inside, a run
-/// folder (`crate::run_folder_around`; `out` itself being a run is the resume's case,
-/// refused by the folder scan with its own message).
-fn refuse_run_inside_run(out: &Path) -> Result<()> {
-    let existing =
-        out.ancestors().skip(1).map(|a| if a.as_os_str().is_empty() { Path::new(".") } else { a }).find(|a| a.is_dir());
-    let Some(dir) = existing else { return Ok(()) };
-    match crate::fsutil::run_folder_around(&dir.join("_")) {
-        Some((run, mark)) => Err(Error::RunDir {
-            path: out.to_path_buf(),
-            message: format!(
-                "inside the run folder {} (it holds {mark}): a run is never created inside another run's folder; give a folder outside it",
-                run.display()
-            ),
-        }),
-        None => Ok(()),
     }
 }
